@@ -1,0 +1,64 @@
+//! Flag value parsers and output helpers shared by the subcommands.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+
+/// Parses a positive, finite number (for physical constants and limits).
+pub fn positive(text: &str) -> Result<f64, String> {
+    let value: f64 = text.trim().parse().map_err(|_| format!("'{text}' is not a number"))?;
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(format!("must be a positive finite number, got {text}"))
+    }
+}
+
+/// Where a command writes its main output: a file (written atomically) or stdout.
+#[derive(Debug, Clone)]
+pub enum Output {
+    Stdout,
+    File(PathBuf),
+}
+
+impl Output {
+    pub fn new(path: Option<PathBuf>) -> Self {
+        match path {
+            Some(p) if p.as_os_str() != "-" => Output::File(p),
+            _ => Output::Stdout,
+        }
+    }
+
+    pub fn path(&self) -> Option<&Path> {
+        match self {
+            Output::File(p) => Some(p),
+            Output::Stdout => None,
+        }
+    }
+
+    /// Writes the content produced by `fill`.
+    pub fn write<F>(&self, fill: F) -> anyhow::Result<()>
+    where
+        F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
+    {
+        match self {
+            Output::File(path) => Ok(haptex_core::io::write_atomic(path, fill)?),
+            Output::Stdout => {
+                let stdout = std::io::stdout();
+                let mut lock = std::io::BufWriter::with_capacity(1 << 16, stdout.lock());
+                fill(&mut lock).and_then(|()| lock.flush()).context("cannot write to stdout")
+            }
+        }
+    }
+}
+
+/// Reads a profile from a path, or from stdin when the path is `-`.
+pub fn read_profile(path: &Path) -> anyhow::Result<haptex_core::FrictionProfile> {
+    use haptex_core::FrictionProfile;
+    Ok(if path.as_os_str() == "-" {
+        FrictionProfile::read_csv(std::io::stdin().lock(), "<stdin>")?
+    } else {
+        FrictionProfile::read_csv_file(path)?
+    })
+}

@@ -1,0 +1,3 @@
+//! One module per `haptex` subcommand.
+
+pub mod voltage;

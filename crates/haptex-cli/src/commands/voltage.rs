@@ -1,0 +1,116 @@
+//! `haptex voltage`: friction profile -> electrovibration voltage profile
+//! (paper eqs. 3-9).
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+use haptex_core::electrovibration::{ContactArea, Device, LayerStack, Method, map_profile};
+
+use crate::args::{Output, positive, read_profile};
+
+/// Compute the voltage an electrovibration display must apply to reproduce a
+/// friction profile.
+///
+/// Reads a friction profile (CSV `x_mm,mu` or `x_mm,ft_n,fn_n`; `-` for
+/// stdin) and writes `x_mm,mu,voltage_v`. Voltages are RMS values. Defaults
+/// are the constants of the paper's Fig. 2. Where the display cannot follow
+/// the profile (U above U_max, or mu_RS below mu_HD) the summary on stderr
+/// says where.
+#[derive(Debug, Args)]
+#[command(
+    allow_negative_numbers = true,
+    after_help = "Example:\n  haptex voltage --profile data/examples/bump_friction.csv -o voltage.csv"
+)]
+pub struct VoltageArgs {
+    /// Friction profile CSV (`x_mm,mu` or `x_mm,ft_n,fn_n`), or `-` for stdin.
+    #[arg(long, value_name = "P.csv")]
+    profile: PathBuf,
+    /// physical: eq. (8), reproduces the friction force; normalized: eq. (9),
+    /// the pattern only (min mu -> 0 V, max mu -> U_max).
+    #[arg(long, value_enum, default_value_t = MethodArg::Physical)]
+    method: MethodArg,
+    /// Friction coefficient of the finger on the display with no voltage, mu_HD.
+    #[arg(long, default_value_t = Device::PAPER.mu_hd, value_parser = positive)]
+    mu_hd: f64,
+    /// Relative permittivity of the stratum corneum, eps_sc.
+    #[arg(long, default_value_t = LayerStack::PAPER.eps_sc, value_parser = positive)]
+    eps_sc: f64,
+    /// Relative permittivity of the display insulator, eps_i.
+    #[arg(long, default_value_t = LayerStack::PAPER.eps_i, value_parser = positive)]
+    eps_i: f64,
+    /// Stratum corneum thickness d_sc in mm.
+    #[arg(long, default_value_t = LayerStack::PAPER.d_sc_mm, value_parser = positive)]
+    d_sc_mm: f64,
+    /// Insulator thickness d_i in mm.
+    #[arg(long, default_value_t = LayerStack::PAPER.d_i_mm, value_parser = positive)]
+    d_i_mm: f64,
+    /// Contact-area coefficient k in mm^2/N (A = k Fn^n; mm^2/N^n when n != 1).
+    #[arg(long, default_value_t = ContactArea::PAPER.k_mm2_per_n, value_parser = positive)]
+    k_mm2_per_n: f64,
+    /// Contact-area exponent n in A = k Fn^n (1 = the paper's linear law;
+    /// other values need the normal force, from --fn-n or an fn_n column).
+    #[arg(long, default_value_t = ContactArea::PAPER.exponent, value_parser = positive)]
+    area_exponent: f64,
+    /// Exploration normal force Fn in N (only used when --area-exponent != 1).
+    #[arg(long, value_parser = positive)]
+    fn_n: Option<f64>,
+    /// Highest voltage the display can apply, U_max in V RMS: the clip level
+    /// (physical) or the full scale (normalized).
+    #[arg(long, default_value_t = Device::PAPER.u_max_v, value_parser = positive)]
+    u_max: f64,
+    /// Output format (default: json if OUT ends in .json, else csv).
+    #[arg(long, value_enum)]
+    format: Option<Format>,
+    /// Output file (default: stdout). Written atomically.
+    #[arg(short, long, value_name = "OUT")]
+    output: Option<PathBuf>,
+    /// Do not print the summary to stderr.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum MethodArg {
+    Physical,
+    Normalized,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, ValueEnum)]
+enum Format {
+    Csv,
+    Json,
+}
+
+pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
+    let profile = read_profile(&args.profile)?;
+    let device = Device {
+        stack: LayerStack { d_sc_mm: args.d_sc_mm, eps_sc: args.eps_sc, d_i_mm: args.d_i_mm, eps_i: args.eps_i },
+        contact: ContactArea { k_mm2_per_n: args.k_mm2_per_n, exponent: args.area_exponent },
+        mu_hd: args.mu_hd,
+        u_max_v: args.u_max,
+    };
+    let method = match args.method {
+        MethodArg::Physical => Method::Physical,
+        MethodArg::Normalized => Method::Normalized,
+    };
+    let voltage = map_profile(&profile, &device, method, args.fn_n)?;
+
+    let output = Output::new(args.output);
+    let format = args.format.unwrap_or(match output.path().and_then(|p| p.extension()) {
+        Some(ext) if ext.eq_ignore_ascii_case("json") => Format::Json,
+        _ => Format::Csv,
+    });
+    output.write(|w| match format {
+        Format::Csv => voltage.write_csv(w),
+        Format::Json => {
+            serde_json::to_writer(&mut *w, &voltage).map_err(std::io::Error::from).and_then(|()| w.write_all(b"\n"))
+        }
+    })?;
+    if !args.quiet {
+        eprint!("{}", voltage.summary);
+        if let Some(path) = output.path() {
+            eprintln!("wrote {}", path.display());
+        }
+    }
+    Ok(())
+}

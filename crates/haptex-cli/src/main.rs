@@ -1,0 +1,39 @@
+//! `haptex`: design the drive signals of surface haptic displays.
+//!
+//! Each subcommand lives in its own module under `commands/`; this file only
+//! parses the command line and reports errors.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod args;
+mod commands;
+
+/// Design the drive signals of surface haptic displays: friction profiles in,
+/// electrovibration voltages out.
+#[derive(Debug, Parser)]
+#[command(name = "haptex", version, about, long_about = None, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    Voltage(commands::voltage::VoltageArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Voltage(args) => commands::voltage::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("error: {error:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,22 @@
+//! File formats shared by every haptex command: the numeric CSV table
+//! reader, CSV number formatting and atomic output.
+
+mod atomic;
+mod table;
+
+pub use atomic::{WriteError, write_atomic};
+pub use table::{Table, TableError, TableErrorKind};
+
+use std::io::Write;
+
+/// Writes one CSV row of numbers (shortest representation that round-trips).
+pub fn write_csv_row(w: &mut dyn Write, values: &[f64]) -> std::io::Result<()> {
+    let mut buffer = ryu::Buffer::new();
+    for (i, v) in values.iter().enumerate() {
+        if i > 0 {
+            w.write_all(b",")?;
+        }
+        w.write_all(buffer.format(*v).as_bytes())?;
+    }
+    w.write_all(b"\n")
+}

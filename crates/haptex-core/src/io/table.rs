@@ -1,0 +1,278 @@
+//! Numeric CSV tables: the one reader behind every haptex CSV format.
+//!
+//! All haptex CSV files share the same shape (`docs/file-formats.md`): a
+//! header row of column names, then rows of numbers; lines starting with `#`
+//! are comments, blank lines are skipped, surrounding spaces are ignored.
+//! Every error names the source (file path or `<stdin>`), the 1-based line
+//! and, where it applies, the column.
+
+use std::fmt;
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read};
+use std::path::Path;
+
+/// What went wrong in a table, without the location.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TableErrorKind {
+    #[error("cannot read: {0}")]
+    Io(String),
+    #[error("no header row (the file is empty or only has comments)")]
+    NoHeader,
+    #[error("empty column name in the header")]
+    EmptyColumnName,
+    #[error("column name appears twice in the header")]
+    DuplicateColumn,
+    #[error("required column is missing (the header has: {present})")]
+    MissingColumn { present: String },
+    #[error("expected {expected} fields as in the header, found {found}")]
+    FieldCount { expected: usize, found: usize },
+    #[error("not a number: {text:?}{}", if text.contains([';', '\t']) { " (fields are separated by commas)" } else { "" })]
+    NotANumber { text: String },
+    #[error("not a finite number: {text:?}")]
+    NonFinite { text: String },
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// A table error with its location: source, line and column.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub struct TableError {
+    /// File path, `<stdin>` or another label for where the text came from.
+    pub source_name: String,
+    /// 1-based line number in the source, when the error is tied to a line.
+    pub line: Option<u64>,
+    /// Column name, when the error is tied to a column.
+    pub column: Option<String>,
+    pub kind: TableErrorKind,
+}
+
+impl fmt::Display for TableError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.source_name)?;
+        if let Some(line) = self.line {
+            write!(f, ", line {line}")?;
+        }
+        if let Some(column) = &self.column {
+            write!(f, ", column '{column}'")?;
+        }
+        write!(f, ": {}", self.kind)
+    }
+}
+
+/// A numeric table read from CSV, stored column by column.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table {
+    source_name: String,
+    header_line: u64,
+    columns: Vec<String>,
+    data: Vec<Vec<f64>>,
+    lines: Vec<u64>,
+}
+
+impl Table {
+    /// Reads a table from CSV text. `source_name` labels errors.
+    ///
+    /// The format is deliberately plain (numbers need no quoting), so the
+    /// reader is line based and its line numbers are exact: fields are split
+    /// at commas, trimmed, and a pair of surrounding double quotes is removed.
+    pub fn read<R: Read>(reader: R, source_name: &str) -> Result<Self, TableError> {
+        let error = |line: Option<u64>, column: Option<String>, kind| TableError {
+            source_name: source_name.to_string(),
+            line,
+            column,
+            kind,
+        };
+        let mut lines = Lines { reader: BufReader::with_capacity(1 << 16, reader), buffer: Vec::new(), number: 0 };
+        let io_error = |(line, e): (u64, std::io::Error)| error(Some(line), None, TableErrorKind::Io(e.to_string()));
+
+        let Some((header_line, header)) = lines.next_content().map_err(io_error)? else {
+            return Err(error(None, None, TableErrorKind::NoHeader));
+        };
+        let header = std::str::from_utf8(header)
+            .map_err(|_| error(Some(header_line), None, TableErrorKind::Invalid("header is not UTF-8 text".into())))?;
+        let mut columns: Vec<String> = Vec::new();
+        for name in header.split(',').map(unquote) {
+            if name.is_empty() {
+                return Err(error(Some(header_line), None, TableErrorKind::EmptyColumnName));
+            }
+            if columns.iter().any(|c| c == name) {
+                return Err(error(Some(header_line), Some(name.to_string()), TableErrorKind::DuplicateColumn));
+            }
+            columns.push(name.to_string());
+        }
+
+        let mut data: Vec<Vec<f64>> = vec![Vec::new(); columns.len()];
+        let mut row_lines = Vec::new();
+        while let Some((line, row)) = lines.next_content().map_err(io_error)? {
+            let mut found = 0;
+            for field in row.split(|&b| b == b',') {
+                if found < columns.len() {
+                    let value =
+                        parse_number(field).map_err(|kind| error(Some(line), Some(columns[found].clone()), kind))?;
+                    data[found].push(value);
+                }
+                found += 1;
+            }
+            if found != columns.len() {
+                return Err(error(Some(line), None, TableErrorKind::FieldCount { expected: columns.len(), found }));
+            }
+            row_lines.push(line);
+        }
+        Ok(Self { source_name: source_name.to_string(), header_line, columns, data, lines: row_lines })
+    }
+
+    /// Reads a table from a file; errors name the path.
+    pub fn read_file(path: &Path) -> Result<Self, TableError> {
+        let name = path.display().to_string();
+        let file = File::open(path).map_err(|e| TableError {
+            source_name: name.clone(),
+            line: None,
+            column: None,
+            kind: TableErrorKind::Io(e.to_string()),
+        })?;
+        Self::read(file, &name)
+    }
+
+    /// Label of the source the table was read from.
+    pub fn source_name(&self) -> &str {
+        &self.source_name
+    }
+
+    /// Column names in file order.
+    pub fn columns(&self) -> &[String] {
+        &self.columns
+    }
+
+    /// Number of data rows.
+    pub fn n_rows(&self) -> usize {
+        self.lines.len()
+    }
+
+    /// Source line of data row `row`.
+    pub fn line_of_row(&self, row: usize) -> u64 {
+        self.lines[row]
+    }
+
+    /// Index of a column by name.
+    pub fn column_index(&self, name: &str) -> Option<usize> {
+        self.columns.iter().position(|c| c == name)
+    }
+
+    /// A column's values, or `None` if the header lacks it.
+    pub fn column(&self, name: &str) -> Option<&[f64]> {
+        self.column_index(name).map(|i| self.data[i].as_slice())
+    }
+
+    /// Column values by index.
+    pub fn column_at(&self, index: usize) -> &[f64] {
+        &self.data[index]
+    }
+
+    /// A column's values, or a "missing column" error naming the header line.
+    pub fn require(&self, name: &str) -> Result<&[f64], TableError> {
+        self.column(name).ok_or_else(|| TableError {
+            source_name: self.source_name.clone(),
+            line: Some(self.header_line),
+            column: Some(name.to_string()),
+            kind: TableErrorKind::MissingColumn { present: self.columns.join(",") },
+        })
+    }
+
+    /// Takes the column data out of the table (column order as in `columns`).
+    pub fn into_columns(self) -> Vec<Vec<f64>> {
+        self.data
+    }
+
+    /// An error located at data row `row` (and optionally a column); rows past
+    /// the end (e.g. "too few rows") are reported at the header line.
+    pub fn error_at(&self, row: Option<usize>, column: Option<&str>, message: impl Into<String>) -> TableError {
+        TableError {
+            source_name: self.source_name.clone(),
+            line: Some(row.and_then(|r| self.lines.get(r).copied()).unwrap_or(self.header_line)),
+            column: column.map(str::to_string),
+            kind: TableErrorKind::Invalid(message.into()),
+        }
+    }
+}
+
+/// A content line with its 1-based number, or an I/O error with the line it hit.
+type NumberedLine<'a> = Result<Option<(u64, &'a [u8])>, (u64, std::io::Error)>;
+
+/// Reads lines, counting them, and yields only the content lines (not
+/// blank, not `#` comments), without the line terminator.
+struct Lines<R> {
+    reader: BufReader<R>,
+    buffer: Vec<u8>,
+    number: u64,
+}
+
+impl<R: Read> Lines<R> {
+    /// The next content line and its number; an I/O error comes with the
+    /// line it hit.
+    fn next_content(&mut self) -> NumberedLine<'_> {
+        const BOM: &[u8] = "\u{feff}".as_bytes();
+        loop {
+            self.buffer.clear();
+            let read = self.reader.read_until(b'\n', &mut self.buffer).map_err(|e| (self.number + 1, e))?;
+            if read == 0 {
+                return Ok(None);
+            }
+            self.number += 1;
+            let skip = if self.number == 1 && self.buffer.starts_with(BOM) { BOM.len() } else { 0 };
+            let line = self.buffer[skip..].trim_ascii();
+            if !(line.is_empty() || line.starts_with(b"#")) {
+                let start = skip + self.buffer[skip..].len() - self.buffer[skip..].trim_ascii_start().len();
+                return Ok(Some((self.number, &self.buffer[start..start + line.len()])));
+            }
+        }
+    }
+}
+
+fn unquote(field: &str) -> &str {
+    let field = field.trim();
+    field.strip_prefix('"').and_then(|f| f.strip_suffix('"')).unwrap_or(field).trim()
+}
+
+fn parse_number(field: &[u8]) -> Result<f64, TableErrorKind> {
+    let text = std::str::from_utf8(field)
+        .map_err(|_| TableErrorKind::NotANumber { text: String::from_utf8_lossy(field).into_owned() })?;
+    let text = unquote(text);
+    if text.is_empty() {
+        return Err(TableErrorKind::NotANumber { text: String::new() });
+    }
+    let value: f64 = text.parse().map_err(|_| TableErrorKind::NotANumber { text: text.to_string() })?;
+    if value.is_finite() { Ok(value) } else { Err(TableErrorKind::NonFinite { text: text.to_string() }) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(text: &str) -> Result<Table, TableError> {
+        Table::read(text.as_bytes(), "t.csv")
+    }
+
+    #[test]
+    fn reads_columns_comments_and_line_numbers() {
+        let t = read("# a comment\nx_mm, mu\n0,0.5\n\n# mid comment\n1.5 ,0.6\n").unwrap();
+        assert_eq!(t.columns(), ["x_mm", "mu"]);
+        assert_eq!(t.column("x_mm").unwrap(), [0.0, 1.5]);
+        assert_eq!(t.column("mu").unwrap(), [0.5, 0.6]);
+        assert_eq!(t.line_of_row(0), 3);
+        assert_eq!(t.line_of_row(1), 6);
+    }
+
+    #[test]
+    fn line_numbers_count_blank_comment_and_crlf_lines() {
+        let t = read("\u{feff}#c\r\nx,y\r\n1,2\r\n\r\n#c\r\n3,\"4\"\r\n").unwrap();
+        assert_eq!(t.columns(), ["x", "y"]);
+        assert_eq!(t.column("y").unwrap(), [2.0, 4.0]);
+        assert_eq!((t.line_of_row(0), t.line_of_row(1)), (3, 6));
+    }
+
+    #[test]
+    fn error_display_names_source_line_and_column() {
+        let e = read("x_mm,mu\n0,0.5\n1,abc\n").unwrap_err();
+        assert_eq!(e.to_string(), "t.csv, line 3, column 'mu': not a number: \"abc\"");
+    }
+}

@@ -1,0 +1,12 @@
+//! haptex core: friction profiles, the electrovibration mapping of the
+//! paper (eqs. 3-9) and the file formats every haptex command shares.
+//!
+//! Units follow `docs/file-formats.md`: positions in mm, forces in N,
+//! voltages in V (RMS), and every field that carries a unit names it.
+
+pub mod electrovibration;
+pub mod io;
+pub mod profile;
+
+pub use electrovibration::{Device, Method, VoltageProfile, VoltageSummary, map_profile};
+pub use profile::{FrictionProfile, ProfileError};

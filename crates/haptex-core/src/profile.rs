@@ -1,0 +1,316 @@
+//! Friction profiles mu(x): the location-domain friction coefficient of a
+//! reference surface, the input of the electrovibration mapping.
+//!
+//! Files (`docs/file-formats.md`): `x_mm,mu`, or `x_mm,ft_n,fn_n` from which
+//! mu = ft/fn (paper eq. 4). Extra columns are allowed and ignored, so a
+//! voltage profile (`x_mm,mu,voltage_v`) reads back as a friction profile.
+
+use std::io::Write;
+use std::path::Path;
+
+use crate::io::{Table, TableError, WriteError, write_atomic, write_csv_row};
+
+/// A friction profile is invalid, or its file could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum ProfileError {
+    #[error(transparent)]
+    Table(#[from] TableError),
+    /// In-memory data failed validation at sample `index`.
+    #[error("sample {index}, field '{field}': {message}")]
+    Invalid { index: usize, field: &'static str, message: String },
+    #[error("{0}")]
+    Resample(String),
+}
+
+/// Where a validation problem is: sample index (0-based), field, message.
+type Violation = (Option<usize>, &'static str, String);
+
+/// A friction profile: positions in mm (strictly increasing) and the
+/// friction coefficient at each, with the normal force in N when known.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrictionProfile {
+    x_mm: Vec<f64>,
+    mu: Vec<f64>,
+    fn_n: Option<Vec<f64>>,
+}
+
+impl FrictionProfile {
+    /// A profile from positions (mm) and friction coefficients.
+    pub fn new(x_mm: Vec<f64>, mu: Vec<f64>) -> Result<Self, ProfileError> {
+        validate(&x_mm, &[("mu", &mu)]).map_err(in_memory)?;
+        Ok(Self { x_mm, mu, fn_n: None })
+    }
+
+    /// A profile from positions (mm), tangential and normal forces (N):
+    /// mu = ft / fn (paper eq. 4); fn must be positive.
+    pub fn from_forces(x_mm: Vec<f64>, ft_n: &[f64], fn_n: Vec<f64>) -> Result<Self, ProfileError> {
+        validate(&x_mm, &[("ft_n", ft_n), ("fn_n", &fn_n)]).map_err(in_memory)?;
+        check_normal_force(&fn_n).map_err(in_memory)?;
+        let mu = ft_n.iter().zip(&fn_n).map(|(t, n)| t / n).collect();
+        Ok(Self { x_mm, mu, fn_n: Some(fn_n) })
+    }
+
+    /// Reads a profile from a parsed table: `x_mm` plus `mu`, or `x_mm` plus
+    /// `ft_n` and `fn_n`. If `mu` is present it is used as is, and an
+    /// `fn_n` column, if any, is kept as the normal force.
+    pub fn from_table(table: &Table) -> Result<Self, ProfileError> {
+        let at = |v: Violation| ProfileError::Table(table.error_at(v.0, Some(v.1), v.2));
+        let x_mm = table.require("x_mm")?.to_vec();
+        let fn_col = table.column("fn_n").map(<[f64]>::to_vec);
+        let mu = match table.column("mu") {
+            Some(mu) => {
+                validate(&x_mm, &[("mu", mu)]).map_err(at)?;
+                mu.to_vec()
+            }
+            None => {
+                let (ft, fnn) = match (table.column("ft_n"), fn_col.as_deref()) {
+                    (Some(ft), Some(fnn)) => (ft, fnn),
+                    _ => {
+                        let missing = if table.column("ft_n").is_none() { "mu (or ft_n and fn_n)" } else { "fn_n" };
+                        return Err(table.require(missing).unwrap_err().into());
+                    }
+                };
+                validate(&x_mm, &[("ft_n", ft), ("fn_n", fnn)]).map_err(at)?;
+                ft.iter().zip(fnn).map(|(t, n)| t / n).collect()
+            }
+        };
+        if let Some(fnn) = &fn_col {
+            check_normal_force(fnn).map_err(at)?;
+        }
+        Ok(Self { x_mm, mu, fn_n: fn_col })
+    }
+
+    /// Reads a profile CSV from any reader; `source_name` labels errors.
+    pub fn read_csv<R: std::io::Read>(reader: R, source_name: &str) -> Result<Self, ProfileError> {
+        Self::from_table(&Table::read(reader, source_name)?)
+    }
+
+    /// Reads a profile CSV file.
+    pub fn read_csv_file(path: &Path) -> Result<Self, ProfileError> {
+        Self::from_table(&Table::read_file(path)?)
+    }
+
+    /// Writes `x_mm,mu` CSV.
+    pub fn write_csv(&self, w: &mut dyn Write) -> std::io::Result<()> {
+        w.write_all(b"x_mm,mu\n")?;
+        for (x, mu) in self.x_mm.iter().zip(&self.mu) {
+            write_csv_row(w, &[*x, *mu])?;
+        }
+        Ok(())
+    }
+
+    /// Writes `x_mm,mu` CSV to `path` atomically.
+    pub fn write_csv_file(&self, path: &Path) -> Result<(), WriteError> {
+        write_atomic(path, |w| self.write_csv(w))
+    }
+
+    /// Positions in mm, strictly increasing.
+    pub fn x_mm(&self) -> &[f64] {
+        &self.x_mm
+    }
+
+    /// Friction coefficient at each position.
+    pub fn mu(&self) -> &[f64] {
+        &self.mu
+    }
+
+    /// Normal force in N at each position, when the source gave it.
+    pub fn fn_n(&self) -> Option<&[f64]> {
+        self.fn_n.as_deref()
+    }
+
+    /// Mean normal force in N (paper section 2.4: "for Fn^RS a mean value
+    /// ... during sliding was used"), when the source gave it.
+    pub fn mean_fn_n(&self) -> Option<f64> {
+        self.fn_n.as_ref().map(|f| f.iter().sum::<f64>() / f.len() as f64)
+    }
+
+    /// Number of samples (at least 2).
+    pub fn len(&self) -> usize {
+        self.x_mm.len()
+    }
+
+    /// Always false: a profile has at least two samples.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// Length covered, x_last - x_first, in mm.
+    pub fn span_mm(&self) -> f64 {
+        self.x_mm[self.len() - 1] - self.x_mm[0]
+    }
+
+    /// mu at `x_mm` by linear interpolation, held constant beyond the ends.
+    pub fn mu_at(&self, x_mm: f64) -> f64 {
+        interpolate(&self.x_mm, &self.mu, x_mm)
+    }
+
+    /// The profile resampled by linear interpolation onto `n` uniformly
+    /// spaced positions from the first to the last sample (n >= 2).
+    pub fn resample_uniform(&self, n: usize) -> Result<Self, ProfileError> {
+        if n < 2 {
+            return Err(ProfileError::Resample(format!("cannot resample onto {n} points: need at least 2")));
+        }
+        let (x0, x1) = (self.x_mm[0], self.x_mm[self.len() - 1]);
+        let step = (x1 - x0) / (n - 1) as f64;
+        self.resample_at((0..n).map(|i| if i + 1 == n { x1 } else { x0 + step * i as f64 }).collect())
+    }
+
+    /// The profile resampled onto a uniform grid of spacing `dx_mm` starting
+    /// at the first sample; the last point may fall short of the end.
+    pub fn resample_step(&self, dx_mm: f64) -> Result<Self, ProfileError> {
+        if !(dx_mm.is_finite() && dx_mm > 0.0) {
+            return Err(ProfileError::Resample(format!("grid spacing must be positive, got {dx_mm} mm")));
+        }
+        let intervals = (self.span_mm() / dx_mm).floor();
+        if intervals < 1.0 {
+            return Err(ProfileError::Resample(format!(
+                "spacing {dx_mm} mm is longer than the profile ({} mm)",
+                self.span_mm()
+            )));
+        }
+        if intervals > 1e9 {
+            return Err(ProfileError::Resample(format!("spacing {dx_mm} mm gives more than 1e9 points")));
+        }
+        let x0 = self.x_mm[0];
+        self.resample_at((0..=intervals as usize).map(|i| x0 + dx_mm * i as f64).collect())
+    }
+
+    /// Linear interpolation of every column at increasing positions `x_mm`.
+    fn resample_at(&self, x_mm: Vec<f64>) -> Result<Self, ProfileError> {
+        let resample = |values: &[f64]| -> Vec<f64> {
+            let mut cursor = Cursor::default();
+            x_mm.iter().map(|&x| cursor.interpolate(&self.x_mm, values, x)).collect()
+        };
+        let mu = resample(&self.mu);
+        let fn_n = self.fn_n.as_deref().map(resample);
+        // A grid over a valid span is strictly increasing unless the span is
+        // so small that consecutive points round to the same value.
+        validate(&x_mm, &[("mu", &mu)]).map_err(|(_, _, m)| {
+            ProfileError::Resample(format!(
+                "cannot resample a {:e} mm span onto {} points: {m}",
+                self.span_mm(),
+                x_mm.len()
+            ))
+        })?;
+        Ok(Self { x_mm, mu, fn_n })
+    }
+}
+
+/// Linear interpolation in a strictly increasing table, clamped at the ends.
+pub fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
+    let i = xs.partition_point(|&v| v <= x);
+    if i == 0 {
+        return ys[0];
+    }
+    if i >= xs.len() {
+        return ys[xs.len() - 1];
+    }
+    lerp(xs, ys, i - 1, x)
+}
+
+fn lerp(xs: &[f64], ys: &[f64], i: usize, x: f64) -> f64 {
+    let t = (x - xs[i]) / (xs[i + 1] - xs[i]);
+    ys[i] + t * (ys[i + 1] - ys[i])
+}
+
+/// Interpolation for increasing query positions: walks the table once.
+#[derive(Default)]
+struct Cursor {
+    i: usize,
+}
+
+impl Cursor {
+    fn interpolate(&mut self, xs: &[f64], ys: &[f64], x: f64) -> f64 {
+        let last = xs.len() - 1;
+        if x <= xs[0] {
+            return ys[0];
+        }
+        if x >= xs[last] {
+            return ys[last];
+        }
+        while xs[self.i + 1] < x {
+            self.i += 1;
+        }
+        lerp(xs, ys, self.i, x)
+    }
+}
+
+/// Checks positions (finite, strictly increasing, at least two) and that each
+/// value column is finite and as long as the positions.
+fn validate(x_mm: &[f64], columns: &[(&'static str, &[f64])]) -> Result<(), Violation> {
+    if x_mm.len() < 2 {
+        return Err((None, "x_mm", format!("a profile needs at least 2 points, got {}", x_mm.len())));
+    }
+    for (name, values) in columns {
+        if values.len() != x_mm.len() {
+            return Err((None, name, format!("{} values for {} positions", values.len(), x_mm.len())));
+        }
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err((Some(i), name, format!("not a finite number: {}", values[i])));
+        }
+    }
+    if let Some(i) = x_mm.iter().position(|v| !v.is_finite()) {
+        return Err((Some(i), "x_mm", format!("not a finite number: {}", x_mm[i])));
+    }
+    if let Some(i) = x_mm.windows(2).position(|w| w[1] <= w[0]) {
+        return Err((
+            Some(i + 1),
+            "x_mm",
+            format!("positions must be strictly increasing: {} follows {}", x_mm[i + 1], x_mm[i]),
+        ));
+    }
+    Ok(())
+}
+
+fn check_normal_force(fn_n: &[f64]) -> Result<(), Violation> {
+    match fn_n.iter().position(|&f| f <= 0.0) {
+        Some(i) => Err((Some(i), "fn_n", format!("normal force must be positive, got {} N", fn_n[i]))),
+        None => Ok(()),
+    }
+}
+
+fn in_memory((index, field, message): Violation) -> ProfileError {
+    ProfileError::Invalid { index: index.unwrap_or(0), field, message }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interpolates_and_clamps() {
+        let p = FrictionProfile::new(vec![0.0, 1.0, 3.0], vec![1.0, 2.0, 0.0]).unwrap();
+        assert_eq!(p.mu_at(-1.0), 1.0);
+        assert_eq!(p.mu_at(0.5), 1.5);
+        assert_eq!(p.mu_at(2.0), 1.0);
+        assert_eq!(p.mu_at(9.0), 0.0);
+    }
+
+    #[test]
+    fn resample_uniform_hits_both_ends_and_is_linear() {
+        let p = FrictionProfile::new(vec![0.0, 1.0, 3.0], vec![1.0, 2.0, 0.0]).unwrap();
+        let r = p.resample_uniform(7).unwrap();
+        assert_eq!(r.x_mm(), [0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0]);
+        assert_eq!(r.mu(), [1.0, 1.5, 2.0, 1.5, 1.0, 0.5, 0.0]);
+        assert!(p.resample_uniform(1).is_err());
+    }
+
+    #[test]
+    fn resample_step_keeps_spacing() {
+        let p = FrictionProfile::new(vec![0.0, 1.0], vec![0.0, 1.0]).unwrap();
+        let r = p.resample_step(0.3).unwrap();
+        assert_eq!(r.len(), 4);
+        assert!((r.mu()[3] - 0.9).abs() < 1e-15);
+        assert!(p.resample_step(2.0).is_err());
+        assert!(p.resample_step(0.0).is_err());
+    }
+
+    #[test]
+    fn forces_give_mu_and_mean_normal_force() {
+        let p = FrictionProfile::from_forces(vec![0.0, 1.0], &[0.1, 0.3], vec![0.2, 0.6]).unwrap();
+        assert_eq!(p.mu(), [0.5, 0.5]);
+        assert!((p.mean_fn_n().unwrap() - 0.4).abs() < 1e-15);
+        assert!(FrictionProfile::from_forces(vec![0.0, 1.0], &[0.1, 0.3], vec![0.2, 0.0]).is_err());
+    }
+}

@@ -1,0 +1,207 @@
+//! Validation of the electrovibration mapping (paper eqs. 3-9) against hand
+//! calculations in SI and the paper's Fig. 2 constants.
+
+use haptex_core::electrovibration::{
+    ContactArea, Device, ElectroError, LayerStack, Method, Regions, electrostatic_force_n, map_profile,
+    required_force_n, voltage_for_force_v,
+};
+use haptex_core::profile::FrictionProfile;
+use proptest::prelude::*;
+
+/// The paper's device with U_max raised so that nothing clips.
+fn unclipped() -> Device {
+    Device { u_max_v: 1000.0, ..Device::PAPER }
+}
+
+fn profile(x: &[f64], mu: &[f64]) -> FrictionProfile {
+    FrictionProfile::new(x.to_vec(), mu.to_vec()).unwrap()
+}
+
+/// Eq. (8) with the paper's Fig. 2 constants (eps_sc = 1650, eps_i = 10,
+/// d_sc = 0.2 mm, d_i = 0.001 mm, k = 200 mm^2/N, mu_HD = 1):
+/// U = sqrt(50217.6 (mu_RS - 1)) V. Reference values from physics.md and
+/// issue 2: 112.05, 158.46, 224.09 V; tolerance 0.01 V (their rounding).
+#[test]
+fn eq8_paper_fig2_voltages() {
+    let p = profile(&[0.0, 1.0, 2.0], &[1.25, 1.5, 2.0]);
+    let v = map_profile(&p, &unclipped(), Method::Physical, None).unwrap();
+    for (u, expected) in v.voltage_v.iter().zip([112.05, 158.46, 224.09]) {
+        assert!((u - expected).abs() < 0.01, "U = {u}, expected {expected}");
+    }
+    assert!(v.summary.clipped.is_empty() && v.summary.not_renderable.is_empty());
+    assert!(v.summary.warnings.is_empty(), "{:?}", v.summary.warnings);
+}
+
+/// Fe/Fn = 1.9913e-5 U^2 with the paper's constants (physics.md), to the 5
+/// significant figures given.
+#[test]
+fn eq3_force_ratio_paper_constants() {
+    let ratio = Device::PAPER.force_ratio_per_v2(0.3);
+    assert!((ratio - 1.9913e-5).abs() < 0.00005e-5, "Fe/Fn per V^2 = {ratio:e}");
+}
+
+/// Eq. (3) against a hand calculation in SI units:
+/// d_sc/eps_sc = 0.2e-3 m / 1650 = 1.212121e-7 m, d_i/eps_i = 1e-6 m / 10 = 1e-7 m,
+/// (sum) (d_sc + d_i) = 2.212121e-7 m * 2.01e-4 m = 4.446364e-11 m^2;
+/// A = 100 mm^2 = 1e-4 m^2, U = 100 V:
+/// Fe = 8.8541878128e-12 F/m * 1e-4 m^2 * 1e4 V^2 / (2 * 4.446364e-11 m^2) = 0.0995666 N.
+/// Tolerance 1e-6 relative (the 7 digits carried by hand).
+#[test]
+fn eq3_force_hand_calculation_si() {
+    let fe = electrostatic_force_n(&LayerStack::PAPER, 100.0, 100.0);
+    assert!((fe / 0.0995666 - 1.0).abs() < 1e-6, "Fe = {fe}");
+    assert!((LayerStack::PAPER.gap_factor_m2() / 4.446364e-11 - 1.0).abs() < 1e-6);
+}
+
+/// Eq. (6): Fe = (mu_RS/mu_HD - 1) Fn, so the display's friction
+/// mu_HD (Fn + Fe) equals the reference mu_RS Fn (eqs. 4-5).
+#[test]
+fn eq6_equates_reference_and_display_friction() {
+    let (mu_rs, mu_hd, fn_n) = (0.9, 0.6, 0.4);
+    let fe = required_force_n(mu_rs, mu_hd, fn_n);
+    assert!((mu_hd * (fn_n + fe) - mu_rs * fn_n).abs() < 1e-15);
+}
+
+/// Eq. (9): min mu -> 0 V, max mu -> U_max exactly, square-root in between.
+#[test]
+fn eq9_maps_min_to_zero_and_max_to_u_max() {
+    let p = profile(&[0.0, 1.0, 2.0, 3.0], &[0.7, 0.3, 0.5, 0.4]);
+    let v = map_profile(&p, &Device::PAPER, Method::Normalized, None).unwrap();
+    assert_eq!(v.voltage_v[1], 0.0);
+    assert_eq!(v.voltage_v[0], 100.0);
+    assert!((v.voltage_v[2] - 100.0 * 0.5f64.sqrt()).abs() < 1e-12);
+    assert_eq!((v.summary.voltage_min_v, v.summary.voltage_max_v), (0.0, 100.0));
+}
+
+#[test]
+fn eq9_constant_profile_gives_zero_volts_and_a_warning() {
+    let p = profile(&[0.0, 1.0, 2.0], &[0.5, 0.5, 0.5]);
+    let v = map_profile(&p, &Device::PAPER, Method::Normalized, None).unwrap();
+    assert!(v.voltage_v.iter().all(|&u| u == 0.0));
+    assert_eq!(v.summary.warnings.len(), 1);
+    assert!(v.summary.warnings[0].contains("constant"), "{:?}", v.summary.warnings);
+}
+
+/// Below mu_HD the voltage is 0 V (not NaN) and the region is reported with
+/// interpolated crossings: mu goes 1.2 -> 0.8 -> 1.2 over x = 0, 1, 2, so
+/// mu < 1 on (0.5, 1.5): 50% of the length.
+#[test]
+fn not_renderable_region_is_zero_volts_and_reported() {
+    let p = profile(&[0.0, 1.0, 2.0], &[1.2, 0.8, 1.2]);
+    let v = map_profile(&p, &Device::PAPER, Method::Physical, None).unwrap();
+    assert_eq!(v.voltage_v[1], 0.0);
+    assert!(v.voltage_v.iter().all(|u| u.is_finite()));
+    let r = &v.summary.not_renderable;
+    assert_eq!(r.ranges_mm.len(), 1);
+    assert!((r.ranges_mm[0][0] - 0.5).abs() < 1e-12 && (r.ranges_mm[0][1] - 1.5).abs() < 1e-12);
+    assert!((r.fraction_of_length - 0.5).abs() < 1e-12);
+    assert!(v.summary.warnings.iter().any(|w| w.contains("50.00%")), "{:?}", v.summary.warnings);
+}
+
+/// The physical method clips at U_max (default 100 V) and reports where.
+/// U = 100 V at mu_RS = 1 + 100^2 * 1.99133e-5 = 1.199133.
+#[test]
+fn physical_clips_at_u_max_and_reports() {
+    let p = profile(&[0.0, 1.0, 2.0], &[1.0, 1.5, 1.0]);
+    let v = map_profile(&p, &Device::PAPER, Method::Physical, None).unwrap();
+    assert_eq!(v.voltage_v[1], 100.0);
+    let mu_clip = v.summary.mu_at_u_max.unwrap();
+    assert!((mu_clip - 1.199133).abs() < 1e-6, "{mu_clip}");
+    let r = &v.summary.clipped;
+    let half = 1.0 - (mu_clip - 1.0) / 0.5; // crossing on each flank
+    assert_eq!(r.ranges_mm.len(), 1);
+    assert!((r.ranges_mm[0][0] - (1.0 - half)).abs() < 1e-9);
+    assert!((r.fraction_of_length - half).abs() < 1e-9);
+    assert!(v.summary.warnings.iter().any(|w| w.contains("clipped")));
+}
+
+#[test]
+fn everything_below_mu_hd_warns() {
+    let p = profile(&[0.0, 1.0], &[0.4, 0.6]);
+    let v = map_profile(&p, &Device::PAPER, Method::Physical, None).unwrap();
+    assert!(v.voltage_v.iter().all(|&u| u == 0.0));
+    assert_eq!(v.summary.not_renderable.fraction_of_length, 1.0);
+    assert!(v.summary.warnings[0].contains("whole profile"));
+}
+
+/// With A = k Fn^n and n != 1, Fe/Fn = eps0 k Fn^(n-1) / (2 G) depends on Fn.
+/// Check against eq. (7) evaluated directly with the area at that force.
+#[test]
+fn power_law_area_needs_and_uses_normal_force() {
+    let device = Device { contact: ContactArea { k_mm2_per_n: 150.0, exponent: 0.5 }, u_max_v: 1e4, ..Device::PAPER };
+    let p = profile(&[0.0, 1.0], &[1.3, 1.6]);
+    let err = map_profile(&p, &device, Method::Physical, None).unwrap_err();
+    assert!(matches!(err, ElectroError::NormalForceRequired { .. }));
+    let fn_n = 0.8;
+    let v = map_profile(&p, &device, Method::Physical, Some(fn_n)).unwrap();
+    let area = 150.0 * fn_n.sqrt();
+    for (mu, u) in [1.3, 1.6].iter().zip(&v.voltage_v) {
+        let expected = voltage_for_force_v(&device.stack, area, required_force_n(*mu, 1.0, fn_n)).unwrap();
+        assert!((u / expected - 1.0).abs() < 1e-12);
+    }
+    // The profile's mean fn_n is used when no force is given.
+    let with_fn = FrictionProfile::from_forces(vec![0.0, 1.0], &[1.04, 1.28], vec![0.8, 0.8]).unwrap();
+    let w = map_profile(&with_fn, &device, Method::Physical, None).unwrap();
+    assert_eq!(w.summary.fn_n, Some(0.8));
+    assert!((w.voltage_v[1] / v.voltage_v[1] - 1.0).abs() < 1e-12);
+}
+
+#[test]
+fn invalid_device_parameters_are_named() {
+    for (device, name) in [
+        (Device { mu_hd: 0.0, ..Device::PAPER }, "mu_hd"),
+        (Device { u_max_v: f64::NAN, ..Device::PAPER }, "u_max_v"),
+        (Device { stack: LayerStack { eps_sc: -1.0, ..LayerStack::PAPER }, ..Device::PAPER }, "eps_sc"),
+    ] {
+        let err = map_profile(&profile(&[0.0, 1.0], &[1.0, 1.1]), &device, Method::Physical, None).unwrap_err();
+        assert!(matches!(err, ElectroError::NotPositive { name: n, .. } if n == name), "{err}");
+    }
+}
+
+#[test]
+fn regions_merge_across_samples_and_handle_touching_points() {
+    let x = [0.0, 1.0, 2.0, 3.0, 4.0];
+    let r = Regions::above(&x, &[2.0, 2.0, 0.0, 1.0, 2.0], 1.0);
+    assert_eq!(r.ranges_mm, vec![[0.0, 1.5], [3.0, 4.0]]);
+    assert!((r.length_mm - 2.5).abs() < 1e-15);
+    let none = Regions::above(&x, &[1.0, 1.0, 1.0, 1.0, 1.0], 1.0);
+    assert!(none.is_empty() && none.fraction_of_length == 0.0);
+}
+
+proptest! {
+    /// Eq. (8) (and its clipping) never decreases as mu_RS increases.
+    #[test]
+    fn voltage_is_monotone_in_mu(
+        mut mu in prop::collection::vec(0.0f64..4.0, 2..50),
+        mu_hd in 0.2f64..2.0,
+        u_max in 1.0f64..500.0,
+    ) {
+        mu.sort_by(f64::total_cmp);
+        let x: Vec<f64> = (0..mu.len()).map(|i| i as f64).collect();
+        let device = Device { mu_hd, u_max_v: u_max, ..Device::PAPER };
+        let p = FrictionProfile::new(x, mu).unwrap();
+        for method in [Method::Physical, Method::Normalized] {
+            let v = map_profile(&p, &device, method, None).unwrap();
+            for w in v.voltage_v.windows(2) {
+                prop_assert!(w[1] >= w[0], "{method}: {} after {}", w[1], w[0]);
+            }
+            prop_assert!(v.voltage_v.iter().all(|u| u.is_finite() && *u >= 0.0 && *u <= u_max));
+        }
+    }
+
+    /// Eq. (7) inverts eq. (3): the voltage for the force of voltage U is U.
+    #[test]
+    fn eq7_inverts_eq3(
+        u in 0.0f64..2000.0,
+        area in 1.0f64..500.0,
+        d_sc in 0.01f64..1.0,
+        eps_sc in 1.0f64..1e4,
+        d_i in 1e-4f64..0.1,
+        eps_i in 1.0f64..100.0,
+    ) {
+        let stack = LayerStack { d_sc_mm: d_sc, eps_sc, d_i_mm: d_i, eps_i };
+        let fe = electrostatic_force_n(&stack, area, u);
+        let back = voltage_for_force_v(&stack, area, fe).unwrap();
+        prop_assert!((back - u).abs() <= 1e-12 * u.max(1.0), "{u} -> {fe} N -> {back}");
+    }
+}
