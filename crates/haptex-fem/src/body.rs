@@ -1,0 +1,256 @@
+//! The deformable body: mesh, element geometry, materials and the
+//! visco-elastic history at every Gauss point, with the element loops the
+//! solver needs (stiffness, step loads, history update, stresses, nodal
+//! forces).
+//!
+//! Kinematics are linear (small strain; the paper's model is a small
+//! deformation visco-elastic one), so for a fixed time-step size the
+//! internal force is affine in the displacement:
+//!
+//!   f_int(u) = K(dt) u + f_frozen,
+//!
+//! with the algorithmic stiffness K(dt) (shear modulus G0 (g_inf + sum gamma_i))
+//! and f_frozen the forces of the history part of the deviatoric stress.
+
+use crate::assembly::{DofMap, PRESCRIBED, Pattern};
+use crate::element::{Formulation, GAUSS_POINTS, Q4, deviator};
+use crate::material::{History, Material, MaterialError, StepCoefficients};
+use crate::mesh::{Mesh, MeshError};
+
+/// The body cannot be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BodyError {
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    #[error("subdomain {subdomain}: {source}")]
+    Material {
+        subdomain: usize,
+        #[source]
+        source: MaterialError,
+    },
+    #[error("element {element} has subdomain {subdomain}, but only {n} materials are given")]
+    MissingMaterial { element: usize, subdomain: usize, n: usize },
+}
+
+/// A subdomain's constitutive description.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SubdomainModel {
+    /// Deformable, with this material.
+    Deformable(Material),
+    /// Rigid: not assembled; all its nodes must be prescribed.
+    Rigid,
+}
+
+/// A deformable body in its reference configuration plus its history.
+#[derive(Debug, Clone)]
+pub struct Body {
+    pub mesh: Mesh,
+    pub geometry: Vec<Q4>,
+    pub subdomains: Vec<SubdomainModel>,
+    pub formulation: Formulation,
+    /// History at each Gauss point (4 per element), committed state.
+    pub history: Vec<History>,
+    deformable: Vec<usize>,
+}
+
+impl Body {
+    pub fn new(mesh: Mesh, subdomains: Vec<SubdomainModel>, formulation: Formulation) -> Result<Self, BodyError> {
+        let geometry = mesh.geometry()?;
+        for (i, s) in subdomains.iter().enumerate() {
+            if let SubdomainModel::Deformable(m) = s {
+                m.validate().map_err(|source| BodyError::Material { subdomain: i, source })?;
+            }
+        }
+        let mut deformable = Vec::new();
+        for (e, &sd) in mesh.subdomain.iter().enumerate() {
+            match subdomains.get(sd as usize) {
+                None => {
+                    return Err(BodyError::MissingMaterial { element: e, subdomain: sd as usize, n: subdomains.len() });
+                }
+                Some(SubdomainModel::Deformable(_)) => deformable.push(e),
+                Some(SubdomainModel::Rigid) => {}
+            }
+        }
+        let history = vec![History::default(); 4 * mesh.n_elements()];
+        Ok(Self { mesh, geometry, subdomains, formulation, history, deformable })
+    }
+
+    /// Indices of the deformable elements.
+    pub fn deformable_elements(&self) -> &[usize] {
+        &self.deformable
+    }
+
+    /// Nodes of the rigid subdomains (they must be prescribed).
+    pub fn rigid_nodes(&self) -> Vec<usize> {
+        self.mesh.nodes_of_subdomains(|s| self.subdomains[s as usize] == SubdomainModel::Rigid)
+    }
+
+    fn material(&self, e: usize) -> &Material {
+        match &self.subdomains[self.mesh.subdomain[e] as usize] {
+            SubdomainModel::Deformable(m) => m,
+            SubdomainModel::Rigid => unreachable!("rigid elements are never evaluated"),
+        }
+    }
+
+    /// The step coefficients of each subdomain for step size `dt_s`.
+    pub fn step_coefficients(&self, dt_s: f64) -> Vec<Option<StepCoefficients>> {
+        self.subdomains
+            .iter()
+            .map(|s| match s {
+                SubdomainModel::Deformable(m) => Some(m.step(dt_s)),
+                SubdomainModel::Rigid => None,
+            })
+            .collect()
+    }
+
+    fn coefficients<'c>(&self, e: usize, c: &'c [Option<StepCoefficients>]) -> &'c StepCoefficients {
+        c[self.mesh.subdomain[e] as usize].as_ref().expect("deformable element")
+    }
+
+    /// Algorithmic stiffness of element `e` for the step coefficients `c`.
+    pub fn element_stiffness(&self, e: usize, c: &[Option<StepCoefficients>]) -> [[f64; 8]; 8] {
+        let m = self.material(e);
+        let g = m.shear_mpa() * self.coefficients(e, c).shear_ratio;
+        self.geometry[e].stiffness(self.formulation, g, m.bulk_mpa())
+    }
+
+    /// Assembles the free-free stiffness (lower triangle) into `values`.
+    pub fn assemble(&self, c: &[Option<StepCoefficients>], pattern: &Pattern, values: &mut [f64]) {
+        values.fill(0.0);
+        for &e in &self.deformable {
+            pattern.add_element(e, &self.element_stiffness(e, c), values);
+        }
+    }
+
+    /// Adds to the free right-hand side `f_free` the loads of a step that do
+    /// not depend on the new free displacements: -f_frozen (history) and
+    /// -K_fp u_p (the prescribed displacements in the global vector `u`).
+    pub fn add_step_loads(&self, c: &[Option<StepCoefficients>], dofs: &DofMap, u: &[f64], f_free: &mut [f64]) {
+        for &e in &self.deformable {
+            let global = DofMap::element_dofs(&self.mesh.elements[e]);
+            let mut f = [0.0; 8];
+            let coefficients = self.coefficients(e, c);
+            if coefficients.n_terms > 0 {
+                for gp in 0..4 {
+                    let frozen = self.history[4 * e + gp].frozen_deviator(coefficients);
+                    self.geometry[e].add_deviator_force(gp, &frozen, &mut f);
+                }
+            }
+            let prescribed: [f64; 8] =
+                std::array::from_fn(|i| if dofs.is_free(global[i]) { 0.0 } else { u[global[i]] });
+            if prescribed.iter().any(|&v| v != 0.0) {
+                let k = self.element_stiffness(e, c);
+                for i in 0..8 {
+                    f[i] += k[i].iter().zip(&prescribed).map(|(a, b)| a * b).sum::<f64>();
+                }
+            }
+            for i in 0..8 {
+                let d = dofs.free[global[i]];
+                if d != PRESCRIBED {
+                    f_free[d] -= f[i];
+                }
+            }
+        }
+    }
+
+    /// Advances the history of every Gauss point to the displacement `u`
+    /// (global vector) at the end of a step with coefficients `c`.
+    pub fn commit(&mut self, c: &[Option<StepCoefficients>], u: &[f64]) {
+        for i in 0..self.deformable.len() {
+            let e = self.deformable[i];
+            let ue = self.element_displacement(e, u);
+            let g0 = self.material(e).shear_mpa();
+            let coefficients = *self.coefficients(e, c);
+            for gp in 0..4 {
+                let s0 = deviator(&self.geometry[e].strain(gp, &ue)).map(|v| 2.0 * g0 * v);
+                self.history[4 * e + gp].advance(&coefficients, &s0);
+            }
+        }
+    }
+
+    /// Displacements of element `e`'s nodes from the global vector `u`.
+    pub fn element_displacement(&self, e: usize, u: &[f64]) -> [f64; 8] {
+        DofMap::element_dofs(&self.mesh.elements[e]).map(|d| u[d])
+    }
+
+    /// Committed stress (xx, yy, zz, xy; MPa) at Gauss point `gp` of element
+    /// `e`, with `u` the displacement the history was committed at.
+    pub fn stress(&self, e: usize, gp: usize, u: &[f64]) -> [f64; 4] {
+        let m = self.material(e);
+        let ue = self.element_displacement(e, u);
+        let p = m.bulk_mpa() * self.geometry[e].dilatation(self.formulation, gp, &ue);
+        let s = self.history[4 * e + gp].deviator(m.g_inf(), m.prony.len());
+        [s[0] + p, s[1] + p, s[2] + p, s[3]]
+    }
+
+    /// Committed stress averaged over the element's Gauss points.
+    pub fn element_stress(&self, e: usize, u: &[f64]) -> [f64; 4] {
+        let mut avg = [0.0; 4];
+        for gp in 0..4 {
+            let s = self.stress(e, gp, u);
+            for k in 0..4 {
+                avg[k] += 0.25 * s[k];
+            }
+        }
+        avg
+    }
+
+    /// Adds the internal nodal forces of the committed stress state of the
+    /// elements in `elements` to the global vector `f` (N per mm of width).
+    pub fn add_internal_forces(&self, elements: &[usize], u: &[f64], f: &mut [f64]) {
+        for &e in elements {
+            if !matches!(self.subdomains[self.mesh.subdomain[e] as usize], SubdomainModel::Deformable(_)) {
+                continue;
+            }
+            let m = self.material(e);
+            let ue = self.element_displacement(e, u);
+            let q = &self.geometry[e];
+            let mut fe = [0.0; 8];
+            for gp in 0..4 {
+                let s = self.history[4 * e + gp].deviator(m.g_inf(), m.prony.len());
+                q.add_deviator_force(gp, &s, &mut fe);
+                if self.formulation == Formulation::Plain {
+                    q.add_pressure_force(
+                        Formulation::Plain,
+                        gp,
+                        m.bulk_mpa() * q.dilatation(Formulation::Plain, gp, &ue),
+                        &mut fe,
+                    );
+                }
+            }
+            if self.formulation == Formulation::BBar {
+                q.add_pressure_force(
+                    Formulation::BBar,
+                    0,
+                    m.bulk_mpa() * q.dilatation(Formulation::BBar, 0, &ue),
+                    &mut fe,
+                );
+            }
+            for (i, d) in DofMap::element_dofs(&self.mesh.elements[e]).into_iter().enumerate() {
+                f[d] += fe[i];
+            }
+        }
+    }
+
+    /// Elements with at least one node in `nodes`.
+    pub fn elements_touching(&self, nodes: &[usize]) -> Vec<usize> {
+        let mut flag = vec![false; self.mesh.n_nodes()];
+        for &n in nodes {
+            flag[n] = true;
+        }
+        (0..self.mesh.n_elements()).filter(|&e| self.mesh.elements[e].iter().any(|&n| flag[n])).collect()
+    }
+
+    /// Reference position of Gauss point `gp` of element `e`.
+    pub fn gauss_point_position(&self, e: usize, gp: usize) -> [f64; 2] {
+        let [r, s] = GAUSS_POINTS[gp];
+        let n = crate::element::shape_functions(r, s);
+        let x = self.mesh.element_coords(e);
+        let mut p = [0.0; 2];
+        for a in 0..4 {
+            p[0] += n[a] * x[a][0];
+            p[1] += n[a] * x[a][1];
+        }
+        p
+    }
+}
