@@ -1,0 +1,289 @@
+//! Prediction by the conditional average, eqs. (11)-(12):
+//!
+//! c_k = sum_n a_n c_nk / sum_n a_n,
+//! a_n = (2 pi)^(-D/2) / prod_l w_nl * exp[ -sum_l (b_l - b_nl)^2 / (2 w_nl^2) ]
+//!
+//! evaluated in log space: ln a_n is computed for every model vector, the
+//! largest is subtracted before exponentiating, so the largest weight is 1
+//! and a query far from every model vector gives finite outputs (close to
+//! those of the nearest vectors) instead of 0/0. Weights below
+//! exp(LOG_WEIGHT_CUTOFF) of the largest are skipped: together they change
+//! an output by less than N e^-46 = N 1.1e-20 of the largest |c_nk|, far
+//! below double rounding for any database that fits in memory.
+//!
+//! Memory layout for speed: outputs are stored row-major, so eq. (11) is a
+//! sum of contiguous rows a_n C_n, accumulated four rows at a time into the
+//! caller's output buffer. A prediction allocates nothing.
+
+use super::{CaeError, Density, Kernel, ModelMatrix, Normalization, Widths};
+
+/// A query whose nearest model vector is farther than this many kernel
+/// widths (sqrt(sum_l ((b_l - b_nl) / w_nl)^2) in normalized units) is
+/// flagged as an extrapolation: there the largest Gaussian of eq. (12) is
+/// below exp(-9/2) = 1.1% of its peak, and the prediction is carried by the
+/// tails of the kernels (paper footnote 6: "extreme extrapolation of results
+/// may lead to erroneous values").
+pub const EXTRAPOLATION_KERNEL_DISTANCE: f64 = 3.0;
+
+/// Model vectors whose ln a_n is more than 46 below the largest are
+/// skipped (relative weight < 1.1e-20).
+pub const LOG_WEIGHT_CUTOFF: f64 = -46.0;
+
+/// The conditional average estimator over a model matrix with given widths.
+#[derive(Debug, Clone)]
+pub struct Cae {
+    matrix: ModelMatrix,
+    norm: Normalization,
+    widths: Widths,
+    /// N x D kernel widths w_nl, normalized units.
+    w: Vec<f64>,
+    kernel: Kernel,
+    /// 1 / range_l^2 (0 for constant inputs), for normalized distances.
+    inv_range2: Vec<f64>,
+}
+
+/// Per-query working memory (one value per model vector). Make one with
+/// [`Cae::scratch`] and reuse it for every query.
+#[derive(Debug, Clone)]
+pub struct Scratch {
+    log_a: Vec<f64>,
+}
+
+/// What a prediction knows about where the query lies relative to the
+/// database.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Diagnostics {
+    /// Row (0-based) of the model vector nearest to the query in normalized
+    /// Euclidean distance.
+    pub nearest_row: usize,
+    /// Its distance in normalized input units (constant inputs left out).
+    pub nearest_distance: f64,
+    /// The smallest distance to any model vector measured in that vector's
+    /// kernel widths, sqrt(sum_l ((b_l - b_nl) / w_nl)^2).
+    pub kernel_distance: f64,
+    /// An input (index) whose normalized query value lies outside [0, 1],
+    /// i.e. beyond the database's range, if any.
+    pub outside_range: Option<usize>,
+    /// A constant input (index) the query gives another value, if any.
+    pub constant_mismatch: Option<usize>,
+    /// Number of model vectors whose weight entered the sum.
+    pub weights_used: usize,
+}
+
+impl Diagnostics {
+    /// True if the query is an extrapolation: farther than
+    /// [`EXTRAPOLATION_KERNEL_DISTANCE`] kernel widths from every model
+    /// vector, or off the value of a constant input.
+    pub fn is_extrapolation(&self) -> bool {
+        self.kernel_distance > EXTRAPOLATION_KERNEL_DISTANCE || self.constant_mismatch.is_some()
+    }
+}
+
+impl Cae {
+    /// The estimator over `matrix` with kernel widths from `widths`
+    /// (normalized input units).
+    pub fn new(matrix: ModelMatrix, widths: Widths) -> Result<Self, CaeError> {
+        let widths = Widths::range(widths.w_min, widths.w_max)?;
+        let (n, d) = (matrix.n(), matrix.d());
+        let norm = Normalization::fit(matrix.inputs_flat(), d)?;
+        let density = (!widths.is_constant()).then(|| Density::new(&norm, &norm.normalize_rows(matrix.inputs_flat())));
+        let mut w = vec![0.0; n * d];
+        widths.fill(density.as_ref(), &mut w);
+        let mut kernel = Kernel::zeros(n, d);
+        kernel.set(&norm, &w);
+        let inv_range2 =
+            (0..d).map(|l| if norm.is_constant(l) { 0.0 } else { 1.0 / (norm.range(l) * norm.range(l)) }).collect();
+        Ok(Self { matrix, norm, widths, w, kernel, inv_range2 })
+    }
+
+    /// The model matrix.
+    pub fn matrix(&self) -> &ModelMatrix {
+        &self.matrix
+    }
+
+    /// The input normalization.
+    pub fn normalization(&self) -> &Normalization {
+        &self.norm
+    }
+
+    /// The width parameters.
+    pub fn widths(&self) -> Widths {
+        self.widths
+    }
+
+    /// The kernel widths w_nl, N x D row-major, normalized units.
+    pub fn kernel_widths(&self) -> &[f64] {
+        &self.w
+    }
+
+    /// Working memory for [`Cae::predict_into`].
+    pub fn scratch(&self) -> Scratch {
+        Scratch { log_a: vec![0.0; self.matrix.n()] }
+    }
+
+    /// Predicts the M outputs at the input vector `b` (D values in the
+    /// model's input order and units) into `out`, eqs. (11)-(12). Allocates
+    /// nothing.
+    pub fn predict_into(&self, b: &[f64], scratch: &mut Scratch, out: &mut [f64]) -> Result<Diagnostics, CaeError> {
+        let (n, d, m) = (self.matrix.n(), self.matrix.d(), self.matrix.m());
+        if b.len() != d {
+            return Err(CaeError::Query(format!("a query needs {d} input values, got {}", b.len())));
+        }
+        if let Some(l) = b.iter().position(|v| !v.is_finite()) {
+            return Err(CaeError::Query(format!("input '{}' is not finite: {}", self.matrix.inputs()[l], b[l])));
+        }
+        if out.len() != m || scratch.log_a.len() != n {
+            return Err(CaeError::Query(format!(
+                "buffers of {} outputs and {} scratch values for a model with {m} outputs and {n} rows",
+                out.len(),
+                scratch.log_a.len()
+            )));
+        }
+
+        // Pass 1: ln a_n for every model vector, and where the query lies.
+        let inputs = self.matrix.inputs_flat();
+        let (mut e_max, mut s_min) = (f64::NEG_INFINITY, f64::INFINITY);
+        let (mut nearest_row, mut nearest_d2) = (0, f64::INFINITY);
+        for (row, (bn, log_a)) in inputs.chunks_exact(d).zip(&mut scratch.log_a).enumerate() {
+            let (e, s) = self.kernel.log_weight(row, bn, b);
+            *log_a = e;
+            let mut d2 = 0.0;
+            for (l, &inv_range2) in self.inv_range2.iter().enumerate() {
+                let diff = b[l] - bn[l];
+                d2 += inv_range2 * diff * diff;
+            }
+            // Plain comparisons (all values are finite): cheaper than f64::max.
+            if e > e_max {
+                e_max = e;
+            }
+            if s < s_min {
+                s_min = s;
+            }
+            if d2 < nearest_d2 {
+                (nearest_row, nearest_d2) = (row, d2);
+            }
+        }
+        let mut outside_range = None;
+        let mut constant_mismatch = None;
+        for (l, &v) in b.iter().enumerate() {
+            if self.norm.is_constant(l) {
+                if v != self.norm.min(l) && constant_mismatch.is_none() {
+                    constant_mismatch = Some(l);
+                }
+            } else if !(0.0..=1.0).contains(&self.norm.normalize(l, v)) && outside_range.is_none() {
+                outside_range = Some(l);
+            }
+        }
+
+        // Pass 2: eq. (11) with the weights shifted by their maximum.
+        let (sum, weights_used) = accumulate(self.matrix.outputs_flat(), m, &scratch.log_a, e_max, out);
+        let inv = 1.0 / sum;
+        for o in out.iter_mut() {
+            *o *= inv;
+        }
+        Ok(Diagnostics {
+            nearest_row,
+            nearest_distance: nearest_d2.sqrt(),
+            kernel_distance: (2.0 * s_min).sqrt(),
+            outside_range,
+            constant_mismatch,
+            weights_used,
+        })
+    }
+
+    /// [`Cae::predict_into`] with freshly allocated buffers.
+    pub fn predict(&self, b: &[f64]) -> Result<(Vec<f64>, Diagnostics), CaeError> {
+        let mut out = vec![0.0; self.matrix.m()];
+        let diagnostics = self.predict_into(b, &mut self.scratch(), &mut out)?;
+        Ok((out, diagnostics))
+    }
+
+    /// The extrapolation warning for a query, if it is one, naming the
+    /// inputs and the nearest model vector.
+    pub fn warning(&self, b: &[f64], diagnostics: &Diagnostics) -> Option<String> {
+        if !diagnostics.is_extrapolation() {
+            return None;
+        }
+        let names = self.matrix.inputs();
+        if let Some(l) = diagnostics.constant_mismatch {
+            return Some(format!(
+                "input '{}' = {} but every model vector has {} = {}: the query is outside the database, \
+                 the prediction is unreliable",
+                names[l],
+                b[l],
+                names[l],
+                self.norm.min(l)
+            ));
+        }
+        let row = diagnostics.nearest_row;
+        let line = self.matrix.line_of_row(row).map(|l| format!(", line {l}")).unwrap_or_default();
+        let beyond = diagnostics
+            .outside_range
+            .map(|l| {
+                let (lo, hi) = (self.norm.min(l), self.norm.min(l) + self.norm.range(l));
+                format!("; '{}' = {} is outside the database range {lo} .. {hi}", names[l], b[l])
+            })
+            .unwrap_or_default();
+        Some(format!(
+            "extrapolation: the nearest model vector (row {}{line}) is {:.3} kernel widths away \
+             (normalized distance {:.4}; threshold {EXTRAPOLATION_KERNEL_DISTANCE} widths){beyond}: \
+             the prediction is unreliable",
+            row + 1,
+            diagnostics.kernel_distance,
+            diagnostics.nearest_distance,
+        ))
+    }
+}
+
+/// out = sum_n exp(ln a_n - e_max) C_n over the rows above the cutoff;
+/// returns the sum of those weights and how many there were. Runs the
+/// AVX2 build of the same loop when the CPU has it (identical results:
+/// the same operations in the same order, only more lanes at once).
+fn accumulate(c: &[f64], m: usize, log_a: &[f64], e_max: f64, out: &mut [f64]) -> (f64, usize) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2, checked just above.
+        return unsafe { accumulate_avx2(c, m, log_a, e_max, out) };
+    }
+    accumulate_rows(c, m, log_a, e_max, out)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn accumulate_avx2(c: &[f64], m: usize, log_a: &[f64], e_max: f64, out: &mut [f64]) -> (f64, usize) {
+    accumulate_rows(c, m, log_a, e_max, out)
+}
+
+#[inline(always)]
+fn accumulate_rows(c: &[f64], m: usize, log_a: &[f64], e_max: f64, out: &mut [f64]) -> (f64, usize) {
+    let out = &mut out[..m];
+    out.fill(0.0);
+    let row = |n: usize| &c[n * m..(n + 1) * m];
+    let (mut sum, mut used) = (0.0, 0);
+    let (mut pending, mut a, mut k) = ([0usize; 4], [0.0f64; 4], 0);
+    for (n, &e) in log_a.iter().enumerate() {
+        let t = e - e_max;
+        if t < LOG_WEIGHT_CUTOFF {
+            continue;
+        }
+        let weight = t.exp();
+        sum += weight;
+        used += 1;
+        pending[k] = n;
+        a[k] = weight;
+        k += 1;
+        if k == 4 {
+            let (c0, c1, c2, c3) = (row(pending[0]), row(pending[1]), row(pending[2]), row(pending[3]));
+            for j in 0..m {
+                out[j] += a[0] * c0[j] + a[1] * c1[j] + a[2] * c2[j] + a[3] * c3[j];
+            }
+            k = 0;
+        }
+    }
+    for (&n, &a) in pending[..k].iter().zip(&a[..k]) {
+        for (o, c) in out.iter_mut().zip(row(n)) {
+            *o += a * c;
+        }
+    }
+    (sum, used)
+}
