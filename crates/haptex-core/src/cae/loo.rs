@@ -18,7 +18,7 @@
 use serde::Serialize;
 
 use super::nelder_mead::{self, Options};
-use super::predict::LOG_WEIGHT_CUTOFF;
+use super::predict::{LOG_WEIGHT_CUTOFF, exp_near_zero};
 use super::{CaeError, Density, Kernel, ModelMatrix, Normalization, Widths};
 
 /// Leave-one-out evaluation over one model matrix, with its buffers.
@@ -94,7 +94,7 @@ impl<'a> Loo<'a> {
             let mut sum = 0.0;
             for (j, wij) in row.iter_mut().enumerate() {
                 let t = *wij - e_max;
-                *wij = if j != i && t >= LOG_WEIGHT_CUTOFF { t.exp() } else { 0.0 };
+                *wij = if j != i && t >= LOG_WEIGHT_CUTOFF { exp_near_zero(t) } else { 0.0 };
                 sum += *wij;
             }
             let inv = 1.0 / sum;
