@@ -301,8 +301,8 @@ fn accumulate_rows(c: &[f64], m: usize, log_a: &mut [f64], e_max: f64, out: &mut
 #[inline(always)]
 pub(crate) fn exp_near_zero(t: f64) -> f64 {
     const SHIFTER: f64 = 6755399441055744.0; // 1.5 * 2^52
-    const LN2_HI: f64 = 6.93147180369123816490e-01;
-    const LN2_LO: f64 = 1.90821492927058770002e-10;
+    const LN2_HI: f64 = 0.6931471803691238;
+    const LN2_LO: f64 = 1.9082149292705877e-10;
     let shifted = t * std::f64::consts::LOG2_E + SHIFTER;
     let k = shifted - SHIFTER;
     let r = (t - k * LN2_HI) - k * LN2_LO;
