@@ -19,6 +19,7 @@ use serde::Serialize;
 
 use super::nelder_mead::{self, Options};
 use super::predict::{LOG_WEIGHT_CUTOFF, exp_near_zero};
+use super::widths::transpose;
 use super::{CaeError, Density, Kernel, ModelMatrix, Normalization, Widths};
 
 /// Leave-one-out evaluation over one model matrix, with its buffers.
@@ -26,6 +27,8 @@ use super::{CaeError, Density, Kernel, ModelMatrix, Normalization, Widths};
 pub struct Loo<'a> {
     matrix: &'a ModelMatrix,
     norm: Normalization,
+    /// D x N inputs, column-major.
+    x_t: Vec<f64>,
     density: Option<Density>,
     /// N x D widths w_nl.
     w: Vec<f64>,
@@ -54,6 +57,7 @@ impl<'a> Loo<'a> {
         Ok(Self {
             matrix,
             norm,
+            x_t: transpose(matrix.inputs_flat(), d),
             density: None,
             w: vec![0.0; n * d],
             kernel: Kernel::zeros(n, d),
@@ -82,15 +86,8 @@ impl<'a> Loo<'a> {
 
         let b = self.matrix.inputs_flat();
         for (i, row) in self.weights.chunks_exact_mut(n).enumerate() {
-            let bi = &b[i * d..(i + 1) * d];
-            let mut e_max = f64::NEG_INFINITY;
-            for (j, (wij, bj)) in row.iter_mut().zip(b.chunks_exact(d)).enumerate() {
-                let (e, _) = self.kernel.log_weight(j, bj, bi);
-                *wij = e;
-                if j != i {
-                    e_max = e_max.max(e);
-                }
-            }
+            self.kernel.log_weights(&self.x_t, &b[i * d..(i + 1) * d], row);
+            let e_max = row.iter().enumerate().filter(|&(j, _)| j != i).fold(f64::NEG_INFINITY, |a, (_, &e)| a.max(e));
             let mut sum = 0.0;
             for (j, wij) in row.iter_mut().enumerate() {
                 let t = *wij - e_max;

@@ -15,6 +15,7 @@
 //! sum of contiguous rows a_n C_n, accumulated four rows at a time into the
 //! caller's output buffer. A prediction allocates nothing.
 
+use super::widths::transpose;
 use super::{CaeError, Density, Kernel, ModelMatrix, Normalization, Widths};
 
 /// A query whose nearest model vector is farther than this many kernel
@@ -38,6 +39,8 @@ pub struct Cae {
     /// N x D kernel widths w_nl, normalized units.
     w: Vec<f64>,
     kernel: Kernel,
+    /// D x N inputs, column-major (the kernel's layout).
+    x_t: Vec<f64>,
     /// 1 / range_l^2 (0 for constant inputs), for normalized distances.
     inv_range2: Vec<f64>,
 }
@@ -47,6 +50,7 @@ pub struct Cae {
 #[derive(Debug, Clone)]
 pub struct Scratch {
     log_a: Vec<f64>,
+    d2: Vec<f64>,
 }
 
 /// What a prediction knows about where the query lies relative to the
@@ -93,7 +97,8 @@ impl Cae {
         kernel.set(&norm, &w);
         let inv_range2 =
             (0..d).map(|l| if norm.is_constant(l) { 0.0 } else { 1.0 / (norm.range(l) * norm.range(l)) }).collect();
-        Ok(Self { matrix, norm, widths, w, kernel, inv_range2 })
+        let x_t = transpose(matrix.inputs_flat(), d);
+        Ok(Self { matrix, norm, widths, w, kernel, x_t, inv_range2 })
     }
 
     /// The model matrix.
@@ -118,7 +123,7 @@ impl Cae {
 
     /// Working memory for [`Cae::predict_into`].
     pub fn scratch(&self) -> Scratch {
-        Scratch { log_a: vec![0.0; self.matrix.n()] }
+        Scratch { log_a: vec![0.0; self.matrix.n()], d2: vec![0.0; self.matrix.n()] }
     }
 
     /// Predicts the M outputs at the input vector `b` (D values in the
@@ -132,7 +137,7 @@ impl Cae {
         if let Some(l) = b.iter().position(|v| !v.is_finite()) {
             return Err(CaeError::Query(format!("input '{}' is not finite: {}", self.matrix.inputs()[l], b[l])));
         }
-        if out.len() != m || scratch.log_a.len() != n {
+        if out.len() != m || scratch.log_a.len() != n || scratch.d2.len() != n {
             return Err(CaeError::Query(format!(
                 "buffers of {} outputs and {} scratch values for a model with {m} outputs and {n} rows",
                 out.len(),
@@ -140,29 +145,7 @@ impl Cae {
             )));
         }
 
-        // Pass 1: ln a_n for every model vector, and where the query lies.
-        let inputs = self.matrix.inputs_flat();
-        let (mut e_max, mut s_min) = (f64::NEG_INFINITY, f64::INFINITY);
-        let (mut nearest_row, mut nearest_d2) = (0, f64::INFINITY);
-        for (row, (bn, log_a)) in inputs.chunks_exact(d).zip(&mut scratch.log_a).enumerate() {
-            let (e, s) = self.kernel.log_weight(row, bn, b);
-            *log_a = e;
-            let mut d2 = 0.0;
-            for (l, &inv_range2) in self.inv_range2.iter().enumerate() {
-                let diff = b[l] - bn[l];
-                d2 += inv_range2 * diff * diff;
-            }
-            // Plain comparisons (all values are finite): cheaper than f64::max.
-            if e > e_max {
-                e_max = e;
-            }
-            if s < s_min {
-                s_min = s;
-            }
-            if d2 < nearest_d2 {
-                (nearest_row, nearest_d2) = (row, d2);
-            }
-        }
+        let pass = evaluate(self, b, scratch, out);
         let mut outside_range = None;
         let mut constant_mismatch = None;
         for (l, &v) in b.iter().enumerate() {
@@ -175,19 +158,17 @@ impl Cae {
             }
         }
 
-        // Pass 2: eq. (11) with the weights shifted by their maximum.
-        let (sum, weights_used) = accumulate(self.matrix.outputs_flat(), m, &mut scratch.log_a, e_max, out);
-        let inv = 1.0 / sum;
+        let inv = 1.0 / pass.sum;
         for o in out.iter_mut() {
             *o *= inv;
         }
         Ok(Diagnostics {
-            nearest_row,
-            nearest_distance: nearest_d2.sqrt(),
-            kernel_distance: (2.0 * s_min).sqrt(),
+            nearest_row: pass.nearest_row,
+            nearest_distance: pass.nearest_d2.sqrt(),
+            kernel_distance: (2.0 * pass.s_min.max(0.0)).sqrt(),
             outside_range,
             constant_mismatch,
-            weights_used,
+            weights_used: pass.used,
         })
     }
 
@@ -235,29 +216,69 @@ impl Cae {
     }
 }
 
-/// out = sum_n exp(ln a_n - e_max) C_n over the rows above the cutoff
-/// (`log_a` is overwritten by the weights); returns the sum of the weights
-/// and how many entered. Runs the AVX2 build of the same code when the CPU
-/// has it (identical results: the same operations in the same order, only
-/// more lanes at once).
-fn accumulate(c: &[f64], m: usize, log_a: &mut [f64], e_max: f64, out: &mut [f64]) -> (f64, usize) {
+/// What the two passes over the model vectors found.
+struct Pass {
+    sum: f64,
+    used: usize,
+    nearest_row: usize,
+    nearest_d2: f64,
+    s_min: f64,
+}
+
+/// The two passes of a prediction: ln a_n and the distances of every model
+/// vector, then out = sum_n exp(ln a_n - max ln a) C_n (not yet divided by
+/// the sum of the weights). Runs the AVX2 build of the same code when the
+/// CPU has it (identical results: the same operations in the same order,
+/// only more lanes at once).
+fn evaluate(cae: &Cae, b: &[f64], scratch: &mut Scratch, out: &mut [f64]) -> Pass {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2, checked just above.
-        return unsafe { accumulate_avx2(c, m, log_a, e_max, out) };
+        return unsafe { evaluate_avx2(cae, b, scratch, out) };
     }
-    accumulate_rows(c, m, log_a, e_max, out)
+    evaluate_lanes(cae, b, scratch, out)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn accumulate_avx2(c: &[f64], m: usize, log_a: &mut [f64], e_max: f64, out: &mut [f64]) -> (f64, usize) {
-    accumulate_rows(c, m, log_a, e_max, out)
+fn evaluate_avx2(cae: &Cae, b: &[f64], scratch: &mut Scratch, out: &mut [f64]) -> Pass {
+    evaluate_lanes(cae, b, scratch, out)
 }
 
 #[inline(always)]
-fn accumulate_rows(c: &[f64], m: usize, log_a: &mut [f64], e_max: f64, out: &mut [f64]) -> (f64, usize) {
-    // The weights, in one vectorizable pass (0 below the cutoff).
+fn evaluate_lanes(cae: &Cae, b: &[f64], scratch: &mut Scratch, out: &mut [f64]) -> Pass {
+    let (n, m) = (cae.matrix.n(), cae.matrix.m());
+    // Pass 1, input by input over all model vectors: ln a_n (eq. 12) and
+    // the squared normalized distance to the query.
+    cae.kernel.log_weights(&cae.x_t, b, &mut scratch.log_a);
+    let d2 = &mut scratch.d2[..n];
+    d2.fill(0.0);
+    for (l, (&bl, &inv_range2)) in b.iter().zip(&cae.inv_range2).enumerate() {
+        for (acc, x) in d2.iter_mut().zip(&cae.x_t[l * n..(l + 1) * n]) {
+            let diff = bl - x;
+            *acc += inv_range2 * diff * diff;
+        }
+    }
+    let (mut e_max, mut s_min) = (f64::NEG_INFINITY, f64::INFINITY);
+    let (mut nearest_row, mut nearest_d2) = (0, f64::INFINITY);
+    for (row, ((&e, &log_norm), &d2)) in scratch.log_a.iter().zip(cae.kernel.log_norm()).zip(d2.iter()).enumerate() {
+        // Plain comparisons (all values are finite): cheaper than f64::max.
+        if e > e_max {
+            e_max = e;
+        }
+        if log_norm - e < s_min {
+            s_min = log_norm - e;
+        }
+        if d2 < nearest_d2 {
+            (nearest_row, nearest_d2) = (row, d2);
+        }
+    }
+
+    // Pass 2, eq. (11): the weights shifted by their maximum in one
+    // vectorizable pass (0 below the cutoff), then the rows a_n C_n summed
+    // four at a time.
+    let c = cae.matrix.outputs_flat();
+    let log_a = &mut scratch.log_a[..n];
     for v in log_a.iter_mut() {
         let t = *v - e_max;
         *v = if t >= LOG_WEIGHT_CUTOFF { exp_near_zero(t) } else { 0.0 };
@@ -289,7 +310,7 @@ fn accumulate_rows(c: &[f64], m: usize, log_a: &mut [f64], e_max: f64, out: &mut
             *o += a * c;
         }
     }
-    (sum, used)
+    Pass { sum, used, nearest_row, nearest_d2, s_min }
 }
 
 /// exp(t) for t in [LOG_WEIGHT_CUTOFF, 0], to within 2 units in the last

@@ -145,12 +145,15 @@ impl Density {
 /// coef_nl = 1 / (2 (w_nl range_l)^2),
 ///
 /// the sums running over the non-constant inputs. The constant
-/// -(D/2) ln(2 pi) is the same for every n and cancels in eq. (11).
+/// -(D/2) ln(2 pi) is the same for every n and cancels in eq. (11). Stored
+/// input by input (column-major, D x N), so the weights of all model
+/// vectors are D vectorizable passes over N values.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Kernel {
+    n: usize,
     d: usize,
-    /// N x D coefficients coef_nl, row-major (0 for constant inputs).
-    coef: Vec<f64>,
+    /// D x N coefficients coef_nl, column-major (0 for constant inputs).
+    coef_t: Vec<f64>,
     /// N log normalizers -sum_l ln w_nl.
     log_norm: Vec<f64>,
 }
@@ -158,39 +161,57 @@ pub struct Kernel {
 impl Kernel {
     /// A kernel for `n` model vectors with all coefficients zero.
     pub fn zeros(n: usize, d: usize) -> Self {
-        Self { d, coef: vec![0.0; n * d], log_norm: vec![0.0; n] }
+        Self { n, d, coef_t: vec![0.0; n * d], log_norm: vec![0.0; n] }
     }
 
-    /// Sets the coefficients from the N x D widths `w` (normalized units).
+    /// Sets the coefficients from the N x D widths `w` (normalized units,
+    /// row-major).
     pub fn set(&mut self, norm: &Normalization, w: &[f64]) {
-        let d = self.d;
-        for ((coef, log_norm), w) in self.coef.chunks_exact_mut(d).zip(&mut self.log_norm).zip(w.chunks_exact(d)) {
-            *log_norm = 0.0;
-            for l in 0..d {
-                if norm.is_constant(l) {
-                    coef[l] = 0.0;
-                } else {
-                    let scaled = w[l] * norm.range(l);
-                    coef[l] = 0.5 / (scaled * scaled);
-                    *log_norm -= w[l].ln();
-                }
+        let (n, d) = (self.n, self.d);
+        self.log_norm.fill(0.0);
+        for l in 0..d {
+            let coef = &mut self.coef_t[l * n..(l + 1) * n];
+            if norm.is_constant(l) {
+                coef.fill(0.0);
+                continue;
+            }
+            for ((c, log_norm), w) in coef.iter_mut().zip(&mut self.log_norm).zip(w.chunks_exact(d)) {
+                let scaled = w[l] * norm.range(l);
+                *c = 0.5 / (scaled * scaled);
+                *log_norm -= w[l].ln();
             }
         }
     }
 
-    /// ln a_n (up to the common constant) and s_n = sum_l coef_nl (b_l -
-    /// b_nl)^2 for the query `b` against model vector `n` with inputs `bn`;
-    /// sqrt(2 s_n) is the query's distance from the vector in kernel widths.
+    /// ln a_n (up to the common constant) of the query `b` for every model
+    /// vector, into `log_a`; `x_t` holds the model inputs column-major
+    /// (D x N, see [`transpose`]). log_norm_n - ln a_n = sum_l coef_nl (b_l -
+    /// b_nl)^2, whose square root times sqrt(2) is the query's distance
+    /// from vector n in kernel widths.
     #[inline(always)]
-    pub fn log_weight(&self, n: usize, bn: &[f64], b: &[f64]) -> (f64, f64) {
-        let coef = &self.coef[n * self.d..(n + 1) * self.d];
-        let mut s = 0.0;
-        for l in 0..self.d {
-            let diff = b[l] - bn[l];
-            s += coef[l] * diff * diff;
+    pub fn log_weights(&self, x_t: &[f64], b: &[f64], log_a: &mut [f64]) {
+        let n = self.n;
+        let log_a = &mut log_a[..n];
+        log_a.copy_from_slice(&self.log_norm);
+        for (l, &bl) in b.iter().enumerate().take(self.d) {
+            let (coef, x) = (&self.coef_t[l * n..(l + 1) * n], &x_t[l * n..(l + 1) * n]);
+            for ((a, c), x) in log_a.iter_mut().zip(coef).zip(x) {
+                let diff = bl - x;
+                *a -= c * diff * diff;
+            }
         }
-        (self.log_norm[n] - s, s)
     }
+
+    /// The log normalizers -sum_l ln w_nl.
+    pub fn log_norm(&self) -> &[f64] {
+        &self.log_norm
+    }
+}
+
+/// An N x D row-major block as D x N column-major.
+pub fn transpose(b: &[f64], d: usize) -> Vec<f64> {
+    let n = b.len() / d;
+    (0..d).flat_map(|l| (0..n).map(move |r| b[r * d + l])).collect()
 }
 
 #[cfg(test)]
