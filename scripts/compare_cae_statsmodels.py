@@ -14,6 +14,8 @@ is given, so the same kernel is bw_l = w * (max_l - min_l).
 
 KernelReg takes one output at a time, so the comparison uses M_SM outputs
 (statsmodels fits each); haptex is also timed with all M = 500 outputs.
+Times are the best of several passes (haptex 200 or 20, statsmodels 3):
+the machine may be shared.
 
 Usage: python3 scripts/compare_cae_statsmodels.py [--queries 100] [--width 0.13]
 Needs numpy and statsmodels (python3 -m pip install statsmodels).
@@ -91,11 +93,13 @@ def main():
 
     bw = args.width * (hi - lo)
     sm = np.empty((args.queries, M_SM))
-    start = time.perf_counter()
-    for k in range(M_SM):
-        reg = KernelReg(outputs[:, k], grid, var_type="cccc", reg_type="lc", bw=bw)
-        sm[:, k], _ = reg.fit(queries)
-    sm_seconds = time.perf_counter() - start
+    sm_seconds = np.inf
+    for _ in range(3):  # best of 3, as haptex reports its best pass
+        start = time.perf_counter()
+        for k in range(M_SM):
+            reg = KernelReg(outputs[:, k], grid, var_type="cccc", reg_type="lc", bw=bw)
+            sm[:, k], _ = reg.fit(queries)
+        sm_seconds = min(sm_seconds, time.perf_counter() - start)
 
     rel = np.abs(hx_sm - sm) / np.abs(sm)
     rel_full = np.abs(hx_full[:, :M_SM] - sm) / np.abs(sm)
