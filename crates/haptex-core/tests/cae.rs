@@ -337,6 +337,12 @@ fn far_query_is_finite_and_warns() {
     assert_relative(&got, x.output_row(d.nearest_row), 1e-12, "far query");
     let warning = cae.warning(&far, &d).unwrap();
     assert!(warning.contains("extrapolation") && warning.contains("'b0' = 10000"), "{warning}");
+
+    // So far that the squared distances overflow: still finite, still flagged.
+    let beyond = [1e300, -1e300];
+    let (got, d) = cae.predict(&beyond).unwrap();
+    assert!(got.iter().all(|v| v.is_finite()), "{got:?}");
+    assert!(d.is_extrapolation() && cae.warning(&beyond, &d).is_some(), "{d:?}");
 }
 
 /// A constant input is left out of the kernel (the prediction equals the

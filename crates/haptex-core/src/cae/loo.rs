@@ -27,7 +27,9 @@ use super::{CaeError, Density, Kernel, ModelMatrix, Normalization, Widths};
 pub struct Loo<'a> {
     matrix: &'a ModelMatrix,
     norm: Normalization,
-    /// D x N inputs, column-major.
+    /// N x D normalized inputs, row-major.
+    bn: Vec<f64>,
+    /// The same, D x N column-major.
     x_t: Vec<f64>,
     density: Option<Density>,
     /// N x D widths w_nl.
@@ -54,10 +56,12 @@ impl<'a> Loo<'a> {
     pub fn new(matrix: &'a ModelMatrix) -> Result<Self, CaeError> {
         let (n, d, m) = (matrix.n(), matrix.d(), matrix.m());
         let norm = Normalization::fit(matrix.inputs_flat(), d)?;
+        let bn = norm.normalize_rows(matrix.inputs_flat());
         Ok(Self {
             matrix,
             norm,
-            x_t: transpose(matrix.inputs_flat(), d),
+            x_t: transpose(&bn, d),
+            bn,
             density: None,
             w: vec![0.0; n * d],
             kernel: Kernel::zeros(n, d),
@@ -78,15 +82,13 @@ impl<'a> Loo<'a> {
         self.evaluations += 1;
         let (n, d, m) = (self.matrix.n(), self.matrix.d(), self.matrix.m());
         if !widths.is_constant() && self.density.is_none() {
-            let bn = self.norm.normalize_rows(self.matrix.inputs_flat());
-            self.density = Some(Density::new(&self.norm, &bn));
+            self.density = Some(Density::new(&self.norm, &self.bn));
         }
         widths.fill(self.density.as_ref(), &mut self.w);
         self.kernel.set(&self.norm, &self.w);
 
-        let b = self.matrix.inputs_flat();
         for (i, row) in self.weights.chunks_exact_mut(n).enumerate() {
-            weight_row(&self.kernel, &self.x_t, &b[i * d..(i + 1) * d], i, row);
+            weight_row(&self.kernel, &self.x_t, &self.bn[i * d..(i + 1) * d], i, row);
         }
         let c = self.matrix.outputs_flat();
         assert!(self.weights.len() == n * n && c.len() == n * m && self.predictions.len() == n * m);

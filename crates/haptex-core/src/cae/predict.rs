@@ -39,10 +39,8 @@ pub struct Cae {
     /// N x D kernel widths w_nl, normalized units.
     w: Vec<f64>,
     kernel: Kernel,
-    /// D x N inputs, column-major (the kernel's layout).
+    /// D x N normalized inputs, column-major (the kernel's layout).
     x_t: Vec<f64>,
-    /// 1 / range_l^2 (0 for constant inputs), for normalized distances.
-    inv_range2: Vec<f64>,
 }
 
 /// Per-query working memory (one value per model vector). Make one with
@@ -51,6 +49,7 @@ pub struct Cae {
 pub struct Scratch {
     log_a: Vec<f64>,
     d2: Vec<f64>,
+    query: Vec<f64>,
 }
 
 /// What a prediction knows about where the query lies relative to the
@@ -95,10 +94,8 @@ impl Cae {
         widths.fill(density.as_ref(), &mut w);
         let mut kernel = Kernel::zeros(n, d);
         kernel.set(&norm, &w);
-        let inv_range2 =
-            (0..d).map(|l| if norm.is_constant(l) { 0.0 } else { 1.0 / (norm.range(l) * norm.range(l)) }).collect();
-        let x_t = transpose(matrix.inputs_flat(), d);
-        Ok(Self { matrix, norm, widths, w, kernel, x_t, inv_range2 })
+        let x_t = transpose(&norm.normalize_rows(matrix.inputs_flat()), d);
+        Ok(Self { matrix, norm, widths, w, kernel, x_t })
     }
 
     /// The model matrix.
@@ -123,7 +120,8 @@ impl Cae {
 
     /// Working memory for [`Cae::predict_into`].
     pub fn scratch(&self) -> Scratch {
-        Scratch { log_a: vec![0.0; self.matrix.n()], d2: vec![0.0; self.matrix.n()] }
+        let (n, d) = (self.matrix.n(), self.matrix.d());
+        Scratch { log_a: vec![0.0; n], d2: vec![0.0; n], query: vec![0.0; d] }
     }
 
     /// Predicts the M outputs at the input vector `b` (D values in the
@@ -137,7 +135,7 @@ impl Cae {
         if let Some(l) = b.iter().position(|v| !v.is_finite()) {
             return Err(CaeError::Query(format!("input '{}' is not finite: {}", self.matrix.inputs()[l], b[l])));
         }
-        if out.len() != m || scratch.log_a.len() != n || scratch.d2.len() != n {
+        if out.len() != m || scratch.log_a.len() != n || scratch.d2.len() != n || scratch.query.len() != d {
             return Err(CaeError::Query(format!(
                 "buffers of {} outputs and {} scratch values for a model with {m} outputs and {n} rows",
                 out.len(),
@@ -145,7 +143,21 @@ impl Cae {
             )));
         }
 
-        let pass = evaluate(self, b, scratch, out);
+        for (l, (q, &v)) in scratch.query.iter_mut().zip(b).enumerate() {
+            *q = self.norm.normalize(l, v);
+        }
+        let mut pass = evaluate(self, scratch, out);
+        let overflowed = !pass.sum.is_finite() || pass.sum <= 0.0;
+        if overflowed {
+            // So far out that the squared distances overflow: predict at the
+            // query clamped into the database's box instead (flagged below).
+            for q in scratch.query.iter_mut() {
+                *q = q.clamp(0.0, 1.0);
+            }
+            pass = evaluate(self, scratch, out);
+            pass.s_min = f64::INFINITY;
+            pass.nearest_d2 = f64::INFINITY;
+        }
         let mut outside_range = None;
         let mut constant_mismatch = None;
         for (l, &v) in b.iter().enumerate() {
@@ -230,33 +242,37 @@ struct Pass {
 /// the sum of the weights). Runs the AVX2 build of the same code when the
 /// CPU has it (identical results: the same operations in the same order,
 /// only more lanes at once).
-fn evaluate(cae: &Cae, b: &[f64], scratch: &mut Scratch, out: &mut [f64]) -> Pass {
+fn evaluate(cae: &Cae, scratch: &mut Scratch, out: &mut [f64]) -> Pass {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2, checked just above.
-        return unsafe { evaluate_avx2(cae, b, scratch, out) };
+        return unsafe { evaluate_avx2(cae, scratch, out) };
     }
-    evaluate_lanes(cae, b, scratch, out)
+    evaluate_lanes(cae, scratch, out)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn evaluate_avx2(cae: &Cae, b: &[f64], scratch: &mut Scratch, out: &mut [f64]) -> Pass {
-    evaluate_lanes(cae, b, scratch, out)
+fn evaluate_avx2(cae: &Cae, scratch: &mut Scratch, out: &mut [f64]) -> Pass {
+    evaluate_lanes(cae, scratch, out)
 }
 
 #[inline(always)]
-fn evaluate_lanes(cae: &Cae, b: &[f64], scratch: &mut Scratch, out: &mut [f64]) -> Pass {
+fn evaluate_lanes(cae: &Cae, scratch: &mut Scratch, out: &mut [f64]) -> Pass {
     let (n, m) = (cae.matrix.n(), cae.matrix.m());
     // Pass 1, input by input over all model vectors: ln a_n (eq. 12) and
-    // the squared normalized distance to the query.
+    // the squared normalized distance to the (normalized) query.
+    let b = &scratch.query;
     cae.kernel.log_weights(&cae.x_t, b, &mut scratch.log_a);
     let d2 = &mut scratch.d2[..n];
     d2.fill(0.0);
-    for (l, (&bl, &inv_range2)) in b.iter().zip(&cae.inv_range2).enumerate() {
+    for (l, &bl) in b.iter().enumerate() {
+        if cae.norm.is_constant(l) {
+            continue;
+        }
         for (acc, x) in d2.iter_mut().zip(&cae.x_t[l * n..(l + 1) * n]) {
             let diff = bl - x;
-            *acc += inv_range2 * diff * diff;
+            *acc += diff * diff;
         }
     }
     let (mut e_max, mut s_min) = (f64::NEG_INFINITY, f64::INFINITY);

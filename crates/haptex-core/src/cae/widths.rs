@@ -35,16 +35,30 @@ pub struct Widths {
 }
 
 impl Widths {
+    /// Smallest width accepted: far below any spacing of model vectors,
+    /// and 1/(2 w^2) stays finite.
+    pub const SMALLEST: f64 = 1e-9;
+    /// Largest width accepted (the database spans 1 in every input).
+    pub const LARGEST: f64 = 1e9;
+
     /// One constant width `w` for every model vector and input.
     pub fn constant(w: f64) -> Result<Self, CaeError> {
         Self::range(w, w)
     }
 
-    /// Non-constant widths between `w_min` and `w_max` (0 < w_min <= w_max).
+    /// Non-constant widths between `w_min` and `w_max`
+    /// ([`Widths::SMALLEST`] <= w_min <= w_max <= [`Widths::LARGEST`]).
     pub fn range(w_min: f64, w_max: f64) -> Result<Self, CaeError> {
         for (name, w) in [("w_min", w_min), ("w_max", w_max)] {
             if !(w.is_finite() && w > 0.0) {
                 return Err(CaeError::Width(format!("{name} must be a positive finite number, got {w}")));
+            }
+            if !(Self::SMALLEST..=Self::LARGEST).contains(&w) {
+                return Err(CaeError::Width(format!(
+                    "{name} = {w} is outside {} .. {} (normalized input units)",
+                    Self::SMALLEST,
+                    Self::LARGEST
+                )));
             }
         }
         if w_min > w_max {
@@ -138,11 +152,11 @@ impl Density {
     }
 }
 
-/// The Gaussian of eq. (12) for every model vector, in log space and raw
-/// input units:
+/// The Gaussian of eq. (12) for every model vector, in log space and
+/// normalized input units:
 ///
-/// ln a_n = -sum_l ln w_nl - sum_l coef_nl (b_l - b_nl)^2 + const,
-/// coef_nl = 1 / (2 (w_nl range_l)^2),
+/// ln a_n = -sum_l ln w_nl - sum_l coef_nl (b'_l - b'_nl)^2 + const,
+/// coef_nl = 1 / (2 w_nl^2),
 ///
 /// the sums running over the non-constant inputs. The constant
 /// -(D/2) ln(2 pi) is the same for every n and cancels in eq. (11). Stored
@@ -176,16 +190,15 @@ impl Kernel {
                 continue;
             }
             for ((c, log_norm), w) in coef.iter_mut().zip(&mut self.log_norm).zip(w.chunks_exact(d)) {
-                let scaled = w[l] * norm.range(l);
-                *c = 0.5 / (scaled * scaled);
+                *c = 0.5 / (w[l] * w[l]);
                 *log_norm -= w[l].ln();
             }
         }
     }
 
-    /// ln a_n (up to the common constant) of the query `b` for every model
-    /// vector, into `log_a`; `x_t` holds the model inputs column-major
-    /// (D x N, see [`transpose`]). log_norm_n - ln a_n = sum_l coef_nl (b_l -
+    /// ln a_n (up to the common constant) of the normalized query `b` for
+    /// every model vector, into `log_a`; `x_t` holds the normalized model
+    /// inputs column-major (D x N, see [`transpose`]). log_norm_n - ln a_n = sum_l coef_nl (b_l -
     /// b_nl)^2, whose square root times sqrt(2) is the query's distance
     /// from vector n in kernel widths.
     #[inline(always)]
