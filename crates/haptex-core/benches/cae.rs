@@ -1,0 +1,76 @@
+//! Speed of the conditional average estimator at the size of the FE
+//! database (issue 4): N = 405 model vectors (a 9 x 5 x 3 x 3 grid), D = 4
+//! inputs, M = 500 outputs (a sampled friction profile per row).
+//! Run: `cargo bench -p haptex-core --bench cae`.
+
+use std::hint::black_box;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use haptex_core::cae::{Cae, Loo, ModelMatrix, OptimizeOptions, Widths, optimize_widths};
+
+const M: usize = 500;
+
+/// A gridded database of smooth bump-like friction profiles: inputs
+/// (width 0.5..2.5 mm, height 0.1..0.5 mm, velocity 10..50 mm/s, mu_skin
+/// 0.4..0.6), outputs mu at 500 positions over 10 mm.
+fn database() -> ModelMatrix {
+    let mut b = Vec::new();
+    let mut c = Vec::new();
+    for i in 0..9 {
+        for j in 0..5 {
+            for k in 0..3 {
+                for l in 0..3 {
+                    let (rw, rh, v, mu) =
+                        (0.5 + 0.25 * i as f64, 0.1 + 0.1 * j as f64, 10.0 + 20.0 * k as f64, 0.4 + 0.1 * l as f64);
+                    b.extend([rw, rh, v, mu]);
+                    c.extend((0..M).map(|p| {
+                        let u = (p as f64 * 0.02 - 5.0) / rw;
+                        mu * (1.0 - 0.6 * rh * u * (-u * u).exp() * (1.0 + 0.002 * v))
+                    }));
+                }
+            }
+        }
+    }
+    let names = |prefix: &str, n: usize| (0..n).map(|i| format!("{prefix}{i}")).collect::<Vec<_>>();
+    let inputs = ["r_w", "r_h", "velocity", "mu_skin"].map(String::from).to_vec();
+    ModelMatrix::new(inputs, names("mu_", M), b, c).unwrap()
+}
+
+fn bench(c: &mut Criterion) {
+    let x = database();
+    assert_eq!((x.n(), x.d(), x.m()), (405, 4, 500));
+    let queries: Vec<[f64; 4]> = (0..16)
+        .map(|q| [0.6 + 0.12 * q as f64, 0.13 + 0.02 * q as f64, 12.0 + 2.3 * q as f64, 0.43 + 0.01 * q as f64])
+        .collect();
+
+    let mut group = c.benchmark_group("cae_n405_d4_m500");
+    for (name, widths) in [
+        ("predict_constant_w0.13", Widths::constant(0.13).unwrap()),
+        ("predict_nonconstant_w0.1_0.2", Widths::range(0.1, 0.2).unwrap()),
+    ] {
+        let cae = Cae::new(x.clone(), widths).unwrap();
+        let mut scratch = cae.scratch();
+        let mut out = vec![0.0; M];
+        let mut q = 0;
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                q = (q + 1) % queries.len();
+                cae.predict_into(black_box(&queries[q]), &mut scratch, &mut out).unwrap();
+                black_box(&out);
+            })
+        });
+    }
+    let mut loo = Loo::new(&x).unwrap();
+    group.bench_function("loo_rmse_one_width", |b| b.iter(|| loo.rmse(black_box(Widths::constant(0.13).unwrap()))));
+    group.sample_size(10);
+    group.bench_function("loo_optimize_constant", |b| {
+        b.iter(|| optimize_widths(&x, OptimizeOptions { constant_only: true, ..OptimizeOptions::default() }).unwrap())
+    });
+    group.bench_function("loo_optimize_nonconstant", |b| {
+        b.iter(|| optimize_widths(&x, OptimizeOptions::default()).unwrap())
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,313 @@
+//! Leave-one-out (LOO) error of the CAE and the widths that minimize it
+//! (paper section 3.2: "a leave one out analysis was performed to assess
+//! the prediction quality and to optimise the weight parameters").
+//!
+//! Row i is predicted by eqs. (11)-(12) from the other N - 1 model vectors:
+//! its own kernel weight is zero, so neither its outputs nor its Gaussian
+//! enter its prediction. The normalization and the width rule are those of
+//! the whole database (they depend on the inputs only), exactly as the
+//! estimator used for prediction has them; no model is refitted. All N
+//! predictions at once are Ĉ = W C with the N x N row-normalized weight
+//! matrix W (W_ii = 0), one matrix product: O(N^2 (D + M)) per width.
+//!
+//! The widths are searched in log space: a scan of constant widths over the
+//! search range, Nelder-Mead on ln w from the best of them, then (unless
+//! only a constant width is wanted) Nelder-Mead on (ln w_min, ln(w_max /
+//! w_min)) from that constant optimum.
+
+use serde::Serialize;
+
+use super::nelder_mead::{self, Options};
+use super::predict::{LOG_WEIGHT_CUTOFF, exp_near_zero};
+use super::widths::transpose;
+use super::{CaeError, Density, Kernel, ModelMatrix, Normalization, Widths};
+
+/// Leave-one-out evaluation over one model matrix, with its buffers.
+#[derive(Debug)]
+pub struct Loo<'a> {
+    matrix: &'a ModelMatrix,
+    norm: Normalization,
+    /// N x D normalized inputs, row-major.
+    bn: Vec<f64>,
+    /// The same, D x N column-major.
+    x_t: Vec<f64>,
+    density: Option<Density>,
+    /// N x D widths w_nl.
+    w: Vec<f64>,
+    kernel: Kernel,
+    /// N x N row-normalized LOO weights, row-major.
+    weights: Vec<f64>,
+    /// N x M LOO predictions, row-major.
+    predictions: Vec<f64>,
+    evaluations: usize,
+}
+
+/// LOO errors at one set of widths.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LooErrors {
+    /// RMS of the LOO residuals over all rows and outputs,
+    /// sqrt(sum_ik (c_ik - ĉ_ik)^2 / (N M)), in output units.
+    pub rmse: f64,
+    /// RMS over the rows, per output (in output order).
+    pub rmse_per_output: Vec<f64>,
+}
+
+impl<'a> Loo<'a> {
+    pub fn new(matrix: &'a ModelMatrix) -> Result<Self, CaeError> {
+        let (n, d, m) = (matrix.n(), matrix.d(), matrix.m());
+        let norm = Normalization::fit(matrix.inputs_flat(), d)?;
+        let bn = norm.normalize_rows(matrix.inputs_flat());
+        Ok(Self {
+            matrix,
+            norm,
+            x_t: transpose(&bn, d),
+            bn,
+            density: None,
+            w: vec![0.0; n * d],
+            kernel: Kernel::zeros(n, d),
+            weights: vec![0.0; n * n],
+            predictions: vec![0.0; n * m],
+            evaluations: 0,
+        })
+    }
+
+    /// Number of width settings evaluated so far.
+    pub fn evaluations(&self) -> usize {
+        self.evaluations
+    }
+
+    /// The LOO predictions of every row, N x M row-major: row i from the
+    /// other N - 1 model vectors.
+    pub fn predictions(&mut self, widths: Widths) -> &[f64] {
+        self.evaluations += 1;
+        let (n, d, m) = (self.matrix.n(), self.matrix.d(), self.matrix.m());
+        if !widths.is_constant() && self.density.is_none() {
+            self.density = Some(Density::new(&self.norm, &self.bn));
+        }
+        widths.fill(self.density.as_ref(), &mut self.w);
+        self.kernel.set(&self.norm, &self.w);
+
+        for (i, row) in self.weights.chunks_exact_mut(n).enumerate() {
+            weight_row(&self.kernel, &self.x_t, &self.bn[i * d..(i + 1) * d], i, row);
+        }
+        let c = self.matrix.outputs_flat();
+        assert!(self.weights.len() == n * n && c.len() == n * m && self.predictions.len() == n * m);
+        // SAFETY: the three buffers are contiguous row-major matrices of the
+        // sizes given (N x N, N x M, N x M, checked above), the output does
+        // not alias the inputs, and with beta = 0 it is only written.
+        unsafe {
+            matrixmultiply::dgemm(
+                n,
+                n,
+                m,
+                1.0,
+                self.weights.as_ptr(),
+                n as isize,
+                1,
+                c.as_ptr(),
+                m as isize,
+                1,
+                0.0,
+                self.predictions.as_mut_ptr(),
+                m as isize,
+                1,
+            );
+        }
+        &self.predictions
+    }
+
+    /// RMS of the LOO residuals over all rows and outputs.
+    pub fn rmse(&mut self, widths: Widths) -> f64 {
+        self.predictions(widths);
+        let sq: f64 = self.matrix.outputs_flat().iter().zip(&self.predictions).map(|(c, p)| (c - p) * (c - p)).sum();
+        (sq / self.predictions.len() as f64).sqrt()
+    }
+
+    /// Overall and per-output LOO errors.
+    pub fn errors(&mut self, widths: Widths) -> LooErrors {
+        let (n, m) = (self.matrix.n(), self.matrix.m());
+        self.predictions(widths);
+        let mut per_output = vec![0.0; m];
+        for (c, p) in self.matrix.outputs_flat().chunks_exact(m).zip(self.predictions.chunks_exact(m)) {
+            for ((acc, c), p) in per_output.iter_mut().zip(c).zip(p) {
+                *acc += (c - p) * (c - p);
+            }
+        }
+        let rmse = (per_output.iter().sum::<f64>() / (n * m) as f64).sqrt();
+        let rmse_per_output = per_output.iter().map(|s| (s / n as f64).sqrt()).collect();
+        LooErrors { rmse, rmse_per_output }
+    }
+}
+
+/// Row i of the LOO weight matrix: the normalized weights of eq. (12) of
+/// every model vector for the query b_i, with w_ii = 0. Runs the AVX2 build
+/// of the same code when the CPU has it.
+fn weight_row(kernel: &Kernel, x_t: &[f64], bi: &[f64], i: usize, row: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2, checked just above.
+        return unsafe { weight_row_avx2(kernel, x_t, bi, i, row) };
+    }
+    weight_row_lanes(kernel, x_t, bi, i, row)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn weight_row_avx2(kernel: &Kernel, x_t: &[f64], bi: &[f64], i: usize, row: &mut [f64]) {
+    weight_row_lanes(kernel, x_t, bi, i, row)
+}
+
+#[inline(always)]
+fn weight_row_lanes(kernel: &Kernel, x_t: &[f64], bi: &[f64], i: usize, row: &mut [f64]) {
+    kernel.log_weights(x_t, bi, row);
+    row[i] = f64::NEG_INFINITY;
+    // Largest ln a_j, j != i, with four independent lanes (vectorizable).
+    let mut lanes = [f64::NEG_INFINITY; 4];
+    let chunks = row.chunks_exact(4);
+    let rest = chunks.remainder();
+    for chunk in chunks {
+        for (lane, &e) in lanes.iter_mut().zip(chunk) {
+            *lane = if e > *lane { e } else { *lane };
+        }
+    }
+    let e_max = rest.iter().chain(&lanes).fold(f64::NEG_INFINITY, |a, &e| if e > a { e } else { a });
+    let mut sum = 0.0;
+    for w in row.iter_mut() {
+        let t = *w - e_max;
+        *w = if t >= LOG_WEIGHT_CUTOFF { exp_near_zero(t) } else { 0.0 };
+        sum += *w;
+    }
+    let inv = 1.0 / sum;
+    for w in row.iter_mut() {
+        *w *= inv;
+    }
+}
+
+/// How to search for the widths.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OptimizeOptions {
+    /// Only a constant width (w_min = w_max).
+    pub constant_only: bool,
+    /// Smallest and largest width searched, normalized units.
+    pub search_range: (f64, f64),
+    /// Constant widths scanned (log-spaced over the range) before the
+    /// simplex search starts from the best.
+    pub scan_points: usize,
+}
+
+impl Default for OptimizeOptions {
+    fn default() -> Self {
+        Self { constant_only: false, search_range: (0.005, 2.0), scan_points: 13 }
+    }
+}
+
+/// One constant width and its LOO RMS error.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ScanPoint {
+    pub w: f64,
+    pub rmse: f64,
+}
+
+/// What the width search did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OptimizerReport {
+    pub method: &'static str,
+    /// Smallest and largest width searched.
+    pub search_range: [f64; 2],
+    /// The scan of constant widths (the LOO error curve).
+    pub scan: Vec<ScanPoint>,
+    /// The best constant width found by Nelder-Mead from the scan.
+    pub constant: ScanPoint,
+    /// Width settings evaluated in total (scan, searches and the final one).
+    pub evaluations: usize,
+    /// Nelder-Mead iterations in total.
+    pub iterations: usize,
+    /// True if every simplex search met its tolerances.
+    pub converged: bool,
+    /// True if the optimum touches the search range (widen it).
+    pub at_bound: bool,
+}
+
+/// The widths with the smallest LOO error found, and that error.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct WidthOptimum {
+    pub widths: Widths,
+    pub errors: LooErrors,
+    pub report: OptimizerReport,
+}
+
+/// Searches the widths that minimize the LOO RMS error (see the module doc).
+pub fn optimize_widths(matrix: &ModelMatrix, options: OptimizeOptions) -> Result<WidthOptimum, CaeError> {
+    let (lo, hi) = options.search_range;
+    Widths::range(lo, hi)?;
+    if lo >= hi {
+        return Err(CaeError::Width(format!("the search range {lo} .. {hi} is empty")));
+    }
+    let mut loo = Loo::new(matrix)?;
+    let (ln_lo, ln_hi) = (lo.ln(), hi.ln());
+    let points = options.scan_points.max(2);
+    let step = (ln_hi - ln_lo) / (points - 1) as f64;
+    let scan: Vec<ScanPoint> = (0..points)
+        .map(|j| {
+            let w = if j + 1 == points { hi } else { (ln_lo + step * j as f64).exp() };
+            ScanPoint { w, rmse: loo.rmse(Widths { w_min: w, w_max: w }) }
+        })
+        .collect();
+    let start = scan.iter().min_by(|a, b| a.rmse.total_cmp(&b.rmse)).unwrap();
+
+    let nm = Options { x_tol: 1e-3, f_tol: 1e-6, f_abs: 0.0, max_evals: 100 };
+    let constant = nelder_mead::minimize(
+        |x| {
+            let w = x[0].exp();
+            loo.rmse(Widths { w_min: w, w_max: w })
+        },
+        &[start.w.ln()],
+        &[step],
+        &[ln_lo],
+        &[ln_hi],
+        nm,
+    );
+    let w_c = constant.x[0].exp();
+    let mut best = (Widths { w_min: w_c, w_max: w_c }, constant.f);
+    let (mut iterations, mut converged) = (constant.iterations, constant.converged);
+
+    if !options.constant_only {
+        let span = ln_hi - ln_lo;
+        let to_widths = |x: &[f64]| {
+            let w_min = x[0].exp();
+            Widths { w_min, w_max: (x[0] + x[1].abs()).exp().clamp(w_min, hi) }
+        };
+        let varying = nelder_mead::minimize(
+            |x| loo.rmse(to_widths(x)),
+            &[constant.x[0], 0.0],
+            &[0.5 * step, 0.5],
+            &[ln_lo, -span],
+            &[ln_hi, span],
+            Options { max_evals: 200, ..nm },
+        );
+        iterations += varying.iterations;
+        converged &= varying.converged;
+        if varying.f < best.1 {
+            best = (to_widths(&varying.x), varying.f);
+        }
+    }
+
+    let widths = best.0;
+    let errors = loo.errors(widths);
+    let near = |a: f64, b: f64| (a / b - 1.0).abs() < 1e-9;
+    let at_bound = near(widths.w_min, lo) || near(widths.w_max, hi);
+    Ok(WidthOptimum {
+        widths,
+        errors,
+        report: OptimizerReport {
+            method: "scan of constant widths, then Nelder-Mead in log width",
+            search_range: [lo, hi],
+            scan,
+            constant: ScanPoint { w: w_c, rmse: constant.f },
+            evaluations: loo.evaluations(),
+            iterations,
+            converged,
+            at_bound,
+        },
+    })
+}
