@@ -10,3 +10,4 @@ pub mod profile;
 
 pub use electrovibration::{Device, Method, VoltageProfile, VoltageSummary, map_profile};
 pub use profile::{FrictionProfile, ProfileError};
+pub mod plot;
