@@ -42,6 +42,14 @@ const SINE_BITS: u32 = 10;
 const SINE_LEN: usize = 1 << SINE_BITS;
 const INDEX_SHIFT: u32 = 64 - SINE_BITS;
 
+// Compile-time modes of the per-sample loop.
+const SINE: u8 = 0;
+const SQUARE: u8 = 1;
+const NONE: u8 = 2;
+const HOLD: u8 = 0;
+const ZERO: u8 = 1;
+const REPEAT: u8 = 2;
+
 /// Settings of a [`RealtimeRenderer`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RealtimeConfig {
@@ -59,7 +67,9 @@ pub struct RealtimeConfig {
     /// velocity (the finger is taken as still).
     pub horizon_s: f64,
     /// Time over which a new report's disagreement with the extrapolated
-    /// position is blended out, in s (0: jump to the report).
+    /// position is blended out, in s (0: jump to the report). Keep it at
+    /// most the report interval (4 ms suits 60-240 Hz: see
+    /// docs/playback.md for the measured trade-off).
     pub blend_s: f64,
     /// Points of the lookup table; `None`: enough for the curve's smallest
     /// spacing (exact for a uniformly sampled curve), at most
@@ -69,7 +79,7 @@ pub struct RealtimeConfig {
 
 impl Default for RealtimeConfig {
     /// 48 kHz, 1 kHz sine, U_max = 100 V, held ends, full scale = sqrt(2) x
-    /// 100 V, 50 ms horizon, 1/60 s blend.
+    /// 100 V, 50 ms horizon, 4 ms blend.
     fn default() -> Self {
         Self {
             sample_rate_hz: 48_000,
@@ -78,7 +88,7 @@ impl Default for RealtimeConfig {
             extend: Extend::Hold,
             volts_per_full_scale: std::f64::consts::SQRT_2 * Limits::DEFAULT.u_max_v,
             horizon_s: 0.05,
-            blend_s: 1.0 / 60.0,
+            blend_s: 0.004,
             table_points: None,
         }
     }
@@ -106,13 +116,14 @@ pub struct RealtimeRenderer {
     x0_mm: f64,
     inv_dx: f64,
     last_index: f64,
+    inv_last_index: f64,
     extend: Extend,
     // Carrier: 64-bit phase accumulator (a full cycle is 2^64) over a
     // unit-RMS sine table.
     shape: CarrierShape,
     phase: u64,
     phase_step: u64,
-    sine: Box<[f64]>,
+    sine: Box<[f64; SINE_LEN + 1]>,
     limiter: EnvelopeLimiter,
     output_scale: f64,
     // Clock.
@@ -173,7 +184,7 @@ impl RealtimeRenderer {
         let dx = (x1 - x0) / (points - 1) as f64;
         let u_max = config.limits.u_max_v;
         let mut clamped = 0usize;
-        let table: Box<[f64]> = (0..points)
+        let mut table: Vec<f64> = (0..points)
             .map(|i| {
                 let x = if i + 1 == points { x1 } else { x0 + dx * i as f64 };
                 let u = curve.voltage_at(x, Extend::Hold);
@@ -181,6 +192,9 @@ impl RealtimeRenderer {
                 u.min(u_max)
             })
             .collect();
+        // Padding: a lookup at exactly the last point reads one entry past it.
+        table.push(table[points - 1]);
+        let table = table.into_boxed_slice();
         let table_max = table.iter().fold(0.0f64, |m, &u| m.max(u));
         let peak_bound_v = config.carrier.peak_per_rms() * table_max;
         if let Some(range_v) = config.limits.amplifier_range_v
@@ -197,9 +211,10 @@ impl RealtimeRenderer {
             return Err(SignalError::ExceedsFullScale { amplitude_v: peak_bound_v, volts_per_full_scale: vpfs });
         }
 
-        let sine: Box<[f64]> = (0..=SINE_LEN)
-            .map(|i| std::f64::consts::SQRT_2 * (std::f64::consts::TAU * i as f64 / SINE_LEN as f64).sin())
-            .collect();
+        let mut sine = Box::new([0.0; SINE_LEN + 1]);
+        for (i, v) in sine.iter_mut().enumerate() {
+            *v = std::f64::consts::SQRT_2 * (std::f64::consts::TAU * i as f64 / SINE_LEN as f64).sin();
+        }
         let cycles_per_sample =
             if config.carrier.shape == CarrierShape::None { 0.0 } else { config.carrier.frequency_hz / fs };
         Ok(Self {
@@ -207,6 +222,7 @@ impl RealtimeRenderer {
             x0_mm: x0,
             inv_dx: 1.0 / dx,
             last_index: (points - 1) as f64,
+            inv_last_index: 1.0 / (points - 1) as f64,
             extend: config.extend,
             shape: config.carrier.shape,
             phase: 0,
@@ -275,98 +291,142 @@ impl RealtimeRenderer {
     /// horizon, plus what is left of the blended correction.
     #[inline]
     pub fn position_at(&self, t_s: f64) -> f64 {
-        let age = (t_s - self.t_report).max(0.0);
-        self.x_report + self.velocity * age.min(self.horizon_s) + self.offset_at(t_s)
-    }
-
-    #[inline]
-    fn offset_at(&self, t_s: f64) -> f64 {
-        let age = (t_s - self.t_report).max(0.0);
-        self.offset * (1.0 - age * self.inv_blend).max(0.0)
+        // Plain comparisons: the operands are finite (NaN-aware f64::min/max
+        // cost extra instructions per sample).
+        let age = t_s - self.t_report;
+        let age = if age > 0.0 { age } else { 0.0 };
+        let extrapolated = if age < self.horizon_s { age } else { self.horizon_s };
+        let left = 1.0 - age * self.inv_blend;
+        let left = if left > 0.0 { left } else { 0.0 };
+        self.x_report + self.velocity * extrapolated + self.offset * left
     }
 
     /// U in V RMS (clamped at U_max) at `x_mm`, from the lookup table.
-    #[inline]
     pub fn voltage_at(&self, x_mm: f64) -> f64 {
-        let mut p = (x_mm - self.x0_mm) * self.inv_dx;
         match self.extend {
-            Extend::Hold => {}
-            Extend::Zero => {
-                if !(0.0..=self.last_index).contains(&p) {
-                    return 0.0;
-                }
-            }
-            Extend::Repeat => {
-                // p mod last_index, with a truncating cast as floor.
-                let q = p / self.last_index;
-                let mut k = q as i64;
-                if (k as f64) > q {
-                    k -= 1;
-                }
-                p -= k as f64 * self.last_index;
-            }
+            Extend::Hold => self.lookup::<HOLD>(x_mm),
+            Extend::Zero => self.lookup::<ZERO>(x_mm),
+            Extend::Repeat => self.lookup::<REPEAT>(x_mm),
         }
-        let p = p.clamp(0.0, self.last_index);
-        let i = (p as usize).min(self.table.len() - 2);
-        let f = p - i as f64;
-        let (a, b) = (self.table[i], self.table[i + 1]);
+    }
+
+    /// Table lookup with linear interpolation; `E` is the extension mode.
+    #[inline(always)]
+    fn lookup<const E: u8>(&self, x_mm: f64) -> f64 {
+        let mut p = (x_mm - self.x0_mm) * self.inv_dx;
+        if E == ZERO && !(0.0..=self.last_index).contains(&p) {
+            return 0.0;
+        }
+        if E == REPEAT {
+            // p mod last_index, with a truncating cast as floor.
+            let q = p * self.inv_last_index;
+            let mut k = q as i64;
+            if (k as f64) > q {
+                k -= 1;
+            }
+            p -= k as f64 * self.last_index;
+        }
+        let p = if p > 0.0 { p } else { 0.0 };
+        let p = if p < self.last_index { p } else { self.last_index };
+        // p <= last_index < 2^20; the table has one padding entry past
+        // last_index, so i + 1 is in bounds even at the end.
+        let i = p as u32;
+        let f = p - f64::from(i);
+        let (a, b) = (self.table[i as usize], self.table[i as usize + 1]);
         a + f * (b - a)
     }
 
-    /// The carrier's unit-RMS value at the current phase; advances the phase.
-    #[inline]
-    fn carrier(&mut self) -> f64 {
-        let phase = self.phase;
-        self.phase = phase.wrapping_add(self.phase_step);
-        match self.shape {
-            CarrierShape::Sine => {
+    /// The unit-RMS carrier at `phase` (a full cycle is 2^64); `S` is the shape.
+    #[inline(always)]
+    fn carrier_at<const S: u8>(sine: &[f64; SINE_LEN + 1], phase: u64) -> f64 {
+        match S {
+            SINE => {
                 let i = (phase >> INDEX_SHIFT) as usize;
                 // The 32 bits below the index as the fraction in [0, 1).
                 let f = ((phase >> (INDEX_SHIFT - 32)) as u32) as f64 * (1.0 / 4_294_967_296.0);
-                let (a, b) = (self.sine[i], self.sine[i + 1]);
+                let (a, b) = (sine[i], sine[i + 1]);
                 a + f * (b - a)
             }
-            CarrierShape::Square => {
+            SQUARE => {
                 if phase < 1 << 63 {
                     1.0
                 } else {
                     -1.0
                 }
             }
-            CarrierShape::None => 1.0,
+            _ => 1.0,
+        }
+    }
+
+    /// Renders the next `n` samples, handing each with its index to
+    /// `write`. The carrier shape `S` and extension `E` are compile-time
+    /// constants, so the per-sample loop has no mode branches.
+    #[inline(always)]
+    fn render<const S: u8, const E: u8>(&mut self, n: usize, mut write: impl FnMut(usize, Sample)) {
+        let dt = self.dt_s;
+        let t0 = self.n as f64 * dt;
+        let mut phase = self.phase;
+        let mut limiter = self.limiter;
+        let mut k = 0.0;
+        for i in 0..n {
+            let t_s = t0 + k * dt;
+            k += 1.0;
+            let (x_mm, requested) = if self.touching {
+                let x = self.position_at(t_s);
+                (x, self.lookup::<E>(x))
+            } else {
+                (self.x_report, 0.0)
+            };
+            let envelope_v = limiter.apply(requested);
+            let signal_v = envelope_v * Self::carrier_at::<S>(&self.sine, phase);
+            phase = phase.wrapping_add(self.phase_step);
+            write(i, Sample { t_s, x_mm, envelope_v, signal_v });
+        }
+        self.phase = phase;
+        self.limiter = limiter;
+        self.n += n as u64;
+    }
+
+    /// [`render`](Self::render) for the configured shape and extension.
+    fn dispatch(&mut self, n: usize, write: impl FnMut(usize, Sample)) {
+        use CarrierShape as C;
+        match (self.shape, self.extend) {
+            (C::Sine, Extend::Hold) => self.render::<SINE, HOLD>(n, write),
+            (C::Sine, Extend::Zero) => self.render::<SINE, ZERO>(n, write),
+            (C::Sine, Extend::Repeat) => self.render::<SINE, REPEAT>(n, write),
+            (C::Square, Extend::Hold) => self.render::<SQUARE, HOLD>(n, write),
+            (C::Square, Extend::Zero) => self.render::<SQUARE, ZERO>(n, write),
+            (C::Square, Extend::Repeat) => self.render::<SQUARE, REPEAT>(n, write),
+            (C::None, Extend::Hold) => self.render::<NONE, HOLD>(n, write),
+            (C::None, Extend::Zero) => self.render::<NONE, ZERO>(n, write),
+            (C::None, Extend::Repeat) => self.render::<NONE, REPEAT>(n, write),
         }
     }
 
     /// Renders the next output sample. O(1), no allocation.
-    #[inline]
     pub fn next_sample(&mut self) -> Sample {
-        let t_s = self.n as f64 * self.dt_s;
-        self.n += 1;
-        let (x_mm, requested) = if self.touching {
-            let x = self.position_at(t_s);
-            (x, self.voltage_at(x))
-        } else {
-            (self.x_report, 0.0)
-        };
-        let envelope_v = self.limiter.apply(requested);
-        let signal_v = envelope_v * self.carrier();
-        Sample { t_s, x_mm, envelope_v, signal_v }
+        let mut sample = Sample { t_s: 0.0, x_mm: 0.0, envelope_v: 0.0, signal_v: 0.0 };
+        self.dispatch(1, |_, s| sample = s);
+        sample
     }
 
     /// Fills `out` with the next samples, as fractions of full scale
     /// (volts / volts_per_full_scale, within [-1, 1]). O(1) per sample, no
     /// allocation.
     pub fn fill(&mut self, out: &mut [f32]) {
-        for o in out {
-            *o = (self.next_sample().signal_v * self.output_scale) as f32;
-        }
+        let scale = self.output_scale;
+        self.dispatch(out.len(), |i, s| out[i] = (s.signal_v * scale) as f32);
     }
 
     /// Fills `out` with the next samples in volts.
     pub fn fill_volts(&mut self, out: &mut [f64]) {
-        for o in out {
-            *o = self.next_sample().signal_v;
-        }
+        self.dispatch(out.len(), |i, s| out[i] = s.signal_v);
+    }
+
+    /// Fills `out` with the next samples, each with its time, position and
+    /// envelope (for inspection and tests).
+    pub fn fill_samples(&mut self, out: &mut [Sample]) {
+        self.dispatch(out.len(), |i, s| out[i] = s);
     }
 
     /// Upper bound of |drive| in V: carrier peak/RMS times the largest
@@ -377,7 +437,7 @@ impl RealtimeRenderer {
 
     /// Number of lookup-table points.
     pub fn table_points(&self) -> usize {
-        self.table.len()
+        self.table.len() - 1
     }
 
     /// Fraction of the lookup table clamped at U_max.

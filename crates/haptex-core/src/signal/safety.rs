@@ -67,13 +67,22 @@ impl EnvelopeLimiter {
         Self { u_max_v: limits.u_max_v, max_step_v, previous_v: 0.0 }
     }
 
-    /// The limited envelope for a requested RMS voltage `requested_v` (>= 0).
+    /// The limited envelope for a requested RMS voltage `requested_v` (>= 0,
+    /// not NaN).
     #[inline]
     pub fn apply(&mut self, requested_v: f64) -> f64 {
-        let clamped = requested_v.min(self.u_max_v);
+        // Plain comparisons (not f64::min/max, whose NaN handling lengthens
+        // this loop-carried dependency chain in the real-time renderer).
+        let clamped = if requested_v < self.u_max_v { requested_v } else { self.u_max_v };
         let lo = self.previous_v - self.max_step_v;
         let hi = self.previous_v + self.max_step_v;
-        let out = clamped.max(lo).min(hi);
+        let out = if clamped > hi {
+            hi
+        } else if clamped < lo {
+            lo
+        } else {
+            clamped
+        };
         self.previous_v = out;
         out
     }
