@@ -92,7 +92,7 @@ fn fill_loop_does_not_allocate() {
                     }
                     next_report += 800;
                 }
-                if rendered % 512 == 0 {
+                if rendered.is_multiple_of(512) {
                     renderer.fill(&mut buffer);
                 } else {
                     renderer.fill_volts(&mut volts);
