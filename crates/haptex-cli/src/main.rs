@@ -22,12 +22,14 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     Voltage(commands::voltage::VoltageArgs),
+    Play(commands::play::PlayArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Voltage(args) => commands::voltage::run(args),
+        Command::Play(args) => commands::play::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,3 +1,4 @@
 //! One module per `haptex` subcommand.
 
+pub mod play;
 pub mod voltage;

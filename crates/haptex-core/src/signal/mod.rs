@@ -210,9 +210,9 @@ impl DriveSignal {
         let r = &self.report;
         writeln!(
             w,
-            "# haptex drive signal, {} Hz, carrier {:?} {} Hz: envelope_v is RMS (V), signal_v the instantaneous drive (V), peak = {} x envelope",
+            "# haptex drive signal, {} Hz, carrier {} {} Hz: envelope_v is RMS (V), signal_v the instantaneous drive (V), peak = {} x envelope",
             r.sample_rate_hz,
-            r.carrier.shape,
+            format!("{:?}", r.carrier.shape).to_lowercase(),
             r.carrier.frequency_hz,
             r.carrier.peak_per_rms()
         )?;
