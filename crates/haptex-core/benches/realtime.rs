@@ -26,6 +26,7 @@ fn bench(c: &mut Criterion) {
         ("sine_hold_slew", CarrierShape::Sine, Extend::Hold, Some(50_000.0)),
         ("square_zero", CarrierShape::Square, Extend::Zero, None),
         ("none_repeat", CarrierShape::None, Extend::Repeat, None),
+        ("sine_repeat", CarrierShape::Sine, Extend::Repeat, None),
     ];
     for (name, shape, extend, slew) in cases {
         let config = RealtimeConfig {

@@ -118,6 +118,8 @@ pub struct RealtimeRenderer {
     last_index: f64,
     inv_last_index: f64,
     extend: Extend,
+    /// Periods subtracted by the last Repeat lookup (table index units).
+    wrap: f64,
     // Carrier: 64-bit phase accumulator (a full cycle is 2^64) over a
     // unit-RMS sine table.
     shape: CarrierShape,
@@ -223,6 +225,7 @@ impl RealtimeRenderer {
             inv_dx: 1.0 / dx,
             last_index: (points - 1) as f64,
             inv_last_index: 1.0 / (points - 1) as f64,
+            wrap: 0.0,
             extend: config.extend,
             shape: config.carrier.shape,
             phase: 0,
@@ -304,27 +307,36 @@ impl RealtimeRenderer {
     /// U in V RMS (clamped at U_max) at `x_mm`, from the lookup table.
     pub fn voltage_at(&self, x_mm: f64) -> f64 {
         match self.extend {
-            Extend::Hold => self.lookup::<HOLD>(x_mm),
-            Extend::Zero => self.lookup::<ZERO>(x_mm),
-            Extend::Repeat => self.lookup::<REPEAT>(x_mm),
+            Extend::Hold => self.lookup::<HOLD>(x_mm, &mut 0.0),
+            Extend::Zero => self.lookup::<ZERO>(x_mm, &mut 0.0),
+            Extend::Repeat => self.lookup::<REPEAT>(x_mm, &mut 0.0),
         }
     }
 
     /// Table lookup with linear interpolation; `E` is the extension mode.
+    /// `wrap` (Repeat only) is the whole number of periods, in table index
+    /// units, last subtracted: kept between samples, it is recomputed only
+    /// when the finger crosses into another period.
     #[inline(always)]
-    fn lookup<const E: u8>(&self, x_mm: f64) -> f64 {
+    fn lookup<const E: u8>(&self, x_mm: f64, wrap: &mut f64) -> f64 {
         let mut p = (x_mm - self.x0_mm) * self.inv_dx;
         if E == ZERO && !(0.0..=self.last_index).contains(&p) {
             return 0.0;
         }
         if E == REPEAT {
-            // p mod last_index, with a truncating cast as floor.
-            let q = p * self.inv_last_index;
-            let mut k = q as i64;
-            if (k as f64) > q {
-                k -= 1;
+            let wrapped = p - *wrap;
+            if (0.0..self.last_index).contains(&wrapped) {
+                p = wrapped;
+            } else {
+                // floor(p / last_index) periods, with a truncating cast as floor.
+                let q = p * self.inv_last_index;
+                let mut k = q as i64;
+                if (k as f64) > q {
+                    k -= 1;
+                }
+                *wrap = k as f64 * self.last_index;
+                p -= *wrap;
             }
-            p -= k as f64 * self.last_index;
         }
         let p = if p > 0.0 { p } else { 0.0 };
         let p = if p < self.last_index { p } else { self.last_index };
@@ -367,13 +379,14 @@ impl RealtimeRenderer {
         let t0 = self.n as f64 * dt;
         let mut phase = self.phase;
         let mut limiter = self.limiter;
+        let mut wrap = self.wrap;
         let mut k = 0.0;
         for i in 0..n {
             let t_s = t0 + k * dt;
             k += 1.0;
             let (x_mm, requested) = if self.touching {
                 let x = self.position_at(t_s);
-                (x, self.lookup::<E>(x))
+                (x, self.lookup::<E>(x, &mut wrap))
             } else {
                 (self.x_report, 0.0)
             };
@@ -384,6 +397,7 @@ impl RealtimeRenderer {
         }
         self.phase = phase;
         self.limiter = limiter;
+        self.wrap = wrap;
         self.n += n as u64;
     }
 
@@ -468,6 +482,32 @@ mod tests {
                 let x = -5.0 + i as f64 * 0.00537;
                 let (a, b) = (r.voltage_at(x), c.voltage_at(x, extend));
                 assert!((a - b).abs() < 1e-9, "{extend:?} x = {x}: {a} vs {b}");
+            }
+        }
+    }
+
+    /// Streaming in Repeat mode (the period offset is cached between
+    /// samples) gives the curve's tiled value at every estimated position,
+    /// while the finger crosses several periods both ways: within 1e-9 V.
+    #[test]
+    fn repeat_tiles_across_periods_while_streaming() {
+        let c = curve();
+        let config = RealtimeConfig { extend: Extend::Repeat, ..RealtimeConfig::default() };
+        let mut r = RealtimeRenderer::new(&c, &config).unwrap();
+        let mut samples = [Sample { t_s: 0.0, x_mm: 0.0, envelope_v: 0.0, signal_v: 0.0 }; 400];
+        for k in 0..240 {
+            // 2 s of 120 Hz reports, x swinging between -25 and 45 mm.
+            let t = r.now_s();
+            r.touch(t, 10.0 + 35.0 * (std::f64::consts::TAU * 0.5 * t).sin());
+            r.fill_samples(&mut samples);
+            for s in &samples {
+                let expected = c.voltage_at(s.x_mm, Extend::Repeat);
+                assert!(
+                    (s.envelope_v - expected).abs() < 1e-9,
+                    "report {k}, x = {}: {} vs {expected}",
+                    s.x_mm,
+                    s.envelope_v
+                );
             }
         }
     }

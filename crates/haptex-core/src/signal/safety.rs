@@ -74,6 +74,11 @@ impl EnvelopeLimiter {
         // Plain comparisons (not f64::min/max, whose NaN handling lengthens
         // this loop-carried dependency chain in the real-time renderer).
         let clamped = if requested_v < self.u_max_v { requested_v } else { self.u_max_v };
+        if self.max_step_v == f64::INFINITY {
+            // No slew limit: no dependency on the previous sample.
+            self.previous_v = clamped;
+            return clamped;
+        }
         let lo = self.previous_v - self.max_step_v;
         let hi = self.previous_v + self.max_step_v;
         let out = if clamped > hi {
