@@ -37,6 +37,7 @@ const GENERATED_RATE_HZ: f64 = 1000.0;
 /// profile's ends).
 #[derive(Debug, Args)]
 #[command(
+    group = clap::ArgGroup::new("finger").required(true).args(["trajectory", "velocity"]),
     allow_negative_numbers = true,
     after_help = "Examples:\n  \
         haptex voltage --profile data/examples/bump_friction.csv -o bump_u.csv\n  \
@@ -50,7 +51,7 @@ pub struct PlayArgs {
     #[arg(long, value_name = "U.csv")]
     profile: PathBuf,
     /// Finger trajectory CSV `t_s,x_mm` (times strictly increasing).
-    #[arg(long, value_name = "T.csv", required_unless_present = "velocity", conflicts_with_all = ["velocity", "strokes"])]
+    #[arg(long, value_name = "T.csv", conflicts_with_all = ["velocity", "strokes"])]
     trajectory: Option<PathBuf>,
     /// Generate the trajectory instead: finger speed in mm/s (constant, or
     /// the mean speed of each stroke with --strokes).

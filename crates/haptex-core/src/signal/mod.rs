@@ -282,7 +282,8 @@ pub fn render(
             clip.slew_limited_samples += 1;
             clip.slew_max_deviation_v = clip.slew_max_deviation_v.max((u - clamped).abs());
         }
-        let s = u * carrier.unit_rms(i as f64 * cycles_per_sample);
+        // + 0.0 turns -0.0 (0 V times a negative carrier value) into 0.0.
+        let s = u * carrier.unit_rms(i as f64 * cycles_per_sample) + 0.0;
         sum_sq += s * s;
         envelope_v.push(u);
         signal_v.push(s);
