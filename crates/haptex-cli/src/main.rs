@@ -23,6 +23,7 @@ struct Cli {
 enum Command {
     Voltage(commands::voltage::VoltageArgs),
     Cae(commands::cae::CaeArgs),
+    Play(commands::play::PlayArgs),
 }
 
 fn main() -> ExitCode {
@@ -30,6 +31,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Voltage(args) => commands::voltage::run(args),
         Command::Cae(args) => commands::cae::run(args),
+        Command::Play(args) => commands::play::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -11,3 +11,7 @@ pub mod profile;
 
 pub use electrovibration::{Device, Method, VoltageProfile, VoltageSummary, map_profile};
 pub use profile::{FrictionProfile, ProfileError};
+pub mod plot;
+pub mod realtime;
+pub mod signal;
+pub mod trajectory;

@@ -23,7 +23,7 @@ pub enum ProfileError {
 }
 
 /// Where a validation problem is: sample index (0-based), field, message.
-type Violation = (Option<usize>, &'static str, String);
+pub(crate) type Violation = (Option<usize>, &'static str, String);
 
 /// A friction profile: positions in mm (strictly increasing) and the
 /// friction coefficient at each, with the normal force in N when known.
@@ -216,12 +216,12 @@ fn lerp(xs: &[f64], ys: &[f64], i: usize, x: f64) -> f64 {
 
 /// Interpolation for increasing query positions: walks the table once.
 #[derive(Default)]
-struct Cursor {
+pub(crate) struct Cursor {
     i: usize,
 }
 
 impl Cursor {
-    fn interpolate(&mut self, xs: &[f64], ys: &[f64], x: f64) -> f64 {
+    pub(crate) fn interpolate(&mut self, xs: &[f64], ys: &[f64], x: f64) -> f64 {
         let last = xs.len() - 1;
         if x <= xs[0] {
             return ys[0];
@@ -238,7 +238,7 @@ impl Cursor {
 
 /// Checks positions (finite, strictly increasing, at least two) and that each
 /// value column is finite and as long as the positions.
-fn validate(x_mm: &[f64], columns: &[(&'static str, &[f64])]) -> Result<(), Violation> {
+pub(crate) fn validate(x_mm: &[f64], columns: &[(&'static str, &[f64])]) -> Result<(), Violation> {
     if x_mm.len() < 2 {
         return Err((None, "x_mm", format!("a profile needs at least 2 points, got {}", x_mm.len())));
     }

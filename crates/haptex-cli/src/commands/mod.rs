@@ -1,4 +1,5 @@
 //! One module per `haptex` subcommand.
 
 pub mod cae;
+pub mod play;
 pub mod voltage;

@@ -1,0 +1,276 @@
+//! `haptex play`: voltage profile + finger trajectory -> drive signal
+//! (WAV with a sidecar JSON, or CSV), with the safety limits applied and
+//! reported, and optionally a PNG of trajectory, envelope and signal.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use clap::{Args, ValueEnum};
+use haptex_core::io::Table;
+use haptex_core::signal::{
+    Carrier, CarrierShape, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions, render, sidecar_path,
+    write_wav,
+};
+use haptex_core::trajectory::Trajectory;
+use serde_json::json;
+
+use crate::args::{Output, positive};
+
+/// Rate at which generated trajectories are sampled (linear in between).
+const GENERATED_RATE_HZ: f64 = 1000.0;
+
+/// Turn a voltage profile U(x) and a finger trajectory x(t) into the drive
+/// signal of an electrovibration display.
+///
+/// The envelope is U(x(t)) (RMS volts, from `haptex voltage`), clamped at
+/// U_max and optionally slew limited, on a carrier: a sine of peak
+/// sqrt(2) U (the default, 1 kHz), a square of peak U, or none (the
+/// envelope itself). A drive whose peak exceeds the amplifier range (or the
+/// WAV full scale) is refused, not clipped. The output format follows the
+/// extension of -o: .wav (mono; a sidecar OUT.wav.json records the volts
+/// per full scale and the safety report) or .csv (`t_s,x_mm,envelope_v,
+/// signal_v`; `-` for stdout).
+///
+/// The trajectory is a `t_s,x_mm` CSV (--trajectory), or generated: one
+/// sweep at constant --velocity, or --strokes back-and-forth minimum-jerk
+/// strokes at mean --velocity, between --from-mm and --to-mm (default: the
+/// profile's ends).
+#[derive(Debug, Args)]
+#[command(
+    group = clap::ArgGroup::new("finger").required(true).args(["trajectory", "velocity"]),
+    allow_negative_numbers = true,
+    after_help = "Examples:\n  \
+        haptex voltage --profile data/examples/bump_friction.csv -o bump_u.csv\n  \
+        haptex play --profile bump_u.csv --velocity 50 -o bump.wav --png bump.png\n  \
+        haptex play --profile bump_u.csv --trajectory finger.csv --carrier square --carrier-hz 400 -o drive.csv\n  \
+        haptex play --profile bump_u.csv --velocity 80 --strokes 6 --slew-v-per-s 20000 -o strokes.wav"
+)]
+pub struct PlayArgs {
+    /// Voltage profile CSV (`x_mm,mu,voltage_v` from `haptex voltage`, or
+    /// `x_mm,voltage_v`), or `-` for stdin. voltage_v is RMS volts.
+    #[arg(long, value_name = "U.csv")]
+    profile: PathBuf,
+    /// Finger trajectory CSV `t_s,x_mm` (times strictly increasing).
+    #[arg(long, value_name = "T.csv", conflicts_with_all = ["velocity", "strokes"])]
+    trajectory: Option<PathBuf>,
+    /// Generate the trajectory instead: finger speed in mm/s (constant, or
+    /// the mean speed of each stroke with --strokes).
+    #[arg(long, value_name = "MM_PER_S", value_parser = positive)]
+    velocity: Option<f64>,
+    /// Generate N back-and-forth strokes (minimum-jerk velocity profile,
+    /// at rest at each reversal) instead of one constant-velocity sweep.
+    #[arg(long, value_name = "N", requires = "velocity", value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    strokes: Option<u32>,
+    /// Start of the generated trajectory in mm (default: first x of the profile).
+    #[arg(long, value_name = "MM", requires = "velocity")]
+    from_mm: Option<f64>,
+    /// End of the generated trajectory in mm (default: last x of the profile).
+    #[arg(long, value_name = "MM", requires = "velocity")]
+    to_mm: Option<f64>,
+    /// Carrier waveform: sine (peak sqrt(2) U), square (peak U), none (the
+    /// envelope U itself, unipolar).
+    #[arg(long, value_enum, default_value_t = CarrierArg::Sine)]
+    carrier: CarrierArg,
+    /// Carrier frequency in Hz (below half the sample rate).
+    #[arg(long, value_name = "F", default_value_t = Carrier::DEFAULT.frequency_hz, value_parser = positive)]
+    carrier_hz: f64,
+    /// Output sample rate in Hz.
+    #[arg(long, value_name = "HZ", default_value_t = 48_000, value_parser = clap::value_parser!(u32).range(1000..=768_000))]
+    sample_rate: u32,
+    /// Highest envelope in V RMS: higher requests are clamped (and reported).
+    #[arg(long, value_name = "V", default_value_t = Limits::DEFAULT.u_max_v, value_parser = positive)]
+    u_max: f64,
+    /// Largest rate of change of the envelope in V/s (default: no limit).
+    /// The envelope then also fades in from 0 V at the start.
+    #[arg(long, value_name = "V_PER_S", value_parser = positive)]
+    slew_v_per_s: Option<f64>,
+    /// Peak output of the amplifier in V: a drive whose peak exceeds it is
+    /// refused (default: no check beyond the WAV full scale).
+    #[arg(long, value_name = "V", value_parser = positive)]
+    amp_range_v: Option<f64>,
+    /// Volts at the amplifier output for a full-scale WAV sample (default:
+    /// sqrt(2) x --u-max, the peak of a sine at U_max). Written to the sidecar.
+    #[arg(long, value_name = "V", value_parser = positive)]
+    volts_per_full_scale: Option<f64>,
+    /// WAV sample format.
+    #[arg(long, value_enum, default_value_t = WavFormatArg::Pcm16)]
+    wav_format: WavFormatArg,
+    /// Voltage where the finger is outside the profile: hold the end
+    /// values, zero, or repeat the profile as a tile.
+    #[arg(long, value_enum, default_value_t = ExtendArg::Hold)]
+    outside: ExtendArg,
+    /// Output: OUT.wav (plus OUT.wav.json) or OUT.csv; `-` writes CSV to stdout.
+    #[arg(short, long, value_name = "OUT")]
+    output: PathBuf,
+    /// Also write the signal as CSV (`t_s,x_mm,envelope_v,signal_v`).
+    #[arg(long, value_name = "FILE.csv")]
+    csv: Option<PathBuf>,
+    /// Also write a PNG of trajectory, envelope and signal.
+    #[arg(long, value_name = "FILE.png")]
+    png: Option<PathBuf>,
+    /// Do not print the summary to stderr.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum CarrierArg {
+    Sine,
+    Square,
+    None,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum WavFormatArg {
+    Pcm16,
+    Pcm24,
+    Float32,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum ExtendArg {
+    Hold,
+    Zero,
+    Repeat,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Format {
+    Wav,
+    Csv,
+}
+
+pub fn run(args: PlayArgs) -> anyhow::Result<()> {
+    let output = Output::new(Some(args.output.clone()));
+    let format = match output.path() {
+        None => Format::Csv,
+        Some(path) => match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+            Some("wav") => Format::Wav,
+            Some("csv") => Format::Csv,
+            _ => bail!(
+                "cannot tell the output format from {}: use a .wav or .csv file (or - for CSV on stdout)",
+                path.display()
+            ),
+        },
+    };
+
+    let curve = read_curve(&args.profile)?;
+    let (trajectory, trajectory_source) = trajectory(&args, &curve)?;
+    let settings = RenderSettings {
+        sample_rate_hz: args.sample_rate,
+        carrier: Carrier {
+            shape: match args.carrier {
+                CarrierArg::Sine => CarrierShape::Sine,
+                CarrierArg::Square => CarrierShape::Square,
+                CarrierArg::None => CarrierShape::None,
+            },
+            frequency_hz: args.carrier_hz,
+        },
+        limits: Limits { u_max_v: args.u_max, slew_v_per_s: args.slew_v_per_s, amplifier_range_v: args.amp_range_v },
+        extend: match args.outside {
+            ExtendArg::Hold => Extend::Hold,
+            ExtendArg::Zero => Extend::Zero,
+            ExtendArg::Repeat => Extend::Repeat,
+        },
+    };
+    let signal = render(&curve, &trajectory, &settings)?;
+
+    let mut written = Vec::new();
+    match format {
+        Format::Wav => {
+            let path = output.path().expect("a WAV output is a file");
+            let options = WavOptions {
+                format: match args.wav_format {
+                    WavFormatArg::Pcm16 => WavFormat::Pcm16,
+                    WavFormatArg::Pcm24 => WavFormat::Pcm24,
+                    WavFormatArg::Float32 => WavFormat::Float32,
+                },
+                volts_per_full_scale: args.volts_per_full_scale.unwrap_or(std::f64::consts::SQRT_2 * args.u_max),
+            };
+            let source = json!({
+                "profile": args.profile.display().to_string(),
+                "trajectory": trajectory_source,
+                "command": std::env::args().collect::<Vec<_>>().join(" "),
+                "haptex_version": env!("CARGO_PKG_VERSION"),
+            });
+            write_wav(path, &signal, &options, source)?;
+            written.push(format!(
+                "{} ({}, {} V per full scale)",
+                path.display(),
+                format!("{:?}", options.format).to_lowercase(),
+                options.volts_per_full_scale
+            ));
+            written.push(sidecar_path(path).display().to_string());
+        }
+        Format::Csv => {
+            output.write(|w| signal.write_csv(w))?;
+            if let Some(path) = output.path() {
+                written.push(path.display().to_string());
+            }
+        }
+    }
+    if let Some(path) = &args.csv {
+        haptex_core::io::write_atomic(path, |w| signal.write_csv(w))?;
+        written.push(path.display().to_string());
+    }
+    if let Some(path) = &args.png {
+        let title = format!("haptex play: {}, {}", file_name(&args.profile), describe(&trajectory_source));
+        signal.figure(&title).write_png(path)?;
+        written.push(path.display().to_string());
+    }
+    if !args.quiet {
+        eprint!("{}", signal.report);
+        for w in written {
+            eprintln!("wrote {w}");
+        }
+    }
+    Ok(())
+}
+
+/// Reads the voltage curve from a file, or stdin for `-`.
+fn read_curve(path: &Path) -> anyhow::Result<VoltageCurve> {
+    Ok(if path.as_os_str() == "-" {
+        VoltageCurve::from_table(&Table::read(std::io::stdin().lock(), "<stdin>")?)?
+    } else {
+        VoltageCurve::read_csv_file(path)?
+    })
+}
+
+/// The trajectory (read or generated) and a JSON description of where it
+/// came from.
+fn trajectory(args: &PlayArgs, curve: &VoltageCurve) -> anyhow::Result<(Trajectory, serde_json::Value)> {
+    if let Some(path) = &args.trajectory {
+        let t = Trajectory::read_csv_file(path)?;
+        return Ok((t, json!({ "file": path.display().to_string() })));
+    }
+    let speed = args.velocity.context("give --trajectory T.csv, or --velocity to generate one")?;
+    let (x0, x1) = curve.span_mm();
+    let (from, to) = (args.from_mm.unwrap_or(x0), args.to_mm.unwrap_or(x1));
+    Ok(match args.strokes {
+        None => (
+            Trajectory::constant_velocity(from, to, speed, GENERATED_RATE_HZ)?,
+            json!({ "generator": "constant_velocity", "from_mm": from, "to_mm": to, "velocity_mm_s": speed }),
+        ),
+        Some(n) => (
+            Trajectory::strokes(from, to, speed, n as usize, GENERATED_RATE_HZ)?,
+            json!({ "generator": "minimum_jerk_strokes", "from_mm": from, "to_mm": to,
+                    "mean_velocity_mm_s": speed, "strokes": n }),
+        ),
+    })
+}
+
+fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned())
+}
+
+/// A short description of the trajectory for the plot title.
+fn describe(source: &serde_json::Value) -> String {
+    if let Some(file) = source["file"].as_str() {
+        return format!("trajectory {}", file_name(Path::new(file)));
+    }
+    let (from, to) = (source["from_mm"].as_f64().unwrap_or(0.0), source["to_mm"].as_f64().unwrap_or(0.0));
+    match source["strokes"].as_u64() {
+        Some(n) => format!("{n} strokes {from}..{to} mm at mean {} mm/s", source["mean_velocity_mm_s"]),
+        None => format!("{from}..{to} mm at {} mm/s", source["velocity_mm_s"]),
+    }
+}

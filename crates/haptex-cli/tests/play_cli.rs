@@ -1,0 +1,177 @@
+//! `haptex play` end to end: the binary, its files and its errors.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn haptex(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_haptex")).args(args).output().expect("run haptex")
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> String {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn path(dir: &Path, name: &str) -> String {
+    dir.join(name).to_str().unwrap().to_string()
+}
+
+/// voltage -> play with generated strokes: WAV at the asked rate and length
+/// (3 strokes of 10 mm at a mean 50 mm/s = 0.6 s, 0.6 * 8000 + 1 samples),
+/// the sidecar's default volts per full scale sqrt(2) x U_max, and a PNG.
+#[test]
+fn voltage_then_play_writes_wav_sidecar_and_png() {
+    let dir = tempfile::tempdir().unwrap();
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/examples/bump_friction.csv");
+    let u = path(dir.path(), "u.csv");
+    assert!(haptex(&["voltage", "--profile", example, "-o", &u, "-q"]).status.success());
+    let wav = path(dir.path(), "s.wav");
+    let png = path(dir.path(), "s.png");
+    let out = haptex(&[
+        "play",
+        "--profile",
+        &u,
+        "--velocity",
+        "50",
+        "--strokes",
+        "3",
+        "--sample-rate",
+        "8000",
+        "--wav-format",
+        "pcm24",
+        "-o",
+        &wav,
+        "--png",
+        &png,
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("wrote"), "{}", stderr(&out));
+
+    let sidecar: serde_json::Value = serde_json::from_slice(&std::fs::read(format!("{wav}.json")).unwrap()).unwrap();
+    assert_eq!(sidecar["volts_per_full_scale"], 100.0 * std::f64::consts::SQRT_2);
+    assert_eq!(sidecar["sample_format"], "pcm24");
+    assert_eq!(sidecar["source"]["trajectory"]["generator"], "minimum_jerk_strokes");
+    assert_eq!(sidecar["n_samples"], 4801);
+    let vpfs = sidecar["volts_per_full_scale"].as_f64().unwrap();
+    let (spec, volts) = haptex_core::signal::read_wav_volts(Path::new(&wav), vpfs).unwrap();
+    assert_eq!((spec.sample_rate, spec.bits_per_sample, volts.len()), (8000, 24, 4801));
+    // The bump profile reaches U_max = 100 V: the sine's peak is 141.4 V.
+    let peak = volts.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(peak > 141.0 && peak <= 141.43, "{peak}");
+
+    let png = std::fs::read(&png).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+}
+
+/// A trajectory file to CSV on stdout: one row per sample at 1 kHz over
+/// 0.1 s, positions interpolated, the square carrier at +/- U.
+#[test]
+fn trajectory_file_to_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let u = write(dir.path(), "u.csv", "x_mm,voltage_v\n0,10\n10,30\n");
+    let t = write(dir.path(), "t.csv", "# finger\nt_s,x_mm\n0,0\n0.1,10\n");
+    let out = haptex(&[
+        "play",
+        "--profile",
+        &u,
+        "--trajectory",
+        &t,
+        "--sample-rate",
+        "1000",
+        "--carrier",
+        "square",
+        "--carrier-hz",
+        "100",
+        "-o",
+        "-",
+        "-q",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).is_empty());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.lines().any(|l| l == "t_s,x_mm,envelope_v,signal_v"));
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 101);
+    for row in &rows {
+        let expected_u = 10.0 + 2.0 * row[1];
+        assert!((row[1] - 100.0 * row[0]).abs() < 1e-9, "{row:?}");
+        assert!((row[2] - expected_u).abs() < 1e-9, "{row:?}");
+        assert!((row[3].abs() - expected_u).abs() < 1e-9, "{row:?}");
+    }
+}
+
+#[test]
+fn bad_inputs_name_file_line_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let u = write(dir.path(), "u.csv", "x_mm,mu,voltage_v\n0,1.1,70\n1,1.2,80\n");
+    let wav = path(dir.path(), "o.wav");
+    let cases: &[(&str, &str, &str)] = &[
+        ("t.csv", "t_s,x_mm\n0,0\n0.1,1\n0.1,2\n", "t.csv, line 4, column 't_s': times must be strictly increasing"),
+        ("t.csv", "t_s,x_mm\n0,0\n0.1,oops\n", "t.csv, line 3, column 'x_mm': not a number"),
+        ("t.csv", "time,x_mm\n0,0\n0.1,1\n", "t.csv, line 1, column 't_s': required column is missing"),
+        ("t.csv", "t_s,x_mm\n0,0\n", "t.csv, line 1, column 't_s': a trajectory needs at least 2 samples"),
+    ];
+    for (name, text, message) in cases {
+        let t = write(dir.path(), name, text);
+        let out = haptex(&["play", "--profile", &u, "--trajectory", &t, "-o", &wav]);
+        assert!(!out.status.success(), "{text:?}");
+        assert!(stderr(&out).contains(message), "{text:?}: {}", stderr(&out));
+    }
+    let bad_u = write(dir.path(), "bad_u.csv", "x_mm,voltage_v\n0,1\n1,-5\n");
+    let out = haptex(&["play", "--profile", &bad_u, "--velocity", "10", "-o", &wav]);
+    assert!(stderr(&out).contains("bad_u.csv, line 3, column 'voltage_v': an RMS voltage cannot be negative"));
+    let out = haptex(&["play", "--profile", &u, "--velocity", "10", "-o", &path(dir.path(), "o.mp3")]);
+    assert!(stderr(&out).contains("use a .wav or .csv file"), "{}", stderr(&out));
+    let out = haptex(&["play", "--profile", &u, "-o", &wav]);
+    assert!(!out.status.success() && stderr(&out).contains("--trajectory"), "{}", stderr(&out));
+    let out = haptex(&["play", "--profile", &u, "--velocity", "10", "--carrier-hz", "30000", "-o", &wav]);
+    assert!(stderr(&out).contains("Nyquist"), "{}", stderr(&out));
+    // Nothing was written by any failed run.
+    assert!(!Path::new(&wav).exists());
+}
+
+/// Clamping is reported; a peak above the amplifier range is refused and
+/// writes nothing; the same drive fits with a square carrier.
+#[test]
+fn clamp_is_reported_and_amplifier_range_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let u = write(dir.path(), "u.csv", "x_mm,voltage_v\n0,50\n10,150\n");
+    let wav = path(dir.path(), "o.wav");
+    let out = haptex(&["play", "--profile", &u, "--velocity", "100", "-o", &wav]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // 2400 of 4801 samples request more than 100 V (x > 5 mm; at x = 5 mm exactly 100 V).
+    assert!(stderr(&out).contains("clamped at U_max = 100 V for 49.99% of the time"), "{}", stderr(&out));
+
+    let refused = path(dir.path(), "refused.wav");
+    let out = haptex(&["play", "--profile", &u, "--velocity", "100", "--amp-range-v", "120", "-o", &refused]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("refused: the drive's peak 141.421 V"), "{}", stderr(&out));
+    assert!(!Path::new(&refused).exists() && !Path::new(&format!("{refused}.json")).exists());
+
+    let out = haptex(&[
+        "play",
+        "--profile",
+        &u,
+        "--velocity",
+        "100",
+        "--amp-range-v",
+        "120",
+        "--carrier",
+        "square",
+        "-o",
+        &refused,
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out = haptex(&["play", "--profile", &u, "--velocity", "100", "--volts-per-full-scale", "120", "-o", &refused]);
+    assert!(stderr(&out).contains("exceeds the WAV full scale"), "{}", stderr(&out));
+}

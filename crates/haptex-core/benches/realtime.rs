@@ -1,0 +1,56 @@
+//! Real-time renderer: time per output sample (issue 7 target: at most
+//! 20 ns). Each iteration fills one 480-sample buffer (10 ms at 48 kHz)
+//! after a touch report, as an audio callback fed at 100 Hz would.
+//! Run: `cargo bench -p haptex-core --bench realtime`.
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use haptex_core::realtime::{RealtimeConfig, RealtimeRenderer};
+use haptex_core::signal::{Carrier, CarrierShape, Extend, Limits, VoltageCurve};
+use std::hint::black_box;
+
+const BUFFER: usize = 480;
+
+fn curve() -> VoltageCurve {
+    // A 40 mm texture sampled every 0.01 mm (4001 points).
+    let x: Vec<f64> = (0..=4000).map(|i| i as f64 * 0.01).collect();
+    let u = x.iter().map(|x| 60.0 + 30.0 * (x * 3.1).sin() + 10.0 * (x * 17.0).sin()).collect();
+    VoltageCurve::new(x, u).unwrap()
+}
+
+fn bench(c: &mut Criterion) {
+    let curve = curve();
+    let mut group = c.benchmark_group("realtime_fill");
+    group.throughput(Throughput::Elements(BUFFER as u64));
+    let cases = [
+        ("sine_hold", CarrierShape::Sine, Extend::Hold, None),
+        ("sine_hold_slew", CarrierShape::Sine, Extend::Hold, Some(50_000.0)),
+        ("square_zero", CarrierShape::Square, Extend::Zero, None),
+        ("none_repeat", CarrierShape::None, Extend::Repeat, None),
+        ("sine_repeat", CarrierShape::Sine, Extend::Repeat, None),
+    ];
+    for (name, shape, extend, slew) in cases {
+        let config = RealtimeConfig {
+            carrier: Carrier { shape, frequency_hz: 1000.0 },
+            limits: Limits { slew_v_per_s: slew, ..Limits::DEFAULT },
+            extend,
+            ..RealtimeConfig::default()
+        };
+        let mut renderer = RealtimeRenderer::new(&curve, &config).unwrap();
+        let mut buffer = vec![0.0f32; BUFFER];
+        let mut k = 0u64;
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                // The finger sweeps back and forth at 100 mm/s over the texture.
+                let t = renderer.now_s();
+                let x = 20.0 + 15.0 * (t * 100.0 / 15.0).sin();
+                renderer.touch(t, black_box(x));
+                renderer.fill(black_box(&mut buffer));
+                k += 1;
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,122 @@
+//! The carrier that carries the envelope U(t) to the display, and the
+//! RMS/peak convention of each shape.
+//!
+//! The electrostatic force follows the square of the instantaneous voltage
+//! (eq. 3), so the force the finger feels is set by the mean of s(t)^2 over a
+//! carrier period: the RMS value. Every shape is therefore scaled to unit
+//! RMS, and the drive is s(t) = U(t) c(t) with U the RMS envelope of eq. (8)
+//! (docs/physics.md, "Voltage convention"):
+//!
+//! | shape  | c(phase)                        | peak / RMS | force ripple |
+//! |--------|---------------------------------|------------|--------------|
+//! | sine   | sqrt(2) sin(2 pi phase)         | sqrt(2)    | at 2 f       |
+//! | square | +1 for phase < 1/2, else -1     | 1          | none (s^2 = U^2 between edges) |
+//! | none   | 1 (s = U, a unipolar drive)     | 1          | none         |
+
+use serde::{Deserialize, Serialize};
+
+/// Waveform of the carrier.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CarrierShape {
+    /// s = sqrt(2) U sin(2 pi f t): peak sqrt(2) U, RMS U.
+    Sine,
+    /// s = +U / -U, each half a period: peak U, RMS U.
+    Square,
+    /// s = U: the envelope itself, for a direct low-frequency drive (or a
+    /// modulator downstream). Unipolar: see docs/playback.md on polarity.
+    None,
+}
+
+/// A carrier: shape and frequency.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Carrier {
+    pub shape: CarrierShape,
+    /// Carrier frequency in Hz (ignored by [`CarrierShape::None`]).
+    pub frequency_hz: f64,
+}
+
+impl Carrier {
+    /// Default carrier: a 1 kHz sine, whose force ripple (2 kHz) lies above
+    /// the vibrotactile range.
+    pub const DEFAULT: Self = Self { shape: CarrierShape::Sine, frequency_hz: 1000.0 };
+
+    /// Peak over RMS of the unit waveform: sqrt(2) for a sine, 1 otherwise.
+    /// The drive's peak is this times the RMS envelope.
+    pub fn peak_per_rms(&self) -> f64 {
+        match self.shape {
+            CarrierShape::Sine => std::f64::consts::SQRT_2,
+            CarrierShape::Square | CarrierShape::None => 1.0,
+        }
+    }
+
+    /// The unit-RMS waveform at `phase` in cycles (any real; its fractional
+    /// part is used).
+    #[inline]
+    pub fn unit_rms(&self, phase: f64) -> f64 {
+        match self.shape {
+            CarrierShape::Sine => std::f64::consts::SQRT_2 * (std::f64::consts::TAU * phase).sin(),
+            CarrierShape::Square => {
+                if phase - phase.floor() < 0.5 {
+                    1.0
+                } else {
+                    -1.0
+                }
+            }
+            CarrierShape::None => 1.0,
+        }
+    }
+
+    /// Checks the carrier can be sampled at `sample_rate_hz`: a positive
+    /// frequency below the Nyquist frequency (for sine and square).
+    pub fn check(&self, sample_rate_hz: f64) -> Result<(), String> {
+        if self.shape == CarrierShape::None {
+            return Ok(());
+        }
+        let f = self.frequency_hz;
+        if !(f.is_finite() && f > 0.0) {
+            return Err(format!("carrier frequency must be a positive finite number, got {f} Hz"));
+        }
+        if f >= sample_rate_hz / 2.0 {
+            return Err(format!(
+                "carrier frequency {f} Hz is not below the Nyquist frequency {} Hz of the {sample_rate_hz} Hz sample rate",
+                sample_rate_hz / 2.0
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl Default for Carrier {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each shape has unit RMS over a period (docs/physics.md convention),
+    /// sampled finely: within 1e-12.
+    #[test]
+    fn every_shape_has_unit_rms_and_its_peak() {
+        for shape in [CarrierShape::Sine, CarrierShape::Square, CarrierShape::None] {
+            let c = Carrier { shape, frequency_hz: 1.0 };
+            let n = 10_000;
+            let values: Vec<f64> = (0..n).map(|i| c.unit_rms(i as f64 / n as f64 + 3.0)).collect();
+            let rms = (values.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
+            let peak = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!((rms - 1.0).abs() < 1e-12, "{shape:?}: rms {rms}");
+            assert!((peak - c.peak_per_rms()).abs() < 1e-12, "{shape:?}: peak {peak}");
+        }
+    }
+
+    #[test]
+    fn nyquist_is_checked() {
+        assert!(Carrier::DEFAULT.check(48_000.0).is_ok());
+        assert!(Carrier { shape: CarrierShape::Sine, frequency_hz: 24_000.0 }.check(48_000.0).is_err());
+        assert!(Carrier { shape: CarrierShape::Square, frequency_hz: 0.0 }.check(48_000.0).is_err());
+        assert!(Carrier { shape: CarrierShape::None, frequency_hz: f64::NAN }.check(48_000.0).is_ok());
+    }
+}

@@ -1,0 +1,163 @@
+//! The voltage curve U(x) a drive signal plays: the `x_mm,voltage_v` part
+//! of a voltage profile, and what U is outside the profile's span.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::electrovibration::VoltageProfile;
+use crate::io::Table;
+use crate::profile::{ProfileError, validate};
+
+/// What the voltage is where the finger is outside the profile's span
+/// [x_first, x_last].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Extend {
+    /// The first / last voltage is held (as `FrictionProfile::mu_at`).
+    #[default]
+    Hold,
+    /// 0 V outside the span: no stimulus where the texture is not defined.
+    Zero,
+    /// The span [x_first, x_last) repeats with period x_last - x_first
+    /// (a texture tile; U(x_last) should equal U(x_first)).
+    Repeat,
+}
+
+/// A voltage curve U(x): positions in mm (strictly increasing, at least
+/// two) and the RMS voltage in V (finite, >= 0) at each. Linear between
+/// samples; outside the span as [`Extend`] says.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VoltageCurve {
+    x_mm: Vec<f64>,
+    voltage_v: Vec<f64>,
+}
+
+impl VoltageCurve {
+    /// A curve from positions (mm) and RMS voltages (V).
+    pub fn new(x_mm: Vec<f64>, voltage_v: Vec<f64>) -> Result<Self, ProfileError> {
+        let in_memory = |(index, field, message): (Option<usize>, &'static str, String)| ProfileError::Invalid {
+            index: index.unwrap_or(0),
+            field,
+            message,
+        };
+        validate(&x_mm, &[("voltage_v", &voltage_v)]).map_err(in_memory)?;
+        check_non_negative(&voltage_v).map_err(in_memory)?;
+        Ok(Self { x_mm, voltage_v })
+    }
+
+    /// Reads a voltage profile table: `x_mm` and `voltage_v` are required,
+    /// other columns (`mu`, ...) are ignored. Errors name file, line, column.
+    pub fn from_table(table: &Table) -> Result<Self, ProfileError> {
+        let at = |(row, field, message): (Option<usize>, &'static str, String)| {
+            ProfileError::Table(table.error_at(row, Some(field), message))
+        };
+        let x_mm = table.require("x_mm")?.to_vec();
+        let voltage_v = table.require("voltage_v")?.to_vec();
+        validate(&x_mm, &[("voltage_v", &voltage_v)]).map_err(at)?;
+        check_non_negative(&voltage_v).map_err(at)?;
+        Ok(Self { x_mm, voltage_v })
+    }
+
+    /// Reads a voltage profile CSV from any reader; `source_name` labels errors.
+    pub fn read_csv<R: std::io::Read>(reader: R, source_name: &str) -> Result<Self, ProfileError> {
+        Self::from_table(&Table::read(reader, source_name)?)
+    }
+
+    /// Reads a voltage profile CSV file (`x_mm,mu,voltage_v`, as written by
+    /// `haptex voltage`).
+    pub fn read_csv_file(path: &Path) -> Result<Self, ProfileError> {
+        Self::from_table(&Table::read_file(path)?)
+    }
+
+    /// Positions in mm.
+    pub fn x_mm(&self) -> &[f64] {
+        &self.x_mm
+    }
+
+    /// RMS voltages in V.
+    pub fn voltage_v(&self) -> &[f64] {
+        &self.voltage_v
+    }
+
+    /// First and last position in mm.
+    pub fn span_mm(&self) -> (f64, f64) {
+        (self.x_mm[0], self.x_mm[self.x_mm.len() - 1])
+    }
+
+    /// Largest voltage of the curve in V.
+    pub fn max_v(&self) -> f64 {
+        self.voltage_v.iter().fold(0.0, |m, &v| m.max(v))
+    }
+
+    /// Smallest spacing between consecutive positions in mm.
+    pub fn min_spacing_mm(&self) -> f64 {
+        self.x_mm.windows(2).map(|w| w[1] - w[0]).fold(f64::INFINITY, f64::min)
+    }
+
+    /// U in V (RMS) at `x_mm`: linear interpolation inside the span,
+    /// `extend` outside it.
+    pub fn voltage_at(&self, x_mm: f64, extend: Extend) -> f64 {
+        let (x0, x1) = self.span_mm();
+        let x = match extend {
+            Extend::Hold => x_mm,
+            Extend::Zero if x_mm < x0 || x_mm > x1 => return 0.0,
+            Extend::Zero => x_mm,
+            Extend::Repeat => x0 + (x_mm - x0).rem_euclid(x1 - x0),
+        };
+        crate::profile::interpolate(&self.x_mm, &self.voltage_v, x)
+    }
+
+    /// Whether `x_mm` is inside the span [x_first, x_last].
+    pub fn contains(&self, x_mm: f64) -> bool {
+        let (x0, x1) = self.span_mm();
+        (x0..=x1).contains(&x_mm)
+    }
+}
+
+impl From<&VoltageProfile> for VoltageCurve {
+    /// The curve of a mapped profile (already validated by the mapping).
+    fn from(profile: &VoltageProfile) -> Self {
+        Self { x_mm: profile.x_mm.clone(), voltage_v: profile.voltage_v.clone() }
+    }
+}
+
+fn check_non_negative(voltage_v: &[f64]) -> Result<(), (Option<usize>, &'static str, String)> {
+    match voltage_v.iter().position(|&u| u < 0.0) {
+        Some(i) => Err((Some(i), "voltage_v", format!("an RMS voltage cannot be negative, got {} V", voltage_v[i]))),
+        None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn extend_modes() {
+        let c = VoltageCurve::new(vec![0.0, 1.0, 2.0], vec![0.0, 10.0, 0.0]).unwrap();
+        assert_eq!(c.voltage_at(0.5, Extend::Hold), 5.0);
+        assert_eq!(c.voltage_at(-1.0, Extend::Hold), 0.0);
+        assert_eq!(c.voltage_at(1.0, Extend::Zero), 10.0);
+        assert_eq!(c.voltage_at(2.5, Extend::Zero), 0.0);
+        assert_eq!(c.voltage_at(3.0, Extend::Repeat), 10.0);
+        assert_eq!(c.voltage_at(-1.5, Extend::Repeat), 5.0);
+        let c = VoltageCurve::new(vec![0.0, 1.0], vec![3.0, 4.0]).unwrap();
+        assert_eq!(c.voltage_at(5.0, Extend::Hold), 4.0);
+        assert_eq!(c.voltage_at(5.0, Extend::Zero), 0.0);
+    }
+
+    #[test]
+    fn reads_voltage_profiles_and_names_bad_lines() {
+        let c = VoltageCurve::read_csv("# c\nx_mm,mu,voltage_v\n0,1.1,70\n1,1.2,99\n".as_bytes(), "u.csv").unwrap();
+        assert_eq!(c.voltage_v(), [70.0, 99.0]);
+        let c = VoltageCurve::read_csv("x_mm,voltage_v\n0,1\n1,2\n".as_bytes(), "u.csv").unwrap();
+        assert_eq!(c.max_v(), 2.0);
+        let e = VoltageCurve::read_csv("x_mm,voltage_v\n0,1\n1,-2\n".as_bytes(), "u.csv").unwrap_err();
+        assert_eq!(e.to_string(), "u.csv, line 3, column 'voltage_v': an RMS voltage cannot be negative, got -2 V");
+        let e = VoltageCurve::read_csv("x_mm,mu\n0,1\n1,2\n".as_bytes(), "u.csv").unwrap_err();
+        assert!(e.to_string().starts_with("u.csv, line 1, column 'voltage_v': required column is missing"), "{e}");
+        let e = VoltageCurve::read_csv("x_mm,voltage_v\n0,1\n0,2\n".as_bytes(), "u.csv").unwrap_err();
+        assert!(e.to_string().starts_with("u.csv, line 3, column 'x_mm'"), "{e}");
+    }
+}

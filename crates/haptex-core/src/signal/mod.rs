@@ -1,0 +1,395 @@
+//! Drive signals: from a voltage profile U(x) and a finger trajectory x(t)
+//! to the time signal an electrovibration display plays (offline).
+//!
+//! The chain, per output sample n at t = t0 + n / fs:
+//!
+//! 1. position x(t) from the trajectory (linear between its samples);
+//! 2. requested envelope U(x(t)) from the voltage curve (RMS volts,
+//!    linear between samples, [`Extend`] outside its span);
+//! 3. safety: clamp at U_max, then the optional slew limit
+//!    ([`EnvelopeLimiter`]);
+//! 4. the drive s(t) = U(t) c(f t), c the unit-RMS carrier
+//!    ([`Carrier`]): a sine of peak sqrt(2) U, a square of peak U, or
+//!    the envelope itself;
+//! 5. refusal if the peak (carrier amplitude) exceeds the amplifier range.
+//!
+//! The real-time counterpart is [`crate::realtime`]; WAV output is
+//! [`write_wav`].
+
+mod carrier;
+mod curve;
+mod safety;
+mod wav;
+
+use std::fmt;
+use std::io::Write;
+
+use serde::{Deserialize, Serialize};
+
+pub use carrier::{Carrier, CarrierShape};
+pub use curve::{Extend, VoltageCurve};
+pub use safety::{ClipReport, EnvelopeLimiter, Limits};
+pub use wav::{WavFormat, WavOptions, WavSidecar, read_wav_volts, sidecar_path, write_wav};
+
+use crate::io::{WriteError, write_csv_row};
+use crate::plot::{Figure, Panel};
+use crate::trajectory::Trajectory;
+
+/// Most samples an offline render may have: 3e7 (10.4 min at 48 kHz; about
+/// 1 GB of working memory). Longer drives belong to the real-time renderer.
+pub const MAX_SAMPLES: usize = 30_000_000;
+
+/// A drive signal cannot be rendered or written.
+#[derive(Debug, thiserror::Error)]
+pub enum SignalError {
+    #[error("{0}")]
+    Settings(String),
+    #[error(
+        "{duration_s} s at {sample_rate_hz} Hz is {n_samples} samples, more than the {MAX_SAMPLES} an offline \
+         render allows (is the trajectory's t_s in seconds?)"
+    )]
+    TooLong { duration_s: f64, sample_rate_hz: u32, n_samples: f64 },
+    #[error(
+        "refused: the drive's peak {amplitude_v:.3} V (first at t = {t_s:.6} s) exceeds the amplifier range \
+         {range_v} V; lower U_max to {max_u_v:.3} V RMS or less, or declare the amplifier's real range"
+    )]
+    ExceedsAmplifierRange { amplitude_v: f64, range_v: f64, t_s: f64, max_u_v: f64 },
+    #[error(
+        "refused: the drive's peak {amplitude_v:.3} V exceeds the WAV full scale of {volts_per_full_scale} V \
+         (volts per full scale); raise it to at least {amplitude_v:.3} V or lower U_max"
+    )]
+    ExceedsFullScale { amplitude_v: f64, volts_per_full_scale: f64 },
+    #[error("cannot encode the WAV file {path}: {message}")]
+    Wav { path: String, message: String },
+    #[error(transparent)]
+    Write(#[from] WriteError),
+}
+
+/// How to render a drive signal.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RenderSettings {
+    /// Output sample rate in Hz.
+    pub sample_rate_hz: u32,
+    pub carrier: Carrier,
+    pub limits: Limits,
+    /// The voltage outside the profile's span.
+    pub extend: Extend,
+}
+
+impl RenderSettings {
+    /// 48 kHz, a 1 kHz sine carrier, U_max = 100 V, held ends.
+    pub const DEFAULT: Self =
+        Self { sample_rate_hz: 48_000, carrier: Carrier::DEFAULT, limits: Limits::DEFAULT, extend: Extend::Hold };
+
+    /// Checks the sample rate, carrier and limits.
+    pub fn check(&self) -> Result<(), SignalError> {
+        if self.sample_rate_hz < 100 {
+            return Err(SignalError::Settings(format!("sample rate {} Hz is below 100 Hz", self.sample_rate_hz)));
+        }
+        self.carrier.check(self.sample_rate_hz as f64).map_err(SignalError::Settings)?;
+        self.limits.check().map_err(SignalError::Settings)
+    }
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// What a render produced and what the safety limits did.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SignalReport {
+    pub sample_rate_hz: u32,
+    pub n_samples: usize,
+    /// Time of the first sample (the trajectory's first time) in s.
+    pub start_s: f64,
+    pub duration_s: f64,
+    pub carrier: Carrier,
+    pub limits: Limits,
+    pub extend: Extend,
+    /// Largest envelope after the limits, V RMS.
+    pub envelope_max_v: f64,
+    /// Peak of the drive: peak/RMS of the carrier times the largest
+    /// envelope, in V. This is the analogue peak a DAC reconstructs; the
+    /// largest sample can be slightly lower.
+    pub peak_v: f64,
+    /// Largest |sample| in V.
+    pub sample_peak_v: f64,
+    /// RMS of the whole drive signal in V.
+    pub signal_rms_v: f64,
+    /// Fraction of samples where the finger is outside the profile's span.
+    pub outside_fraction: f64,
+    pub clip: ClipReport,
+    pub warnings: Vec<String>,
+}
+
+impl fmt::Display for SignalReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "signal: {} samples at {} Hz, {:.4} s from t = {} s",
+            self.n_samples, self.sample_rate_hz, self.duration_s, self.start_s
+        )?;
+        match self.carrier.shape {
+            CarrierShape::None => writeln!(f, "carrier: none (the drive is the RMS envelope itself)")?,
+            shape => writeln!(
+                f,
+                "carrier: {} at {} Hz (peak = {:.4} x RMS)",
+                format!("{shape:?}").to_lowercase(),
+                self.carrier.frequency_hz,
+                self.carrier.peak_per_rms()
+            )?,
+        }
+        writeln!(
+            f,
+            "envelope (RMS): max {:.3} V; drive peak {:.3} V, RMS {:.3} V",
+            self.envelope_max_v, self.peak_v, self.signal_rms_v
+        )?;
+        let c = &self.clip;
+        writeln!(
+            f,
+            "clamped at U_max = {} V: {} samples ({:.2}%), largest request {:.3} V",
+            self.limits.u_max_v,
+            c.clamped_samples,
+            100.0 * c.clamped_fraction,
+            c.requested_max_v
+        )?;
+        if let Some(slew) = self.limits.slew_v_per_s {
+            writeln!(
+                f,
+                "slew limit {slew} V/s: {} samples changed ({:.2}%), largest change {:.3} V",
+                c.slew_limited_samples,
+                100.0 * c.slew_limited_fraction,
+                c.slew_max_deviation_v
+            )?;
+        }
+        for warning in &self.warnings {
+            writeln!(f, "warning: {warning}")?;
+        }
+        Ok(())
+    }
+}
+
+/// A rendered drive signal, one value per output sample.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DriveSignal {
+    /// Finger position in mm.
+    pub x_mm: Vec<f64>,
+    /// Envelope after the safety limits, V RMS.
+    pub envelope_v: Vec<f64>,
+    /// Instantaneous drive voltage in V.
+    pub signal_v: Vec<f64>,
+    pub report: SignalReport,
+}
+
+impl DriveSignal {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.signal_v.len()
+    }
+
+    /// True if there are no samples (never, for a rendered signal).
+    pub fn is_empty(&self) -> bool {
+        self.signal_v.is_empty()
+    }
+
+    /// Time of sample `i` in s.
+    pub fn t_s(&self, i: usize) -> f64 {
+        self.report.start_s + i as f64 / self.report.sample_rate_hz as f64
+    }
+
+    /// Times of all samples in s.
+    pub fn times_s(&self) -> Vec<f64> {
+        (0..self.len()).map(|i| self.t_s(i)).collect()
+    }
+
+    /// Writes `t_s,x_mm,envelope_v,signal_v` CSV after a comment line with
+    /// the conventions.
+    pub fn write_csv(&self, w: &mut dyn Write) -> std::io::Result<()> {
+        let r = &self.report;
+        writeln!(
+            w,
+            "# haptex drive signal, {} Hz, carrier {} {} Hz: envelope_v is RMS (V), signal_v the instantaneous drive (V), peak = {} x envelope",
+            r.sample_rate_hz,
+            format!("{:?}", r.carrier.shape).to_lowercase(),
+            r.carrier.frequency_hz,
+            r.carrier.peak_per_rms()
+        )?;
+        w.write_all(b"t_s,x_mm,envelope_v,signal_v\n")?;
+        for i in 0..self.len() {
+            write_csv_row(w, &[self.t_s(i), self.x_mm[i], self.envelope_v[i], self.signal_v[i]])?;
+        }
+        Ok(())
+    }
+
+    /// A three-panel figure: finger position, envelope (with U_max) and drive.
+    pub fn figure(&self, title: &str) -> Figure {
+        let t = self.times_s();
+        let u_max = self.report.limits.u_max_v;
+        let ends = [t[0], t[t.len() - 1]];
+        Figure::new(title)
+            .panel(Panel::new("t (s)", "x (mm)").title("finger trajectory").line("x(t)", &t, &self.x_mm))
+            .panel(
+                Panel::new("t (s)", "U (V RMS)")
+                    .title("envelope U(x(t)) after the safety limits")
+                    .line("U(t)", &t, &self.envelope_v)
+                    .series(crate::plot::Series::line("U_max", &ends, &[u_max, u_max]).color((150, 150, 150))),
+            )
+            .panel(Panel::new("t (s)", "s (V)").title("drive signal").line("s(t)", &t, &self.signal_v))
+    }
+}
+
+/// Renders the drive signal of `curve` along `trajectory`, from the
+/// trajectory's first to its last time, with the safety limits of
+/// `settings`. Refuses (error) a signal whose peak exceeds the amplifier
+/// range; clamps and slew limits are applied and reported.
+pub fn render(
+    curve: &VoltageCurve,
+    trajectory: &Trajectory,
+    settings: &RenderSettings,
+) -> Result<DriveSignal, SignalError> {
+    settings.check()?;
+    let fs = settings.sample_rate_hz as f64;
+    let n_float = (trajectory.duration_s() * fs).floor() + 1.0;
+    if n_float > MAX_SAMPLES as f64 {
+        return Err(SignalError::TooLong {
+            duration_s: trajectory.duration_s(),
+            sample_rate_hz: settings.sample_rate_hz,
+            n_samples: n_float,
+        });
+    }
+    let n = n_float as usize;
+    let mut x_mm = vec![0.0; n];
+    trajectory.positions_into(trajectory.start_s(), 1.0 / fs, &mut x_mm);
+
+    let carrier = settings.carrier;
+    let cycles_per_sample = carrier.frequency_hz / fs;
+    let mut limiter = EnvelopeLimiter::new(&settings.limits, fs);
+    let mut envelope_v = Vec::with_capacity(n);
+    let mut signal_v = Vec::with_capacity(n);
+    let mut clip = ClipReport::default();
+    let mut outside = 0usize;
+    let mut sum_sq = 0.0;
+    for (i, &x) in x_mm.iter().enumerate() {
+        let requested = curve.voltage_at(x, settings.extend);
+        outside += usize::from(!curve.contains(x));
+        clip.requested_max_v = clip.requested_max_v.max(requested);
+        let clamped = requested.min(settings.limits.u_max_v);
+        clip.clamped_samples += usize::from(requested > settings.limits.u_max_v);
+        let u = limiter.apply(requested);
+        if u != clamped {
+            clip.slew_limited_samples += 1;
+            clip.slew_max_deviation_v = clip.slew_max_deviation_v.max((u - clamped).abs());
+        }
+        // + 0.0 turns -0.0 (0 V times a negative carrier value) into 0.0.
+        let s = u * carrier.unit_rms(i as f64 * cycles_per_sample) + 0.0;
+        sum_sq += s * s;
+        envelope_v.push(u);
+        signal_v.push(s);
+    }
+    clip.clamped_fraction = clip.clamped_samples as f64 / n as f64;
+    clip.slew_limited_fraction = clip.slew_limited_samples as f64 / n as f64;
+
+    let envelope_max_v = envelope_v.iter().fold(0.0f64, |m, &u| m.max(u));
+    let peak_v = carrier.peak_per_rms() * envelope_max_v;
+    let start_s = trajectory.start_s();
+    if let Some(range_v) = settings.limits.amplifier_range_v
+        && peak_v > range_v
+    {
+        let first = envelope_v.iter().position(|&u| carrier.peak_per_rms() * u > range_v).unwrap_or(0);
+        return Err(SignalError::ExceedsAmplifierRange {
+            amplitude_v: peak_v,
+            range_v,
+            t_s: start_s + first as f64 / fs,
+            max_u_v: range_v / carrier.peak_per_rms(),
+        });
+    }
+
+    let outside_fraction = outside as f64 / n as f64;
+    let mut warnings = Vec::new();
+    if clip.clamped_samples > 0 {
+        warnings.push(format!(
+            "the profile asks for up to {:.3} V RMS: clamped at U_max = {} V for {:.2}% of the time",
+            clip.requested_max_v,
+            settings.limits.u_max_v,
+            100.0 * clip.clamped_fraction
+        ));
+    }
+    if outside > 0 {
+        let (x0, x1) = curve.span_mm();
+        let what = match settings.extend {
+            Extend::Hold => "the end voltages are held",
+            Extend::Zero => "U = 0 V there",
+            Extend::Repeat => "the profile repeats",
+        };
+        warnings.push(format!(
+            "the finger is outside the profile ({x0} .. {x1} mm) for {:.2}% of the time: {what}",
+            100.0 * outside_fraction
+        ));
+    }
+    let report = SignalReport {
+        sample_rate_hz: settings.sample_rate_hz,
+        n_samples: n,
+        start_s,
+        duration_s: (n - 1) as f64 / fs,
+        carrier,
+        limits: settings.limits,
+        extend: settings.extend,
+        envelope_max_v,
+        peak_v,
+        sample_peak_v: signal_v.iter().fold(0.0f64, |m, &s| m.max(s.abs())),
+        signal_rms_v: (sum_sq / n as f64).sqrt(),
+        outside_fraction,
+        clip,
+        warnings,
+    };
+    Ok(DriveSignal { x_mm, envelope_v, signal_v, report })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn flat(u: f64) -> VoltageCurve {
+        VoltageCurve::new(vec![0.0, 10.0], vec![u, u]).unwrap()
+    }
+
+    /// A constant envelope U on a sine carrier has RMS U and peak sqrt(2) U
+    /// (docs/physics.md voltage convention); 1 kHz at 48 kHz over whole
+    /// periods: within 1e-9 relative.
+    #[test]
+    fn sine_drive_has_rms_u_and_peak_sqrt2_u() {
+        let trajectory = Trajectory::new(vec![0.0, 0.1], vec![1.0, 1.0]).unwrap();
+        let s = render(&flat(80.0), &trajectory, &RenderSettings::DEFAULT).unwrap();
+        assert_eq!(s.len(), 4801);
+        let whole = &s.signal_v[..4800];
+        let rms = (whole.iter().map(|v| v * v).sum::<f64>() / 4800.0).sqrt();
+        assert!((rms / 80.0 - 1.0).abs() < 1e-9, "{rms}");
+        assert!((s.report.peak_v - 80.0 * std::f64::consts::SQRT_2).abs() < 1e-9);
+        assert!(s.report.clip.clamped_samples == 0 && s.report.warnings.is_empty());
+    }
+
+    #[test]
+    fn slew_limit_fades_in_from_zero() {
+        let trajectory = Trajectory::new(vec![0.0, 0.01], vec![1.0, 1.0]).unwrap();
+        let settings = RenderSettings {
+            sample_rate_hz: 1000,
+            carrier: Carrier { shape: CarrierShape::None, frequency_hz: 0.0 },
+            limits: Limits { slew_v_per_s: Some(10_000.0), ..Limits::DEFAULT },
+            extend: Extend::Hold,
+        };
+        let s = render(&flat(50.0), &trajectory, &settings).unwrap();
+        assert_eq!(s.envelope_v, [10.0, 20.0, 30.0, 40.0, 50.0, 50.0, 50.0, 50.0, 50.0, 50.0, 50.0]);
+        assert_eq!(s.signal_v, s.envelope_v);
+        assert_eq!(s.report.clip.slew_limited_samples, 4);
+        assert_eq!(s.report.clip.slew_max_deviation_v, 40.0);
+    }
+
+    #[test]
+    fn absurd_lengths_are_refused() {
+        let trajectory = Trajectory::new(vec![0.0, 1e6], vec![0.0, 1.0]).unwrap();
+        let e = render(&flat(1.0), &trajectory, &RenderSettings::DEFAULT).unwrap_err();
+        assert!(matches!(e, SignalError::TooLong { .. }), "{e}");
+    }
+}

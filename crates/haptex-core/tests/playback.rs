@@ -1,0 +1,249 @@
+//! Issue 7 acceptance, offline path: envelope frequency (FFT), safety
+//! limits, WAV read-back with hound and with Python's standard library.
+
+use std::path::Path;
+use std::process::Command;
+
+use haptex_core::electrovibration::{Device, Method, map_profile};
+use haptex_core::profile::FrictionProfile;
+use haptex_core::signal::{
+    Carrier, CarrierShape, Extend, Limits, RenderSettings, SignalError, VoltageCurve, WavFormat, WavOptions,
+    read_wav_volts, render, sidecar_path, write_wav,
+};
+use haptex_core::trajectory::Trajectory;
+use rustfft::FftPlanner;
+use rustfft::num_complex::Complex;
+
+/// Voltage profile of a sinusoidal friction profile, mu = 1.1 + 0.05 sin(2 pi x / P)
+/// over 0..40 mm, mapped with the paper's device (eq. 8): U from 50.1 to
+/// 86.8 V, below U_max, with period P.
+fn sine_surface_curve(period_mm: f64) -> VoltageCurve {
+    let x: Vec<f64> = (0..=4000).map(|i| i as f64 * 0.01).collect();
+    let mu = x.iter().map(|x| 1.1 + 0.05 * (std::f64::consts::TAU * x / period_mm).sin()).collect();
+    let profile = FrictionProfile::new(x, mu).unwrap();
+    let voltage = map_profile(&profile, &Device::PAPER, Method::Physical, None).unwrap();
+    assert!(voltage.summary.clipped.is_empty() && voltage.summary.not_renderable.is_empty());
+    VoltageCurve::from(&voltage)
+}
+
+/// Magnitude spectrum of `values` minus their mean.
+fn spectrum(values: &[f64]) -> Vec<f64> {
+    let mean = values.iter().sum::<f64>() / values.len() as f64;
+    let mut buffer: Vec<Complex<f64>> = values.iter().map(|&v| Complex::new(v - mean, 0.0)).collect();
+    FftPlanner::new().plan_fft_forward(buffer.len()).process(&mut buffer);
+    buffer[..values.len() / 2].iter().map(|c| c.norm()).collect()
+}
+
+fn argmax(values: &[f64]) -> usize {
+    (0..values.len()).fold(0, |best, i| if values[i] > values[best] { i } else { best })
+}
+
+/// Issue 7 acceptance: a constant-velocity trajectory over a sine-surface
+/// voltage profile gives an envelope at velocity / period. 20 whole periods
+/// are analysed, so the expected frequency falls on an FFT bin (resolution
+/// fs/N) and the peak must be exactly that bin. The drive's strongest
+/// components are the carrier and the sidebands at carrier +/- v/P (AM).
+#[test]
+fn sine_surface_envelope_is_at_velocity_over_period() {
+    let period_mm = 2.0;
+    let curve = sine_surface_curve(period_mm);
+    let settings = RenderSettings { sample_rate_hz: 8000, ..RenderSettings::DEFAULT };
+    for velocity_mm_s in [50.0, 100.0] {
+        let expected_hz = velocity_mm_s / period_mm;
+        let duration_s = 20.0 / expected_hz;
+        let trajectory = Trajectory::constant_velocity(0.0, velocity_mm_s * duration_s, velocity_mm_s, 1000.0).unwrap();
+        let signal = render(&curve, &trajectory, &settings).unwrap();
+        let n = (duration_s * 8000.0).round() as usize;
+        assert_eq!(signal.len(), n + 1);
+        let resolution_hz = 8000.0 / n as f64;
+
+        let envelope = spectrum(&signal.envelope_v[..n]);
+        let peak_hz = argmax(&envelope) as f64 * resolution_hz;
+        assert_eq!(peak_hz, expected_hz, "envelope peak at v = {velocity_mm_s} mm/s");
+
+        let drive = spectrum(&signal.signal_v[..n]);
+        let carrier_bin = (1000.0 / resolution_hz) as usize;
+        assert_eq!(argmax(&drive), carrier_bin);
+        let mut sidebands = drive.clone();
+        sidebands[carrier_bin] = 0.0;
+        let side_hz = argmax(&sidebands) as f64 * resolution_hz;
+        assert!((side_hz - 1000.0).abs() == expected_hz, "sideband at {side_hz} Hz, expected 1000 +/- {expected_hz}");
+    }
+}
+
+/// A ramp U = 20 x V/mm over 0..10 mm (0..200 V) swept at constant speed
+/// with U_max = 100 V: the second half is clamped to exactly 100 V, the
+/// report counts it (fraction within one sample), and the peak is
+/// sqrt(2) x 100 V.
+#[test]
+fn clipping_is_clamped_and_reported() {
+    let curve = VoltageCurve::new(vec![0.0, 10.0], vec![0.0, 200.0]).unwrap();
+    let trajectory = Trajectory::constant_velocity(0.0, 10.0, 10.0, 1000.0).unwrap();
+    let signal = render(&curve, &trajectory, &RenderSettings::DEFAULT).unwrap();
+    let r = &signal.report;
+    assert_eq!(r.envelope_max_v, 100.0);
+    assert!(signal.envelope_v.iter().all(|&u| u <= 100.0));
+    assert!((r.clip.clamped_fraction - 0.5).abs() <= 1.0 / r.n_samples as f64, "{}", r.clip.clamped_fraction);
+    assert!((r.clip.requested_max_v - 200.0).abs() < 1e-9);
+    assert_eq!(r.peak_v, 100.0 * std::f64::consts::SQRT_2);
+    assert!(r.sample_peak_v <= r.peak_v);
+    assert!(r.warnings.iter().any(|w| w.contains("clamped at U_max")), "{:?}", r.warnings);
+    assert!(r.to_string().contains("clamped at U_max = 100 V"), "{r}");
+}
+
+/// A signal whose peak exceeds the declared amplifier range is refused,
+/// not clipped: U = 90 V RMS on a sine is 127.3 V peak, above 120 V; the
+/// same envelope on a square carrier (peak 90 V) fits.
+#[test]
+fn amplifier_range_is_refused_not_clipped() {
+    let curve = VoltageCurve::new(vec![0.0, 10.0], vec![90.0, 90.0]).unwrap();
+    let trajectory = Trajectory::constant_velocity(0.0, 10.0, 100.0, 1000.0).unwrap();
+    let limits = Limits { amplifier_range_v: Some(120.0), ..Limits::DEFAULT };
+    let sine = RenderSettings { limits, ..RenderSettings::DEFAULT };
+    match render(&curve, &trajectory, &sine) {
+        Err(SignalError::ExceedsAmplifierRange { amplitude_v, range_v, t_s, max_u_v }) => {
+            assert!((amplitude_v - 90.0 * std::f64::consts::SQRT_2).abs() < 1e-9);
+            assert_eq!((range_v, t_s), (120.0, 0.0));
+            assert!((max_u_v - 120.0 / std::f64::consts::SQRT_2).abs() < 1e-9);
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+    let square = RenderSettings { carrier: Carrier { shape: CarrierShape::Square, frequency_hz: 500.0 }, ..sine };
+    let signal = render(&curve, &trajectory, &square).unwrap();
+    assert_eq!(signal.report.peak_v, 90.0);
+    assert_eq!(signal.report.sample_peak_v, 90.0);
+    // Clamping below the range makes the sine fit.
+    let clamped = RenderSettings { limits: Limits { u_max_v: 84.0, ..limits }, ..sine };
+    assert!(render(&curve, &trajectory, &clamped).is_ok());
+}
+
+/// A signal with clamping, a slew limit and both carriers' worth of
+/// structure, used by the WAV tests: 0.25 s at 44.1 kHz.
+fn test_signal() -> haptex_core::signal::DriveSignal {
+    let curve = VoltageCurve::new(vec![0.0, 2.0, 4.0], vec![10.0, 120.0, 30.0]).unwrap();
+    let trajectory = Trajectory::strokes(0.0, 4.0, 32.0, 2, 1000.0).unwrap();
+    let settings = RenderSettings {
+        sample_rate_hz: 44_100,
+        carrier: Carrier { shape: CarrierShape::Sine, frequency_hz: 700.0 },
+        limits: Limits { u_max_v: 100.0, slew_v_per_s: Some(5000.0), amplifier_range_v: Some(150.0) },
+        extend: Extend::Hold,
+    };
+    render(&curve, &trajectory, &settings).unwrap()
+}
+
+/// WAV read-back with hound: rate, channels, bits, length, and every sample
+/// within half a quantisation step (vpfs / full scale / 2) of the rendered
+/// volts; 32-bit float within f32 rounding (2^-24 relative to full scale).
+#[test]
+fn wav_reads_back_with_hound_at_rate_length_and_scale() {
+    let signal = test_signal();
+    assert_eq!(signal.len(), 11_026);
+    let dir = tempfile::tempdir().unwrap();
+    let vpfs = 150.0;
+    for format in [WavFormat::Pcm16, WavFormat::Pcm24, WavFormat::Float32] {
+        let path = dir.path().join(format!("{format:?}.wav"));
+        let options = WavOptions { format, volts_per_full_scale: vpfs };
+        let sidecar = write_wav(&path, &signal, &options, serde_json::json!({"test": true})).unwrap();
+        let (spec, volts) = read_wav_volts(&path, vpfs).unwrap();
+        assert_eq!((spec.sample_rate, spec.channels), (44_100, 1));
+        assert_eq!(volts.len(), signal.len());
+        let tolerance = match format {
+            WavFormat::Float32 => vpfs * 2f64.powi(-24),
+            _ => 0.5 * vpfs / format.full_scale() * (1.0 + 1e-9),
+        };
+        let worst = volts.iter().zip(&signal.signal_v).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(worst <= tolerance, "{format:?}: error {worst} V > {tolerance} V");
+
+        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(sidecar_path(&path)).unwrap()).unwrap();
+        assert_eq!(json["volts_per_full_scale"], vpfs);
+        assert_eq!(json["n_samples"], signal.len());
+        assert_eq!(json["sample_rate_hz"], 44_100);
+        assert_eq!(json["wav_file"], format!("{format:?}.wav"));
+        assert_eq!(json["report"]["clip"]["clamped_samples"], signal.report.clip.clamped_samples);
+        assert_eq!(sidecar.full_scale_value, format.full_scale());
+    }
+}
+
+/// A WAV whose full scale is below the drive's peak is refused and nothing
+/// is written.
+#[test]
+fn wav_full_scale_below_peak_is_refused() {
+    let signal = test_signal();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("x.wav");
+    let options = WavOptions { format: WavFormat::Pcm16, volts_per_full_scale: 140.0 };
+    let e = write_wav(&path, &signal, &options, serde_json::Value::Null).unwrap_err();
+    assert!(matches!(e, SignalError::ExceedsFullScale { .. }), "{e}");
+    assert!(e.to_string().contains("141.421"), "{e}");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
+/// Reads a WAV with Python's standard library, independently of hound:
+/// `wave` for 16-bit PCM, and for WAVE_FORMAT_EXTENSIBLE files (24-bit,
+/// float; Python 3.11's `wave` reads only plain PCM) a RIFF parse with
+/// `struct`. Volts per full scale come from the sidecar JSON. Prints
+/// "rate n bits peak_volts".
+const PYTHON_READER: &str = r#"
+import json, struct, sys, wave
+path = sys.argv[1]
+side = json.load(open(path + ".json"))
+vpfs, fs_value = side["volts_per_full_scale"], side["full_scale_value"]
+data = open(path, "rb").read()
+assert data[:4] == b"RIFF" and data[8:12] == b"WAVE"
+pos, fmt, payload = 12, None, None
+while pos < len(data):
+    cid, size = data[pos:pos + 4], struct.unpack("<I", data[pos + 4:pos + 8])[0]
+    body = data[pos + 8:pos + 8 + size]
+    if cid == b"fmt ":
+        fmt = struct.unpack("<HHIIHH", body[:16])
+    elif cid == b"data":
+        payload = body
+    pos += 8 + size + (size & 1)
+tag, channels, rate, _, _, bits = fmt
+if tag == 1:
+    with wave.open(path, "rb") as w:
+        assert (w.getframerate(), w.getnchannels(), w.getsampwidth()) == (rate, 1, 2)
+        n = w.getnframes()
+        values = struct.unpack("<%dh" % n, w.readframes(n))
+elif bits == 24:
+    n = len(payload) // 3
+    values = [int.from_bytes(payload[3 * i:3 * i + 3], "little", signed=True) for i in range(n)]
+else:
+    n = len(payload) // 4
+    values = struct.unpack("<%df" % n, payload)
+peak = max(abs(v) for v in values) / fs_value * vpfs
+print(rate, n, bits, repr(peak))
+"#;
+
+/// Issue 7 acceptance: the WAVs read back with Python's standard library at
+/// the right rate, length and scale (peak in volts within one quantisation
+/// step of the rendered sample peak).
+#[test]
+fn wav_reads_back_with_python_at_rate_length_and_scale() {
+    let signal = test_signal();
+    let dir = tempfile::tempdir().unwrap();
+    let vpfs = 200.0;
+    for (format, bits) in [(WavFormat::Pcm16, 16), (WavFormat::Pcm24, 24), (WavFormat::Float32, 32)] {
+        let path = dir.path().join(format!("{format:?}.wav"));
+        write_wav(&path, &signal, &WavOptions { format, volts_per_full_scale: vpfs }, serde_json::Value::Null).unwrap();
+        let (rate, n, read_bits, peak) = python_read(&path);
+        assert_eq!((rate, n, read_bits), (44_100, signal.len(), bits), "{format:?}");
+        let step = vpfs / format.full_scale();
+        assert!(
+            (peak - signal.report.sample_peak_v).abs() <= step.max(vpfs * 2f64.powi(-24)),
+            "{format:?}: Python peak {peak} V, rendered {} V",
+            signal.report.sample_peak_v
+        );
+    }
+}
+
+fn python_read(path: &Path) -> (u32, usize, u32, f64) {
+    let out = Command::new("python3")
+        .args(["-c", PYTHON_READER, path.to_str().unwrap()])
+        .output()
+        .expect("python3 must be installed to run this test");
+    assert!(out.status.success(), "python: {}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let fields: Vec<&str> = text.split_whitespace().collect();
+    (fields[0].parse().unwrap(), fields[1].parse().unwrap(), fields[2].parse().unwrap(), fields[3].parse().unwrap())
+}

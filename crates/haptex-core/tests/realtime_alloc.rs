@@ -1,0 +1,107 @@
+//! Issue 7 acceptance: the real-time renderer does not allocate per output
+//! sample. A counting global allocator (in this test binary only) counts
+//! allocations made by the test's own thread while the fill loop runs:
+//! touch reports, buffer fills, lift-off, touch-down and every carrier and
+//! extension mode, over 2 s of output. The expected count is exactly 0.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use haptex_core::realtime::{RealtimeConfig, RealtimeRenderer};
+use haptex_core::signal::{Carrier, CarrierShape, Extend, Limits, VoltageCurve};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+thread_local! {
+    // Const-initialised, so reading it never allocates.
+    static COUNTING: Cell<bool> = const { Cell::new(false) };
+}
+
+fn count() {
+    if COUNTING.with(Cell::get) {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+// SAFETY: forwards every call to the system allocator unchanged.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        count();
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        count();
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        count();
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Allocations made by `f` on this thread.
+fn allocations_in(f: impl FnOnce()) -> usize {
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    COUNTING.with(|c| c.set(true));
+    f();
+    COUNTING.with(|c| c.set(false));
+    ALLOCATIONS.load(Ordering::Relaxed) - before
+}
+
+#[test]
+fn fill_loop_does_not_allocate() {
+    // The counter works: a Vec allocates.
+    assert_eq!(allocations_in(|| drop(std::hint::black_box(vec![1u8; 16]))), 1);
+
+    let x: Vec<f64> = (0..=2000).map(|i| i as f64 * 0.01).collect();
+    let u = x.iter().map(|x| 60.0 + 50.0 * (x * 3.0).sin()).collect();
+    let curve = VoltageCurve::new(x, u).unwrap();
+    let shapes = [CarrierShape::Sine, CarrierShape::Square, CarrierShape::None];
+    for (shape, extend) in shapes.into_iter().zip([Extend::Hold, Extend::Zero, Extend::Repeat]) {
+        let config = RealtimeConfig {
+            carrier: Carrier { shape, frequency_hz: 1000.0 },
+            limits: Limits { u_max_v: 100.0, slew_v_per_s: Some(20_000.0), amplifier_range_v: Some(150.0) },
+            extend,
+            ..RealtimeConfig::default()
+        };
+        let mut renderer = RealtimeRenderer::new(&curve, &config).unwrap();
+        let mut buffer = vec![0.0f32; 256];
+        let mut volts = vec![0.0f64; 256];
+        let mut peak = 0.0f32;
+        let count = allocations_in(|| {
+            // 2 s at 48 kHz in 256-sample buffers, a touch report every
+            // 800 samples (60 Hz), the finger lifted for a while in the middle.
+            let mut rendered = 0usize;
+            let mut next_report = 0usize;
+            while rendered < 96_000 {
+                if rendered >= next_report {
+                    let t = renderer.now_s();
+                    if (0.9..1.1).contains(&t) {
+                        renderer.release();
+                    } else {
+                        renderer.touch(t, -3.0 + 30.0 * t);
+                    }
+                    next_report += 800;
+                }
+                if rendered.is_multiple_of(512) {
+                    renderer.fill(&mut buffer);
+                } else {
+                    renderer.fill_volts(&mut volts);
+                }
+                peak = buffer.iter().fold(peak, |m, v| m.max(v.abs()));
+                rendered += 256;
+            }
+        });
+        assert_eq!(count, 0, "{shape:?}/{extend:?}: {count} allocations in the fill loop");
+        assert!(peak > 0.1 && peak <= 1.0, "{shape:?}: peak {peak} of full scale");
+    }
+}
