@@ -7,6 +7,7 @@
 pub mod electrovibration;
 pub mod io;
 pub mod profile;
+pub mod recording;
 
 pub use electrovibration::{Device, Method, VoltageProfile, VoltageSummary, map_profile};
 pub use profile::{FrictionProfile, ProfileError};
