@@ -165,18 +165,12 @@ impl Recording {
         let sha256 = hex(&hash.finalize());
 
         let force_name = force_path.display().to_string();
-        let force = read_stream(&force_bytes, &force_name, "force.file", &FORCE_COLUMNS, meta.force.rate_hz, true)?;
+        let force = read_stream(&force_bytes, &force_name, "force.file", &FORCE_COLUMNS)?;
         let position_name = position_path.display().to_string();
-        let position = read_stream(
-            &position_bytes,
-            &position_name,
-            "position.file",
-            &POSITION_COLUMNS,
-            meta.position.rate_hz,
-            false,
-        )?;
+        let position = read_stream(&position_bytes, &position_name, "position.file", &POSITION_COLUMNS)?;
         check_rate(&name, "force.rate_hz", &force_name, &force.columns[0], meta.force.rate_hz)?;
         check_rate(&name, "position.rate_hz", &position_name, &position.columns[0], meta.position.rate_hz)?;
+        check_force_uniform(&force_name, &force.columns[0], meta.force.rate_hz, &|row| force.place(row))?;
         check_spans((&force_name, &force.columns[0]), (&position_name, &position.columns[0]), meta.position.rate_hz)?;
 
         let [t_s, fn_n, ft_n]: [Vec<f64>; 3] = force.columns.try_into().expect("three force columns");
@@ -204,9 +198,9 @@ impl Recording {
         let force_columns = [&force.t_s, &force.fn_n, &force.ft_n];
         check_columns(&force_name, &FORCE_COLUMNS, &force_columns.map(|c| c.as_slice()), &|row| Place::Row(row))?;
         check_columns(&position_name, &POSITION_COLUMNS, &[&position.t_s, &position.x_mm], &|row| Place::Row(row))?;
-        check_force_uniform(&force_name, &force.t_s, meta.force.rate_hz, &|row| Place::Row(row))?;
         check_rate(name, "force.rate_hz", &force_name, &force.t_s, meta.force.rate_hz)?;
         check_rate(name, "position.rate_hz", &position_name, &position.t_s, meta.position.rate_hz)?;
+        check_force_uniform(&force_name, &force.t_s, meta.force.rate_hz, &|row| Place::Row(row))?;
         check_spans((&force_name, &force.t_s), (&position_name, &position.t_s), meta.position.rate_hz)?;
         let force = ForceStream { rate_hz: meta.force.rate_hz, ..force };
         let position = PositionStream { rate_hz: meta.position.rate_hz, ..position };
@@ -341,22 +335,26 @@ fn check_meta(file: &str, meta: &RecordingMeta) -> Result<(), RecordingError> {
     Ok(())
 }
 
-/// A parsed stream: columns in the order asked for.
+/// A parsed stream: columns in the order asked for, and the CSV line of
+/// each row (NPY: none, rows are reported by index).
 struct StreamColumns {
     columns: Vec<Vec<f64>>,
+    lines: Option<Vec<u64>>,
 }
 
-/// Reads a CSV or NPY stream and checks its values (finite, time increasing,
-/// uniform force sampling). `field` names the metadata field for errors about
-/// the file as a whole.
-fn read_stream(
-    bytes: &[u8],
-    file: &str,
-    field: &str,
-    names: &[&str],
-    rate_hz: f64,
-    uniform: bool,
-) -> Result<StreamColumns, RecordingError> {
+impl StreamColumns {
+    fn place(&self, row: usize) -> Place {
+        match &self.lines {
+            Some(lines) => Place::Line(lines[row]),
+            None => Place::Row(row),
+        }
+    }
+}
+
+/// Reads a CSV or NPY stream and checks its values (finite, time
+/// increasing). `field` names the metadata field for errors about the file
+/// as a whole.
+fn read_stream(bytes: &[u8], file: &str, field: &str, names: &[&str]) -> Result<StreamColumns, RecordingError> {
     let lower = file.to_ascii_lowercase();
     if lower.ends_with(".csv") {
         let table = Table::read(bytes, file)?;
@@ -375,18 +373,13 @@ fn read_stream(
                 .into());
         }
         check_columns(file, names, &refs, &place)?;
-        if uniform {
-            check_force_uniform(file, &columns[0], rate_hz, &place)?;
-        }
-        Ok(StreamColumns { columns })
+        let lines = Some((0..table.n_rows()).map(|row| table.line_of_row(row)).collect());
+        Ok(StreamColumns { columns, lines })
     } else if lower.ends_with(".npy") {
         let columns = read_npy_columns(bytes, file, names)?;
         let refs: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
         check_columns(file, names, &refs, &|row| Place::Row(row))?;
-        if uniform {
-            check_force_uniform(file, &columns[0], rate_hz, &|row| Place::Row(row))?;
-        }
-        Ok(StreamColumns { columns })
+        Ok(StreamColumns { columns, lines: None })
     } else {
         Err(RecordingError::invalid(
             file,
@@ -515,7 +508,7 @@ fn check_force_uniform(
             place(i + 1),
             Some("t_s"),
             format!(
-                "sample interval {:e} s is not the nominal 1/{rate_hz} Hz = {nominal:e} s: the force stream must be \
+                "sample interval {:.4e} s is not the nominal 1/{rate_hz} Hz = {nominal:.4e} s: the force stream must be \
                  uniformly sampled (no gaps or repeated blocks)",
                 t[i + 1] - t[i]
             ),
