@@ -6,6 +6,7 @@
 
 pub mod electrovibration;
 pub mod io;
+pub mod library;
 pub mod profile;
 pub mod recording;
 
