@@ -22,12 +22,14 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     Voltage(commands::voltage::VoltageArgs),
+    Library(commands::library::LibraryArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Voltage(args) => commands::voltage::run(args),
+        Command::Library(args) => commands::library::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

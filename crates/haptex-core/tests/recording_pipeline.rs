@@ -200,6 +200,25 @@ fn sliding_detection_finds_pauses_and_reversals() {
     assert_eq!(backward.used, [false, false, true]);
 }
 
+/// A pause within a stroke: the two segments are joined across the short
+/// stretch where the finger slows down and restarts (bridged, under 1 mm),
+/// and the whole stroke comes back within the round-trip tolerance.
+#[test]
+fn a_pause_is_bridged_into_one_profile() {
+    let path = Trajectory::starting_at(0.0).hold(0.15).move_to(20.0, 0.25).hold(0.2).move_to(40.0, 0.25).hold(0.15);
+    let rec = stroke(&path, 0.5, Noise { force_n: 0.005, position_mm: 0.01 }, &[FIVE_KHZ], 6);
+    let p = process(&rec, &ProcessingConfig::default()).unwrap();
+    assert_eq!(p.segments.len(), 2);
+    assert!(p.bridged_mm > 0.0 && p.bridged_mm <= 1.0, "{}", p.bridged_mm);
+    let x = p.profile.x_mm();
+    assert!(x[0] < 1.0 && x[x.len() - 1] > 39.0, "{} .. {}", x[0], x[x.len() - 1]);
+    let (max, rms) = errors(&p.profile);
+    assert!(max <= 0.012 && rms <= 0.004, "max {max}, rms {rms}");
+    // Without bridging, the profile is the longer of the two segments.
+    let unbridged = process(&rec, &ProcessingConfig { max_gap_mm: 0.0, ..ProcessingConfig::default() }).unwrap();
+    assert!(unbridged.profile.span_mm() < 20.0 && unbridged.bridged_mm == 0.0);
+}
+
 /// A finger pressing without moving, and a finger moving without pressing,
 /// give a NoSliding error that says why.
 #[test]

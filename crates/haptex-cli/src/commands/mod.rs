@@ -1,3 +1,4 @@
 //! One module per `haptex` subcommand.
 
+pub mod library;
 pub mod voltage;

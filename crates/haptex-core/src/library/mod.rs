@@ -130,6 +130,8 @@ pub struct StrokeInfo {
     /// Fn_RS, the mean normal force while sliding (N), where known.
     pub mean_fn_n: Option<f64>,
     pub sliding_s: Option<f64>,
+    /// Length of the profile bridged between sliding segments, mm.
+    pub bridged_mm: Option<f64>,
     pub n_segments: Option<i64>,
 }
 
@@ -429,6 +431,7 @@ impl Library {
             duration_s: Some(recording.duration_s()),
             config_json: Some(serde_json::to_string(config).expect("config serializes")),
             sliding_s: Some(processed.sliding_s),
+            bridged_mm: Some(processed.bridged_mm),
             segments_json: Some(serde_json::to_string(&used).expect("segments serialize")),
             n_segments: Some(used.len() as i64),
         };
@@ -469,6 +472,7 @@ impl Library {
             duration_s: None,
             config_json: None,
             sliding_s: None,
+            bridged_mm: None,
             segments_json: None,
             n_segments: None,
         };
@@ -535,8 +539,8 @@ impl Library {
         let mean_mu = profile.mu().iter().sum::<f64>() / profile.len() as f64;
         tx.execute(
             "INSERT INTO profiles (stroke_id, config_json, n_points, x_mm, mu, fn_n, mean_mu, mean_fn_n, span_mm,
-                                   sliding_s, n_segments, segments_json)
-             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)",
+                                   sliding_s, bridged_mm, n_segments, segments_json)
+             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)",
             params![
                 stroke_id,
                 row.config_json,
@@ -548,6 +552,7 @@ impl Library {
                 profile.mean_fn_n(),
                 profile.span_mm(),
                 row.sliding_s,
+                row.bridged_mm,
                 row.n_segments,
                 row.segments_json,
             ],
@@ -631,6 +636,7 @@ struct StrokeRow<'a> {
     duration_s: Option<f64>,
     config_json: Option<String>,
     sliding_s: Option<f64>,
+    bridged_mm: Option<f64>,
     segments_json: Option<String>,
     n_segments: Option<i64>,
 }
@@ -638,7 +644,7 @@ struct StrokeRow<'a> {
 const STROKE_SELECT: &str = "SELECT s.id, m.name, s.kind, s.participant, s.stroke, s.synthetic, s.source, s.licence,
         s.origin_path, s.content_sha256, s.imported_at, s.import_id, s.metadata_json, p.config_json,
         s.force_rate_hz, s.position_rate_hz, s.duration_s, p.n_points, p.span_mm, p.mean_mu, p.mean_fn_n,
-        p.sliding_s, p.n_segments
+        p.sliding_s, p.bridged_mm, p.n_segments
     FROM strokes s JOIN materials m ON m.id = s.material_id JOIN profiles p ON p.stroke_id = s.id";
 
 fn stroke_info(r: &rusqlite::Row<'_>) -> rusqlite::Result<StrokeInfo> {
@@ -665,7 +671,8 @@ fn stroke_info(r: &rusqlite::Row<'_>) -> rusqlite::Result<StrokeInfo> {
         mean_mu: r.get(19)?,
         mean_fn_n: r.get(20)?,
         sliding_s: r.get(21)?,
-        n_segments: r.get(22)?,
+        bridged_mm: r.get(22)?,
+        n_segments: r.get(23)?,
     })
 }
 

@@ -59,6 +59,7 @@ pub const MIGRATIONS: &[&str] = &[
         mean_fn_n     REAL,
         span_mm       REAL NOT NULL,
         sliding_s     REAL,
+        bridged_mm    REAL,
         n_segments    INTEGER,
         segments_json TEXT
     );

@@ -16,8 +16,11 @@
 //! The segments of one recording share the grid (nodes at multiples of dx),
 //! so a stroke interrupted by a pause continues on the same nodes, and where
 //! segments overlap (a reversal goes back over the same ground) their values
-//! are averaged. The stroke's profile is the longest run of consecutive
-//! nodes covered by at least one segment.
+//! are averaged. Short gaps between segments (the few tenths of a mm where
+//! the finger slows into and out of a pause or a reversal, no longer
+//! sliding) are bridged by linear interpolation between the nodes on either
+//! side, up to a maximum gap. The stroke's profile is the longest run of
+//! consecutive nodes covered by a segment or a bridge.
 
 /// Values on grid nodes `first_node, first_node + 1, ...` (x = node * dx).
 #[derive(Debug, Clone, PartialEq)]
@@ -36,9 +39,10 @@ impl GridSeries {
         self.len() == 0
     }
 
-    /// Node positions in mm.
+    /// Node positions in mm, node * dx rounded to 1e-9 mm (so that a 0.1 mm
+    /// grid reads 41.8, not 41.800000000000004).
     pub fn x_mm(&self, dx_mm: f64) -> Vec<f64> {
-        (0..self.len() as i64).map(|k| (self.first_node + k) as f64 * dx_mm).collect()
+        (0..self.len() as i64).map(|k| ((self.first_node + k) as f64 * dx_mm * 1e9).round() / 1e9).collect()
     }
 }
 
@@ -133,9 +137,19 @@ impl<'a> Cumulative<'a> {
     }
 }
 
-/// Averages overlapping segments node by node and keeps the longest run of
-/// covered nodes. All series must have the same number of columns.
-pub fn combine_segments(series: &[GridSeries]) -> Option<GridSeries> {
+/// The segments of one stroke combined on their shared grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Combined {
+    pub series: GridSeries,
+    /// Nodes of `series` filled by bridging gaps.
+    pub bridged_nodes: usize,
+}
+
+/// Averages overlapping segments node by node, bridges gaps of at most
+/// `max_gap_nodes` uncovered nodes by linear interpolation, and keeps the
+/// longest run of covered nodes. All series must have the same number of
+/// columns.
+pub fn combine_segments(series: &[GridSeries], max_gap_nodes: usize) -> Option<Combined> {
     let first = series.iter().map(|s| s.first_node).min()?;
     let last = series.iter().map(|s| s.first_node + s.len() as i64 - 1).max()?;
     let n_columns = series[0].columns.len();
@@ -153,9 +167,34 @@ pub fn combine_segments(series: &[GridSeries]) -> Option<GridSeries> {
             counts[offset + k] += 1;
         }
     }
+    let mut values: Vec<Vec<f64>> = sums
+        .iter()
+        .map(|sum| sum.iter().zip(&counts).map(|(s, &c)| if c > 0 { s / f64::from(c) } else { 0.0 }).collect())
+        .collect();
+    let mut covered: Vec<bool> = counts.iter().map(|&c| c > 0).collect();
+    // Bridge short gaps between covered nodes a and b.
+    let mut previous: Option<usize> = None;
+    for b in 0..n {
+        if !covered[b] {
+            continue;
+        }
+        if let Some(a) = previous
+            && b - a > 1
+            && b - a - 1 <= max_gap_nodes
+        {
+            for column in &mut values {
+                for k in a + 1..b {
+                    let t = (k - a) as f64 / (b - a) as f64;
+                    column[k] = column[a] + t * (column[b] - column[a]);
+                }
+            }
+            covered[a + 1..b].iter_mut().for_each(|c| *c = true);
+        }
+        previous = Some(b);
+    }
     // Longest run of covered nodes.
     let (mut best, mut run_start) = ((0, 0), None);
-    for (k, covered) in counts.iter().map(|&c| c > 0).chain([false]).enumerate() {
+    for (k, covered) in covered.iter().copied().chain([false]).enumerate() {
         match (covered, run_start) {
             (true, None) => run_start = Some(k),
             (false, Some(s)) => {
@@ -171,8 +210,9 @@ pub fn combine_segments(series: &[GridSeries]) -> Option<GridSeries> {
     if b == a {
         return None;
     }
-    let columns = sums.iter().map(|sum| (a..b).map(|k| sum[k] / f64::from(counts[k])).collect()).collect();
-    Some(GridSeries { first_node: first + a as i64, columns })
+    let bridged_nodes = counts[a..b].iter().filter(|&&c| c == 0).count();
+    let columns = values.iter().map(|v| v[a..b].to_vec()).collect();
+    Some(Combined { series: GridSeries { first_node: first + a as i64, columns }, bridged_nodes })
 }
 
 #[cfg(test)]
@@ -223,8 +263,20 @@ mod tests {
         let a = GridSeries { first_node: 0, columns: vec![vec![1.0; 5]] };
         let b = GridSeries { first_node: 3, columns: vec![vec![3.0; 4]] };
         let c = GridSeries { first_node: 20, columns: vec![vec![9.0; 2]] };
-        let combined = combine_segments(&[a, b, c]).unwrap();
-        assert_eq!(combined.first_node, 0);
-        assert_eq!(combined.columns[0], [1.0, 1.0, 1.0, 2.0, 2.0, 3.0, 3.0]);
+        let combined = combine_segments(&[a, b, c], 3).unwrap();
+        assert_eq!(combined.series.first_node, 0);
+        assert_eq!(combined.series.columns[0], [1.0, 1.0, 1.0, 2.0, 2.0, 3.0, 3.0]);
+        assert_eq!(combined.bridged_nodes, 0);
+    }
+
+    #[test]
+    fn short_gaps_are_bridged_linearly_long_ones_are_not() {
+        let a = GridSeries { first_node: 0, columns: vec![vec![1.0; 3]] };
+        let b = GridSeries { first_node: 6, columns: vec![vec![5.0; 2]] };
+        let c = GridSeries { first_node: 20, columns: vec![vec![9.0; 2]] };
+        let combined = combine_segments(&[a, b, c], 3).unwrap();
+        assert_eq!(combined.series.first_node, 0);
+        assert_eq!(combined.series.columns[0], [1.0, 1.0, 1.0, 2.0, 3.0, 4.0, 5.0, 5.0]);
+        assert_eq!(combined.bridged_nodes, 3);
     }
 }

@@ -74,6 +74,10 @@ pub struct ProcessingConfig {
     pub min_length_mm: f64,
     /// Spacing of the location grid, mm (default 0.1).
     pub dx_mm: f64,
+    /// Longest gap between sliding segments bridged by linear
+    /// interpolation, mm (default 1: the slow-down into and out of a pause
+    /// or a reversal).
+    pub max_gap_mm: f64,
     /// Directions that contribute to the profile (default both).
     pub direction: DirectionFilter,
 }
@@ -92,6 +96,7 @@ impl Default for ProcessingConfig {
             min_duration_s: 0.05,
             min_length_mm: 1.0,
             dx_mm: 0.1,
+            max_gap_mm: 1.0,
             direction: DirectionFilter::Both,
         }
     }
@@ -115,8 +120,12 @@ impl ProcessingConfig {
                 return Err(RecordingError::Config { name, message: format!("must be positive, got {value}") });
             }
         }
-        let non_negative =
-            [("trim_s", self.trim_s), ("min_duration_s", self.min_duration_s), ("min_length_mm", self.min_length_mm)];
+        let non_negative = [
+            ("trim_s", self.trim_s),
+            ("min_duration_s", self.min_duration_s),
+            ("min_length_mm", self.min_length_mm),
+            ("max_gap_mm", self.max_gap_mm),
+        ];
         for (name, value) in non_negative {
             if !(value.is_finite() && value >= 0.0) {
                 return Err(RecordingError::Config { name, message: format!("must be zero or positive, got {value}") });
@@ -182,6 +191,8 @@ pub struct ProcessedStroke {
     pub mean_mu: f64,
     /// Total duration of the contributing segments, s.
     pub sliding_s: f64,
+    /// Length of the profile bridged between segments, mm.
+    pub bridged_mm: f64,
     /// Length of the anti-alias filter, taps.
     pub filter_taps: usize,
     /// The resampled signals and velocity at the position rate.
@@ -258,12 +269,16 @@ pub fn process(recording: &Recording, config: &ProcessingConfig) -> Result<Proce
             grids.push(grid);
         }
     }
-    let combined = combine_segments(&grids).filter(|g| g.len() >= 2).ok_or_else(|| RecordingError::Processing {
-        file: file.clone(),
-        message: format!("the sliding segments cover less than two {} mm grid cells", config.dx_mm),
+    let max_gap_nodes = (config.max_gap_mm / config.dx_mm + 1e-9).floor() as usize;
+    let combined = combine_segments(&grids, max_gap_nodes).filter(|c| c.series.len() >= 2).ok_or_else(|| {
+        RecordingError::Processing {
+            file: file.clone(),
+            message: format!("the sliding segments cover less than two {} mm grid cells", config.dx_mm),
+        }
     })?;
-    let x_grid = combined.x_mm(config.dx_mm);
-    let [mu, fn_grid]: [Vec<f64>; 2] = combined.columns.try_into().expect("two grid columns");
+    let bridged_mm = combined.bridged_nodes as f64 * config.dx_mm;
+    let x_grid = combined.series.x_mm(config.dx_mm);
+    let [mu, fn_grid]: [Vec<f64>; 2] = combined.series.columns.try_into().expect("two grid columns");
 
     // Step 5: Fn_RS = mean Fn while sliding, over the location domain.
     let mean_fn_n = fn_grid.iter().sum::<f64>() / fn_grid.len() as f64;
@@ -279,6 +294,7 @@ pub fn process(recording: &Recording, config: &ProcessingConfig) -> Result<Proce
         mean_fn_n,
         mean_mu,
         sliding_s,
+        bridged_mm,
         filter_taps: filter.taps().len(),
         series: PositionRateSeries { t_s, x_mm, v_mm_s, fn_n, ft_n },
     })
