@@ -287,3 +287,43 @@ fn killing_an_import_leaves_a_consistent_library_and_readers_work_meanwhile() {
     assert_eq!(library.check().unwrap(), Vec::<String>::new());
     assert_eq!(library.strokes("test material").unwrap().len(), N as usize);
 }
+
+/// The converter of docs/recordings.md (scripts/convert_recording.py,
+/// Python standard library only) turns a generic export in ms, mN and m
+/// with the friction force reported on the finger into a recording that
+/// processes to the same profile as the original.
+#[test]
+fn python_converter_produces_an_importable_recording() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = short_recording(3, 0.8);
+    let mut force = String::from("# lab export\ntime,Fz,Fx\n");
+    for i in 0..rec.force.t_s.len() {
+        force += &format!("{},{},{}\n", rec.force.t_s[i] * 1e3, rec.force.fn_n[i] * 1e3, -rec.force.ft_n[i] * 1e3);
+    }
+    let mut track = String::from("time,X\n");
+    for k in 0..rec.position.t_s.len() {
+        track += &format!("{},{}\n", rec.position.t_s[k] * 1e3, rec.position.x_mm[k] * 1e-3);
+    }
+    std::fs::write(dir.path().join("forces.csv"), force).unwrap();
+    std::fs::write(dir.path().join("track.csv"), track).unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scripts/convert_recording.py");
+    let out = Command::new("python3")
+        .arg(&script)
+        .args(["--force", "forces.csv", "--force-columns", "time,Fz,Fx", "--position", "track.csv"])
+        .args(["--position-columns", "time,X", "--time-unit", "ms", "--force-unit", "mN", "--position-unit", "m"])
+        .args(["--flip-ft", "--force-rate", "20000", "--position-rate", "400", "--material", "test material"])
+        .args(["--participant", "P1", "--stroke", "3", "--source", "converter test", "--licence", "CC0-1.0"])
+        .args(["--out", "converted", "--name", "trial"])
+        .current_dir(dir.path())
+        .output()
+        .expect("python3 runs");
+    assert!(out.status.success(), "{}", stderr(&out));
+    let converted = Recording::load(&dir.path().join("converted/trial.recording.json")).unwrap();
+    let config = haptex_core::recording::ProcessingConfig::default();
+    let a = haptex_core::recording::process(&converted, &config).unwrap().profile;
+    let b = haptex_core::recording::process(&rec, &config).unwrap().profile;
+    assert_eq!(a.x_mm(), b.x_mm());
+    // Unit conversion rounds in the last digits only.
+    let diff = a.mu().iter().zip(b.mu()).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+    assert!(diff < 1e-9, "{diff}");
+}
