@@ -32,7 +32,7 @@ const SHIPPED_LIBRARY: &str = "data/library/library.sqlite";
 #[command(after_help = "Examples:
   haptex library list
   haptex library sample --material velvet --seed 7 -o velvet.csv
-  haptex voltage --profile velvet.csv
+  haptex voltage --profile velvet.csv --method normalized
   haptex library import --db my.sqlite recordings/
   haptex library import --db my.sqlite --profile bump.csv --material 'my bump' --licence CC-BY-4.0")]
 pub struct LibraryArgs {
@@ -52,7 +52,10 @@ enum LibraryCommand {
     Export(ExportArgs),
     Process(ProcessArgs),
     Demo(DemoArgs),
+    /// Check the library's consistency (SQLite integrity and foreign keys,
+    /// every stroke with its profile); exits non-zero on a problem.
     Check,
+    /// Migrate a library written by an older haptex to this schema version.
     Upgrade,
 }
 
