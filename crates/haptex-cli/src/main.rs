@@ -24,6 +24,7 @@ enum Command {
     Voltage(commands::voltage::VoltageArgs),
     Cae(commands::cae::CaeArgs),
     Play(commands::play::PlayArgs),
+    Library(commands::library::LibraryArgs),
 }
 
 fn main() -> ExitCode {
@@ -32,6 +33,7 @@ fn main() -> ExitCode {
         Command::Voltage(args) => commands::voltage::run(args),
         Command::Cae(args) => commands::cae::run(args),
         Command::Play(args) => commands::play::run(args),
+        Command::Library(args) => commands::library::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

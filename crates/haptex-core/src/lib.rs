@@ -7,7 +7,9 @@
 pub mod cae;
 pub mod electrovibration;
 pub mod io;
+pub mod library;
 pub mod profile;
+pub mod recording;
 
 pub use electrovibration::{Device, Method, VoltageProfile, VoltageSummary, map_profile};
 pub use profile::{FrictionProfile, ProfileError};

@@ -50,6 +50,16 @@ impl FrictionProfile {
         Ok(Self { x_mm, mu, fn_n: Some(fn_n) })
     }
 
+    /// The same profile with the normal force in N at each position
+    /// (finite, positive, one value per position), e.g. the location-domain
+    /// Fn of a recorded stroke.
+    pub fn with_normal_force(mut self, fn_n: Vec<f64>) -> Result<Self, ProfileError> {
+        validate(&self.x_mm, &[("fn_n", &fn_n)]).map_err(in_memory)?;
+        check_normal_force(&fn_n).map_err(in_memory)?;
+        self.fn_n = Some(fn_n);
+        Ok(self)
+    }
+
     /// Reads a profile from a parsed table: `x_mm` plus `mu`, or `x_mm` plus
     /// `ft_n` and `fn_n`. If `mu` is present it is used as is, and an
     /// `fn_n` column, if any, is kept as the normal force.

@@ -2,4 +2,5 @@
 
 pub mod cae;
 pub mod play;
+pub mod library;
 pub mod voltage;

@@ -1,0 +1,209 @@
+//! The raw recording format: reading CSV and NPY streams, and the errors
+//! for malformed recordings (issue 6 acceptance: mismatched lengths,
+//! non-monotone time, NaN, wrong units; each names the file and the line).
+
+use std::path::{Path, PathBuf};
+
+use haptex_core::recording::format::write_npy_f32;
+use haptex_core::recording::synth::demo_recordings;
+use haptex_core::recording::{ProcessingConfig, Recording, RecordingError, StreamFormat, process};
+
+const META: &str = r#"{
+  "format": "haptex-recording-1",
+  "material": "test",
+  "participant": "P1",
+  "stroke": 1,
+  "force": {"file": "s.force.csv", "rate_hz": 1000},
+  "position": {"file": "s.position.csv", "rate_hz": 100},
+  "units": {"time": "s", "force": "N", "position": "mm"},
+  "source": "hand-written test data",
+  "licence": "CC0-1.0"
+}
+"#;
+
+/// A valid 1000 Hz / 100 Hz recording of 0.1 s, as CSV text.
+fn force_csv() -> String {
+    let mut s = String::from("# force\nt_s,fn_n,ft_n\n");
+    for i in 0..=100 {
+        s += &format!("{},{},{}\n", i as f64 / 1000.0, 0.5, 0.25);
+    }
+    s
+}
+
+fn position_csv() -> String {
+    let mut s = String::from("t_s,x_mm\n");
+    for k in 0..=10 {
+        s += &format!("{},{}\n", k as f64 / 100.0, k as f64);
+    }
+    s
+}
+
+fn write_recording(dir: &Path, meta: &str, force: &str, position: &str) -> PathBuf {
+    std::fs::write(dir.join("s.force.csv"), force).unwrap();
+    std::fs::write(dir.join("s.position.csv"), position).unwrap();
+    let path = dir.join("s.recording.json");
+    std::fs::write(&path, meta).unwrap();
+    path
+}
+
+fn load_error(meta: &str, force: &str, position: &str) -> (RecordingError, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_recording(dir.path(), meta, force, position);
+    let err = Recording::load(&path).unwrap_err();
+    let message = err.to_string().replace(&format!("{}/", dir.path().display()), "");
+    (err, message)
+}
+
+#[test]
+fn a_valid_csv_recording_loads_with_its_hash() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_recording(dir.path(), META, &force_csv(), &position_csv());
+    let rec = Recording::load(&path).unwrap();
+    assert_eq!(rec.force.t_s.len(), 101);
+    assert_eq!(rec.position.x_mm[10], 10.0);
+    assert_eq!(rec.sha256.as_ref().unwrap().len(), 64);
+    // The hash covers the stream contents.
+    std::fs::write(dir.path().join("s.position.csv"), position_csv().replace(",10\n", ",10.5\n")).unwrap();
+    assert_ne!(Recording::load(&path).unwrap().sha256, rec.sha256);
+}
+
+#[test]
+fn mismatched_lengths_name_both_files() {
+    // The position stream stops at 0.05 s, the force stream at 0.1 s.
+    let short: String = position_csv().lines().take(7).map(|l| format!("{l}\n")).collect();
+    let (err, message) = load_error(META, &force_csv(), &short);
+    assert!(matches!(err, RecordingError::Mismatch { .. }), "{message}");
+    assert!(message.contains("mismatched lengths"), "{message}");
+    assert!(message.contains("s.force.csv (101 samples") && message.contains("s.position.csv (6 samples"), "{message}");
+}
+
+#[test]
+fn a_row_with_a_missing_field_names_its_line() {
+    let force = force_csv().replace("0.05,0.5,0.25\n", "0.05,0.5\n");
+    let (_, message) = load_error(META, &force, &position_csv());
+    assert_eq!(message, "s.force.csv, line 53: expected 3 fields as in the header, found 2");
+}
+
+#[test]
+fn non_monotone_time_names_its_line() {
+    let position = position_csv().replace("0.05,5\n", "0.035,5\n");
+    let (_, message) = load_error(META, &force_csv(), &position);
+    assert_eq!(message, "s.position.csv, line 7, column 't_s': time must increase strictly: 0.035 s follows 0.04 s");
+}
+
+#[test]
+fn nan_names_its_line_and_column() {
+    let force = force_csv().replace("0.02,0.5,0.25\n", "0.02,NaN,0.25\n");
+    let (_, message) = load_error(META, &force, &position_csv());
+    assert_eq!(message, "s.force.csv, line 23, column 'fn_n': not a finite number: \"NaN\"");
+}
+
+#[test]
+fn wrong_units_in_a_header_or_the_metadata_are_named() {
+    let force = force_csv().replace("t_s,fn_n,ft_n", "t_ms,fn_n,ft_n");
+    let (_, message) = load_error(META, &force, &position_csv());
+    assert_eq!(
+        message,
+        "s.force.csv, line 2, column 't_ms': wrong unit in the header: haptex recordings need column 't_s' \
+         (seconds); convert the data"
+    );
+    let position = position_csv().replace("x_mm", "x_m");
+    let (_, message) = load_error(META, &force_csv(), &position);
+    assert!(message.starts_with("s.position.csv, line 1, column 'x_m': wrong unit"), "{message}");
+
+    let meta = META.replace(r#""force": "N""#, r#""force": "mN""#);
+    let (_, message) = load_error(&meta, &force_csv(), &position_csv());
+    assert!(message.starts_with("s.recording.json, field 'units.force': is \"mN\""), "{message}");
+}
+
+#[test]
+fn a_missing_column_is_named() {
+    let force = force_csv().replace("t_s,fn_n,ft_n", "t_s,fn_n,fx_n");
+    let (_, message) = load_error(META, &force, &position_csv());
+    assert!(message.starts_with("s.force.csv, line 2, column 'ft_n': required column is missing"), "{message}");
+}
+
+#[test]
+fn a_declared_rate_that_does_not_match_the_timestamps_is_named() {
+    let meta = META.replace(r#""rate_hz": 1000"#, r#""rate_hz": 2000"#);
+    let (_, message) = load_error(&meta, &force_csv(), &position_csv());
+    assert!(message.starts_with("s.recording.json, field 'force.rate_hz': declares 2000 Hz"), "{message}");
+}
+
+#[test]
+fn a_gap_in_the_force_stream_is_named() {
+    let force: String = force_csv().lines().filter(|l| !l.starts_with("0.03,")).map(|l| format!("{l}\n")).collect();
+    let (_, message) = load_error(META, &force, &position_csv());
+    assert!(message.starts_with("s.force.csv, line 33, column 't_s': sample interval 2.0000e-3 s"), "{message}");
+}
+
+#[test]
+fn malformed_metadata_is_named_with_its_line() {
+    let meta = META.replace("  \"participant\": \"P1\",\n", "");
+    let (_, message) = load_error(&meta, &force_csv(), &position_csv());
+    assert!(
+        message.starts_with("s.recording.json: invalid metadata: missing field `participant` at line"),
+        "{message}"
+    );
+    let meta = META.replace("\"licence\"", "\"licnce\"");
+    let (_, message) = load_error(&meta, &force_csv(), &position_csv());
+    assert!(message.contains("unknown field `licnce`") && message.contains("line 10"), "{message}");
+    let (_, message) = load_error("{", &force_csv(), &position_csv());
+    assert!(message.contains("line 1"), "{message}");
+}
+
+#[test]
+fn a_missing_stream_file_is_named() {
+    let meta = META.replace("s.force.csv", "nowhere.csv");
+    let (err, message) = load_error(&meta, &force_csv(), &position_csv());
+    assert!(matches!(err, RecordingError::Io { .. }));
+    assert!(message.starts_with("nowhere.csv: cannot read"), "{message}");
+}
+
+#[test]
+fn npy_streams_report_rows_and_shapes() {
+    let dir = tempfile::tempdir().unwrap();
+    let meta = META.replace(".csv", ".npy");
+    std::fs::write(dir.path().join("s.recording.json"), &meta).unwrap();
+    let t: Vec<f64> = (0..=100).map(|i| i as f64 / 1000.0).collect();
+    let mut fn_n = vec![0.5; 101];
+    let ft_n = vec![0.25; 101];
+    let tp: Vec<f64> = (0..=10).map(|k| k as f64 / 100.0).collect();
+    let x: Vec<f64> = (0..=10).map(f64::from).collect();
+    write_npy_f32(&dir.path().join("s.position.npy"), &[&tp, &x]).unwrap();
+    write_npy_f32(&dir.path().join("s.force.npy"), &[&t, &fn_n, &ft_n]).unwrap();
+    let path = dir.path().join("s.recording.json");
+    let rec = Recording::load(&path).unwrap();
+    assert_eq!(rec.force.fn_n[7], 0.5);
+
+    fn_n[42] = f64::NAN;
+    write_npy_f32(&dir.path().join("s.force.npy"), &[&t, &fn_n, &ft_n]).unwrap();
+    let message = Recording::load(&path).unwrap_err().to_string();
+    assert!(message.ends_with("s.force.npy, row 42, column 'fn_n': not a finite number: NaN"), "{message}");
+
+    write_npy_f32(&dir.path().join("s.force.npy"), &[&t, &ft_n]).unwrap();
+    let message = Recording::load(&path).unwrap_err().to_string();
+    assert!(
+        message.ends_with("s.force.npy: array shape [101, 2]: expected (samples, 3) with columns t_s, fn_n, ft_n"),
+        "{message}"
+    );
+
+    std::fs::write(dir.path().join("s.force.npy"), b"not an npy file").unwrap();
+    let message = Recording::load(&path).unwrap_err().to_string();
+    assert!(message.contains("s.force.npy: not a valid NPY file"), "{message}");
+}
+
+/// A recording written as CSV reads back exactly (shortest round-trip
+/// number formatting) and processes to the same profile as in memory.
+#[test]
+fn csv_written_recordings_process_identically() {
+    let (stem, rec) = demo_recordings(5, 1).swap_remove(0);
+    let dir = tempfile::tempdir().unwrap();
+    let path = rec.write(dir.path(), &stem, StreamFormat::Csv).unwrap();
+    let back = Recording::load(&path).unwrap();
+    assert_eq!(back.force, rec.force);
+    assert_eq!(back.position, rec.position);
+    assert_eq!(back.meta.extra, rec.meta.extra);
+    let config = ProcessingConfig::default();
+    assert_eq!(process(&back, &config).unwrap().profile, process(&rec, &config).unwrap().profile);
+}
