@@ -228,7 +228,8 @@ impl Regions {
                 (false, false) => {}
             }
         }
-        let length_mm: f64 = ranges.iter().map(|r| r[1] - r[0]).sum();
+        // Fold from +0.0: an empty f64 sum is -0.0, which prints as "-0.00%".
+        let length_mm = ranges.iter().fold(0.0, |sum, r| sum + (r[1] - r[0]));
         let span = x_mm[x_mm.len() - 1] - x_mm[0];
         Self { length_mm, fraction_of_length: length_mm / span, ranges_mm: ranges }
     }

@@ -29,6 +29,9 @@ fn eq8_paper_fig2_voltages() {
         assert!((u - expected).abs() < 0.01, "U = {u}, expected {expected}");
     }
     assert!(v.summary.clipped.is_empty() && v.summary.not_renderable.is_empty());
+    // Empty regions are +0, so the summary never prints "-0.00%".
+    assert!(v.summary.clipped.fraction_of_length.is_sign_positive());
+    assert!(!v.summary.to_string().contains("-0.00"), "{}", v.summary);
     assert!(v.summary.warnings.is_empty(), "{:?}", v.summary.warnings);
 }
 

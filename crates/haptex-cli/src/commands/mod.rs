@@ -1,6 +1,6 @@
 //! One module per `haptex` subcommand.
 
 pub mod cae;
-pub mod play;
 pub mod library;
+pub mod play;
 pub mod voltage;

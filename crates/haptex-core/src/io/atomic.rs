@@ -31,6 +31,14 @@ where
     let mut writer = BufWriter::with_capacity(1 << 16, tmp);
     fill(&mut writer).map_err(wrap)?;
     let tmp = writer.into_inner().map_err(|e| wrap(e.into_error()))?;
+    // Temporary files are created private (0600); an output is an ordinary
+    // file: keep the permissions of the file it replaces, or use 0644.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = std::fs::metadata(path).map(|m| m.permissions().mode() & 0o7777).unwrap_or(0o644);
+        tmp.as_file().set_permissions(std::fs::Permissions::from_mode(mode)).map_err(wrap)?;
+    }
     tmp.as_file().sync_all().map_err(wrap)?;
     tmp.persist(path).map_err(|e| wrap(e.error))?;
     Ok(())
@@ -52,6 +60,11 @@ mod tests {
         .unwrap_err();
         assert!(err.to_string().contains("out.csv"), "{err}");
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "first\n");
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            assert_eq!(std::fs::metadata(&path).unwrap().permissions().mode() & 0o777, 0o644);
+        }
         // No temporary file is left behind.
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
