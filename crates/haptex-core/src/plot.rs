@@ -106,6 +106,16 @@ impl Series {
     }
 }
 
+/// A closed polygon drawn under the series (e.g. a mesh element).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Shape {
+    pub points: Vec<(f64, f64)>,
+    /// Fill colour, if filled.
+    pub fill: Option<(u8, u8, u8)>,
+    /// Outline colour, if outlined (1 px).
+    pub stroke: Option<(u8, u8, u8)>,
+}
+
 /// One panel (a pair of axes) of a figure.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Panel {
@@ -116,6 +126,10 @@ pub struct Panel {
     /// y axis label with its unit, e.g. `"U (V RMS)"`.
     pub y_label: String,
     pub series: Vec<Series>,
+    /// Polygons drawn before the series.
+    pub shapes: Vec<Shape>,
+    /// Legend entries without data: (label, colour swatch).
+    pub swatches: Vec<(String, (u8, u8, u8))>,
     /// Fixed x range; `None` fits the data.
     pub x_range: Option<(f64, f64)>,
     /// Fixed y range; `None` fits the data with 5% margins.
@@ -130,6 +144,8 @@ impl Panel {
             x_label: x_label.into(),
             y_label: y_label.into(),
             series: Vec::new(),
+            shapes: Vec::new(),
+            swatches: Vec::new(),
             x_range: None,
             y_range: None,
         }
@@ -154,6 +170,18 @@ impl Panel {
     /// Adds a series.
     pub fn series(mut self, series: Series) -> Self {
         self.series.push(series);
+        self
+    }
+
+    /// Adds a polygon, drawn under the series.
+    pub fn shape(mut self, shape: Shape) -> Self {
+        self.shapes.push(shape);
+        self
+    }
+
+    /// Adds a legend entry with a colour swatch and no data.
+    pub fn swatch(mut self, label: impl Into<String>, color: (u8, u8, u8)) -> Self {
+        self.swatches.push((label.into(), color));
         self
     }
 
@@ -330,9 +358,34 @@ where
         .draw()
         .map_err(draw_error)?;
 
+    for shape in &panel.shapes {
+        let points: Vec<(f64, f64)> =
+            shape.points.iter().copied().filter(|(x, y)| x.is_finite() && y.is_finite()).collect();
+        if let Some((r, g, b)) = shape.fill {
+            chart
+                .draw_series(std::iter::once(Polygon::new(points.clone(), RGBColor(r, g, b).filled())))
+                .map_err(draw_error)?;
+        }
+        if let Some((r, g, b)) = shape.stroke {
+            let mut closed = points;
+            if let Some(&first) = closed.first() {
+                closed.push(first);
+            }
+            chart.draw_series(std::iter::once(PathElement::new(closed, RGBColor(r, g, b)))).map_err(draw_error)?;
+        }
+    }
+    let mut labelled = false;
+    for (label, (r, g, b)) in &panel.swatches {
+        let color = RGBColor(*r, *g, *b);
+        chart
+            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+            .map_err(draw_error)?
+            .label(label.as_str())
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 16, y + 5)], color.filled()));
+        labelled = true;
+    }
     // Plot columns available to the data, for thinning long series.
     let columns = (width as usize).saturating_sub(115).max(50);
-    let mut labelled = false;
     for (i, series) in panel.series.iter().enumerate() {
         let (r, g, b) = series.color.unwrap_or(PALETTE[i % PALETTE.len()]);
         let color = RGBColor(r, g, b);
@@ -402,12 +455,14 @@ fn ranges(panel: &Panel) -> ((f64, f64), (f64, f64)) {
             (lo - pad, hi + pad)
         }
     };
-    let finite_pairs =
-        || panel.series.iter().flat_map(|s| s.x.iter().zip(&s.y)).filter(|(x, y)| x.is_finite() && y.is_finite());
-    let x =
-        panel.x_range.unwrap_or_else(|| widen(fit(&mut finite_pairs().map(|(x, _)| *x)).unwrap_or((0.0, 1.0)), 0.0));
+    let finite_pairs = || {
+        let series = panel.series.iter().flat_map(|s| s.x.iter().copied().zip(s.y.iter().copied()));
+        let shapes = panel.shapes.iter().flat_map(|s| s.points.iter().copied());
+        series.chain(shapes).filter(|(x, y)| x.is_finite() && y.is_finite())
+    };
+    let x = panel.x_range.unwrap_or_else(|| widen(fit(&mut finite_pairs().map(|(x, _)| x)).unwrap_or((0.0, 1.0)), 0.0));
     let y =
-        panel.y_range.unwrap_or_else(|| widen(fit(&mut finite_pairs().map(|(_, y)| *y)).unwrap_or((0.0, 1.0)), 0.05));
+        panel.y_range.unwrap_or_else(|| widen(fit(&mut finite_pairs().map(|(_, y)| y)).unwrap_or((0.0, 1.0)), 0.05));
     (x, y)
 }
 

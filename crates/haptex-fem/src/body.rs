@@ -32,6 +32,16 @@ pub enum BodyError {
     MissingMaterial { element: usize, subdomain: usize, n: usize },
 }
 
+/// Adds `scale * f` (element vector) to the free entries of `f_free`.
+fn scatter_free(dofs: &DofMap, nodes: &[usize; 4], f: &[f64; 8], scale: f64, f_free: &mut [f64]) {
+    for (i, g) in DofMap::element_dofs(nodes).into_iter().enumerate() {
+        let d = dofs.free[g];
+        if d != PRESCRIBED {
+            f_free[d] += scale * f[i];
+        }
+    }
+}
+
 /// A subdomain's constitutive description.
 #[derive(Debug, Clone, PartialEq)]
 pub enum SubdomainModel {
@@ -122,34 +132,36 @@ impl Body {
         }
     }
 
-    /// Adds to the free right-hand side `f_free` the loads of a step that do
-    /// not depend on the new free displacements: -f_frozen (history) and
-    /// -K_fp u_p (the prescribed displacements in the global vector `u`).
-    pub fn add_step_loads(&self, c: &[Option<StepCoefficients>], dofs: &DofMap, u: &[f64], f_free: &mut [f64]) {
+    /// Adds to the free right-hand side the loads of the history part of the
+    /// stress, -f_frozen, for a step with coefficients `c`.
+    pub fn add_history_loads(&self, c: &[Option<StepCoefficients>], dofs: &DofMap, f_free: &mut [f64]) {
+        for &e in &self.deformable {
+            let coefficients = self.coefficients(e, c);
+            if coefficients.n_terms == 0 {
+                continue;
+            }
+            let mut f = [0.0; 8];
+            for gp in 0..4 {
+                let frozen = self.history[4 * e + gp].frozen_deviator(coefficients);
+                self.geometry[e].add_deviator_force(gp, &frozen, &mut f);
+            }
+            scatter_free(dofs, &self.mesh.elements[e], &f, -1.0, f_free);
+        }
+    }
+
+    /// Adds to the free right-hand side -K_fp u_p: the forces of the
+    /// prescribed displacements held in the global vector `u`.
+    pub fn add_prescribed_loads(&self, c: &[Option<StepCoefficients>], dofs: &DofMap, u: &[f64], f_free: &mut [f64]) {
         for &e in &self.deformable {
             let global = DofMap::element_dofs(&self.mesh.elements[e]);
-            let mut f = [0.0; 8];
-            let coefficients = self.coefficients(e, c);
-            if coefficients.n_terms > 0 {
-                for gp in 0..4 {
-                    let frozen = self.history[4 * e + gp].frozen_deviator(coefficients);
-                    self.geometry[e].add_deviator_force(gp, &frozen, &mut f);
-                }
-            }
             let prescribed: [f64; 8] =
                 std::array::from_fn(|i| if dofs.is_free(global[i]) { 0.0 } else { u[global[i]] });
-            if prescribed.iter().any(|&v| v != 0.0) {
-                let k = self.element_stiffness(e, c);
-                for i in 0..8 {
-                    f[i] += k[i].iter().zip(&prescribed).map(|(a, b)| a * b).sum::<f64>();
-                }
+            if prescribed.iter().all(|&v| v == 0.0) {
+                continue;
             }
-            for i in 0..8 {
-                let d = dofs.free[global[i]];
-                if d != PRESCRIBED {
-                    f_free[d] -= f[i];
-                }
-            }
+            let k = self.element_stiffness(e, c);
+            let f: [f64; 8] = std::array::from_fn(|i| k[i].iter().zip(&prescribed).map(|(a, b)| a * b).sum::<f64>());
+            scatter_free(dofs, &self.mesh.elements[e], &f, -1.0, f_free);
         }
     }
 

@@ -13,9 +13,15 @@
 pub mod analytic;
 pub mod assembly;
 pub mod body;
+pub mod contact;
+pub mod drawing;
 pub mod element;
+pub mod finger;
 pub mod linalg;
 pub mod material;
 pub mod mesh;
 pub mod ring;
+pub mod scenario;
+pub mod solver;
 pub mod statics;
+pub mod surface;

@@ -9,6 +9,7 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
+use std::sync::Arc;
 
 use crate::assembly::Pattern;
 
@@ -23,8 +24,8 @@ pub enum FactorError {
 
 /// A sparse LL^T factorization with a fixed pattern.
 pub struct SparseCholesky {
-    pattern: SymbolicSparseColMat<usize>,
-    symbolic: SymbolicCholesky<usize>,
+    pattern: Arc<SymbolicSparseColMat<usize>>,
+    symbolic: Arc<SymbolicCholesky<usize>>,
     l_values: Vec<f64>,
     factor_scratch: MemBuffer,
     solve_scratch: MemBuffer,
@@ -48,23 +49,34 @@ impl SparseCholesky {
             symbolic_matrix.as_ref(),
             Side::Lower,
             SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
+            // Supernodal: the multi-right-hand-side solves that build the pad
+            // compliance then run as dense block operations.
+            CholeskySymbolicParams {
+                supernodal_flop_ratio_threshold: faer::sparse::linalg::SupernodalThreshold::FORCE_SUPERNODAL,
+                ..Default::default()
+            },
         )
         .map_err(faer_error)?;
+        Ok(Self::with_symbolic(Arc::new(symbolic_matrix), Arc::new(symbolic), max_rhs))
+    }
+
+    fn with_symbolic(
+        pattern: Arc<SymbolicSparseColMat<usize>>,
+        symbolic: Arc<SymbolicCholesky<usize>>,
+        max_rhs: usize,
+    ) -> Self {
         let factor_scratch =
             MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()));
         let solve_columns = max_rhs.max(1);
         let solve_scratch = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(solve_columns, Par::Seq));
         let l_values = vec![0.0; symbolic.len_val()];
-        Ok(Self {
-            pattern: symbolic_matrix,
-            symbolic,
-            l_values,
-            factor_scratch,
-            solve_scratch,
-            solve_columns,
-            factorized: false,
-        })
+        Self { pattern, symbolic, l_values, factor_scratch, solve_scratch, solve_columns, factorized: false }
+    }
+
+    /// A second factorization of the same pattern, sharing the symbolic
+    /// analysis (for another time-step size).
+    pub fn share(&self, max_rhs: usize) -> Self {
+        Self::with_symbolic(self.pattern.clone(), self.symbolic.clone(), max_rhs)
     }
 
     /// Number of unknowns.
@@ -81,7 +93,7 @@ impl SparseCholesky {
     /// lower-triangle `values`.
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), FactorError> {
         self.factorized = false;
-        let matrix = SparseColMatRef::new(self.pattern.as_ref(), values);
+        let matrix = SparseColMatRef::new(self.pattern.as_ref().as_ref(), values);
         self.symbolic
             .factorize_numeric_llt::<f64>(
                 &mut self.l_values,
@@ -174,5 +186,102 @@ mod tests {
         let mut check = vec![0.0; n_links];
         symmetric_matvec_add(&pattern, &values, &b, &mut check);
         assert!(check.iter().zip(&rhs).all(|(a, b)| (a - b).abs() < 1e-12));
+    }
+}
+
+/// LU factorization with partial pivoting of small dense matrices, with
+/// all memory allocated once for a largest size (no allocation per solve).
+pub struct DenseLu {
+    n_max: usize,
+    n: usize,
+    a: Vec<f64>,
+    perm: Vec<usize>,
+    perm_inv: Vec<usize>,
+    scratch: MemBuffer,
+}
+
+impl DenseLu {
+    pub fn new(n_max: usize) -> Self {
+        use faer::linalg::lu::partial_pivoting::{factor, solve};
+        let req = factor::lu_in_place_scratch::<usize, f64>(n_max, n_max, Par::Seq, Default::default())
+            .or(solve::solve_in_place_scratch::<usize, f64>(n_max, 1, Par::Seq));
+        Self {
+            n_max,
+            n: 0,
+            a: vec![0.0; n_max * n_max],
+            perm: vec![0; n_max],
+            perm_inv: vec![0; n_max],
+            scratch: MemBuffer::new(req),
+        }
+    }
+
+    /// The n x n matrix to fill (column-major), before [`DenseLu::factor`].
+    pub fn matrix_mut(&mut self, n: usize) -> MatMut<'_, f64> {
+        assert!(n <= self.n_max, "dense system of {n} exceeds the workspace ({})", self.n_max);
+        self.n = n;
+        MatMut::from_column_major_slice_mut(&mut self.a[..n * n], n, n)
+    }
+
+    /// Factorizes the matrix filled through [`DenseLu::matrix_mut`]; false if singular.
+    pub fn factor(&mut self) -> bool {
+        use faer::linalg::lu::partial_pivoting::factor;
+        let n = self.n;
+        let a = MatMut::from_column_major_slice_mut(&mut self.a[..n * n], n, n);
+        factor::lu_in_place(
+            a,
+            &mut self.perm[..n],
+            &mut self.perm_inv[..n],
+            Par::Seq,
+            MemStack::new(&mut self.scratch),
+            Default::default(),
+        );
+        (0..n).all(|i| {
+            let d = self.a[i * n + i];
+            d.is_finite() && d != 0.0
+        })
+    }
+
+    /// Solves in place for one right-hand side of length n.
+    pub fn solve(&mut self, rhs: &mut [f64]) {
+        use faer::linalg::lu::partial_pivoting::solve;
+        let n = self.n;
+        let lu = faer::MatRef::from_column_major_slice(&self.a[..n * n], n, n);
+        // SAFETY: perm and perm_inv were filled by lu_in_place for size n and
+        // are inverse permutations of 0..n.
+        let perm = unsafe { faer::perm::PermRef::new_unchecked(&self.perm[..n], &self.perm_inv[..n], n) };
+        solve::solve_in_place(
+            lu,
+            lu,
+            perm,
+            MatMut::from_column_major_slice_mut(rhs, n, 1),
+            Par::Seq,
+            MemStack::new(&mut self.scratch),
+        );
+    }
+}
+
+#[cfg(test)]
+mod dense_tests {
+    use super::*;
+
+    #[test]
+    fn dense_lu_solves_a_nonsymmetric_system() {
+        let mut lu = DenseLu::new(5);
+        let a = [[0.0, 2.0, 1.0], [1.0, 1.0, 0.0], [3.0, 0.0, 1.0]];
+        {
+            let mut m = lu.matrix_mut(3);
+            for i in 0..3 {
+                for j in 0..3 {
+                    m[(i, j)] = a[i][j];
+                }
+            }
+        }
+        assert!(lu.factor());
+        let x = [1.0, -2.0, 0.5];
+        let mut b: Vec<f64> = (0..3).map(|i| (0..3).map(|j| a[i][j] * x[j]).sum()).collect();
+        lu.solve(&mut b);
+        for i in 0..3 {
+            assert!((b[i] - x[i]).abs() < 1e-14);
+        }
     }
 }

@@ -200,6 +200,65 @@ fn wrap(phi: f64, reference: f64) -> f64 {
     if phi < reference { std::f64::consts::TAU } else { 0.0 }
 }
 
+/// Angular parameters for a ring whose outer curve is `contour(phi)`
+/// (phi in [0, 2 pi), phi = 0 the middle of the pad): `n_fine` segments of
+/// at most `pad_spacing` (arc length) over the pad (arc +-`half_arc` around
+/// phi = 0, starting at index 0; a multiple of 18, so that two 3-to-1
+/// transitions fit and a node sits at phi = 0), then a spacing growing
+/// linearly (rate 0.25) with the distance from the pad up to
+/// `coarse_spacing`. The total count is a multiple of 3. Returns the
+/// parameters (increasing from -phi_pad) and `n_fine`.
+pub fn contour_parameters(
+    contour: &dyn Fn(f64) -> [f64; 2],
+    half_arc: f64,
+    pad_spacing: f64,
+    coarse_spacing: f64,
+) -> (Vec<f64>, usize) {
+    // Arc length of the contour as a function of phi, tabulated.
+    let table_n = 20_000;
+    let mut phis = Vec::with_capacity(table_n + 1);
+    let mut arcs = Vec::with_capacity(table_n + 1);
+    let mut s = 0.0;
+    let mut prev = contour(0.0);
+    for i in 0..=table_n {
+        let phi = std::f64::consts::TAU * i as f64 / table_n as f64;
+        let p = contour(phi);
+        s += (p[0] - prev[0]).hypot(p[1] - prev[1]);
+        prev = p;
+        phis.push(phi);
+        arcs.push(s);
+    }
+    let perimeter = s;
+    let phi_at = |arc: f64| haptex_core::profile::interpolate(&arcs, &phis, arc.rem_euclid(perimeter));
+    let half = half_arc.min(0.4 * perimeter);
+    let n_fine = (18.0 * (2.0 * half / (18.0 * pad_spacing)).ceil()).max(18.0) as usize;
+    let coarse_length = perimeter - 2.0 * half;
+    let h = |u: f64| (pad_spacing + 0.25 * u.min(coarse_length - u)).min(coarse_spacing);
+    let steps = 10_000;
+    let mut cumulative = vec![0.0; steps + 1];
+    for i in 0..steps {
+        let u = coarse_length * (i as f64 + 0.5) / steps as f64;
+        cumulative[i + 1] = cumulative[i] + coarse_length / steps as f64 / h(u);
+    }
+    let mut n_coarse = cumulative[steps].round().max(3.0) as usize;
+    while !(n_fine + n_coarse).is_multiple_of(3) {
+        n_coarse += 1;
+    }
+    let us: Vec<f64> = (0..=steps).map(|i| coarse_length * i as f64 / steps as f64).collect();
+    let total = cumulative[steps];
+    let mut params = Vec::with_capacity(n_fine + n_coarse);
+    for k in 0..n_fine {
+        let arc = -half + 2.0 * half * k as f64 / n_fine as f64;
+        let phi = phi_at(arc);
+        params.push(if arc < 0.0 { phi - std::f64::consts::TAU } else { phi });
+    }
+    for k in 0..n_coarse {
+        let u = haptex_core::profile::interpolate(&cumulative, &us, total * k as f64 / n_coarse as f64);
+        params.push(phi_at(half + u));
+    }
+    (params, n_fine)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

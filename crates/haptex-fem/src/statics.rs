@@ -62,7 +62,8 @@ impl LinearSystem {
                 f_free[d] = f_ext[g];
             }
         }
-        body.add_step_loads(&self.coefficients, &self.dofs, u, f_free);
+        body.add_history_loads(&self.coefficients, &self.dofs, f_free);
+        body.add_prescribed_loads(&self.coefficients, &self.dofs, u, f_free);
     }
 
     /// Copies free values into the global vector.

@@ -44,3 +44,61 @@ pub fn distorted_patch() -> (Mesh, Vec<usize>) {
     let subdomain = vec![0; elements.len()];
     (Mesh { nodes, elements, subdomain, outer: Vec::new(), inner: Vec::new() }, boundary)
 }
+
+use haptex_fem::body::{Body, SubdomainModel};
+use haptex_fem::contact::{ContactLaw, ContactSet};
+use haptex_fem::element::Formulation;
+use haptex_fem::material::Material;
+use haptex_fem::ring::{RingSpec, Transition, contour_parameters, mesh_ring};
+use haptex_fem::solver::ContactProblem;
+use haptex_fem::surface::{RigidSurface, SurfaceShape};
+
+/// A homogeneous cylinder of radius `radius` (lowest point at the origin)
+/// around a rigid core of radius `core` (the driven set), meshed with a
+/// pad spacing `pad` over +-`half_arc` of arc at the bottom, over a flat
+/// rigid surface.
+pub fn cylinder_on_flat(
+    radius: f64,
+    core: f64,
+    pad: f64,
+    half_arc: f64,
+    material: Material,
+    law: ContactLaw,
+) -> ContactProblem {
+    let map = |phi: f64, t: f64| {
+        let r = radius - t;
+        [r * phi.sin(), radius - r * phi.cos()]
+    };
+    let contour = |phi: f64| map(phi, 0.0);
+    let (phis, n_fine) = contour_parameters(&contour, half_arc, pad, 8.0 * pad);
+    // Rows graded from the pad spacing at the surface, growing by 1.15.
+    let depth = radius - core;
+    let mut rows = vec![0.0];
+    let mut h = pad;
+    while *rows.last().unwrap() + h < depth {
+        rows.push(rows.last().unwrap() + h);
+        h *= 1.15;
+    }
+    rows.push(depth);
+    let first = rows.iter().position(|&t| t > 2.5 * pad).unwrap();
+    let second = rows.iter().position(|&t| t > 10.0 * pad).unwrap().max(first + 2);
+    let transitions = vec![
+        Transition { after_row: first, range: None },
+        Transition { after_row: second, range: Some((0, n_fine / 3)) },
+    ];
+    let ring = mesh_ring(&RingSpec { map: &map, phis, rows, transitions, subdomain: &|_, _| 0 }).unwrap();
+    let mesh = ring.mesh;
+    let segments: Vec<[usize; 2]> = (0..n_fine).map(|k| [mesh.outer[k], mesh.outer[k + 1]]).collect();
+    let contact = ContactSet::new(&mesh.nodes, &segments, 4);
+    let other = mesh.outer[n_fine + 1..].to_vec();
+    let driven = mesh.inner.clone();
+    let body = Body::new(mesh, vec![SubdomainModel::Deformable(material)], Formulation::BBar).unwrap();
+    ContactProblem {
+        body,
+        driven_nodes: driven,
+        contact,
+        other_surface_nodes: other,
+        surface: RigidSurface::new(&SurfaceShape::Flat, -radius - 20.0, radius + 20.0),
+        law,
+    }
+}

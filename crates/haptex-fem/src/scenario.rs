@@ -1,0 +1,366 @@
+//! A tactile scenario (the paper's section 2.4): the finger is pressed onto
+//! the rigid surface (by a displacement of bone and nail, or by a normal
+//! load), then the surface slides under it at constant velocity. The
+//! apparent friction Ft/Fn along the slide is the reference profile
+//! mu_RS(x), with x the finger's position on the surface (in the surface
+//! template's coordinates: the finger starts at x = 0 and ends at x =
+//! slide).
+
+use std::time::Instant;
+
+use haptex_core::profile::FrictionProfile;
+use serde::Serialize;
+
+use crate::body::{Body, BodyError};
+use crate::contact::{ContactLaw, ContactSet};
+use crate::element::Formulation;
+use crate::finger::{FingerError, FingerModel, Resolution};
+use crate::mesh::Mesh;
+use crate::solver::{ContactProblem, Drive, SolveError, Solver, SolverSettings};
+use crate::surface::{RigidSurface, SurfaceShape};
+
+/// How the finger is pressed.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Loading {
+    /// Bone and nail moved down by this much from first touch, then held (mm).
+    Indent(f64),
+    /// A constant normal load on bone and nail (N per mm of finger width).
+    Load(f64),
+}
+
+/// Everything that defines a simulation.
+#[derive(Debug, Clone)]
+pub struct Scenario {
+    pub surface: SurfaceShape,
+    pub model: FingerModel,
+    pub resolution: Resolution,
+    pub viscoelastic: bool,
+    pub loading: Loading,
+    /// Duration of the press (s) and its number of steps.
+    pub press_time_s: f64,
+    pub press_steps: usize,
+    /// Slide distance (mm) and velocity (mm/s).
+    pub slide_mm: f64,
+    pub velocity_mm_s: f64,
+    /// Slide per step (mm).
+    pub step_mm: f64,
+    /// Skin-surface friction coefficient (the model file's if `None`).
+    pub mu_skin: Option<f64>,
+    /// Normal and tangential penalty (MPa per mm).
+    pub penalty_mpa_per_mm: f64,
+    /// Smoothed onset of the normal penalty (mm), see `ContactLaw::pressure`.
+    pub smoothing_mm: f64,
+    /// Keep a full-field frame every this many slide steps (0: none besides
+    /// the end of the press and the step nearest the feature).
+    pub frame_every: usize,
+    pub settings: SolverSettings,
+}
+
+impl Scenario {
+    /// The paper's scenario on `surface`: default finger, default mesh,
+    /// visco-elastic, 0.25 mm indentation pressed in 0.1 s, 10 mm slide at
+    /// 20 mm/s in steps of at most 0.05 mm (finer for narrow features).
+    pub fn paper(surface: SurfaceShape) -> Self {
+        let step_mm = default_step_mm(&surface);
+        Self {
+            surface,
+            model: FingerModel::default_model(),
+            resolution: Resolution::Default,
+            viscoelastic: true,
+            loading: Loading::Indent(0.25),
+            press_time_s: 0.1,
+            press_steps: 10,
+            slide_mm: 10.0,
+            velocity_mm_s: 20.0,
+            step_mm,
+            mu_skin: None,
+            penalty_mpa_per_mm: 200.0,
+            smoothing_mm: 2e-4,
+            frame_every: 0,
+            settings: SolverSettings::default(),
+        }
+    }
+
+    fn validate(&self) -> Result<(), SimulationError> {
+        let positive = [
+            ("press time (s)", self.press_time_s),
+            ("slide (mm)", self.slide_mm),
+            ("velocity (mm/s)", self.velocity_mm_s),
+            ("step (mm)", self.step_mm),
+            ("penalty (MPa/mm)", self.penalty_mpa_per_mm),
+            (
+                "indentation or load",
+                match self.loading {
+                    Loading::Indent(v) | Loading::Load(v) => v,
+                },
+            ),
+        ];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(SimulationError::Invalid(format!("{name} must be positive, got {v}")));
+            }
+        }
+        if self.press_steps == 0 {
+            return Err(SimulationError::Invalid("the press needs at least one step".into()));
+        }
+        if let Some(mu) = self.mu_skin
+            && !(mu.is_finite() && mu >= 0.0)
+        {
+            return Err(SimulationError::Invalid(format!("skin friction must be >= 0, got {mu}")));
+        }
+        if self.slide_mm / self.step_mm > 1e6 {
+            return Err(SimulationError::Invalid("more than 1e6 slide steps".into()));
+        }
+        self.surface.validate().map_err(|e| SimulationError::Invalid(e.to_string()))?;
+        Ok(())
+    }
+}
+
+/// A slide step of 0.05 mm, or a tenth of the feature width if narrower.
+pub fn default_step_mm(surface: &SurfaceShape) -> f64 {
+    match surface {
+        SurfaceShape::Bump { width, .. } | SurfaceShape::Edge { width, .. } | SurfaceShape::Sine { width, .. } => {
+            (0.1 * width).min(0.05)
+        }
+        _ => 0.05,
+    }
+}
+
+/// A simulation could not be run.
+#[derive(Debug, thiserror::Error)]
+pub enum SimulationError {
+    #[error("{0}")]
+    Invalid(String),
+    #[error(transparent)]
+    Finger(#[from] FingerError),
+    #[error(transparent)]
+    Body(#[from] BodyError),
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+    #[error("the finger lost contact with the surface at x = {x_mm:.3} mm (t = {t_s:.4} s): Ft/Fn is undefined there")]
+    NoContact { x_mm: f64, t_s: f64 },
+}
+
+/// One row of the force history (forces per mm of finger width).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct HistoryRow {
+    pub t_s: f64,
+    pub slide_mm: f64,
+    /// Normal force on the finger (up), N/mm.
+    pub fn_n: f64,
+    /// Friction force on the finger, opposing its motion over the surface, N/mm.
+    pub ft_n: f64,
+    /// Length of skin in contact, mm.
+    pub contact_mm: f64,
+    /// Vertical displacement of bone and nail, mm (negative: pressed down).
+    pub drive_y_mm: f64,
+    /// Reaction on bone and nail from the tissue's stresses, N/mm (x, y).
+    pub reaction_n: [f64; 2],
+    pub iterations: usize,
+    pub cuts: u32,
+}
+
+/// A full-field snapshot.
+#[derive(Debug, Clone)]
+pub struct Frame {
+    pub t_s: f64,
+    pub slide_mm: f64,
+    /// Global displacement vector (2 per node), mm.
+    pub displacement: Vec<f64>,
+    /// Element stress (xx, yy, zz, xy), MPa, averaged over Gauss points.
+    pub stress: Vec<[f64; 4]>,
+}
+
+/// Size and effort of a run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Statistics {
+    pub nodes: usize,
+    pub elements: usize,
+    pub free_dofs: usize,
+    pub contact_dofs: usize,
+    pub factor_nnz: usize,
+    pub steps: usize,
+    pub newton_iterations: usize,
+    pub step_cuts: u32,
+    pub wall_time_s: f64,
+}
+
+/// What a simulation produces.
+#[derive(Debug, Clone)]
+pub struct SimulationResult {
+    pub history: Vec<HistoryRow>,
+    /// Ft/Fn against the finger's position on the surface, over the slide.
+    pub profile: FrictionProfile,
+    pub frames: Vec<Frame>,
+    pub statistics: Statistics,
+    pub mesh: Mesh,
+    /// The surface's vertical placement (mm) and polyline for drawing.
+    pub lift_mm: f64,
+    pub surface: RigidSurface,
+}
+
+/// Progress of a running simulation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    pub step: usize,
+    pub total_steps: usize,
+    pub t_s: f64,
+    pub slide_mm: f64,
+}
+
+/// Builds the contact problem of a scenario.
+pub fn build_problem(scenario: &Scenario) -> Result<(ContactProblem, f64), SimulationError> {
+    scenario.validate()?;
+    let finger = scenario.model.mesh(scenario.resolution)?;
+    let half = scenario.model.geometry.half_width_mm;
+    let surface = RigidSurface::new(&scenario.surface, -half - 2.0, half + scenario.slide_mm + 2.0);
+    let contact = ContactSet::new(&finger.mesh.nodes, &finger.contact_segments, 4);
+    // Lift the surface so that it just touches the undeformed finger.
+    let lift_mm = contact
+        .point_positions(&vec![0.0; 2 * contact.n_nodes()])
+        .iter()
+        .map(|p| p[1] - surface.height(p[0]))
+        .fold(f64::INFINITY, f64::min);
+    let mu = scenario.mu_skin.unwrap_or(scenario.model.contact.mu_skin);
+    let law = ContactLaw {
+        penalty_normal: scenario.penalty_mpa_per_mm,
+        penalty_tangential: scenario.penalty_mpa_per_mm,
+        mu,
+        smoothing_mm: scenario.smoothing_mm,
+    };
+    let body = Body::new(finger.mesh, scenario.model.subdomain_models(scenario.viscoelastic), Formulation::BBar)?;
+    let problem = ContactProblem {
+        body,
+        driven_nodes: finger.driven_nodes,
+        contact,
+        other_surface_nodes: finger.other_surface_nodes,
+        surface,
+        law,
+    };
+    Ok((problem, lift_mm))
+}
+
+/// Runs a scenario; `progress` is called after every step.
+pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<SimulationResult, SimulationError> {
+    let started = Instant::now();
+    let (problem, lift_mm) = build_problem(scenario)?;
+    let mut solver = Solver::new(problem, scenario.settings, lift_mm)?;
+    let slide_steps = (scenario.slide_mm / scenario.step_mm).ceil() as usize;
+    // Equal steps that end exactly at the slide length (so every step has
+    // the same time step and shares one set of operators).
+    let step_mm = scenario.slide_mm / slide_steps as f64;
+    let total_steps = scenario.press_steps + slide_steps;
+    let mut history = Vec::with_capacity(total_steps + 1);
+    let mut frames = Vec::new();
+    let dt_press = scenario.press_time_s / scenario.press_steps as f64;
+    let record = |solver: &Solver, report: &crate::solver::StepReport| HistoryRow {
+        t_s: report.t_s,
+        slide_mm: report.slide_mm,
+        fn_n: report.totals.force[1],
+        ft_n: -report.totals.force[0],
+        contact_mm: report.totals.contact_mm,
+        drive_y_mm: report.drive_mm[1],
+        reaction_n: solver.driven_reaction(),
+        iterations: report.iterations,
+        cuts: report.cuts,
+    };
+    // Press. Under load control the finger is first brought into contact
+    // by a small displacement (1% of the pad spacing), then the load ramps.
+    match scenario.loading {
+        Loading::Indent(indent) => {
+            for k in 1..=scenario.press_steps {
+                let y = -indent * k as f64 / scenario.press_steps as f64;
+                let report = solver.advance(dt_press, 0.0, Drive::Displacement([0.0, y]))?;
+                history.push(record(&solver, &report));
+                progress(Progress { step: k, total_steps, t_s: report.t_s, slide_mm: 0.0 });
+            }
+        }
+        Loading::Load(load) => {
+            let touch = 0.01 * scenario.resolution.parameters().pad_spacing_mm;
+            solver.advance(0.0, 0.0, Drive::Displacement([0.0, -touch]))?;
+            for k in 1..=scenario.press_steps {
+                let fy = load * k as f64 / scenario.press_steps as f64;
+                let report = solver.advance(dt_press, 0.0, Drive::Load { x_mm: 0.0, fy_n: fy })?;
+                history.push(record(&solver, &report));
+                progress(Progress { step: k, total_steps, t_s: report.t_s, slide_mm: 0.0 });
+            }
+        }
+    }
+    frames.push(frame(&solver));
+    // Slide.
+    let dt_slide = step_mm / scenario.velocity_mm_s;
+    let feature_x = feature_position(&scenario.surface);
+    let mut x = Vec::with_capacity(slide_steps);
+    let mut ft = Vec::with_capacity(slide_steps);
+    let mut fn_n = Vec::with_capacity(slide_steps);
+    let mut feature_frame_taken = false;
+    for k in 1..=slide_steps {
+        let slide = scenario.slide_mm * k as f64 / slide_steps as f64;
+        let dt = dt_slide;
+        let drive = match scenario.loading {
+            Loading::Indent(indent) => Drive::Displacement([0.0, -indent]),
+            Loading::Load(load) => Drive::Load { x_mm: 0.0, fy_n: load },
+        };
+        let report = solver.advance(dt, slide, drive)?;
+        let row = record(&solver, &report);
+        if row.fn_n.is_nan() || row.fn_n <= 1e-12 {
+            return Err(SimulationError::NoContact { x_mm: slide, t_s: row.t_s });
+        }
+        x.push(slide);
+        ft.push(row.ft_n);
+        fn_n.push(row.fn_n);
+        history.push(row);
+        let at_feature = feature_x.is_some_and(|f| !feature_frame_taken && slide >= f);
+        if at_feature || (scenario.frame_every > 0 && k % scenario.frame_every == 0) {
+            feature_frame_taken |= at_feature;
+            frames.push(frame(&solver));
+        }
+        progress(Progress { step: scenario.press_steps + k, total_steps, t_s: report.t_s, slide_mm: slide });
+    }
+    let profile = FrictionProfile::from_forces(x, &ft, fn_n)
+        .map_err(|e| SimulationError::Invalid(format!("the computed profile is invalid: {e}")))?;
+    let (free_dofs, factor_nnz) = solver.sizes();
+    let statistics = Statistics {
+        nodes: solver.problem.body.mesh.n_nodes(),
+        elements: solver.problem.body.mesh.n_elements(),
+        free_dofs,
+        contact_dofs: 2 * solver.problem.contact.n_nodes(),
+        factor_nnz,
+        steps: solver.steps,
+        newton_iterations: solver.total_iterations,
+        step_cuts: history.iter().map(|r| r.cuts).sum(),
+        wall_time_s: started.elapsed().as_secs_f64(),
+    };
+    Ok(SimulationResult {
+        history,
+        profile,
+        frames,
+        statistics,
+        mesh: solver.problem.body.mesh.clone(),
+        lift_mm,
+        surface: solver.problem.surface.clone(),
+    })
+}
+
+fn frame(solver: &Solver) -> Frame {
+    let body = &solver.problem.body;
+    let stress = (0..body.mesh.n_elements())
+        .map(|e| {
+            if body.deformable_elements().binary_search(&e).is_ok() {
+                body.element_stress(e, &solver.u)
+            } else {
+                [0.0; 4]
+            }
+        })
+        .collect();
+    Frame { t_s: solver.t_s, slide_mm: solver.slide_mm, displacement: solver.u.clone(), stress }
+}
+
+/// Where the finger is over the feature's characteristic point.
+fn feature_position(surface: &SurfaceShape) -> Option<f64> {
+    match surface {
+        SurfaceShape::Bump { x0, .. } | SurfaceShape::Edge { x0, .. } | SurfaceShape::Sine { x0, .. } => Some(*x0),
+        _ => None,
+    }
+}

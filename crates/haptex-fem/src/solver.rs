@@ -1,0 +1,801 @@
+//! The quasi-static contact solver: a deformable body, a rigid set of
+//! driven nodes (bone and nail), and penalty contact with friction against
+//! a rigid surface that moves.
+//!
+//! # Algorithm
+//!
+//! With small-strain kinematics the body is linear for a given step size dt:
+//! f_int = K(dt) u + f_frozen (see [`crate::body`]). Only the contact is
+//! nonlinear, and it acts on the few nodes of the pad. The solver therefore
+//! condenses the problem exactly onto those candidate contact DOFs s
+//! (static condensation, Guyan 1965 — exact for a linear body):
+//!
+//! ```text
+//!   Phi = K_ff^-1 P_s        response of all free DOFs to unit forces at s
+//!   C   = P_s^T Phi          compliance of the pad (dense, 2m x 2m)
+//!   u_f = u0 + Phi F(u_s)    u0: response to the driven motion and history
+//!   R(u_s) = u_s - u0_s - C F(u_s) = 0
+//! ```
+//!
+//! `Phi`, `C` and its inverse `S` (the condensed stiffness) are computed once
+//! per step size from one sparse Cholesky factorization (symbolic analysis
+//! shared by all step sizes). Each step costs one sparse solve for the
+//! history load and a Newton iteration on R whose Jacobian I - C D (D the
+//! contact tangent) is only non-trivial on the active DOFs A:
+//!
+//! ```text
+//!   (I - C_AA D_AA) du_A = -R_A,     du = -R + (C D)_{:,A} du_A.
+//! ```
+//!
+//! Convergence is measured on the force residual S R (N per mm of width),
+//! relative to the largest nodal contact force; a backtracking line search
+//! on |S R| guards the semi-smooth Newton iteration against active-set
+//! cycling. A step that does not converge is retried in halves (with the
+//! history untouched), down to 1/2^max_cuts of the step; if that fails the
+//! error names the time, the step and the residual. Nothing is committed
+//! from a failed attempt.
+
+use faer::MatMut;
+use faer::linalg::solvers::DenseSolveCore;
+
+use crate::assembly::{DofMap, Pattern};
+use crate::body::Body;
+use crate::contact::{Block, ContactLaw, ContactSet, ContactTotals, SurfacePlacement};
+use crate::linalg::{DenseLu, FactorError, SparseCholesky};
+use crate::material::StepCoefficients;
+use crate::surface::RigidSurface;
+
+/// A contact problem: body, driven rigid set, candidate contact region,
+/// rigid surface and contact law.
+#[derive(Debug, Clone)]
+pub struct ContactProblem {
+    pub body: Body,
+    /// Nodes moved together as a rigid body (translation only).
+    pub driven_nodes: Vec<usize>,
+    pub contact: ContactSet,
+    /// Boundary nodes outside the candidate region, checked for penetration.
+    pub other_surface_nodes: Vec<usize>,
+    pub surface: RigidSurface,
+    pub law: ContactLaw,
+}
+
+/// Newton settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolverSettings {
+    pub max_iterations: usize,
+    /// Converged when |S R|_inf <= relative_tolerance * max(|F|_inf, absolute_force_n).
+    pub relative_tolerance: f64,
+    pub absolute_force_n: f64,
+    /// Halvings of a step before giving up.
+    pub max_cuts: u32,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        Self { max_iterations: 100, relative_tolerance: 1e-9, absolute_force_n: 1e-9, max_cuts: 10 }
+    }
+}
+
+/// How the driven set is loaded during a step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Drive {
+    /// Rigid translation (x, y) of the driven set, mm.
+    Displacement([f64; 2]),
+    /// x displacement held at the given value, and a vertical force pushing
+    /// the driven set down with `fy_n` (N per mm of width, > 0); its
+    /// vertical displacement is an unknown.
+    Load { x_mm: f64, fy_n: f64 },
+}
+
+/// The solver failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    #[error(transparent)]
+    Factor(#[from] FactorError),
+    #[error(
+        "Newton iteration did not converge at t = {t_s:.6} s (step {step}, slide {slide_mm:.4} mm) after {cuts} step \
+         halvings: force residual {residual:.3e} N/mm (tolerance {tolerance:.3e})"
+    )]
+    NotConverged { t_s: f64, step: usize, slide_mm: f64, cuts: u32, residual: f64, tolerance: f64 },
+    #[error(
+        "the skin touches the surface outside the meshed contact region at t = {t_s:.6} s (node {node}, x = \
+         {x_mm:.3} mm): enlarge contact.contact_half_arc_mm in the finger model"
+    )]
+    OutsideContactRegion { t_s: f64, node: usize, x_mm: f64 },
+    #[error("the driven set lost contact under load control at t = {t_s:.6} s: no contact force can carry the load")]
+    LostContact { t_s: f64 },
+}
+
+/// The converged state after a step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepReport {
+    pub t_s: f64,
+    pub slide_mm: f64,
+    /// Rigid displacement of the driven set, mm.
+    pub drive_mm: [f64; 2],
+    pub totals: ContactTotals,
+    /// Newton iterations of this step (summed over sub-steps if it was cut).
+    pub iterations: usize,
+    /// Step halvings that were needed.
+    pub cuts: u32,
+}
+
+/// Operators that depend on the step size.
+struct StepOperators {
+    dt_s: f64,
+    coefficients: Vec<Option<StepCoefficients>>,
+    cholesky: SparseCholesky,
+    /// n_free x 2m, column-major.
+    phi: Vec<f64>,
+    /// 2m x 2m compliance and its inverse, column-major.
+    compliance: Vec<f64>,
+    stiffness: Vec<f64>,
+    /// Free response to a unit translation of the driven set in x and in y.
+    psi: [Vec<f64>; 2],
+}
+
+/// Work arrays of the Newton iteration, allocated once.
+struct Scratch {
+    last_ddy: f64,
+    /// S v, S v_trial, S u0_s, S psi_s, S dv.
+    sv: Vec<f64>,
+    sv_trial: Vec<f64>,
+    su0: Vec<f64>,
+    spsi: Vec<f64>,
+    sdv: Vec<f64>,
+    /// D on the active DOFs, dense.
+    d_active: Vec<f64>,
+    u0_free: Vec<f64>,
+    u_next: Vec<f64>,
+    u0_s: Vec<f64>,
+    psi_y_s: Vec<f64>,
+    v: Vec<f64>,
+    v_trial: Vec<f64>,
+    dv: Vec<f64>,
+    forces: Vec<f64>,
+    forces_trial: Vec<f64>,
+    residual: Vec<f64>,
+    force_residual: Vec<f64>,
+    blocks: Vec<Block>,
+    blocks_trial: Vec<Block>,
+    active: Vec<usize>,
+    position: Vec<usize>,
+    cd: Vec<f64>,
+    rhs: Vec<f64>,
+    lu: DenseLu,
+}
+
+/// The solver and the committed state.
+pub struct Solver {
+    pub problem: ContactProblem,
+    pub settings: SolverSettings,
+    dofs: DofMap,
+    base: SparseCholesky,
+    pattern: Pattern,
+    values: Vec<f64>,
+    /// Free index of each candidate DOF (2 per candidate node).
+    candidate_free: Vec<usize>,
+    operators: Vec<StepOperators>,
+    scratch: Scratch,
+    /// Committed global displacement.
+    pub u: Vec<f64>,
+    pub t_s: f64,
+    pub slide_mm: f64,
+    pub drive_mm: [f64; 2],
+    /// Contact forces of the last converged step (per candidate DOF).
+    pub forces: Vec<f64>,
+    pub steps: usize,
+    pub placement_lift_mm: f64,
+    pub total_iterations: usize,
+}
+
+impl Solver {
+    /// Analyses the problem: DOF numbering, stiffness pattern, symbolic
+    /// factorization. `lift_mm` places the surface vertically.
+    pub fn new(problem: ContactProblem, settings: SolverSettings, lift_mm: f64) -> Result<Self, SolveError> {
+        let mut prescribed: Vec<usize> = problem.driven_nodes.iter().flat_map(|&n| [2 * n, 2 * n + 1]).collect();
+        // Rigid subdomains' nodes must be driven; they are by construction of
+        // the finger, checked here for other problems.
+        for n in problem.body.rigid_nodes() {
+            if !problem.driven_nodes.contains(&n) {
+                prescribed.extend([2 * n, 2 * n + 1]);
+            }
+        }
+        let dofs = DofMap::new(problem.body.mesh.n_nodes(), &prescribed);
+        let pattern = Pattern::new(&dofs, &problem.body.mesh.elements, problem.body.deformable_elements());
+        let m2 = 2 * problem.contact.n_nodes();
+        let base = SparseCholesky::new(&pattern, m2)?;
+        let candidate_free: Vec<usize> =
+            problem.contact.nodes.iter().flat_map(|&n| [dofs.free[2 * n], dofs.free[2 * n + 1]]).collect();
+        let n_free = dofs.n_free;
+        let scratch = Scratch {
+            last_ddy: 0.0,
+            sv: vec![0.0; m2],
+            sv_trial: vec![0.0; m2],
+            su0: vec![0.0; m2],
+            spsi: vec![0.0; m2],
+            sdv: vec![0.0; m2],
+            d_active: vec![0.0; m2 * m2],
+            u0_free: vec![0.0; n_free],
+            u_next: vec![0.0; 2 * problem.body.mesh.n_nodes()],
+            u0_s: vec![0.0; m2],
+            psi_y_s: vec![0.0; m2],
+            v: vec![0.0; m2],
+            v_trial: vec![0.0; m2],
+            dv: vec![0.0; m2],
+            forces: vec![0.0; m2],
+            forces_trial: vec![0.0; m2],
+            residual: vec![0.0; m2],
+            force_residual: vec![0.0; m2],
+            blocks: Vec::with_capacity(4 * problem.contact.n_points()),
+            blocks_trial: Vec::with_capacity(4 * problem.contact.n_points()),
+            active: Vec::with_capacity(m2),
+            position: vec![usize::MAX; m2],
+            cd: vec![0.0; m2 * (m2 + 1)],
+            rhs: vec![0.0; m2 + 1],
+            lu: DenseLu::new(m2 + 1),
+        };
+        let n_nodes = problem.body.mesh.n_nodes();
+        let mut solver = Self {
+            problem,
+            settings,
+            dofs,
+            base,
+            values: vec![0.0; pattern.nnz()],
+            pattern,
+            candidate_free,
+            operators: Vec::new(),
+            scratch,
+            u: vec![0.0; 2 * n_nodes],
+            t_s: 0.0,
+            slide_mm: 0.0,
+            drive_mm: [0.0; 2],
+            forces: vec![0.0; m2],
+            steps: 0,
+            placement_lift_mm: lift_mm,
+            total_iterations: 0,
+        };
+        let placement = solver.placement(0.0);
+        let u_s = solver.candidate_displacements();
+        solver.problem.contact.initialize(&u_s, &solver.problem.surface, placement);
+        Ok(solver)
+    }
+
+    /// Number of free DOFs and of stored entries of the Cholesky factor.
+    pub fn sizes(&self) -> (usize, usize) {
+        (self.dofs.n_free, self.base.factor_nnz())
+    }
+
+    fn placement(&self, slide_mm: f64) -> SurfacePlacement {
+        SurfacePlacement { slide_mm, lift_mm: self.placement_lift_mm }
+    }
+
+    fn candidate_displacements(&self) -> Vec<f64> {
+        self.problem.contact.nodes.iter().flat_map(|&n| [self.u[2 * n], self.u[2 * n + 1]]).collect()
+    }
+
+    /// The operators for step size `dt_s`, built on first use.
+    fn operators_for(&mut self, dt_s: f64) -> Result<usize, SolveError> {
+        if let Some(i) = self.operators.iter().position(|o| o.dt_s == dt_s) {
+            return Ok(i);
+        }
+        let timer = std::time::Instant::now();
+        let body = &self.problem.body;
+        let coefficients = body.step_coefficients(dt_s);
+        body.assemble(&coefficients, &self.pattern, &mut self.values);
+        let m2 = self.candidate_free.len();
+        let n = self.dofs.n_free;
+        let mut cholesky = self.base.share(m2);
+        cholesky.factorize(&self.values)?;
+        // Phi = K^-1 P_s.
+        let mut phi = vec![0.0; n * m2];
+        for (c, &row) in self.candidate_free.iter().enumerate() {
+            phi[c * n + row] = 1.0;
+        }
+        cholesky.solve_in_place(MatMut::from_column_major_slice_mut(&mut phi, n, m2));
+        let mut compliance = vec![0.0; m2 * m2];
+        for c in 0..m2 {
+            for (r, &row) in self.candidate_free.iter().enumerate() {
+                compliance[c * m2 + r] = phi[c * n + row];
+            }
+        }
+        // S = C^-1 (C is symmetric positive definite).
+        let c_mat = faer::MatRef::from_column_major_slice(&compliance, m2, m2);
+        let llt = c_mat
+            .llt(faer::Side::Lower)
+            .map_err(|e| FactorError::NotPositiveDefinite(format!("pad compliance: {e:?}")))?;
+        let s_mat = llt.inverse();
+        let mut stiffness = vec![0.0; m2 * m2];
+        for c in 0..m2 {
+            for r in 0..m2 {
+                stiffness[c * m2 + r] = s_mat[(r, c)];
+            }
+        }
+        // Responses to unit translations of the driven set.
+        let mut psi = [vec![0.0; n], vec![0.0; n]];
+        for (axis, response) in psi.iter_mut().enumerate() {
+            let mut u = vec![0.0; self.u.len()];
+            for &node in &self.problem.driven_nodes {
+                u[2 * node + axis] = 1.0;
+            }
+            body.add_prescribed_loads(&coefficients, &self.dofs, &u, response);
+            cholesky.solve_vec(response);
+        }
+        self.operators.push(StepOperators { dt_s, coefficients, cholesky, phi, compliance, stiffness, psi });
+        if std::env::var_os("HAPTEX_DEBUG").is_some() {
+            eprintln!("operators for dt {dt_s}: {:.1} ms", timer.elapsed().as_secs_f64() * 1e3);
+        }
+        Ok(self.operators.len() - 1)
+    }
+
+    /// Advances to `slide_mm` with the driven set loaded by `drive` over a
+    /// time `dt_s`, halving the step on failure. Returns the report of the
+    /// (possibly subdivided) step.
+    pub fn advance(&mut self, dt_s: f64, slide_mm: f64, drive: Drive) -> Result<StepReport, SolveError> {
+        let start_drive = self.drive_mm;
+        let start_slide = self.slide_mm;
+        let mut iterations = 0;
+        let mut cuts = 0;
+        // Remaining work as fractions of the step: a stack of (from, to).
+        let mut pending = vec![(0.0f64, 1.0f64)];
+        let mut last = None;
+        while let Some((from, to)) = pending.pop() {
+            let fraction = to - from;
+            let target_slide = start_slide + to * (slide_mm - start_slide);
+            let target_drive = match drive {
+                Drive::Displacement(d) => Drive::Displacement([
+                    start_drive[0] + to * (d[0] - start_drive[0]),
+                    start_drive[1] + to * (d[1] - start_drive[1]),
+                ]),
+                Drive::Load { x_mm, fy_n } => Drive::Load { x_mm: start_drive[0] + to * (x_mm - start_drive[0]), fy_n },
+            };
+            match self.try_step(fraction * dt_s, target_slide, target_drive) {
+                Ok((its, totals)) => {
+                    iterations += its;
+                    last = Some(totals);
+                }
+                Err(failure) => {
+                    let depth = (1.0 / fraction).log2().round() as u32;
+                    if depth >= self.settings.max_cuts {
+                        return Err(match failure {
+                            StepFailure::Newton { residual, tolerance } => SolveError::NotConverged {
+                                t_s: self.t_s + fraction * dt_s,
+                                step: self.steps + 1,
+                                slide_mm: target_slide,
+                                cuts: depth,
+                                residual,
+                                tolerance,
+                            },
+                            StepFailure::Fatal(e) => e,
+                        });
+                    }
+                    if let StepFailure::Fatal(e) = failure {
+                        return Err(e);
+                    }
+                    cuts += 1;
+                    let middle = 0.5 * (from + to);
+                    pending.push((middle, to));
+                    pending.push((from, middle));
+                }
+            }
+        }
+        self.steps += 1;
+        self.total_iterations += iterations;
+        Ok(StepReport {
+            t_s: self.t_s,
+            slide_mm: self.slide_mm,
+            drive_mm: self.drive_mm,
+            totals: last.expect("at least one sub-step"),
+            iterations,
+            cuts,
+        })
+    }
+
+    /// One attempt at a step; commits only on success.
+    fn try_step(&mut self, dt_s: f64, slide_mm: f64, drive: Drive) -> Result<(usize, ContactTotals), StepFailure> {
+        let k = self.operators_for(dt_s).map_err(StepFailure::Fatal)?;
+        let placement = self.placement(slide_mm);
+        let m2 = self.candidate_free.len();
+        let n = self.dofs.n_free;
+        let (x_drive, y_drive, load) = match drive {
+            Drive::Displacement([x, y]) => (x, y, None),
+            Drive::Load { x_mm, fy_n } => (x_mm, self.drive_mm[1], Some(fy_n)),
+        };
+        // u0: the response to the history load and to the driven motion
+        // (under load control, to the last y; y then changes by dy).
+        {
+            let ops = &mut self.operators[k];
+            let s = &mut self.scratch;
+            s.u0_free.fill(0.0);
+            if ops.coefficients.iter().flatten().any(|c| c.n_terms > 0) {
+                self.problem.body.add_history_loads(&ops.coefficients, &self.dofs, &mut s.u0_free);
+                ops.cholesky.solve_vec(&mut s.u0_free);
+            }
+            for i in 0..n {
+                s.u0_free[i] += x_drive * ops.psi[0][i] + y_drive * ops.psi[1][i];
+            }
+            for (c, &row) in self.candidate_free.iter().enumerate() {
+                s.u0_s[c] = s.u0_free[row];
+                s.psi_y_s[c] = ops.psi[1][row];
+            }
+        }
+        let ops = &self.operators[k];
+        let condensed = Condensed { m2, compliance: &ops.compliance, stiffness: &ops.stiffness, load };
+        // Predictor: the last converged pad displacement. (Extrapolating
+        // the last increment was tried and is worse: near a feature's top it
+        // lifts the pad off and Newton restarts from no contact at all.)
+        let s = &mut self.scratch;
+        for (c, &node) in self.problem.contact.nodes.iter().enumerate() {
+            s.v[2 * c] = self.u[2 * node];
+            s.v[2 * c + 1] = self.u[2 * node + 1];
+        }
+        let mut dy = 0.0;
+        let outcome = newton(
+            &condensed,
+            &mut self.problem.contact,
+            &self.problem.surface,
+            placement,
+            &self.problem.law,
+            &self.settings,
+            s,
+            &mut dy,
+        )?;
+        // Converged: recover the full field u_f = u0 + dy psi_y + Phi F.
+        let s = &mut self.scratch;
+        let u_free = &mut s.u0_free;
+        if load.is_some() {
+            for i in 0..n {
+                u_free[i] += dy * ops.psi[1][i];
+            }
+        }
+        for c in 0..m2 {
+            let f = s.forces[c];
+            if f != 0.0 {
+                let column = &ops.phi[c * n..(c + 1) * n];
+                for i in 0..n {
+                    u_free[i] += column[i] * f;
+                }
+            }
+        }
+        let drive_mm = [x_drive, y_drive + dy];
+        let u = &mut s.u_next;
+        for (g, &d) in self.dofs.free.iter().enumerate() {
+            if d != crate::assembly::PRESCRIBED {
+                u[g] = u_free[d];
+            }
+        }
+        for &node in &self.problem.driven_nodes {
+            u[2 * node] = drive_mm[0];
+            u[2 * node + 1] = drive_mm[1];
+        }
+        // No skin outside the candidate region may touch the surface.
+        for &node in &self.problem.other_surface_nodes {
+            let p = self.problem.body.mesh.nodes[node];
+            let x = [p[0] + u[2 * node] + placement.slide_mm, p[1] + u[2 * node + 1] - placement.lift_mm];
+            if self.problem.surface.project(x).is_some_and(|proj| proj.depth > 1e-9) {
+                return Err(StepFailure::Fatal(SolveError::OutsideContactRegion {
+                    t_s: self.t_s + dt_s,
+                    node,
+                    x_mm: p[0] + u[2 * node],
+                }));
+            }
+        }
+        // Commit.
+        self.problem.body.commit(&ops.coefficients, u);
+        self.problem.contact.commit();
+        std::mem::swap(&mut self.u, &mut s.u_next);
+        self.forces.copy_from_slice(&s.forces);
+        self.t_s += dt_s;
+        self.slide_mm = slide_mm;
+        self.drive_mm = drive_mm;
+        Ok(outcome)
+    }
+
+    /// The reaction on the driven set (N per mm of width): the sum of the
+    /// internal forces of the committed stresses at the driven nodes,
+    /// computed element by element (independently of the condensation).
+    pub fn driven_reaction(&self) -> [f64; 2] {
+        let body = &self.problem.body;
+        let elements = body.elements_touching(&self.problem.driven_nodes);
+        let mut f = vec![0.0; self.u.len()];
+        body.add_internal_forces(&elements, &self.u, &mut f);
+        let mut r = [0.0; 2];
+        for &node in &self.problem.driven_nodes {
+            r[0] += f[2 * node];
+            r[1] += f[2 * node + 1];
+        }
+        r
+    }
+}
+
+/// Why one attempt at a step failed.
+enum StepFailure {
+    Newton { residual: f64, tolerance: f64 },
+    Fatal(SolveError),
+}
+
+/// The condensed operators of one step.
+struct Condensed<'a> {
+    m2: usize,
+    compliance: &'a [f64],
+    stiffness: &'a [f64],
+    /// Vertical load on the driven set (load control), N per mm of width.
+    load: Option<f64>,
+}
+
+impl Condensed<'_> {
+    /// out = S x (m2 x m2 dense; once per step, not per iteration).
+    fn stiffness_times(&self, x: &[f64], out: &mut [f64]) {
+        let m2 = self.m2;
+        for r in 0..m2 {
+            // S is symmetric: row r is column r.
+            let row = &self.stiffness[r * m2..(r + 1) * m2];
+            out[r] = row.iter().zip(x).map(|(a, b)| a * b).sum();
+        }
+    }
+
+    /// The residual R = v - u0_s - dy psi_s - C F into `s.residual` and the
+    /// force residual S R = S v - S u0_s - dy S psi_s - F into
+    /// `s.force_residual`, with S v kept up to date incrementally (S C = I),
+    /// so an evaluation costs O(m2 x active) instead of O(m2^2). Returns
+    /// (|S R, load residual|_inf, squared norm, largest nodal force).
+    fn residual(&self, s: &mut Scratch, trial: bool, dy: f64) -> (f64, f64, f64) {
+        let m2 = self.m2;
+        let (v, sv, forces) = if trial { (&s.v_trial, &s.sv_trial, &s.forces_trial) } else { (&s.v, &s.sv, &s.forces) };
+        for r in 0..m2 {
+            s.residual[r] = v[r] - s.u0_s[r] - dy * s.psi_y_s[r];
+        }
+        for c in 0..m2 {
+            let f = forces[c];
+            if f != 0.0 {
+                let column = &self.compliance[c * m2..(c + 1) * m2];
+                for r in 0..m2 {
+                    s.residual[r] -= column[r] * f;
+                }
+            }
+        }
+        let mut norm: f64 = 0.0;
+        let mut merit = 0.0;
+        let mut force_scale: f64 = 0.0;
+        for r in 0..m2 {
+            let value = sv[r] - s.su0[r] - dy * s.spsi[r] - forces[r];
+            s.force_residual[r] = value;
+            norm = norm.max(value.abs());
+            merit += value * value;
+            force_scale = force_scale.max(forces[r].abs());
+        }
+        if let Some(load) = self.load {
+            let total: f64 = (0..m2 / 2).map(|i| forces[2 * i + 1]).sum();
+            let load_residual = total - load;
+            norm = norm.max(load_residual.abs());
+            merit += load_residual * load_residual;
+        }
+        (norm, merit, force_scale)
+    }
+}
+
+/// Semi-smooth Newton with backtracking on the condensed contact problem.
+/// On entry `s.v` holds the predictor; on success `s.v`/`s.forces` hold the
+/// solution and `dy` the change of the driven y (load control).
+#[allow(clippy::too_many_arguments)]
+fn newton(
+    cond: &Condensed<'_>,
+    contact: &mut ContactSet,
+    surface: &RigidSurface,
+    placement: SurfacePlacement,
+    law: &ContactLaw,
+    settings: &SolverSettings,
+    s: &mut Scratch,
+    dy: &mut f64,
+) -> Result<(usize, ContactTotals), StepFailure> {
+    let m2 = cond.m2;
+    let debug = std::env::var_os("HAPTEX_DEBUG").is_some();
+    // The step's constant products, and S v exactly.
+    cond.stiffness_times(&s.u0_s, &mut s.su0);
+    cond.stiffness_times(&s.psi_y_s, &mut s.spsi);
+    cond.stiffness_times(&s.v, &mut s.sv);
+    // Stick predictor: one Newton step with every contact point sticking,
+    // taken when some point stuck at the last step (the pad's shear is still
+    // building up, as at the start of a slide). Starting from the last state
+    // instead, the linearised slip drags the whole pad past the surface and
+    // the iterates flip every point's slip direction back and forth. In
+    // steady sliding the last state is the better start.
+    if contact.committed.iter().any(|p| p.active && !p.slipping) {
+        contact.evaluate_with(&s.v, surface, placement, law, true, &mut s.forces, &mut s.blocks);
+        cond.residual(s, false, *dy);
+        if newton_direction(cond, s).is_some() {
+            for r in 0..m2 {
+                s.v[r] += s.dv[r];
+                s.sv[r] += s.sdv[r];
+            }
+            *dy += s.last_ddy;
+        }
+    }
+    let mut totals = contact.evaluate(&s.v, surface, placement, law, &mut s.forces, &mut s.blocks);
+    let (mut norm, mut merit, mut scale) = cond.residual(s, false, *dy);
+    let tolerance_of = |scale: f64| settings.relative_tolerance * scale.max(settings.absolute_force_n);
+    for iteration in 0..settings.max_iterations {
+        if !norm.is_finite() {
+            break;
+        }
+        if debug {
+            eprintln!(
+                "it {iteration}: norm {norm:.3e} active {} slip {}",
+                totals.active_points, totals.slipping_points
+            );
+        }
+        if norm <= tolerance_of(scale) {
+            // Confirm with S v computed afresh (no drift of the updates).
+            cond.stiffness_times(&s.v, &mut s.sv);
+            (norm, merit, scale) = cond.residual(s, false, *dy);
+            if norm <= tolerance_of(scale) {
+                return Ok((iteration, totals));
+            }
+        }
+        if newton_direction(cond, s).is_none() {
+            return Err(StepFailure::Fatal(SolveError::LostContact { t_s: f64::NAN }));
+        }
+        let ddy = s.last_ddy;
+        // Backtracking line search on |S R|^2.
+        let mut alpha = 1.0;
+        let mut accepted = false;
+        for _ in 0..8 {
+            for r in 0..m2 {
+                s.v_trial[r] = s.v[r] + alpha * s.dv[r];
+                s.sv_trial[r] = s.sv[r] + alpha * s.sdv[r];
+            }
+            let trial_totals =
+                contact.evaluate(&s.v_trial, surface, placement, law, &mut s.forces_trial, &mut s.blocks_trial);
+            let (trial_norm, trial_merit, trial_scale) = cond.residual(s, true, *dy + alpha * ddy);
+            if trial_merit.is_finite()
+                && (trial_merit < (1.0 - 1e-4 * alpha) * merit || trial_norm <= tolerance_of(trial_scale))
+            {
+                std::mem::swap(&mut s.v, &mut s.v_trial);
+                std::mem::swap(&mut s.sv, &mut s.sv_trial);
+                std::mem::swap(&mut s.forces, &mut s.forces_trial);
+                std::mem::swap(&mut s.blocks, &mut s.blocks_trial);
+                *dy += alpha * ddy;
+                totals = trial_totals;
+                (norm, merit, scale) = (trial_norm, trial_merit, trial_scale);
+                accepted = true;
+                break;
+            }
+            alpha *= 0.5;
+        }
+        if !accepted {
+            // No decrease along the Newton direction (the active set changes
+            // within the step): take the full step anyway and let the
+            // iteration limit decide.
+            for r in 0..m2 {
+                s.v[r] += s.dv[r];
+                s.sv[r] += s.sdv[r];
+            }
+            *dy += ddy;
+            totals = contact.evaluate(&s.v, surface, placement, law, &mut s.forces, &mut s.blocks);
+            (norm, merit, scale) = cond.residual(s, false, *dy);
+        }
+        if debug {
+            eprintln!("  alpha {}", if accepted { alpha } else { f64::NAN });
+        }
+    }
+    Err(StepFailure::Newton { residual: norm, tolerance: tolerance_of(scale) })
+}
+
+/// The Newton direction of the condensed problem at the current iterate
+/// (residuals in `s.residual` and `s.force_residual`, tangent blocks in
+/// `s.blocks`): `s.dv`, its image `s.sdv` = S dv, and `s.last_ddy` for the
+/// driven y under load control. `None` when under load control nothing is
+/// in contact (the load cannot be carried).
+fn newton_direction(cond: &Condensed<'_>, s: &mut Scratch) -> Option<()> {
+    let m2 = cond.m2;
+    // Active DOFs: those touched by a tangent block.
+    s.active.clear();
+    for b in &s.blocks {
+        for node in [b.i, b.j] {
+            for q in 0..2 {
+                let dof = 2 * node + q;
+                if s.position[dof] == usize::MAX {
+                    s.position[dof] = s.active.len();
+                    s.active.push(dof);
+                }
+            }
+        }
+    }
+    let n_a = s.active.len();
+    let with_load = cond.load.is_some();
+    if with_load && n_a == 0 {
+        for &dof in &s.active {
+            s.position[dof] = usize::MAX;
+        }
+        return None;
+    }
+    // D_AA, merged from the blocks (dense n_a x n_a, column-major).
+    let d = &mut s.d_active[..n_a * n_a];
+    d.fill(0.0);
+    for b in &s.blocks {
+        for p in 0..2 {
+            for q in 0..2 {
+                d[s.position[2 * b.j + q] * n_a + s.position[2 * b.i + p]] += b.d[p][q];
+            }
+        }
+    }
+    // CD = C[:, A] D_AA (m2 x n_a, column-major), using D's sparsity.
+    let cd = &mut s.cd[..m2 * n_a];
+    cd.fill(0.0);
+    for col in 0..n_a {
+        let out = &mut cd[col * m2..(col + 1) * m2];
+        for row in 0..n_a {
+            let value = d[col * n_a + row];
+            if value != 0.0 {
+                let dof = s.active[row];
+                let column_c = &cond.compliance[dof * m2..(dof + 1) * m2];
+                for r in 0..m2 {
+                    out[r] += column_c[r] * value;
+                }
+            }
+        }
+    }
+    // The active system, plus the load row and dy column.
+    let size = n_a + with_load as usize;
+    {
+        let mut j = s.lu.matrix_mut(size);
+        for col in 0..n_a {
+            for (row, &dof) in s.active.iter().enumerate() {
+                j[(row, col)] = if row == col { 1.0 } else { 0.0 } - cd[col * m2 + dof];
+            }
+        }
+        if with_load {
+            for (row, &dof) in s.active.iter().enumerate() {
+                j[(row, n_a)] = -s.psi_y_s[dof];
+            }
+            // d(sum F_y)/dv_A: the sum of D's y rows.
+            for col in 0..n_a {
+                j[(n_a, col)] = s
+                    .active
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, dof)| *dof % 2 == 1)
+                    .map(|(row, _)| d[col * n_a + row])
+                    .sum();
+            }
+            j[(n_a, n_a)] = 0.0;
+        }
+    }
+    let regular = s.lu.factor();
+    for (row, &dof) in s.active.iter().enumerate() {
+        s.rhs[row] = -s.residual[dof];
+    }
+    if with_load {
+        let total: f64 = (0..m2 / 2).map(|i| s.forces[2 * i + 1]).sum();
+        s.rhs[n_a] = -(total - cond.load.unwrap_or(0.0));
+    }
+    let mut ddy = 0.0;
+    if regular && n_a > 0 {
+        s.lu.solve(&mut s.rhs[..size]);
+        if with_load {
+            ddy = s.rhs[n_a];
+        }
+    }
+    // dv = -R + CD dv_A + ddy psi, and S dv = -S R + D dv_A + ddy S psi.
+    for r in 0..m2 {
+        s.dv[r] = -s.residual[r] + ddy * s.psi_y_s[r];
+        s.sdv[r] = -s.force_residual[r] + ddy * s.spsi[r];
+    }
+    if regular {
+        for col in 0..n_a {
+            let x = s.rhs[col];
+            let column = &cd[col * m2..(col + 1) * m2];
+            for r in 0..m2 {
+                s.dv[r] += column[r] * x;
+            }
+            for row in 0..n_a {
+                s.sdv[s.active[row]] += d[col * n_a + row] * x;
+            }
+        }
+    }
+    for &dof in &s.active {
+        s.position[dof] = usize::MAX;
+    }
+    s.last_ddy = ddy;
+    Some(())
+}
