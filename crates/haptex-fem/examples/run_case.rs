@@ -23,6 +23,19 @@ fn main() {
     if let Some(d) = args.iter().find_map(|a| a.strip_prefix("smooth=")).and_then(|v| v.parse().ok()) {
         scenario.smoothing_mm = d;
     }
+    if args.iter().any(|a| a == "fine") {
+        scenario.resolution = haptex_fem::finger::Resolution::Fine;
+    }
+    if args.iter().any(|a| a == "coarse") {
+        scenario.resolution = haptex_fem::finger::Resolution::Coarse;
+    }
+    if let Some(d) = args.iter().find_map(|a| a.strip_prefix("step=")).and_then(|v| v.parse().ok()) {
+        scenario.step_mm = d;
+    }
+    if let Some(out) = args.iter().find_map(|a| a.strip_prefix("csv=")) {
+        scenario.frame_every = 0;
+        let _ = out;
+    }
     if args.iter().any(|a| a == "elastic") {
         scenario.viscoelastic = false;
     }
@@ -46,6 +59,9 @@ fn main() {
                 &h.iter().map(|r| r.contact_mm).collect::<Vec<_>>(),
             ));
         fig.write_png(std::path::Path::new(out)).unwrap();
+    }
+    if let Some(out) = args.iter().find_map(|a| a.strip_prefix("csv=")) {
+        result.profile.write_csv_file(std::path::Path::new(out)).unwrap();
     }
     let mu = result.profile.mu();
     let x = result.profile.x_mm();

@@ -20,6 +20,7 @@ pub mod finger;
 pub mod linalg;
 pub mod material;
 pub mod mesh;
+pub mod output;
 pub mod ring;
 pub mod scenario;
 pub mod solver;

@@ -1,0 +1,231 @@
+//! `haptex simulate`: the 2D finite-element finger pad pressed onto a rigid
+//! surface and slid over it; writes the friction profile Ft/Fn(x).
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use haptex_fem::finger::{FingerModel, Resolution};
+use haptex_fem::output;
+use haptex_fem::scenario::{self, Loading, Scenario, default_step_mm};
+use haptex_fem::surface::SurfaceShape;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::args::{Output, positive};
+
+/// Simulate a finger pad sliding over a surface (2D plane-strain FE) and
+/// write its friction profile.
+///
+/// The finger (data/finger/finger-2d.toml: six tissue layers, rigid bone and
+/// nail) is pressed onto the rigid surface, which then slides under it. The
+/// output `x_mm,mu,ft_n,fn_n` gives the apparent friction Ft/Fn against the
+/// finger's position on the surface (x from 0 to --slide, in the surface
+/// template's coordinates); forces are per mm of finger width. It is a
+/// friction profile for `haptex voltage`.
+#[derive(Debug, Args)]
+#[command(
+    allow_negative_numbers = true,
+    after_help = "Examples:\n  haptex simulate --surface bump --x0 5 --width 1.5 --height 0.3 -o bump.csv --png bump.png\n  \
+                  haptex simulate --surface file:heights.csv --history history.csv --vtk vtk/"
+)]
+pub struct SimulateArgs {
+    /// Surface: flat, bump, edge, sine, or file:H.csv (columns x_mm,h_mm).
+    #[arg(long, value_name = "SURFACE")]
+    surface: String,
+    /// Feature position x0 in mm (bump top, edge top, sine phase).
+    #[arg(long, default_value_t = 5.0, allow_negative_numbers = true)]
+    x0: f64,
+    /// Feature width r_w in mm (bump width, edge rise, sine period).
+    #[arg(long, default_value_t = 1.5, value_parser = positive)]
+    width: f64,
+    /// Feature height r_h in mm (bump and edge height, sine amplitude).
+    #[arg(long, default_value_t = 0.3)]
+    height: f64,
+    /// Sliding velocity in mm/s.
+    #[arg(long, default_value_t = 20.0, value_parser = positive)]
+    velocity: f64,
+    /// Press bone and nail down by this much after first touch (mm).
+    #[arg(long, value_parser = positive, conflicts_with = "load")]
+    indent: Option<f64>,
+    /// Press with a constant normal load instead (N per mm of finger width).
+    #[arg(long, value_parser = positive)]
+    load: Option<f64>,
+    /// Slide distance in mm.
+    #[arg(long, default_value_t = 10.0, value_parser = positive)]
+    slide: f64,
+    /// Slide per step in mm (default: 0.1, or width/10 if smaller).
+    #[arg(long, value_parser = positive)]
+    step: Option<f64>,
+    /// Duration of the press in s.
+    #[arg(long, default_value_t = 0.1, value_parser = positive)]
+    press_time: f64,
+    /// Skin-surface friction coefficient (default: the finger model's, 0.5).
+    #[arg(long)]
+    mu_skin: Option<f64>,
+    /// Tissue model.
+    #[arg(long, value_enum, default_value_t = MaterialArg::Viscoelastic)]
+    material: MaterialArg,
+    /// Mesh resolution (pad node spacing 0.2, 0.1, 0.05 mm).
+    #[arg(long, value_enum, default_value_t = MeshArg::Default)]
+    mesh: MeshArg,
+    /// Finger model file (default: the shipped data/finger/finger-2d.toml).
+    #[arg(long, value_name = "FILE")]
+    finger: Option<PathBuf>,
+    /// Contact penalty in MPa per mm of penetration.
+    #[arg(long, default_value_t = 200.0, value_parser = positive)]
+    penalty: f64,
+    /// Friction profile output (default: stdout).
+    #[arg(short, long, value_name = "profile.csv")]
+    output: Option<PathBuf>,
+    /// Force history CSV (t_s,slide_mm,fn_n,ft_n,contact_mm,...).
+    #[arg(long, value_name = "H.csv")]
+    history: Option<PathBuf>,
+    /// Directory for a VTK series (.vtu per frame + simulation.pvd) for ParaView.
+    #[arg(long, value_name = "DIR")]
+    vtk: Option<PathBuf>,
+    /// With --vtk: a frame every this many slide steps (default: ~25 frames).
+    #[arg(long, value_name = "N")]
+    vtk_every: Option<usize>,
+    /// PNG of the deformed finger after the press and over the feature.
+    #[arg(long, value_name = "F.png")]
+    png: Option<PathBuf>,
+    /// No progress bar or summary.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum MaterialArg {
+    Elastic,
+    Viscoelastic,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum MeshArg {
+    Coarse,
+    Default,
+    Fine,
+}
+
+fn parse_surface(args: &SimulateArgs) -> anyhow::Result<SurfaceShape> {
+    let (x0, width, height) = (args.x0, args.width, args.height);
+    if !x0.is_finite() || !height.is_finite() {
+        anyhow::bail!("--x0 and --height must be finite numbers");
+    }
+    Ok(match args.surface.as_str() {
+        "flat" => SurfaceShape::Flat,
+        "bump" => SurfaceShape::Bump { x0, width, height },
+        "edge" => SurfaceShape::Edge { x0, width, height },
+        "sine" => SurfaceShape::Sine { x0, width, height },
+        other => match other.strip_prefix("file:") {
+            Some(path) => SurfaceShape::read_csv(std::path::Path::new(path))?,
+            None => anyhow::bail!("--surface must be flat, bump, edge, sine or file:H.csv, got '{other}'"),
+        },
+    })
+}
+
+pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
+    let surface = parse_surface(&args)?;
+    let model = match &args.finger {
+        Some(path) => FingerModel::read(path)?,
+        None => FingerModel::default_model(),
+    };
+    let mut scenario = Scenario::paper(surface.clone());
+    scenario.model = model;
+    scenario.resolution = match args.mesh {
+        MeshArg::Coarse => Resolution::Coarse,
+        MeshArg::Default => Resolution::Default,
+        MeshArg::Fine => Resolution::Fine,
+    };
+    scenario.viscoelastic = matches!(args.material, MaterialArg::Viscoelastic);
+    scenario.loading = match (args.indent, args.load) {
+        (_, Some(load)) => Loading::Load(load),
+        (Some(indent), None) => Loading::Indent(indent),
+        (None, None) => Loading::Indent(0.25),
+    };
+    scenario.press_time_s = args.press_time;
+    scenario.slide_mm = args.slide;
+    scenario.velocity_mm_s = args.velocity;
+    scenario.step_mm = args.step.unwrap_or_else(|| default_step_mm(&surface));
+    scenario.mu_skin = args.mu_skin;
+    scenario.penalty_mpa_per_mm = args.penalty;
+    let slide_steps = (scenario.slide_mm / scenario.step_mm).ceil() as usize;
+    if args.vtk.is_some() {
+        scenario.frame_every = args.vtk_every.unwrap_or((slide_steps / 25).max(1)).max(1);
+    }
+
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        let bar = ProgressBar::new((scenario.press_steps + slide_steps) as u64);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{spinner} simulate [{bar:30}] {pos}/{len} steps, {msg} ({elapsed}, eta {eta})",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        );
+        bar
+    };
+    let result = scenario::run(&scenario, &mut |p| {
+        bar.set_position(p.step as u64);
+        bar.set_message(format!("t = {:.3} s, x = {:.2} mm", p.t_s, p.slide_mm));
+    });
+    bar.finish_and_clear();
+    let result = result.context("simulation failed")?;
+
+    let description = describe(&args, &scenario);
+    Output::new(args.output.clone()).write(|w| output::write_profile(&result, &description, w))?;
+    if let Some(path) = &args.history {
+        haptex_core::io::write_atomic(path, |w| output::write_history(&result, w))?;
+    }
+    if let Some(dir) = &args.vtk {
+        output::write_vtk_series(&result, dir)?;
+    }
+    if let Some(path) = &args.png {
+        let title = format!("haptex simulate: {}", description.split(';').next().unwrap_or(""));
+        output::write_png(&result, &title, path)?;
+    }
+    if !args.quiet {
+        let s = result.statistics;
+        let mu = result.profile.mu();
+        let (lo, hi) = mu.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &m| (a.min(m), b.max(m)));
+        eprintln!("{description}");
+        eprintln!(
+            "mesh: {} nodes, {} elements, {} free DOFs ({} in the contact region)",
+            s.nodes, s.elements, s.free_dofs, s.contact_dofs
+        );
+        eprintln!(
+            "solved {} steps, {} Newton iterations, {} step halvings in {:.2} s",
+            s.steps, s.newton_iterations, s.step_cuts, s.wall_time_s
+        );
+        eprintln!("Ft/Fn over the slide: {lo:.4} .. {hi:.4}");
+        for (label, path) in
+            [("profile", &args.output), ("history", &args.history), ("VTK series", &args.vtk), ("PNG", &args.png)]
+        {
+            if let Some(p) = path {
+                eprintln!("wrote {label}: {}", p.display());
+            }
+        }
+    }
+    Ok(())
+}
+
+fn describe(args: &SimulateArgs, scenario: &Scenario) -> String {
+    let surface = match &scenario.surface {
+        SurfaceShape::Flat => "flat".to_string(),
+        SurfaceShape::Sampled { .. } => args.surface.clone(),
+        _ => format!("{} x0 = {} mm, r_w = {} mm, r_h = {} mm", args.surface, args.x0, args.width, args.height),
+    };
+    let loading = match scenario.loading {
+        Loading::Indent(d) => format!("indent {d} mm"),
+        Loading::Load(f) => format!("load {f} N/mm"),
+    };
+    format!(
+        "{surface}; {loading}, slide {} mm at {} mm/s, {} tissue, {:?} mesh",
+        scenario.slide_mm,
+        scenario.velocity_mm_s,
+        if scenario.viscoelastic { "visco-elastic" } else { "elastic" },
+        scenario.resolution
+    )
+}
