@@ -261,7 +261,7 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
     let mut history = Vec::with_capacity(total_steps + 1);
     let mut frames = Vec::new();
     let dt_press = scenario.press_time_s / scenario.press_steps as f64;
-    let record = |solver: &Solver, report: &crate::solver::StepReport| HistoryRow {
+    let record = |solver: &mut Solver, report: &crate::solver::StepReport| HistoryRow {
         t_s: report.t_s,
         slide_mm: report.slide_mm,
         fn_n: report.totals.force[1],
@@ -279,7 +279,7 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
             for k in 1..=scenario.press_steps {
                 let y = -indent * k as f64 / scenario.press_steps as f64;
                 let report = solver.advance(dt_press, 0.0, Drive::Displacement([0.0, y]))?;
-                history.push(record(&solver, &report));
+                history.push(record(&mut solver, &report));
                 progress(Progress { step: k, total_steps, t_s: report.t_s, slide_mm: 0.0 });
             }
         }
@@ -289,7 +289,7 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
             for k in 1..=scenario.press_steps {
                 let fy = load * k as f64 / scenario.press_steps as f64;
                 let report = solver.advance(dt_press, 0.0, Drive::Load { x_mm: 0.0, fy_n: fy })?;
-                history.push(record(&solver, &report));
+                history.push(record(&mut solver, &report));
                 progress(Progress { step: k, total_steps, t_s: report.t_s, slide_mm: 0.0 });
             }
         }
@@ -310,7 +310,7 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
             Loading::Load(load) => Drive::Load { x_mm: 0.0, fy_n: load },
         };
         let report = solver.advance(dt, slide, drive)?;
-        let row = record(&solver, &report);
+        let row = record(&mut solver, &report);
         if row.fn_n.is_nan() || row.fn_n <= 1e-12 {
             return Err(SimulationError::NoContact { x_mm: slide, t_s: row.t_s });
         }

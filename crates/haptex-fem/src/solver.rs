@@ -187,6 +187,10 @@ pub struct Solver {
     pub steps: usize,
     pub placement_lift_mm: f64,
     pub total_iterations: usize,
+    pending: Vec<(f64, f64)>,
+    /// Elements touching the driven nodes, and a force buffer, for reactions.
+    reaction_elements: Vec<usize>,
+    reaction_forces: Vec<f64>,
 }
 
 impl Solver {
@@ -254,7 +258,11 @@ impl Solver {
             steps: 0,
             placement_lift_mm: lift_mm,
             total_iterations: 0,
+            pending: Vec::with_capacity(2 * settings.max_cuts as usize + 2),
+            reaction_elements: Vec::new(),
+            reaction_forces: vec![0.0; 2 * n_nodes],
         };
+        solver.reaction_elements = solver.problem.body.elements_touching(&solver.problem.driven_nodes);
         let placement = solver.placement(0.0);
         let u_s = solver.candidate_displacements();
         solver.problem.contact.initialize(&u_s, &solver.problem.surface, placement);
@@ -337,7 +345,11 @@ impl Solver {
         let mut iterations = 0;
         let mut cuts = 0;
         // Remaining work as fractions of the step: a stack of (from, to).
-        let mut pending = vec![(0.0f64, 1.0f64)];
+        // Work still to do, as fractions (from, to) of the step: a stack that
+        // step halving pushes onto (kept in the solver: no allocation).
+        let mut pending = std::mem::take(&mut self.pending);
+        pending.clear();
+        pending.push((0.0f64, 1.0f64));
         let mut last = None;
         while let Some((from, to)) = pending.pop() {
             let fraction = to - from;
@@ -357,6 +369,7 @@ impl Solver {
                 Err(failure) => {
                     let depth = (1.0 / fraction).log2().round() as u32;
                     if depth >= self.settings.max_cuts {
+                        self.pending = pending;
                         return Err(match failure {
                             StepFailure::Newton { residual, tolerance } => SolveError::NotConverged {
                                 t_s: self.t_s + fraction * dt_s,
@@ -370,6 +383,7 @@ impl Solver {
                         });
                     }
                     if let StepFailure::Fatal(e) = failure {
+                        self.pending = pending;
                         return Err(e);
                     }
                     cuts += 1;
@@ -379,6 +393,7 @@ impl Solver {
                 }
             }
         }
+        self.pending = pending;
         self.steps += 1;
         self.total_iterations += iterations;
         Ok(StepReport {
@@ -494,11 +509,10 @@ impl Solver {
     /// The reaction on the driven set (N per mm of width): the sum of the
     /// internal forces of the committed stresses at the driven nodes,
     /// computed element by element (independently of the condensation).
-    pub fn driven_reaction(&self) -> [f64; 2] {
-        let body = &self.problem.body;
-        let elements = body.elements_touching(&self.problem.driven_nodes);
-        let mut f = vec![0.0; self.u.len()];
-        body.add_internal_forces(&elements, &self.u, &mut f);
+    pub fn driven_reaction(&mut self) -> [f64; 2] {
+        let f = &mut self.reaction_forces;
+        f.fill(0.0);
+        self.problem.body.add_internal_forces(&self.reaction_elements, &self.u, f);
         let mut r = [0.0; 2];
         for &node in &self.problem.driven_nodes {
             r[0] += f[2 * node];
