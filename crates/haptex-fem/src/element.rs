@@ -274,6 +274,32 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        /// fenris-style patch property: on any convex quad (a unit square
+        /// with corners moved by up to 0.3), an affine displacement field
+        /// gives its exact constant strain at every Gauss point (1e-12).
+        #[test]
+        fn affine_field_gives_exact_strain_on_random_quads(
+            moves in proptest::collection::vec(-0.3f64..0.3, 8),
+            a in proptest::collection::vec(-1.0f64..1.0, 6),
+        ) {
+            let x: [[f64; 2]; 4] = std::array::from_fn(|i| [CORNERS[i][0] + moves[2 * i], CORNERS[i][1] + moves[2 * i + 1]]);
+            let q = Q4::new(&x).unwrap();
+            let u: [f64; 8] = std::array::from_fn(|i| {
+                let p = x[i / 2];
+                if i % 2 == 0 { a[0] + a[1] * p[0] + a[2] * p[1] } else { a[3] + a[4] * p[0] + a[5] * p[1] }
+            });
+            let exact = [a[1], a[5], 0.0, 0.5 * (a[2] + a[4])];
+            for gp in 0..4 {
+                let e = q.strain(gp, &u);
+                for k in 0..4 {
+                    proptest::prop_assert!((e[k] - exact[k]).abs() < 1e-12);
+                }
+                proptest::prop_assert!((q.dilatation(Formulation::BBar, gp, &u) - (a[1] + a[5])).abs() < 1e-12);
+            }
+        }
+    }
+
     #[test]
     fn inverted_element_is_rejected() {
         let err = Q4::new(&[[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]]).unwrap_err();
