@@ -44,18 +44,32 @@ fn main() {
     let edge = SurfaceShape::Edge { x0: 5.0, width: 1.5, height: 0.3 };
     let sine = SurfaceShape::Sine { x0: 5.0, width: 2.0, height: 0.2 };
     let b = simulate(bump.clone(), 20.0, true);
-    write_png(&b, "bump x0 = 5, r_w = 1.5, r_h = 0.3 mm: after the press, and over the bump", &dir.join("fem_bump_deformed.png"))
-        .unwrap();
+    write_png(
+        &b,
+        "bump x0 = 5, r_w = 1.5, r_h = 0.3 mm: after the press, and over the bump",
+        &dir.join("fem_bump_deformed.png"),
+    )
+    .unwrap();
     let e = simulate(edge, 20.0, true);
     let s = simulate(sine, 20.0, true);
-    let mut figure = Figure::new("Ft/Fn along a 10 mm slide at 20 mm/s (visco-elastic finger, skin mu = 0.5)").size(1000, 260);
-    for (label, r) in [("bump x0 = 5, r_w = 1.5, r_h = 0.3 mm", &b), ("edge x0 = 5, r_w = 1.5, r_h = 0.3 mm", &e), ("sine x0 = 5, period 2, amplitude 0.2 mm", &s)] {
-        figure = figure.panel(Panel::new("finger position on the surface x (mm)", "Ft/Fn").title(label).line("", r.profile.x_mm(), r.profile.mu()));
+    let mut figure =
+        Figure::new("Ft/Fn along a 10 mm slide at 20 mm/s (visco-elastic finger, skin mu = 0.5)").size(1000, 260);
+    for (label, r) in [
+        ("bump x0 = 5, r_w = 1.5, r_h = 0.3 mm", &b),
+        ("edge x0 = 5, r_w = 1.5, r_h = 0.3 mm", &e),
+        ("sine x0 = 5, period 2, amplitude 0.2 mm", &s),
+    ] {
+        figure = figure.panel(Panel::new("finger position on the surface x (mm)", "Ft/Fn").title(label).line(
+            "",
+            r.profile.x_mm(),
+            r.profile.mu(),
+        ));
     }
     figure.write_png(&dir.join("fem_profiles.png")).unwrap();
 
     let mut mu_panel = Panel::new("finger position on the surface x (mm)", "Ft/Fn").title("Ft/Fn");
-    let mut fn_panel = Panel::new("finger position on the surface x (mm)", "Fn (N per mm of width)").title("normal force (0.25 mm press)");
+    let mut fn_panel = Panel::new("finger position on the surface x (mm)", "Fn (N per mm of width)")
+        .title("normal force (0.25 mm press)");
     for velocity in [10.0, 20.0, 50.0, 100.0] {
         let r = simulate(bump.clone(), velocity, true);
         let fn_n: Vec<f64> = r.history.iter().filter(|h| h.slide_mm > 0.0).map(|h| h.fn_n).collect();

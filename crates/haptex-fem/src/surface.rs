@@ -134,6 +134,9 @@ pub struct RigidSurface {
     x: Vec<f64>,
     h: Vec<f64>,
     arc: Vec<f64>,
+    /// (first x, 1/spacing) when the vertices are uniformly spaced: O(1)
+    /// segment lookup (templates), else binary search (sampled files).
+    uniform: Option<(f64, f64)>,
 }
 
 impl RigidSurface {
@@ -164,7 +167,23 @@ impl RigidSurface {
         for i in 1..x.len() {
             arc[i] = arc[i - 1] + (x[i] - x[i - 1]).hypot(h[i] - h[i - 1]);
         }
-        Self { x, h, arc }
+        let n = x.len();
+        let spacing = (x[n - 1] - x[0]) / (n - 1) as f64;
+        let uniform =
+            x.windows(2).all(|w| ((w[1] - w[0]) / spacing - 1.0).abs() < 1e-9).then_some((x[0], 1.0 / spacing));
+        Self { x, h, arc, uniform }
+    }
+
+    /// Index i of the segment [x_i, x_i+1] containing x (clamped to the range).
+    fn segment(&self, x: f64) -> usize {
+        let last = self.x.len() - 2;
+        match self.uniform {
+            Some((x0, inv)) => {
+                let i = ((x - x0) * inv).floor();
+                if i.is_nan() || i < 0.0 { 0 } else { (i as usize).min(last) }
+            }
+            None => self.x.partition_point(|&v| v <= x).saturating_sub(1).min(last),
+        }
     }
 
     /// The x range covered.
@@ -174,7 +193,9 @@ impl RigidSurface {
 
     /// Polyline height at x (held flat outside the range).
     pub fn height(&self, x: f64) -> f64 {
-        haptex_core::profile::interpolate(&self.x, &self.h, x)
+        let i = self.segment(x);
+        let t = ((x - self.x[i]) / (self.x[i + 1] - self.x[i])).clamp(0.0, 1.0);
+        self.h[i] + t * (self.h[i + 1] - self.h[i])
     }
 
     /// Highest point over [a, b].
@@ -193,7 +214,7 @@ impl RigidSurface {
 
     /// Arc-length coordinate of the surface point below x.
     pub fn arc_at(&self, x: f64) -> f64 {
-        let i = self.x.partition_point(|&v| v <= x).clamp(1, self.x.len() - 1) - 1;
+        let i = self.segment(x);
         let t = ((x - self.x[i]) / (self.x[i + 1] - self.x[i])).clamp(0.0, 1.0);
         self.arc[i] + t * (self.arc[i + 1] - self.arc[i])
     }
@@ -206,9 +227,8 @@ impl RigidSurface {
             return None;
         }
         // Segments meeting the window [x - vertical, x + vertical].
-        let n = self.x.len();
-        let first = self.x.partition_point(|&v| v < p[0] - vertical).saturating_sub(1).min(n - 2);
-        let last = self.x.partition_point(|&v| v <= p[0] + vertical).clamp(first + 1, n - 1);
+        let first = self.segment(p[0] - vertical);
+        let last = (self.segment(p[0] + vertical) + 1).max(first + 1);
         let mut best = (f64::INFINITY, 0usize, 0.0);
         for i in first..last {
             let (ax, ay) = (self.x[i], self.h[i]);
