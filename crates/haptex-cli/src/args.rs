@@ -1,7 +1,7 @@
 //! Flag value parsers and output helpers shared by the subcommands.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 
 use anyhow::Context;
 
@@ -61,4 +61,28 @@ pub fn read_profile(path: &Path) -> anyhow::Result<haptex_core::FrictionProfile>
     } else {
         FrictionProfile::read_csv_file(path)?
     })
+}
+
+/// A shipped data file or directory: the path in environment variable
+/// `env_var` if set, else `relative` (e.g. `data/db`) in this source tree.
+pub fn shipped_data(env_var: &str, relative: &str) -> PathBuf {
+    if let Some(path) = std::env::var_os(env_var) {
+        return PathBuf::from(path);
+    }
+    normalize(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(relative))
+}
+
+/// Removes `.` and `..` components lexically (for readable messages).
+fn normalize(path: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for component in path.components() {
+        match component {
+            Component::ParentDir if out.file_name().is_some() => {
+                out.pop();
+            }
+            Component::CurDir => {}
+            other => out.push(other),
+        }
+    }
+    out
 }

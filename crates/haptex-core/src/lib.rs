@@ -5,6 +5,7 @@
 //! voltages in V (RMS), and every field that carries a unit names it.
 
 pub mod cae;
+pub mod database;
 pub mod electrovibration;
 pub mod io;
 pub mod library;

@@ -26,3 +26,4 @@ pub mod scenario;
 pub mod solver;
 pub mod statics;
 pub mod surface;
+pub mod sweep;

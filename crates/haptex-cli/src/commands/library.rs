@@ -2,7 +2,7 @@
 //! texture library they are kept in (paper section 2.4).
 
 use std::io::Write;
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand, ValueEnum};
@@ -289,25 +289,7 @@ pub fn run(args: LibraryArgs) -> anyhow::Result<()> {
 
 /// $HAPTEX_LIBRARY, else the shipped library of this source tree.
 fn default_db() -> PathBuf {
-    if let Some(path) = std::env::var_os("HAPTEX_LIBRARY") {
-        return PathBuf::from(path);
-    }
-    normalize(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(SHIPPED_LIBRARY))
-}
-
-/// Removes `.` and `..` components lexically (for readable messages).
-fn normalize(path: &Path) -> PathBuf {
-    let mut out = PathBuf::new();
-    for component in path.components() {
-        match component {
-            Component::ParentDir if out.file_name().is_some() => {
-                out.pop();
-            }
-            Component::CurDir => {}
-            other => out.push(other),
-        }
-    }
-    out
+    crate::args::shipped_data("HAPTEX_LIBRARY", SHIPPED_LIBRARY)
 }
 
 fn open_read_only(db: &Path) -> anyhow::Result<Library> {

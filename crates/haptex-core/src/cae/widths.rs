@@ -28,7 +28,7 @@ use super::{CaeError, Normalization};
 
 /// The width parameters: w_min and w_max in normalized input units
 /// (equal for a constant width).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
 pub struct Widths {
     pub w_min: f64,
     pub w_max: f64,

@@ -1,0 +1,337 @@
+//! The FE database of template surfaces and the instant prediction of any
+//! member of a family (paper sections 3.1-3.2, Fig. 2a).
+//!
+//! For each template (bump, edge, sine) a model matrix in the CAE CSV format
+//! holds one FE simulation per row: the inputs `r_w_mm,r_h_mm,velocity_mm_s`
+//! and the friction profile Ft/Fn sampled on a common grid of positions of
+//! the finger relative to the feature, xi = x - x0 (outputs `mu@-5.00`,
+//! ...). `metadata.json` beside them records the grid, the sweep, the FE
+//! settings, the build and the leave-one-out-optimal CAE widths. A
+//! prediction for (r_w, r_h, velocity) is the CAE estimate over the
+//! template's matrix, shifted to the feature's position x0.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::cae::{Cae, CaeError, Diagnostics, LooErrors, ModelMatrix, Scratch, Widths};
+
+/// The database's input columns, in order.
+pub const INPUTS: [&str; 3] = ["r_w_mm", "r_h_mm", "velocity_mm_s"];
+
+/// The template surfaces of design.md.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Template {
+    Bump,
+    Edge,
+    Sine,
+}
+
+impl Template {
+    pub const ALL: [Template; 3] = [Template::Bump, Template::Edge, Template::Sine];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Template::Bump => "bump",
+            Template::Edge => "edge",
+            Template::Sine => "sine",
+        }
+    }
+
+    /// Parses "bump", "edge" or "sine".
+    pub fn parse(text: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|t| t.name() == text)
+    }
+
+    /// The model-matrix file of this template in a database directory.
+    pub fn file_name(self) -> String {
+        format!("{}.csv", self.name())
+    }
+}
+
+/// The positions xi = x - x0 (mm) at which every profile is sampled.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Grid {
+    pub xi_min_mm: f64,
+    pub xi_max_mm: f64,
+    pub points: usize,
+}
+
+impl Grid {
+    pub fn positions(&self) -> Vec<f64> {
+        let n = self.points;
+        (0..n).map(|i| self.xi_min_mm + (self.xi_max_mm - self.xi_min_mm) * i as f64 / (n - 1) as f64).collect()
+    }
+
+    /// The output column names, `mu@<xi>` with two decimals.
+    pub fn column_names(&self) -> Vec<String> {
+        self.positions().iter().map(|xi| format!("mu@{xi:.2}")).collect()
+    }
+}
+
+/// The parameter sweep of a database.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Sweep {
+    pub templates: Vec<Template>,
+    pub widths_mm: Vec<f64>,
+    pub heights_mm: Vec<f64>,
+    pub velocities_mm_s: Vec<f64>,
+}
+
+/// The FE settings every run of the database shares.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FeSettings {
+    /// Finger model file and the SHA-256 of its text.
+    pub finger_model: String,
+    pub finger_model_sha256: String,
+    pub mesh: String,
+    pub material: String,
+    pub indent_mm: f64,
+    pub press_time_s: f64,
+    /// The feature's position in each run, and the slide (mm).
+    pub x0_mm: f64,
+    pub slide_mm: f64,
+    /// Slide step: min(max_step_mm, width / 10).
+    pub max_step_mm: f64,
+    pub mu_skin: f64,
+    pub penalty_mpa_per_mm: f64,
+}
+
+/// The CAE set-up of one template's matrix.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TemplateEntry {
+    pub template: Template,
+    pub file: String,
+    pub rows: usize,
+    /// Leave-one-out-optimal widths (normalized input units).
+    pub widths: Widths,
+    /// LOO RMS error of Ft/Fn over all outputs, and relative to the mean
+    /// range of the profiles.
+    pub loo_rmse: f64,
+    pub loo_rmse_relative_to_range: f64,
+    /// The constant width with the smallest LOO error, and that error.
+    pub constant_width: f64,
+    pub constant_width_rmse: f64,
+}
+
+/// `metadata.json` of a database.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Metadata {
+    pub format: String,
+    pub haptex_version: String,
+    /// UTC date and time the database was merged (RFC 3339).
+    pub created: String,
+    /// Wall time of the FE runs, summed over runs and shards (s), and the
+    /// build's wall-clock time when it ran as one job.
+    pub cpu_time_s: f64,
+    pub build_wall_time_s: Option<f64>,
+    pub grid: Grid,
+    pub sweep: Sweep,
+    pub fe: FeSettings,
+    pub templates: Vec<TemplateEntry>,
+}
+
+/// The identifier of the metadata format.
+pub const FORMAT: &str = "haptex-template-database/1";
+
+/// A database cannot be read or used.
+#[derive(Debug, thiserror::Error)]
+pub enum DatabaseError {
+    #[error("{path}: {message}")]
+    File { path: PathBuf, message: String },
+    #[error(transparent)]
+    Cae(#[from] CaeError),
+    #[error("the database has no {0} template")]
+    MissingTemplate(&'static str),
+    #[error("{0}")]
+    Query(String),
+}
+
+impl Metadata {
+    /// Reads `metadata.json` from a database directory.
+    pub fn read(dir: &Path) -> Result<Self, DatabaseError> {
+        let path = dir.join("metadata.json");
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| DatabaseError::File { path: path.clone(), message: e.to_string() })?;
+        let metadata: Self = serde_json::from_str(&text).map_err(|e| DatabaseError::File {
+            path: path.clone(),
+            message: format!("line {}, column {}: {e}", e.line(), e.column()),
+        })?;
+        if metadata.format != FORMAT {
+            return Err(DatabaseError::File {
+                path,
+                message: format!("format '{}' is not '{FORMAT}'", metadata.format),
+            });
+        }
+        Ok(metadata)
+    }
+
+    pub fn entry(&self, template: Template) -> Option<&TemplateEntry> {
+        self.templates.iter().find(|e| e.template == template)
+    }
+}
+
+/// One template's predictor: its model matrix and the CAE with the
+/// database's LOO-optimal widths.
+#[derive(Debug, Clone)]
+pub struct TemplateModel {
+    pub template: Template,
+    pub cae: Cae,
+    pub grid: Grid,
+    positions: Vec<f64>,
+}
+
+/// A predicted profile.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Prediction {
+    /// Finger positions on the surface, x = x0 + xi (mm).
+    pub x_mm: Vec<f64>,
+    pub mu: Vec<f64>,
+    /// The database row whose FE profile this is, when the parameters are
+    /// exactly a row's (then no estimate is involved).
+    pub fe_row: Option<usize>,
+    pub diagnostics: Diagnostics,
+}
+
+impl TemplateModel {
+    /// Loads one template of the database in `dir`.
+    pub fn load(dir: &Path, template: Template) -> Result<Self, DatabaseError> {
+        let metadata = Metadata::read(dir)?;
+        Self::load_with(dir, &metadata, template)
+    }
+
+    /// Loads one template, given the database's metadata.
+    pub fn load_with(dir: &Path, metadata: &Metadata, template: Template) -> Result<Self, DatabaseError> {
+        let entry = metadata.entry(template).ok_or(DatabaseError::MissingTemplate(template.name()))?;
+        let path = dir.join(&entry.file);
+        let matrix = ModelMatrix::read_csv_file(&path, &INPUTS)?;
+        if matrix.m() != metadata.grid.points {
+            return Err(DatabaseError::File {
+                path,
+                message: format!("{} outputs, the metadata's grid has {} points", matrix.m(), metadata.grid.points),
+            });
+        }
+        let cae = Cae::new(matrix, entry.widths)?;
+        Ok(Self { template, cae, grid: metadata.grid, positions: metadata.grid.positions() })
+    }
+
+    /// Positions xi = x - x0 of the outputs (mm).
+    pub fn positions(&self) -> &[f64] {
+        &self.positions
+    }
+
+    /// The row whose inputs equal (r_w, r_h, v) to 1e-9, if any.
+    pub fn exact_row(&self, inputs: &[f64; 3]) -> Option<usize> {
+        let m = self.cae.matrix();
+        (0..m.n()).find(|&n| m.input_row(n).iter().zip(inputs).all(|(a, b)| (a - b).abs() <= 1e-9 * a.abs().max(1.0)))
+    }
+
+    /// Ft/Fn on the grid for (r_w, r_h, velocity) into `out`, without
+    /// allocation: the FE row itself at a database point, else the CAE
+    /// estimate. Returns the row used, if exact, and the diagnostics.
+    pub fn predict_into(
+        &self,
+        inputs: &[f64; 3],
+        scratch: &mut Scratch,
+        out: &mut [f64],
+    ) -> Result<(Option<usize>, Diagnostics), DatabaseError> {
+        if inputs.iter().any(|v| !v.is_finite()) {
+            return Err(DatabaseError::Query(format!("parameters must be finite numbers, got {inputs:?}")));
+        }
+        let diagnostics = self.cae.predict_into(inputs, scratch, out)?;
+        let row = self.exact_row(inputs);
+        if let Some(n) = row {
+            out.copy_from_slice(self.cae.matrix().output_row(n));
+        }
+        Ok((row, diagnostics))
+    }
+
+    /// The predicted profile of a feature at `x0_mm`.
+    pub fn predict(
+        &self,
+        x0_mm: f64,
+        width_mm: f64,
+        height_mm: f64,
+        velocity_mm_s: f64,
+    ) -> Result<Prediction, DatabaseError> {
+        if !x0_mm.is_finite() {
+            return Err(DatabaseError::Query(format!("x0 must be a finite number, got {x0_mm}")));
+        }
+        let mut scratch = self.cae.scratch();
+        let mut mu = vec![0.0; self.grid.points];
+        let (fe_row, diagnostics) = self.predict_into(&[width_mm, height_mm, velocity_mm_s], &mut scratch, &mut mu)?;
+        let x_mm = self.positions.iter().map(|xi| x0_mm + xi).collect();
+        Ok(Prediction { x_mm, mu, fe_row, diagnostics })
+    }
+
+    /// The range of each input over the database: (min, max) for r_w, r_h, v.
+    pub fn input_ranges(&self) -> [(f64, f64); 3] {
+        let m = self.cae.matrix();
+        std::array::from_fn(|l| {
+            (0..m.n())
+                .map(|n| m.input_row(n)[l])
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)))
+        })
+    }
+}
+
+/// LOO errors for the metadata, from the CAE's per-output errors.
+pub fn relative_loo_error(matrix: &ModelMatrix, errors: &LooErrors) -> f64 {
+    // Mean range of the profiles (max - min of each row), averaged.
+    let mean_range = (0..matrix.n())
+        .map(|n| {
+            let row = matrix.output_row(n);
+            let (lo, hi) = row.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+            hi - lo
+        })
+        .sum::<f64>()
+        / matrix.n() as f64;
+    errors.rmse / mean_range
+}
+
+impl DatabaseError {
+    /// A CSV problem (file, line, column) as a database error.
+    pub fn from_table(e: crate::io::TableError) -> Self {
+        DatabaseError::Cae(CaeError::Table(e))
+    }
+}
+
+/// The current UTC time as RFC 3339 (`2026-11-22T07:30:00Z`).
+pub fn utc_now_rfc3339() -> String {
+    let seconds = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs()) as i64;
+    let (days, rest) = (seconds.div_euclid(86_400), seconds.rem_euclid(86_400));
+    // Civil date from days since 1970-01-01 (H. Hinnant, "chrono-Compatible
+    // Low-Level Date Algorithms").
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!("{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z", rest / 3600, rest % 3600 / 60, rest % 60)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_positions_and_names() {
+        let g = Grid { xi_min_mm: -5.0, xi_max_mm: 5.0, points: 501 };
+        let p = g.positions();
+        assert_eq!((p[0], p[250], p[500]), (-5.0, 0.0, 5.0));
+        assert!((p[1] + 4.98).abs() < 1e-12);
+        assert_eq!(g.column_names()[1], "mu@-4.98");
+    }
+
+    #[test]
+    fn rfc3339_shape() {
+        let t = utc_now_rfc3339();
+        assert_eq!(t.len(), 20, "{t}");
+        assert!(t.starts_with("20") && t.ends_with('Z'));
+    }
+}

@@ -1,0 +1,437 @@
+//! Building the FE database of template surfaces (`haptex db build` and
+//! `haptex db merge`): the paper's sweep (section 3.1) of bump, edge and
+//! sine over r_w and r_h, at several sliding velocities.
+//!
+//! Every run writes its own file `runs/<template>_w<r_w>_h<r_h>_v<v>.csv`
+//! atomically once it is complete, so a build that is killed continues where
+//! it stopped, and shards of the sweep (`--shard K/N`, one per job of a
+//! cluster array) write disjoint sets of run files. Merging collects the
+//! run files of one or more directories into the model matrices of
+//! `haptex_core::database` and chooses the CAE widths by leave-one-out.
+//! Runs are deterministic (each is single-threaded), so the database does
+//! not depend on how the sweep was split.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use haptex_core::cae::{ModelMatrix, OptimizeOptions, optimize_widths};
+use haptex_core::database::{self, FeSettings, Grid, INPUTS, Metadata, Sweep, Template, TemplateEntry};
+use haptex_core::io::{Table, write_atomic};
+use rayon::prelude::*;
+use sha2::{Digest, Sha256};
+
+use crate::finger::{FingerModel, Resolution};
+use crate::scenario::{Scenario, SimulationError, default_step_mm, run};
+use crate::surface::SurfaceShape;
+
+/// One simulation of the sweep.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Run {
+    pub template: Template,
+    pub width_mm: f64,
+    pub height_mm: f64,
+    pub velocity_mm_s: f64,
+}
+
+impl Run {
+    /// The run's file name in the `runs/` directory.
+    pub fn file_name(&self) -> String {
+        format!("{}_w{:.3}_h{:.3}_v{:.1}.csv", self.template.name(), self.width_mm, self.height_mm, self.velocity_mm_s)
+    }
+
+    fn surface(&self, x0_mm: f64) -> SurfaceShape {
+        let (x0, width, height) = (x0_mm, self.width_mm, self.height_mm);
+        match self.template {
+            Template::Bump => SurfaceShape::Bump { x0, width, height },
+            Template::Edge => SurfaceShape::Edge { x0, width, height },
+            Template::Sine => SurfaceShape::Sine { x0, width, height },
+        }
+    }
+}
+
+/// Everything that defines a database.
+#[derive(Debug, Clone)]
+pub struct DatabaseSpec {
+    pub sweep: Sweep,
+    pub grid: Grid,
+    pub model: FingerModel,
+    /// Where the model came from and the text it was read from (for the
+    /// metadata's provenance).
+    pub model_source: String,
+    pub model_text: String,
+    pub resolution: Resolution,
+    pub viscoelastic: bool,
+    pub indent_mm: f64,
+    pub press_time_s: f64,
+    /// The feature's position in each run, and the slide: the grid xi must
+    /// fall inside [step - x0, slide - x0] with a run-in before it.
+    pub x0_mm: f64,
+    pub slide_mm: f64,
+    pub max_step_mm: f64,
+}
+
+impl DatabaseSpec {
+    /// The paper's sweep (section 3.1): bump, edge and sine; r_w from 0.5 to
+    /// 2.5 mm in 0.25 mm steps; r_h from 0.1 to 0.5 mm in 0.1 mm steps; at
+    /// 10, 20, 50 and 100 mm/s. Profiles on xi = x - x0 from -5 to 5 mm
+    /// every 0.02 mm (501 points); each run slides 11 mm over a feature at
+    /// x0 = 6 mm, so the first millimetre (the onset of sliding) is not in
+    /// the profile.
+    pub fn paper() -> Self {
+        let model = FingerModel::default_model();
+        Self {
+            sweep: Sweep {
+                templates: Template::ALL.to_vec(),
+                widths_mm: (0..9).map(|i| 0.5 + 0.25 * i as f64).collect(),
+                heights_mm: (1..=5).map(|i| 0.1 * i as f64).collect(),
+                velocities_mm_s: vec![10.0, 20.0, 50.0, 100.0],
+            },
+            grid: Grid { xi_min_mm: -5.0, xi_max_mm: 5.0, points: 501 },
+            model,
+            model_source: "data/finger/finger-2d.toml".into(),
+            model_text: crate::finger::DEFAULT_MODEL_TOML.into(),
+            resolution: Resolution::Default,
+            viscoelastic: true,
+            indent_mm: 0.25,
+            press_time_s: 0.1,
+            x0_mm: 6.0,
+            slide_mm: 11.0,
+            max_step_mm: 0.1,
+        }
+    }
+
+    /// All runs, in a fixed order (template, width, height, velocity).
+    pub fn runs(&self) -> Vec<Run> {
+        self.record().runs()
+    }
+
+    /// The sweep, grid and FE settings, as recorded in a build directory.
+    pub fn record(&self) -> SweepRecord {
+        SweepRecord { sweep: self.sweep.clone(), grid: self.grid, fe: self.fe_settings() }
+    }
+
+    /// The runs of shard `k` of `n` (1-based): every n-th run from the k-th.
+    pub fn shard(&self, k: usize, n: usize) -> Vec<Run> {
+        self.runs().into_iter().enumerate().filter(|(i, _)| i % n == k - 1).map(|(_, r)| r).collect()
+    }
+
+    fn scenario(&self, run: &Run) -> Scenario {
+        let surface = run.surface(self.x0_mm);
+        let mut scenario = Scenario::paper(surface.clone());
+        scenario.model = self.model.clone();
+        scenario.resolution = self.resolution;
+        scenario.viscoelastic = self.viscoelastic;
+        scenario.loading = crate::scenario::Loading::Indent(self.indent_mm);
+        scenario.press_time_s = self.press_time_s;
+        scenario.slide_mm = self.slide_mm;
+        scenario.velocity_mm_s = run.velocity_mm_s;
+        scenario.step_mm = default_step_mm(&surface).min(self.max_step_mm);
+        scenario
+    }
+
+    fn validate(&self) -> Result<(), SweepError> {
+        let g = &self.grid;
+        if g.points < 2 || !(g.xi_max_mm > g.xi_min_mm) {
+            return Err(SweepError::Invalid(format!(
+                "grid {} .. {} mm with {} points",
+                g.xi_min_mm, g.xi_max_mm, g.points
+            )));
+        }
+        let min_step = self.max_step_mm.min(self.sweep.widths_mm.iter().cloned().fold(f64::INFINITY, f64::min) / 10.0);
+        if g.xi_min_mm + self.x0_mm < min_step.max(self.max_step_mm) || g.xi_max_mm + self.x0_mm > self.slide_mm + 1e-9
+        {
+            return Err(SweepError::Invalid(format!(
+                "the grid xi = {} .. {} mm does not fit the slide 0 .. {} mm around x0 = {} mm",
+                g.xi_min_mm, g.xi_max_mm, self.slide_mm, self.x0_mm
+            )));
+        }
+        let s = &self.sweep;
+        if s.templates.is_empty() || s.widths_mm.is_empty() || s.heights_mm.is_empty() || s.velocities_mm_s.is_empty() {
+            return Err(SweepError::Invalid("the sweep is empty".into()));
+        }
+        Ok(())
+    }
+
+    /// The FE settings for the metadata.
+    fn fe_settings(&self) -> FeSettings {
+        FeSettings {
+            finger_model: self.model_source.clone(),
+            finger_model_sha256: hex(&Sha256::digest(self.model_text.as_bytes())),
+            mesh: format!("{:?}", self.resolution).to_lowercase(),
+            material: if self.viscoelastic { "viscoelastic" } else { "elastic" }.into(),
+            indent_mm: self.indent_mm,
+            press_time_s: self.press_time_s,
+            x0_mm: self.x0_mm,
+            slide_mm: self.slide_mm,
+            max_step_mm: self.max_step_mm,
+            mu_skin: self.model.contact.mu_skin,
+            penalty_mpa_per_mm: Scenario::paper(SurfaceShape::Flat).penalty_mpa_per_mm,
+        }
+    }
+}
+
+/// What `build_runs` records in a build directory (`sweep.json`) so that
+/// `merge` assembles the database the runs were made for.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SweepRecord {
+    pub sweep: Sweep,
+    pub grid: Grid,
+    pub fe: FeSettings,
+}
+
+impl SweepRecord {
+    fn read(dir: &Path) -> Result<Self, SweepError> {
+        let path = dir.join("sweep.json");
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| SweepError::File { path: path.clone(), message: e.to_string() })?;
+        serde_json::from_str(&text).map_err(|e| SweepError::File { path, message: format!("line {}: {e}", e.line()) })
+    }
+
+    /// All runs of the record's sweep.
+    fn runs(&self) -> Vec<Run> {
+        let s = &self.sweep;
+        let mut runs = Vec::new();
+        for &template in &s.templates {
+            for &width_mm in &s.widths_mm {
+                for &height_mm in &s.heights_mm {
+                    for &velocity_mm_s in &s.velocities_mm_s {
+                        runs.push(Run { template, width_mm, height_mm, velocity_mm_s });
+                    }
+                }
+            }
+        }
+        runs
+    }
+}
+
+/// A sweep failed.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    #[error("{0}")]
+    Invalid(String),
+    #[error("run {run}: {source}")]
+    Run {
+        run: String,
+        #[source]
+        source: SimulationError,
+    },
+    #[error("{path}: {message}")]
+    File { path: PathBuf, message: String },
+    #[error("{0}")]
+    Database(#[from] database::DatabaseError),
+    #[error("{0}")]
+    Cae(#[from] haptex_core::cae::CaeError),
+    #[error(transparent)]
+    Write(#[from] haptex_core::io::WriteError),
+    #[error("missing runs ({count}), e.g. {example}: build them (or merge every shard's directory)")]
+    MissingRuns { count: usize, example: String },
+}
+
+/// What a build did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BuildReport {
+    pub runs_total: usize,
+    pub runs_done_before: usize,
+    pub runs_computed: usize,
+    pub wall_time_s: f64,
+    pub cpu_time_s: f64,
+}
+
+/// Runs the simulations of `runs` that have no file in `dir/runs` yet, on
+/// `jobs` threads (one FE run per thread), calling `progress(done, total)`
+/// after each. Each finished run is written atomically.
+pub fn build_runs(
+    spec: &DatabaseSpec,
+    runs: &[Run],
+    dir: &Path,
+    jobs: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<BuildReport, SweepError> {
+    spec.validate()?;
+    let started = Instant::now();
+    let runs_dir = dir.join("runs");
+    std::fs::create_dir_all(&runs_dir)
+        .map_err(|e| SweepError::File { path: runs_dir.clone(), message: e.to_string() })?;
+    // The build directory records its sweep; resuming with another sweep
+    // would mix runs of different settings.
+    let record = spec.record();
+    if dir.join("sweep.json").exists() {
+        let existing = SweepRecord::read(dir)?;
+        if existing != record {
+            return Err(SweepError::File {
+                path: dir.join("sweep.json"),
+                message: "this directory holds runs of a different sweep or FE set-up; use another --out".into(),
+            });
+        }
+    } else {
+        let json = serde_json::to_string_pretty(&record).expect("record serializes");
+        write_atomic(&dir.join("sweep.json"), |w| writeln!(w, "{json}"))?;
+    }
+    let pending: Vec<&Run> = runs.iter().filter(|r| !runs_dir.join(r.file_name()).exists()).collect();
+    let done_before = runs.len() - pending.len();
+    let done = AtomicUsize::new(done_before);
+    progress(done_before, runs.len());
+    let cpu = Mutex::new(0.0f64);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs.max(1))
+        .build()
+        .map_err(|e| SweepError::Invalid(format!("cannot start {jobs} threads: {e}")))?;
+    pool.install(|| {
+        pending.par_iter().try_for_each(|run| -> Result<(), SweepError> {
+            let scenario = spec.scenario(run);
+            let result = run_scenario(&scenario).map_err(|source| SweepError::Run { run: run.file_name(), source })?;
+            let mu = sample(&result.profile, spec, &spec.grid.positions());
+            let path = runs_dir.join(run.file_name());
+            write_atomic(&path, |w| write_run(w, run, &spec.grid, &mu, result.statistics.wall_time_s))?;
+            *cpu.lock().expect("no panics while holding the lock") += result.statistics.wall_time_s;
+            progress(done.fetch_add(1, Ordering::SeqCst) + 1, runs.len());
+            Ok(())
+        })
+    })?;
+    Ok(BuildReport {
+        runs_total: runs.len(),
+        runs_done_before: done_before,
+        runs_computed: pending.len(),
+        wall_time_s: started.elapsed().as_secs_f64(),
+        cpu_time_s: cpu.into_inner().unwrap_or(0.0),
+    })
+}
+
+fn run_scenario(scenario: &Scenario) -> Result<crate::scenario::SimulationResult, SimulationError> {
+    run(scenario, &mut |_| {})
+}
+
+/// The profile sampled at xi + x0 by linear interpolation.
+fn sample(profile: &haptex_core::FrictionProfile, spec: &DatabaseSpec, xi: &[f64]) -> Vec<f64> {
+    xi.iter().map(|xi| profile.mu_at(xi + spec.x0_mm)).collect()
+}
+
+/// A run file: its parameters as comments, then `xi_mm,mu`. Values are
+/// written with 6 decimals (the FE profile's accuracy is ~1e-3).
+fn write_run(w: &mut dyn Write, run: &Run, grid: &Grid, mu: &[f64], wall_time_s: f64) -> std::io::Result<()> {
+    writeln!(w, "# template={}", run.template.name())?;
+    writeln!(w, "# r_w_mm={}", run.width_mm)?;
+    writeln!(w, "# r_h_mm={}", run.height_mm)?;
+    writeln!(w, "# velocity_mm_s={}", run.velocity_mm_s)?;
+    writeln!(w, "# wall_time_s={wall_time_s}")?;
+    writeln!(w, "xi_mm,mu")?;
+    for (xi, m) in grid.positions().iter().zip(mu) {
+        writeln!(w, "{xi:.4},{m:.6}")?;
+    }
+    Ok(())
+}
+
+/// Reads a run file: the profile and the wall time recorded in it.
+fn read_run(path: &Path, grid: &Grid) -> Result<(Vec<f64>, f64), SweepError> {
+    let table = Table::read_file(path).map_err(database::DatabaseError::from_table)?;
+    let mu = table.require("mu").map_err(database::DatabaseError::from_table)?.to_vec();
+    if mu.len() != grid.points {
+        return Err(SweepError::File {
+            path: path.into(),
+            message: format!("{} points, the grid has {} (built with another grid?)", mu.len(), grid.points),
+        });
+    }
+    let text =
+        std::fs::read_to_string(path).map_err(|e| SweepError::File { path: path.into(), message: e.to_string() })?;
+    let wall =
+        text.lines().find_map(|l| l.strip_prefix("# wall_time_s=")).and_then(|v| v.trim().parse().ok()).unwrap_or(0.0);
+    Ok((mu, wall))
+}
+
+/// Collects the runs of `sources` (directories with a `runs/` folder) into
+/// the database in `out`: one model matrix per template, written with 6
+/// decimals, and `metadata.json` with the LOO-optimal widths.
+pub fn merge(sources: &[PathBuf], out: &Path, build_wall_time_s: Option<f64>) -> Result<Metadata, SweepError> {
+    let Some(first) = sources.first() else {
+        return Err(SweepError::Invalid("nothing to merge: give at least one build directory".into()));
+    };
+    let record = SweepRecord::read(first)?;
+    for source in &sources[1..] {
+        if SweepRecord::read(source)? != record {
+            return Err(SweepError::File {
+                path: source.join("sweep.json"),
+                message: format!("a different sweep or FE set-up than {}", first.join("sweep.json").display()),
+            });
+        }
+    }
+    let grid = record.grid;
+    let columns = grid.column_names();
+    let mut entries = Vec::new();
+    let mut cpu_time_s = 0.0;
+    let mut missing = Vec::new();
+    std::fs::create_dir_all(out).map_err(|e| SweepError::File { path: out.into(), message: e.to_string() })?;
+    for &template in &record.sweep.templates {
+        let runs: Vec<Run> = record.runs().into_iter().filter(|r| r.template == template).collect();
+        let mut rows: Vec<(Run, Vec<f64>)> = Vec::with_capacity(runs.len());
+        for run in runs {
+            let found = sources.iter().map(|d| d.join("runs").join(run.file_name())).find(|p| p.exists());
+            match found {
+                Some(path) => {
+                    let (mu, wall) = read_run(&path, &grid)?;
+                    cpu_time_s += wall;
+                    rows.push((run, mu));
+                }
+                None => missing.push(run.file_name()),
+            }
+        }
+        if !missing.is_empty() {
+            continue;
+        }
+        let file = template.file_name();
+        let path = out.join(&file);
+        write_atomic(&path, |w| {
+            writeln!(
+                w,
+                "# haptex FE database, {} template: inputs {}, outputs Ft/Fn at xi = x - x0 (mm)",
+                template.name(),
+                INPUTS.join(",")
+            )?;
+            writeln!(w, "{},{}", INPUTS.join(","), columns.join(","))?;
+            for (run, mu) in &rows {
+                write!(w, "{},{},{}", run.width_mm, run.height_mm, run.velocity_mm_s)?;
+                for m in mu {
+                    write!(w, ",{m:.6}")?;
+                }
+                writeln!(w)?;
+            }
+            Ok(())
+        })?;
+        // LOO-optimal widths, on the matrix as written.
+        let matrix = ModelMatrix::read_csv_file(&path, &INPUTS)?;
+        let optimum = optimize_widths(&matrix, OptimizeOptions::default())?;
+        entries.push(TemplateEntry {
+            template,
+            file,
+            rows: matrix.n(),
+            widths: optimum.widths,
+            loo_rmse: optimum.errors.rmse,
+            loo_rmse_relative_to_range: database::relative_loo_error(&matrix, &optimum.errors),
+            constant_width: optimum.report.constant.w,
+            constant_width_rmse: optimum.report.constant.rmse,
+        });
+    }
+    if !missing.is_empty() {
+        return Err(SweepError::MissingRuns { count: missing.len(), example: missing[0].clone() });
+    }
+    let metadata = Metadata {
+        format: database::FORMAT.into(),
+        haptex_version: env!("CARGO_PKG_VERSION").into(),
+        created: database::utc_now_rfc3339(),
+        cpu_time_s,
+        build_wall_time_s,
+        grid,
+        sweep: record.sweep.clone(),
+        fe: record.fe.clone(),
+        templates: entries,
+    };
+    let json = serde_json::to_string_pretty(&metadata).expect("metadata serializes");
+    write_atomic(&out.join("metadata.json"), |w| writeln!(w, "{json}"))?;
+    Ok(metadata)
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
