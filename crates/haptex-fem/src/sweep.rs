@@ -134,7 +134,7 @@ impl DatabaseSpec {
 
     fn validate(&self) -> Result<(), SweepError> {
         let g = &self.grid;
-        if g.points < 2 || !(g.xi_max_mm > g.xi_min_mm) {
+        if g.points < 2 || !g.xi_min_mm.is_finite() || !g.xi_max_mm.is_finite() || g.xi_max_mm <= g.xi_min_mm {
             return Err(SweepError::Invalid(format!(
                 "grid {} .. {} mm with {} points",
                 g.xi_min_mm, g.xi_max_mm, g.points
