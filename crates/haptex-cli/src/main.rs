@@ -25,6 +25,7 @@ enum Command {
     Cae(commands::cae::CaeArgs),
     Play(commands::play::PlayArgs),
     Library(commands::library::LibraryArgs),
+    Serve(commands::serve::ServeArgs),
 }
 
 fn main() -> ExitCode {
@@ -34,6 +35,7 @@ fn main() -> ExitCode {
         Command::Cae(args) => commands::cae::run(args),
         Command::Play(args) => commands::play::run(args),
         Command::Library(args) => commands::library::run(args),
+        Command::Serve(args) => commands::serve::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -3,4 +3,5 @@
 pub mod cae;
 pub mod library;
 pub mod play;
+pub mod serve;
 pub mod voltage;
