@@ -18,6 +18,7 @@
     profile: null,         // {x_mm, mu, fn_n, label, synthetic, download()}
     profiles: {},          // last profile of each source, kept when switching
     voltage: null,         // last /api/voltage answer
+    drawn: null,           // the profile whose voltage is drawn
     method: 'physical',
     device: {},            // parameter name -> number (only valid ones)
     velocity: 50,
@@ -102,6 +103,8 @@
           x_mm: sample.x_mm, mu: sample.mu, fn_n: sample.fn_n,
           label: `${sample.material} (${sample.synthetic ? 'synthetic' : 'measured'}), stroke ${sample.stroke.id}`,
           synthetic: sample.synthetic,
+          material: sample.material,
+          seed: sample.seed,
           download: async () => ({
             blob: await (await api(`${base}?seed=${encodeURIComponent(sample.seed)}&format=csv`)).blob(),
             name: `${sample.material}-stroke-${sample.stroke.id}.csv`,
@@ -276,6 +279,7 @@
     const answer = await (await postJson('/api/voltage', voltageBody())).json();
     if (id !== voltageRequest) return; // a newer request is on its way
     state.voltage = answer;
+    state.drawn = state.profile;
     document.querySelectorAll('[aria-invalid="true"]').forEach((el) => el.removeAttribute('aria-invalid'));
     draw();
     showSummary();

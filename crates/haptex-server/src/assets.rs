@@ -23,9 +23,11 @@ struct Assets;
 
 /// The Content-Security-Policy of every response. uPlot draws on canvas
 /// and sets element styles from script (CSSOM, which `style-src` does not
-/// restrict); downloads and the feel-strip audio use `blob:` URLs.
+/// restrict). Downloads are `blob:` URLs made by the page; `connect-src`
+/// allows reading them back (the browser test checks a download's bytes
+/// that way).
 pub const CONTENT_SECURITY_POLICY: &str = "default-src 'none'; script-src 'self'; style-src 'self'; \
-     img-src 'self' data: blob:; media-src 'self' blob:; connect-src 'self'; font-src 'self'; \
+     img-src 'self' data: blob:; media-src 'self' blob:; connect-src 'self' blob:; font-src 'self'; \
      base-uri 'none'; form-action 'none'; frame-ancestors 'none'";
 
 type HeaderLayers = Stack<
