@@ -102,14 +102,53 @@ pub fn app(state: AppState) -> Router {
         )
 }
 
-/// Serves `app` on `listener` until `shutdown` completes, then finishes the
-/// requests in flight (graceful shutdown).
+/// Serves the application on `listener` until `shutdown` completes, then
+/// stops accepting and lets the requests in flight finish (graceful
+/// shutdown, at most [`Limits::request_timeout`] more).
+///
+/// HTTP/1.1 through hyper directly (not `axum::serve`) for the header-read
+/// timeout: a client that opens a connection and sends its headers slowly,
+/// or not at all, is dropped after [`Limits::header_timeout`]; once the
+/// headers are in, [`Limits::request_timeout`] bounds the rest.
 pub async fn serve(
     listener: tokio::net::TcpListener,
     state: AppState,
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> Result<(), ServeError> {
-    axum::serve(listener, app(state)).with_graceful_shutdown(shutdown).await?;
+    use hyper_util::rt::{TokioIo, TokioTimer};
+    use hyper_util::service::TowerToHyperService;
+
+    let limits = state.limits().clone();
+    let service = TowerToHyperService::new(app(state));
+    let mut http = hyper::server::conn::http1::Builder::new();
+    http.timer(TokioTimer::new()).header_read_timeout(limits.header_timeout);
+    let connections = hyper_util::server::graceful::GracefulShutdown::new();
+    let mut shutdown = std::pin::pin!(shutdown);
+    loop {
+        let (stream, peer) = tokio::select! {
+            accepted = listener.accept() => match accepted {
+                Ok(accepted) => accepted,
+                Err(e) => {
+                    // Out of file descriptors and the like: wait, do not spin.
+                    tracing::warn!("cannot accept a connection: {e}");
+                    tokio::time::sleep(Duration::from_millis(50)).await;
+                    continue;
+                }
+            },
+            () = &mut shutdown => break,
+        };
+        let _ = stream.set_nodelay(true);
+        let connection = connections.watch(http.serve_connection(TokioIo::new(stream), service.clone()));
+        tokio::spawn(async move {
+            if let Err(e) = connection.await {
+                tracing::debug!(%peer, "connection ended with an error: {e}");
+            }
+        });
+    }
+    drop(listener);
+    if tokio::time::timeout(limits.request_timeout, connections.shutdown()).await.is_err() {
+        tracing::warn!("connections still open after {:?}: closing them", limits.request_timeout);
+    }
     Ok(())
 }
 

@@ -27,9 +27,15 @@ pub struct Limits {
     pub max_wav_samples: usize,
     /// Most samples of a rendered drive signal returned as JSON.
     pub max_json_samples: usize,
-    /// Longest time a request may take, body upload included; then 408.
+    /// Longest time a request may take once its headers are in, body
+    /// upload included; then 408.
     #[serde(serialize_with = "seconds")]
     pub request_timeout: Duration,
+    /// Longest wait for a request's headers (a new connection's first
+    /// request, or the next one on a kept-alive connection); then the
+    /// connection is closed.
+    #[serde(serialize_with = "seconds")]
+    pub header_timeout: Duration,
     /// Drive-signal renders run at the same time (each holds up to
     /// `max_wav_samples` x 32 bytes of working memory).
     pub concurrent_renders: usize,
@@ -37,13 +43,15 @@ pub struct Limits {
 
 impl Limits {
     /// 1 MiB bodies, 100 000 points, 2 000 000 WAV samples (41.7 s at
-    /// 48 kHz), 200 000 JSON samples, 10 s per request, 2 renders at once.
+    /// 48 kHz), 200 000 JSON samples, 10 s per request, 10 s for headers,
+    /// 2 renders at once.
     pub const DEFAULT: Self = Self {
         max_body_bytes: 1 << 20,
         max_points: 100_000,
         max_wav_samples: 2_000_000,
         max_json_samples: 200_000,
         request_timeout: Duration::from_secs(10),
+        header_timeout: Duration::from_secs(10),
         concurrent_renders: 2,
     };
 }

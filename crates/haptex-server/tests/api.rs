@@ -469,6 +469,37 @@ async fn a_stalled_upload_times_out_with_a_json_408() {
     tokio::time::timeout(Duration::from_secs(5), server).await.unwrap().unwrap().unwrap();
 }
 
+/// A client that opens a connection and never finishes its headers is
+/// disconnected after the header timeout (here 300 ms instead of 10 s).
+#[tokio::test]
+async fn stalled_headers_are_disconnected() {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    let limits = Limits { header_timeout: Duration::from_millis(300), ..Limits::DEFAULT };
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+    let server = tokio::spawn(haptex_server::serve(listener, AppState::new(None, limits).unwrap(), async {
+        let _ = stopped.await;
+    }));
+    for partial in ["", "GET /api/health HTTP/1.1\r\nHost: x\r\n"] {
+        let mut socket = tokio::net::TcpStream::connect(addr).await.unwrap();
+        socket.write_all(partial.as_bytes()).await.unwrap();
+        let mut response = Vec::new();
+        let read = tokio::time::timeout(Duration::from_secs(5), socket.read_to_end(&mut response)).await;
+        assert!(read.is_ok(), "connection with partial headers {partial:?} still open after 5 s");
+        let text = String::from_utf8_lossy(&response);
+        assert!(!text.contains(" 200 "), "{text}");
+    }
+    // A complete request on a new connection is still served.
+    let mut socket = tokio::net::TcpStream::connect(addr).await.unwrap();
+    socket.write_all(b"GET /api/health HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n").await.unwrap();
+    let mut response = Vec::new();
+    socket.read_to_end(&mut response).await.unwrap();
+    assert!(String::from_utf8_lossy(&response).starts_with("HTTP/1.1 200"));
+    stop.send(()).unwrap();
+    tokio::time::timeout(Duration::from_secs(5), server).await.unwrap().unwrap().unwrap();
+}
+
 // ------------------------------------------------------------ profile
 
 #[tokio::test]
