@@ -18,6 +18,10 @@ if ! command -v chromium >/dev/null 2>&1 || ! command -v chromedriver >/dev/null
     fi
 fi
 
+# The OpenAPI description of the web API is validated against the OpenAPI
+# 3.1 schema (crates/haptex-server/tests/api.rs) with openapi-spec-validator.
+python3 -m pip install --quiet --disable-pip-version-check openapi-spec-validator==0.9.0
+
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --locked -- -D warnings
 cargo test --workspace --profile ci --locked "$@"

@@ -191,6 +191,27 @@ async fn openapi_describes_every_route_and_the_parameter_ranges() {
     }
 }
 
+/// The description is a valid OpenAPI 3.1 document (checked by the
+/// `openapi-spec-validator` Python package, which scripts/test.sh installs).
+#[test]
+fn openapi_is_a_valid_openapi_document() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src/openapi.json");
+    let out = std::process::Command::new("python3")
+        .args([
+            "-c",
+            "import json, sys\nfrom openapi_spec_validator import validate\nvalidate(json.load(open(sys.argv[1])))",
+        ])
+        .arg(&path)
+        .output()
+        .expect("python3 must be installed to run this test");
+    assert!(
+        out.status.success(),
+        "openapi-spec-validator (pip install openapi-spec-validator; scripts/test.sh does) refused {}: {}",
+        path.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 #[tokio::test]
 async fn unknown_routes_and_wrong_methods_are_json_errors() {
     get("/api/nothing-here").await.error(StatusCode::NOT_FOUND, None);
