@@ -26,6 +26,7 @@ enum Command {
     Play(commands::play::PlayArgs),
     Library(commands::library::LibraryArgs),
     Simulate(commands::simulate::SimulateArgs),
+    Serve(commands::serve::ServeArgs),
 }
 
 fn main() -> ExitCode {
@@ -36,6 +37,7 @@ fn main() -> ExitCode {
         Command::Play(args) => commands::play::run(args),
         Command::Library(args) => commands::library::run(args),
         Command::Simulate(args) => commands::simulate::run(args),
+        Command::Serve(args) => commands::serve::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

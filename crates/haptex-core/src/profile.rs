@@ -109,6 +109,24 @@ impl FrictionProfile {
         Ok(())
     }
 
+    /// Writes `#` comment lines (one per entry; newlines become spaces),
+    /// then `x_mm,mu`, or `x_mm,mu,fn_n` when the normal force is known.
+    pub fn write_csv_commented(&self, w: &mut dyn Write, comments: &[String]) -> std::io::Result<()> {
+        for line in comments {
+            writeln!(w, "# {}", line.replace('\n', " "))?;
+        }
+        match &self.fn_n {
+            Some(fn_n) => {
+                w.write_all(b"x_mm,mu,fn_n\n")?;
+                for ((x, mu), f) in self.x_mm.iter().zip(&self.mu).zip(fn_n) {
+                    write_csv_row(w, &[*x, *mu, *f])?;
+                }
+                Ok(())
+            }
+            None => self.write_csv(w),
+        }
+    }
+
     /// Writes `x_mm,mu` CSV to `path` atomically.
     pub fn write_csv_file(&self, path: &Path) -> Result<(), WriteError> {
         write_atomic(path, |w| self.write_csv(w))

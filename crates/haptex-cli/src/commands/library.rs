@@ -1,14 +1,13 @@
 //! `haptex library`: recorded finger strokes -> friction profiles, and the
 //! texture library they are kept in (paper section 2.4).
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand, ValueEnum};
 use haptex_core::FrictionProfile;
 use haptex_core::io::{write_atomic, write_csv_row};
-use haptex_core::library::{Added, ImportId, Library, ProfileProvenance, StoredProfile, StrokeInfo};
+use haptex_core::library::{Added, ImportId, Library, ProfileProvenance, StoredProfile};
 use haptex_core::recording::format::METADATA_SUFFIX;
 use haptex_core::recording::synth::{DEMO_SEED, DEMO_STROKES_PER_MATERIAL, write_demo};
 use haptex_core::recording::{DirectionFilter, ProcessingConfig, Recording, process};
@@ -288,7 +287,7 @@ pub fn run(args: LibraryArgs) -> anyhow::Result<()> {
 }
 
 /// $HAPTEX_LIBRARY, else the shipped library of this source tree.
-fn default_db() -> PathBuf {
+pub(crate) fn default_db() -> PathBuf {
     crate::args::shipped_data("HAPTEX_LIBRARY", SHIPPED_LIBRARY)
 }
 
@@ -524,9 +523,9 @@ fn sample(db: &Path, args: SampleArgs) -> anyhow::Result<()> {
         stroke.id,
         sampled.seed
     )];
-    comments.extend(provenance_comments(stroke));
+    comments.extend(stroke.provenance_lines());
     output.write(|w| match format {
-        SampleFormat::Csv => write_profile_csv(w, profile, &comments),
+        SampleFormat::Csv => profile.write_csv_commented(w, &comments),
         SampleFormat::Json => {
             let json = serde_json::json!({
                 "seed": sampled.seed,
@@ -557,52 +556,6 @@ fn sample(db: &Path, args: SampleArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `#` comment lines describing where a stroke comes from.
-fn provenance_comments(stroke: &StrokeInfo) -> Vec<String> {
-    let mut lines = vec![
-        format!(
-            "stroke {}: {}{}",
-            stroke.id,
-            match (&stroke.participant, stroke.stroke) {
-                (Some(p), Some(n)) => format!("participant {p}, stroke {n}, "),
-                _ => String::new(),
-            },
-            if stroke.synthetic { "SYNTHETIC (generated, not measured)" } else { "measured" }
-        ),
-        format!("source: {}", stroke.source),
-        format!("licence: {}", stroke.licence),
-        format!("origin: {} (sha256 {})", stroke.origin_path, stroke.content_sha256),
-    ];
-    if let Some(f) = stroke.mean_fn_n {
-        lines.push(format!(
-            "fn_n: normal force along the stroke in N; Fn_RS (mean while sliding, paper section 2.4) = {f:.6} N"
-        ));
-    }
-    lines
-}
-
-/// A profile as CSV: `#` comments, then `x_mm,mu` or `x_mm,mu,fn_n`.
-fn write_profile_csv(w: &mut dyn Write, profile: &FrictionProfile, comments: &[String]) -> std::io::Result<()> {
-    for line in comments {
-        writeln!(w, "# {}", line.replace('\n', " "))?;
-    }
-    match profile.fn_n() {
-        Some(fn_n) => {
-            writeln!(w, "x_mm,mu,fn_n")?;
-            for ((x, mu), f) in profile.x_mm().iter().zip(profile.mu()).zip(fn_n) {
-                write_csv_row(w, &[*x, *mu, *f])?;
-            }
-        }
-        None => {
-            writeln!(w, "x_mm,mu")?;
-            for (x, mu) in profile.x_mm().iter().zip(profile.mu()) {
-                write_csv_row(w, &[*x, *mu])?;
-            }
-        }
-    }
-    Ok(())
-}
-
 fn export(db: &Path, args: ExportArgs) -> anyhow::Result<()> {
     let library = open_read_only(db)?;
     let materials: Vec<_> = match &args.material {
@@ -620,8 +573,8 @@ fn export(db: &Path, args: ExportArgs) -> anyhow::Result<()> {
             let stored = library.profile(stroke.id)?;
             let file = dir.join(format!("stroke-{}.csv", stroke.id));
             let mut comments = vec![format!("haptex library export: material {:?}", material.name)];
-            comments.extend(provenance_comments(&stroke));
-            write_atomic(&file, |w| write_profile_csv(w, &stored.profile, &comments))?;
+            comments.extend(stroke.provenance_lines());
+            write_atomic(&file, |w| stored.profile.write_csv_commented(w, &comments))?;
             manifest_strokes
                 .push(serde_json::json!({ "file": file.strip_prefix(&args.out).unwrap_or(&file), "stroke": stroke }));
         }
@@ -668,7 +621,7 @@ fn process_one(args: ProcessArgs) -> anyhow::Result<()> {
             processed.mean_fn_n
         ),
     ];
-    Output::new(args.output.clone()).write(|w| write_profile_csv(w, &processed.profile, &comments))?;
+    Output::new(args.output.clone()).write(|w| processed.profile.write_csv_commented(w, &comments))?;
     if let Some(path) = &args.series {
         let s = &processed.series;
         let mut segment_of = vec![0.0; s.t_s.len()];

@@ -3,5 +3,6 @@
 pub mod cae;
 pub mod library;
 pub mod play;
+pub mod serve;
 pub mod simulate;
 pub mod voltage;

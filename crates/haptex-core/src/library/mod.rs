@@ -135,6 +135,34 @@ pub struct StrokeInfo {
     pub n_segments: Option<i64>,
 }
 
+impl StrokeInfo {
+    /// Lines describing where the stroke comes from (synthetic or
+    /// measured, source, licence, origin, Fn_RS), for `#` comments of an
+    /// exported profile.
+    pub fn provenance_lines(&self) -> Vec<String> {
+        let mut lines = vec![
+            format!(
+                "stroke {}: {}{}",
+                self.id,
+                match (&self.participant, self.stroke) {
+                    (Some(p), Some(n)) => format!("participant {p}, stroke {n}, "),
+                    _ => String::new(),
+                },
+                if self.synthetic { "SYNTHETIC (generated, not measured)" } else { "measured" }
+            ),
+            format!("source: {}", self.source),
+            format!("licence: {}", self.licence),
+            format!("origin: {} (sha256 {})", self.origin_path, self.content_sha256),
+        ];
+        if let Some(f) = self.mean_fn_n {
+            lines.push(format!(
+                "fn_n: normal force along the stroke in N; Fn_RS (mean while sliding, paper section 2.4) = {f:.6} N"
+            ));
+        }
+        lines
+    }
+}
+
 /// A stored profile with its stroke.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StoredProfile {

@@ -100,15 +100,10 @@ pub fn sidecar_path(wav: &Path) -> PathBuf {
     PathBuf::from(name)
 }
 
-/// Writes `signal` as a mono WAV at `path` and its sidecar JSON at
-/// [`sidecar_path`], each atomically. Refuses a signal whose peak exceeds
-/// `volts_per_full_scale`. Returns the sidecar.
-pub fn write_wav(
-    path: &Path,
-    signal: &DriveSignal,
-    options: &WavOptions,
-    source: serde_json::Value,
-) -> Result<WavSidecar, SignalError> {
+/// Encodes `signal` as a mono WAV file in memory (what [`write_wav`] writes;
+/// a server sends these bytes). Refuses a signal whose peak exceeds
+/// `volts_per_full_scale`. `label` names the output in errors.
+pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Result<Vec<u8>, SignalError> {
     let vpfs = options.volts_per_full_scale;
     if !(vpfs.is_finite() && vpfs > 0.0) {
         return Err(SignalError::Settings(format!(
@@ -119,7 +114,7 @@ pub fn write_wav(
     if report.peak_v > vpfs {
         return Err(SignalError::ExceedsFullScale { amplitude_v: report.peak_v, volts_per_full_scale: vpfs });
     }
-    let wav_error = |e: hound::Error| SignalError::Wav { path: path.display().to_string(), message: e.to_string() };
+    let wav_error = |e: hound::Error| SignalError::Wav { path: label.to_string(), message: e.to_string() };
     let format = options.format;
     let full_scale = format.full_scale();
     let scale = full_scale / vpfs;
@@ -138,8 +133,22 @@ pub fn write_wav(
         }
         writer.finalize().map_err(wav_error)?;
     }
-    write_atomic(path, |w| w.write_all(&bytes))?;
+    Ok(bytes)
+}
 
+/// Writes `signal` as a mono WAV at `path` and its sidecar JSON at
+/// [`sidecar_path`], each atomically. Refuses a signal whose peak exceeds
+/// `volts_per_full_scale`. Returns the sidecar.
+pub fn write_wav(
+    path: &Path,
+    signal: &DriveSignal,
+    options: &WavOptions,
+    source: serde_json::Value,
+) -> Result<WavSidecar, SignalError> {
+    let bytes = encode_wav(signal, options, &path.display().to_string())?;
+    write_atomic(path, |w| w.write_all(&bytes))?;
+    let report = &signal.report;
+    let (format, vpfs, full_scale) = (options.format, options.volts_per_full_scale, options.format.full_scale());
     let sidecar = WavSidecar {
         kind: "haptex drive signal".into(),
         wav_file: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),

@@ -1,0 +1,69 @@
+//! `haptex serve`: the web application (JSON API and GUI) on a local port.
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+
+use clap::Args;
+use haptex_server::{Config, Limits};
+
+/// Start the haptex web application: the GUI at http://ADDR/ and the JSON
+/// API under /api (described at /api/openapi.json).
+///
+/// The GUI shows the friction and voltage profiles of a texture-library
+/// material or of your own profile file, with the device and finger
+/// constants (the paper's Fig. 2 defaults), and offers CSV, JSON and WAV
+/// downloads. The default address serves this machine only; to use it
+/// from a phone on the same network, listen on all interfaces with
+/// --addr 0.0.0.0:8080 and open http://THIS-MACHINE'S-IP:8080/.
+/// Ctrl-C stops the server after the requests in flight. Requests are
+/// logged to stderr (RUST_LOG=debug for more, RUST_LOG=warn for less).
+#[derive(Debug, Args)]
+#[command(after_help = "Examples:\n  \
+    haptex serve\n  \
+    haptex serve --addr 0.0.0.0:8080\n  \
+    haptex serve --library my-lab.sqlite --addr 127.0.0.1:9000")]
+pub struct ServeArgs {
+    /// Address and port to listen on (0.0.0.0:PORT: every interface).
+    #[arg(long, value_name = "IP:PORT", default_value = Config::DEFAULT_ADDR)]
+    addr: SocketAddr,
+    /// Texture library to serve (default: $HAPTEX_LIBRARY, else the shipped
+    /// data/library/library.sqlite, whose 12 materials are SYNTHETIC).
+    #[arg(long, value_name = "PATH")]
+    library: Option<PathBuf>,
+}
+
+pub fn run(args: ServeArgs) -> anyhow::Result<()> {
+    init_logging();
+    let library = args.library.unwrap_or_else(super::library::default_db);
+    if !library.is_file() {
+        anyhow::bail!(
+            "{}: no library there; pass --library PATH (a library made by `haptex library import`)",
+            library.display()
+        );
+    }
+    let config = Config { addr: args.addr, library: Some(library.clone()), limits: Limits::DEFAULT };
+    haptex_server::run(config, |addr| {
+        eprintln!("haptex serve: library {}", library.display());
+        if addr.ip().is_unspecified() {
+            eprintln!(
+                "listening on every interface, port {}: open http://<this machine's address>:{}/",
+                addr.port(),
+                addr.port()
+            );
+        } else {
+            eprintln!("open http://{addr}/ (Ctrl-C stops)");
+        }
+    })?;
+    eprintln!("haptex serve: stopped");
+    Ok(())
+}
+
+/// Request logging to stderr: RUST_LOG if set, else info for the server.
+fn init_logging() {
+    use tracing_subscriber::EnvFilter;
+    let filter =
+        EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("haptex_server=info,tower_http=info"));
+    // Fails only if a subscriber is already set, which then logs instead.
+    let ansi = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let _ = tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).with_ansi(ansi).try_init();
+}

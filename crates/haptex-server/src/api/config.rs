@@ -1,0 +1,32 @@
+//! `GET /api/config`: what the GUI needs to build its controls: the
+//! profile sources this server offers, the device parameters with the
+//! paper's defaults and ranges, the mapping methods, the playback defaults
+//! and the limits.
+
+use axum::Json;
+use axum::extract::State;
+use haptex_core::signal::{Carrier, RenderSettings};
+use serde_json::{Value, json};
+
+use crate::params::DEVICE_PARAMS;
+use crate::state::AppState;
+
+pub async fn get(State(state): State<AppState>) -> Json<Value> {
+    let play = RenderSettings::DEFAULT;
+    Json(json!({
+        "version": env!("CARGO_PKG_VERSION"),
+        "sources": state.sources(),
+        "device_params": DEVICE_PARAMS,
+        "methods": [
+            { "id": "physical", "label": "physical (eq. 8)", "description": "the voltage that reproduces the reference friction force; clipped at U_max, 0 V where mu_RS < mu_HD" },
+            { "id": "normalized", "label": "normalized (eq. 9)", "description": "the pattern only: min mu -> 0 V, max mu -> U_max" },
+        ],
+        "play": {
+            "sample_rate_hz": play.sample_rate_hz,
+            "carrier": Carrier::DEFAULT,
+            "velocity_mm_s": crate::api::play::DEFAULT_VELOCITY_MM_S,
+        },
+        "limits": state.limits(),
+        "voltage_convention": "every voltage is RMS: a sine carrier of peak sqrt(2) U gives the same mean electrostatic force",
+    }))
+}

@@ -1,0 +1,70 @@
+//! The texture library (paper section 2.4): `GET /api/materials` lists the
+//! materials (each with its `synthetic` flag: generated, not measured), and
+//! `GET /api/materials/{name}/sample?seed=S` returns a random stroke's
+//! friction profile (the paper's "random selection from the experimental
+//! set"; the same seed selects the same stroke). `?format=csv` answers the
+//! profile as CSV with its provenance in `#` comments.
+
+use axum::Json;
+use axum::extract::rejection::PathRejection;
+use axum::extract::{Path, RawQuery, State};
+use axum::response::{IntoResponse, Response};
+use serde_json::{Value, json};
+
+use crate::error::ApiError;
+use crate::input::Query;
+use crate::state::AppState;
+
+pub async fn list(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -> Result<Json<Value>, ApiError> {
+    Query::parse(raw_query.as_deref())?.finish()?;
+    let pool = state.library()?;
+    let file = pool.path().file_name().map(|n| n.to_string_lossy().into_owned());
+    let materials = pool.with(|library| library.materials().map_err(ApiError::library)).await?;
+    Ok(Json(json!({ "library": file, "materials": materials })))
+}
+
+pub async fn sample(
+    State(state): State<AppState>,
+    name: Result<Path<String>, PathRejection>,
+    RawQuery(raw_query): RawQuery,
+) -> Result<Response, ApiError> {
+    let Path(name) = name.map_err(|e| ApiError::bad_request(e.body_text(), Some("name")))?;
+    let mut query = Query::parse(raw_query.as_deref())?;
+    let seed = query.take_u64("seed")?;
+    let format = query.take_format(&["json", "csv"])?;
+    query.finish()?;
+    let pool = state.library()?;
+    let (sampled, total) = pool
+        .with(move |library| {
+            let sampled = library.sample(&name, seed).map_err(ApiError::library)?;
+            let total = library.strokes(&name).map_err(ApiError::library)?.len();
+            Ok((sampled, total))
+        })
+        .await?;
+    let stroke = &sampled.stored.stroke;
+    let profile = &sampled.stored.profile;
+    if format == "csv" {
+        let mut comments = vec![format!(
+            "haptex library sample: material {:?} ({} data), stroke id {} (one of {total}), seed {}",
+            stroke.material,
+            if stroke.synthetic { "SYNTHETIC" } else { "measured" },
+            stroke.id,
+            sampled.seed
+        )];
+        comments.extend(stroke.provenance_lines());
+        let bytes = super::to_csv(|w| profile.write_csv_commented(w, &comments))?;
+        return Ok(super::csv_response(bytes, &format!("{}-stroke-{}.csv", safe_name(&stroke.material), stroke.id)));
+    }
+    let mut answer = super::profile::profile_json(profile);
+    answer["material"] = json!(stroke.material);
+    answer["synthetic"] = json!(stroke.synthetic);
+    answer["seed"] = json!(sampled.seed.to_string());
+    answer["strokes_total"] = json!(total);
+    answer["stroke"] = json!(stroke);
+    Ok(Json(answer).into_response())
+}
+
+/// A material name reduced to characters safe in a file name.
+fn safe_name(name: &str) -> String {
+    name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect()
+}

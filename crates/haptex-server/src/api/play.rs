@@ -1,0 +1,277 @@
+//! `POST /api/play`: the drive signal of a voltage profile along a finger
+//! trajectory (what `haptex play` does): the RMS envelope U(x(t)), clamped
+//! at U_max and optionally slew limited, on a carrier; WAV bytes (default)
+//! or JSON with the safety report.
+//!
+//! Body (JSON): `{"voltage": {"x_mm": [..], "voltage_v": [..]}, "stroke":
+//! {"velocity_mm_s": 50}}` or with `"trajectory": {"t_s": [..], "x_mm":
+//! [..]}` instead of `stroke`; optional `carrier`, `sample_rate_hz`,
+//! `u_max_v`, `slew_v_per_s`, `amplifier_range_v`, `outside`, `format`
+//! (`wav` | `json`), `wav_format`, `volts_per_full_scale`.
+
+use axum::Json;
+use axum::body::Bytes;
+use axum::extract::rejection::BytesRejection;
+use axum::extract::{RawQuery, State};
+use axum::http::{HeaderMap, HeaderName, HeaderValue, header};
+use axum::response::{IntoResponse, Response};
+use haptex_core::signal::{
+    Carrier, DriveSignal, Extend, Limits, RenderSettings, SignalError, VoltageCurve, WavFormat, WavOptions, encode_wav,
+    render,
+};
+use haptex_core::trajectory::Trajectory;
+use serde::Deserialize;
+use serde_json::json;
+
+use crate::error::ApiError;
+use crate::input::{BodyKind, Query, TrajectoryJson, body_bytes, body_kind, check_points, parse_json};
+use crate::params::{check_range, spec};
+use crate::state::AppState;
+
+/// Finger speed of a generated stroke when the GUI has no other, mm/s.
+pub const DEFAULT_VELOCITY_MM_S: f64 = 50.0;
+/// Rate at which generated strokes are sampled (linear in between), Hz.
+const STROKE_RATE_HZ: f64 = 1000.0;
+/// Sample rates accepted, Hz.
+const SAMPLE_RATES_HZ: std::ops::RangeInclusive<u32> = 1000..=192_000;
+/// Fastest generated finger speed accepted, mm/s.
+const MAX_VELOCITY_MM_S: f64 = 10_000.0;
+/// Most back-and-forth strokes of a generated trajectory.
+const MAX_STROKES: u32 = 1000;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlayBody {
+    voltage: CurveJson,
+    #[serde(default)]
+    trajectory: Option<TrajectoryJson>,
+    #[serde(default)]
+    stroke: Option<StrokeJson>,
+    #[serde(default)]
+    carrier: Option<Carrier>,
+    #[serde(default)]
+    sample_rate_hz: Option<u32>,
+    #[serde(default)]
+    u_max_v: Option<f64>,
+    #[serde(default)]
+    slew_v_per_s: Option<f64>,
+    #[serde(default)]
+    amplifier_range_v: Option<f64>,
+    #[serde(default)]
+    outside: Option<Extend>,
+    #[serde(default)]
+    format: Option<PlayFormat>,
+    #[serde(default)]
+    wav_format: Option<WavFormat>,
+    #[serde(default)]
+    volts_per_full_scale: Option<f64>,
+}
+
+/// A voltage curve: positions in mm and RMS voltages in V.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CurveJson {
+    x_mm: Vec<f64>,
+    voltage_v: Vec<f64>,
+}
+
+/// A generated trajectory: one sweep at constant velocity, or `strokes`
+/// back-and-forth minimum-jerk strokes at mean velocity, between `from_mm`
+/// and `to_mm` (default: the ends of the voltage curve).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StrokeJson {
+    velocity_mm_s: f64,
+    #[serde(default)]
+    strokes: Option<u32>,
+    #[serde(default)]
+    from_mm: Option<f64>,
+    #[serde(default)]
+    to_mm: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum PlayFormat {
+    Wav,
+    Json,
+}
+
+pub async fn post(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    RawQuery(raw_query): RawQuery,
+    body: Result<Bytes, BytesRejection>,
+) -> Result<Response, ApiError> {
+    let limits = state.limits().clone();
+    Query::parse(raw_query.as_deref())?.finish()?;
+    body_kind(&headers, &[BodyKind::Json])?;
+    let body: PlayBody = parse_json(&body_bytes(body, limits.max_body_bytes)?)?;
+
+    check_points(body.voltage.x_mm.len(), limits.max_points, "voltage.x_mm")?;
+    let curve = VoltageCurve::new(body.voltage.x_mm, body.voltage.voltage_v).map_err(|e| match e {
+        haptex_core::profile::ProfileError::Invalid { index, field, message } => {
+            ApiError::bad_request(message, Some(&format!("voltage.{field}[{index}]")))
+        }
+        other => ApiError::bad_request(other.to_string(), Some("voltage")),
+    })?;
+    let format = body.format.unwrap_or(PlayFormat::Wav);
+    let sample_rate_hz = body.sample_rate_hz.unwrap_or(RenderSettings::DEFAULT.sample_rate_hz);
+    if !SAMPLE_RATES_HZ.contains(&sample_rate_hz) {
+        return Err(ApiError::bad_request(
+            format!(
+                "sample rate must be {} to {} Hz, got {sample_rate_hz}",
+                SAMPLE_RATES_HZ.start(),
+                SAMPLE_RATES_HZ.end()
+            ),
+            Some("sample_rate_hz"),
+        ));
+    }
+    let u_max_spec = spec("u_max_v").expect("u_max_v is a device parameter");
+    let u_max_v = match body.u_max_v {
+        Some(u) => check_range(u_max_spec, u, "u_max_v")?,
+        None => Limits::DEFAULT.u_max_v,
+    };
+    for (name, value) in [("slew_v_per_s", body.slew_v_per_s), ("amplifier_range_v", body.amplifier_range_v)] {
+        if let Some(v) = value
+            && !(v.is_finite() && v > 0.0)
+        {
+            return Err(ApiError::bad_request(format!("{name} must be a positive finite number, got {v}"), Some(name)));
+        }
+    }
+    let settings = RenderSettings {
+        sample_rate_hz,
+        carrier: body.carrier.unwrap_or(Carrier::DEFAULT),
+        limits: Limits { u_max_v, slew_v_per_s: body.slew_v_per_s, amplifier_range_v: body.amplifier_range_v },
+        extend: body.outside.unwrap_or_default(),
+    };
+    settings.check().map_err(|e| ApiError::bad_request(e.to_string(), Some("carrier")))?;
+    let max_samples = match format {
+        PlayFormat::Wav => limits.max_wav_samples,
+        PlayFormat::Json => limits.max_json_samples,
+    };
+    let (field, trajectory) = trajectory(body.trajectory, body.stroke, &curve, sample_rate_hz, max_samples, &limits)?;
+    let samples = trajectory.duration_s() * f64::from(sample_rate_hz) + 1.0;
+    if samples > max_samples as f64 {
+        return Err(ApiError::too_large(
+            format!(
+                "{:.3} s at {sample_rate_hz} Hz is {samples:.0} samples, more than the {max_samples} a {} answer may have",
+                trajectory.duration_s(),
+                if format == PlayFormat::Wav { "WAV" } else { "JSON" }
+            ),
+            Some(field),
+        ));
+    }
+    let wav = WavOptions {
+        format: body.wav_format.unwrap_or(WavFormat::Pcm16),
+        volts_per_full_scale: body.volts_per_full_scale.unwrap_or(std::f64::consts::SQRT_2 * u_max_v),
+    };
+
+    let _permit = state.renders().acquire().await.map_err(|_| ApiError::unavailable("the server is shutting down"))?;
+    tokio::task::spawn_blocking(move || {
+        let signal = render(&curve, &trajectory, &settings).map_err(signal_error)?;
+        match format {
+            PlayFormat::Wav => wav_response(&signal, &wav),
+            PlayFormat::Json => Ok(Json(json_answer(&signal)).into_response()),
+        }
+    })
+    .await
+    .map_err(|e| ApiError::internal(format!("render task failed: {e}")))?
+}
+
+/// The trajectory to render, and the request field it came from.
+fn trajectory(
+    given: Option<TrajectoryJson>,
+    stroke: Option<StrokeJson>,
+    curve: &VoltageCurve,
+    sample_rate_hz: u32,
+    max_samples: usize,
+    limits: &crate::Limits,
+) -> Result<(&'static str, Trajectory), ApiError> {
+    match (given, stroke) {
+        (Some(t), None) => Ok(("trajectory", t.into_trajectory("trajectory.", limits.max_points)?)),
+        (None, Some(s)) => {
+            let field = |name: &str| format!("stroke.{name}");
+            if !(s.velocity_mm_s.is_finite() && s.velocity_mm_s > 0.0 && s.velocity_mm_s <= MAX_VELOCITY_MM_S) {
+                return Err(ApiError::bad_request(
+                    format!("velocity must be > 0 and <= {MAX_VELOCITY_MM_S} mm/s, got {}", s.velocity_mm_s),
+                    Some(&field("velocity_mm_s")),
+                ));
+            }
+            let strokes = s.strokes.unwrap_or(1);
+            if !(1..=MAX_STROKES).contains(&strokes) {
+                return Err(ApiError::bad_request(
+                    format!("strokes must be 1 to {MAX_STROKES}, got {strokes}"),
+                    Some(&field("strokes")),
+                ));
+            }
+            let (x0, x1) = curve.span_mm();
+            let (from, to) = (s.from_mm.unwrap_or(x0), s.to_mm.unwrap_or(x1));
+            for (name, v) in [("from_mm", from), ("to_mm", to)] {
+                if !(v.is_finite() && v.abs() <= 1e6) {
+                    return Err(ApiError::bad_request(
+                        format!("{v} mm is not a position in [-1e6, 1e6] mm"),
+                        Some(&field(name)),
+                    ));
+                }
+            }
+            // Refuse before generating: the render is at least this long.
+            let duration_s = (to - from).abs() / s.velocity_mm_s * f64::from(strokes);
+            let samples = duration_s * f64::from(sample_rate_hz.max(STROKE_RATE_HZ as u32)) + 1.0;
+            if samples > max_samples as f64 {
+                return Err(ApiError::too_large(
+                    format!("a {duration_s:.3} s stroke at {sample_rate_hz} Hz is more than {max_samples} samples"),
+                    Some("stroke"),
+                ));
+            }
+            let generated = if strokes == 1 {
+                Trajectory::constant_velocity(from, to, s.velocity_mm_s, STROKE_RATE_HZ)
+            } else {
+                Trajectory::strokes(from, to, s.velocity_mm_s, strokes as usize, STROKE_RATE_HZ)
+            };
+            Ok(("stroke", generated.map_err(|e| ApiError::bad_request(e.to_string(), Some("stroke")))?))
+        }
+        (Some(_), Some(_)) => Err(ApiError::bad_request("give trajectory or stroke, not both", Some("stroke"))),
+        (None, None) => Err(ApiError::bad_request(
+            "give a trajectory ({\"t_s\": [..], \"x_mm\": [..]}) or a stroke ({\"velocity_mm_s\": 50})",
+            Some("trajectory"),
+        )),
+    }
+}
+
+fn signal_error(error: SignalError) -> ApiError {
+    match &error {
+        SignalError::TooLong { .. } => ApiError::too_large(error.to_string(), Some("trajectory")),
+        SignalError::ExceedsAmplifierRange { .. } => {
+            ApiError::bad_request(error.to_string(), Some("amplifier_range_v"))
+        }
+        SignalError::ExceedsFullScale { .. } => ApiError::bad_request(error.to_string(), Some("volts_per_full_scale")),
+        SignalError::Settings(_) => ApiError::bad_request(error.to_string(), None),
+        SignalError::Wav { .. } | SignalError::Write(_) => ApiError::internal(error.to_string()),
+    }
+}
+
+fn wav_response(signal: &DriveSignal, options: &WavOptions) -> Result<Response, ApiError> {
+    let bytes = encode_wav(signal, options, "response").map_err(signal_error)?;
+    let number = |v: f64| HeaderValue::from_str(&v.to_string()).unwrap_or_else(|_| HeaderValue::from_static("0"));
+    Ok((
+        [
+            (header::CONTENT_TYPE, HeaderValue::from_static("audio/wav")),
+            (header::CONTENT_DISPOSITION, HeaderValue::from_static("attachment; filename=\"haptex-drive.wav\"")),
+            (HeaderName::from_static("x-haptex-volts-per-full-scale"), number(options.volts_per_full_scale)),
+            (HeaderName::from_static("x-haptex-peak-v"), number(signal.report.peak_v)),
+        ],
+        bytes,
+    )
+        .into_response())
+}
+
+fn json_answer(signal: &DriveSignal) -> serde_json::Value {
+    json!({
+        "report": signal.report,
+        "t_s": signal.times_s(),
+        "x_mm": signal.x_mm,
+        "envelope_v": signal.envelope_v,
+        "signal_v": signal.signal_v,
+    })
+}

@@ -1,0 +1,119 @@
+//! `POST /api/voltage`: friction profile -> electrovibration voltage
+//! profile (paper eq. 8, or eq. 9 with `method=normalized`), with the
+//! limits summary (where U is clipped at U_max, where mu_RS < mu_HD).
+//!
+//! Two bodies:
+//!
+//! - `application/json`: `{"profile": {"x_mm": [..], "mu": [..]},
+//!   "method": "physical", "device": {"u_max_v": 100, ...}}`;
+//! - `text/csv`: a profile file as is (`x_mm,mu` or `x_mm,ft_n,fn_n`), the
+//!   method and device parameters in the query string
+//!   (`?method=normalized&u_max_v=80`).
+//!
+//! `?format=csv` answers `x_mm,mu,voltage_v` CSV (the file `haptex voltage`
+//! writes) instead of JSON.
+
+use std::collections::BTreeMap;
+
+use axum::Json;
+use axum::body::Bytes;
+use axum::extract::rejection::BytesRejection;
+use axum::extract::{RawQuery, State};
+use axum::http::HeaderMap;
+use axum::response::{IntoResponse, Response};
+use haptex_core::electrovibration::{Method, VoltageProfile, map_profile};
+use haptex_core::profile::FrictionProfile;
+use serde::{Deserialize, Serialize};
+
+use crate::error::ApiError;
+use crate::input::{BodyKind, ProfileJson, Query, body_bytes, body_kind, parse_json, parse_number, profile_from_csv};
+use crate::params::{DEVICE_PARAMS, DeviceRequest, parse_method};
+use crate::state::AppState;
+
+/// The JSON body.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct VoltageBody {
+    profile: ProfileJson,
+    #[serde(default)]
+    method: Option<Method>,
+    /// Device and finger parameters by name (`params::DEVICE_PARAMS`).
+    #[serde(default)]
+    device: BTreeMap<String, f64>,
+}
+
+/// The JSON answer: the parameters used (defaults filled in), the summary
+/// and the profile.
+#[derive(Debug, Serialize)]
+struct VoltageAnswer<'a> {
+    parameters: BTreeMap<&'static str, f64>,
+    #[serde(flatten)]
+    voltage: &'a VoltageProfile,
+}
+
+pub async fn post(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    RawQuery(raw_query): RawQuery,
+    body: Result<Bytes, BytesRejection>,
+) -> Result<Response, ApiError> {
+    let limits = state.limits();
+    let mut query = Query::parse(raw_query.as_deref())?;
+    let format = query.take_format(&["json", "csv"])?;
+    let kind = body_kind(&headers, &[BodyKind::Json, BodyKind::Csv])?;
+    let bytes = body_bytes(body, limits.max_body_bytes)?;
+    let (profile, method, request) = match kind {
+        BodyKind::Json => {
+            query.finish()?;
+            let body: VoltageBody = parse_json(&bytes)?;
+            let request = DeviceRequest::from_pairs(body.device.iter().map(|(k, v)| (k.as_str(), *v)), "device.")?;
+            let profile = body.profile.into_profile("profile.", limits.max_points)?;
+            (profile, body.method.unwrap_or(Method::Physical), request)
+        }
+        BodyKind::Csv => {
+            let method = query.take("method").map(|m| parse_method(&m, "method")).transpose()?;
+            let mut pairs = Vec::new();
+            for (name, text) in query.take_all() {
+                if !DEVICE_PARAMS.iter().any(|p| p.name == name) {
+                    return Err(ApiError::bad_request(
+                        "unknown query parameter (with a CSV body the query takes format, method and the device \
+                         parameters)",
+                        Some(&name),
+                    ));
+                }
+                let value = parse_number(&text, &name)?;
+                pairs.push((name, value));
+            }
+            let request = DeviceRequest::from_pairs(pairs.iter().map(|(k, v)| (k.as_str(), *v)), "")?;
+            let profile = profile_from_csv(&bytes, limits.max_points)?;
+            (profile, method.unwrap_or(Method::Physical), request)
+        }
+    };
+    let voltage = compute(&profile, method, &request)?;
+    Ok(match format {
+        "csv" => super::csv_response(super::to_csv(|w| voltage.write_csv(w))?, "voltage.csv"),
+        _ => Json(VoltageAnswer { parameters: request.values(), voltage: &voltage }).into_response(),
+    })
+}
+
+/// Maps the profile; a device whose constants make eq. (8) overflow (a
+/// non-finite result) is refused rather than answered with NaN or null.
+pub(crate) fn compute(
+    profile: &FrictionProfile,
+    method: Method,
+    request: &DeviceRequest,
+) -> Result<VoltageProfile, ApiError> {
+    let voltage = map_profile(profile, &request.device, method, request.fn_n)
+        .map_err(|e| ApiError::bad_request(e.to_string(), Some("device")))?;
+    let s = &voltage.summary;
+    let finite = voltage.voltage_v.iter().all(|u| u.is_finite())
+        && [s.fe_over_fn_per_v2, s.mu_at_u_max].iter().flatten().all(|v| v.is_finite() && *v > 0.0);
+    if !finite {
+        return Err(ApiError::bad_request(
+            "these device constants put Fe/Fn per V^2 (eq. 3) outside the floating-point range: check the \
+             thicknesses, permittivities and k",
+            Some("device"),
+        ));
+    }
+    Ok(voltage)
+}

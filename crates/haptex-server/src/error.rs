@@ -1,0 +1,153 @@
+//! Errors of the API, and the one place where they become responses.
+//!
+//! Every error a client gets is JSON: `{"error": message, "field": name}`
+//! (`field` is `null` when no single field is at fault; `line` is added for
+//! CSV bodies). Handlers return [`ApiError`]; responses that axum or a
+//! middleware produce without a handler (unknown route, wrong method,
+//! timeout) are rewritten into the same shape by [`json_client_errors`].
+
+use std::any::Any;
+
+use axum::Json;
+use axum::extract::Request;
+use axum::http::{HeaderValue, StatusCode, Uri, header};
+use axum::middleware::Next;
+use axum::response::{IntoResponse, Response};
+use haptex_core::library::LibraryError;
+use serde::Serialize;
+
+/// An API error: status, message and the offending field.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ApiError {
+    #[serde(skip)]
+    pub status: StatusCode,
+    /// What went wrong, for a person.
+    #[serde(rename = "error")]
+    pub message: String,
+    /// The request field at fault (JSON path such as `profile.mu[3]`, a
+    /// query parameter, a CSV column, `body`, `content-type`), if one is.
+    pub field: Option<String>,
+    /// 1-based line of a CSV body, when the error is tied to one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub line: Option<u64>,
+}
+
+impl ApiError {
+    pub fn new(status: StatusCode, message: impl Into<String>, field: Option<&str>) -> Self {
+        Self { status, message: message.into(), field: field.map(str::to_string), line: None }
+    }
+
+    /// 400: the request is malformed or a value is out of range.
+    pub fn bad_request(message: impl Into<String>, field: Option<&str>) -> Self {
+        Self::new(StatusCode::BAD_REQUEST, message, field)
+    }
+
+    /// 404: no such resource.
+    pub fn not_found(message: impl Into<String>, field: Option<&str>) -> Self {
+        Self::new(StatusCode::NOT_FOUND, message, field)
+    }
+
+    /// 413: the body, or what it asks for, is larger than the limits.
+    pub fn too_large(message: impl Into<String>, field: Option<&str>) -> Self {
+        Self::new(StatusCode::PAYLOAD_TOO_LARGE, message, field)
+    }
+
+    /// 415: a body in a format this route does not take.
+    pub fn unsupported_media_type(message: impl Into<String>) -> Self {
+        Self::new(StatusCode::UNSUPPORTED_MEDIA_TYPE, message, Some("content-type"))
+    }
+
+    /// 500: a fault of the server, not of the request.
+    pub fn internal(message: impl Into<String>) -> Self {
+        Self::new(StatusCode::INTERNAL_SERVER_ERROR, message, None)
+    }
+
+    /// 503: the server is busy; try again.
+    pub fn unavailable(message: impl Into<String>) -> Self {
+        Self::new(StatusCode::SERVICE_UNAVAILABLE, message, None)
+    }
+
+    pub fn with_line(mut self, line: Option<u64>) -> Self {
+        self.line = line;
+        self
+    }
+
+    /// A library error: an unknown material is the client's (404), the
+    /// rest are the server's.
+    pub fn library(error: LibraryError) -> Self {
+        match error {
+            LibraryError::UnknownMaterial { .. } => Self::not_found(error.to_string(), Some("name")),
+            other => Self::internal(other.to_string()),
+        }
+    }
+}
+
+impl std::fmt::Display for ApiError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} {}", self.status.as_u16(), self.message)?;
+        if let Some(field) = &self.field {
+            write!(f, " (field {field})")?;
+        }
+        Ok(())
+    }
+}
+
+impl IntoResponse for ApiError {
+    fn into_response(self) -> Response {
+        if self.status.is_server_error() {
+            tracing::error!(status = self.status.as_u16(), "{}", self.message);
+        } else {
+            tracing::debug!(status = self.status.as_u16(), field = ?self.field, "{}", self.message);
+        }
+        let mut response = (self.status, Json(&self)).into_response();
+        response.extensions_mut().insert(JsonError);
+        response
+    }
+}
+
+/// Marks a response whose body is already an [`ApiError`].
+#[derive(Debug, Clone, Copy)]
+struct JsonError;
+
+/// Middleware: a 4xx response that is not already an [`ApiError`] (axum's
+/// 405 for a wrong method, the timeout's 408, a rejection) gets the JSON
+/// error body, keeping its status and headers (`Allow` for 405).
+pub async fn json_client_errors(request: Request, next: Next) -> Response {
+    let (method, path) = (request.method().clone(), request.uri().path().to_string());
+    let response = next.run(request).await;
+    let status = response.status();
+    if !status.is_client_error() || response.extensions().get::<JsonError>().is_some() {
+        return response;
+    }
+    let (parts, _) = response.into_parts();
+    let message = match status {
+        StatusCode::METHOD_NOT_ALLOWED => format!("{method} is not allowed on {path} (the Allow header lists what is)"),
+        StatusCode::REQUEST_TIMEOUT => format!("{method} {path} took longer than the server's time limit per request"),
+        other => other.canonical_reason().unwrap_or("client error").to_lowercase(),
+    };
+    let mut rebuilt = ApiError::new(status, message, None).into_response();
+    for (name, value) in &parts.headers {
+        if name != header::CONTENT_TYPE && name != header::CONTENT_LENGTH {
+            rebuilt.headers_mut().insert(name.clone(), value.clone());
+        }
+    }
+    rebuilt
+}
+
+/// Fallback for unknown routes: 404 JSON.
+pub async fn not_found(uri: Uri) -> ApiError {
+    ApiError::not_found(format!("no such route: {}", uri.path()), None)
+}
+
+/// Response for a handler that panicked (a bug): 500 JSON; the panic is logged.
+pub fn panic_response(panic: Box<dyn Any + Send + 'static>) -> Response {
+    let what = panic
+        .downcast_ref::<String>()
+        .map(String::as_str)
+        .or_else(|| panic.downcast_ref::<&str>().copied())
+        .unwrap_or("unknown panic");
+    tracing::error!("handler panicked: {what}");
+    let mut response = ApiError::internal("internal error (a bug: the server's log has the details)").into_response();
+    response.headers_mut().insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
+    response
+}

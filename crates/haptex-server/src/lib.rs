@@ -1,0 +1,197 @@
+//! haptex web application: the JSON API and the web GUI of `haptex serve`
+//! (paper section 4, Fig. 3: pick a source, see the friction and voltage
+//! profiles, use it from a PC or a phone).
+//!
+//! A library crate, so that tests start the whole application in-process
+//! ([`app`] is a plain `axum::Router`, called with
+//! `tower::ServiceExt::oneshot`) and the `haptex` binary only parses flags
+//! and calls [`run`].
+//!
+//! Layout, one concept per module:
+//!
+//! - [`routes`]: the route table (method, path, handler), the one list the
+//!   router is built from and the OpenAPI test checks;
+//! - `api/*`: one module per resource (health, config, voltage, materials,
+//!   play, profile, openapi);
+//! - [`error`]: [`ApiError`] and the middleware that turns every 4xx into
+//!   the JSON error `{"error": message, "field": name}`;
+//! - [`params`]: device parameters with the paper's defaults and their
+//!   accepted ranges;
+//! - [`input`]: request bodies (JSON or `text/csv`) and query strings;
+//! - [`state`]: shared state ([`AppState`]: the texture library pool and
+//!   the limits);
+//! - [`assets`]: the GUI, embedded in the binary (rust-embed), and the
+//!   security headers.
+//!
+//! Not yet served: the template-surface prediction (`GET /api/templates`,
+//! `POST /api/predict`), which needs the FE database of issue 5.
+//! [`AppState`] and [`routes::table`] are where it plugs in.
+
+mod api;
+pub mod assets;
+pub mod error;
+pub mod input;
+pub mod params;
+pub mod routes;
+pub mod state;
+
+use std::future::Future;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use axum::Router;
+use axum::extract::DefaultBodyLimit;
+use axum::http::StatusCode;
+use tower_http::catch_panic::CatchPanicLayer;
+use tower_http::timeout::TimeoutLayer;
+use tower_http::trace::{DefaultMakeSpan, DefaultOnResponse, TraceLayer};
+use tracing::Level;
+
+pub use error::ApiError;
+pub use state::{AppState, Limits};
+
+/// How to start the server.
+#[derive(Debug, Clone)]
+pub struct Config {
+    /// Address to listen on (default 127.0.0.1:8080: this machine only).
+    pub addr: SocketAddr,
+    /// The texture library (SQLite) to serve under `/api/materials`, opened
+    /// read-only; `None` serves no materials.
+    pub library: Option<PathBuf>,
+    pub limits: Limits,
+}
+
+impl Config {
+    /// The default address, 127.0.0.1:8080.
+    pub const DEFAULT_ADDR: &'static str = "127.0.0.1:8080";
+}
+
+/// The server could not start or stopped with an error.
+#[derive(Debug, thiserror::Error)]
+pub enum ServeError {
+    #[error("cannot listen on {addr}: {source}")]
+    Bind { addr: SocketAddr, source: std::io::Error },
+    #[error("cannot start the async runtime: {0}")]
+    Runtime(std::io::Error),
+    #[error("server error: {0}")]
+    Io(#[from] std::io::Error),
+    #[error(transparent)]
+    Library(#[from] haptex_core::library::LibraryError),
+}
+
+/// The whole application: API routes, GUI, middleware.
+///
+/// Layers, outermost first: request logging (tracing), panic catcher
+/// (a 500, never a dropped connection), security headers, 4xx-to-JSON,
+/// timeout, body limit.
+pub fn app(state: AppState) -> Router {
+    let limits = state.limits().clone();
+    routes::router()
+        .fallback(error::not_found)
+        .with_state(state)
+        .layer(DefaultBodyLimit::max(limits.max_body_bytes))
+        .layer(TimeoutLayer::with_status_code(StatusCode::REQUEST_TIMEOUT, limits.request_timeout))
+        .layer(axum::middleware::from_fn(error::json_client_errors))
+        .layer(assets::security_headers())
+        .layer(CatchPanicLayer::custom(error::panic_response))
+        .layer(
+            TraceLayer::new_for_http()
+                .make_span_with(DefaultMakeSpan::new().level(Level::INFO))
+                .on_response(DefaultOnResponse::new().level(Level::INFO).latency_unit(tower_http::LatencyUnit::Micros)),
+        )
+}
+
+/// Serves the application on `listener` until `shutdown` completes, then
+/// stops accepting and lets the requests in flight finish (graceful
+/// shutdown, at most [`Limits::request_timeout`] more).
+///
+/// HTTP/1.1 through hyper directly (not `axum::serve`) for the header-read
+/// timeout: a client that opens a connection and sends its headers slowly,
+/// or not at all, is dropped after [`Limits::header_timeout`]; once the
+/// headers are in, [`Limits::request_timeout`] bounds the rest.
+pub async fn serve(
+    listener: tokio::net::TcpListener,
+    state: AppState,
+    shutdown: impl Future<Output = ()> + Send + 'static,
+) -> Result<(), ServeError> {
+    use hyper_util::rt::{TokioIo, TokioTimer};
+    use hyper_util::service::TowerToHyperService;
+
+    let limits = state.limits().clone();
+    let service = TowerToHyperService::new(app(state));
+    let mut http = hyper::server::conn::http1::Builder::new();
+    http.timer(TokioTimer::new()).header_read_timeout(limits.header_timeout);
+    let connections = hyper_util::server::graceful::GracefulShutdown::new();
+    let mut shutdown = std::pin::pin!(shutdown);
+    loop {
+        let (stream, peer) = tokio::select! {
+            accepted = listener.accept() => match accepted {
+                Ok(accepted) => accepted,
+                Err(e) => {
+                    // Out of file descriptors and the like: wait, do not spin.
+                    tracing::warn!("cannot accept a connection: {e}");
+                    tokio::time::sleep(Duration::from_millis(50)).await;
+                    continue;
+                }
+            },
+            () = &mut shutdown => break,
+        };
+        let _ = stream.set_nodelay(true);
+        let connection = connections.watch(http.serve_connection(TokioIo::new(stream), service.clone()));
+        tokio::spawn(async move {
+            if let Err(e) = connection.await {
+                tracing::debug!(%peer, "connection ended with an error: {e}");
+            }
+        });
+    }
+    drop(listener);
+    if tokio::time::timeout(limits.request_timeout, connections.shutdown()).await.is_err() {
+        tracing::warn!("connections still open after {:?}: closing them", limits.request_timeout);
+    }
+    Ok(())
+}
+
+/// Starts the server with `config` and blocks until Ctrl-C (or SIGTERM),
+/// then shuts down gracefully. `on_listening` is called with the bound
+/// address once the server accepts connections.
+pub fn run(config: Config, on_listening: impl FnOnce(SocketAddr)) -> Result<(), ServeError> {
+    let state = AppState::new(config.library.as_deref(), config.limits.clone())?;
+    let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build().map_err(ServeError::Runtime)?;
+    runtime.block_on(async move {
+        let listener = tokio::net::TcpListener::bind(config.addr)
+            .await
+            .map_err(|source| ServeError::Bind { addr: config.addr, source })?;
+        on_listening(listener.local_addr()?);
+        serve(listener, state, shutdown_signal()).await
+    })?;
+    // Blocking tasks (library reads, renders) are bounded by the limits;
+    // do not wait long for a stuck one.
+    runtime.shutdown_timeout(Duration::from_secs(5));
+    Ok(())
+}
+
+/// Completes on Ctrl-C, or on SIGTERM on Unix.
+async fn shutdown_signal() {
+    let ctrl_c = async {
+        if tokio::signal::ctrl_c().await.is_err() {
+            std::future::pending::<()>().await;
+        }
+    };
+    #[cfg(unix)]
+    let terminate = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut signal) => {
+                signal.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let terminate = std::future::pending::<()>();
+    tokio::select! {
+        () = ctrl_c => {},
+        () = terminate => {},
+    }
+    tracing::info!("shutting down: finishing the requests in flight");
+}

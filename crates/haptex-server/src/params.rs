@@ -1,0 +1,224 @@
+//! Device and finger parameters of the voltage mapping (paper eqs. 3-9),
+//! with the paper's defaults (Fig. 2) and the ranges the API accepts.
+//!
+//! One table, [`DEVICE_PARAMS`], serves validation, the defaults the GUI
+//! shows (`GET /api/config`) and the OpenAPI description (a test checks
+//! they agree). Names and units are those of the `haptex voltage` flags.
+
+use std::collections::BTreeMap;
+
+use haptex_core::electrovibration::{ContactArea, Device, LayerStack, Method};
+use serde::Serialize;
+
+use crate::error::ApiError;
+
+/// One parameter: accepted when 0 < value <= `max`.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct ParamSpec {
+    pub name: &'static str,
+    /// The paper's value (`None`: no default; the parameter is optional).
+    pub default: Option<f64>,
+    /// Largest accepted value (inclusive); every parameter must be > 0.
+    pub max: f64,
+    pub unit: &'static str,
+    pub description: &'static str,
+}
+
+/// Every device and finger parameter, in the order the GUI shows them.
+pub const DEVICE_PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "mu_hd",
+        default: Some(Device::PAPER.mu_hd),
+        max: 10.0,
+        unit: "",
+        description: "friction coefficient of the finger on the display with no voltage, mu_HD",
+    },
+    ParamSpec {
+        name: "u_max_v",
+        default: Some(Device::PAPER.u_max_v),
+        max: 10_000.0,
+        unit: "V",
+        description: "highest voltage the display applies, U_max (RMS): clip level (physical) or full scale (normalized)",
+    },
+    ParamSpec {
+        name: "eps_sc",
+        default: Some(LayerStack::PAPER.eps_sc),
+        max: 1e6,
+        unit: "",
+        description: "relative permittivity of the stratum corneum, eps_sc",
+    },
+    ParamSpec {
+        name: "eps_i",
+        default: Some(LayerStack::PAPER.eps_i),
+        max: 1e6,
+        unit: "",
+        description: "relative permittivity of the display insulator, eps_i",
+    },
+    ParamSpec {
+        name: "d_sc_mm",
+        default: Some(LayerStack::PAPER.d_sc_mm),
+        max: 10.0,
+        unit: "mm",
+        description: "stratum corneum thickness d_sc",
+    },
+    ParamSpec {
+        name: "d_i_mm",
+        default: Some(LayerStack::PAPER.d_i_mm),
+        max: 10.0,
+        unit: "mm",
+        description: "insulator thickness d_i",
+    },
+    ParamSpec {
+        name: "k_mm2_per_n",
+        default: Some(ContactArea::PAPER.k_mm2_per_n),
+        max: 1e6,
+        unit: "mm^2/N",
+        description: "contact-area coefficient k in A = k Fn^n",
+    },
+    ParamSpec {
+        name: "area_exponent",
+        default: Some(ContactArea::PAPER.exponent),
+        max: 2.0,
+        unit: "",
+        description: "contact-area exponent n in A = k Fn^n (1: the paper's linear law; otherwise fn_n is needed)",
+    },
+    ParamSpec {
+        name: "fn_n",
+        default: None,
+        max: 100.0,
+        unit: "N",
+        description: "exploration normal force Fn (used only when area_exponent != 1; default: the profile's mean fn_n)",
+    },
+];
+
+/// Looks a parameter up by name.
+pub fn spec(name: &str) -> Option<&'static ParamSpec> {
+    DEVICE_PARAMS.iter().find(|p| p.name == name)
+}
+
+/// The device and normal force a request asks for.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct DeviceRequest {
+    pub device: Device,
+    /// Fn in N, when given.
+    pub fn_n: Option<f64>,
+}
+
+impl DeviceRequest {
+    /// The device from `(name, value)` pairs; missing parameters take the
+    /// paper's defaults. Unknown names and values out of (0, max] are
+    /// errors naming `prefix` + the parameter.
+    pub fn from_pairs<'a>(pairs: impl IntoIterator<Item = (&'a str, f64)>, prefix: &str) -> Result<Self, ApiError> {
+        let mut values: Vec<Option<f64>> = DEVICE_PARAMS.iter().map(|p| p.default).collect();
+        for (name, value) in pairs {
+            let field = format!("{prefix}{name}");
+            let index = DEVICE_PARAMS.iter().position(|p| p.name == name).ok_or_else(|| {
+                let known: Vec<&str> = DEVICE_PARAMS.iter().map(|p| p.name).collect();
+                ApiError::bad_request(format!("unknown parameter (known: {})", known.join(", ")), Some(&field))
+            })?;
+            check_range(&DEVICE_PARAMS[index], value, &field)?;
+            values[index] = Some(value);
+        }
+        let get = |name: &str| -> f64 {
+            let i = DEVICE_PARAMS.iter().position(|p| p.name == name).expect("known parameter");
+            values[i].expect("parameter with a default")
+        };
+        let device = Device {
+            stack: LayerStack {
+                d_sc_mm: get("d_sc_mm"),
+                eps_sc: get("eps_sc"),
+                d_i_mm: get("d_i_mm"),
+                eps_i: get("eps_i"),
+            },
+            contact: ContactArea { k_mm2_per_n: get("k_mm2_per_n"), exponent: get("area_exponent") },
+            mu_hd: get("mu_hd"),
+            u_max_v: get("u_max_v"),
+        };
+        let fn_n = values[DEVICE_PARAMS.iter().position(|p| p.name == "fn_n").expect("fn_n")];
+        Ok(Self { device, fn_n })
+    }
+}
+
+impl DeviceRequest {
+    /// Every parameter by name, defaults included (`fn_n` when given).
+    pub fn values(&self) -> BTreeMap<&'static str, f64> {
+        let d = &self.device;
+        let mut map = BTreeMap::from([
+            ("mu_hd", d.mu_hd),
+            ("u_max_v", d.u_max_v),
+            ("eps_sc", d.stack.eps_sc),
+            ("eps_i", d.stack.eps_i),
+            ("d_sc_mm", d.stack.d_sc_mm),
+            ("d_i_mm", d.stack.d_i_mm),
+            ("k_mm2_per_n", d.contact.k_mm2_per_n),
+            ("area_exponent", d.contact.exponent),
+        ]);
+        if let Some(f) = self.fn_n {
+            map.insert("fn_n", f);
+        }
+        map
+    }
+}
+
+/// Checks 0 < value <= spec.max (and finite).
+pub fn check_range(spec: &ParamSpec, value: f64, field: &str) -> Result<f64, ApiError> {
+    if value.is_finite() && value > 0.0 && value <= spec.max {
+        Ok(value)
+    } else {
+        let unit = if spec.unit.is_empty() { String::new() } else { format!(" {}", spec.unit) };
+        Err(ApiError::bad_request(
+            format!("{} must be > 0 and <= {}{unit}, got {value}", spec.name, spec.max),
+            Some(field),
+        ))
+    }
+}
+
+/// Parses a mapping method: `physical` (eq. 8) or `normalized` (eq. 9).
+pub fn parse_method(text: &str, field: &str) -> Result<Method, ApiError> {
+    match text {
+        "physical" => Ok(Method::Physical),
+        "normalized" => Ok(Method::Normalized),
+        other => Err(ApiError::bad_request(
+            format!("unknown method {other:?}: use physical (eq. 8) or normalized (eq. 9)"),
+            Some(field),
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// With no parameters the device is the paper's Fig. 2 device.
+    #[test]
+    fn defaults_are_the_papers_device() {
+        let request = DeviceRequest::from_pairs([], "").unwrap();
+        assert_eq!(request.device, Device::PAPER);
+        assert_eq!(request.fn_n, None);
+    }
+
+    #[test]
+    fn out_of_range_and_unknown_names_are_refused_with_their_field() {
+        for (name, value) in [("u_max_v", 0.0), ("u_max_v", 1e5), ("mu_hd", -1.0), ("d_i_mm", f64::NAN)] {
+            let e = DeviceRequest::from_pairs([(name, value)], "device.").unwrap_err();
+            assert_eq!(e.field.as_deref(), Some(format!("device.{name}").as_str()), "{e}");
+        }
+        let e = DeviceRequest::from_pairs([("u_max", 50.0)], "").unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("u_max"));
+    }
+
+    /// Each parameter set by name comes back under that name: the table and
+    /// the device fields are wired one to one.
+    #[test]
+    fn every_parameter_reaches_its_device_field() {
+        for (i, spec) in DEVICE_PARAMS.iter().enumerate() {
+            let value = spec.max / (i as f64 + 3.0);
+            let request = DeviceRequest::from_pairs([(spec.name, value)], "").unwrap();
+            let values = request.values();
+            assert_eq!(values.get(spec.name), Some(&value), "{}", spec.name);
+            for other in DEVICE_PARAMS.iter().filter(|o| o.name != spec.name) {
+                assert_eq!(values.get(other.name).copied(), other.default, "{} when setting {}", other.name, spec.name);
+            }
+        }
+    }
+}

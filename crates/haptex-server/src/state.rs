@@ -1,0 +1,181 @@
+//! Shared state of the application: the sources of friction profiles and
+//! the limits every request is held to.
+//!
+//! Sources today: the texture library (a SQLite file, read-only) and the
+//! user's own profile (in the request). The template-surface database of
+//! issue 5 (FE database + CAE) will be one more field here, loaded once at
+//! start, and one more entry in [`AppState::sources`].
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use haptex_core::library::{Library, LibraryError};
+use serde::Serialize;
+use tokio::sync::Semaphore;
+
+use crate::error::ApiError;
+
+/// What one request may ask of the server.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Limits {
+    /// Largest request body in bytes (1 MiB).
+    pub max_body_bytes: usize,
+    /// Most points of a profile or trajectory in a request.
+    pub max_points: usize,
+    /// Most samples of a rendered drive signal returned as WAV.
+    pub max_wav_samples: usize,
+    /// Most samples of a rendered drive signal returned as JSON.
+    pub max_json_samples: usize,
+    /// Longest time a request may take once its headers are in, body
+    /// upload included; then 408.
+    #[serde(serialize_with = "seconds")]
+    pub request_timeout: Duration,
+    /// Longest wait for a request's headers (a new connection's first
+    /// request, or the next one on a kept-alive connection); then the
+    /// connection is closed.
+    #[serde(serialize_with = "seconds")]
+    pub header_timeout: Duration,
+    /// Drive-signal renders run at the same time (each holds up to
+    /// `max_wav_samples` x 32 bytes of working memory).
+    pub concurrent_renders: usize,
+}
+
+impl Limits {
+    /// 1 MiB bodies, 100 000 points, 2 000 000 WAV samples (41.7 s at
+    /// 48 kHz), 200 000 JSON samples, 10 s per request, 10 s for headers,
+    /// 2 renders at once.
+    pub const DEFAULT: Self = Self {
+        max_body_bytes: 1 << 20,
+        max_points: 100_000,
+        max_wav_samples: 2_000_000,
+        max_json_samples: 200_000,
+        request_timeout: Duration::from_secs(10),
+        header_timeout: Duration::from_secs(10),
+        concurrent_renders: 2,
+    };
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+fn seconds<S: serde::Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_f64(d.as_secs_f64())
+}
+
+/// Shared, cheaply cloned application state.
+#[derive(Clone, Debug)]
+pub struct AppState(Arc<Inner>);
+
+#[derive(Debug)]
+struct Inner {
+    library: Option<Arc<LibraryPool>>,
+    limits: Limits,
+    renders: Semaphore,
+}
+
+/// A profile source the GUI can offer.
+#[derive(Debug, Clone, Serialize)]
+pub struct SourceInfo {
+    pub id: &'static str,
+    pub label: &'static str,
+    pub description: &'static str,
+}
+
+impl AppState {
+    /// State serving the library at `library` (opened read-only, checked
+    /// now so that a bad path fails at start, not at the first request).
+    pub fn new(library: Option<&Path>, limits: Limits) -> Result<Self, LibraryError> {
+        let library = library.map(LibraryPool::open).transpose()?.map(Arc::new);
+        let renders = Semaphore::new(limits.concurrent_renders.max(1));
+        Ok(Self(Arc::new(Inner { library, limits, renders })))
+    }
+
+    pub fn limits(&self) -> &Limits {
+        &self.0.limits
+    }
+
+    /// The texture library, or 404 if the server has none.
+    pub fn library(&self) -> Result<&Arc<LibraryPool>, ApiError> {
+        self.0.library.as_ref().ok_or_else(|| ApiError::not_found("this server has no texture library", None))
+    }
+
+    /// Whether a texture library is served.
+    pub fn has_library(&self) -> bool {
+        self.0.library.is_some()
+    }
+
+    /// Bounds the number of renders running at once.
+    pub fn renders(&self) -> &Semaphore {
+        &self.0.renders
+    }
+
+    /// The profile sources available, in the order the GUI offers them.
+    pub fn sources(&self) -> Vec<SourceInfo> {
+        let mut sources = Vec::new();
+        if self.has_library() {
+            sources.push(SourceInfo {
+                id: "library",
+                label: "library material",
+                description: "a random stroke of a material of the texture library (paper section 2.4)",
+            });
+        }
+        sources.push(SourceInfo {
+            id: "upload",
+            label: "your profile (CSV)",
+            description: "a friction profile file: x_mm,mu or x_mm,ft_n,fn_n",
+        });
+        sources
+    }
+}
+
+/// Read-only connections to the texture library. A [`Library`] is `Send`
+/// but not `Sync`, so each request borrows one connection (opening one
+/// when none is idle) and returns it; at most `MAX_IDLE` are kept.
+#[derive(Debug)]
+pub struct LibraryPool {
+    path: PathBuf,
+    idle: Mutex<Vec<Library>>,
+}
+
+impl LibraryPool {
+    const MAX_IDLE: usize = 8;
+
+    fn open(path: &Path) -> Result<Self, LibraryError> {
+        let first = Library::open_read_only(path)?;
+        Ok(Self { path: path.to_path_buf(), idle: Mutex::new(vec![first]) })
+    }
+
+    /// The library file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Runs `f` with a connection on a blocking thread (SQLite is
+    /// synchronous).
+    pub async fn with<T, F>(self: &Arc<Self>, f: F) -> Result<T, ApiError>
+    where
+        T: Send + 'static,
+        F: FnOnce(&Library) -> Result<T, ApiError> + Send + 'static,
+    {
+        let pool = Arc::clone(self);
+        tokio::task::spawn_blocking(move || {
+            let library = match pool.idle.lock().map(|mut idle| idle.pop()) {
+                Ok(Some(library)) => library,
+                _ => Library::open_read_only(&pool.path).map_err(ApiError::library)?,
+            };
+            let result = f(&library);
+            if let Ok(mut idle) = pool.idle.lock()
+                && idle.len() < Self::MAX_IDLE
+            {
+                idle.push(library);
+            }
+            result
+        })
+        .await
+        .map_err(|e| ApiError::internal(format!("library task failed: {e}")))?
+    }
+}

@@ -1,0 +1,761 @@
+//! API tests: the whole application in-process (`tower::ServiceExt::oneshot`),
+//! every route, and every kind of bad input answered by a 4xx JSON error
+//! `{"error": message, "field": name}` naming the field at fault.
+//!
+//! Physics oracles: docs/physics.md (eq. 8 with the paper's Fig. 2
+//! constants: mu_RS/mu_HD = 1.25 -> 112.05 V, 1.5 -> 158.46 V, 2.0 ->
+//! 224.09 V, quoted to 0.01 V) and the core's `map_profile`, which the CLI
+//! uses (the server must give the same numbers bit for bit).
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use axum::Router;
+use axum::body::{Body, Bytes};
+use axum::http::{HeaderMap, Method, Request, StatusCode, header};
+use haptex_core::electrovibration::{Device, Method as MapMethod, map_profile};
+use haptex_core::io::Table;
+use haptex_core::library::Library;
+use haptex_core::profile::FrictionProfile;
+use haptex_server::{AppState, Limits, app, params::DEVICE_PARAMS, routes};
+use serde_json::{Value, json};
+use tower::ServiceExt;
+
+fn shipped_library() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/library/library.sqlite")
+}
+
+fn bump_csv() -> String {
+    std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/examples/bump_friction.csv"))
+        .unwrap()
+}
+
+fn server() -> Router {
+    app(AppState::new(Some(&shipped_library()), Limits::DEFAULT).unwrap())
+}
+
+struct Answer {
+    status: StatusCode,
+    headers: HeaderMap,
+    body: Bytes,
+}
+
+impl Answer {
+    fn json(&self) -> Value {
+        serde_json::from_slice(&self.body)
+            .unwrap_or_else(|e| panic!("not JSON ({e}): {}", String::from_utf8_lossy(&self.body)))
+    }
+
+    fn text(&self) -> String {
+        String::from_utf8(self.body.to_vec()).unwrap()
+    }
+
+    fn content_type(&self) -> &str {
+        self.headers.get(header::CONTENT_TYPE).map(|v| v.to_str().unwrap()).unwrap_or("")
+    }
+
+    /// Asserts a JSON error with this status and field; returns the body.
+    #[track_caller]
+    fn error(&self, status: StatusCode, field: Option<&str>) -> Value {
+        assert_eq!(self.status, status, "{}", String::from_utf8_lossy(&self.body));
+        assert!(self.content_type().starts_with("application/json"), "content type {}", self.content_type());
+        let body = self.json();
+        let message = body["error"].as_str().expect("an error message");
+        assert!(!message.is_empty());
+        assert!(body.as_object().unwrap().contains_key("field"), "{body}");
+        assert_eq!(body["field"].as_str(), field, "{body}");
+        body
+    }
+
+    #[track_caller]
+    fn ok(&self) -> &Self {
+        assert_eq!(self.status, StatusCode::OK, "{}", String::from_utf8_lossy(&self.body));
+        self
+    }
+}
+
+async fn send_to(router: Router, request: Request<Body>) -> Answer {
+    let response = router.oneshot(request).await.unwrap();
+    let status = response.status();
+    let headers = response.headers().clone();
+    let body = axum::body::to_bytes(response.into_body(), usize::MAX).await.unwrap();
+    Answer { status, headers, body }
+}
+
+async fn send(request: Request<Body>) -> Answer {
+    send_to(server(), request).await
+}
+
+async fn get(uri: &str) -> Answer {
+    send(Request::get(uri).body(Body::empty()).unwrap()).await
+}
+
+async fn post_json(uri: &str, body: &Value) -> Answer {
+    post_raw(uri, "application/json", body.to_string()).await
+}
+
+async fn post_raw(uri: &str, content_type: &str, body: impl Into<Body>) -> Answer {
+    send(Request::post(uri).header(header::CONTENT_TYPE, content_type).body(body.into()).unwrap()).await
+}
+
+fn numbers(value: &Value) -> Vec<f64> {
+    value.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect()
+}
+
+fn profile_json(x: &[f64], mu: &[f64]) -> Value {
+    json!({ "x_mm": x, "mu": mu })
+}
+
+// ---------------------------------------------------------------- meta
+
+#[tokio::test]
+async fn health_answers_ok_with_security_headers_and_no_cors() {
+    let request = Request::get("/api/health").header(header::ORIGIN, "http://elsewhere.example").body(Body::empty());
+    let answer = send(request.unwrap()).await;
+    answer.ok();
+    assert_eq!(answer.json()["status"], "ok");
+    assert_eq!(answer.json()["library"], true);
+    let csp = answer.headers.get(header::CONTENT_SECURITY_POLICY).unwrap().to_str().unwrap();
+    assert!(csp.contains("default-src 'none'") && csp.contains("script-src 'self'"), "{csp}");
+    assert_eq!(answer.headers.get(header::X_CONTENT_TYPE_OPTIONS).unwrap(), "nosniff");
+    // CORS is off: no cross-origin grant, whatever the Origin.
+    assert!(answer.headers.get(header::ACCESS_CONTROL_ALLOW_ORIGIN).is_none());
+    let preflight = send(
+        Request::builder()
+            .method(Method::OPTIONS)
+            .uri("/api/voltage")
+            .header(header::ORIGIN, "http://elsewhere.example")
+            .header(header::ACCESS_CONTROL_REQUEST_METHOD, "POST")
+            .body(Body::empty())
+            .unwrap(),
+    )
+    .await;
+    preflight.error(StatusCode::METHOD_NOT_ALLOWED, None);
+    assert!(preflight.headers.get(header::ACCESS_CONTROL_ALLOW_ORIGIN).is_none());
+}
+
+#[tokio::test]
+async fn config_offers_library_and_upload_with_the_papers_defaults() {
+    let config = get("/api/config").await.ok().json();
+    let sources: Vec<&str> = config["sources"].as_array().unwrap().iter().map(|s| s["id"].as_str().unwrap()).collect();
+    assert_eq!(sources, ["library", "upload"]);
+    let default = |name: &str| {
+        config["device_params"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap()["default"].as_f64()
+    };
+    assert_eq!(default("mu_hd"), Some(Device::PAPER.mu_hd));
+    assert_eq!(default("eps_sc"), Some(1650.0));
+    assert_eq!(default("eps_i"), Some(10.0));
+    assert_eq!(default("d_sc_mm"), Some(0.2));
+    assert_eq!(default("d_i_mm"), Some(0.001));
+    assert_eq!(default("k_mm2_per_n"), Some(200.0));
+    assert_eq!(default("u_max_v"), Some(100.0));
+    assert_eq!(default("fn_n"), None);
+    assert_eq!(config["limits"]["max_body_bytes"], 1 << 20);
+}
+
+/// The OpenAPI description lists exactly the routes the router serves
+/// (method and path), and its device-parameter schema has the defaults and
+/// ranges the server enforces.
+#[tokio::test]
+async fn openapi_describes_every_route_and_the_parameter_ranges() {
+    let answer = get("/api/openapi.json").await;
+    answer.ok();
+    assert!(answer.content_type().starts_with("application/json"));
+    let doc = answer.json();
+    assert!(doc["openapi"].as_str().unwrap().starts_with("3."));
+    let mut described: Vec<(String, String)> = Vec::new();
+    for (path, item) in doc["paths"].as_object().unwrap() {
+        for method in item.as_object().unwrap().keys() {
+            described.push((method.to_uppercase(), path.clone()));
+        }
+    }
+    let mut served: Vec<(String, String)> = routes::list().into_iter().map(|(m, p)| (m.to_string(), p)).collect();
+    described.sort();
+    served.sort();
+    assert_eq!(described, served, "routes served vs routes in /api/openapi.json");
+
+    let schema = &doc["components"]["schemas"]["DeviceParams"]["properties"];
+    assert_eq!(schema.as_object().unwrap().len(), DEVICE_PARAMS.len());
+    for spec in DEVICE_PARAMS {
+        let property = &schema[spec.name];
+        assert_eq!(property["maximum"].as_f64(), Some(spec.max), "{}", spec.name);
+        assert_eq!(property["exclusiveMinimum"].as_f64(), Some(0.0), "{}", spec.name);
+        assert_eq!(property["default"].as_f64(), spec.default, "{}", spec.name);
+    }
+    // Every route answers something other than 404 for its own path.
+    for (method, path) in routes::list() {
+        let uri = path.replace("{path}", "app.js").replace("{name}", "velvet");
+        let answer = send(Request::builder().method(method.clone()).uri(&uri).body(Body::empty()).unwrap()).await;
+        assert_ne!(answer.status, StatusCode::NOT_FOUND, "{method} {uri}");
+        assert_ne!(answer.status, StatusCode::METHOD_NOT_ALLOWED, "{method} {uri}");
+    }
+}
+
+/// The description is a valid OpenAPI 3.1 document (checked by the
+/// `openapi-spec-validator` Python package, which scripts/test.sh installs).
+#[test]
+fn openapi_is_a_valid_openapi_document() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src/openapi.json");
+    let out = std::process::Command::new("python3")
+        .args([
+            "-c",
+            "import json, sys\nfrom openapi_spec_validator import validate\nvalidate(json.load(open(sys.argv[1])))",
+        ])
+        .arg(&path)
+        .output()
+        .expect("python3 must be installed to run this test");
+    assert!(
+        out.status.success(),
+        "openapi-spec-validator (pip install openapi-spec-validator; scripts/test.sh does) refused {}: {}",
+        path.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[tokio::test]
+async fn unknown_routes_and_wrong_methods_are_json_errors() {
+    get("/api/nothing-here").await.error(StatusCode::NOT_FOUND, None);
+    get("/nothing-here").await.error(StatusCode::NOT_FOUND, None);
+    let answer = get("/api/voltage").await;
+    answer.error(StatusCode::METHOD_NOT_ALLOWED, None);
+    assert_eq!(answer.headers.get(header::ALLOW).unwrap(), "POST");
+    post_json("/api/health", &json!({})).await.error(StatusCode::METHOD_NOT_ALLOWED, None);
+}
+
+// ------------------------------------------------------------- static
+
+#[tokio::test]
+async fn gui_files_come_from_the_embedded_set_only() {
+    let page = get("/").await;
+    page.ok();
+    assert!(page.content_type().starts_with("text/html"));
+    assert!(page.text().contains("/static/app.js"));
+    assert!(page.headers.contains_key(header::CONTENT_SECURITY_POLICY));
+    let script = get("/static/app.js").await;
+    script.ok();
+    assert!(script.content_type().starts_with("text/javascript"));
+    let uplot = get("/static/vendor/uPlot.iife.min.js").await;
+    uplot.ok();
+    assert!(uplot.text().contains("uPlot"));
+    // Conditional request: the ETag gives 304 without a body.
+    let etag = script.headers.get(header::ETAG).unwrap().clone();
+    let again =
+        send(Request::get("/static/app.js").header(header::IF_NONE_MATCH, etag).body(Body::empty()).unwrap()).await;
+    assert_eq!(again.status, StatusCode::NOT_MODIFIED);
+    assert!(again.body.is_empty());
+    // Nothing outside the embedded set, however the path is spelled.
+    for uri in ["/static/nope.js", "/static/../Cargo.toml", "/static/..%2FCargo.toml", "/static/%2e%2e/src/lib.rs"] {
+        get(uri).await.error(StatusCode::NOT_FOUND, Some("path"));
+    }
+    for name in haptex_server::assets::names() {
+        assert!(!name.contains(".."), "{name}");
+    }
+}
+
+// ------------------------------------------------------------ voltage
+
+/// physics.md validation values of eq. (8) with the paper's Fig. 2 device
+/// (U_max raised to 1000 V so that nothing is clipped): 0.01 V, the
+/// precision they are quoted to.
+#[tokio::test]
+async fn voltage_eq8_matches_the_papers_constants() {
+    let body = json!({
+        "profile": profile_json(&[0.0, 1.0, 2.0, 3.0], &[1.0, 1.25, 1.5, 2.0]),
+        "device": { "u_max_v": 1000.0 },
+    });
+    let answer = post_json("/api/voltage", &body).await.ok().json();
+    let u = numbers(&answer["voltage_v"]);
+    for (got, want) in u.iter().zip([0.0, 112.05, 158.46, 224.09]) {
+        assert!((got - want).abs() < 0.01, "{got} vs {want}");
+    }
+    let ratio = answer["summary"]["fe_over_fn_per_v2"].as_f64().unwrap();
+    assert!((ratio / 1.9913e-5 - 1.0).abs() < 1e-4, "{ratio}");
+    assert_eq!(answer["parameters"]["u_max_v"], 1000.0);
+    assert_eq!(answer["parameters"]["eps_sc"], 1650.0);
+    assert_eq!(answer["summary"]["method"], "physical");
+}
+
+/// The JSON path, the CSV upload path and the core mapping (what `haptex
+/// voltage` writes) agree exactly, and eq. (9) maps min mu to 0 V and max
+/// mu to U_max.
+#[tokio::test]
+async fn voltage_csv_upload_equals_json_and_the_core_mapping() {
+    let csv = bump_csv();
+    let profile = FrictionProfile::read_csv(csv.as_bytes(), "bump").unwrap();
+    for (method, name) in [(MapMethod::Physical, "physical"), (MapMethod::Normalized, "normalized")] {
+        let device = Device { u_max_v: 80.0, mu_hd: 0.99, ..Device::PAPER };
+        let core = map_profile(&profile, &device, method, None).unwrap();
+        let upload = post_raw(&format!("/api/voltage?method={name}&u_max_v=80&mu_hd=0.99"), "text/csv", csv.clone())
+            .await
+            .ok()
+            .json();
+        let body = json!({
+            "profile": profile_json(profile.x_mm(), profile.mu()),
+            "method": name,
+            "device": { "u_max_v": 80.0, "mu_hd": 0.99 },
+        });
+        let from_json = post_json("/api/voltage", &body).await.ok().json();
+        assert_eq!(numbers(&upload["voltage_v"]), core.voltage_v, "{name}");
+        assert_eq!(numbers(&from_json["voltage_v"]), core.voltage_v, "{name}");
+        assert_eq!(upload["summary"], serde_json::to_value(&core.summary).unwrap());
+        if method == MapMethod::Normalized {
+            let u = numbers(&upload["voltage_v"]);
+            let max = u.iter().cloned().fold(0.0, f64::max);
+            let min = u.iter().cloned().fold(f64::INFINITY, f64::min);
+            assert_eq!((min, max), (0.0, 80.0));
+        }
+    }
+}
+
+#[tokio::test]
+async fn voltage_csv_answer_reads_back_with_the_haptex_reader() {
+    let answer = post_raw("/api/voltage?format=csv&method=normalized", "text/csv", bump_csv()).await;
+    answer.ok();
+    assert!(answer.content_type().starts_with("text/csv"));
+    assert!(answer.headers.get(header::CONTENT_DISPOSITION).unwrap().to_str().unwrap().contains("voltage.csv"));
+    let table = Table::read(answer.body.as_ref(), "answer").unwrap();
+    assert_eq!(table.columns(), ["x_mm", "mu", "voltage_v"]);
+    assert_eq!(table.n_rows(), 1001);
+    assert_eq!(table.column("voltage_v").unwrap().iter().cloned().fold(0.0, f64::max), 100.0);
+}
+
+#[tokio::test]
+async fn voltage_bad_csv_is_refused_with_line_and_column() {
+    let cases: &[(&str, Option<&str>, Option<u64>)] = &[
+        ("x_mm,mu\n0,1.1\n1,abc\n", Some("mu"), Some(3)), // not a number
+        ("x_mm,mu\n0,1.1\n1,NaN\n", Some("mu"), Some(3)), // NaN
+        ("x_mm,mu\n0,1.1\n1,inf\n", Some("mu"), Some(3)), // infinity
+        ("# only a comment\nx_mm,mu\n0,1.1\n1,1.2,7\n", Some("body"), Some(4)), // field count
+        ("x_mm,mu\n0,1.1\n0,1.2\n", Some("x_mm"), Some(3)), // not increasing
+        ("x_mm,mu\n0,1.1\n", Some("x_mm"), Some(1)),      // one point (reported at the header)
+        ("x_mm,friction\n0,1.1\n1,1.2\n", Some("mu (or ft_n and fn_n)"), Some(1)), // missing column
+        ("x_mm,ft_n,fn_n\n0,0.1,0.2\n1,0.1,0\n", Some("fn_n"), Some(3)), // Fn = 0
+        ("x_mm,mu,mu\n0,1,1\n", Some("mu"), Some(1)),     // duplicate column
+        ("\n# nothing\n", Some("body"), None),            // no header
+    ];
+    for (csv, field, line) in cases {
+        let answer = post_raw("/api/voltage", "text/csv", csv.to_string()).await;
+        let body = answer.error(StatusCode::BAD_REQUEST, *field);
+        assert_eq!(body["line"].as_u64(), *line, "{csv:?}: {body}");
+        assert!(body["error"].as_str().unwrap().starts_with("request body"), "{body}");
+    }
+}
+
+#[tokio::test]
+async fn voltage_bad_json_is_refused_naming_the_field() {
+    let good = profile_json(&[0.0, 1.0, 2.0], &[1.0, 1.2, 1.1]);
+    let cases: Vec<(String, StatusCode, &str)> = vec![
+        ("{\"profile\": ".into(), StatusCode::BAD_REQUEST, "profile"), // truncated
+        ("{\"profile\": {\"x_mm\": [0, 1], \"mu\": [1, NaN]}}".into(), StatusCode::BAD_REQUEST, "profile.mu[1]"),
+        ("{\"profile\": {\"x_mm\": [0, 1e999], \"mu\": [1, 1]}}".into(), StatusCode::BAD_REQUEST, "profile.x_mm[1]"),
+        ("{\"profile\": {\"x_mm\": [0, 1], \"mu\": [1, \"a\"]}}".into(), StatusCode::BAD_REQUEST, "profile.mu[1]"),
+        (
+            json!({ "profile": profile_json(&[0.0, 2.0, 1.0], &[1.0, 1.0, 1.0]) }).to_string(),
+            StatusCode::BAD_REQUEST,
+            "profile.x_mm[2]",
+        ),
+        (
+            json!({ "profile": profile_json(&[0.0, 1.0, 2.0], &[1.0, 1.0]) }).to_string(),
+            StatusCode::BAD_REQUEST,
+            "profile.mu[0]",
+        ),
+        (json!({ "profile": { "x_mm": [0.0, 1.0] } }).to_string(), StatusCode::BAD_REQUEST, "profile.mu"),
+        (json!({ "profile": good, "extra": 1 }).to_string(), StatusCode::BAD_REQUEST, "extra"),
+        (json!({ "profile": good, "method": "magic" }).to_string(), StatusCode::BAD_REQUEST, "method"),
+        (
+            json!({ "profile": good, "device": { "u_max_v": 0.0 } }).to_string(),
+            StatusCode::BAD_REQUEST,
+            "device.u_max_v",
+        ),
+        (
+            json!({ "profile": good, "device": { "u_max_v": -5.0 } }).to_string(),
+            StatusCode::BAD_REQUEST,
+            "device.u_max_v",
+        ),
+        (
+            json!({ "profile": good, "device": { "u_max_v": 1e7 } }).to_string(),
+            StatusCode::BAD_REQUEST,
+            "device.u_max_v",
+        ),
+        (json!({ "profile": good, "device": { "mu_hd": 11.0 } }).to_string(), StatusCode::BAD_REQUEST, "device.mu_hd"),
+        (
+            json!({ "profile": good, "device": { "area_exponent": 3.0 } }).to_string(),
+            StatusCode::BAD_REQUEST,
+            "device.area_exponent",
+        ),
+        (json!({ "profile": good, "device": { "u_max": 50.0 } }).to_string(), StatusCode::BAD_REQUEST, "device.u_max"),
+        (
+            json!({ "profile": good, "device": { "u_max_v": "high" } }).to_string(),
+            StatusCode::BAD_REQUEST,
+            "device.u_max_v",
+        ),
+        // A power-law contact area needs the normal force.
+        (json!({ "profile": good, "device": { "area_exponent": 0.5 } }).to_string(), StatusCode::BAD_REQUEST, "device"),
+        // Constants whose eq. (3) factor underflows: refused, not NaN.
+        (
+            json!({ "profile": good, "device": { "d_sc_mm": 1e-300, "d_i_mm": 1e-300 } }).to_string(),
+            StatusCode::BAD_REQUEST,
+            "device",
+        ),
+    ];
+    for (body, status, field) in cases {
+        let answer = post_raw("/api/voltage", "application/json", body.clone()).await;
+        answer.error(status, Some(field));
+    }
+    // With the normal force the power law works.
+    let body = json!({ "profile": good, "device": { "area_exponent": 0.5, "fn_n": 0.4 } });
+    let answer = post_json("/api/voltage", &body).await.ok().json();
+    assert_eq!(answer["summary"]["fn_n"], 0.4);
+}
+
+#[tokio::test]
+async fn voltage_bad_query_content_type_and_sizes_are_refused() {
+    let csv = bump_csv();
+    let cases: &[(&str, &str)] = &[
+        ("/api/voltage?u_max_v=0", "u_max_v"),
+        ("/api/voltage?u_max_v=abc", "u_max_v"),
+        ("/api/voltage?u_max_v=NaN", "u_max_v"),
+        ("/api/voltage?eps_sc=-3", "eps_sc"),
+        ("/api/voltage?d_sc_mm=20", "d_sc_mm"),
+        ("/api/voltage?method=eq10", "method"),
+        ("/api/voltage?format=xml", "format"),
+        ("/api/voltage?voltage=1", "voltage"),
+        ("/api/voltage?u_max_v=50&u_max_v=60", "u_max_v"),
+    ];
+    for (uri, field) in cases {
+        post_raw(uri, "text/csv", csv.clone()).await.error(StatusCode::BAD_REQUEST, Some(field));
+    }
+    // A JSON body takes its parameters from the body: the query only has format.
+    let body = json!({ "profile": profile_json(&[0.0, 1.0], &[1.0, 1.1]) });
+    post_raw("/api/voltage?u_max_v=50", "application/json", body.to_string())
+        .await
+        .error(StatusCode::BAD_REQUEST, Some("u_max_v"));
+
+    post_raw("/api/voltage", "text/plain", csv.clone())
+        .await
+        .error(StatusCode::UNSUPPORTED_MEDIA_TYPE, Some("content-type"));
+    send(Request::post("/api/voltage").body(Body::from(csv.clone())).unwrap())
+        .await
+        .error(StatusCode::UNSUPPORTED_MEDIA_TYPE, Some("content-type"));
+    post_raw("/api/voltage", "text/csv", "").await.error(StatusCode::BAD_REQUEST, Some("body"));
+
+    // Larger than 1 MiB: 413 before anything is parsed.
+    let mut big = String::from("x_mm,mu\n");
+    let mut i = 0u64;
+    while big.len() <= Limits::DEFAULT.max_body_bytes {
+        big.push_str(&format!("{i}.000000,1.000000\n"));
+        i += 1;
+    }
+    post_raw("/api/voltage", "text/csv", big).await.error(StatusCode::PAYLOAD_TOO_LARGE, Some("body"));
+
+    // Under 1 MiB but more points than the limit: 413 naming the points.
+    let n = Limits::DEFAULT.max_points + 1;
+    let mut many = String::from("x_mm,mu\n");
+    for i in 0..n {
+        many.push_str(&format!("{i},1\n"));
+    }
+    assert!(many.len() < Limits::DEFAULT.max_body_bytes);
+    post_raw("/api/voltage", "text/csv", many).await.error(StatusCode::PAYLOAD_TOO_LARGE, Some("body"));
+    let x: Vec<f64> = (0..n).map(|i| i as f64).collect();
+    let body = json!({ "profile": { "x_mm": x, "mu": vec![1; n] } }).to_string();
+    assert!(body.len() < Limits::DEFAULT.max_body_bytes);
+    post_raw("/api/voltage", "application/json", body).await.error(StatusCode::PAYLOAD_TOO_LARGE, Some("profile.x_mm"));
+}
+
+/// A client that sends its headers and part of the body, then stalls (a
+/// slow upload, or a slowloris attack), is cut off by the request timeout
+/// with a JSON 408 (here 300 ms instead of 10 s), over a real socket.
+#[tokio::test]
+async fn a_stalled_upload_times_out_with_a_json_408() {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    let limits = Limits { request_timeout: Duration::from_millis(300), ..Limits::DEFAULT };
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+    let server = tokio::spawn(haptex_server::serve(listener, AppState::new(None, limits).unwrap(), async {
+        let _ = stopped.await;
+    }));
+    let mut socket = tokio::net::TcpStream::connect(addr).await.unwrap();
+    let partial =
+        "POST /api/voltage HTTP/1.1\r\nHost: x\r\nContent-Type: text/csv\r\nContent-Length: 1000\r\n\r\nx_mm,mu\n0,1\n";
+    socket.write_all(partial.as_bytes()).await.unwrap();
+    let mut response = Vec::new();
+    let read = tokio::time::timeout(Duration::from_secs(5), socket.read_to_end(&mut response)).await;
+    let text = String::from_utf8_lossy(&response);
+    assert!(read.is_ok(), "no answer within 5 s");
+    assert!(text.starts_with("HTTP/1.1 408"), "{text}");
+    assert!(text.contains("application/json") && text.contains("\"error\""), "{text}");
+    // Graceful shutdown: the server future ends once asked to.
+    stop.send(()).unwrap();
+    tokio::time::timeout(Duration::from_secs(5), server).await.unwrap().unwrap().unwrap();
+}
+
+/// A client that opens a connection and never finishes its headers is
+/// disconnected after the header timeout (here 300 ms instead of 10 s).
+#[tokio::test]
+async fn stalled_headers_are_disconnected() {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    let limits = Limits { header_timeout: Duration::from_millis(300), ..Limits::DEFAULT };
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+    let server = tokio::spawn(haptex_server::serve(listener, AppState::new(None, limits).unwrap(), async {
+        let _ = stopped.await;
+    }));
+    for partial in ["", "GET /api/health HTTP/1.1\r\nHost: x\r\n"] {
+        let mut socket = tokio::net::TcpStream::connect(addr).await.unwrap();
+        socket.write_all(partial.as_bytes()).await.unwrap();
+        let mut response = Vec::new();
+        let read = tokio::time::timeout(Duration::from_secs(5), socket.read_to_end(&mut response)).await;
+        assert!(read.is_ok(), "connection with partial headers {partial:?} still open after 5 s");
+        let text = String::from_utf8_lossy(&response);
+        assert!(!text.contains(" 200 "), "{text}");
+    }
+    // A complete request on a new connection is still served.
+    let mut socket = tokio::net::TcpStream::connect(addr).await.unwrap();
+    socket.write_all(b"GET /api/health HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n").await.unwrap();
+    let mut response = Vec::new();
+    socket.read_to_end(&mut response).await.unwrap();
+    assert!(String::from_utf8_lossy(&response).starts_with("HTTP/1.1 200"));
+    stop.send(()).unwrap();
+    tokio::time::timeout(Duration::from_secs(5), server).await.unwrap().unwrap().unwrap();
+}
+
+// ------------------------------------------------------------ profile
+
+#[tokio::test]
+async fn profile_is_normalized_to_json_or_csv() {
+    let answer = post_raw("/api/profile", "text/csv", "x_mm,ft_n,fn_n\n0,0.1,0.2\n1,0.3,0.4\n").await.ok().json();
+    assert_eq!(numbers(&answer["mu"]), [0.1 / 0.2, 0.3 / 0.4]);
+    assert_eq!(numbers(&answer["fn_n"]), [0.2, 0.4]);
+    assert_eq!(answer["n_points"], 2);
+    let csv = post_json("/api/profile?format=csv", &profile_json(&[0.0, 1.0], &[1.0, 1.5])).await;
+    csv.ok();
+    let table = Table::read(csv.body.as_ref(), "answer").unwrap();
+    assert_eq!(table.columns(), ["x_mm", "mu"]);
+    assert_eq!(table.column("mu").unwrap(), [1.0, 1.5]);
+    post_json("/api/profile", &json!({ "x_mm": [0.0, 1.0], "mu": [1.0] }))
+        .await
+        .error(StatusCode::BAD_REQUEST, Some("mu[0]"));
+    post_raw("/api/profile", "text/csv", "x_mm,mu\n0,1\n1,oops\n").await.error(StatusCode::BAD_REQUEST, Some("mu"));
+    post_raw("/api/profile?seed=1", "text/csv", "x_mm,mu\n0,1\n1,1\n")
+        .await
+        .error(StatusCode::BAD_REQUEST, Some("seed"));
+}
+
+// ---------------------------------------------------------- materials
+
+#[tokio::test]
+async fn materials_lists_the_synthetic_demo_library() {
+    let answer = get("/api/materials").await.ok().json();
+    let materials = answer["materials"].as_array().unwrap();
+    assert_eq!(materials.len(), 12);
+    assert!(materials.iter().all(|m| m["synthetic"] == true), "the shipped demo library is synthetic");
+    assert!(materials.iter().any(|m| m["name"] == "velvet"));
+    get("/api/materials?x=1").await.error(StatusCode::BAD_REQUEST, Some("x"));
+}
+
+/// The sample is the stroke the library itself selects for that seed
+/// (same profile, bit for bit), flagged synthetic; CSV carries the
+/// provenance in comments.
+#[tokio::test]
+async fn material_sample_is_the_librarys_seeded_choice() {
+    let library = Library::open_read_only(&shipped_library()).unwrap();
+    let expected = library.sample("velvet", Some(7)).unwrap();
+    let answer = get("/api/materials/velvet/sample?seed=7").await.ok().json();
+    assert_eq!(answer["seed"], "7");
+    assert_eq!(answer["synthetic"], true);
+    assert_eq!(answer["material"], "velvet");
+    assert_eq!(answer["stroke"]["id"], expected.stored.stroke.id);
+    assert_eq!(numbers(&answer["x_mm"]), expected.stored.profile.x_mm());
+    assert_eq!(numbers(&answer["mu"]), expected.stored.profile.mu());
+    assert_eq!(numbers(&answer["fn_n"]), expected.stored.profile.fn_n().unwrap());
+    let again = get("/api/materials/velvet/sample?seed=7").await.ok().json();
+    assert_eq!(again["stroke"]["id"], answer["stroke"]["id"]);
+    // Without a seed, one is drawn and returned so the choice can be repeated.
+    let drawn = get("/api/materials/velvet/sample").await.ok().json();
+    let seed = drawn["seed"].as_str().unwrap();
+    let repeated = get(&format!("/api/materials/velvet/sample?seed={seed}")).await.ok().json();
+    assert_eq!(repeated["stroke"]["id"], drawn["stroke"]["id"]);
+
+    let csv = get("/api/materials/velvet/sample?seed=7&format=csv").await;
+    csv.ok();
+    let text = csv.text();
+    assert!(text.contains("SYNTHETIC"), "{text}");
+    let table = Table::read(csv.body.as_ref(), "answer").unwrap();
+    assert_eq!(table.columns(), ["x_mm", "mu", "fn_n"]);
+    assert_eq!(table.column("mu").unwrap(), expected.stored.profile.mu());
+}
+
+#[tokio::test]
+async fn material_sample_bad_input_is_refused() {
+    get("/api/materials/unobtainium/sample").await.error(StatusCode::NOT_FOUND, Some("name"));
+    get("/api/materials/velvet/sample?seed=abc").await.error(StatusCode::BAD_REQUEST, Some("seed"));
+    get("/api/materials/velvet/sample?seed=-1").await.error(StatusCode::BAD_REQUEST, Some("seed"));
+    get("/api/materials/velvet/sample?seed=18446744073709551616").await.error(StatusCode::BAD_REQUEST, Some("seed"));
+    get("/api/materials/velvet/sample?format=xml").await.error(StatusCode::BAD_REQUEST, Some("format"));
+    get("/api/materials/velvet/sample?material=wood").await.error(StatusCode::BAD_REQUEST, Some("material"));
+    get("/api/materials/%FF/sample").await.error(StatusCode::BAD_REQUEST, Some("name"));
+    // A server without a library has no materials.
+    let bare = app(AppState::new(None, Limits::DEFAULT).unwrap());
+    send_to(bare, Request::get("/api/materials").body(Body::empty()).unwrap()).await.error(StatusCode::NOT_FOUND, None);
+}
+
+/// Library reads from many requests at once (the connection pool).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn concurrent_samples_all_succeed() {
+    let router = server();
+    let requests = (0..16u64).map(|seed| {
+        let router = router.clone();
+        tokio::spawn(async move {
+            let uri = format!("/api/materials/wood/sample?seed={seed}");
+            send_to(router, Request::get(uri).body(Body::empty()).unwrap()).await
+        })
+    });
+    for handle in requests.collect::<Vec<_>>() {
+        let answer = handle.await.unwrap();
+        answer.ok();
+        assert_eq!(answer.json()["material"], "wood");
+    }
+}
+
+// ---------------------------------------------------------------- play
+
+/// A constant 50 V profile swept at 50 mm/s over 10 mm: a 0.2 s, 48 kHz WAV
+/// of a 1 kHz sine whose peak is sqrt(2) 50 V; 16-bit codes are within one
+/// code (1/32767 of full scale) of the exact value.
+#[tokio::test]
+async fn play_renders_a_stroke_as_wav() {
+    let body = json!({
+        "voltage": { "x_mm": [0.0, 10.0], "voltage_v": [50.0, 50.0] },
+        "stroke": { "velocity_mm_s": 50.0 },
+    });
+    let answer = post_json("/api/play", &body).await;
+    answer.ok();
+    assert_eq!(answer.content_type(), "audio/wav");
+    let vpfs: f64 = answer.headers.get("x-haptex-volts-per-full-scale").unwrap().to_str().unwrap().parse().unwrap();
+    assert!((vpfs - 100.0 * std::f64::consts::SQRT_2).abs() < 1e-9);
+    let mut reader = hound::WavReader::new(std::io::Cursor::new(answer.body.to_vec())).unwrap();
+    let spec = reader.spec();
+    assert_eq!((spec.channels, spec.sample_rate, spec.bits_per_sample), (1, 48_000, 16));
+    let samples: Vec<i16> = reader.samples::<i16>().map(Result::unwrap).collect();
+    assert_eq!(samples.len(), 9601); // 0.2 s at 48 kHz, both ends
+    let peak_v = samples.iter().map(|s| f64::from(s.unsigned_abs())).fold(0.0, f64::max) / 32767.0 * vpfs;
+    assert!((peak_v - 50.0 * std::f64::consts::SQRT_2).abs() < vpfs / 32767.0 + 1e-9, "{peak_v}");
+}
+
+#[tokio::test]
+async fn play_renders_a_trajectory_as_json() {
+    let body = json!({
+        "voltage": { "x_mm": [0.0, 1.0, 2.0], "voltage_v": [0.0, 40.0, 120.0] },
+        "trajectory": { "t_s": [0.0, 0.01], "x_mm": [0.0, 2.0] },
+        "carrier": { "shape": "none", "frequency_hz": 0.0 },
+        "sample_rate_hz": 1000,
+        "u_max_v": 100.0,
+        "format": "json",
+    });
+    let answer = post_json("/api/play", &body).await.ok().json();
+    let envelope = numbers(&answer["envelope_v"]);
+    let x = numbers(&answer["x_mm"]);
+    assert_eq!(envelope.len(), 11);
+    for (u, x) in envelope.iter().zip(&x) {
+        let requested = if *x <= 1.0 { 40.0 * x } else { 40.0 + 80.0 * (x - 1.0) };
+        assert!((u - requested.min(100.0)).abs() < 1e-9, "x {x}: {u}");
+    }
+    assert!(answer["report"]["clip"]["clamped_samples"].as_u64().unwrap() > 0);
+    assert_eq!(numbers(&answer["signal_v"]), envelope);
+}
+
+#[tokio::test]
+async fn play_bad_input_is_refused() {
+    let voltage = json!({ "x_mm": [0.0, 10.0], "voltage_v": [50.0, 50.0] });
+    let stroke = json!({ "velocity_mm_s": 50.0 });
+    let cases: Vec<(Value, StatusCode, &str)> = vec![
+        (json!({ "voltage": voltage }), StatusCode::BAD_REQUEST, "trajectory"),
+        (
+            json!({ "voltage": voltage, "stroke": stroke, "trajectory": { "t_s": [0, 1], "x_mm": [0, 1] } }),
+            StatusCode::BAD_REQUEST,
+            "stroke",
+        ),
+        (
+            json!({ "voltage": voltage, "stroke": { "velocity_mm_s": 0.0 } }),
+            StatusCode::BAD_REQUEST,
+            "stroke.velocity_mm_s",
+        ),
+        (
+            json!({ "voltage": voltage, "stroke": { "velocity_mm_s": 50.0, "strokes": 0 } }),
+            StatusCode::BAD_REQUEST,
+            "stroke.strokes",
+        ),
+        (
+            json!({ "voltage": voltage, "stroke": { "velocity_mm_s": 50.0, "from_mm": 3.0, "to_mm": 3.0 } }),
+            StatusCode::BAD_REQUEST,
+            "stroke",
+        ),
+        (json!({ "voltage": voltage, "stroke": { "velocity_mm_s": 0.001 } }), StatusCode::PAYLOAD_TOO_LARGE, "stroke"),
+        (
+            json!({ "voltage": voltage, "stroke": { "velocity_mm_s": 0.2 }, "format": "json" }),
+            StatusCode::PAYLOAD_TOO_LARGE,
+            "stroke",
+        ),
+        (
+            json!({ "voltage": voltage, "trajectory": { "t_s": [0, 1e6], "x_mm": [0, 1] } }),
+            StatusCode::PAYLOAD_TOO_LARGE,
+            "trajectory",
+        ),
+        (
+            json!({ "voltage": voltage, "trajectory": { "t_s": [0, 1, 1], "x_mm": [0, 1, 2] } }),
+            StatusCode::BAD_REQUEST,
+            "trajectory.t_s[2]",
+        ),
+        (
+            json!({ "voltage": { "x_mm": [0.0, 1.0], "voltage_v": [1.0, -1.0] }, "stroke": stroke }),
+            StatusCode::BAD_REQUEST,
+            "voltage.voltage_v[1]",
+        ),
+        (
+            json!({ "voltage": { "x_mm": [1.0, 0.0], "voltage_v": [1.0, 1.0] }, "stroke": stroke }),
+            StatusCode::BAD_REQUEST,
+            "voltage.x_mm[1]",
+        ),
+        (
+            json!({ "voltage": voltage, "stroke": stroke, "carrier": { "shape": "sine", "frequency_hz": 30000.0 } }),
+            StatusCode::BAD_REQUEST,
+            "carrier",
+        ),
+        (
+            json!({ "voltage": voltage, "stroke": stroke, "carrier": { "shape": "triangle", "frequency_hz": 100.0 } }),
+            StatusCode::BAD_REQUEST,
+            "carrier.shape",
+        ),
+        (
+            json!({ "voltage": voltage, "stroke": stroke, "sample_rate_hz": 10 }),
+            StatusCode::BAD_REQUEST,
+            "sample_rate_hz",
+        ),
+        (json!({ "voltage": voltage, "stroke": stroke, "u_max_v": 0.0 }), StatusCode::BAD_REQUEST, "u_max_v"),
+        (
+            json!({ "voltage": voltage, "stroke": stroke, "slew_v_per_s": -1.0 }),
+            StatusCode::BAD_REQUEST,
+            "slew_v_per_s",
+        ),
+        (
+            json!({ "voltage": voltage, "stroke": stroke, "amplifier_range_v": 10.0 }),
+            StatusCode::BAD_REQUEST,
+            "amplifier_range_v",
+        ),
+        (
+            json!({ "voltage": voltage, "stroke": stroke, "volts_per_full_scale": 10.0 }),
+            StatusCode::BAD_REQUEST,
+            "volts_per_full_scale",
+        ),
+        (json!({ "voltage": voltage, "stroke": stroke, "format": "mp3" }), StatusCode::BAD_REQUEST, "format"),
+        (json!({ "voltage": voltage, "stroke": stroke, "loud": true }), StatusCode::BAD_REQUEST, "loud"),
+    ];
+    for (body, status, field) in cases {
+        post_json("/api/play", &body).await.error(status, Some(field));
+    }
+    post_raw("/api/play", "text/csv", "t_s,x_mm\n0,0\n")
+        .await
+        .error(StatusCode::UNSUPPORTED_MEDIA_TYPE, Some("content-type"));
+}

@@ -1,0 +1,466 @@
+//! The GUI in a real browser: Debian's headless Chromium driven through
+//! chromedriver (WebDriver, the `fantoccini` crate), against the server
+//! started in-process on a loopback port.
+//!
+//! Checks, in one browser session (starting Chromium is the slow part):
+//!
+//! 1. the page loads and draws the first library material without a
+//!    console error (Chromium's own console log, read through
+//!    chromedriver, at level SEVERE);
+//! 2. changing controls changes the plotted voltage: method -> normalized
+//!    puts the largest voltage at U_max = 100 V; typing U_max = 60 scales
+//!    every plotted voltage by 0.6 (1e-12 relative: eq. 9 is linear in
+//!    U_max);
+//! 3. uploading a profile file plots exactly its points;
+//! 4. the downloads: Chromium's own download cannot be inspected here, so
+//!    the test reads the blob behind the page's download link (the bytes
+//!    the browser saves) and parses the voltage CSV with haptex's CSV
+//!    reader: the same numbers as the plot; the profile CSV holds the
+//!    uploaded points; the stroke WAV starts with a RIFF/WAVE header;
+//! 5. the feel strip: a pointer moved over it shows U(x) of the plotted
+//!    profile at the pointer's x (1e-9 relative);
+//! 6. a phone-sized window (390 x 844) has no horizontal scrolling.
+//!
+//! It saves screenshots (desktop and phone) in the target directory;
+//! with HAPTEX_UPDATE_SCREENSHOTS=1 also to docs/img/ (what docs/web.md
+//! and the README show).
+//!
+//! Needs /usr/bin/chromium and /usr/bin/chromedriver (Debian packages
+//! chromium and chromium-driver; scripts/test.sh installs them), or
+//! HAPTEX_CHROMIUM / HAPTEX_CHROMEDRIVER. HAPTEX_BROWSER_TEST=skip skips
+//! the test, saying so.
+
+use std::net::{SocketAddr, TcpListener as StdListener};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use axum::http::Method;
+use fantoccini::actions::{InputSource, MouseActions, PointerAction};
+use fantoccini::wd::WebDriverCompatibleCommand;
+use fantoccini::{Client, ClientBuilder, Locator};
+use haptex_core::io::Table;
+use haptex_server::{AppState, Limits};
+use serde_json::{Value, json};
+
+const WAIT: Duration = Duration::from_secs(20);
+/// Seed of the stroke shown in the screenshots.
+const SCREENSHOT_SEED: u64 = 3;
+
+#[test]
+fn gui_in_headless_chromium() {
+    if std::env::var("HAPTEX_BROWSER_TEST").as_deref() == Ok("skip") {
+        eprintln!("SKIPPED: HAPTEX_BROWSER_TEST=skip: the GUI was not tested in a browser");
+        return;
+    }
+    let chromium = tool("HAPTEX_CHROMIUM", "/usr/bin/chromium");
+    let chromedriver = tool("HAPTEX_CHROMEDRIVER", "/usr/bin/chromedriver");
+    let scratch = tempfile::tempdir().unwrap();
+    let runtime = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
+    runtime.block_on(async {
+        let (server, stop) = start_server().await;
+        let driver = Driver::start(&chromedriver, scratch.path());
+        let client = connect(&driver, &chromium, scratch.path()).await;
+        let result = exercise(&client, &format!("http://{server}/"), scratch.path()).await;
+        // Close the browser whatever happened, then report.
+        let _ = client.close().await;
+        let _ = stop.send(());
+        if let Err(message) = result {
+            panic!("{message}\nchromedriver log: {}", driver.log_path.display());
+        }
+    });
+}
+
+fn tool(variable: &str, default: &str) -> PathBuf {
+    let path = std::env::var_os(variable).map(PathBuf::from).unwrap_or_else(|| PathBuf::from(default));
+    assert!(
+        path.is_file(),
+        "{} not found: install Debian's chromium and chromium-driver (bash scripts/test.sh does), set {variable}, \
+         or set HAPTEX_BROWSER_TEST=skip to skip the browser test",
+        path.display()
+    );
+    path
+}
+
+async fn start_server() -> (SocketAddr, tokio::sync::oneshot::Sender<()>) {
+    let library = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/library/library.sqlite");
+    let state = AppState::new(Some(&library), Limits::DEFAULT).unwrap();
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+    tokio::spawn(haptex_server::serve(listener, state, async {
+        let _ = stopped.await;
+    }));
+    (addr, stop)
+}
+
+/// chromedriver on a free loopback port, killed when dropped.
+struct Driver {
+    child: Child,
+    port: u16,
+    log_path: PathBuf,
+}
+
+impl Driver {
+    fn start(chromedriver: &Path, scratch: &Path) -> Self {
+        let port = StdListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+        let log_path = scratch.join("chromedriver.log");
+        let child = Command::new(chromedriver)
+            .arg(format!("--port={port}"))
+            .arg(format!("--log-path={}", log_path.display()))
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap_or_else(|e| panic!("cannot start {}: {e}", chromedriver.display()));
+        let driver = Self { child, port, log_path };
+        let start = Instant::now();
+        while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
+            assert!(start.elapsed() < WAIT, "chromedriver did not listen on port {port} within {WAIT:?}");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        driver
+    }
+}
+
+impl Drop for Driver {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+async fn connect(driver: &Driver, chromium: &Path, scratch: &Path) -> Client {
+    let profile = scratch.join("chromium-profile");
+    let downloads = scratch.join("downloads");
+    std::fs::create_dir_all(&downloads).unwrap();
+    let capabilities = json!({
+        "browserName": "chrome",
+        "goog:chromeOptions": {
+            "binary": chromium,
+            "args": [
+                "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+                "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-dev-shm-usage",
+                format!("--user-data-dir={}", profile.display()), "--window-size=1280,1000",
+            ],
+            "prefs": { "download.default_directory": downloads, "download.prompt_for_download": false },
+        },
+        "goog:loggingPrefs": { "browser": "ALL" },
+    });
+    let Value::Object(capabilities) = capabilities else { unreachable!() };
+    let connector = hyper_util::client::legacy::connect::HttpConnector::new();
+    ClientBuilder::new(connector)
+        .capabilities(capabilities)
+        .connect(&format!("http://127.0.0.1:{}", driver.port))
+        .await
+        .expect("a WebDriver session with chromedriver")
+}
+
+/// chromedriver's browser console log (entries since the last call).
+#[derive(Debug)]
+struct BrowserLog;
+
+impl WebDriverCompatibleCommand for BrowserLog {
+    fn endpoint(&self, base_url: &url::Url, session_id: Option<&str>) -> Result<url::Url, url::ParseError> {
+        base_url.join(&format!("session/{}/se/log", session_id.unwrap_or_default()))
+    }
+
+    fn method_and_body(&self, _: &url::Url) -> (Method, Option<String>) {
+        (Method::POST, Some(r#"{"type": "browser"}"#.to_string()))
+    }
+}
+
+type Check<T> = Result<T, String>;
+
+fn fail<T>(message: impl Into<String>) -> Check<T> {
+    Err(message.into())
+}
+
+macro_rules! wd {
+    ($e:expr) => {
+        $e.await.map_err(|e| format!("{}: {e}", stringify!($e)))?
+    };
+}
+
+/// Console messages at level SEVERE since the last call.
+async fn console_errors(client: &Client) -> Check<Vec<String>> {
+    let entries = wd!(client.issue_cmd(BrowserLog));
+    Ok(entries
+        .as_array()
+        .map(|a| a.as_slice())
+        .unwrap_or_default()
+        .iter()
+        .filter(|e| e["level"] == "SEVERE")
+        .map(|e| e["message"].as_str().unwrap_or_default().to_string())
+        .collect())
+}
+
+async fn script(client: &Client, code: &str) -> Check<Value> {
+    Ok(wd!(client.execute(code, vec![])))
+}
+
+/// Waits until `code` (a JS expression) is truthy.
+async fn wait_for(client: &Client, code: &str, what: &str) -> Check<()> {
+    let start = Instant::now();
+    loop {
+        let value = script(client, &format!("return Boolean({code});")).await?;
+        if value == Value::Bool(true) {
+            return Ok(());
+        }
+        if start.elapsed() > WAIT {
+            let message = script(client, "return document.getElementById('message').textContent;").await?;
+            return fail(format!("timed out waiting for {what} ({code}); the page says: {message}"));
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+}
+
+async fn updates(client: &Client) -> Check<u64> {
+    let value = script(client, "return Number(document.body.dataset.updates);").await?;
+    value.as_u64().ok_or_else(|| format!("data-updates is {value}"))
+}
+
+async fn wait_update(client: &Client, after: u64, what: &str) -> Check<()> {
+    wait_for(client, &format!("Number(document.body.dataset.updates) > {after}"), what).await
+}
+
+fn numbers(value: &Value) -> Check<Vec<f64>> {
+    value
+        .as_array()
+        .ok_or_else(|| format!("not an array: {value}"))?
+        .iter()
+        .map(|v| v.as_f64().ok_or_else(|| format!("not a number: {v}")))
+        .collect()
+}
+
+/// The data the uPlot chart `name` draws: [x, series 1, ...].
+async fn plotted(client: &Client, name: &str) -> Check<Vec<Vec<f64>>> {
+    let data = script(client, &format!("return window.haptex.plots.{name}.data;")).await?;
+    data.as_array().ok_or("no plot data")?.iter().map(numbers).collect()
+}
+
+/// Clicks a download button and returns the bytes behind the page's
+/// download link (the blob the browser saves).
+async fn download(client: &Client, kind: &str) -> Check<Vec<u8>> {
+    let before = script(client, "return Number(document.getElementById('download-link').dataset.count || 0);").await?;
+    let before = before.as_u64().unwrap_or(0);
+    wd!(wd!(client.find(Locator::Css(&format!("[data-download='{kind}']")))).click());
+    let link = "document.getElementById('download-link')";
+    wait_for(
+        client,
+        &format!("Number({link}.dataset.count || 0) > {before} && {link}.dataset.kind === '{kind}'"),
+        kind,
+    )
+    .await?;
+    let fetch = format!(
+        "const done = arguments[arguments.length - 1];
+         fetch({link}.href).then(r => r.arrayBuffer()).then(b => done(Array.from(new Uint8Array(b))))
+           .catch(e => done('error: ' + e));"
+    );
+    let bytes = wd!(client.execute_async(&fetch, vec![]));
+    bytes
+        .as_array()
+        .ok_or_else(|| format!("fetching the download blob failed: {bytes}"))?
+        .iter()
+        .map(|b| b.as_u64().map(|b| b as u8).ok_or_else(|| format!("not a byte: {b}")))
+        .collect()
+}
+
+async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
+    // 1. Load: the first source is the library, its first material drawn.
+    wd!(client.goto(base));
+    wait_for(client, "document.body.dataset.state === 'ready'", "the first plot").await?;
+    let errors = console_errors(client).await?;
+    if !errors.is_empty() {
+        return fail(format!("console errors on load: {errors:#?}"));
+    }
+    let material_info = wd!(wd!(client.find(Locator::Id("material-info"))).text());
+    if !material_info.contains("SYNTHETIC") {
+        return fail(format!("a synthetic material is not labelled as such: {material_info:?}"));
+    }
+
+    // 2. Controls change the plotted voltage.
+    let before = plotted(client, "voltage").await?;
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css("input[name='method'][value='normalized']"))).click());
+    wait_update(client, n, "the voltage after choosing the normalized method").await?;
+    let normalized = plotted(client, "voltage").await?;
+    let max = normalized[1].iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    if max != 100.0 || normalized[1] == before[1] {
+        return fail(format!("normalized method: largest plotted voltage {max} V, expected U_max = 100 V"));
+    }
+    let n = updates(client).await?;
+    let u_max = wd!(client.find(Locator::Id("param-u_max_v")));
+    wd!(u_max.clear());
+    wd!(u_max.send_keys("60"));
+    wait_for(client, "window.haptex.state.voltage.summary.u_max_v === 60", "U_max = 60 V").await?;
+    wait_update(client, n, "the voltage after typing U_max").await?;
+    let scaled = plotted(client, "voltage").await?;
+    for (u60, u100) in scaled[1].iter().zip(&normalized[1]) {
+        if (u60 - 0.6 * u100).abs() > 1e-12 * u100.max(1.0) {
+            return fail(format!("U_max 100 -> 60 V should scale every voltage by 0.6: {u100} -> {u60}"));
+        }
+    }
+
+    // 3. Upload a profile file: its points are plotted.
+    let x: Vec<f64> = (0..9).map(|i| 0.5 * i as f64).collect();
+    let mu = [1.0, 1.05, 1.2, 1.4, 1.3, 1.1, 1.0, 1.02, 1.0];
+    let mut csv = String::from("# browser test profile\nx_mm,mu\n");
+    for (x, mu) in x.iter().zip(mu) {
+        csv.push_str(&format!("{x},{mu}\n"));
+    }
+    let file = scratch.join("my-profile.csv");
+    std::fs::write(&file, &csv).unwrap();
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css("input[name='source'][value='upload']"))).click());
+    wd!(wd!(client.find(Locator::Id("upload"))).send_keys(&file.display().to_string()));
+    wait_update(client, n, "the plot of the uploaded profile").await?;
+    wait_for(client, "window.haptex.state.voltage.x_mm.length === 9", "the uploaded profile's 9 points").await?;
+    let friction = plotted(client, "friction").await?;
+    if friction[0] != x || friction[1] != mu {
+        return fail(format!("uploaded profile plotted as {:?} / {:?}", friction[0], friction[1]));
+    }
+    let voltage = plotted(client, "voltage").await?;
+    if voltage[1].iter().cloned().fold(0.0, f64::max) != 60.0 || voltage[1][0] != 0.0 {
+        return fail(format!("normalized voltage of the upload: {:?}", voltage[1]));
+    }
+    let info = wd!(wd!(client.find(Locator::Id("upload-info"))).text());
+    if !info.contains("my-profile.csv") || !info.contains("9 points") {
+        return fail(format!("upload info: {info:?}"));
+    }
+
+    // 4. Downloads: the blobs behind the download link.
+    let bytes = download(client, "voltage-csv").await?;
+    let table = Table::read(bytes.as_slice(), "downloaded voltage.csv").map_err(|e| e.to_string())?;
+    if table.columns() != ["x_mm", "mu", "voltage_v"] {
+        return fail(format!("voltage CSV columns {:?}", table.columns()));
+    }
+    for (column, want) in [("x_mm", &voltage[0]), ("mu", &friction[1]), ("voltage_v", &voltage[1])] {
+        if table.column(column).unwrap() != want.as_slice() {
+            return fail(format!("downloaded {column} differs from the plot: {:?}", table.column(column)));
+        }
+    }
+    let bytes = download(client, "profile-csv").await?;
+    let table = Table::read(bytes.as_slice(), "downloaded profile.csv").map_err(|e| e.to_string())?;
+    if table.column("x_mm") != Some(x.as_slice()) || table.column("mu") != Some(mu.as_slice()) {
+        return fail("downloaded profile CSV differs from the uploaded file");
+    }
+    let wav = download(client, "stroke-wav").await?;
+    if wav.len() < 44 || &wav[..4] != b"RIFF" || &wav[8..12] != b"WAVE" {
+        return fail(format!("stroke WAV download is not a WAV file ({} bytes)", wav.len()));
+    }
+    let json = download(client, "voltage-json").await?;
+    let answer: Value = serde_json::from_slice(&json).map_err(|e| format!("voltage JSON download: {e}"))?;
+    if numbers(&answer["voltage_v"])? != voltage[1] {
+        return fail("voltage JSON download differs from the plot");
+    }
+
+    // 5. The feel strip: U at the pointer.
+    let strip = wd!(client.find(Locator::Id("feel-strip")));
+    let width = script(client, "return document.getElementById('feel-strip').getBoundingClientRect().width;").await?;
+    let width = width.as_f64().ok_or("strip width")?;
+    let offset = 0.3 * width; // from the centre: x at 80% of the span
+    let moves = MouseActions::new("mouse".into()).then(PointerAction::MoveToElement {
+        element: strip,
+        duration: Some(Duration::from_millis(50)),
+        x: offset,
+        y: 0.0,
+    });
+    wd!(client.perform_actions(moves));
+    wait_for(client, "document.getElementById('feel-readout').dataset.voltageV !== undefined", "the feel readout")
+        .await?;
+    let read = script(
+        client,
+        "const d = document.getElementById('feel-readout').dataset; return [Number(d.xMm), Number(d.voltageV)];",
+    )
+    .await?;
+    let read = numbers(&read)?;
+    let (x_read, u_read) = (read[0], read[1]);
+    let span = (x[0], x[x.len() - 1]);
+    if (x_read - (span.0 + 0.8 * (span.1 - span.0))).abs() > 0.05 {
+        return fail(format!("feel strip: pointer at 80% of the strip read x = {x_read} mm"));
+    }
+    let expected = haptex_core::profile::interpolate(&voltage[0], &voltage[1], x_read);
+    if (u_read - expected).abs() > 1e-9 * expected.max(1.0) {
+        return fail(format!("feel strip at x = {x_read} mm shows U = {u_read} V, the profile has {expected} V"));
+    }
+
+    // 6. Phone-sized window: no horizontal scrolling, plots fit.
+    wd!(client.set_window_size(390, 844));
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    let overflow = script(client, "return document.documentElement.scrollWidth - window.innerWidth;").await?;
+    if overflow.as_f64().unwrap_or(1.0) > 0.0 {
+        return fail(format!("phone-sized window scrolls sideways by {overflow} px"));
+    }
+    // Screenshots for the docs: a material with mu_RS above mu_HD, eq. 8.
+    show_library(client, "latex").await?;
+    let phone = screenshot(client).await?;
+    wd!(client.set_window_size(1280, 1180));
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    let desktop = screenshot(client).await?;
+    save_screenshot("web.png", &desktop);
+    save_screenshot("web-phone.png", &phone);
+
+    let errors = console_errors(client).await?;
+    if !errors.is_empty() {
+        return fail(format!("console errors: {errors:#?}"));
+    }
+    Ok(())
+}
+
+/// Shows `material` of the library with the physical method and the
+/// paper's defaults (the upload source is active before).
+async fn show_library(client: &Client, material: &str) -> Check<()> {
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css("input[name='source'][value='library']"))).click());
+    wait_update(client, n, "the library source again").await?;
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css(&format!("#material option[value='{material}']")))).click());
+    wait_update(client, n, "the material").await?;
+    // A fixed stroke, so that the screenshots do not change from run to run
+    // (set by script: this is set-up, not a check).
+    let n = updates(client).await?;
+    let set_seed = format!(
+        "const s = document.getElementById('seed'); s.value = '{SCREENSHOT_SEED}'; \
+         s.dispatchEvent(new Event('change')); return true;"
+    );
+    script(client, &set_seed).await?;
+    wait_update(client, n, "the stroke of the fixed seed").await?;
+    let drawn = format!(
+        "window.haptex.state.drawn.material === '{material}' && window.haptex.state.drawn.seed === '{SCREENSHOT_SEED}'"
+    );
+    wait_for(client, &drawn, "the fixed stroke drawn").await?;
+    wd!(wd!(client.find(Locator::Css("input[name='method'][value='physical']"))).click());
+    wd!(wd!(client.find(Locator::Id("reset-device"))).click());
+    wait_for(
+        client,
+        "window.haptex.state.voltage.summary.u_max_v === 100 && window.haptex.state.voltage.summary.method === 'physical'",
+        "the paper's defaults",
+    )
+    .await
+}
+
+/// A screenshot of the top of the page with the feel pointer on the strip.
+async fn screenshot(client: &Client) -> Check<Vec<u8>> {
+    let strip = wd!(client.find(Locator::Id("feel-strip")));
+    let moves = MouseActions::new("mouse".into()).then(PointerAction::MoveToElement {
+        element: strip,
+        duration: Some(Duration::from_millis(50)),
+        x: -40.0,
+        y: 0.0,
+    });
+    wd!(client.perform_actions(moves));
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    script(client, "window.scrollTo(0, 0); return true;").await?;
+    Ok(wd!(client.screenshot()))
+}
+
+fn save_screenshot(name: &str, png: &[u8]) {
+    let target = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::write(&target, png).unwrap();
+    eprintln!("screenshot: {}", target.display());
+    if std::env::var("HAPTEX_UPDATE_SCREENSHOTS").as_deref() == Ok("1") {
+        let docs = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../docs/img").join(name);
+        std::fs::write(&docs, png).unwrap();
+        eprintln!("screenshot: {}", docs.display());
+    }
+}
