@@ -26,6 +26,8 @@ enum Command {
     Play(commands::play::PlayArgs),
     Library(commands::library::LibraryArgs),
     Simulate(commands::simulate::SimulateArgs),
+    Db(commands::db::DbArgs),
+    Predict(commands::predict::PredictArgs),
     Serve(commands::serve::ServeArgs),
 }
 
@@ -37,6 +39,8 @@ fn main() -> ExitCode {
         Command::Play(args) => commands::play::run(args),
         Command::Library(args) => commands::library::run(args),
         Command::Simulate(args) => commands::simulate::run(args),
+        Command::Db(args) => commands::db::run(args),
+        Command::Predict(args) => commands::predict::run(args),
         Command::Serve(args) => commands::serve::run(args),
     };
     match result {

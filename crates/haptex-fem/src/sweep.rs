@@ -42,7 +42,8 @@ impl Run {
         format!("{}_w{:.3}_h{:.3}_v{:.1}.csv", self.template.name(), self.width_mm, self.height_mm, self.velocity_mm_s)
     }
 
-    fn surface(&self, x0_mm: f64) -> SurfaceShape {
+    /// The run's surface with its feature at `x0_mm`.
+    pub fn surface(&self, x0_mm: f64) -> SurfaceShape {
         let (x0, width, height) = (x0_mm, self.width_mm, self.height_mm);
         match self.template {
             Template::Bump => SurfaceShape::Bump { x0, width, height },

@@ -1,8 +1,10 @@
 //! One module per `haptex` subcommand.
 
 pub mod cae;
+pub mod db;
 pub mod library;
 pub mod play;
+pub mod predict;
 pub mod serve;
 pub mod simulate;
 pub mod voltage;

@@ -1,0 +1,439 @@
+//! `haptex db`: build the FE database of template surfaces (paper section
+//! 3.1), merge the shards of a cluster build, and show the leave-one-out
+//! comparison of the paper's Fig. 2a.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use clap::{Args, Subcommand, ValueEnum};
+use haptex_core::cae::{Cae, ModelMatrix};
+use haptex_core::database::{INPUTS, Metadata, Template, TemplateModel};
+use haptex_core::plot::{Figure, Panel};
+use haptex_fem::finger::{FingerModel, Resolution};
+use haptex_fem::sweep::{self, DatabaseSpec, Run};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::args::{Output, positive, shipped_data};
+
+/// The shipped database, relative to the source tree.
+pub const SHIPPED_DB: &str = "data/db";
+
+/// Build, merge and inspect the FE database of template surfaces.
+#[derive(Debug, Args)]
+pub struct DbArgs {
+    #[command(subcommand)]
+    command: DbCommand,
+}
+
+#[derive(Debug, Subcommand)]
+enum DbCommand {
+    Build(BuildArgs),
+    Merge(MergeArgs),
+    Loo(LooArgs),
+}
+
+/// Run the FE sweep of the template database and, when every run is done,
+/// write the database (one CAE model matrix per template + metadata.json).
+///
+/// The default sweep is the paper's (section 3.1): bump, edge and sine with
+/// r_w = 0.5 .. 2.5 mm in 0.25 mm steps and r_h = 0.1 .. 0.5 mm in 0.1 mm
+/// steps, at 10, 20, 50 and 100 mm/s: 540 runs of the default finger model
+/// (0.25 mm indentation, 11 mm slide over a feature at x0 = 6 mm), each
+/// profile sampled at xi = x - x0 = -5 .. 5 mm every 0.02 mm.
+///
+/// Each run is written atomically to OUT/runs/ as soon as it finishes, so an
+/// interrupted build continues where it stopped when run again. With
+/// --shard K/N (or, without the flag, Slurm's SLURM_ARRAY_TASK_ID and
+/// SLURM_ARRAY_TASK_COUNT) only every N-th run from the K-th is computed;
+/// join the shards with `haptex db merge`.
+#[derive(Debug, Args)]
+#[command(after_help = "Examples:\n  haptex db build                       # the shipped database, data/db\n  \
+                  haptex db build --out /tmp/db --jobs 2\n  \
+                  haptex db build --out scratch/db --shard 3/16   # job 3 of a 16-job array\n  \
+                  haptex db build --out /tmp/small --widths 1,2 --heights 0.2 --velocities 20 --templates bump")]
+struct BuildArgs {
+    /// Database directory (runs go to OUT/runs/). Default: the shipped
+    /// data/db of this source tree, or $HAPTEX_DB.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// FE runs at a time (one thread each). Default: the number of cores.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    jobs: Option<u32>,
+    /// Compute only shard K of N (1-based): runs K, K+N, K+2N, ... of the
+    /// sweep's fixed order. Default: from SLURM_ARRAY_TASK_ID,
+    /// SLURM_ARRAY_TASK_MIN and SLURM_ARRAY_TASK_COUNT when set, else all.
+    #[arg(long, value_name = "K/N", value_parser = parse_shard)]
+    shard: Option<(usize, usize)>,
+    /// Surface templates, comma-separated.
+    #[arg(long, value_delimiter = ',', value_enum)]
+    templates: Option<Vec<TemplateArg>>,
+    /// Feature widths r_w (mm), comma-separated.
+    #[arg(long, value_delimiter = ',', value_parser = positive)]
+    widths: Option<Vec<f64>>,
+    /// Feature heights r_h (mm), comma-separated.
+    #[arg(long, value_delimiter = ',', value_parser = positive)]
+    heights: Option<Vec<f64>>,
+    /// Sliding velocities (mm/s), comma-separated.
+    #[arg(long, value_delimiter = ',', value_parser = positive)]
+    velocities: Option<Vec<f64>>,
+    /// Mesh resolution of the finger.
+    #[arg(long, value_enum, default_value_t = MeshArg::Default)]
+    mesh: MeshArg,
+    /// Profile grid points over xi = -5 .. 5 mm.
+    #[arg(long, default_value_t = 501, value_parser = clap::value_parser!(u32).range(2..=100_000))]
+    grid_points: u32,
+    /// Only compute the runs; do not write the database even if complete.
+    #[arg(long)]
+    no_merge: bool,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+/// Join the runs of one or more build directories (the shards of a
+/// cluster build) into a database: model matrices, LOO-optimal CAE widths
+/// and metadata.json.
+#[derive(Debug, Args)]
+#[command(after_help = "Example:\n  haptex db merge --from shard-1 --from shard-2 --out data/db")]
+struct MergeArgs {
+    /// Build directories whose runs/ to collect (repeat the flag).
+    #[arg(long, required = true, value_name = "DIR")]
+    from: Vec<PathBuf>,
+    /// Database directory to write.
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+}
+
+/// Leave-one-out view of the database: the paper's Fig. 2a for one case
+/// (FE profile, CAE with the case left out, CAE over the whole database)
+/// and the LOO error of every template.
+///
+/// Without --surface, prints the LOO summary (widths, RMS error, error
+/// relative to the profiles' range) per template. With --surface, --width,
+/// --height (and --velocity) naming a database row, writes
+/// `xi_mm,h_mm,mu_fe,mu_cae_loo,mu_cae_full` and optionally a PNG.
+#[derive(Debug, Args)]
+#[command(after_help = "Examples:\n  haptex db loo\n  \
+                  haptex db loo --surface bump --width 1.5 --height 0.3 -o bump-loo.csv --png bump-loo.png")]
+struct LooArgs {
+    /// Database directory. Default: the shipped data/db, or $HAPTEX_DB.
+    #[arg(long, value_name = "DIR")]
+    db: Option<PathBuf>,
+    /// Template of the case.
+    #[arg(long, value_enum, requires_all = ["width", "height"])]
+    surface: Option<TemplateArg>,
+    /// r_w of the case (mm).
+    #[arg(long)]
+    width: Option<f64>,
+    /// r_h of the case (mm).
+    #[arg(long)]
+    height: Option<f64>,
+    /// Velocity of the case (mm/s).
+    #[arg(long, default_value_t = 20.0)]
+    velocity: f64,
+    /// CSV output of the case (default: stdout).
+    #[arg(short, long, value_name = "FILE")]
+    output: Option<PathBuf>,
+    /// PNG plot of the case.
+    #[arg(long, value_name = "FILE")]
+    png: Option<PathBuf>,
+    /// Summary as JSON (to stdout, or stderr when a case is written there).
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum TemplateArg {
+    Bump,
+    Edge,
+    Sine,
+}
+
+impl From<TemplateArg> for Template {
+    fn from(t: TemplateArg) -> Self {
+        match t {
+            TemplateArg::Bump => Template::Bump,
+            TemplateArg::Edge => Template::Edge,
+            TemplateArg::Sine => Template::Sine,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum MeshArg {
+    Coarse,
+    Default,
+    Fine,
+}
+
+pub fn run(args: DbArgs) -> anyhow::Result<()> {
+    match args.command {
+        DbCommand::Build(a) => build(a),
+        DbCommand::Merge(a) => merge(a),
+        DbCommand::Loo(a) => loo(a),
+    }
+}
+
+/// The database directory: the flag, else $HAPTEX_DB, else the shipped one.
+pub fn default_db() -> PathBuf {
+    shipped_data("HAPTEX_DB", SHIPPED_DB)
+}
+
+fn parse_shard(text: &str) -> Result<(usize, usize), String> {
+    let (k, n) = text.split_once('/').ok_or_else(|| format!("'{text}' is not K/N (e.g. 3/16)"))?;
+    let k: usize = k.trim().parse().map_err(|_| format!("'{k}' in '{text}' is not a whole number"))?;
+    let n: usize = n.trim().parse().map_err(|_| format!("'{n}' in '{text}' is not a whole number"))?;
+    if n == 0 || k == 0 || k > n {
+        return Err(format!("shard {k}/{n}: need 1 <= K <= N"));
+    }
+    Ok((k, n))
+}
+
+/// The shard from Slurm's job-array variables, if set: task ids run from
+/// SLURM_ARRAY_TASK_MIN (default 0 or 1, whichever the ids imply).
+fn slurm_shard() -> anyhow::Result<Option<(usize, usize)>> {
+    let var = |name: &str| -> anyhow::Result<Option<usize>> {
+        match std::env::var(name) {
+            Ok(v) => v.trim().parse().map(Some).with_context(|| format!("${name} = '{v}' is not a whole number")),
+            Err(_) => Ok(None),
+        }
+    };
+    let (Some(id), Some(count)) = (var("SLURM_ARRAY_TASK_ID")?, var("SLURM_ARRAY_TASK_COUNT")?) else {
+        return Ok(None);
+    };
+    let min = var("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
+    let k = id.checked_sub(min).map(|i| i + 1);
+    match k {
+        Some(k) if count > 0 && k <= count => Ok(Some((k, count))),
+        _ => bail!(
+            "SLURM_ARRAY_TASK_ID = {id} with SLURM_ARRAY_TASK_MIN = {min} and SLURM_ARRAY_TASK_COUNT = {count} \
+             is not a task of the array (use --shard K/N for arrays with gaps or steps)"
+        ),
+    }
+}
+
+fn build(args: BuildArgs) -> anyhow::Result<()> {
+    let out = args.out.clone().unwrap_or_else(default_db);
+    let mut spec = DatabaseSpec::paper();
+    if let Some(templates) = &args.templates {
+        spec.sweep.templates = templates.iter().map(|&t| t.into()).collect();
+        spec.sweep.templates.sort();
+        spec.sweep.templates.dedup();
+    }
+    if let Some(v) = args.widths.clone() {
+        spec.sweep.widths_mm = sorted(v);
+    }
+    if let Some(v) = args.heights.clone() {
+        spec.sweep.heights_mm = sorted(v);
+    }
+    if let Some(v) = args.velocities.clone() {
+        spec.sweep.velocities_mm_s = sorted(v);
+    }
+    spec.resolution = match args.mesh {
+        MeshArg::Coarse => Resolution::Coarse,
+        MeshArg::Default => Resolution::Default,
+        MeshArg::Fine => Resolution::Fine,
+    };
+    spec.grid.points = args.grid_points as usize;
+    // The model is the shipped one; its provenance goes into the metadata.
+    spec.model = FingerModel::default_model();
+
+    let shard = match args.shard {
+        Some(s) => Some(s),
+        None => slurm_shard()?,
+    };
+    let runs: Vec<Run> = match shard {
+        Some((k, n)) => spec.shard(k, n),
+        None => spec.runs(),
+    };
+    let jobs =
+        args.jobs.map(|j| j as usize).unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let total_all = spec.runs().len();
+    if !args.quiet {
+        let what = match shard {
+            Some((k, n)) => format!("shard {k}/{n}: {} of {total_all} runs", runs.len()),
+            None => format!("{total_all} runs"),
+        };
+        eprintln!("haptex db build: {what} into {}, {jobs} at a time", out.join("runs").display());
+    }
+
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        let bar = ProgressBar::new(runs.len() as u64);
+        bar.set_style(
+            ProgressStyle::with_template("{spinner} db build [{bar:30}] {pos}/{len} runs ({elapsed}, eta {eta})")
+                .expect("valid template")
+                .progress_chars("=> "),
+        );
+        bar
+    };
+    let report = sweep::build_runs(&spec, &runs, &out, jobs, &|done, _total| bar.set_position(done as u64));
+    bar.finish_and_clear();
+    let report = report.with_context(|| format!("building the database in {}", out.display()))?;
+    if !args.quiet {
+        eprintln!(
+            "{} runs computed ({} were already done) in {:.1} s wall, {:.1} s of FE time",
+            report.runs_computed, report.runs_done_before, report.wall_time_s, report.cpu_time_s
+        );
+    }
+    if args.no_merge || shard.is_some() {
+        if !args.quiet {
+            eprintln!(
+                "runs are in {}; join them with `haptex db merge --from DIR... --out DIR`",
+                out.join("runs").display()
+            );
+        }
+        return Ok(());
+    }
+    // The build's wall time is known only when this invocation ran the
+    // whole sweep.
+    let wall = (report.runs_done_before == 0).then_some(report.wall_time_s);
+    let metadata = sweep::merge(std::slice::from_ref(&out), &out, wall)?;
+    if !args.quiet {
+        print_summary(&metadata, &out);
+    }
+    Ok(())
+}
+
+fn sorted(mut v: Vec<f64>) -> Vec<f64> {
+    v.sort_by(f64::total_cmp);
+    v.dedup();
+    v
+}
+
+fn merge(args: MergeArgs) -> anyhow::Result<()> {
+    let metadata = sweep::merge(&args.from, &args.out, None)?;
+    print_summary(&metadata, &args.out);
+    Ok(())
+}
+
+fn print_summary(metadata: &Metadata, dir: &Path) {
+    eprintln!("database {} ({}):", dir.display(), metadata.created);
+    for e in &metadata.templates {
+        eprintln!(
+            "  {:<5} {:>4} rows  widths {:.4} .. {:.4}  LOO RMS {:.4} ({:.1}% of the profile range)",
+            e.template.name(),
+            e.rows,
+            e.widths.w_min,
+            e.widths.w_max,
+            e.loo_rmse,
+            100.0 * e.loo_rmse_relative_to_range
+        );
+    }
+}
+
+fn loo(args: LooArgs) -> anyhow::Result<()> {
+    let dir = args.db.clone().unwrap_or_else(default_db);
+    let metadata = Metadata::read(&dir)?;
+    let Some(surface) = args.surface else {
+        let summary = summary_json(&metadata);
+        if args.json {
+            println!("{}", serde_json::to_string_pretty(&summary)?);
+        } else {
+            print_summary(&metadata, &dir);
+        }
+        return Ok(());
+    };
+    let template: Template = surface.into();
+    let (width, height) = (args.width.expect("clap requires it"), args.height.expect("clap requires it"));
+    let model = TemplateModel::load_with(&dir, &metadata, template)?;
+    let query = [width, height, args.velocity];
+    let Some(row) = model.exact_row(&query) else {
+        bail!(
+            "{} r_w = {width} mm, r_h = {height} mm, v = {} mm/s is not a case of the database {} \
+             (r_w in {:?}, r_h in {:?}, v in {:?})",
+            template.name(),
+            args.velocity,
+            dir.display(),
+            metadata.sweep.widths_mm,
+            metadata.sweep.heights_mm,
+            metadata.sweep.velocities_mm_s
+        );
+    };
+    let matrix = model.cae.matrix();
+    let widths = model.cae.widths();
+    let fe = matrix.output_row(row).to_vec();
+    // The case left out: the CAE over the other rows (renormalized, widths
+    // as in the metadata), which never sees the case.
+    let left_out = Cae::new(without_row(matrix, row)?, widths)?.predict(&query)?.0;
+    let full = model.cae.predict(&query)?.0;
+    let xi = model.positions().to_vec();
+    let shape = Run { template, width_mm: width, height_mm: height, velocity_mm_s: args.velocity }.surface(0.0);
+    let h: Vec<f64> = xi.iter().map(|&x| shape.height(x)).collect();
+    let rms = |a: &[f64]| (a.iter().zip(&fe).map(|(p, f)| (p - f) * (p - f)).sum::<f64>() / fe.len() as f64).sqrt();
+    let (rms_loo, rms_full) = (rms(&left_out), rms(&full));
+
+    let output = Output::new(args.output.clone());
+    output.write(|w| {
+        writeln!(
+            w,
+            "# haptex db loo: {} r_w={width} mm r_h={height} mm v={} mm/s (row {} of {}); widths {} .. {}",
+            template.name(),
+            args.velocity,
+            row + 1,
+            dir.join(template.file_name()).display(),
+            widths.w_min,
+            widths.w_max
+        )?;
+        writeln!(w, "# RMS difference to FE: CAE leaving the case out {rms_loo:.6}, CAE full {rms_full:.6}")?;
+        writeln!(w, "xi_mm,h_mm,mu_fe,mu_cae_loo,mu_cae_full")?;
+        for i in 0..xi.len() {
+            haptex_core::io::write_csv_row(w, &[xi[i], h[i], fe[i], left_out[i], full[i]])?;
+        }
+        Ok(())
+    })?;
+    if let Some(path) = &args.png {
+        let title = format!(
+            "{} r_w = {width} mm, r_h = {height} mm, v = {} mm/s: FE and CAE (paper Fig. 2a)",
+            template.name(),
+            args.velocity
+        );
+        Figure::new(title)
+            .size(900, 260)
+            .panel(Panel::new("x - x0 (mm)", "height (mm)").line("surface", &xi, &h))
+            .panel(
+                Panel::new("x - x0 (mm)", "Ft/Fn")
+                    .line("FE", &xi, &fe)
+                    .line(format!("CAE, case left out (RMS {rms_loo:.4})"), &xi, &left_out)
+                    .line(format!("CAE, full database (RMS {rms_full:.4})"), &xi, &full),
+            )
+            .write_png(path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    eprintln!(
+        "{} r_w = {width} mm, r_h = {height} mm, v = {} mm/s: RMS difference to FE {rms_loo:.4} leaving the case \
+         out, {rms_full:.4} with it",
+        template.name(),
+        args.velocity
+    );
+    if args.json {
+        eprintln!("{}", serde_json::to_string_pretty(&summary_json(&metadata))?);
+    }
+    Ok(())
+}
+
+/// Per template: rows, widths and LOO errors, from the metadata.
+fn summary_json(metadata: &Metadata) -> serde_json::Value {
+    serde_json::json!({
+        "created": metadata.created,
+        "haptex_version": metadata.haptex_version,
+        "build_wall_time_s": metadata.build_wall_time_s,
+        "cpu_time_s": metadata.cpu_time_s,
+        "inputs": INPUTS,
+        "templates": metadata.templates,
+    })
+}
+
+/// A model matrix without row `row`: the database the left-out case's
+/// estimate is made from.
+fn without_row(matrix: &ModelMatrix, row: usize) -> anyhow::Result<ModelMatrix> {
+    let (d, m) = (matrix.d(), matrix.m());
+    let mut b = Vec::with_capacity((matrix.n() - 1) * d);
+    let mut c = Vec::with_capacity((matrix.n() - 1) * m);
+    for n in (0..matrix.n()).filter(|&n| n != row) {
+        b.extend_from_slice(matrix.input_row(n));
+        c.extend_from_slice(matrix.output_row(n));
+    }
+    Ok(ModelMatrix::new(matrix.inputs().to_vec(), matrix.outputs().to_vec(), b, c)?)
+}

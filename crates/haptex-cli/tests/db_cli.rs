@@ -1,0 +1,339 @@
+//! `haptex db` and `haptex predict` end to end: a small sweep built whole,
+//! in shards and after a kill gives the same database; predictions at and
+//! between database rows; bad input.
+
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn haptex(args: &[&str]) -> Output {
+    haptex_env(args, &[])
+}
+
+fn haptex_env(args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_haptex"));
+    command.args(args);
+    for var in ["SLURM_ARRAY_TASK_ID", "SLURM_ARRAY_TASK_COUNT", "SLURM_ARRAY_TASK_MIN", "HAPTEX_DB"] {
+        command.env_remove(var);
+    }
+    command.envs(env.iter().copied());
+    command.output().expect("run haptex")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// A sweep small enough for a test: 2 templates x 2 widths x 1 height x 2
+/// velocities = 8 coarse-mesh runs.
+const SMALL: [&str; 10] =
+    ["--templates", "bump,edge", "--widths", "1,2", "--heights", "0.3", "--velocities", "20,50", "--mesh", "coarse"];
+
+fn build(dir: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["db", "build", "--out", dir.to_str().unwrap(), "--jobs", "2", "-q"];
+    args.extend_from_slice(&SMALL);
+    args.extend_from_slice(extra);
+    haptex(&args)
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// metadata.json without the fields that record when and how fast it was
+/// built (they differ between any two builds).
+fn metadata_without_times(dir: &Path) -> serde_json::Value {
+    let mut value: serde_json::Value = serde_json::from_str(&read(&dir.join("metadata.json"))).unwrap();
+    let object = value.as_object_mut().unwrap();
+    for key in ["created", "cpu_time_s", "build_wall_time_s"] {
+        assert!(object.remove(key).is_some(), "metadata has {key}");
+    }
+    value
+}
+
+fn assert_same_database(a: &Path, b: &Path) {
+    for file in ["bump.csv", "edge.csv"] {
+        assert_eq!(
+            read(&a.join(file)),
+            read(&b.join(file)),
+            "{file} differs between {} and {}",
+            a.display(),
+            b.display()
+        );
+    }
+    assert_eq!(metadata_without_times(a), metadata_without_times(b));
+}
+
+#[test]
+fn sharded_build_merges_to_the_same_database_as_a_whole_build() {
+    let tmp = tempfile::tempdir().unwrap();
+    let whole = tmp.path().join("whole");
+    let out = build(&whole, &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let matrix = read(&whole.join("bump.csv"));
+    assert_eq!(matrix.lines().filter(|l| !l.starts_with('#')).count(), 1 + 4, "header + 4 bump runs");
+
+    // Two shards into separate directories (as on nodes without a shared
+    // disk), one from the flag and one from Slurm's job-array variables.
+    let (s1, s2) = (tmp.path().join("s1"), tmp.path().join("s2"));
+    let out = build(&s1, &["--shard", "1/2"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(!s1.join("metadata.json").exists(), "a shard does not write the database");
+    let mut args = vec!["db", "build", "--out", s2.to_str().unwrap(), "--jobs", "2", "-q"];
+    args.extend_from_slice(&SMALL);
+    let out = haptex_env(
+        &args,
+        &[("SLURM_ARRAY_TASK_ID", "2"), ("SLURM_ARRAY_TASK_COUNT", "2"), ("SLURM_ARRAY_TASK_MIN", "1")],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let n1 = std::fs::read_dir(s1.join("runs")).unwrap().count();
+    let n2 = std::fs::read_dir(s2.join("runs")).unwrap().count();
+    assert_eq!((n1, n2), (4, 4), "each shard computes half of the 8 runs");
+
+    // Merging one shard alone is refused, naming a missing run.
+    let merged = tmp.path().join("merged");
+    let out = haptex(&["db", "merge", "--from", s1.to_str().unwrap(), "--out", merged.to_str().unwrap()]);
+    assert!(!out.status.success());
+    assert!(text(&out.stderr).contains("missing runs (4)"), "{}", text(&out.stderr));
+
+    let out = haptex(&[
+        "db",
+        "merge",
+        "--from",
+        s1.to_str().unwrap(),
+        "--from",
+        s2.to_str().unwrap(),
+        "--out",
+        merged.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_same_database(&whole, &merged);
+}
+
+#[test]
+fn killed_build_resumes_to_the_same_database() {
+    let tmp = tempfile::tempdir().unwrap();
+    let reference = tmp.path().join("reference");
+    let out = build(&reference, &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+
+    // One run at a time; kill the build as soon as its first run is on disk.
+    let killed = tmp.path().join("killed");
+    let mut args = vec!["db", "build", "--out", killed.to_str().unwrap(), "--jobs", "1", "-q"];
+    args.extend_from_slice(&SMALL);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_haptex"))
+        .args(&args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start haptex");
+    let runs = killed.join("runs");
+    let count_runs = || {
+        std::fs::read_dir(&runs).map_or(0, |d| {
+            d.filter(|e| e.as_ref().is_ok_and(|e| e.file_name().to_string_lossy().ends_with(".csv"))).count()
+        })
+    };
+    let started = Instant::now();
+    while count_runs() == 0 {
+        assert!(started.elapsed() < Duration::from_secs(120), "no run finished in 2 minutes");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().expect("kill the build");
+    child.wait().unwrap();
+    let done = count_runs();
+    assert!(done < 8, "the build was killed before it finished ({done} of 8 runs done)");
+    assert!(!killed.join("metadata.json").exists());
+
+    let out = build(&killed, &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_same_database(&reference, &killed);
+    // The resumed build recomputed only what was missing, so its metadata
+    // does not claim a whole-build wall time.
+    let metadata: serde_json::Value = serde_json::from_str(&read(&killed.join("metadata.json"))).unwrap();
+    assert!(metadata["build_wall_time_s"].is_null());
+
+    // A second build with another sweep in the same directory is refused.
+    let out = haptex(&[
+        "db",
+        "build",
+        "--out",
+        killed.to_str().unwrap(),
+        "-q",
+        "--templates",
+        "bump",
+        "--widths",
+        "1.5",
+        "--heights",
+        "0.3",
+        "--velocities",
+        "20",
+    ]);
+    assert!(!out.status.success());
+    assert!(text(&out.stderr).contains("different sweep"), "{}", text(&out.stderr));
+
+    // Predictions from this database: a row is returned as the FE result...
+    let db = reference.to_str().unwrap();
+    let out = haptex(&[
+        "predict",
+        "--db",
+        db,
+        "--surface",
+        "bump",
+        "--x0",
+        "5",
+        "--width",
+        "2",
+        "--height",
+        "0.3",
+        "--velocity",
+        "50",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("FE result"), "{}", text(&out.stderr));
+    let run = read(&reference.join("runs/bump_w2.000_h0.300_v50.0.csv"));
+    let fe_mu: Vec<f64> = run
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
+        .collect();
+    let rows: Vec<(f64, f64)> = text(&out.stdout)
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| {
+            let (x, mu) = l.split_once(',').unwrap();
+            (x.parse().unwrap(), mu.parse().unwrap())
+        })
+        .collect();
+    assert_eq!(rows.len(), 501);
+    assert!((rows[0].0 - 0.0).abs() < 1e-12 && (rows[500].0 - 10.0).abs() < 1e-12, "x = x0 + xi, xi = -5 .. 5");
+    for ((_, mu), fe) in rows.iter().zip(&fe_mu) {
+        assert_eq!(mu, fe, "an exact database row is the FE profile itself");
+    }
+
+    // ... and a point between rows is a CAE estimate inside the range of the
+    // profiles it averages (a convex combination of them, eq. 11).
+    let out = haptex(&[
+        "predict",
+        "--db",
+        db,
+        "--surface",
+        "bump",
+        "--x0",
+        "5",
+        "--width",
+        "1.4",
+        "--height",
+        "0.3",
+        "--velocity",
+        "30",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("CAE estimate"), "{}", text(&out.stderr));
+    let matrix = read(&reference.join("bump.csv"));
+    let table: Vec<Vec<f64>> = matrix
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split(',').skip(3).map(|v| v.parse().unwrap()).collect())
+        .collect();
+    for (i, line) in text(&out.stdout).lines().filter(|l| !l.starts_with('#')).skip(1).enumerate() {
+        let mu: f64 = line.split_once(',').unwrap().1.parse().unwrap();
+        let lo = table.iter().map(|r| r[i]).fold(f64::INFINITY, f64::min);
+        let hi = table.iter().map(|r| r[i]).fold(f64::NEG_INFINITY, f64::max);
+        assert!(mu >= lo - 1e-12 && mu <= hi + 1e-12, "xi index {i}: {mu} outside [{lo}, {hi}]");
+    }
+
+    // Far outside the database: an answer, with the extrapolation warning.
+    let out = haptex(&[
+        "predict",
+        "--db",
+        db,
+        "--surface",
+        "bump",
+        "--x0",
+        "5",
+        "--width",
+        "8",
+        "--height",
+        "3",
+        "--velocity",
+        "30",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("warning:"), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("# warning:"));
+
+    // The sine template is not in this database.
+    let out = haptex(&["predict", "--db", db, "--surface", "sine", "--x0", "5", "--width", "1", "--height", "0.3"]);
+    assert!(!out.status.success());
+    assert!(text(&out.stderr).contains("no sine template"), "{}", text(&out.stderr));
+
+    // db loo on a case of the database: CSV, PNG, and the FE column is the
+    // run's profile.
+    let csv = tmp.path().join("loo.csv");
+    let png = tmp.path().join("loo.png");
+    let out = haptex(&[
+        "db",
+        "loo",
+        "--db",
+        db,
+        "--surface",
+        "bump",
+        "--width",
+        "2",
+        "--height",
+        "0.3",
+        "--velocity",
+        "50",
+        "-o",
+        csv.to_str().unwrap(),
+        "--png",
+        png.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let loo = read(&csv);
+    let body: Vec<&str> = loo.lines().filter(|l| !l.starts_with('#')).collect();
+    assert_eq!(body[0], "xi_mm,h_mm,mu_fe,mu_cae_loo,mu_cae_full");
+    for (line, fe) in body[1..].iter().zip(&fe_mu) {
+        let mu_fe: f64 = line.split(',').nth(2).unwrap().parse().unwrap();
+        assert_eq!(mu_fe, *fe);
+    }
+    assert_eq!(&std::fs::read(&png).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
+
+    // ... and on parameters that are not a case, a clear error.
+    let out = haptex(&["db", "loo", "--db", db, "--surface", "bump", "--width", "1.3", "--height", "0.3"]);
+    assert!(!out.status.success());
+    assert!(text(&out.stderr).contains("is not a case of the database"), "{}", text(&out.stderr));
+}
+
+#[test]
+fn predict_and_db_refuse_bad_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    let empty = tmp.path().to_str().unwrap();
+    let cases: [(&[&str], &str); 7] = [
+        (
+            &["predict", "--db", empty, "--surface", "bump", "--x0", "5", "--width", "1", "--height", "0.3"],
+            "no FE database",
+        ),
+        (&["predict", "--surface", "cone", "--x0", "5", "--width", "1", "--height", "0.3"], "invalid value 'cone'"),
+        (&["predict", "--surface", "bump", "--x0", "5", "--width", "-1", "--height", "0.3"], "--width"),
+        (&["predict", "--surface", "bump", "--x0", "nan", "--width", "1", "--height", "0.3"], "x0 must be a finite"),
+        (&["db", "build", "--out", empty, "--shard", "3/2"], "need 1 <= K <= N"),
+        (&["db", "build", "--out", empty, "--shard", "two"], "is not K/N"),
+        (&["db", "merge", "--from", empty, "--out", empty], "sweep.json"),
+    ];
+    for (args, expected) in cases {
+        let out = haptex(args);
+        assert!(!out.status.success(), "{args:?} should fail");
+        assert!(text(&out.stderr).contains(expected), "{args:?}: expected '{expected}' in: {}", text(&out.stderr));
+    }
+    // A Slurm task id outside the array is refused rather than guessed.
+    let out = haptex_env(
+        &["db", "build", "--out", empty, "--widths", "1"],
+        &[("SLURM_ARRAY_TASK_ID", "7"), ("SLURM_ARRAY_TASK_COUNT", "4"), ("SLURM_ARRAY_TASK_MIN", "0")],
+    );
+    assert!(!out.status.success());
+    assert!(text(&out.stderr).contains("is not a task of the array"), "{}", text(&out.stderr));
+}
