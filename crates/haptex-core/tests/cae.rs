@@ -345,6 +345,125 @@ fn far_query_is_finite_and_warns() {
     assert!(d.is_extrapolation() && cae.warning(&beyond, &d).is_some(), "{d:?}");
 }
 
+/// Eq. (11) over every model vector, with one constant width `w`, in log
+/// space: the largest exponent is subtracted before libm's exp, so a far
+/// query does not underflow, and no weight is left out however small. Also
+/// returns how many rows have a weight of at least e^-46 of the largest
+/// (the rows the estimator considers before pruning).
+fn brute_force_every_row(x: &ModelMatrix, w: f64, query: &[f64]) -> (Vec<f64>, usize) {
+    let (n, d, m) = (x.n(), x.d(), x.m());
+    let col = |l: usize| (0..n).map(move |r| x.input_row(r)[l]);
+    let lo: Vec<f64> = (0..d).map(|l| col(l).fold(f64::INFINITY, f64::min)).collect();
+    let hi: Vec<f64> = (0..d).map(|l| col(l).fold(f64::NEG_INFINITY, f64::max)).collect();
+    let exponents: Vec<f64> = (0..n)
+        .map(|r| {
+            -(0..d).map(|l| ((query[l] - x.input_row(r)[l]) / (hi[l] - lo[l])).powi(2) / (2.0 * w * w)).sum::<f64>()
+        })
+        .collect();
+    let largest = exponents.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mut num = vec![0.0; m];
+    let mut den = 0.0;
+    for (r, e) in exponents.iter().enumerate() {
+        let a = (e - largest).exp();
+        den += a;
+        for (acc, c) in num.iter_mut().zip(x.output_row(r)) {
+            *acc += a * c;
+        }
+    }
+    let above_cutoff = exponents.iter().filter(|&&e| e - largest >= -46.0).count();
+    (num.iter().map(|v| v / den).collect(), above_cutoff)
+}
+
+/// Pruning (`PRUNE_RELATIVE`, docs/cae.md "Speed"): with positive outputs
+/// and a narrow width the estimator leaves out rows whose weight is above
+/// the e^-46 cutoff, and every prediction still equals eq. (11) summed over
+/// every row (brute force, 1e-12 relative; issue 4's tolerance).
+#[test]
+fn pruned_predictions_equal_the_sum_over_every_row() {
+    let x = random_matrix(21, 300, 3, 8);
+    let cae = Cae::new(x.clone(), Widths::constant(0.05).unwrap()).unwrap();
+    assert!(cae.prunes());
+    let (mut left_out, mut pruned_queries) = (0, 0);
+    for q in queries(&x, 22, 40) {
+        let (got, d) = cae.predict(&q).unwrap();
+        let (want, above_cutoff) = brute_force_every_row(&x, 0.05, &q);
+        assert_relative(&got, &want, 1e-12, "pruned");
+        assert!(d.weights_used <= above_cutoff, "{} > {above_cutoff}", d.weights_used);
+        left_out += above_cutoff - d.weights_used;
+        pruned_queries += usize::from(d.weights_used < above_cutoff);
+    }
+    assert!(pruned_queries >= 10 && left_out >= 50, "{pruned_queries} queries pruned, {left_out} rows left out");
+}
+
+/// Pruning weighs a row's outputs, not only its weight: one model vector
+/// whose outputs are 1e15 times the others' has a relative weight of
+/// e^-45 = 2.9e-20 at the query, which alone would be negligible, but its
+/// contribution (4.1e-6 of the result) is not. It is kept while rows 46 ..=
+/// 48, with larger weights (e^-39.7 .. e^-43.1) but ordinary outputs, are
+/// left out, and the prediction equals the brute-force sum over every row
+/// (1e-12 relative).
+#[test]
+fn pruning_keeps_a_small_weight_with_large_outputs() {
+    let n = 50;
+    let b: Vec<f64> = (0..n).map(|i| i as f64 / (n - 1) as f64).collect();
+    let c: Vec<f64> = (0..n).flat_map(|i| if i == n - 1 { [1e15, 2e15] } else { [1.0, 2.0] }).collect();
+    let x = ModelMatrix::new(names("b", 1), names("c", 2), b, c).unwrap();
+    // 1 / (2 w^2) = 45: the last row (distance 1) has ln a = -45.
+    let w = (1.0f64 / 90.0).sqrt();
+    let cae = Cae::new(x.clone(), Widths::constant(w).unwrap()).unwrap();
+    assert!(cae.prunes());
+    let (got, d) = cae.predict(&[0.0]).unwrap();
+    let (want, above_cutoff) = brute_force_every_row(&x, w, &[0.0]);
+    assert_relative(&got, &want, 1e-12, "large outputs");
+    assert!(want[0] > 1.0 + 4e-6, "the far row's contribution is not negligible: {want:?}");
+    assert_eq!(above_cutoff, n);
+    assert_eq!(d.weights_used, 47, "rows 0 ..= 45 and the far row");
+}
+
+/// A query far outside the database (up to 3 ranges beyond it, where the
+/// relative weights fall off steeply and many rows are left out) keeps the
+/// prediction's accuracy: it equals the brute-force sum over every row in
+/// log space (1e-12 relative), with and without outputs of both signs
+/// (pruning on and off).
+#[test]
+fn far_queries_lose_no_accuracy_to_pruning() {
+    let x = random_matrix(23, 200, 2, 5);
+    // The same matrix with one output shifted to change sign: no pruning.
+    let mut c = x.outputs_flat().to_vec();
+    for (i, v) in c.iter_mut().enumerate() {
+        if i % 5 == 0 {
+            *v -= 3.0;
+        }
+    }
+    let mixed = ModelMatrix::new(x.inputs().to_vec(), x.outputs().to_vec(), x.inputs_flat().to_vec(), c).unwrap();
+    for (matrix, prunes) in [(&x, true), (&mixed, false)] {
+        let cae = Cae::new(matrix.clone(), Widths::constant(0.1).unwrap()).unwrap();
+        assert_eq!(cae.prunes(), prunes);
+        let mut left_out = 0;
+        for (q0, q1) in [(-3.0, 0.5), (4.0, -2.0), (0.5, 4.0), (-1.5, -1.5)] {
+            // In units of each input's range beyond the database's box [-1, 2].
+            let q = [3.0 * q0 - 1.0, 250.0 * (3.0 * q1 - 1.0)];
+            let (got, d) = cae.predict(&q).unwrap();
+            let (want, above_cutoff) = brute_force_every_row(matrix, 0.1, &q);
+            assert!(d.is_extrapolation(), "{q:?}: {d:?}");
+            for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+                // Outputs of both signs can nearly cancel: relative to the largest |c_nk| there.
+                let scale = if prunes {
+                    w.abs()
+                } else {
+                    (0..matrix.n()).map(|r| matrix.output_row(r)[k].abs()).fold(0.0, f64::max)
+                };
+                assert!((g - w).abs() <= 1e-12 * scale, "{q:?} output {k}: {g} vs {w}");
+            }
+            if !prunes {
+                assert_eq!(d.weights_used, above_cutoff);
+            }
+            left_out += above_cutoff - d.weights_used;
+        }
+        assert_eq!(left_out > 0, prunes, "{left_out} rows left out");
+    }
+}
+
 /// A constant input is left out of the kernel (the prediction equals the
 /// estimator without that column) and a query off its value is flagged.
 #[test]

@@ -26,12 +26,14 @@ mod matrix;
 pub mod nelder_mead;
 mod normalize;
 mod predict;
+mod prune;
 mod widths;
 
 pub use loo::{Loo, LooErrors, OptimizeOptions, OptimizerReport, ScanPoint, WidthOptimum, optimize_widths};
 pub use matrix::ModelMatrix;
 pub use normalize::Normalization;
 pub use predict::{Cae, Diagnostics, EXTRAPOLATION_KERNEL_DISTANCE, LOG_WEIGHT_CUTOFF, Scratch};
+pub use prune::PRUNE_RELATIVE;
 pub use widths::{Density, Kernel, Widths};
 
 use crate::io::TableError;

@@ -9,12 +9,18 @@
 //! those of the nearest vectors) instead of 0/0. Weights below
 //! exp(LOG_WEIGHT_CUTOFF) of the largest are skipped: together they change
 //! an output by less than N e^-46 = N 1.1e-20 of the largest |c_nk|, far
-//! below double rounding for any database that fits in memory.
+//! below double rounding for any database that fits in memory. Beyond
+//! that cutoff, when every output is of one sign over the database and
+//! never zero, the model vectors whose outputs cannot change any output by
+//! more than PRUNE_RELATIVE = 1e-16 of its value are not read at all
+//! (`prune`, which states the bound).
 //!
 //! Memory layout for speed: outputs are stored row-major, so eq. (11) is a
-//! sum of contiguous rows a_n C_n, accumulated four rows at a time into the
-//! caller's output buffer. A prediction allocates nothing.
+//! sum of contiguous rows a_n C_n over the listed rows, accumulated four
+//! rows at a time into the caller's output buffer. A prediction allocates
+//! nothing.
 
+use super::prune::{Pruning, weighted_sum};
 use super::widths::transpose;
 use super::{CaeError, Density, Kernel, ModelMatrix, Normalization, Widths};
 
@@ -41,6 +47,8 @@ pub struct Cae {
     kernel: Kernel,
     /// D x N normalized inputs, column-major (the kernel's layout).
     x_t: Vec<f64>,
+    /// Which model vectors a prediction may leave out.
+    pruning: Pruning,
 }
 
 /// Per-query working memory (one value per model vector). Make one with
@@ -50,6 +58,10 @@ pub struct Scratch {
     log_a: Vec<f64>,
     d2: Vec<f64>,
     query: Vec<f64>,
+    /// The rows that enter eq. (11) and their weights (the first
+    /// `Diagnostics::weights_used`).
+    rows: Vec<usize>,
+    weights: Vec<f64>,
 }
 
 /// What a prediction knows about where the query lies relative to the
@@ -95,7 +107,8 @@ impl Cae {
         let mut kernel = Kernel::zeros(n, d);
         kernel.set(&norm, &w);
         let x_t = transpose(&norm.normalize_rows(matrix.inputs_flat()), d);
-        Ok(Self { matrix, norm, widths, w, kernel, x_t })
+        let pruning = Pruning::new(&matrix);
+        Ok(Self { matrix, norm, widths, w, kernel, x_t, pruning })
     }
 
     /// The model matrix.
@@ -118,10 +131,18 @@ impl Cae {
         &self.w
     }
 
+    /// True if predictions leave out the model vectors whose outputs cannot
+    /// change any output by more than [`PRUNE_RELATIVE`](super::PRUNE_RELATIVE) of its value
+    /// (possible when every output is of one sign over the database and
+    /// never zero; `docs/cae.md`, "Speed").
+    pub fn prunes(&self) -> bool {
+        self.pruning.is_active()
+    }
+
     /// Working memory for [`Cae::predict_into`].
     pub fn scratch(&self) -> Scratch {
         let (n, d) = (self.matrix.n(), self.matrix.d());
-        Scratch { log_a: vec![0.0; n], d2: vec![0.0; n], query: vec![0.0; d] }
+        Scratch { log_a: vec![0.0; n], d2: vec![0.0; n], query: vec![0.0; d], rows: vec![0; n], weights: vec![0.0; n] }
     }
 
     /// Predicts the M outputs at the input vector `b` (D values in the
@@ -135,7 +156,9 @@ impl Cae {
         if let Some(l) = b.iter().position(|v| !v.is_finite()) {
             return Err(CaeError::Query(format!("input '{}' is not finite: {}", self.matrix.inputs()[l], b[l])));
         }
-        if out.len() != m || scratch.log_a.len() != n || scratch.d2.len() != n || scratch.query.len() != d {
+        let scratch_ok = [scratch.log_a.len(), scratch.d2.len(), scratch.rows.len(), scratch.weights.len()] == [n; 4]
+            && scratch.query.len() == d;
+        if out.len() != m || !scratch_ok {
             return Err(CaeError::Query(format!(
                 "buffers of {} outputs and {} scratch values for a model with {m} outputs and {n} rows",
                 out.len(),
@@ -228,8 +251,9 @@ impl Cae {
     }
 }
 
-/// What the two passes over the model vectors found.
+/// What the passes over the model vectors found.
 struct Pass {
+    /// Sum of every weight above the cutoff (kept or pruned).
     sum: f64,
     used: usize,
     nearest_row: usize,
@@ -237,11 +261,12 @@ struct Pass {
     s_min: f64,
 }
 
-/// The two passes of a prediction: ln a_n and the distances of every model
-/// vector, then out = sum_n exp(ln a_n - max ln a) C_n (not yet divided by
-/// the sum of the weights). Runs the AVX2 build of the same code when the
-/// CPU has it (identical results: the same operations in the same order,
-/// only more lanes at once).
+/// The passes of a prediction: ln a_n and the distances of every model
+/// vector, the weights, the list of rows that enter eq. (11), then out =
+/// sum_n exp(ln a_n - max ln a) C_n over those rows (not yet divided by the
+/// sum of the weights). Runs the AVX2 build of the same code when the CPU
+/// has it (identical results: the same operations in the same order, only
+/// more lanes at once).
 fn evaluate(cae: &Cae, scratch: &mut Scratch, out: &mut [f64]) -> Pass {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
@@ -275,57 +300,59 @@ fn evaluate_lanes(cae: &Cae, scratch: &mut Scratch, out: &mut [f64]) -> Pass {
             *acc += diff * diff;
         }
     }
-    let (mut e_max, mut s_min) = (f64::NEG_INFINITY, f64::INFINITY);
-    let (mut nearest_row, mut nearest_d2) = (0, f64::INFINITY);
-    for (row, ((&e, &log_norm), &d2)) in scratch.log_a.iter().zip(cae.kernel.log_norm()).zip(d2.iter()).enumerate() {
-        // Plain comparisons (all values are finite): cheaper than f64::max.
-        if e > e_max {
-            e_max = e;
+    // The largest ln a_n, the smallest log_norm_n - ln a_n and the smallest
+    // distance, four lanes at a time (plain comparisons: cheaper than
+    // f64::max, and every value is finite or infinite, never NaN, unless the
+    // distances overflowed, which the caller detects from the sum).
+    let log_a = &mut scratch.log_a[..n];
+    let log_norm = &cae.kernel.log_norm()[..n];
+    let (mut e_max, mut s_min, mut d2_min) = ([f64::NEG_INFINITY; 4], [f64::INFINITY; 4], [f64::INFINITY; 4]);
+    let mut reduce = |i: usize, e: f64, ln: f64, d: f64| {
+        if e > e_max[i] {
+            e_max[i] = e;
         }
-        if log_norm - e < s_min {
-            s_min = log_norm - e;
+        if ln - e < s_min[i] {
+            s_min[i] = ln - e;
         }
-        if d2 < nearest_d2 {
-            (nearest_row, nearest_d2) = (row, d2);
+        if d < d2_min[i] {
+            d2_min[i] = d;
+        }
+    };
+    let whole = n - n % 4;
+    for ((e, ln), d) in log_a[..whole].chunks_exact(4).zip(log_norm.chunks_exact(4)).zip(d2.chunks_exact(4)) {
+        for i in 0..4 {
+            reduce(i, e[i], ln[i], d[i]);
         }
     }
+    for j in whole..n {
+        reduce(0, log_a[j], log_norm[j], d2[j]);
+    }
+    let fold_max = |v: [f64; 4]| v.into_iter().fold(f64::NEG_INFINITY, |a, e| if e > a { e } else { a });
+    let fold_min = |v: [f64; 4]| v.into_iter().fold(f64::INFINITY, |a, e| if e < a { e } else { a });
+    let (e_max, s_min, nearest_d2) = (fold_max(e_max), fold_min(s_min), fold_min(d2_min));
+    let nearest_row = d2.iter().position(|&v| v == nearest_d2).unwrap_or(0);
 
-    // Pass 2, eq. (11): the weights shifted by their maximum in one
-    // vectorizable pass (0 below the cutoff), then the rows a_n C_n summed
-    // four at a time.
-    let c = cae.matrix.outputs_flat();
-    let log_a = &mut scratch.log_a[..n];
+    // Pass 2: the weights shifted by their maximum (0 below the cutoff)
+    // and their sum, in vectorizable passes.
     for v in log_a.iter_mut() {
         let t = *v - e_max;
         *v = if t >= LOG_WEIGHT_CUTOFF { exp_near_zero(t) } else { 0.0 };
     }
-    let out = &mut out[..m];
-    out.fill(0.0);
-    let row = |n: usize| &c[n * m..(n + 1) * m];
-    let (mut sum, mut used) = (0.0, 0);
-    let (mut pending, mut a, mut k) = ([0usize; 4], [0.0f64; 4], 0);
-    for (n, &weight) in log_a.iter().enumerate() {
-        if weight == 0.0 {
-            continue;
-        }
-        sum += weight;
-        used += 1;
-        pending[k] = n;
-        a[k] = weight;
-        k += 1;
-        if k == 4 {
-            let (c0, c1, c2, c3) = (row(pending[0]), row(pending[1]), row(pending[2]), row(pending[3]));
-            for j in 0..m {
-                out[j] += a[0] * c0[j] + a[1] * c1[j] + a[2] * c2[j] + a[3] * c3[j];
-            }
-            k = 0;
+    let mut sums = [0.0f64; 4];
+    for chunk in log_a[..whole].chunks_exact(4) {
+        for (s, a) in sums.iter_mut().zip(chunk) {
+            *s += a;
         }
     }
-    for (&n, &a) in pending[..k].iter().zip(&a[..k]) {
-        for (o, c) in out.iter_mut().zip(row(n)) {
-            *o += a * c;
-        }
-    }
+    let sum = (sums[0] + sums[1]) + (sums[2] + sums[3]) + log_a[whole..].iter().sum::<f64>();
+
+    // Pass 3: the rows that enter eq. (11), the ones whose outputs cannot
+    // matter left out (`prune`: together they change no output by more
+    // than PRUNE_RELATIVE of its value).
+    let used = cae.pruning.select(log_a, sum, &mut scratch.rows, &mut scratch.weights);
+
+    // Pass 4, eq. (11) before the division by the sum of the weights.
+    weighted_sum(cae.matrix.outputs_flat(), m, &scratch.rows[..used], &scratch.weights[..used], out);
     Pass { sum, used, nearest_row, nearest_d2, s_min }
 }
 
