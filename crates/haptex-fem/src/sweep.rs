@@ -174,6 +174,56 @@ impl DatabaseSpec {
     }
 }
 
+impl DatabaseSpec {
+    /// The specification a database was built with, from its metadata: the
+    /// same FE settings, for simulating a case that is not a database row.
+    /// The finger model must be the shipped one the database recorded (its
+    /// SHA-256 is compared).
+    pub fn from_metadata(metadata: &Metadata) -> Result<Self, SweepError> {
+        let mut spec = Self::paper();
+        let fe = &metadata.fe;
+        if hex(&Sha256::digest(spec.model_text.as_bytes())) != fe.finger_model_sha256 {
+            return Err(SweepError::Invalid(format!(
+                "the database was built with another finger model ({}, SHA-256 {}) than this haptex's",
+                fe.finger_model, fe.finger_model_sha256
+            )));
+        }
+        spec.sweep = metadata.sweep.clone();
+        spec.grid = metadata.grid;
+        spec.resolution = match fe.mesh.as_str() {
+            "coarse" => Resolution::Coarse,
+            "default" => Resolution::Default,
+            "fine" => Resolution::Fine,
+            other => return Err(SweepError::Invalid(format!("unknown mesh '{other}' in the metadata"))),
+        };
+        spec.viscoelastic = match fe.material.as_str() {
+            "viscoelastic" => true,
+            "elastic" => false,
+            other => return Err(SweepError::Invalid(format!("unknown material '{other}' in the metadata"))),
+        };
+        spec.indent_mm = fe.indent_mm;
+        spec.press_time_s = fe.press_time_s;
+        spec.x0_mm = fe.x0_mm;
+        spec.slide_mm = fe.slide_mm;
+        spec.max_step_mm = fe.max_step_mm;
+        if spec.fe_settings() != *fe {
+            return Err(SweepError::Invalid(
+                "the database's FE settings (skin friction, contact penalty) differ from this haptex's".into(),
+            ));
+        }
+        Ok(spec)
+    }
+
+    /// Simulates one case with the database's settings: its profile on the
+    /// database grid, as a database row would hold it (rounded to 6
+    /// decimals like the run files).
+    pub fn simulate(&self, run: &Run) -> Result<Vec<f64>, SweepError> {
+        let result =
+            run_scenario(&self.scenario(run)).map_err(|source| SweepError::Run { run: run.file_name(), source })?;
+        Ok(sample(&result.profile, self, &self.grid.positions()).into_iter().map(|m| (m * 1e6).round() / 1e6).collect())
+    }
+}
+
 /// What `build_runs` records in a build directory (`sweep.json`) so that
 /// `merge` assembles the database the runs were made for.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

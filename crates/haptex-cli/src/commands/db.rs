@@ -110,11 +110,15 @@ struct MergeArgs {
 ///
 /// Without --surface, prints the LOO summary (widths, RMS error, error
 /// relative to the profiles' range) per template. With --surface, --width,
-/// --height (and --velocity) naming a database row, writes
-/// `xi_mm,h_mm,mu_fe,mu_cae_loo,mu_cae_full` and optionally a PNG.
+/// --height (and --velocity), writes `xi_mm,h_mm,mu_fe,mu_cae_loo,mu_cae_full`
+/// and optionally a PNG. For a database case the FE profile is the
+/// database's row; for any other parameters the case is simulated now with
+/// the database's FE settings (about half a second), which shows how well
+/// the CAE predicts it.
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:\n  haptex db loo\n  \
-                  haptex db loo --surface bump --width 1.5 --height 0.3 -o bump-loo.csv --png bump-loo.png")]
+                  haptex db loo --surface bump --width 1.5 --height 0.3 -o bump-loo.csv --png bump-loo.png\n  \
+                  haptex db loo --surface edge --width 1.3 --height 0.27 --velocity 30 --png edge-check.png")]
 struct LooArgs {
     /// Database directory. Default: the shipped data/db, or $HAPTEX_DB.
     #[arg(long, value_name = "DIR")]
@@ -140,6 +144,9 @@ struct LooArgs {
     /// Summary as JSON (to stdout, or stderr when a case is written there).
     #[arg(long)]
     json: bool,
+    /// No messages on stderr.
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -339,27 +346,35 @@ fn loo(args: LooArgs) -> anyhow::Result<()> {
     let (width, height) = (args.width.expect("clap requires it"), args.height.expect("clap requires it"));
     let model = TemplateModel::load_with(&dir, &metadata, template)?;
     let query = [width, height, args.velocity];
-    let Some(row) = model.exact_row(&query) else {
-        bail!(
-            "{} r_w = {width} mm, r_h = {height} mm, v = {} mm/s is not a case of the database {} \
-             (r_w in {:?}, r_h in {:?}, v in {:?})",
-            template.name(),
-            args.velocity,
-            dir.display(),
-            metadata.sweep.widths_mm,
-            metadata.sweep.heights_mm,
-            metadata.sweep.velocities_mm_s
-        );
-    };
     let matrix = model.cae.matrix();
     let widths = model.cae.widths();
-    let fe = matrix.output_row(row).to_vec();
-    // The case left out: the CAE over the other rows (renormalized, widths
-    // as in the metadata), which never sees the case.
-    let left_out = Cae::new(without_row(matrix, row)?, widths)?.predict(&query)?.0;
+    let run = Run { template, width_mm: width, height_mm: height, velocity_mm_s: args.velocity };
     let full = model.cae.predict(&query)?.0;
+    let row = model.exact_row(&query);
+    let (fe, left_out, case) = match row {
+        Some(row) => {
+            // The case left out: the CAE over the other rows (renormalized,
+            // widths as in the metadata), which never sees the case.
+            let left_out = Cae::new(without_row(matrix, row)?, widths)?.predict(&query)?.0;
+            (
+                matrix.output_row(row).to_vec(),
+                left_out,
+                format!("row {} of {}", row + 1, dir.join(template.file_name()).display()),
+            )
+        }
+        None => {
+            // Not a database case: simulate it with the database's FE
+            // settings; the database never saw it, so both estimates agree.
+            if !args.quiet {
+                eprintln!("not a case of the database: simulating it with the database's FE settings");
+            }
+            let spec = DatabaseSpec::from_metadata(&metadata)?;
+            let fe = spec.simulate(&run).context("simulating the case")?;
+            (fe, full.clone(), "not in the database, FE simulated now".to_string())
+        }
+    };
     let xi = model.positions().to_vec();
-    let shape = Run { template, width_mm: width, height_mm: height, velocity_mm_s: args.velocity }.surface(0.0);
+    let shape = run.surface(0.0);
     let h: Vec<f64> = xi.iter().map(|&x| shape.height(x)).collect();
     let rms = |a: &[f64]| (a.iter().zip(&fe).map(|(p, f)| (p - f) * (p - f)).sum::<f64>() / fe.len() as f64).sqrt();
     let (rms_loo, rms_full) = (rms(&left_out), rms(&full));
@@ -368,11 +383,9 @@ fn loo(args: LooArgs) -> anyhow::Result<()> {
     output.write(|w| {
         writeln!(
             w,
-            "# haptex db loo: {} r_w={width} mm r_h={height} mm v={} mm/s (row {} of {}); widths {} .. {}",
+            "# haptex db loo: {} r_w={width} mm r_h={height} mm v={} mm/s ({case}); widths {} .. {}",
             template.name(),
             args.velocity,
-            row + 1,
-            dir.join(template.file_name()).display(),
             widths.w_min,
             widths.w_max
         )?;
@@ -389,24 +402,31 @@ fn loo(args: LooArgs) -> anyhow::Result<()> {
             template.name(),
             args.velocity
         );
+        let friction = Panel::new("x - x0 (mm)", "Ft/Fn").line("FE", &xi, &fe);
+        let friction = if row.is_some() {
+            friction.line(format!("CAE, case left out (RMS {rms_loo:.4})"), &xi, &left_out).line(
+                format!("CAE, full database (RMS {rms_full:.4})"),
+                &xi,
+                &full,
+            )
+        } else {
+            friction.line(format!("CAE, case not in the database (RMS {rms_full:.4})"), &xi, &full)
+        };
         Figure::new(title)
             .size(900, 260)
             .panel(Panel::new("x - x0 (mm)", "height (mm)").line("surface", &xi, &h))
-            .panel(
-                Panel::new("x - x0 (mm)", "Ft/Fn")
-                    .line("FE", &xi, &fe)
-                    .line(format!("CAE, case left out (RMS {rms_loo:.4})"), &xi, &left_out)
-                    .line(format!("CAE, full database (RMS {rms_full:.4})"), &xi, &full),
-            )
+            .panel(friction)
             .write_png(path)
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
-    eprintln!(
-        "{} r_w = {width} mm, r_h = {height} mm, v = {} mm/s: RMS difference to FE {rms_loo:.4} leaving the case \
-         out, {rms_full:.4} with it",
-        template.name(),
-        args.velocity
-    );
+    if !args.quiet {
+        eprintln!(
+            "{} r_w = {width} mm, r_h = {height} mm, v = {} mm/s ({case}): RMS difference to FE {rms_loo:.4} \
+             leaving the case out, {rms_full:.4} over the whole database",
+            template.name(),
+            args.velocity
+        );
+    }
     if args.json {
         eprintln!("{}", serde_json::to_string_pretty(&summary_json(&metadata))?);
     }

@@ -86,15 +86,21 @@ pub fn run(args: PredictArgs) -> anyhow::Result<()> {
             row + 1,
             dir.join(template.file_name()).display()
         ),
-        None => format!(
-            "CAE estimate over {} FE profiles (widths {:.4} .. {:.4}); nearest case row {} at normalized distance \
-             {:.3}",
-            model.cae.matrix().n(),
-            model.cae.widths().w_min,
-            model.cae.widths().w_max,
-            prediction.diagnostics.nearest_row + 1,
-            prediction.diagnostics.nearest_distance
-        ),
+        None => {
+            let entry = metadata.entry(template).expect("the model was loaded from this entry");
+            format!(
+                "CAE estimate over {} FE profiles (widths {:.4} .. {:.4}); nearest case row {} at normalized \
+                 distance {:.3}; typical error (leave-one-out RMS over the database) {:.4}, {:.0}% of a profile's \
+                 range",
+                model.cae.matrix().n(),
+                model.cae.widths().w_min,
+                model.cae.widths().w_max,
+                prediction.diagnostics.nearest_row + 1,
+                prediction.diagnostics.nearest_distance,
+                entry.loo_rmse,
+                100.0 * entry.loo_rmse_relative_to_range
+            )
+        }
     };
     let warning = if prediction.fe_row.is_some() { None } else { model.cae.warning(&query, &prediction.diagnostics) };
     Output::new(args.output.clone()).write(|w| {
