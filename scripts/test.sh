@@ -5,6 +5,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+# Nothing here reads standard input. Cargo's compiler probe (`rustc -
+# --print=...`) has been seen to read an inherited stdin in CI and fail
+# parsing whatever text was there, so the suite never inherits one.
+exec </dev/null
+
 # The web GUI's browser test (crates/haptex-server/tests/browser.rs) drives
 # Debian's headless Chromium through chromedriver: install them if missing.
 if ! command -v chromium >/dev/null 2>&1 || ! command -v chromedriver >/dev/null 2>&1; then
