@@ -419,4 +419,14 @@ fn shipped_database_predicts_off_grid_fe_cases() {
     let lines: Vec<String> = text(&out.stdout).lines().filter(|l| !l.starts_with('#')).map(String::from).collect();
     assert_eq!(lines[0], "x_mm,mu");
     assert_eq!(lines.len(), 502);
+    assert!(!text(&out.stderr).contains("warning"), "inside the grid: {}", text(&out.stderr));
+
+    // Just beyond the grid's widest bump (2.5 mm): close enough to the
+    // database's cases that the kernel-distance test does not fire, but
+    // outside its range, which predict must still say.
+    let out = haptex(&["predict", "--surface", "bump", "--x0", "5", "--width", "2.6", "--height", "0.27"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("warning: width r_w = 2.6 mm is outside the database range 0.5 .. 2.5 mm"), "{stderr}");
+    assert!(text(&out.stdout).contains("# warning: width r_w = 2.6 mm"));
 }

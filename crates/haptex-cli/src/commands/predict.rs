@@ -17,8 +17,9 @@ use crate::args::{Output, positive};
 /// FE profiles of the same template, weighted by how close their (r_w, r_h,
 /// velocity) are to the query. When the parameters are exactly a database
 /// row, that row's FE profile is returned and the command says so. Queries
-/// far from every database case (outside the ranges of r_w, r_h, velocity)
-/// are answered with a warning: the estimate is then unreliable.
+/// far from every database case, or with a parameter outside the database's
+/// range of r_w, r_h or velocity, are answered with a warning: the estimate
+/// then extrapolates and is unreliable.
 ///
 /// Output: `x_mm,mu`, x the finger's position on the surface (the database
 /// grid xi = -5 .. 5 mm shifted to the feature at x0), a friction profile
@@ -102,7 +103,11 @@ pub fn run(args: PredictArgs) -> anyhow::Result<()> {
             )
         }
     };
-    let warning = if prediction.fe_row.is_some() { None } else { model.cae.warning(&query, &prediction.diagnostics) };
+    let warning = if prediction.fe_row.is_some() {
+        None
+    } else {
+        model.cae.warning(&query, &prediction.diagnostics).or_else(|| range_warning(&model, &query))
+    };
     Output::new(args.output.clone()).write(|w| {
         writeln!(
             w,
@@ -130,4 +135,22 @@ pub fn run(args: PredictArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// A warning when a parameter lies outside the database's range although
+/// the query is still within the kernel's reach of some case (the CAE's own
+/// extrapolation warning covers queries farther away).
+fn range_warning(model: &TemplateModel, query: &[f64; 3]) -> Option<String> {
+    const NAMES: [(&str, &str); 3] = [("width r_w", "mm"), ("height r_h", "mm"), ("velocity", "mm/s")];
+    let outside: Vec<String> = model
+        .input_ranges()
+        .iter()
+        .zip(query)
+        .zip(NAMES)
+        .filter(|(((lo, hi), v), _)| *v < lo || *v > hi)
+        .map(|(((lo, hi), v), (name, unit))| {
+            format!("{name} = {v} {unit} is outside the database range {lo} .. {hi} {unit}")
+        })
+        .collect();
+    (!outside.is_empty()).then(|| format!("{}: the estimate extrapolates the FE database", outside.join("; ")))
 }
