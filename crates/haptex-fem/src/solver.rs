@@ -692,6 +692,16 @@ fn newton(
             eprintln!("  alpha {}", if accepted { alpha } else { f64::NAN });
         }
     }
+    // The last update may have converged: check it as the loop's head would
+    // (else a converged step were cut, or reported as failed with a residual
+    // below its tolerance).
+    if norm.is_finite() && norm <= tolerance_of(scale) {
+        cond.stiffness_times(&s.v, &mut s.sv);
+        (norm, _, scale) = cond.residual(s, false, *dy);
+        if norm <= tolerance_of(scale) {
+            return Ok((settings.max_iterations, totals));
+        }
+    }
     Err(StepFailure::Newton { residual: norm, tolerance: tolerance_of(scale) })
 }
 
