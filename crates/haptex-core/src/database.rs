@@ -48,6 +48,34 @@ impl Template {
     pub fn file_name(self) -> String {
         format!("{}.csv", self.name())
     }
+
+    /// The surface height h(x) in mm of this template with feature position
+    /// `x0`, width r_w and height r_h (all mm), as design.md defines them:
+    ///
+    /// - bump: h = r_h exp(-((x - x0) / (r_w / 2))^2);
+    /// - edge: h = r_h s((x - x0 + r_w) / r_w), s(t) = 3t^2 - 2t^3 on
+    ///   [0, 1]: flat at 0, rising over r_w, flat at r_h from x0 on;
+    /// - sine: h = r_h sin(2 pi (x - x0) / r_w): phase x0, period r_w,
+    ///   amplitude r_h.
+    pub fn height_mm(self, x: f64, x0: f64, width: f64, height: f64) -> f64 {
+        match self {
+            Template::Bump => height * (-((x - x0) / (0.5 * width)).powi(2)).exp(),
+            Template::Edge => {
+                let t = ((x - x0 + width) / width).clamp(0.0, 1.0);
+                height * t * t * (3.0 - 2.0 * t)
+            }
+            Template::Sine => height * (std::f64::consts::TAU * (x - x0) / width).sin(),
+        }
+    }
+
+    /// What the width r_w and the height r_h mean for this template.
+    pub fn parameter_meaning(self) -> (&'static str, &'static str) {
+        match self {
+            Template::Bump => ("bump width r_w", "bump height r_h"),
+            Template::Edge => ("edge rise r_w", "edge height r_h"),
+            Template::Sine => ("sine period r_w", "sine amplitude r_h"),
+        }
+    }
 }
 
 /// The positions xi = x - x0 (mm) at which every profile is sampled.
@@ -263,6 +291,64 @@ impl TemplateModel {
         let (fe_row, diagnostics) = self.predict_into(&[width_mm, height_mm, velocity_mm_s], &mut scratch, &mut mu)?;
         let x_mm = self.positions.iter().map(|xi| x0_mm + xi).collect();
         Ok(Prediction { x_mm, mu, fe_row, diagnostics })
+    }
+
+    /// Where a prediction for `query` (r_w, r_h, velocity) comes from, in
+    /// one sentence: the FE row it is, or the CAE estimate with its nearest
+    /// case and the template's typical (leave-one-out) error from `entry`.
+    pub fn describe(&self, query: &[f64; 3], prediction: &Prediction, entry: &TemplateEntry) -> String {
+        match prediction.fe_row {
+            Some(row) => format!(
+                "FE result: r_w = {} mm, r_h = {} mm, v = {} mm/s is row {} of {} (no estimate involved)",
+                query[0],
+                query[1],
+                query[2],
+                row + 1,
+                self.template.file_name()
+            ),
+            None => format!(
+                "CAE estimate over {} FE profiles (widths {:.4} .. {:.4}); nearest case row {} at normalized \
+                 distance {:.3}; typical error (leave-one-out RMS over the database) {:.4}, {:.0}% of a profile's \
+                 range",
+                self.cae.matrix().n(),
+                self.cae.widths().w_min,
+                self.cae.widths().w_max,
+                prediction.diagnostics.nearest_row + 1,
+                prediction.diagnostics.nearest_distance,
+                entry.loo_rmse,
+                100.0 * entry.loo_rmse_relative_to_range
+            ),
+        }
+    }
+
+    /// The warning for a query (r_w, r_h, velocity) and its prediction, if
+    /// any: none for an exact database row; the CAE's extrapolation warning
+    /// when the query is far from every case (paper footnote 6); else a
+    /// warning naming each parameter outside the database's range, where
+    /// the estimate extrapolates although some case is still within the
+    /// kernel's reach.
+    pub fn warning(&self, query: &[f64; 3], fe_row: Option<usize>, diagnostics: &Diagnostics) -> Option<String> {
+        if fe_row.is_some() {
+            return None;
+        }
+        self.cae.warning(query, diagnostics).or_else(|| self.range_warning(query))
+    }
+
+    /// A warning naming each parameter of `query` outside the database's
+    /// range, if any.
+    pub fn range_warning(&self, query: &[f64; 3]) -> Option<String> {
+        const NAMES: [(&str, &str); 3] = [("width r_w", "mm"), ("height r_h", "mm"), ("velocity", "mm/s")];
+        let outside: Vec<String> = self
+            .input_ranges()
+            .iter()
+            .zip(query)
+            .zip(NAMES)
+            .filter(|(((lo, hi), v), _)| *v < lo || *v > hi)
+            .map(|(((lo, hi), v), (name, unit))| {
+                format!("{name} = {v} {unit} is outside the database range {lo} .. {hi} {unit}")
+            })
+            .collect();
+        (!outside.is_empty()).then(|| format!("{}: the estimate extrapolates the FE database", outside.join("; ")))
     }
 
     /// The range of each input over the database: (min, max) for r_w, r_h, v.

@@ -9,6 +9,7 @@
 
 use std::path::Path;
 
+use haptex_core::database::Template;
 use haptex_core::io::{Table, TableError};
 use serde::{Deserialize, Serialize};
 
@@ -44,12 +45,9 @@ impl SurfaceShape {
     pub fn height(&self, x: f64) -> f64 {
         match self {
             SurfaceShape::Flat => 0.0,
-            SurfaceShape::Bump { x0, width, height } => height * (-((x - x0) / (0.5 * width)).powi(2)).exp(),
-            SurfaceShape::Edge { x0, width, height } => {
-                let t = ((x - x0 + width) / width).clamp(0.0, 1.0);
-                height * t * t * (3.0 - 2.0 * t)
-            }
-            SurfaceShape::Sine { x0, width, height } => height * (std::f64::consts::TAU * (x - x0) / width).sin(),
+            SurfaceShape::Bump { x0, width, height } => Template::Bump.height_mm(x, *x0, *width, *height),
+            SurfaceShape::Edge { x0, width, height } => Template::Edge.height_mm(x, *x0, *width, *height),
+            SurfaceShape::Sine { x0, width, height } => Template::Sine.height_mm(x, *x0, *width, *height),
             SurfaceShape::Sampled { x_mm, h_mm } => haptex_core::profile::interpolate(x_mm, h_mm, x),
         }
     }

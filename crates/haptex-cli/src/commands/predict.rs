@@ -78,36 +78,9 @@ pub fn run(args: PredictArgs) -> anyhow::Result<()> {
     let model = TemplateModel::load_with(&dir, &metadata, template)?;
     let prediction = model.predict(args.x0, args.width, args.height, args.velocity)?;
     let query = [args.width, args.height, args.velocity];
-    let source = match prediction.fe_row {
-        Some(row) => format!(
-            "FE result: r_w = {} mm, r_h = {} mm, v = {} mm/s is row {} of {} (no estimate involved)",
-            args.width,
-            args.height,
-            args.velocity,
-            row + 1,
-            dir.join(template.file_name()).display()
-        ),
-        None => {
-            let entry = metadata.entry(template).expect("the model was loaded from this entry");
-            format!(
-                "CAE estimate over {} FE profiles (widths {:.4} .. {:.4}); nearest case row {} at normalized \
-                 distance {:.3}; typical error (leave-one-out RMS over the database) {:.4}, {:.0}% of a profile's \
-                 range",
-                model.cae.matrix().n(),
-                model.cae.widths().w_min,
-                model.cae.widths().w_max,
-                prediction.diagnostics.nearest_row + 1,
-                prediction.diagnostics.nearest_distance,
-                entry.loo_rmse,
-                100.0 * entry.loo_rmse_relative_to_range
-            )
-        }
-    };
-    let warning = if prediction.fe_row.is_some() {
-        None
-    } else {
-        model.cae.warning(&query, &prediction.diagnostics).or_else(|| range_warning(&model, &query))
-    };
+    let entry = metadata.entry(template).expect("the model was loaded from this entry");
+    let source = model.describe(&query, &prediction, entry);
+    let warning = model.warning(&query, prediction.fe_row, &prediction.diagnostics);
     Output::new(args.output.clone()).write(|w| {
         writeln!(
             w,
@@ -135,22 +108,4 @@ pub fn run(args: PredictArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
-}
-
-/// A warning when a parameter lies outside the database's range although
-/// the query is still within the kernel's reach of some case (the CAE's own
-/// extrapolation warning covers queries farther away).
-fn range_warning(model: &TemplateModel, query: &[f64; 3]) -> Option<String> {
-    const NAMES: [(&str, &str); 3] = [("width r_w", "mm"), ("height r_h", "mm"), ("velocity", "mm/s")];
-    let outside: Vec<String> = model
-        .input_ranges()
-        .iter()
-        .zip(query)
-        .zip(NAMES)
-        .filter(|(((lo, hi), v), _)| *v < lo || *v > hi)
-        .map(|(((lo, hi), v), (name, unit))| {
-            format!("{name} = {v} {unit} is outside the database range {lo} .. {hi} {unit}")
-        })
-        .collect();
-    (!outside.is_empty()).then(|| format!("{}: the estimate extrapolates the FE database", outside.join("; ")))
 }
