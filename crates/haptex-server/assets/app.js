@@ -1,12 +1,12 @@
-// haptex GUI: pick a friction profile (texture-library material or your own
-// CSV file), set the device and finger constants, see the friction and
-// voltage profiles (paper eqs. 8 and 9, computed by the server), feel the
-// voltage along a strip, download CSV / JSON / WAV.
+// haptex GUI: pick a friction profile (a surface template predicted from
+// the FE database, a texture-library material or your own CSV file), set
+// the device and finger constants, see the surface, friction and voltage
+// profiles (paper eqs. 8 and 9, computed by the server), feel the voltage
+// along a strip, download CSV / JSON / WAV.
 //
 // Every number comes from the JSON API (docs/web.md); this script only
 // gathers inputs, draws and offers downloads. Sources are a registry
-// (SOURCES): a new one (the surface templates of the FE database, later)
-// is one more entry whose load() returns a profile.
+// (SOURCES): each entry's load() returns a profile.
 'use strict';
 
 (function () {
@@ -14,6 +14,8 @@
 
   const state = {
     config: null,
+    templates: null,       // GET /api/templates answer, when the server has the FE database
+    template: {},          // surface, x0_mm and the slider values of the template source
     source: null,          // id of the active source
     profile: null,         // {x_mm, mu, fn_n, label, synthetic, download()}
     profiles: {},          // last profile of each source, kept when switching
@@ -25,7 +27,7 @@
     carrierHz: 1000,
     updates: 0,
   };
-  const plots = { friction: null, voltage: null };
+  const plots = { height: null, friction: null, voltage: null };
   window.haptex = { state, plots };
 
   // ---------------------------------------------------------------- API
@@ -80,8 +82,48 @@
   // ------------------------------------------------------------- sources
 
   const SOURCES = {
+    template: {
+      panel: 'template',
+      // FE profiles are skin-on-surface friction (mu_skin 0.5), below the
+      // display's own mu_HD: eq. (8) has nothing to add there, so virtual
+      // profiles are shown with their pattern, eq. (9), as in the paper's
+      // Fig. 2b (docs/database.md).
+      method: 'normalized',
+      async load() {
+        const body = templateBody();
+        const answer = await (await postJson('/api/predict', body)).json();
+        const info = $('template-info');
+        info.textContent = '';
+        const source = document.createElement('div');
+        source.textContent = answer.fe_exact
+          ? `FE result: a database case (row ${answer.fe_row} of ${answer.surface}.csv), no estimate involved.`
+          : `CAE estimate over the FE database; typical error ${fmt(answer.loo_rmse)} in mu ` +
+            `(${Math.round(100 * answer.loo_rmse_relative_to_range)}% of a profile's range, leave-one-out).`;
+        info.append(source);
+        info.classList.toggle('warning', answer.extrapolation);
+        answer.warnings.forEach((w) => {
+          const line = document.createElement('div');
+          line.textContent = `Extrapolation: ${w}`;
+          info.append(line);
+        });
+        const p = answer.parameters;
+        return {
+          x_mm: answer.x_mm, mu: answer.mu, fn_n: null, h_mm: answer.h_mm,
+          label: `${answer.surface} r_w ${fmt(p.width_mm)} mm, r_h ${fmt(p.height_mm)} mm, ` +
+            `${fmt(p.velocity_mm_s)} mm/s (${answer.fe_exact ? 'FE' : 'CAE'}` +
+            `${answer.extrapolation ? ', extrapolated' : ''})`,
+          synthetic: false,
+          extrapolation: answer.extrapolation,
+          download: async () => ({
+            blob: await (await postJson('/api/predict?format=csv', body)).blob(),
+            name: `${answer.surface}-w${p.width_mm}-h${p.height_mm}-v${p.velocity_mm_s}.csv`,
+          }),
+        };
+      },
+    },
     library: {
       panel: 'library',
+      method: 'physical',
       async load(options = {}) {
         const name = $('material').value;
         if (!name) throw new ApiError('the library has no materials', 'material', 0);
@@ -138,11 +180,15 @@
     },
   };
 
+  let loadRequest = 0;
+
   async function loadSource(options) {
-    const source = SOURCES[state.source];
+    const id = ++loadRequest;
+    const sourceId = state.source;
     say('Loading the profile…');
-    const profile = await source.load(options);
-    state.profiles[state.source] = profile;
+    const profile = await SOURCES[sourceId].load(options);
+    if (id !== loadRequest) return; // a newer profile is on its way
+    state.profiles[sourceId] = profile;
     state.profile = profile;
     if (!profile) {
       clearPlots();
@@ -155,6 +201,9 @@
   function selectSource(id) {
     state.source = id;
     document.querySelectorAll('.source-panel').forEach((p) => { p.hidden = p.dataset.source !== SOURCES[id].panel; });
+    $('height-figure').hidden = id !== 'template';
+    loadRequest += 1; // a profile still loading for the previous source is dropped
+    if (SOURCES[id].method) setMethod(SOURCES[id].method);
     state.profile = state.profiles[id] || null;
     if (state.profile) {
       updateVoltage().catch(showError);
@@ -163,7 +212,100 @@
     }
   }
 
+  // ------------------------------------------------------- template source
+
+  /** The POST /api/predict body from the template controls. */
+  function templateBody() {
+    const t = state.template;
+    return {
+      surface: t.surface, x0_mm: t.x0_mm,
+      width_mm: t.width_mm, height_mm: t.height_mm, velocity_mm_s: t.velocity_mm_s,
+    };
+  }
+
+  let templateTimer = null;
+
+  function scheduleTemplate() {
+    clearTimeout(templateTimer);
+    templateTimer = setTimeout(() => loadSource().catch(showError), 40);
+  }
+
+  /** Builds the sliders of the selected surface (ranges from /api/templates). */
+  function buildTemplateSliders() {
+    const info = state.templates.templates.find((t) => t.name === state.template.surface);
+    $('surface-formula').textContent = info.formula;
+    const box = $('template-params');
+    box.textContent = '';
+    info.parameters.forEach((p) => {
+      const wrap = document.createElement('div');
+      wrap.className = 'slider';
+      const label = document.createElement('label');
+      label.htmlFor = `template-${p.name}`;
+      const name = document.createElement('span');
+      name.textContent = `${p.label} (${p.unit})`;
+      const out = document.createElement('output');
+      out.htmlFor = `template-${p.name}`;
+      label.append(name, out);
+      const input = document.createElement('input');
+      Object.assign(input, {
+        type: 'range', id: `template-${p.name}`, min: p.slider[0], max: p.slider[1], step: p.step,
+      });
+      input.dataset.templateParam = p.name;
+      const current = state.template[p.name] ?? p.default;
+      input.value = String(current);
+      const note = document.createElement('p');
+      note.className = 'range-note';
+      const show = () => {
+        const v = Number(input.value);
+        state.template[p.name] = v;
+        out.value = `${fmt(v)} ${p.unit}`;
+        const outside = v < p.database[0] || v > p.database[1];
+        wrap.classList.toggle('outside', outside);
+        note.textContent = outside
+          ? `outside the FE database (${fmt(p.database[0])} .. ${fmt(p.database[1])} ${p.unit}): extrapolation`
+          : `FE database: ${fmt(p.database[0])} .. ${fmt(p.database[1])} ${p.unit}`;
+      };
+      input.addEventListener('input', () => { show(); scheduleTemplate(); });
+      show();
+      wrap.append(label, input, note);
+      box.append(wrap);
+    });
+  }
+
+  function buildTemplateControls(templates) {
+    state.templates = templates;
+    const select = $('surface');
+    templates.templates.forEach((t) => {
+      const option = document.createElement('option');
+      option.value = t.name;
+      option.textContent = `${t.name} (${t.rows} FE runs)`;
+      select.append(option);
+    });
+    state.template.surface = templates.templates[0].name;
+    state.template.x0_mm = templates.x0_mm.default;
+    $('x0').value = String(templates.x0_mm.default);
+    buildTemplateSliders();
+    select.addEventListener('change', () => {
+      state.template.surface = select.value;
+      buildTemplateSliders();
+      loadSource().catch(showError);
+    });
+    $('x0').addEventListener('input', () => {
+      const text = $('x0').value.trim();
+      if (text === '' || !Number.isFinite(Number(text))) return;
+      state.template.x0_mm = Number(text);
+      scheduleTemplate();
+    });
+  }
+
   // ------------------------------------------------------------ controls
+
+  /** Selects a mapping method (its radio button too). */
+  function setMethod(id) {
+    state.method = id;
+    const input = document.querySelector(`input[name="method"][value="${id}"]`);
+    if (input) input.checked = true;
+  }
 
   function buildControls(config) {
     const sourceBox = $('source-select');
@@ -362,6 +504,13 @@
       { label: 'U (V RMS)', stroke: '#b3261e', width: 1.5 },
       { label: 'U_max', stroke: '#888', dash: [6, 4], width: 1 },
     ];
+    const h = state.drawn && state.drawn.h_mm;
+    if (h && h.length === x.length) {
+      plots.height = replot(plots.height, 'height-plot', [{ label: 'h (mm)', stroke: '#444', width: 1.5, fill: 'rgba(0,0,0,0.06)' }], [x, h]);
+    } else if (plots.height) {
+      plots.height.destroy();
+      plots.height = null;
+    }
     plots.friction = replot(plots.friction, 'friction-plot', frictionSeries, frictionData);
     plots.voltage = replot(plots.voltage, 'voltage-plot', voltageSeries, voltageData);
   }
@@ -378,14 +527,14 @@
   }
 
   function clearPlots() {
-    ['friction', 'voltage'].forEach((k) => { if (plots[k]) { plots[k].destroy(); plots[k] = null; } });
+    ['height', 'friction', 'voltage'].forEach((k) => { if (plots[k]) { plots[k].destroy(); plots[k] = null; } });
     $('summary').textContent = '';
     state.voltage = null;
     drawStrip();
   }
 
   function resizePlots() {
-    ['friction', 'voltage'].forEach((k) => {
+    ['height', 'friction', 'voltage'].forEach((k) => {
       const plot = plots[k];
       if (plot) plot.setSize({ width: plotWidth(`${k}-plot`), height: plotHeight() });
     });
@@ -563,6 +712,9 @@
       let resizeTimer = null;
       window.addEventListener('resize', () => { clearTimeout(resizeTimer); resizeTimer = setTimeout(resizePlots, 100); });
       const sources = state.config.sources.filter((s) => SOURCES[s.id]);
+      if (sources.some((s) => s.id === 'template')) {
+        buildTemplateControls(await (await api('/api/templates')).json());
+      }
       if (sources.some((s) => s.id === 'library')) {
         const list = await (await api('/api/materials')).json();
         const select = $('material');

@@ -73,7 +73,9 @@ pub fn parse_json<T: DeserializeOwned>(bytes: &[u8]) -> Result<T, ApiError> {
     let mut deserializer = serde_json::Deserializer::from_slice(bytes);
     let value = serde_path_to_error::deserialize(&mut deserializer).map_err(|e| {
         let path = e.path().to_string();
-        let field = if path == "." { "body".to_string() } else { path };
+        // "." is the whole body, "?" a position serde could not name (a
+        // truncated document).
+        let field = if path == "." || path == "?" { "body".to_string() } else { path };
         ApiError::bad_request(format!("invalid JSON body: {}", e.inner()), Some(&field))
     })?;
     deserializer.end().map_err(|e| ApiError::bad_request(format!("invalid JSON body: {e}"), Some("body")))?;

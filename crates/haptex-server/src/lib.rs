@@ -11,21 +11,19 @@
 //!
 //! - [`routes`]: the route table (method, path, handler), the one list the
 //!   router is built from and the OpenAPI test checks;
-//! - `api/*`: one module per resource (health, config, voltage, materials,
-//!   play, profile, openapi);
+//! - `api/*`: one module per resource (health, config, templates, predict,
+//!   voltage, materials, play, profile, openapi);
 //! - [`error`]: [`ApiError`] and the middleware that turns every 4xx into
 //!   the JSON error `{"error": message, "field": name}`;
 //! - [`params`]: device parameters with the paper's defaults and their
 //!   accepted ranges;
 //! - [`input`]: request bodies (JSON or `text/csv`) and query strings;
-//! - [`state`]: shared state ([`AppState`]: the texture library pool and
-//!   the limits);
+//! - [`state`]: shared state ([`AppState`]: the FE database, the texture
+//!   library pool and the limits);
+//! - [`templates`]: the FE database of surface templates and the ranges of
+//!   their parameters;
 //! - [`assets`]: the GUI, embedded in the binary (rust-embed), and the
 //!   security headers.
-//!
-//! Not yet served: the template-surface prediction (`GET /api/templates`,
-//! `POST /api/predict`), which needs the FE database of issue 5.
-//! [`AppState`] and [`routes::table`] are where it plugs in.
 
 mod api;
 pub mod assets;
@@ -34,6 +32,7 @@ pub mod input;
 pub mod params;
 pub mod routes;
 pub mod state;
+pub mod templates;
 
 use std::future::Future;
 use std::net::SocketAddr;
@@ -59,6 +58,9 @@ pub struct Config {
     /// The texture library (SQLite) to serve under `/api/materials`, opened
     /// read-only; `None` serves no materials.
     pub library: Option<PathBuf>,
+    /// The FE database of surface templates (a `haptex db` directory) to
+    /// serve under `/api/templates` and `/api/predict`; `None` serves none.
+    pub database: Option<PathBuf>,
     pub limits: Limits,
 }
 
@@ -78,6 +80,8 @@ pub enum ServeError {
     Io(#[from] std::io::Error),
     #[error(transparent)]
     Library(#[from] haptex_core::library::LibraryError),
+    #[error(transparent)]
+    Database(#[from] haptex_core::database::DatabaseError),
 }
 
 /// The whole application: API routes, GUI, middleware.
@@ -156,7 +160,10 @@ pub async fn serve(
 /// then shuts down gracefully. `on_listening` is called with the bound
 /// address once the server accepts connections.
 pub fn run(config: Config, on_listening: impl FnOnce(SocketAddr)) -> Result<(), ServeError> {
-    let state = AppState::new(config.library.as_deref(), config.limits.clone())?;
+    let mut state = AppState::new(config.library.as_deref(), config.limits.clone())?;
+    if let Some(dir) = &config.database {
+        state = state.with_database(dir)?;
+    }
     let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build().map_err(ServeError::Runtime)?;
     runtime.block_on(async move {
         let listener = tokio::net::TcpListener::bind(config.addr)

@@ -2,9 +2,9 @@
 //! router is built from and that the OpenAPI test compares with
 //! `/api/openapi.json`.
 //!
-//! To add a route (e.g. `POST /api/predict` once the FE database of issue 5
-//! exists): write its handler under `api/`, add one [`endpoint`] line here
-//! and describe it in `src/openapi.json`; the test fails until both agree.
+//! To add a route: write its handler under `api/`, add one [`endpoint`]
+//! line here and describe it in `src/openapi.json`; the test fails until
+//! both agree.
 
 use axum::Router;
 use axum::handler::Handler;
@@ -39,6 +39,8 @@ pub fn table() -> Vec<Endpoint> {
         endpoint(Method::GET, "/api/health", api::health::get),
         endpoint(Method::GET, "/api/config", api::config::get),
         endpoint(Method::GET, "/api/openapi.json", api::openapi::get),
+        endpoint(Method::GET, "/api/templates", api::templates::get),
+        endpoint(Method::POST, "/api/predict", api::predict::post),
         endpoint(Method::POST, "/api/voltage", api::voltage::post),
         endpoint(Method::POST, "/api/profile", api::profile::post),
         endpoint(Method::GET, "/api/materials", api::materials::list),

@@ -1,20 +1,21 @@
 //! Shared state of the application: the sources of friction profiles and
 //! the limits every request is held to.
 //!
-//! Sources today: the texture library (a SQLite file, read-only) and the
-//! user's own profile (in the request). The template-surface database of
-//! issue 5 (FE database + CAE) will be one more field here, loaded once at
-//! start, and one more entry in [`AppState::sources`].
+//! Sources: the surface templates (the FE database and its CAE, loaded once
+//! at start), the texture library (a SQLite file, read-only) and the
+//! user's own profile (in the request).
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use haptex_core::database::DatabaseError;
 use haptex_core::library::{Library, LibraryError};
 use serde::Serialize;
 use tokio::sync::Semaphore;
 
 use crate::error::ApiError;
+use crate::templates::TemplateSet;
 
 /// What one request may ask of the server.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -73,6 +74,7 @@ pub struct AppState(Arc<Inner>);
 #[derive(Debug)]
 struct Inner {
     library: Option<Arc<LibraryPool>>,
+    templates: Option<Arc<TemplateSet>>,
     limits: Limits,
     renders: Semaphore,
 }
@@ -91,7 +93,29 @@ impl AppState {
     pub fn new(library: Option<&Path>, limits: Limits) -> Result<Self, LibraryError> {
         let library = library.map(LibraryPool::open).transpose()?.map(Arc::new);
         let renders = Semaphore::new(limits.concurrent_renders.max(1));
-        Ok(Self(Arc::new(Inner { library, limits, renders })))
+        Ok(Self(Arc::new(Inner { library, templates: None, limits, renders })))
+    }
+
+    /// This state, also serving the surface templates of the FE database in
+    /// `dir` (loaded now, so that a bad database fails at start).
+    pub fn with_database(self, dir: &Path) -> Result<Self, DatabaseError> {
+        let templates = Some(Arc::new(TemplateSet::load(dir)?));
+        let limits = self.0.limits.clone();
+        let renders = Semaphore::new(limits.concurrent_renders.max(1));
+        Ok(Self(Arc::new(Inner { library: self.0.library.clone(), templates, limits, renders })))
+    }
+
+    /// The surface templates, or 404 if the server has no FE database.
+    pub fn templates(&self) -> Result<&Arc<TemplateSet>, ApiError> {
+        self.0
+            .templates
+            .as_ref()
+            .ok_or_else(|| ApiError::not_found("this server has no FE database of templates", None))
+    }
+
+    /// Whether surface templates are served.
+    pub fn has_templates(&self) -> bool {
+        self.0.templates.is_some()
     }
 
     pub fn limits(&self) -> &Limits {
@@ -116,6 +140,14 @@ impl AppState {
     /// The profile sources available, in the order the GUI offers them.
     pub fn sources(&self) -> Vec<SourceInfo> {
         let mut sources = Vec::new();
+        if self.has_templates() {
+            sources.push(SourceInfo {
+                id: "template",
+                label: "surface template",
+                description: "a bump, edge or sine surface: its friction profile predicted from the FE database by the \
+                              conditional average estimator (paper sections 3.1-3.2)",
+            });
+        }
         if self.has_library() {
             sources.push(SourceInfo {
                 id: "library",

@@ -13,6 +13,7 @@ use std::time::Duration;
 use axum::Router;
 use axum::body::{Body, Bytes};
 use axum::http::{HeaderMap, Method, Request, StatusCode, header};
+use haptex_core::database::{Metadata, Template, TemplateModel};
 use haptex_core::electrovibration::{Device, Method as MapMethod, map_profile};
 use haptex_core::io::Table;
 use haptex_core::library::Library;
@@ -25,13 +26,23 @@ fn shipped_library() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/library/library.sqlite")
 }
 
+fn shipped_db() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/db")
+}
+
 fn bump_csv() -> String {
     std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/examples/bump_friction.csv"))
         .unwrap()
 }
 
+/// The application on the shipped texture library and FE database (the
+/// state is loaded once and shared by the tests).
 fn server() -> Router {
-    app(AppState::new(Some(&shipped_library()), Limits::DEFAULT).unwrap())
+    static STATE: std::sync::OnceLock<AppState> = std::sync::OnceLock::new();
+    let state = STATE.get_or_init(|| {
+        AppState::new(Some(&shipped_library()), Limits::DEFAULT).unwrap().with_database(&shipped_db()).unwrap()
+    });
+    app(state.clone())
 }
 
 struct Answer {
@@ -115,6 +126,7 @@ async fn health_answers_ok_with_security_headers_and_no_cors() {
     answer.ok();
     assert_eq!(answer.json()["status"], "ok");
     assert_eq!(answer.json()["library"], true);
+    assert_eq!(answer.json()["templates"], true);
     let csp = answer.headers.get(header::CONTENT_SECURITY_POLICY).unwrap().to_str().unwrap();
     assert!(csp.contains("default-src 'none'") && csp.contains("script-src 'self'"), "{csp}");
     assert_eq!(answer.headers.get(header::X_CONTENT_TYPE_OPTIONS).unwrap(), "nosniff");
@@ -135,10 +147,10 @@ async fn health_answers_ok_with_security_headers_and_no_cors() {
 }
 
 #[tokio::test]
-async fn config_offers_library_and_upload_with_the_papers_defaults() {
+async fn config_offers_template_library_and_upload_with_the_papers_defaults() {
     let config = get("/api/config").await.ok().json();
     let sources: Vec<&str> = config["sources"].as_array().unwrap().iter().map(|s| s["id"].as_str().unwrap()).collect();
-    assert_eq!(sources, ["library", "upload"]);
+    assert_eq!(sources, ["template", "library", "upload"]);
     let default = |name: &str| {
         config["device_params"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap()["default"].as_f64()
     };
@@ -758,4 +770,186 @@ async fn play_bad_input_is_refused() {
     post_raw("/api/play", "text/csv", "t_s,x_mm\n0,0\n")
         .await
         .error(StatusCode::UNSUPPORTED_MEDIA_TYPE, Some("content-type"));
+}
+
+// ----------------------------------------------------------- templates
+
+/// The shipped database's sweep (data/db/metadata.json; paper section 3.1:
+/// r_w 0.5 .. 2.5 mm, r_h 0.1 .. 0.5 mm; velocities 10 .. 100 mm/s).
+#[tokio::test]
+async fn templates_list_the_database_ranges_and_errors() {
+    let answer = get("/api/templates").await.ok().json();
+    let metadata = Metadata::read(&shipped_db()).unwrap();
+    let names: Vec<&str> =
+        answer["templates"].as_array().unwrap().iter().map(|t| t["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["bump", "edge", "sine"]);
+    for t in answer["templates"].as_array().unwrap() {
+        let entry = metadata.entry(Template::parse(t["name"].as_str().unwrap()).unwrap()).unwrap();
+        assert_eq!(t["rows"], entry.rows);
+        assert_eq!(t["loo_rmse"].as_f64(), Some(entry.loo_rmse));
+        let params = t["parameters"].as_array().unwrap();
+        let names: Vec<&str> = params.iter().map(|p| p["name"].as_str().unwrap()).collect();
+        assert_eq!(names, ["width_mm", "height_mm", "velocity_mm_s"]);
+        assert_eq!(numbers(&params[0]["database"]), [0.5, 2.5]);
+        let heights = numbers(&params[1]["database"]);
+        assert!((heights[0] - 0.1).abs() < 1e-12 && (heights[1] - 0.5).abs() < 1e-12, "{heights:?}");
+        assert_eq!(numbers(&params[2]["database"]), [10.0, 100.0]);
+        for p in params {
+            let (db, accepted, slider) = (numbers(&p["database"]), numbers(&p["accepted"]), numbers(&p["slider"]));
+            assert!(accepted[0] <= slider[0] && slider[0] < db[0] && db[1] < slider[1] && slider[1] <= accepted[1]);
+            let default = p["default"].as_f64().unwrap();
+            let steps = (default - slider[0]) / p["step"].as_f64().unwrap();
+            assert!((steps - steps.round()).abs() < 1e-6, "{p}: the default is not a slider position");
+        }
+    }
+    assert_eq!(answer["x0_mm"]["default"], 5.0);
+}
+
+/// The server's prediction is the core's (`TemplateModel::predict`, what
+/// `haptex predict` prints), number for number, with the surface height of
+/// design.md's bump formula at each x.
+#[tokio::test]
+async fn predict_equals_the_core_estimate_with_the_surface_height() {
+    let body = json!({ "surface": "bump", "x0_mm": 5, "width_mm": 1.3, "height_mm": 0.27, "velocity_mm_s": 20 });
+    let answer = post_json("/api/predict", &body).await.ok().json();
+    let model = TemplateModel::load(&shipped_db(), Template::Bump).unwrap();
+    let expected = model.predict(5.0, 1.3, 0.27, 20.0).unwrap();
+    assert_eq!(numbers(&answer["x_mm"]), expected.x_mm);
+    assert_eq!(numbers(&answer["mu"]), expected.mu);
+    assert_eq!(answer["fe_exact"], false);
+    assert_eq!(answer["fe_row"], Value::Null);
+    assert_eq!(answer["extrapolation"], false);
+    assert!(answer["warnings"].as_array().unwrap().is_empty());
+    let (x, h) = (numbers(&answer["x_mm"]), numbers(&answer["h_mm"]));
+    assert_eq!((x[0], x[x.len() - 1]), (0.0, 10.0));
+    let top = x.iter().position(|v| (*v - 5.0).abs() < 1e-9).unwrap();
+    assert!((h[top] - 0.27).abs() < 1e-12, "h(x0) = {}", h[top]);
+    for (x, h) in x.iter().zip(&h) {
+        let expected = 0.27 * (-((x - 5.0) / 0.65).powi(2)).exp();
+        assert!((h - expected).abs() <= 1e-12 * expected.max(1e-300), "h({x}) = {h}, design.md's bump {expected}");
+    }
+    // The profile feeds /api/voltage as is.
+    let voltage = post_json("/api/voltage", &json!({ "profile": profile_json(&x, &numbers(&answer["mu"])) })).await;
+    voltage.ok();
+}
+
+/// At a database case the FE profile itself is returned (issue 5: "when
+/// the parameters are exactly a database row it says so").
+#[tokio::test]
+async fn predict_at_a_database_case_returns_its_fe_profile() {
+    let body = json!({ "surface": "edge", "x0_mm": 0, "width_mm": 1.5, "height_mm": 0.3, "velocity_mm_s": 50 });
+    let answer = post_json("/api/predict", &body).await.ok().json();
+    assert_eq!(answer["fe_exact"], true);
+    let model = TemplateModel::load(&shipped_db(), Template::Edge).unwrap();
+    let row = model.exact_row(&[1.5, 0.3, 50.0]).unwrap();
+    assert_eq!(answer["fe_row"], row + 1);
+    assert_eq!(numbers(&answer["mu"]), model.cae.matrix().output_row(row));
+    assert!(answer["source"].as_str().unwrap().starts_with("FE result"));
+}
+
+/// Parameters outside the database but within the accepted range are
+/// predicted, flagged and explained; the estimate stays finite.
+#[tokio::test]
+async fn predict_outside_the_database_is_flagged_as_extrapolation() {
+    for (body, outside) in [
+        (json!({ "surface": "sine", "width_mm": 3.0, "height_mm": 0.2 }), vec!["width_mm"]),
+        (
+            json!({ "surface": "bump", "width_mm": 1.0, "height_mm": 0.05, "velocity_mm_s": 150 }),
+            vec!["height_mm", "velocity_mm_s"],
+        ),
+    ] {
+        let answer = post_json("/api/predict", &body).await.ok().json();
+        assert_eq!(answer["extrapolation"], true, "{body}");
+        let listed: Vec<&str> =
+            answer["outside_database"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
+        assert_eq!(listed, outside);
+        let warning = answer["warnings"][0].as_str().unwrap();
+        assert!(warning.contains("extrapolat"), "{warning}");
+        assert!(numbers(&answer["mu"]).iter().all(|m| m.is_finite()));
+        assert_eq!(answer["parameters"]["x0_mm"], 5.0, "x0 defaults to 5 mm");
+    }
+}
+
+/// `?format=csv` is the `x_mm,mu` file of `haptex predict`, read back by
+/// haptex's own profile reader.
+#[tokio::test]
+async fn predict_csv_reads_back_as_a_friction_profile() {
+    let body = json!({ "surface": "sine", "x0_mm": 0, "width_mm": 2, "height_mm": 0.2, "velocity_mm_s": 50 });
+    let json_answer = post_json("/api/predict", &body).await.ok().json();
+    let answer = post_json("/api/predict?format=csv", &body).await;
+    answer.ok();
+    assert!(answer.content_type().starts_with("text/csv"));
+    let text = answer.text();
+    assert!(text.starts_with("# haptex predict: sine x0=0 mm r_w=2 mm r_h=0.2 mm velocity=50 mm/s"), "{text}");
+    let profile = FrictionProfile::from_table(&Table::read(text.as_bytes(), "answer").unwrap()).unwrap();
+    assert_eq!(profile.x_mm(), numbers(&json_answer["x_mm"]));
+    assert_eq!(profile.mu(), numbers(&json_answer["mu"]));
+}
+
+#[tokio::test]
+async fn predict_bad_input_is_refused_naming_the_field() {
+    let ok = json!({ "surface": "bump", "x0_mm": 5, "width_mm": 1.3, "height_mm": 0.27, "velocity_mm_s": 20 });
+    let with = |field: &str, value: Value| {
+        let mut body = ok.clone();
+        body[field] = value;
+        body
+    };
+    let without = |field: &str| {
+        let mut body = ok.clone();
+        body.as_object_mut().unwrap().remove(field);
+        body
+    };
+    let cases = [
+        (with("surface", json!("dome")), "surface"),
+        (with("surface", json!(3)), "surface"),
+        (without("surface"), "surface"),
+        (without("width_mm"), "width_mm"),
+        (without("height_mm"), "height_mm"),
+        (with("width_mm", json!("1.3")), "width_mm"),
+        (with("width_mm", json!(-1)), "width_mm"),
+        (with("width_mm", json!(0)), "width_mm"),
+        (with("width_mm", json!(100)), "width_mm"),
+        (with("height_mm", json!(1e300)), "height_mm"),
+        (with("velocity_mm_s", json!(0)), "velocity_mm_s"),
+        (with("velocity_mm_s", json!(1e4)), "velocity_mm_s"),
+        (with("x0_mm", json!(1e6)), "x0_mm"),
+        (with("x0_mm", json!("5")), "x0_mm"),
+        (with("depth_mm", json!(1)), "depth_mm"),
+    ];
+    for (body, field) in cases {
+        let answer = post_json("/api/predict", &body).await;
+        answer.error(StatusCode::BAD_REQUEST, Some(field));
+    }
+    // NaN and infinities are not JSON: refused as a malformed body.
+    let text = ok.to_string().replace("1.3", "NaN");
+    let answer = post_raw("/api/predict", "application/json", text).await;
+    assert_eq!(answer.status, StatusCode::BAD_REQUEST);
+    answer.error(StatusCode::BAD_REQUEST, answer.json()["field"].as_str());
+    post_raw("/api/predict", "application/json", "{").await.error(StatusCode::BAD_REQUEST, Some("body"));
+    post_raw("/api/predict", "text/csv", "x_mm,mu\n0,1\n")
+        .await
+        .error(StatusCode::UNSUPPORTED_MEDIA_TYPE, Some("content-type"));
+    post_json("/api/predict?format=xml", &ok).await.error(StatusCode::BAD_REQUEST, Some("format"));
+    post_json("/api/predict?seed=1", &ok).await.error(StatusCode::BAD_REQUEST, Some("seed"));
+    let huge = format!("{{\"surface\": \"bump\", \"pad\": \"{}\"}}", "x".repeat(2 << 20));
+    post_raw("/api/predict", "application/json", huge).await.error(StatusCode::PAYLOAD_TOO_LARGE, Some("body"));
+    get("/api/templates?x=1").await.error(StatusCode::BAD_REQUEST, Some("x"));
+}
+
+/// A server started without an FE database answers its template routes
+/// with 404 and offers no template source.
+#[tokio::test]
+async fn templates_without_a_database_are_not_found() {
+    let bare = app(AppState::new(None, Limits::DEFAULT).unwrap());
+    send_to(bare.clone(), Request::get("/api/templates").body(Body::empty()).unwrap())
+        .await
+        .error(StatusCode::NOT_FOUND, None);
+    let request = Request::post("/api/predict")
+        .header(header::CONTENT_TYPE, "application/json")
+        .body(Body::from(r#"{"surface": "bump", "width_mm": 1, "height_mm": 0.2}"#))
+        .unwrap();
+    send_to(bare.clone(), request).await.error(StatusCode::NOT_FOUND, None);
+    let config = send_to(bare, Request::get("/api/config").body(Body::empty()).unwrap()).await.ok().json();
+    let sources: Vec<&str> = config["sources"].as_array().unwrap().iter().map(|s| s["id"].as_str().unwrap()).collect();
+    assert_eq!(sources, ["upload"]);
 }

@@ -4,22 +4,28 @@
 //!
 //! Checks, in one browser session (starting Chromium is the slow part):
 //!
-//! 1. the page loads and draws the first library material without a
-//!    console error (Chromium's own console log, read through
-//!    chromedriver, at level SEVERE);
-//! 2. changing controls changes the plotted voltage: method -> normalized
+//! 1. the page loads and draws the first source, a bump template predicted
+//!    from the shipped FE database, without a console error (Chromium's
+//!    own console log, read through chromedriver, at level SEVERE): the
+//!    surface height plot peaks at the default r_h = 0.27 mm and the
+//!    friction plot is the server's prediction;
+//! 2. moving the width slider with the mouse changes the plotted friction
+//!    and voltage (to the server's prediction at the new width); dragged
+//!    beyond the database range it is flagged as an extrapolation;
+//! 3. the library source labels its synthetic materials;
+//! 4. changing controls changes the plotted voltage: method -> normalized
 //!    puts the largest voltage at U_max = 100 V; typing U_max = 60 scales
 //!    every plotted voltage by 0.6 (1e-12 relative: eq. 9 is linear in
 //!    U_max);
-//! 3. uploading a profile file plots exactly its points;
-//! 4. the downloads: Chromium's own download cannot be inspected here, so
+//! 5. uploading a profile file plots exactly its points;
+//! 6. the downloads: Chromium's own download cannot be inspected here, so
 //!    the test reads the blob behind the page's download link (the bytes
 //!    the browser saves) and parses the voltage CSV with haptex's CSV
 //!    reader: the same numbers as the plot; the profile CSV holds the
 //!    uploaded points; the stroke WAV starts with a RIFF/WAVE header;
-//! 5. the feel strip: a pointer moved over it shows U(x) of the plotted
+//! 7. the feel strip: a pointer moved over it shows U(x) of the plotted
 //!    profile at the pointer's x (1e-9 relative);
-//! 6. a phone-sized window (390 x 844) has no horizontal scrolling.
+//! 8. a phone-sized window (390 x 844) has no horizontal scrolling.
 //!
 //! It saves screenshots (desktop and phone) in the target directory;
 //! with HAPTEX_UPDATE_SCREENSHOTS=1 also to docs/img/ (what docs/web.md
@@ -83,8 +89,11 @@ fn tool(variable: &str, default: &str) -> PathBuf {
 }
 
 async fn start_server() -> (SocketAddr, tokio::sync::oneshot::Sender<()>) {
-    let library = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/library/library.sqlite");
-    let state = AppState::new(Some(&library), Limits::DEFAULT).unwrap();
+    let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data");
+    let state = AppState::new(Some(&data.join("library/library.sqlite")), Limits::DEFAULT)
+        .unwrap()
+        .with_database(&data.join("db"))
+        .unwrap();
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let addr = listener.local_addr().unwrap();
     let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
@@ -265,20 +274,101 @@ async fn download(client: &Client, kind: &str) -> Check<Vec<u8>> {
         .collect()
 }
 
+/// The friction profile the server predicts for a bump (POST /api/predict
+/// from inside the page).
+async fn predicted_bump(client: &Client, width_mm: f64) -> Check<Vec<f64>> {
+    let fetch = format!(
+        "const done = arguments[arguments.length - 1];
+         fetch('/api/predict', {{ method: 'POST', headers: {{ 'Content-Type': 'application/json' }},
+           body: JSON.stringify({{ surface: 'bump', x0_mm: 5, width_mm: {width_mm}, height_mm: 0.27, velocity_mm_s: 20 }}) }})
+           .then(r => r.json()).then(a => done(a.mu)).catch(e => done('error: ' + e));"
+    );
+    numbers(&wd!(client.execute_async(&fetch, vec![])))
+}
+
+/// Clicks the width slider at `fraction` of its length (0 = left end).
+async fn click_slider(client: &Client, id: &str, fraction: f64) -> Check<()> {
+    let slider = wd!(client.find(Locator::Id(id)));
+    let width =
+        script(client, &format!("return document.getElementById('{id}').getBoundingClientRect().width;")).await?;
+    let x = (fraction - 0.5) * width.as_f64().ok_or("slider width")?;
+    let click = MouseActions::new("mouse".into())
+        .then(PointerAction::MoveToElement { element: slider, duration: Some(Duration::from_millis(30)), x, y: 0.0 })
+        .then(PointerAction::Down { button: fantoccini::actions::MOUSE_BUTTON_LEFT })
+        .then(PointerAction::Up { button: fantoccini::actions::MOUSE_BUTTON_LEFT });
+    wd!(client.perform_actions(click));
+    wd!(client.release_actions());
+    Ok(())
+}
+
 async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
-    // 1. Load: the first source is the library, its first material drawn.
+    // 1. Load: the first source is the template, the default bump drawn.
     wd!(client.goto(base));
     wait_for(client, "document.body.dataset.state === 'ready'", "the first plot").await?;
     let errors = console_errors(client).await?;
     if !errors.is_empty() {
         return fail(format!("console errors on load: {errors:#?}"));
     }
+    wait_for(client, "window.haptex.plots.height !== null", "the surface height plot").await?;
+    let height = plotted(client, "height").await?;
+    let peak = height[1].iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    if (peak - 0.27).abs() > 1e-12 {
+        return fail(format!("the default bump's plotted height peaks at {peak} mm, not r_h = 0.27 mm"));
+    }
+    let friction = plotted(client, "friction").await?;
+    if friction[1] != predicted_bump(client, 1.3).await? {
+        return fail("the plotted friction is not the server's prediction for the default bump");
+    }
+
+    // 2. The width slider, moved with the mouse, changes the plotted voltage.
+    let before = plotted(client, "voltage").await?;
+    let n = updates(client).await?;
+    click_slider(client, "template-width_mm", 0.8).await?;
+    wait_update(client, n, "the voltage after moving the width slider").await?;
+    wait_for(
+        client,
+        "window.haptex.state.drawn.label.startsWith('bump r_w ') && window.haptex.state.template.width_mm !== 1.3",
+        "the new width drawn",
+    )
+    .await?;
+    let width = script(client, "return window.haptex.state.template.width_mm;").await?;
+    let width = width.as_f64().ok_or("template width")?;
+    if !(1.5..=2.5).contains(&width) {
+        return fail(format!("clicking the width slider at 80% gave r_w = {width} mm"));
+    }
+    let after = plotted(client, "voltage").await?;
+    if after[1] == before[1] {
+        return fail("moving the width slider did not change the plotted voltage");
+    }
+    let friction = plotted(client, "friction").await?;
+    if friction[1] != predicted_bump(client, width).await? {
+        return fail(format!("the plotted friction is not the server's prediction for r_w = {width} mm"));
+    }
+    let n = updates(client).await?;
+    click_slider(client, "template-width_mm", 0.995).await?;
+    wait_update(client, n, "the voltage at the slider's end").await?;
+    wait_for(client, "window.haptex.state.drawn.extrapolation === true", "the extrapolated profile drawn").await?;
+    let flagged = script(
+        client,
+        "return document.getElementById('template-width_mm').parentElement.classList.contains('outside') && \
+         document.getElementById('template-info').textContent.includes('Extrapolation');",
+    )
+    .await?;
+    if flagged != Value::Bool(true) {
+        return fail("a width beyond the FE database is not flagged as an extrapolation");
+    }
+
+    // 3. The library: synthetic materials are labelled.
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css("input[name='source'][value='library']"))).click());
+    wait_update(client, n, "the first library material").await?;
+    wait_for(client, "window.haptex.plots.height === null", "the height plot gone for a material").await?;
     let material_info = wd!(wd!(client.find(Locator::Id("material-info"))).text());
     if !material_info.contains("SYNTHETIC") {
         return fail(format!("a synthetic material is not labelled as such: {material_info:?}"));
     }
 
-    // 2. Controls change the plotted voltage.
+    // 4. Controls change the plotted voltage.
     let before = plotted(client, "voltage").await?;
     let n = updates(client).await?;
     wd!(wd!(client.find(Locator::Css("input[name='method'][value='normalized']"))).click());
@@ -301,7 +391,7 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
         }
     }
 
-    // 3. Upload a profile file: its points are plotted.
+    // 5. Upload a profile file: its points are plotted.
     let x: Vec<f64> = (0..9).map(|i| 0.5 * i as f64).collect();
     let mu = [1.0, 1.05, 1.2, 1.4, 1.3, 1.1, 1.0, 1.02, 1.0];
     let mut csv = String::from("# browser test profile\nx_mm,mu\n");
@@ -328,7 +418,7 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
         return fail(format!("upload info: {info:?}"));
     }
 
-    // 4. Downloads: the blobs behind the download link.
+    // 6. Downloads: the blobs behind the download link.
     let bytes = download(client, "voltage-csv").await?;
     let table = Table::read(bytes.as_slice(), "downloaded voltage.csv").map_err(|e| e.to_string())?;
     if table.columns() != ["x_mm", "mu", "voltage_v"] {
@@ -354,7 +444,7 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
         return fail("voltage JSON download differs from the plot");
     }
 
-    // 5. The feel strip: U at the pointer.
+    // 7. The feel strip: U at the pointer.
     let strip = wd!(client.find(Locator::Id("feel-strip")));
     let width = script(client, "return document.getElementById('feel-strip').getBoundingClientRect().width;").await?;
     let width = width.as_f64().ok_or("strip width")?;
@@ -384,21 +474,24 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
         return fail(format!("feel strip at x = {x_read} mm shows U = {u_read} V, the profile has {expected} V"));
     }
 
-    // 6. Phone-sized window: no horizontal scrolling, plots fit.
+    // 8. Phone-sized window: no horizontal scrolling, plots fit.
     wd!(client.set_window_size(390, 844));
     tokio::time::sleep(Duration::from_millis(400)).await;
     let overflow = script(client, "return document.documentElement.scrollWidth - window.innerWidth;").await?;
     if overflow.as_f64().unwrap_or(1.0) > 0.0 {
         return fail(format!("phone-sized window scrolls sideways by {overflow} px"));
     }
-    // Screenshots for the docs: a material with mu_RS above mu_HD, eq. 8.
-    show_library(client, "latex").await?;
+    // Screenshots for the docs: the default bump template (phone and
+    // desktop), and a library material with mu_RS above mu_HD, eq. 8.
+    show_template(client).await?;
     let phone = screenshot(client).await?;
-    wd!(client.set_window_size(1280, 1180));
+    wd!(client.set_window_size(1280, 1280));
     tokio::time::sleep(Duration::from_millis(400)).await;
     let desktop = screenshot(client).await?;
     save_screenshot("web.png", &desktop);
     save_screenshot("web-phone.png", &phone);
+    show_library(client, "latex").await?;
+    save_screenshot("web-library.png", &screenshot(client).await?);
 
     let errors = console_errors(client).await?;
     if !errors.is_empty() {
@@ -407,8 +500,28 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     Ok(())
 }
 
+/// Shows the default bump template with the normalized method (the one
+/// the GUI picks for virtual profiles) and the paper's defaults (the upload
+/// source is active before).
+async fn show_template(client: &Client) -> Check<()> {
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css("input[name='source'][value='template']"))).click());
+    wait_update(client, n, "the template source again").await?;
+    // Back to the default width (set-up, not a check).
+    let n = updates(client).await?;
+    script(
+        client,
+        "const s = document.getElementById('template-width_mm'); s.value = '1.3'; \
+         s.dispatchEvent(new Event('input')); return true;",
+    )
+    .await?;
+    wait_update(client, n, "the default width").await?;
+    wait_for(client, "window.haptex.state.drawn.label.startsWith('bump r_w 1.3 mm')", "the default bump drawn").await?;
+    paper_defaults(client, "normalized").await
+}
+
 /// Shows `material` of the library with the physical method and the
-/// paper's defaults (the upload source is active before).
+/// paper's defaults (the template source is active before).
 async fn show_library(client: &Client, material: &str) -> Check<()> {
     let n = updates(client).await?;
     wd!(wd!(client.find(Locator::Css("input[name='source'][value='library']"))).click());
@@ -429,14 +542,16 @@ async fn show_library(client: &Client, material: &str) -> Check<()> {
         "window.haptex.state.drawn.material === '{material}' && window.haptex.state.drawn.seed === '{SCREENSHOT_SEED}'"
     );
     wait_for(client, &drawn, "the fixed stroke drawn").await?;
-    wd!(wd!(client.find(Locator::Css("input[name='method'][value='physical']"))).click());
+    paper_defaults(client, "physical").await
+}
+
+/// The method `method` and the paper's device constants.
+async fn paper_defaults(client: &Client, method: &str) -> Check<()> {
+    wd!(wd!(client.find(Locator::Css(&format!("input[name='method'][value='{method}']")))).click());
     wd!(wd!(client.find(Locator::Id("reset-device"))).click());
-    wait_for(
-        client,
-        "window.haptex.state.voltage.summary.u_max_v === 100 && window.haptex.state.voltage.summary.method === 'physical'",
-        "the paper's defaults",
-    )
-    .await
+    let summary = "window.haptex.state.voltage.summary";
+    wait_for(client, &format!("{summary}.u_max_v === 100 && {summary}.method === '{method}'"), "the paper's defaults")
+        .await
 }
 
 /// A screenshot of the top of the page with the feel pointer on the strip.

@@ -9,10 +9,11 @@ use haptex_server::{Config, Limits};
 /// Start the haptex web application: the GUI at http://ADDR/ and the JSON
 /// API under /api (described at /api/openapi.json).
 ///
-/// The GUI shows the friction and voltage profiles of a texture-library
-/// material or of your own profile file, with the device and finger
-/// constants (the paper's Fig. 2 defaults), and offers CSV, JSON and WAV
-/// downloads. The default address serves this machine only; to use it
+/// The GUI shows the friction and voltage profiles of a surface template
+/// (bump, edge or sine, predicted from the FE database as its sliders
+/// move), of a texture-library material or of your own profile file, with
+/// the device and finger constants (the paper's Fig. 2 defaults), and
+/// offers CSV, JSON and WAV downloads. The default address serves this machine only; to use it
 /// from a phone on the same network, listen on all interfaces with
 /// --addr 0.0.0.0:8080 and open http://THIS-MACHINE'S-IP:8080/.
 /// Ctrl-C stops the server after the requests in flight. Requests are
@@ -21,7 +22,8 @@ use haptex_server::{Config, Limits};
 #[command(after_help = "Examples:\n  \
     haptex serve\n  \
     haptex serve --addr 0.0.0.0:8080\n  \
-    haptex serve --library my-lab.sqlite --addr 127.0.0.1:9000")]
+    haptex serve --library my-lab.sqlite --addr 127.0.0.1:9000\n  \
+    haptex serve --db my-db/   (a database built by `haptex db build --out my-db`)")]
 pub struct ServeArgs {
     /// Address and port to listen on (0.0.0.0:PORT: every interface).
     #[arg(long, value_name = "IP:PORT", default_value = Config::DEFAULT_ADDR)]
@@ -30,6 +32,10 @@ pub struct ServeArgs {
     /// data/library/library.sqlite, whose 12 materials are SYNTHETIC).
     #[arg(long, value_name = "PATH")]
     library: Option<PathBuf>,
+    /// FE database of surface templates to serve (default: $HAPTEX_DB, else
+    /// the shipped data/db).
+    #[arg(long, value_name = "DIR")]
+    db: Option<PathBuf>,
 }
 
 pub fn run(args: ServeArgs) -> anyhow::Result<()> {
@@ -41,9 +47,17 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
             library.display()
         );
     }
-    let config = Config { addr: args.addr, library: Some(library.clone()), limits: Limits::DEFAULT };
+    let db = args.db.unwrap_or_else(super::db::default_db);
+    if !db.join("metadata.json").is_file() {
+        anyhow::bail!(
+            "{}: no FE database there (no metadata.json); pass --db DIR (a database made by `haptex db build`)",
+            db.display()
+        );
+    }
+    let config =
+        Config { addr: args.addr, library: Some(library.clone()), database: Some(db.clone()), limits: Limits::DEFAULT };
     haptex_server::run(config, |addr| {
-        eprintln!("haptex serve: library {}", library.display());
+        eprintln!("haptex serve: library {}, FE database {}", library.display(), db.display());
         if addr.ip().is_unspecified() {
             eprintln!(
                 "listening on every interface, port {}: open http://<this machine's address>:{}/",

@@ -11,5 +11,6 @@ pub async fn get(State(state): State<AppState>) -> Json<Value> {
         "status": "ok",
         "version": env!("CARGO_PKG_VERSION"),
         "library": state.has_library(),
+        "templates": state.has_templates(),
     }))
 }

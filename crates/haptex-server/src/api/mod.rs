@@ -5,7 +5,9 @@ pub mod health;
 pub mod materials;
 pub mod openapi;
 pub mod play;
+pub mod predict;
 pub mod profile;
+pub mod templates;
 pub mod voltage;
 
 use axum::http::{HeaderValue, header};
