@@ -524,7 +524,7 @@ fn malformed_model_files_name_line_and_column() {
         ("a,b,a\n0,1,2\n1,2,3\n", &["a", "b"], Some(1), Some("a"), "twice"),
         ("a,b\n0,1\n1,2\n", &["a", "b"], Some(1), None, "no output columns"),
         ("a,b,y\n0,1,2\n1,2\n", &["a", "b"], Some(3), None, "expected 3 fields"),
-        ("", &["a"], None, None, "no header"),
+        ("", &["a"], Some(1), None, "no header"),
     ];
     for (text, inputs, line, column, fragment) in cases {
         let err = match ModelMatrix::read_csv(text.as_bytes(), "m.csv", inputs) {

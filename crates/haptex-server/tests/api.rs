@@ -343,7 +343,7 @@ async fn voltage_bad_csv_is_refused_with_line_and_column() {
         ("x_mm,friction\n0,1.1\n1,1.2\n", Some("mu (or ft_n and fn_n)"), Some(1)), // missing column
         ("x_mm,ft_n,fn_n\n0,0.1,0.2\n1,0.1,0\n", Some("fn_n"), Some(3)), // Fn = 0
         ("x_mm,mu,mu\n0,1,1\n", Some("mu"), Some(1)),     // duplicate column
-        ("\n# nothing\n", Some("body"), None),            // no header
+        ("\n# nothing\n", Some("body"), Some(2)),         // no header (due by the end, line 2)
     ];
     for (csv, field, line) in cases {
         let answer = post_raw("/api/voltage", "text/csv", csv.to_string()).await;

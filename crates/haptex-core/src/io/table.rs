@@ -86,7 +86,9 @@ impl Table {
         let io_error = |(line, e): (u64, std::io::Error)| error(Some(line), None, TableErrorKind::Io(e.to_string()));
 
         let Some((header_line, header)) = lines.next_content().map_err(io_error)? else {
-            return Err(error(None, None, TableErrorKind::NoHeader));
+            // Name the line where the header was due: the end of the file
+            // (line 1 of an empty one).
+            return Err(error(Some(lines.number.max(1)), None, TableErrorKind::NoHeader));
         };
         let header = std::str::from_utf8(header)
             .map_err(|_| error(Some(header_line), None, TableErrorKind::Invalid("header is not UTF-8 text".into())))?;
