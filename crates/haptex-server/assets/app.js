@@ -16,6 +16,7 @@
     config: null,
     templates: null,       // GET /api/templates answer, when the server has the FE database
     template: {},          // surface, x0_mm and the slider values of the template source
+    fe: null,              // last POST /api/simulate answer and the template request it was for
     source: null,          // id of the active source
     profile: null,         // {x_mm, mu, fn_n, label, synthetic, download()}
     profiles: {},          // last profile of each source, kept when switching
@@ -107,7 +108,9 @@
           info.append(line);
         });
         const p = answer.parameters;
+        showFe();
         return {
+          key: JSON.stringify(body),
           x_mm: answer.x_mm, mu: answer.mu, fn_n: null, h_mm: answer.h_mm,
           label: `${answer.surface} r_w ${fmt(p.width_mm)} mm, r_h ${fmt(p.height_mm)} mm, ` +
             `${fmt(p.velocity_mm_s)} mm/s (${answer.fe_exact ? 'FE' : 'CAE'}` +
@@ -290,12 +293,49 @@
       buildTemplateSliders();
       loadSource().catch(showError);
     });
+    $('run-fe').addEventListener('click', () => runFe().catch(showError));
     $('x0').addEventListener('input', () => {
       const text = $('x0').value.trim();
       if (text === '' || !Number.isFinite(Number(text))) return;
       state.template.x0_mm = Number(text);
       scheduleTemplate();
     });
+  }
+
+  // ------------------------------------------------- FE model on demand
+
+  /** Runs the FE model for the template parameters shown (POST /api/simulate). */
+  async function runFe() {
+    const body = templateBody();
+    const key = JSON.stringify(body);
+    const button = $('run-fe');
+    button.disabled = true;
+    $('fe-info').textContent = 'Running the FE model…';
+    try {
+      const answer = await (await postJson('/api/simulate', body)).json();
+      state.fe = { key, mu: answer.mu, seconds: answer.fe_seconds, rms: answer.cae_rms_difference };
+      showFe();
+      if (state.voltage) draw();
+    } catch (error) {
+      $('fe-info').textContent = '';
+      throw error;
+    } finally {
+      button.disabled = false;
+    }
+  }
+
+  /** The FE result, when it is for the template parameters shown. */
+  function currentFe() {
+    const fe = state.fe;
+    return fe && state.source === 'template' && state.drawn && state.drawn.key === fe.key ? fe : null;
+  }
+
+  function showFe() {
+    const fe = state.fe && state.fe.key === JSON.stringify(templateBody()) ? state.fe : null;
+    $('fe-info').textContent = fe
+      ? `FE model: ${fe.seconds.toFixed(2)} s; the CAE estimate differs from it by ${fmt(fe.rms)} RMS in mu ` +
+        '(dashed green in the friction plot).'
+      : '';
   }
 
   // ------------------------------------------------------------ controls
@@ -498,6 +538,11 @@
       frictionSeries.push(
         { label: 'mu_HD', stroke: '#888', dash: [6, 4], width: 1 },
         { label: 'mu at U_max', stroke: '#c77700', dash: [2, 4], width: 1 });
+    }
+    const fe = currentFe();
+    if (fe && fe.mu.length === x.length) {
+      frictionData.push(fe.mu);
+      frictionSeries.push({ label: 'mu FE model', stroke: '#2e7d32', dash: [5, 3], width: 1.5 });
     }
     const voltageData = [x, v.voltage_v, constant(x, s.u_max_v)];
     const voltageSeries = [

@@ -41,6 +41,7 @@ pub fn table() -> Vec<Endpoint> {
         endpoint(Method::GET, "/api/openapi.json", api::openapi::get),
         endpoint(Method::GET, "/api/templates", api::templates::get),
         endpoint(Method::POST, "/api/predict", api::predict::post),
+        endpoint(Method::POST, "/api/simulate", api::simulate::post),
         endpoint(Method::POST, "/api/voltage", api::voltage::post),
         endpoint(Method::POST, "/api/profile", api::profile::post),
         endpoint(Method::GET, "/api/materials", api::materials::list),

@@ -40,12 +40,20 @@ pub struct Limits {
     /// Drive-signal renders run at the same time (each holds up to
     /// `max_wav_samples` x 32 bytes of working memory).
     pub concurrent_renders: usize,
+    /// FE simulations (`POST /api/simulate`, about half a second of one
+    /// core each) run at the same time.
+    pub concurrent_simulations: usize,
+    /// How long a simulation request waits for its turn before the server
+    /// answers 503.
+    #[serde(serialize_with = "seconds")]
+    pub simulation_wait: Duration,
 }
 
 impl Limits {
     /// 1 MiB bodies, 100 000 points, 2 000 000 WAV samples (41.7 s at
     /// 48 kHz), 200 000 JSON samples, 10 s per request, 10 s for headers,
-    /// 2 renders at once.
+    /// 2 renders at once, 1 FE simulation at once (the other core serves
+    /// everything else) with a wait of up to 5 s for it.
     pub const DEFAULT: Self = Self {
         max_body_bytes: 1 << 20,
         max_points: 100_000,
@@ -54,6 +62,8 @@ impl Limits {
         request_timeout: Duration::from_secs(10),
         header_timeout: Duration::from_secs(10),
         concurrent_renders: 2,
+        concurrent_simulations: 1,
+        simulation_wait: Duration::from_secs(5),
     };
 }
 
@@ -77,6 +87,7 @@ struct Inner {
     templates: Option<Arc<TemplateSet>>,
     limits: Limits,
     renders: Semaphore,
+    simulations: Arc<Semaphore>,
 }
 
 /// A profile source the GUI can offer.
@@ -93,7 +104,8 @@ impl AppState {
     pub fn new(library: Option<&Path>, limits: Limits) -> Result<Self, LibraryError> {
         let library = library.map(LibraryPool::open).transpose()?.map(Arc::new);
         let renders = Semaphore::new(limits.concurrent_renders.max(1));
-        Ok(Self(Arc::new(Inner { library, templates: None, limits, renders })))
+        let simulations = Arc::new(Semaphore::new(limits.concurrent_simulations));
+        Ok(Self(Arc::new(Inner { library, templates: None, limits, renders, simulations })))
     }
 
     /// This state, also serving the surface templates of the FE database in
@@ -102,7 +114,8 @@ impl AppState {
         let templates = Some(Arc::new(TemplateSet::load(dir)?));
         let limits = self.0.limits.clone();
         let renders = Semaphore::new(limits.concurrent_renders.max(1));
-        Ok(Self(Arc::new(Inner { library: self.0.library.clone(), templates, limits, renders })))
+        let simulations = Arc::new(Semaphore::new(limits.concurrent_simulations));
+        Ok(Self(Arc::new(Inner { library: self.0.library.clone(), templates, limits, renders, simulations })))
     }
 
     /// The surface templates, or 404 if the server has no FE database.
@@ -135,6 +148,12 @@ impl AppState {
     /// Bounds the number of renders running at once.
     pub fn renders(&self) -> &Semaphore {
         &self.0.renders
+    }
+
+    /// Bounds the number of FE simulations running at once (0 permits:
+    /// simulation switched off).
+    pub fn simulations(&self) -> &Arc<Semaphore> {
+        &self.0.simulations
     }
 
     /// The profile sources available, in the order the GUI offers them.

@@ -953,3 +953,74 @@ async fn templates_without_a_database_are_not_found() {
     let sources: Vec<&str> = config["sources"].as_array().unwrap().iter().map(|s| s["id"].as_str().unwrap()).collect();
     assert_eq!(sources, ["upload"]);
 }
+
+// ------------------------------------------------------------ simulate
+
+/// The FE model on demand, with the database's settings, reproduces the
+/// shipped database's run for the same case bit for bit (both are the
+/// same deterministic computation, rounded to 6 decimals); the CAE then
+/// differs from it by nothing (a database case is its own FE row).
+#[tokio::test]
+async fn simulate_reproduces_a_database_run_bit_for_bit() {
+    let body = json!({ "surface": "bump", "x0_mm": 5, "width_mm": 1.5, "height_mm": 0.3, "velocity_mm_s": 20 });
+    let answer = post_json("/api/simulate", &body).await.ok().json();
+    let model = TemplateModel::load(&shipped_db(), Template::Bump).unwrap();
+    let row = model.exact_row(&[1.5, 0.3, 20.0]).unwrap();
+    assert_eq!(numbers(&answer["mu"]), model.cae.matrix().output_row(row));
+    let expected_x: Vec<f64> = model.positions().iter().map(|xi| 5.0 + xi).collect();
+    assert_eq!(numbers(&answer["x_mm"]), expected_x);
+    assert_eq!(answer["cae_rms_difference"], 0.0);
+    assert!(answer["fe_seconds"].as_f64().unwrap() > 0.0);
+    assert_eq!(numbers(&answer["h_mm"]).len(), expected_x.len());
+}
+
+/// Off the database grid, the instant CAE estimate differs from the FE
+/// model by about the database's leave-one-out error (the same check as
+/// `haptex db loo` in db_cli.rs: within twice the LOO RMS), and the CSV
+/// answer reads back as the same profile.
+#[tokio::test]
+async fn simulate_off_grid_agrees_with_the_cae_within_its_loo_error() {
+    let body = json!({ "surface": "edge", "x0_mm": 0, "width_mm": 1.3, "height_mm": 0.27, "velocity_mm_s": 35 });
+    let answer = post_json("/api/simulate", &body).await.ok().json();
+    let loo = Metadata::read(&shipped_db()).unwrap().entry(Template::Edge).unwrap().loo_rmse;
+    let rms = answer["cae_rms_difference"].as_f64().unwrap();
+    eprintln!("edge r_w 1.3 r_h 0.27 v 35: RMS(CAE - FE) = {rms:.5}, LOO RMS {loo:.5}");
+    assert!(rms > 0.0 && rms < 2.0 * loo, "RMS(CAE - FE) = {rms}, LOO RMS {loo}");
+    let csv = post_json("/api/simulate?format=csv", &body).await;
+    csv.ok();
+    let text = csv.text();
+    assert!(text.starts_with("# haptex FE simulation: edge x0=0 mm r_w=1.3 mm"), "{text}");
+    let profile = FrictionProfile::from_table(&Table::read(text.as_bytes(), "answer").unwrap()).unwrap();
+    assert_eq!(profile.mu(), numbers(&answer["mu"]));
+}
+
+#[tokio::test]
+async fn simulate_bad_input_and_a_busy_server_are_refused() {
+    let ok = json!({ "surface": "sine", "width_mm": 1.0, "height_mm": 0.2 });
+    let with = |field: &str, value: Value| {
+        let mut body = ok.clone();
+        body[field] = value;
+        body
+    };
+    for (body, field) in [
+        (with("width_mm", json!(0.3)), "width_mm"), // predicts, but finer than the mesh resolves
+        (with("width_mm", json!(3.5)), "width_mm"), // beyond the slider
+        (with("height_mm", json!(0.05)), "height_mm"),
+        (with("velocity_mm_s", json!(500)), "velocity_mm_s"),
+        (with("surface", json!("dome")), "surface"),
+        (with("depth_mm", json!(1)), "depth_mm"),
+    ] {
+        post_json("/api/simulate", &body).await.error(StatusCode::BAD_REQUEST, Some(field));
+    }
+    post_raw("/api/simulate", "text/csv", "x_mm,mu\n")
+        .await
+        .error(StatusCode::UNSUPPORTED_MEDIA_TYPE, Some("content-type"));
+    // No simulation slot and no wait: 503 JSON, never a hung request.
+    let limits = Limits { concurrent_simulations: 0, simulation_wait: Duration::ZERO, ..Limits::DEFAULT };
+    let busy = app(AppState::new(None, limits).unwrap().with_database(&shipped_db()).unwrap());
+    let request = Request::post("/api/simulate")
+        .header(header::CONTENT_TYPE, "application/json")
+        .body(Body::from(ok.to_string()))
+        .unwrap();
+    send_to(busy, request).await.error(StatusCode::SERVICE_UNAVAILABLE, None);
+}

@@ -10,8 +10,10 @@
 //!    surface height plot peaks at the default r_h = 0.27 mm and the
 //!    friction plot is the server's prediction;
 //! 2. moving the width slider with the mouse changes the plotted friction
-//!    and voltage (to the server's prediction at the new width); dragged
-//!    beyond the database range it is flagged as an extrapolation;
+//!    and voltage (to the server's prediction at the new width); the FE
+//!    model run on demand is drawn beside the estimate; dragged beyond the
+//!    database range the width is flagged as an extrapolation (and the FE
+//!    profile of the old width is no longer drawn);
 //! 3. the library source labels its synthetic materials;
 //! 4. changing controls changes the plotted voltage: method -> normalized
 //!    puts the largest voltage at U_max = 100 V; typing U_max = 60 scales
@@ -344,10 +346,28 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     if friction[1] != predicted_bump(client, width).await? {
         return fail(format!("the plotted friction is not the server's prediction for r_w = {width} mm"));
     }
+    // The FE model on demand for these parameters: its profile is drawn
+    // beside the estimate, within 0.1 of it everywhere (the CAE's typical
+    // error is 0.014, docs/database.md).
+    wd!(wd!(client.find(Locator::Id("run-fe"))).click());
+    wait_for(client, "window.haptex.plots.friction.series.length === 3", "the FE profile in the friction plot").await?;
+    let with_fe = plotted(client, "friction").await?;
+    let fe = numbers(&script(client, "return window.haptex.state.fe.mu;").await?)?;
+    if with_fe[2] != fe || with_fe[1] != friction[1] {
+        return fail("the friction plot does not show the estimate and the FE profile just run");
+    }
+    let worst = fe.iter().zip(&friction[1]).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    let info = wd!(wd!(client.find(Locator::Id("fe-info"))).text());
+    if worst > 0.1 || !info.contains("RMS") {
+        return fail(format!("FE vs CAE: largest difference {worst}; the note says {info:?}"));
+    }
     let n = updates(client).await?;
     click_slider(client, "template-width_mm", 0.995).await?;
     wait_update(client, n, "the voltage at the slider's end").await?;
     wait_for(client, "window.haptex.state.drawn.extrapolation === true", "the extrapolated profile drawn").await?;
+    if plotted(client, "friction").await?.len() != 2 {
+        return fail("the FE profile of the previous width is still drawn");
+    }
     let flagged = script(
         client,
         "return document.getElementById('template-width_mm').parentElement.classList.contains('outside') && \
@@ -501,8 +521,9 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
 }
 
 /// Shows the default bump template with the normalized method (the one
-/// the GUI picks for virtual profiles) and the paper's defaults (the upload
-/// source is active before).
+/// the GUI picks for virtual profiles), the paper's defaults and the FE
+/// model's profile beside the estimate (the upload source is active
+/// before).
 async fn show_template(client: &Client) -> Check<()> {
     let n = updates(client).await?;
     wd!(wd!(client.find(Locator::Css("input[name='source'][value='template']"))).click());
@@ -517,7 +538,10 @@ async fn show_template(client: &Client) -> Check<()> {
     .await?;
     wait_update(client, n, "the default width").await?;
     wait_for(client, "window.haptex.state.drawn.label.startsWith('bump r_w 1.3 mm')", "the default bump drawn").await?;
-    paper_defaults(client, "normalized").await
+    paper_defaults(client, "normalized").await?;
+    // With the FE model's profile beside the estimate.
+    wd!(wd!(client.find(Locator::Id("run-fe"))).click());
+    wait_for(client, "window.haptex.plots.friction.series.length === 3", "the FE profile drawn").await
 }
 
 /// Shows `material` of the library with the physical method and the

@@ -1,0 +1,129 @@
+//! `POST /api/simulate`: the finite-element model run on demand for one
+//! template surface, with the FE settings the database was built with
+//! (finger model, mesh, visco-elastic tissue, 0.25 mm press, 10 mm slide):
+//! what `haptex db loo` does for a case outside the database. About half a
+//! second of one core; at most [`crate::Limits::concurrent_simulations`]
+//! run at once, a request waits up to
+//! [`crate::Limits::simulation_wait`] for its turn, then 503.
+//!
+//! Body: as `POST /api/predict`. Each parameter must lie in its
+//! `simulate` range (`GET /api/templates`): from the database's smallest
+//! value (features the mesh resolves) to the GUI slider's end. The answer
+//! is the FE profile on the database grid shifted to x0 (`x_mm`, `mu`,
+//! rounded to 6 decimals as database rows are), the surface height, the
+//! wall time, and the RMS difference of the CAE prediction for the same
+//! parameters (how good the instant estimate is here). An FE run that
+//! fails (the solver's clear error: time, step, residual) answers 422.
+//! `?format=csv` answers `x_mm,mu` with the settings in `#` comments.
+
+use std::time::Instant;
+
+use axum::Json;
+use axum::body::Bytes;
+use axum::extract::rejection::BytesRejection;
+use axum::extract::{RawQuery, State};
+use axum::http::{HeaderMap, StatusCode};
+use axum::response::{IntoResponse, Response};
+use haptex_core::profile::FrictionProfile;
+use haptex_fem::sweep::Run;
+use serde_json::json;
+
+use crate::error::ApiError;
+use crate::input::{BodyKind, Query, body_bytes, body_kind};
+use crate::state::AppState;
+use crate::templates::{TemplateQuery, TemplateSet};
+
+pub async fn post(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    RawQuery(raw_query): RawQuery,
+    body: Result<Bytes, BytesRejection>,
+) -> Result<Response, ApiError> {
+    let mut query = Query::parse(raw_query.as_deref())?;
+    let format = query.take_format(&["json", "csv"])?;
+    query.finish()?;
+    body_kind(&headers, &[BodyKind::Json])?;
+    let set = std::sync::Arc::clone(state.templates()?);
+    let request = TemplateQuery::parse(&body_bytes(body, state.limits().max_body_bytes)?, &set)?;
+    let TemplateQuery { template, x0_mm, query } = request;
+    let model = set.model(template).ok_or_else(|| ApiError::internal("a template without its model"))?;
+    for (range, value) in TemplateSet::ranges(model).iter().zip(query) {
+        if !range.simulates(value) {
+            return Err(ApiError::bad_request(
+                format!(
+                    "{} = {value} {}: the FE model runs on demand for {} .. {} {} (from the database's smallest \
+                     value, which the mesh resolves, to the slider's end); use POST /api/predict beyond",
+                    range.name, range.unit, range.simulate[0], range.simulate[1], range.unit
+                ),
+                Some(range.name),
+            ));
+        }
+    }
+    let spec = std::sync::Arc::clone(
+        set.fe().map_err(|why| ApiError::not_found(format!("FE simulation is not available: {why}"), None))?,
+    );
+
+    let limits = state.limits();
+    let permit =
+        tokio::time::timeout(limits.simulation_wait, std::sync::Arc::clone(state.simulations()).acquire_owned())
+            .await
+            .map_err(|_| {
+                ApiError::unavailable(format!(
+                    "the server is busy with other FE simulations (at most {} at once); try again in a few seconds",
+                    limits.concurrent_simulations
+                ))
+            })?
+            .map_err(|_| ApiError::unavailable("the server is shutting down"))?;
+    let run = Run { template, width_mm: query[0], height_mm: query[1], velocity_mm_s: query[2] };
+    let started = Instant::now();
+    let fe = tokio::task::spawn_blocking(move || {
+        let _permit = permit;
+        spec.simulate(&run)
+    })
+    .await
+    .map_err(|e| ApiError::internal(format!("FE task failed: {e}")))?
+    .map_err(|e| ApiError::new(StatusCode::UNPROCESSABLE_ENTITY, format!("the FE simulation failed: {e}"), None))?;
+    let seconds = started.elapsed().as_secs_f64();
+
+    let x_mm: Vec<f64> = model.positions().iter().map(|xi| x0_mm + xi).collect();
+    let profile = FrictionProfile::new(x_mm, fe)
+        .map_err(|e| ApiError::internal(format!("the simulated profile is invalid: {e}")))?;
+    let prediction = model
+        .predict(x0_mm, query[0], query[1], query[2])
+        .map_err(|e| ApiError::internal(format!("the CAE prediction failed: {e}")))?;
+    let cae_rms = (prediction.mu.iter().zip(profile.mu()).map(|(p, f)| (p - f) * (p - f)).sum::<f64>()
+        / profile.len() as f64)
+        .sqrt();
+    let fe_settings = &set.metadata().fe;
+    let settings = format!(
+        "FE model of the database: {} mesh, {} tissue, press {} mm, mu_skin {}",
+        fe_settings.mesh, fe_settings.material, fe_settings.indent_mm, fe_settings.mu_skin
+    );
+
+    if format == "csv" {
+        let comments = vec![
+            format!(
+                "haptex FE simulation: {} x0={x0_mm} mm r_w={} mm r_h={} mm velocity={} mm/s ({seconds:.2} s)",
+                template.name(),
+                query[0],
+                query[1],
+                query[2]
+            ),
+            settings,
+            format!("RMS difference of the CAE prediction for the same parameters: {cae_rms:.6}"),
+        ];
+        let bytes = super::to_csv(|w| profile.write_csv_commented(w, &comments))?;
+        return Ok(super::csv_response(
+            bytes,
+            &format!("{}-w{}-h{}-v{}-fe.csv", template.name(), query[0], query[1], query[2]),
+        ));
+    }
+    let mut answer = super::profile::profile_json(&profile);
+    answer["surface"] = json!(template.name());
+    answer["parameters"] = request.parameters_json();
+    answer["h_mm"] = json!(request.heights(profile.x_mm()));
+    answer["fe_seconds"] = json!(seconds);
+    answer["fe_settings"] = json!(settings);
+    answer["cae_rms_difference"] = json!(cae_rms);
+    Ok(Json(answer).into_response())
+}
