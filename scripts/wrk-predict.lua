@@ -7,7 +7,7 @@
 -- extrapolations), height 0.27 mm, 20 mm/s, x0 = 5 mm. Every answer is the
 -- JSON profile with its surface height (501 points, about 21 KB).
 --
--- With `haptex serve` listening:
+-- With `haptex serve` listening, from the repository root:
 --   wrk -t2 -c32 -d30s --latency -s scripts/wrk-predict.lua http://127.0.0.1:8080/api/predict
 
 local surfaces = { "bump", "edge", "sine" }
@@ -25,9 +25,4 @@ function request()
   return wrk.format(nil, nil, nil, body)
 end
 
--- wrk prints "Non-2xx or 3xx responses: N" when any answer was not 2xx/3xx.
-function done(summary, latency, requests)
-  io.write(string.format("p99 latency %.3f ms; %d requests; errors: connect %d, read %d, write %d, status %d, timeout %d\n",
-    latency:percentile(99) / 1000, summary.requests, summary.errors.connect, summary.errors.read,
-    summary.errors.write, summary.errors.status, summary.errors.timeout))
-end
+dofile("scripts/wrk-report.lua")

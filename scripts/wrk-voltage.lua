@@ -30,10 +30,4 @@ else
   wrk.headers["Content-Type"] = "text/csv"
 end
 
--- wrk prints "Non-2xx or 3xx responses: N" when any answer was not 2xx/3xx
--- (no per-response Lua hook here: it would slow wrk down).
-function done(summary, latency, requests)
-  io.write(string.format("p99 latency %.3f ms; %d requests; errors: connect %d, read %d, write %d, status %d, timeout %d\n",
-    latency:percentile(99) / 1000, summary.requests, summary.errors.connect, summary.errors.read,
-    summary.errors.write, summary.errors.status, summary.errors.timeout))
-end
+dofile("scripts/wrk-report.lua")

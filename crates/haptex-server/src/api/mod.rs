@@ -11,8 +11,50 @@ pub mod simulate;
 pub mod templates;
 pub mod voltage;
 
-use axum::http::{HeaderValue, header};
+use std::sync::Arc;
+
+use axum::body::Bytes;
+use axum::extract::rejection::BytesRejection;
+use axum::http::{HeaderMap, HeaderValue, header};
 use axum::response::{IntoResponse, Response};
+use haptex_core::database::TemplateModel;
+
+use crate::ApiError;
+use crate::input::{BodyKind, Query, body_bytes, body_kind};
+use crate::state::AppState;
+use crate::templates::{TemplateQuery, TemplateSet};
+
+/// What the template routes (`predict`, `simulate`) start from: the
+/// answer format (`?format=json|csv`, nothing else in the query) and the
+/// JSON body checked against the server's templates.
+pub(crate) struct TemplateCall {
+    pub format: &'static str,
+    pub set: Arc<TemplateSet>,
+    pub request: TemplateQuery,
+}
+
+impl TemplateCall {
+    pub fn new(
+        state: &AppState,
+        headers: &HeaderMap,
+        raw_query: Option<&str>,
+        body: Result<Bytes, BytesRejection>,
+    ) -> Result<Self, ApiError> {
+        let mut query = Query::parse(raw_query)?;
+        let format = query.take_format(&["json", "csv"])?;
+        query.finish()?;
+        body_kind(headers, &[BodyKind::Json])?;
+        let set = Arc::clone(state.templates()?);
+        let request = TemplateQuery::parse(&body_bytes(body, state.limits().max_body_bytes)?, &set)?;
+        Ok(Self { format, set, request })
+    }
+
+    /// The requested template's model (present: the request was checked
+    /// against the set).
+    pub fn model(&self) -> Result<&TemplateModel, ApiError> {
+        self.set.model(self.request.template).ok_or_else(|| ApiError::internal("a template without its model"))
+    }
+}
 
 /// A CSV body offered as a download named `filename`.
 pub(crate) fn csv_response(bytes: Vec<u8>, filename: &str) -> Response {

@@ -25,7 +25,6 @@ use haptex_core::profile::FrictionProfile;
 use serde_json::json;
 
 use crate::error::ApiError;
-use crate::input::{BodyKind, Query, body_bytes, body_kind};
 use crate::state::AppState;
 use crate::templates::{TemplateQuery, TemplateSet};
 
@@ -35,14 +34,10 @@ pub async fn post(
     RawQuery(raw_query): RawQuery,
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Response, ApiError> {
-    let mut query = Query::parse(raw_query.as_deref())?;
-    let format = query.take_format(&["json", "csv"])?;
-    query.finish()?;
-    body_kind(&headers, &[BodyKind::Json])?;
-    let set = state.templates()?;
-    let request = TemplateQuery::parse(&body_bytes(body, state.limits().max_body_bytes)?, set)?;
+    let call = super::TemplateCall::new(&state, &headers, raw_query.as_deref(), body)?;
+    let (format, set, request) = (call.format, &call.set, call.request);
     let TemplateQuery { template, x0_mm: x0, query } = request;
-    let model = set.model(template).ok_or_else(|| ApiError::internal("a template without its model"))?;
+    let model = call.model()?;
     let entry = set.metadata().entry(template).ok_or_else(|| ApiError::internal("a template without its entry"))?;
     let ranges = TemplateSet::ranges(model);
 
