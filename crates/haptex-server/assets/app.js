@@ -284,6 +284,10 @@
       option.textContent = `${t.name} (${t.rows} FE runs)`;
       select.append(option);
     });
+    if (!templates.fe.simulate) {
+      $('run-fe').hidden = true;
+      $('fe-info').textContent = `FE model on demand: not available (${templates.fe.simulate_unavailable}).`;
+    }
     state.template.surface = templates.templates[0].name;
     state.template.x0_mm = templates.x0_mm.default;
     $('x0').value = String(templates.x0_mm.default);

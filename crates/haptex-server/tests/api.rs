@@ -1024,3 +1024,33 @@ async fn simulate_bad_input_and_a_busy_server_are_refused() {
         .unwrap();
     send_to(busy, request).await.error(StatusCode::SERVICE_UNAVAILABLE, None);
 }
+
+/// A database built with another finger model (its SHA-256 differs from
+/// this haptex's): predictions work, the FE model on demand says why it
+/// cannot run (GET /api/templates and a 404 naming the reason).
+#[tokio::test]
+async fn simulate_with_another_finger_models_database_is_unavailable() {
+    let dir = tempfile::tempdir().unwrap();
+    for entry in std::fs::read_dir(shipped_db()).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_file() {
+            std::fs::copy(&path, dir.path().join(path.file_name().unwrap())).unwrap();
+        }
+    }
+    let metadata_path = dir.path().join("metadata.json");
+    let mut metadata: Value = serde_json::from_str(&std::fs::read_to_string(&metadata_path).unwrap()).unwrap();
+    metadata["fe"]["finger_model_sha256"] = json!("0".repeat(64));
+    std::fs::write(&metadata_path, metadata.to_string()).unwrap();
+    let router = app(AppState::new(None, Limits::DEFAULT).unwrap().with_database(dir.path()).unwrap());
+    let templates =
+        send_to(router.clone(), Request::get("/api/templates").body(Body::empty()).unwrap()).await.ok().json();
+    assert_eq!(templates["fe"]["simulate"], false);
+    let why = templates["fe"]["simulate_unavailable"].as_str().unwrap();
+    assert!(why.contains("another finger model"), "{why}");
+    let body = r#"{"surface": "bump", "width_mm": 1.5, "height_mm": 0.3}"#;
+    let request =
+        |uri: &str| Request::post(uri).header(header::CONTENT_TYPE, "application/json").body(Body::from(body)).unwrap();
+    send_to(router.clone(), request("/api/predict")).await.ok();
+    let refused = send_to(router, request("/api/simulate")).await.error(StatusCode::NOT_FOUND, None);
+    assert!(refused["error"].as_str().unwrap().contains("another finger model"), "{refused}");
+}

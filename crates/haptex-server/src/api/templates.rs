@@ -56,6 +56,10 @@ pub async fn get(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -
             "indent_mm": fe.indent_mm,
             "mu_skin": fe.mu_skin,
             "finger_model": fe.finger_model,
+            // Whether POST /api/simulate can run the FE model with these
+            // settings, and why not.
+            "simulate": set.fe().is_ok(),
+            "simulate_unavailable": set.fe().err(),
         },
         "templates": templates,
     })))
