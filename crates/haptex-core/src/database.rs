@@ -68,6 +68,13 @@ impl Template {
         }
     }
 
+    /// A query in words, as the headers of predicted and simulated
+    /// profiles give it: `bump x0=5 mm r_w=1.3 mm r_h=0.27 mm velocity=20
+    /// mm/s` (`query`: r_w, r_h, velocity).
+    pub fn describe_query(self, x0_mm: f64, query: &[f64; 3]) -> String {
+        format!("{} x0={x0_mm} mm r_w={} mm r_h={} mm velocity={} mm/s", self.name(), query[0], query[1], query[2])
+    }
+
     /// What the width r_w and the height r_h mean for this template.
     pub fn parameter_meaning(self) -> (&'static str, &'static str) {
         match self {
@@ -208,6 +215,8 @@ pub struct TemplateModel {
     pub cae: Cae,
     pub grid: Grid,
     positions: Vec<f64>,
+    /// (min, max) of r_w, r_h and velocity over the rows, computed once.
+    input_ranges: [(f64, f64); 3],
 }
 
 /// A predicted profile.
@@ -240,8 +249,13 @@ impl TemplateModel {
                 message: format!("{} outputs, the metadata's grid has {} points", matrix.m(), metadata.grid.points),
             });
         }
+        let input_ranges = std::array::from_fn(|l| {
+            (0..matrix.n())
+                .map(|n| matrix.input_row(n)[l])
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)))
+        });
         let cae = Cae::new(matrix, entry.widths)?;
-        Ok(Self { template, cae, grid: metadata.grid, positions: metadata.grid.positions() })
+        Ok(Self { template, cae, grid: metadata.grid, positions: metadata.grid.positions(), input_ranges })
     }
 
     /// Positions xi = x - x0 of the outputs (mm).
@@ -353,12 +367,7 @@ impl TemplateModel {
 
     /// The range of each input over the database: (min, max) for r_w, r_h, v.
     pub fn input_ranges(&self) -> [(f64, f64); 3] {
-        let m = self.cae.matrix();
-        std::array::from_fn(|l| {
-            (0..m.n())
-                .map(|n| m.input_row(n)[l])
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)))
-        })
+        self.input_ranges
     }
 }
 
