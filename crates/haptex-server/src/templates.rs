@@ -214,7 +214,7 @@ impl TemplateQuery {
             ));
         }
         let query = [width, height, body.velocity_mm_s.unwrap_or(DEFAULT_VELOCITY_MM_S)];
-        for (range, value) in Self::ranges_of(model).iter().zip(query) {
+        for (range, value) in TemplateSet::ranges(model).iter().zip(query) {
             if !range.accepts(value) {
                 return Err(ApiError::bad_request(
                     format!(
@@ -234,10 +234,6 @@ impl TemplateQuery {
             }
         }
         Ok(Self { template: model.template, x0_mm, query })
-    }
-
-    fn ranges_of(model: &TemplateModel) -> [ParameterRange; 3] {
-        TemplateSet::ranges(model)
     }
 
     /// The surface height h(x) (mm) at each of `x_mm`.

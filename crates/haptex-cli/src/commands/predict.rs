@@ -82,15 +82,7 @@ pub fn run(args: PredictArgs) -> anyhow::Result<()> {
     let source = model.describe(&query, &prediction, entry);
     let warning = model.warning(&query, prediction.fe_row, &prediction.diagnostics);
     Output::new(args.output.clone()).write(|w| {
-        writeln!(
-            w,
-            "# haptex predict: {} x0={} mm r_w={} mm r_h={} mm velocity={} mm/s",
-            template.name(),
-            args.x0,
-            args.width,
-            args.height,
-            args.velocity
-        )?;
+        writeln!(w, "# haptex predict: {}", template.describe_query(args.x0, &query))?;
         writeln!(w, "# {source}")?;
         if let Some(warning) = &warning {
             writeln!(w, "# warning: {warning}")?;

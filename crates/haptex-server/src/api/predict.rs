@@ -21,6 +21,7 @@ use axum::extract::rejection::BytesRejection;
 use axum::extract::{RawQuery, State};
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
+use haptex_core::database::Prediction;
 use haptex_core::profile::FrictionProfile;
 use serde_json::json;
 
@@ -45,18 +46,12 @@ pub async fn post(
         model.predict(x0, query[0], query[1], query[2]).map_err(|e| ApiError::bad_request(e.to_string(), None))?;
     let source = model.describe(&query, &prediction, entry);
     let warning = model.warning(&query, prediction.fe_row, &prediction.diagnostics);
-    let profile = FrictionProfile::new(prediction.x_mm.clone(), prediction.mu.clone())
+    let Prediction { x_mm, mu, fe_row, diagnostics } = prediction;
+    let profile = FrictionProfile::new(x_mm, mu)
         .map_err(|e| ApiError::internal(format!("the predicted profile is invalid: {e}")))?;
 
     if format == "csv" {
-        let mut comments = vec![format!(
-            "haptex predict: {} x0={x0} mm r_w={} mm r_h={} mm velocity={} mm/s",
-            template.name(),
-            query[0],
-            query[1],
-            query[2]
-        )];
-        comments.push(source);
+        let mut comments = vec![format!("haptex predict: {}", template.describe_query(x0, &query)), source];
         comments.extend(warning.map(|w| format!("warning: {w}")));
         let bytes = super::to_csv(|w| profile.write_csv_commented(w, &comments))?;
         return Ok(super::csv_response(
@@ -67,18 +62,18 @@ pub async fn post(
 
     let outside: Vec<&str> =
         ranges.iter().zip(query).filter(|(r, v)| !r.in_database(*v)).map(|(r, _)| r.name).collect();
-    let h_mm = request.heights(&prediction.x_mm);
+    let h_mm = request.heights(profile.x_mm());
     let mut answer = super::profile::profile_json(&profile);
     answer["surface"] = json!(template.name());
     answer["formula"] = json!(super::templates::formula(template));
     answer["parameters"] = request.parameters_json();
-    answer["fe_exact"] = json!(prediction.fe_row.is_some());
-    answer["fe_row"] = json!(prediction.fe_row.map(|r| r + 1));
+    answer["fe_exact"] = json!(fe_row.is_some());
+    answer["fe_row"] = json!(fe_row.map(|r| r + 1));
     answer["source"] = json!(source);
     answer["extrapolation"] = json!(warning.is_some());
     answer["outside_database"] = json!(outside);
     answer["warnings"] = json!(warning.into_iter().collect::<Vec<_>>());
-    answer["diagnostics"] = json!(prediction.diagnostics);
+    answer["diagnostics"] = json!(diagnostics);
     answer["loo_rmse"] = json!(entry.loo_rmse);
     answer["loo_rmse_relative_to_range"] = json!(entry.loo_rmse_relative_to_range);
     answer["h_mm"] = json!(h_mm);

@@ -97,13 +97,7 @@ pub async fn post(
 
     if format == "csv" {
         let comments = vec![
-            format!(
-                "haptex FE simulation: {} x0={x0_mm} mm r_w={} mm r_h={} mm velocity={} mm/s ({seconds:.2} s)",
-                template.name(),
-                query[0],
-                query[1],
-                query[2]
-            ),
+            format!("haptex FE simulation: {} ({seconds:.2} s)", template.describe_query(x0_mm, &query)),
             settings,
             format!("RMS difference of the CAE prediction for the same parameters: {cae_rms:.6}"),
         ];
