@@ -12,7 +12,7 @@
 //! - [`routes`]: the route table (method, path, handler), the one list the
 //!   router is built from and the OpenAPI test checks;
 //! - `api/*`: one module per resource (health, config, templates, predict,
-//!   voltage, materials, play, profile, openapi);
+//!   simulate, voltage, materials, play, profile, openapi);
 //! - [`error`]: [`ApiError`] and the middleware that turns every 4xx into
 //!   the JSON error `{"error": message, "field": name}`;
 //! - [`params`]: device parameters with the paper's defaults and their
@@ -59,7 +59,8 @@ pub struct Config {
     /// read-only; `None` serves no materials.
     pub library: Option<PathBuf>,
     /// The FE database of surface templates (a `haptex db` directory) to
-    /// serve under `/api/templates` and `/api/predict`; `None` serves none.
+    /// serve under `/api/templates`, `/api/predict` and `/api/simulate`;
+    /// `None` serves none.
     pub database: Option<PathBuf>,
     pub limits: Limits,
 }

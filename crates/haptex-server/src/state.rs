@@ -103,19 +103,22 @@ impl AppState {
     /// now so that a bad path fails at start, not at the first request).
     pub fn new(library: Option<&Path>, limits: Limits) -> Result<Self, LibraryError> {
         let library = library.map(LibraryPool::open).transpose()?.map(Arc::new);
-        let renders = Semaphore::new(limits.concurrent_renders.max(1));
-        let simulations = Arc::new(Semaphore::new(limits.concurrent_simulations));
-        Ok(Self(Arc::new(Inner { library, templates: None, limits, renders, simulations })))
+        Ok(Self::build(library, None, limits))
     }
 
     /// This state, also serving the surface templates of the FE database in
     /// `dir` (loaded now, so that a bad database fails at start).
     pub fn with_database(self, dir: &Path) -> Result<Self, DatabaseError> {
         let templates = Some(Arc::new(TemplateSet::load(dir)?));
-        let limits = self.0.limits.clone();
+        Ok(Self::build(self.0.library.clone(), templates, self.0.limits.clone()))
+    }
+
+    /// The state of these sources, with fresh render and simulation slots
+    /// for `limits`.
+    fn build(library: Option<Arc<LibraryPool>>, templates: Option<Arc<TemplateSet>>, limits: Limits) -> Self {
         let renders = Semaphore::new(limits.concurrent_renders.max(1));
         let simulations = Arc::new(Semaphore::new(limits.concurrent_simulations));
-        Ok(Self(Arc::new(Inner { library: self.0.library.clone(), templates, limits, renders, simulations })))
+        Self(Arc::new(Inner { library, templates, limits, renders, simulations }))
     }
 
     /// The surface templates, or 404 if the server has no FE database.

@@ -11,9 +11,10 @@ use haptex_server::{Config, Limits};
 ///
 /// The GUI shows the friction and voltage profiles of a surface template
 /// (bump, edge or sine, predicted from the FE database as its sliders
-/// move), of a texture-library material or of your own profile file, with
-/// the device and finger constants (the paper's Fig. 2 defaults), and
-/// offers CSV, JSON and WAV downloads. The default address serves this machine only; to use it
+/// move, or simulated by the FE model on demand), of a texture-library
+/// material or of your own profile file, with the device and finger
+/// constants (the paper's Fig. 2 defaults), and offers CSV, JSON and WAV
+/// downloads. The default address serves this machine only; to use it
 /// from a phone on the same network, listen on all interfaces with
 /// --addr 0.0.0.0:8080 and open http://THIS-MACHINE'S-IP:8080/.
 /// Ctrl-C stops the server after the requests in flight. Requests are
