@@ -9,6 +9,7 @@ pub mod database;
 pub mod electrovibration;
 pub mod io;
 pub mod library;
+pub mod num;
 pub mod profile;
 pub mod recording;
 
