@@ -5,7 +5,7 @@ mod atomic;
 mod table;
 
 pub use atomic::{WriteError, write_atomic};
-pub use table::{Table, TableError, TableErrorKind};
+pub use table::{MAX_LINE_BYTES, Table, TableError, TableErrorKind};
 
 use std::io::Write;
 

@@ -6,6 +6,7 @@
 //! Every error names the source (file path or `<stdin>`), the 1-based line
 //! and, where it applies, the column.
 
+use std::collections::HashMap;
 use std::fmt;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
@@ -30,6 +31,8 @@ pub enum TableErrorKind {
     NotANumber { text: String },
     #[error("not a finite number: {text:?}")]
     NonFinite { text: String },
+    #[error("line longer than {limit} bytes (a haptex CSV line is a header or a row of numbers; is this a CSV file?)")]
+    LineTooLong { limit: usize },
     #[error("{0}")]
     Invalid(String),
 }
@@ -59,12 +62,19 @@ impl fmt::Display for TableError {
     }
 }
 
+/// Longest line the reader accepts, in bytes (1 MiB): far more than any
+/// haptex header or row (a 500-output model matrix row is ~12 kB), and a
+/// bound on the memory a file without line breaks (`/dev/zero`) can take.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+
 /// A numeric table read from CSV, stored column by column.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Table {
     source_name: String,
     header_line: u64,
     columns: Vec<String>,
+    /// Column name -> index, so lookups cost O(1) whatever the width.
+    index: HashMap<String, usize>,
     data: Vec<Vec<f64>>,
     lines: Vec<u64>,
 }
@@ -75,6 +85,8 @@ impl Table {
     /// The format is deliberately plain (numbers need no quoting), so the
     /// reader is line based and its line numbers are exact: fields are split
     /// at commas, trimmed, and a pair of surrounding double quotes is removed.
+    /// Time and memory are linear in the input; a line longer than
+    /// [`MAX_LINE_BYTES`] is an error.
     pub fn read<R: Read>(reader: R, source_name: &str) -> Result<Self, TableError> {
         let error = |line: Option<u64>, column: Option<String>, kind| TableError {
             source_name: source_name.to_string(),
@@ -83,7 +95,16 @@ impl Table {
             kind,
         };
         let mut lines = Lines { reader: BufReader::with_capacity(1 << 16, reader), buffer: Vec::new(), number: 0 };
-        let io_error = |(line, e): (u64, std::io::Error)| error(Some(line), None, TableErrorKind::Io(e.to_string()));
+        let io_error = |(line, e): (u64, LineError)| {
+            error(
+                Some(line),
+                None,
+                match e {
+                    LineError::Io(e) => TableErrorKind::Io(e.to_string()),
+                    LineError::TooLong => TableErrorKind::LineTooLong { limit: MAX_LINE_BYTES },
+                },
+            )
+        };
 
         let Some((header_line, header)) = lines.next_content().map_err(io_error)? else {
             // Name the line where the header was due: the end of the file
@@ -93,11 +114,12 @@ impl Table {
         let header = std::str::from_utf8(header)
             .map_err(|_| error(Some(header_line), None, TableErrorKind::Invalid("header is not UTF-8 text".into())))?;
         let mut columns: Vec<String> = Vec::new();
+        let mut index: HashMap<String, usize> = HashMap::new();
         for name in header.split(',').map(unquote) {
             if name.is_empty() {
                 return Err(error(Some(header_line), None, TableErrorKind::EmptyColumnName));
             }
-            if columns.iter().any(|c| c == name) {
+            if index.insert(name.to_string(), columns.len()).is_some() {
                 return Err(error(Some(header_line), Some(name.to_string()), TableErrorKind::DuplicateColumn));
             }
             columns.push(name.to_string());
@@ -120,7 +142,7 @@ impl Table {
             }
             row_lines.push(line);
         }
-        Ok(Self { source_name: source_name.to_string(), header_line, columns, data, lines: row_lines })
+        Ok(Self { source_name: source_name.to_string(), header_line, columns, index, data, lines: row_lines })
     }
 
     /// Reads a table from a file; errors name the path.
@@ -157,7 +179,7 @@ impl Table {
 
     /// Index of a column by name.
     pub fn column_index(&self, name: &str) -> Option<usize> {
-        self.columns.iter().position(|c| c == name)
+        self.index.get(name).copied()
     }
 
     /// A column's values, or `None` if the header lacks it.
@@ -176,8 +198,20 @@ impl Table {
             source_name: self.source_name.clone(),
             line: Some(self.header_line),
             column: Some(name.to_string()),
-            kind: TableErrorKind::MissingColumn { present: self.columns.join(",") },
+            kind: TableErrorKind::MissingColumn { present: self.header_summary() },
         })
+    }
+
+    /// The header's column names for a message: all of them if there are
+    /// few, else the first ten and the count.
+    pub fn header_summary(&self) -> String {
+        const SHOWN: usize = 10;
+        let names: Vec<String> = self.columns.iter().take(SHOWN).map(|c| quote(c)).collect();
+        if self.columns.len() > SHOWN {
+            format!("{},... ({} columns)", names.join(","), self.columns.len())
+        } else {
+            names.join(",")
+        }
     }
 
     /// Takes the column data out of the table (column order as in `columns`).
@@ -197,8 +231,14 @@ impl Table {
     }
 }
 
-/// A content line with its 1-based number, or an I/O error with the line it hit.
-type NumberedLine<'a> = Result<Option<(u64, &'a [u8])>, (u64, std::io::Error)>;
+/// A content line with its 1-based number, or an error with the line it hit.
+type NumberedLine<'a> = Result<Option<(u64, &'a [u8])>, (u64, LineError)>;
+
+/// Why a line could not be read.
+enum LineError {
+    Io(std::io::Error),
+    TooLong,
+}
 
 /// Reads lines, counting them, and yields only the content lines (not
 /// blank, not `#` comments), without the line terminator.
@@ -215,7 +255,7 @@ impl<R: Read> Lines<R> {
         const BOM: &[u8] = "\u{feff}".as_bytes();
         loop {
             self.buffer.clear();
-            let read = self.reader.read_until(b'\n', &mut self.buffer).map_err(|e| (self.number + 1, e))?;
+            let read = self.read_line().map_err(|e| (self.number + 1, e))?;
             if read == 0 {
                 return Ok(None);
             }
@@ -230,6 +270,38 @@ impl<R: Read> Lines<R> {
     }
 }
 
+impl<R: Read> Lines<R> {
+    /// Reads up to and including the next `\n` into the buffer (like
+    /// `read_until`), but refuses a line longer than [`MAX_LINE_BYTES`]
+    /// before it is held in memory. Returns the bytes read (0 at the end).
+    fn read_line(&mut self) -> Result<usize, LineError> {
+        let mut read = 0;
+        loop {
+            let available = match self.reader.fill_buf() {
+                Ok(bytes) => bytes,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                Err(e) => return Err(LineError::Io(e)),
+            };
+            if available.is_empty() {
+                return Ok(read);
+            }
+            let (take, done) = match available.iter().position(|&b| b == b'\n') {
+                Some(i) => (i + 1, true),
+                None => (available.len(), false),
+            };
+            if self.buffer.len() + take > MAX_LINE_BYTES + 2 {
+                return Err(LineError::TooLong);
+            }
+            self.buffer.extend_from_slice(&available[..take]);
+            self.reader.consume(take);
+            read += take;
+            if done {
+                return Ok(read);
+            }
+        }
+    }
+}
+
 fn unquote(field: &str) -> &str {
     let field = field.trim();
     field.strip_prefix('"').and_then(|f| f.strip_suffix('"')).unwrap_or(field).trim()
@@ -237,13 +309,23 @@ fn unquote(field: &str) -> &str {
 
 fn parse_number(field: &[u8]) -> Result<f64, TableErrorKind> {
     let text = std::str::from_utf8(field)
-        .map_err(|_| TableErrorKind::NotANumber { text: String::from_utf8_lossy(field).into_owned() })?;
+        .map_err(|_| TableErrorKind::NotANumber { text: quote(&String::from_utf8_lossy(field)) })?;
     let text = unquote(text);
     if text.is_empty() {
         return Err(TableErrorKind::NotANumber { text: String::new() });
     }
-    let value: f64 = text.parse().map_err(|_| TableErrorKind::NotANumber { text: text.to_string() })?;
-    if value.is_finite() { Ok(value) } else { Err(TableErrorKind::NonFinite { text: text.to_string() }) }
+    let value: f64 = text.parse().map_err(|_| TableErrorKind::NotANumber { text: quote(text) })?;
+    if value.is_finite() { Ok(value) } else { Err(TableErrorKind::NonFinite { text: quote(text) }) }
+}
+
+/// A field as quoted in an error: whole if short, else its first 40
+/// characters and how long it was (a message never carries a megabyte).
+fn quote(text: &str) -> String {
+    const KEEP: usize = 40;
+    match text.char_indices().nth(KEEP) {
+        None => text.to_string(),
+        Some((end, _)) => format!("{}... ({} bytes)", &text[..end], text.len()),
+    }
 }
 
 #[cfg(test)]
@@ -270,6 +352,30 @@ mod tests {
         assert_eq!(t.columns(), ["x", "y"]);
         assert_eq!(t.column("y").unwrap(), [2.0, 4.0]);
         assert_eq!((t.line_of_row(0), t.line_of_row(1)), (3, 6));
+    }
+
+    /// A file without line breaks (`/dev/zero`) is refused once a line
+    /// passes the limit, not read until memory runs out.
+    #[test]
+    fn endless_line_is_refused_at_the_limit() {
+        let endless = std::io::repeat(b'0');
+        let e = Table::read(endless, "zero").unwrap_err();
+        assert_eq!(e.kind, TableErrorKind::LineTooLong { limit: MAX_LINE_BYTES });
+        assert_eq!(e.line, Some(1));
+        let long_row = format!("x,y\n1,{}\n", "2".repeat(MAX_LINE_BYTES));
+        let e = read(&long_row).unwrap_err();
+        assert_eq!((e.line, e.kind), (Some(2), TableErrorKind::LineTooLong { limit: MAX_LINE_BYTES }));
+        // A line just under the limit is fine.
+        let ok = format!("x\n0.{}\n", "1".repeat(MAX_LINE_BYTES - 10));
+        assert_eq!(read(&ok).unwrap().n_rows(), 1);
+    }
+
+    #[test]
+    fn long_fields_are_quoted_short() {
+        let e = read(&format!("x\n{}\n", "9".repeat(400))).unwrap_err();
+        assert!(matches!(&e.kind, TableErrorKind::NonFinite { text } if text.len() < 80), "{e}");
+        let e = read(&format!("x\n{}\n", "é".repeat(400))).unwrap_err();
+        assert!(e.to_string().contains("(800 bytes)"), "{e}");
     }
 
     #[test]
