@@ -68,14 +68,17 @@ enum LibraryCommand {
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:
   haptex library import --db lab.sqlite recordings/velvet/ recordings/wood/P1-s1.recording.json
-  haptex library import --db lab.sqlite --profile bump.csv --material 'my bump' --source 'FE run 12' --licence CC0-1.0")]
+  haptex library import --db lab.sqlite --profile bump.csv --synthetic --material 'my bump' --source 'FE run 12' --licence CC0-1.0
+  haptex library import --db lab.sqlite --profile felt.csv --measured --material felt --source 'our rig, 2026-11-02'")]
+#[command(group = clap::ArgGroup::new("provenance").args(["measured", "synthetic"]).multiple(false))]
 struct ImportArgs {
     /// Recording metadata files (*.recording.json) or directories.
     #[arg(value_name = "RECORDING", required_unless_present = "profile", conflicts_with = "profile")]
     inputs: Vec<PathBuf>,
     /// A friction profile CSV (`x_mm,mu`, optionally with `fn_n`) to add as
-    /// a stroke of --material.
-    #[arg(long, value_name = "P.csv", requires = "material")]
+    /// a stroke of --material; say where it comes from with --measured or
+    /// --synthetic.
+    #[arg(long, value_name = "P.csv", requires_all = ["material", "provenance"])]
     profile: Option<PathBuf>,
     /// Material of the --profile (created if new).
     #[arg(long, value_name = "NAME", requires = "profile")]
@@ -89,7 +92,11 @@ struct ImportArgs {
     /// Licence of the --profile data.
     #[arg(long, default_value = "unspecified", requires = "profile")]
     licence: String,
-    /// The --profile is generated, not measured.
+    /// The --profile was measured on a real finger (a recording).
+    #[arg(long, requires = "profile")]
+    measured: bool,
+    /// The --profile is generated, not measured (an FE run, a CAE
+    /// prediction, a model, a drawing).
     #[arg(long, requires = "profile")]
     synthetic: bool,
     #[command(flatten)]
@@ -316,7 +323,11 @@ fn import(db: &Path, args: ImportArgs) -> anyhow::Result<()> {
         let provenance = ProfileProvenance {
             source: args.source.clone().unwrap_or_else(|| format!("user profile {}", profile_path.display())),
             licence: args.licence.clone(),
-            synthetic: args.synthetic,
+            synthetic: match (args.measured, args.synthetic) {
+                (true, false) => false,
+                (false, true) => true,
+                _ => bail!("say where --profile comes from: --measured or --synthetic"),
+            },
             origin_path: profile_path.display().to_string(),
         };
         let added = library.add_profile(run, material, &args.description, &profile, &provenance)?;
