@@ -362,3 +362,34 @@ fn python_converter_produces_an_importable_recording() {
     let diff = a.mu().iter().zip(b.mu()).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
     assert!(diff < 1e-9, "{diff}");
 }
+
+/// Issue 13: a multi-file output appears whole or is detectably
+/// incomplete. An export killed before its manifest leaves no manifest
+/// (the old one is removed first); a complete export lists the hash of
+/// every file it wrote, and the files match it.
+#[test]
+fn export_is_whole_or_detectably_incomplete() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/library/library.sqlite");
+    let export = dir.path().join("export");
+    assert!(haptex(&["library", "export", "--db", s(&db), "--out", s(&export)]).status.success());
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(export.join("manifest.json")).unwrap()).unwrap();
+    let files = manifest["files_sha256"].as_object().unwrap();
+    assert_eq!(files.len(), manifest["strokes"].as_array().unwrap().len());
+    assert!(files.len() >= 12);
+    let members: haptex_core::io::MemberHashes =
+        files.iter().map(|(k, v)| (k.clone(), v.as_str().unwrap().to_string())).collect();
+    haptex_core::io::verify_members(&export, &members).unwrap();
+
+    let killed = Command::new(env!("CARGO_BIN_EXE_haptex"))
+        .args(["library", "export", "--db", s(&db), "--out", s(&export)])
+        .env("HAPTEX_FAULT_INJECT", "before-marker")
+        .output()
+        .unwrap();
+    assert!(!killed.status.success(), "the fault hook did not fire");
+    assert!(!export.join("manifest.json").exists(), "an interrupted export kept a manifest");
+    // A rerun completes it.
+    assert!(haptex(&["library", "export", "--db", s(&db), "--out", s(&export)]).status.success());
+    assert!(export.join("manifest.json").exists());
+}

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand, ValueEnum};
 use haptex_core::FrictionProfile;
-use haptex_core::io::{write_atomic, write_csv_row};
+use haptex_core::io::{FileSet, write_atomic, write_csv_row};
 use haptex_core::library::{Added, ImportId, Library, ProfileProvenance, StoredProfile};
 use haptex_core::recording::format::METADATA_SUFFIX;
 use haptex_core::recording::synth::{DEMO_SEED, DEMO_STROKES_PER_MATERIAL, write_demo};
@@ -153,6 +153,10 @@ enum SampleFormat {
 
 /// Export profiles as CSV files, DIR/MATERIAL/stroke-ID.csv, with a
 /// DIR/manifest.json of the materials and every stroke's provenance.
+///
+/// The manifest is removed first and written last, listing the SHA-256 of
+/// every file (`files_sha256`): an export without a manifest, or with a
+/// file that does not match it, is incomplete (`sha256sum` checks it).
 #[derive(Debug, Args)]
 struct ExportArgs {
     /// Output directory (created if missing).
@@ -576,23 +580,28 @@ fn export(db: &Path, args: ExportArgs) -> anyhow::Result<()> {
         }
         None => library.materials()?,
     };
+    // The manifest is the export's marker: removed first, written last with
+    // the SHA-256 of every file, so an interrupted export has no manifest
+    // (or one whose hashes do not match) and is seen to be incomplete.
+    let mut set = FileSet::begin(&args.out, "manifest.json")?;
     let mut manifest_strokes = Vec::new();
     for material in &materials {
-        let dir = args.out.join(file_name(&material.name));
-        std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
         for stroke in library.strokes(&material.name)? {
             let stored = library.profile(stroke.id)?;
-            let file = dir.join(format!("stroke-{}.csv", stroke.id));
+            let file = format!("{}/stroke-{}.csv", file_name(&material.name), stroke.id);
             let mut comments = vec![format!("haptex library export: material {:?}", material.name)];
             comments.extend(stroke.provenance_lines());
-            write_atomic(&file, |w| stored.profile.write_csv_commented(w, &comments))?;
-            manifest_strokes
-                .push(serde_json::json!({ "file": file.strip_prefix(&args.out).unwrap_or(&file), "stroke": stroke }));
+            set.write(&file, |w| stored.profile.write_csv_commented(w, &comments))?;
+            manifest_strokes.push(serde_json::json!({ "file": file, "stroke": stroke }));
         }
     }
-    let manifest = args.out.join("manifest.json");
-    let json = serde_json::json!({ "library": db, "materials": materials, "strokes": manifest_strokes });
-    write_atomic(&manifest, |w| {
+    set.finish(|w, files| {
+        let json = serde_json::json!({
+            "library": db,
+            "materials": materials,
+            "strokes": manifest_strokes,
+            "files_sha256": files,
+        });
         serde_json::to_writer_pretty(&mut *w, &json)?;
         writeln!(w)
     })?;
