@@ -191,7 +191,7 @@ impl FrictionProfile {
     /// at the first sample; the last point may fall short of the end.
     pub fn resample_step(&self, dx_mm: f64) -> Result<Self, ProfileError> {
         if !(dx_mm.is_finite() && dx_mm > 0.0) {
-            return Err(ProfileError::Resample(format!("grid spacing must be positive, got {dx_mm} mm")));
+            return Err(ProfileError::Resample(format!("grid spacing must be positive, got {} mm", Num(dx_mm))));
         }
         let intervals = (self.span_mm() / dx_mm).floor();
         if intervals < 1.0 {

@@ -21,6 +21,7 @@ use super::nelder_mead::{self, Options};
 use super::predict::{LOG_WEIGHT_CUTOFF, exp_near_zero};
 use super::widths::transpose;
 use super::{CaeError, Density, Kernel, ModelMatrix, Normalization, Widths};
+use crate::num::Num;
 
 /// Leave-one-out evaluation over one model matrix, with its buffers.
 #[derive(Debug)]
@@ -285,7 +286,7 @@ pub fn optimize_widths(matrix: &ModelMatrix, options: OptimizeOptions) -> Result
     let (lo, hi) = options.search_range;
     Widths::range(lo, hi)?;
     if lo >= hi {
-        return Err(CaeError::Width(format!("the search range {lo} .. {hi} is empty")));
+        return Err(CaeError::Width(format!("the search range {} .. {} is empty", Num(lo), Num(hi))));
     }
     let mut loo = Loo::with_memory_budget(matrix, options.memory_budget_bytes)?;
     let (ln_lo, ln_hi) = (lo.ln(), hi.ln());

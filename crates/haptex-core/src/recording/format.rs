@@ -24,6 +24,7 @@ use sha2::{Digest, Sha256};
 
 use super::error::{Place, RecordingError};
 use crate::io::{Table, WriteError, write_atomic, write_csv_row};
+use crate::num::Num;
 
 /// Value of the metadata's `format` field.
 pub const FORMAT: &str = "haptex-recording-1";
@@ -355,7 +356,11 @@ fn check_meta(file: &str, meta: &RecordingMeta) -> Result<(), RecordingError> {
     }
     for (field, rate) in [("force.rate_hz", meta.force.rate_hz), ("position.rate_hz", meta.position.rate_hz)] {
         if !(rate.is_finite() && rate > 0.0) {
-            return Err(RecordingError::field(file, field, format!("must be a positive rate in Hz, got {rate}")));
+            return Err(RecordingError::field(
+                file,
+                field,
+                format!("must be a positive rate in Hz, got {}", Num(rate)),
+            ));
         }
     }
     if meta.force.rate_hz < 2.0 * meta.position.rate_hz {
@@ -531,7 +536,7 @@ fn check_columns(
                 file,
                 place(i),
                 Some(name),
-                format!("not a finite number: {}", column[i]),
+                format!("not a finite number: {}", Num(column[i])),
             ));
         }
     }
@@ -549,7 +554,7 @@ fn check_columns(
             file,
             place(i + 1),
             Some("t_s"),
-            format!("time must increase strictly: {} s follows {} s", t[i + 1], t[i]),
+            format!("time must increase strictly: {} s follows {} s", Num(t[i + 1]), Num(t[i])),
         ));
     }
     Ok(())
