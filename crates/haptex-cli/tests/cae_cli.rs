@@ -163,7 +163,7 @@ fn leave_one_out_memory_is_bounded_by_a_budget() {
         let out = haptex(&args);
         assert_eq!(out.status.code(), Some(1), "{command:?}: {}", stderr(&out));
         let message = stderr(&out);
-        assert!(message.contains("40000 x 40000") && message.contains("12.8 GB"), "{message}");
+        assert!(message.contains("40000 x 40000") && message.contains("11.9 GiB"), "{message}");
         assert!(message.contains("--memory-budget-mib") && message.contains("--width"), "{message}");
     }
     // With a width, no leave-one-out is needed.

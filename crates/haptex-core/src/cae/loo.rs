@@ -80,7 +80,7 @@ impl<'a> Loo<'a> {
         let needed = Self::memory_bytes(n, d, m);
         if needed > u128::from(budget_bytes) {
             return Err(CaeError::TooLarge(format!(
-                "leave-one-out over {n} model vectors needs an {n} x {n} weight matrix: about {} of memory, more \
+                "leave-one-out over {n} model vectors needs a {n} x {n} weight matrix: about {} of memory, more \
                  than the budget of {} (raise the budget, or give the kernel width so that no leave-one-out is \
                  run)",
                 bytes_text(needed),
@@ -215,10 +215,14 @@ fn weight_row_lanes(kernel: &Kernel, x_t: &[f64], bi: &[f64], i: usize, row: &mu
     }
 }
 
-/// A byte count for a message: `12.8 GB`, `512.0 MB`.
+/// A byte count for a message, in binary units: `11.9 GiB`, `512.0 MiB`.
 fn bytes_text(bytes: u128) -> String {
     let b = bytes as f64;
-    if b >= 1e9 { format!("{:.1} GB", b / 1e9) } else { format!("{:.1} MB", b / 1e6) }
+    if b >= (1u64 << 30) as f64 {
+        format!("{:.1} GiB", b / (1u64 << 30) as f64)
+    } else {
+        format!("{:.1} MiB", b / (1u64 << 20) as f64)
+    }
 }
 
 /// How to search for the widths.
