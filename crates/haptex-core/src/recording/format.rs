@@ -149,15 +149,31 @@ impl Recording {
     pub fn load(metadata_path: &Path) -> Result<Self, RecordingError> {
         let name = metadata_path.display().to_string();
         let meta_bytes = read_bytes(metadata_path, MAX_METADATA_BYTES)?;
-        let meta: RecordingMeta = serde_json::from_slice(&meta_bytes)
-            .map_err(|e| RecordingError::Metadata { file: name.clone(), message: format!("invalid metadata: {e}") })?;
-        check_meta(&name, &meta)?;
+        let meta = parse_meta(&name, &meta_bytes)?;
         let dir = metadata_path.parent().unwrap_or(Path::new(""));
         let force_path = stream_path(&name, dir, "force.file", &meta.force.file)?;
         let position_path = stream_path(&name, dir, "position.file", &meta.position.file)?;
         let force_bytes = read_bytes(&force_path, MAX_STREAM_BYTES)?;
         let position_bytes = read_bytes(&position_path, MAX_STREAM_BYTES)?;
+        Self::parse(
+            &name,
+            &meta_bytes,
+            (&force_path.display().to_string(), &force_bytes),
+            (&position_path.display().to_string(), &position_bytes),
+        )
+    }
 
+    /// Parses and validates a recording from the bytes of its metadata and
+    /// streams (what [`Recording::load`] does once the files are read; the
+    /// stream names' extensions, `.csv` or `.npy`, give their format).
+    pub fn parse(
+        name: &str,
+        meta_bytes: &[u8],
+        (force_name, force_bytes): (&str, &[u8]),
+        (position_name, position_bytes): (&str, &[u8]),
+    ) -> Result<Self, RecordingError> {
+        let meta = parse_meta(name, meta_bytes)?;
+        let name = name.to_string();
         let mut hash = Sha256::new();
         for part in [&meta_bytes, &force_bytes, &position_bytes] {
             hash.update((part.len() as u64).to_le_bytes());
@@ -165,14 +181,12 @@ impl Recording {
         }
         let sha256 = hex(&hash.finalize());
 
-        let force_name = force_path.display().to_string();
-        let force = read_stream(&force_bytes, &force_name, "force.file", &FORCE_COLUMNS)?;
-        let position_name = position_path.display().to_string();
-        let position = read_stream(&position_bytes, &position_name, "position.file", &POSITION_COLUMNS)?;
-        check_rate(&name, "force.rate_hz", &force_name, &force.columns[0], meta.force.rate_hz)?;
-        check_rate(&name, "position.rate_hz", &position_name, &position.columns[0], meta.position.rate_hz)?;
-        check_force_uniform(&force_name, &force.columns[0], meta.force.rate_hz, &|row| force.place(row))?;
-        check_spans((&force_name, &force.columns[0]), (&position_name, &position.columns[0]), meta.position.rate_hz)?;
+        let force = read_stream(force_bytes, force_name, "force.file", &FORCE_COLUMNS)?;
+        let position = read_stream(position_bytes, position_name, "position.file", &POSITION_COLUMNS)?;
+        check_rate(&name, "force.rate_hz", force_name, &force.columns[0], meta.force.rate_hz)?;
+        check_rate(&name, "position.rate_hz", position_name, &position.columns[0], meta.position.rate_hz)?;
+        check_force_uniform(force_name, &force.columns[0], meta.force.rate_hz, &|row| force.place(row))?;
+        check_spans((force_name, &force.columns[0]), (position_name, &position.columns[0]), meta.position.rate_hz)?;
 
         let [t_s, fn_n, ft_n]: [Vec<f64>; 3] = force.columns.try_into().expect("three force columns");
         let [tp_s, x_mm]: [Vec<f64>; 2] = position.columns.try_into().expect("two position columns");
@@ -338,6 +352,14 @@ fn read_bytes(path: &Path, limit: u64) -> Result<Vec<u8>, RecordingError> {
 
 fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Parses and checks a metadata file's bytes.
+fn parse_meta(name: &str, bytes: &[u8]) -> Result<RecordingMeta, RecordingError> {
+    let meta: RecordingMeta = serde_json::from_slice(bytes)
+        .map_err(|e| RecordingError::Metadata { file: name.to_string(), message: format!("invalid metadata: {e}") })?;
+    check_meta(name, &meta)?;
+    Ok(meta)
 }
 
 /// Checks the metadata fields that the JSON types cannot.
