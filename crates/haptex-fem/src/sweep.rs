@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use haptex_core::cae::{ModelMatrix, OptimizeOptions, optimize_widths};
 use haptex_core::database::{self, FeSettings, Grid, INPUTS, Metadata, Sweep, Template, TemplateEntry};
-use haptex_core::io::{Table, write_atomic};
+use haptex_core::io::{FileSet, Table, write_atomic};
 use rayon::prelude::*;
 use sha2::{Digest, Sha256};
 
@@ -410,10 +410,11 @@ pub fn merge(sources: &[PathBuf], out: &Path, build_wall_time_s: Option<f64>) ->
     }
     let grid = record.grid;
     let columns = grid.column_names();
-    let mut entries = Vec::new();
     let mut cpu_time_s = 0.0;
     let mut missing = Vec::new();
-    std::fs::create_dir_all(out).map_err(|e| SweepError::File { path: out.into(), message: e.to_string() })?;
+    // Every run is found and read before anything is written, so a merge
+    // that cannot finish leaves an existing database as it was.
+    let mut tables: Vec<(Template, Vec<(Run, Vec<f64>)>)> = Vec::new();
     for &template in &record.sweep.templates {
         let runs: Vec<Run> = record.runs().into_iter().filter(|r| r.template == template).collect();
         let mut rows: Vec<(Run, Vec<f64>)> = Vec::with_capacity(runs.len());
@@ -428,12 +429,19 @@ pub fn merge(sources: &[PathBuf], out: &Path, build_wall_time_s: Option<f64>) ->
                 None => missing.push(run.file_name()),
             }
         }
-        if !missing.is_empty() {
-            continue;
-        }
+        tables.push((template, rows));
+    }
+    if !missing.is_empty() {
+        return Err(SweepError::MissingRuns { count: missing.len(), example: missing[0].clone() });
+    }
+    // The database is a file set: metadata.json is removed now and written
+    // last with the SHA-256 of every matrix, so an interrupted merge leaves
+    // a directory that reads as incomplete, never a mix of old and new.
+    let mut set = FileSet::begin(out, "metadata.json")?;
+    let mut entries = Vec::new();
+    for (template, rows) in tables {
         let file = template.file_name();
-        let path = out.join(&file);
-        write_atomic(&path, |w| {
+        let path = set.write(&file, |w| {
             writeln!(
                 w,
                 "# haptex FE database, {} template: inputs {}, outputs Ft/Fn at xi = x - x0 (mm)",
@@ -464,9 +472,6 @@ pub fn merge(sources: &[PathBuf], out: &Path, build_wall_time_s: Option<f64>) ->
             constant_width_rmse: optimum.report.constant.rmse,
         });
     }
-    if !missing.is_empty() {
-        return Err(SweepError::MissingRuns { count: missing.len(), example: missing[0].clone() });
-    }
     let metadata = Metadata {
         format: database::FORMAT.into(),
         haptex_version: env!("CARGO_PKG_VERSION").into(),
@@ -477,9 +482,10 @@ pub fn merge(sources: &[PathBuf], out: &Path, build_wall_time_s: Option<f64>) ->
         sweep: record.sweep.clone(),
         fe: record.fe.clone(),
         templates: entries,
+        files_sha256: Some(set.members().clone()),
     };
     let json = serde_json::to_string_pretty(&metadata).expect("metadata serializes");
-    write_atomic(&out.join("metadata.json"), |w| writeln!(w, "{json}"))?;
+    set.finish(|w, _| writeln!(w, "{json}"))?;
     Ok(metadata)
 }
 
