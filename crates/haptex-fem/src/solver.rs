@@ -422,7 +422,7 @@ impl Solver {
             let ops = &mut self.operators[k];
             let s = &mut self.scratch;
             s.u0_free.fill(0.0);
-            if ops.coefficients.iter().flatten().any(|c| c.n_terms > 0) {
+            if ops.coefficients.iter().flatten().any(|c| c.n_terms() > 0) {
                 self.problem.body.add_history_loads(&ops.coefficients, &self.dofs, &mut s.u0_free);
                 ops.cholesky.solve_vec(&mut s.u0_free);
             }
