@@ -300,12 +300,11 @@ impl FingerModel {
     /// error names the first field out of range.
     pub fn validate(&self) -> Result<(), FieldError> {
         self.validate_fields()?;
-        self.validate_shape()?;
         self.validate_meshes()
     }
 
     /// Each field within its range of [`limits`].
-    fn validate_fields(&self) -> Result<(), FieldError> {
+    fn validate_ranges(&self) -> Result<(), FieldError> {
         use limits::*;
 
         let g = &self.geometry;
@@ -366,9 +365,9 @@ impl FingerModel {
     }
 
     /// The fields and the checks between them, without meshing (for
-    /// [`FingerModel::mesh`], which meshes anyway).
-    fn validate_without_meshing(&self) -> Result<(), FieldError> {
-        self.validate_fields()?;
+    /// [`FingerModel::mesh`], which meshes anyway, and for a quick check).
+    pub fn validate_fields(&self) -> Result<(), FieldError> {
+        self.validate_ranges()?;
         self.validate_shape()
     }
 
@@ -674,7 +673,7 @@ impl FingerModel {
     /// The model is validated first (a model built in code has not been
     /// through [`FingerModel::from_toml`]).
     pub fn mesh(&self, resolution: Resolution) -> Result<FingerMesh, FingerError> {
-        self.validate_without_meshing().map_err(FingerError::Invalid)?;
+        self.validate_fields().map_err(FingerError::Invalid)?;
         Ok(self.mesh_validated(resolution)?)
     }
 

@@ -81,6 +81,20 @@ impl Default for SolverSettings {
     }
 }
 
+impl SolverSettings {
+    /// Iterations 1 ..= 10^4, halvings at most 40 (a step of 1e-12 of the
+    /// original), tolerances positive.
+    pub fn validate(&self) -> Result<(), SolveError> {
+        let ok = (1..=10_000).contains(&self.max_iterations)
+            && self.max_cuts <= 40
+            && self.relative_tolerance.is_finite()
+            && self.relative_tolerance > 0.0
+            && self.absolute_force_n.is_finite()
+            && self.absolute_force_n > 0.0;
+        if ok { Ok(()) } else { Err(SolveError::Settings(format!("out of range: {self:?}"))) }
+    }
+}
+
 /// How the driven set is loaded during a step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Drive {
@@ -109,6 +123,8 @@ pub enum SolveError {
     OutsideContactRegion { t_s: f64, node: usize, x_mm: f64 },
     #[error("the driven set lost contact under load control at t = {t_s:.6} s: no contact force can carry the load")]
     LostContact { t_s: f64 },
+    #[error("solver settings: {0}")]
+    Settings(String),
     #[error("contact candidate node {node} is driven or rigid: the contact region must be free skin")]
     PrescribedContactNode { node: usize },
     #[error(
@@ -209,6 +225,10 @@ impl Solver {
     /// Analyses the problem: DOF numbering, stiffness pattern, symbolic
     /// factorization. `lift_mm` places the surface vertically.
     pub fn new(problem: ContactProblem, settings: SolverSettings, lift_mm: f64) -> Result<Self, SolveError> {
+        settings.validate()?;
+        if !lift_mm.is_finite() {
+            return Err(SolveError::Settings(format!("the surface's placement {lift_mm} mm is not finite")));
+        }
         let mut prescribed: Vec<usize> = problem.driven_nodes.iter().flat_map(|&n| [2 * n, 2 * n + 1]).collect();
         // Rigid subdomains' nodes must be driven; they are by construction of
         // the finger, checked here for other problems.

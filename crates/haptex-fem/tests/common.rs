@@ -98,7 +98,7 @@ pub fn cylinder_on_flat(
         driven_nodes: driven,
         contact,
         other_surface_nodes: other,
-        surface: RigidSurface::new(&SurfaceShape::Flat, -radius - 20.0, radius + 20.0),
+        surface: RigidSurface::new(&SurfaceShape::Flat, -radius - 20.0, radius + 20.0).unwrap(),
         law,
     }
 }
