@@ -14,10 +14,12 @@
 //!
 //! which is exact for a strain history linear within each step. Units: MPa, s.
 
+use haptex_core::num::Num;
 use serde::{Deserialize, Serialize};
 
 /// One term of a Prony series: relative weight g_i and time constant tau_i.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PronyTerm {
     /// Relative weight g_i (0 < g_i, sum of all g_i < 1).
     pub g: f64,
@@ -27,6 +29,7 @@ pub struct PronyTerm {
 
 /// An isotropic material of the finger model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Material {
     /// Instantaneous Young's modulus E0 in MPa.
     pub e_mpa: f64,
@@ -50,26 +53,31 @@ impl Material {
         Self { e_mpa, nu, prony: Vec::new() }
     }
 
-    /// Checks E > 0, -1 < nu < 0.5, g_i > 0, tau_i > 0, sum g_i < 1.
+    /// Checks E > 0, -1 < nu < 0.5, g_i > 0, tau_i > 0, sum g_i < 1, and at
+    /// most [`MAX_PRONY_TERMS`] terms.
     pub fn validate(&self) -> Result<(), MaterialError> {
         let err = |what: String| Err(MaterialError { what });
+        if self.prony.len() > MAX_PRONY_TERMS {
+            return err(format!("{} Prony terms: at most {MAX_PRONY_TERMS} are supported", self.prony.len()));
+        }
         if !(self.e_mpa.is_finite() && self.e_mpa > 0.0) {
-            return err(format!("Young's modulus must be positive, got {} MPa", self.e_mpa));
+            return err(format!("Young's modulus must be positive, got {} MPa", Num(self.e_mpa)));
         }
         if !(self.nu > -1.0 && self.nu < 0.5) {
-            return err(format!("Poisson's ratio must lie in (-1, 0.5), got {}", self.nu));
+            return err(format!("Poisson's ratio must lie in (-1, 0.5), got {}", Num(self.nu)));
         }
         for term in &self.prony {
             if !(term.g > 0.0 && term.tau_s.is_finite() && term.tau_s > 0.0) {
                 return err(format!(
                     "Prony terms need g > 0 and tau > 0 s, got g = {}, tau = {} s",
-                    term.g, term.tau_s
+                    Num(term.g),
+                    Num(term.tau_s)
                 ));
             }
         }
         let total: f64 = self.prony.iter().map(|t| t.g).sum();
         if total >= 1.0 {
-            return err(format!("the Prony weights must sum to less than 1, got {total}"));
+            return err(format!("the Prony weights must sum to less than 1, got {}", Num(total)));
         }
         Ok(())
     }

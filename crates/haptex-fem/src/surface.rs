@@ -110,16 +110,16 @@ impl SurfaceShape {
                 if x_mm.len() < 2 || x_mm.len() != h_mm.len() {
                     return invalid("a sampled surface needs at least 2 points of x and h".into());
                 }
-                if let Some(i) = x_mm.windows(2).position(|w| !(w[1] > w[0])) {
+                if let Some(message) = Self::out_of_range_point(x_mm, h_mm) {
+                    return invalid(message.1);
+                }
+                if let Some(i) = x_mm.windows(2).position(|w| w[1] <= w[0]) {
                     return invalid(format!(
                         "a sampled surface needs strictly increasing x: point {} (x = {} mm) follows x = {} mm",
                         i + 2,
                         Num(x_mm[i + 1]),
                         Num(x_mm[i])
                     ));
-                }
-                if let Some(message) = Self::out_of_range_point(x_mm, h_mm) {
-                    return invalid(message.1);
                 }
                 Ok(())
             }
@@ -264,7 +264,7 @@ impl RigidSurface {
         }
         let dx = shape.detail_mm().min(0.005);
         let count = ((x_max - x_min) / dx).ceil();
-        if !(count < limits::MAX_VERTICES as f64) {
+        if count.is_nan() || count >= limits::MAX_VERTICES as f64 {
             return Err(SurfaceError::Invalid(format!(
                 "sampling the surface over x = {} .. {} mm every {} mm (r_w/200, at most 5 um) takes {} points, more \
                  than {}: widen the feature or shorten the slide",
