@@ -152,7 +152,8 @@ fn killed_build_resumes_to_the_same_database() {
     let metadata: serde_json::Value = serde_json::from_str(&read(&killed.join("metadata.json"))).unwrap();
     assert!(metadata["build_wall_time_s"].is_null());
 
-    // A second build with another sweep in the same directory is refused.
+    // A second build with another sweep in the same directory is refused
+    // (a sweep that could make a database: two runs per template).
     let out = haptex(&[
         "db",
         "build",
@@ -162,7 +163,7 @@ fn killed_build_resumes_to_the_same_database() {
         "--templates",
         "bump",
         "--widths",
-        "1.5",
+        "1.5,2",
         "--heights",
         "0.3",
         "--velocities",
