@@ -43,6 +43,18 @@ impl Run {
         format!("{}_w{:.3}_h{:.3}_v{:.1}.csv", self.template.name(), self.width_mm, self.height_mm, self.velocity_mm_s)
     }
 
+    /// The run in words, for messages: `bump r_w = 1.3 mm, r_h = 0.27 mm,
+    /// v = 20 mm/s` (numbers quoted short whatever their size).
+    pub fn describe(&self) -> String {
+        format!(
+            "{} r_w = {} mm, r_h = {} mm, v = {} mm/s",
+            self.template.name(),
+            Num(self.width_mm),
+            Num(self.height_mm),
+            Num(self.velocity_mm_s)
+        )
+    }
+
     /// The run's surface with its feature at `x0_mm`.
     pub fn surface(&self, x0_mm: f64) -> SurfaceShape {
         let (x0, width, height) = (x0_mm, self.width_mm, self.height_mm);
@@ -157,7 +169,7 @@ impl DatabaseSpec {
         }
         self.model.validate().map_err(|e| SweepError::Invalid(format!("finger model {}: {e}", self.model_source)))?;
         for run in record.runs() {
-            self.scenario(&run).validate().map_err(|source| SweepError::Run { run: run.file_name(), source })?;
+            self.scenario(&run).validate().map_err(|error| SweepError::Run { run: run.describe(), error })?;
         }
         Ok(())
     }
@@ -225,7 +237,7 @@ impl DatabaseSpec {
     /// decimals like the run files).
     pub fn simulate(&self, run: &Run) -> Result<Vec<f64>, SweepError> {
         let result =
-            run_scenario(&self.scenario(run)).map_err(|source| SweepError::Run { run: run.file_name(), source })?;
+            run_scenario(&self.scenario(run)).map_err(|error| SweepError::Run { run: run.describe(), error })?;
         Ok(sample(&result.profile, self, &self.grid.positions()).into_iter().map(|m| (m * 1e6).round() / 1e6).collect())
     }
 }
@@ -241,6 +253,10 @@ pub struct SweepRecord {
 
 /// Fewest runs per template: a CAE model matrix needs two rows.
 pub const MIN_ROWS: usize = 2;
+
+/// Most runs in a sweep (the paper's has 540): a bound on the list of runs
+/// a build enumerates.
+pub const MAX_RUNS: usize = 1_000_000;
 
 /// Most grid points: a model matrix row (3 inputs and one Ft/Fn per point,
 /// ~9 bytes each) must stay under the CSV reader's 1 MiB line limit.
@@ -287,7 +303,18 @@ impl SweepRecord {
                 return invalid(format!("sweep {name} {} is not a positive number", Num(*v)));
             }
         }
-        let per_template = s.widths_mm.len() * s.heights_mm.len() * s.velocities_mm_s.len();
+        let per_template = s.widths_mm.len().saturating_mul(s.heights_mm.len()).saturating_mul(s.velocities_mm_s.len());
+        let total = per_template.saturating_mul(s.templates.len());
+        if total > MAX_RUNS {
+            return invalid(format!(
+                "the sweep has {} templates x {} widths x {} heights x {} velocities = {} runs; at most {MAX_RUNS}",
+                s.templates.len(),
+                s.widths_mm.len(),
+                s.heights_mm.len(),
+                s.velocities_mm_s.len(),
+                if total == usize::MAX { "more than 10^19".to_string() } else { total.to_string() }
+            ));
+        }
         if per_template < MIN_ROWS {
             return invalid(format!(
                 "the sweep has {per_template} run per template ({} width x {} height x {} velocity); the database's \
@@ -349,12 +376,10 @@ impl SweepRecord {
 pub enum SweepError {
     #[error("{0}")]
     Invalid(String),
-    #[error("run {run}: {source}")]
-    Run {
-        run: String,
-        #[source]
-        source: SimulationError,
-    },
+    /// A run failed (or would): `run` describes it, `error` says why (its
+    /// text is part of this error's, not a separate source).
+    #[error("run {run}: {error}")]
+    Run { run: String, error: SimulationError },
     #[error("{path}: {message}")]
     File { path: PathBuf, message: String },
     #[error("{0}")]
@@ -424,7 +449,7 @@ pub fn build_runs(
     pool.install(|| {
         pending.par_iter().try_for_each(|run| -> Result<(), SweepError> {
             let scenario = spec.scenario(run);
-            let result = run_scenario(&scenario).map_err(|source| SweepError::Run { run: run.file_name(), source })?;
+            let result = run_scenario(&scenario).map_err(|error| SweepError::Run { run: run.describe(), error })?;
             let mu = sample(&result.profile, spec, &spec.grid.positions());
             let path = runs_dir.join(run.file_name());
             write_atomic(&path, |w| write_run(w, run, &spec.grid, &mu, result.statistics.wall_time_s))?;

@@ -19,8 +19,8 @@
 use haptex_fem::finger::{DEFAULT_MODEL_TOML, FingerError, FingerModel, Resolution};
 use std::collections::BTreeMap;
 use std::sync::Mutex;
-use std::sync::atomic::AtomicU32;
 use std::sync::atomic::Ordering::Relaxed;
+use std::sync::atomic::{AtomicU32, AtomicUsize};
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
@@ -354,6 +354,10 @@ impl Edit {
     }
 }
 
+/// The largest meshes of accepted models: nodes, contact segments.
+static MOST_NODES: AtomicUsize = AtomicUsize::new(0);
+static MOST_SEGMENTS: AtomicUsize = AtomicUsize::new(0);
+
 /// Why generated models were refused: the field (or "syntax") and a count.
 static REFUSED: Mutex<BTreeMap<String, u32>> = Mutex::new(BTreeMap::new());
 
@@ -412,6 +416,8 @@ pub fn check_mesh(finger: &haptex_fem::finger::FingerMesh, resolution: Resolutio
     prop_assert!(geometry.iter().all(|q| q.weight.iter().all(|&w| w > 0.0)));
     prop_assert!(m.n_nodes() <= 40_000, "{resolution:?}: {} nodes", m.n_nodes());
     let segments = finger.contact_segments.len();
+    MOST_NODES.fetch_max(m.n_nodes(), Relaxed);
+    MOST_SEGMENTS.fetch_max(segments, Relaxed);
     prop_assert!((18..=900).contains(&segments), "{resolution:?}: {segments} contact segments");
     prop_assert!(!finger.other_surface_nodes.is_empty());
     for [a, b] in &finger.contact_segments {
@@ -432,7 +438,12 @@ fn random_finger_models_are_read_or_refused_and_accepted_ones_mesh() {
         })
         .unwrap();
     let (total, accepted) = (total.into_inner(), accepted.into_inner());
-    eprintln!("finger models: {total} cases, {accepted} accepted and meshed at 3 resolutions");
+    eprintln!(
+        "finger models: {total} cases, {accepted} accepted and meshed at 3 resolutions (largest mesh so far {} nodes, \
+         {} contact segments)",
+        MOST_NODES.load(Relaxed),
+        MOST_SEGMENTS.load(Relaxed)
+    );
     eprintln!("refused (both properties so far), by field: {:?}", REFUSED.lock().unwrap());
     assert!(accepted > 0, "no generated model was accepted: the generator misses the valid region");
 }

@@ -88,7 +88,7 @@ pub fn csv_text() -> impl Strategy<Value = String> {
 /// removed); invalid UTF-8 is kept as bytes (the reader takes bytes).
 pub fn mutated_csv() -> impl Strategy<Value = Vec<u8>> {
     let edit = (0u8..3, any::<usize>(), any::<u8>());
-    proptest::collection::vec(edit, 1..10).prop_map(|edits| {
+    proptest::collection::vec(edit, 1..5).prop_map(|edits| {
         let mut bytes = b"# ramp and step\nx_mm,h_mm\n-5,0\n0,0\n1,0.2\n1.001,0\n2.5,0.1\n10,0\n".to_vec();
         for (kind, at, b) in edits {
             let n = bytes.len();

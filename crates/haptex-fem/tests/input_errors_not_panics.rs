@@ -309,3 +309,21 @@ fn driven_contact_node_is_refused_by_the_solver() {
     let e = SimulationError::Solve(SolveError::PrescribedContactNode { node: 7 });
     assert!(e.to_string().contains("must be free skin"));
 }
+
+/// Syntax errors name the line they are on. (Before: the line was the
+/// count of `lines()` before the error's offset, one short when the error
+/// starts a line, as a duplicate key does.)
+#[test]
+fn syntax_errors_name_the_line_they_are_on() {
+    let line = shipped_line("geometry", "half_height_mm");
+    let duplicate =
+        DEFAULT_MODEL_TOML.replace("half_height_mm = 6.0\n", "half_height_mm = 6.0\nhalf_height_mm = 7.0\n");
+    let err = FingerModel::from_toml(&duplicate, "f.toml").unwrap_err().to_string();
+    assert!(err.starts_with(&format!("f.toml: line {}: duplicate key", line + 1)), "{err}");
+    let missing_value = DEFAULT_MODEL_TOML.replace("half_height_mm = 6.0\n", "half_height_mm =\n");
+    let err = FingerModel::from_toml(&missing_value, "f.toml").unwrap_err().to_string();
+    assert!(err.starts_with(&format!("f.toml: line {line}: ")), "{err}");
+    let missing_key = DEFAULT_MODEL_TOML.replace("half_height_mm = 6.0\n", "");
+    let err = FingerModel::from_toml(&missing_key, "f.toml").unwrap_err().to_string();
+    assert!(err.contains("missing field `half_height_mm`"), "{err}");
+}
