@@ -9,9 +9,9 @@
 //! a contact region of free skin and node counts within the documented
 //! bounds.
 //!
-//! Cases per property: `HAPTEX_FUZZ_CASES` (default 300, a few seconds in
+//! Cases per property: `HAPTEX_FUZZ_CASES` (default 1000, a few seconds in
 //! CI). The campaign of issue 13 ran 1e5 cases of each property
-//! (docs/fem.md, "Finger model file").
+//! (docs/fem.md, "Accepted inputs").
 //!
 //! The generators (`number`, `model_text`, `mutated_text`) are meant to be
 //! reused by a fuzz campaign over every parser.
@@ -27,7 +27,7 @@ use proptest::test_runner::{Config, TestRunner};
 
 /// Cases per property, from `HAPTEX_FUZZ_CASES`.
 pub fn fuzz_cases() -> u32 {
-    std::env::var("HAPTEX_FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(300)
+    std::env::var("HAPTEX_FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(1000)
 }
 
 fn runner() -> TestRunner {

@@ -7,7 +7,7 @@
 //! accepted surface is valid, its polyline over the finger's range builds
 //! (or is refused cleanly), and its heights and closest points are finite.
 //!
-//! Cases per property: `HAPTEX_FUZZ_CASES` (default 300). The generators
+//! Cases per property: `HAPTEX_FUZZ_CASES` (default 1000). The generators
 //! (`csv_text`, `mutated_csv`) are meant to be reused by a fuzz campaign
 //! over every parser.
 
@@ -20,7 +20,7 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 
 fn runner() -> TestRunner {
-    let cases = std::env::var("HAPTEX_FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(300);
+    let cases = std::env::var("HAPTEX_FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(1000);
     TestRunner::new(Config { cases, failure_persistence: None, ..Config::default() })
 }
 
