@@ -261,20 +261,12 @@ fn wav_without_a_matching_scale_chunk_is_refused() {
 #[cfg(unix)]
 #[test]
 fn outputs_to_a_fifo_or_stdout_are_written_in_place() {
-    use std::io::Read;
     use std::os::unix::fs::FileTypeExt;
     let dir = tempfile::tempdir().unwrap();
     let u = write(dir.path(), "u.csv", "x_mm,voltage_v\n0,10\n10,40\n");
     let fifo = dir.path().join("f");
     assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
-    let reader = {
-        let fifo = fifo.clone();
-        std::thread::spawn(move || {
-            let mut bytes = Vec::new();
-            std::fs::File::open(&fifo).unwrap().read_to_end(&mut bytes).unwrap();
-            bytes
-        })
-    };
+    let reader = read_in_background(&fifo);
     let fifo_arg = fifo.to_str().unwrap();
     let out = haptex(&["play", "--profile", &u, "--velocity", "100", "--format", "wav", "-o", fifo_arg]);
     release(&fifo, &out);
@@ -307,20 +299,25 @@ fn outputs_to_a_fifo_or_stdout_are_written_in_place() {
     assert!(!out.status.success());
     assert!(stderr(&out).contains("is a directory"), "{}", stderr(&out));
     // Same class, another command: voltage into the FIFO.
-    let reader = {
-        let fifo = fifo.clone();
-        std::thread::spawn(move || {
-            let mut text = String::new();
-            std::fs::File::open(&fifo).unwrap().read_to_string(&mut text).unwrap();
-            text
-        })
-    };
+    let reader = read_in_background(&fifo);
     let profile = write(dir.path(), "p.csv", "x_mm,mu\n0,1.1\n1,1.2\n");
     let out = haptex(&["voltage", "--profile", &profile, "-o", fifo_arg]);
     release(&fifo, &out);
     assert!(out.status.success(), "{}", stderr(&out));
-    assert!(reader.join().unwrap().contains("x_mm,mu,voltage_v"));
+    assert!(String::from_utf8(reader.join().unwrap()).unwrap().contains("x_mm,mu,voltage_v"));
     assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+}
+
+/// Reads a FIFO to its end on another thread.
+#[cfg(unix)]
+fn read_in_background(fifo: &Path) -> std::thread::JoinHandle<Vec<u8>> {
+    use std::io::Read;
+    let fifo = fifo.to_path_buf();
+    std::thread::spawn(move || {
+        let mut bytes = Vec::new();
+        std::fs::File::open(&fifo).unwrap().read_to_end(&mut bytes).unwrap();
+        bytes
+    })
 }
 
 /// If haptex failed without opening the FIFO, opens it for writing so the
