@@ -393,3 +393,26 @@ fn export_is_whole_or_detectably_incomplete() {
     assert!(haptex(&["library", "export", "--db", s(&db), "--out", s(&export)]).status.success());
     assert!(export.join("manifest.json").exists());
 }
+
+/// Issue 13, "linear in the input": a recordings directory holding two
+/// symbolic links to itself made the import walk exponential (endless in
+/// practice); each real directory is now entered once.
+#[cfg(unix)]
+#[test]
+fn directory_walk_enters_each_directory_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let recordings = dir.path().join("rec");
+    std::fs::create_dir(&recordings).unwrap();
+    short_recording(1, 0.6).write(&recordings, "one", StreamFormat::Csv).unwrap();
+    std::os::unix::fs::symlink(&recordings, recordings.join("loop-a")).unwrap();
+    std::os::unix::fs::symlink("..", recordings.join("loop-b")).unwrap();
+    let db = dir.path().join("lib.sqlite");
+    let out = Command::new(env!("CARGO_BIN_EXE_haptex"))
+        .args(["library", "import", "--db", s(&db), s(&recordings), "-q"])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&haptex(&["library", "list", "--db", s(&db)]));
+    assert!(text.contains("1 materials, 1 strokes") || text.contains("1 material, 1 stroke"), "{text}");
+}

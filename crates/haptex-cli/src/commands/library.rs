@@ -1,6 +1,7 @@
 //! `haptex library`: recorded finger strokes -> friction profiles, and the
 //! texture library they are kept in (paper section 2.4).
 
+use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
@@ -400,12 +401,19 @@ fn import_one(library: &mut Library, run: ImportId, file: &Path, config: &Proces
 /// Recording metadata files: the files given, and every *.recording.json
 /// below the directories given, sorted.
 fn collect_recordings(inputs: &[PathBuf]) -> anyhow::Result<Vec<PathBuf>> {
-    fn walk(dir: &Path, out: &mut Vec<PathBuf>) -> anyhow::Result<()> {
+    /// Walks `dir` depth first, entering each real directory once (a
+    /// symbolic link back up the tree would otherwise make the walk
+    /// endless, or exponential with two such links).
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>, seen: &mut HashSet<PathBuf>) -> anyhow::Result<()> {
+        let real = std::fs::canonicalize(dir).with_context(|| format!("cannot read directory {}", dir.display()))?;
+        if !seen.insert(real) {
+            return Ok(());
+        }
         let entries = std::fs::read_dir(dir).with_context(|| format!("cannot read directory {}", dir.display()))?;
         for entry in entries {
             let path = entry.with_context(|| format!("cannot read directory {}", dir.display()))?.path();
             if path.is_dir() {
-                walk(&path, out)?;
+                walk(&path, out, seen)?;
             } else if path.to_string_lossy().ends_with(METADATA_SUFFIX) {
                 out.push(path);
             }
@@ -413,10 +421,11 @@ fn collect_recordings(inputs: &[PathBuf]) -> anyhow::Result<Vec<PathBuf>> {
         Ok(())
     }
     let mut files = Vec::new();
+    let mut seen = HashSet::new();
     for input in inputs {
         if input.is_dir() {
             let before = files.len();
-            walk(input, &mut files)?;
+            walk(input, &mut files, &mut seen)?;
             files[before..].sort();
             if files.len() == before {
                 bail!("{}: no recordings (*{METADATA_SUFFIX}) in this directory", input.display());
