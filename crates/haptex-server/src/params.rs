@@ -4,6 +4,12 @@
 //! One table, [`DEVICE_PARAMS`], serves validation, the defaults the GUI
 //! shows (`GET /api/config`) and the OpenAPI description (a test checks
 //! they agree). Names and units are those of the `haptex voltage` flags.
+//!
+//! The ranges keep eq. (3) inside the floating-point range: at every
+//! corner of them, Fe/Fn per V^2, the voltage of eq. (8) and mu at U_max
+//! are finite and positive (a test walks the corners). So a value that
+//! would break the mapping is refused naming its own field, and the
+//! mapping's results need no field-less after-the-fact check.
 
 use std::collections::BTreeMap;
 
@@ -11,14 +17,17 @@ use haptex_core::electrovibration::{ContactArea, Device, LayerStack, Method};
 use serde::Serialize;
 
 use crate::error::ApiError;
+use crate::fields::Range;
 
-/// One parameter: accepted when 0 < value <= `max`.
+/// One parameter: accepted when `min` <= value <= `max`.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct ParamSpec {
     pub name: &'static str,
     /// The paper's value (`None`: no default; the parameter is optional).
     pub default: Option<f64>,
-    /// Largest accepted value (inclusive); every parameter must be > 0.
+    /// Smallest accepted value (inclusive, > 0).
+    pub min: f64,
+    /// Largest accepted value (inclusive).
     pub max: f64,
     pub unit: &'static str,
     pub description: &'static str,
@@ -29,6 +38,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "mu_hd",
         default: Some(Device::PAPER.mu_hd),
+        min: 1e-3,
         max: 10.0,
         unit: "",
         description: "friction coefficient of the finger on the display with no voltage, mu_HD",
@@ -36,6 +46,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "u_max_v",
         default: Some(Device::PAPER.u_max_v),
+        min: 1e-3,
         max: 10_000.0,
         unit: "V",
         description: "highest voltage the display applies, U_max (RMS): clip level (physical) or full scale (normalized)",
@@ -43,6 +54,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "eps_sc",
         default: Some(LayerStack::PAPER.eps_sc),
+        min: 1.0,
         max: 1e6,
         unit: "",
         description: "relative permittivity of the stratum corneum, eps_sc",
@@ -50,6 +62,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "eps_i",
         default: Some(LayerStack::PAPER.eps_i),
+        min: 1.0,
         max: 1e6,
         unit: "",
         description: "relative permittivity of the display insulator, eps_i",
@@ -57,6 +70,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "d_sc_mm",
         default: Some(LayerStack::PAPER.d_sc_mm),
+        min: 1e-6,
         max: 10.0,
         unit: "mm",
         description: "stratum corneum thickness d_sc",
@@ -64,6 +78,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "d_i_mm",
         default: Some(LayerStack::PAPER.d_i_mm),
+        min: 1e-6,
         max: 10.0,
         unit: "mm",
         description: "insulator thickness d_i",
@@ -71,6 +86,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "k_mm2_per_n",
         default: Some(ContactArea::PAPER.k_mm2_per_n),
+        min: 1e-6,
         max: 1e6,
         unit: "mm^2/N",
         description: "contact-area coefficient k in A = k Fn^n",
@@ -78,6 +94,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "area_exponent",
         default: Some(ContactArea::PAPER.exponent),
+        min: 1e-3,
         max: 2.0,
         unit: "",
         description: "contact-area exponent n in A = k Fn^n (1: the paper's linear law; otherwise fn_n is needed)",
@@ -85,11 +102,19 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "fn_n",
         default: None,
+        min: 1e-6,
         max: 100.0,
         unit: "N",
         description: "exploration normal force Fn (used only when area_exponent != 1; default: the profile's mean fn_n)",
     },
 ];
+
+impl ParamSpec {
+    /// The accepted range.
+    pub fn range(&self) -> Range {
+        Range::new(self.min, self.max, self.unit)
+    }
+}
 
 /// Looks a parameter up by name.
 pub fn spec(name: &str) -> Option<&'static ParamSpec> {
@@ -106,16 +131,20 @@ pub struct DeviceRequest {
 
 impl DeviceRequest {
     /// The device from `(name, value)` pairs; missing parameters take the
-    /// paper's defaults. Unknown names and values out of (0, max] are
-    /// errors naming `prefix` + the parameter.
+    /// paper's defaults. Unknown names, names given twice and values out
+    /// of [min, max] are errors naming `prefix` + the parameter.
     pub fn from_pairs<'a>(pairs: impl IntoIterator<Item = (&'a str, f64)>, prefix: &str) -> Result<Self, ApiError> {
         let mut values: Vec<Option<f64>> = DEVICE_PARAMS.iter().map(|p| p.default).collect();
+        let mut given = vec![false; DEVICE_PARAMS.len()];
         for (name, value) in pairs {
             let field = format!("{prefix}{name}");
             let index = DEVICE_PARAMS.iter().position(|p| p.name == name).ok_or_else(|| {
                 let known: Vec<&str> = DEVICE_PARAMS.iter().map(|p| p.name).collect();
                 ApiError::bad_request(format!("unknown parameter (known: {})", known.join(", ")), Some(&field))
             })?;
+            if std::mem::replace(&mut given[index], true) {
+                return Err(ApiError::bad_request(format!("{name} is given twice"), Some(&field)));
+            }
             check_range(&DEVICE_PARAMS[index], value, &field)?;
             values[index] = Some(value);
         }
@@ -160,17 +189,10 @@ impl DeviceRequest {
     }
 }
 
-/// Checks 0 < value <= spec.max (and finite).
+/// Checks min <= value <= max (and finite); the error names `field`.
 pub fn check_range(spec: &ParamSpec, value: f64, field: &str) -> Result<f64, ApiError> {
-    if value.is_finite() && value > 0.0 && value <= spec.max {
-        Ok(value)
-    } else {
-        let unit = if spec.unit.is_empty() { String::new() } else { format!(" {}", spec.unit) };
-        Err(ApiError::bad_request(
-            format!("{} must be > 0 and <= {}{unit}, got {value}", spec.name, spec.max),
-            Some(field),
-        ))
-    }
+    let range = spec.range();
+    if range.contains(value) { Ok(value) } else { Err(range.refusal(spec.name, value, field)) }
 }
 
 /// Parses a mapping method: `physical` (eq. 8) or `normalized` (eq. 9).
@@ -205,6 +227,35 @@ mod tests {
         }
         let e = DeviceRequest::from_pairs([("u_max", 50.0)], "").unwrap_err();
         assert_eq!(e.field.as_deref(), Some("u_max"));
+        let e = DeviceRequest::from_pairs([("u_max_v", 50.0), ("u_max_v", 60.0)], "device.").unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("device.u_max_v"));
+    }
+
+    /// At every corner of the accepted ranges (2^9 devices, each with mu
+    /// at the ends of its own range), eq. (3)'s factor, the voltage of
+    /// eq. (8) and mu at U_max are finite: no accepted combination makes
+    /// the mapping overflow or underflow.
+    #[test]
+    fn device_ranges_keep_eq3_finite_at_every_corner() {
+        use haptex_core::electrovibration::PhysicalMapping;
+        let n = DEVICE_PARAMS.len();
+        for corner in 0..(1u32 << n) {
+            let pairs: Vec<(&str, f64)> = DEVICE_PARAMS
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (p.name, if corner & (1 << i) == 0 { p.min } else { p.max }))
+                .collect();
+            let request = DeviceRequest::from_pairs(pairs, "").unwrap();
+            let d = request.device;
+            let ratio = d.force_ratio_per_v2(request.fn_n.unwrap());
+            assert!(ratio.is_finite() && ratio > 0.0, "corner {corner:b}: Fe/Fn per V^2 = {ratio}");
+            let mapping = PhysicalMapping::new(d.mu_hd, ratio, d.u_max_v);
+            assert!(mapping.mu_clip.is_finite() && mapping.mu_clip > 0.0, "corner {corner:b}: {}", mapping.mu_clip);
+            for mu in [crate::fields::MU.min, crate::fields::MU.max, d.mu_hd, mapping.mu_clip] {
+                let u = mapping.voltage_v(mu);
+                assert!(u.is_finite() && u >= 0.0, "corner {corner:b}, mu {mu}: U = {u}");
+            }
+        }
     }
 
     /// Each parameter set by name comes back under that name: the table and
@@ -212,7 +263,7 @@ mod tests {
     #[test]
     fn every_parameter_reaches_its_device_field() {
         for (i, spec) in DEVICE_PARAMS.iter().enumerate() {
-            let value = spec.max / (i as f64 + 3.0);
+            let value = spec.min + (spec.max - spec.min) / (i as f64 + 3.0);
             let request = DeviceRequest::from_pairs([(spec.name, value)], "").unwrap();
             let values = request.values();
             assert_eq!(values.get(spec.name), Some(&value), "{}", spec.name);
