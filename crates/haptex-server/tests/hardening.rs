@@ -24,9 +24,10 @@ use common::{RawServer, maximal_csv, maximal_voltage_json, send_to, shipped_stat
 /// stopped every endpoint, `/api/health` included. Three clients post
 /// maximal bodies (a 1 MiB CSV with a 10^5-column header, a 1 MiB JSON
 /// profile) back to back on a two-worker runtime while `/api/health` is
-/// asked every 10 ms: every health answer comes within 50 ms (the
-/// acceptance bound). Before: the handlers parsed and mapped on the
-/// workers, and health waited behind them (hundreds of ms).
+/// asked every 10 ms (as a task on the workers, where connections are
+/// served): every health answer comes within 50 ms (the acceptance
+/// bound). Before: the handlers parsed and mapped on the workers (a
+/// maximal CSV took 135 ms there), and health waited behind them.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn cpu_work_runs_off_the_async_workers_so_health_answers_within_50_ms() {
     let router = app(shipped_state());
@@ -54,9 +55,14 @@ async fn cpu_work_runs_off_the_async_workers_so_health_answers_within_50_ms() {
     let mut latencies = Vec::new();
     let started = Instant::now();
     while started.elapsed() < Duration::from_secs(3) {
-        let t = Instant::now();
-        send_to(router.clone(), Request::get("/api/health").body(Body::empty()).unwrap()).await.ok();
-        latencies.push(t.elapsed());
+        // On the runtime's workers, as a connection's request is served.
+        let router = router.clone();
+        let latency = tokio::spawn(async move {
+            let t = Instant::now();
+            send_to(router, Request::get("/api/health").body(Body::empty()).unwrap()).await.ok();
+            t.elapsed()
+        });
+        latencies.push(latency.await.unwrap());
         tokio::time::sleep(Duration::from_millis(10)).await;
     }
     stop.store(true, std::sync::atomic::Ordering::Relaxed);
