@@ -158,12 +158,16 @@ pub async fn json_client_errors(request: Request, next: Next) -> Response {
         return response;
     }
     let (parts, _) = response.into_parts();
-    let message = match status {
-        StatusCode::METHOD_NOT_ALLOWED => format!("{method} is not allowed on {path} (the Allow header lists what is)"),
-        StatusCode::REQUEST_TIMEOUT => format!("{method} {path} took longer than the server's time limit per request"),
-        other => other.canonical_reason().unwrap_or("client error").to_lowercase(),
+    let (message, field) = match status {
+        StatusCode::METHOD_NOT_ALLOWED => {
+            (format!("{method} is not allowed on {path} (the Allow header lists what is)"), Some("method"))
+        }
+        StatusCode::REQUEST_TIMEOUT => {
+            (format!("{method} {path} took longer than the server's time limit per request"), None)
+        }
+        other => (other.canonical_reason().unwrap_or("client error").to_lowercase(), None),
     };
-    let mut rebuilt = ApiError::new(status, message, None).into_response();
+    let mut rebuilt = ApiError::new(status, message, field).into_response();
     for (name, value) in &parts.headers {
         if name != header::CONTENT_TYPE && name != header::CONTENT_LENGTH {
             rebuilt.headers_mut().insert(name.clone(), value.clone());
@@ -172,9 +176,9 @@ pub async fn json_client_errors(request: Request, next: Next) -> Response {
     rebuilt
 }
 
-/// Fallback for unknown routes: 404 JSON.
+/// Fallback for unknown routes: 404 JSON naming the path.
 pub async fn not_found(uri: Uri) -> ApiError {
-    ApiError::not_found(format!("no such route: {}", quote(uri.path())), None)
+    ApiError::not_found(format!("no such route: {}", quote(uri.path())), Some("path"))
 }
 
 /// Response for a handler that panicked (a bug): 500 JSON; the panic is logged.

@@ -72,9 +72,14 @@ pub fn body_bytes(body: Result<Bytes, BytesRejection>, max_body_bytes: usize) ->
     }
 }
 
-/// Parses a JSON body; errors name the JSON path of the bad value (a
-/// field given twice is named too).
+/// Parses a JSON body, an object (every body of this API is one); errors
+/// name the JSON path of the bad value (a field given twice is named
+/// too).
 pub fn parse_json<T: DeserializeOwned>(bytes: &[u8]) -> Result<T, ApiError> {
+    // serde would also read a struct from an array of its fields in order.
+    if bytes.iter().find(|b| !b.is_ascii_whitespace()) != Some(&b'{') {
+        return Err(ApiError::bad_request("the body must be a JSON object ({...})", Some("body")));
+    }
     let mut deserializer = serde_json::Deserializer::from_slice(bytes);
     let value = serde_path_to_error::deserialize(&mut deserializer).map_err(|e| {
         let path = e.path().to_string();
@@ -82,6 +87,13 @@ pub fn parse_json<T: DeserializeOwned>(bytes: &[u8]) -> Result<T, ApiError> {
         // truncated document).
         let field = if path == "." || path == "?" { "body".to_string() } else { path };
         let message = e.inner().to_string();
+        // Past the nesting limit the path is a pile of "[0]": name the
+        // top-level field it is in.
+        let field = if message.starts_with("recursion limit exceeded") {
+            field.split(['.', '[']).next().filter(|f| !f.is_empty()).unwrap_or("body").to_string()
+        } else {
+            field
+        };
         let field = match duplicate_field(&message) {
             Some(name) if field == "body" => name.to_string(),
             Some(name) if !field.ends_with(name) => format!("{field}.{name}"),

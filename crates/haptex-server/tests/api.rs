@@ -85,7 +85,7 @@ async fn health_answers_ok_with_security_headers_and_no_cors() {
             .unwrap(),
     )
     .await;
-    preflight.error(StatusCode::METHOD_NOT_ALLOWED, None);
+    preflight.error(StatusCode::METHOD_NOT_ALLOWED, Some("method"));
     assert!(preflight.headers.get(header::ACCESS_CONTROL_ALLOW_ORIGIN).is_none());
 }
 
@@ -200,12 +200,12 @@ fn openapi_is_a_valid_openapi_document() {
 
 #[tokio::test]
 async fn unknown_routes_and_wrong_methods_are_json_errors() {
-    get("/api/nothing-here").await.error(StatusCode::NOT_FOUND, None);
-    get("/nothing-here").await.error(StatusCode::NOT_FOUND, None);
+    get("/api/nothing-here").await.error(StatusCode::NOT_FOUND, Some("path"));
+    get("/nothing-here").await.error(StatusCode::NOT_FOUND, Some("path"));
     let answer = get("/api/voltage").await;
-    answer.error(StatusCode::METHOD_NOT_ALLOWED, None);
+    answer.error(StatusCode::METHOD_NOT_ALLOWED, Some("method"));
     assert_eq!(answer.headers.get(header::ALLOW).unwrap(), "POST");
-    post_json("/api/health", &json!({})).await.error(StatusCode::METHOD_NOT_ALLOWED, None);
+    post_json("/api/health", &json!({})).await.error(StatusCode::METHOD_NOT_ALLOWED, Some("method"));
 }
 
 // ------------------------------------------------------------- static

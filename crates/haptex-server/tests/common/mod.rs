@@ -203,16 +203,35 @@ impl RawServer {
 /// error body naming `field`.
 #[track_caller]
 pub fn assert_json_error(answer: &str, status: u16, field: Option<&str>) {
-    let (head, body) = answer.split_once("\r\n\r\n").unwrap_or_else(|| panic!("no complete answer: {answer:?}"));
-    assert!(head.starts_with(&format!("HTTP/1.1 {status} ")), "{head}");
+    if let Err(e) = check_json_error(answer, status, field) {
+        panic!("{e}: {answer:?}");
+    }
+}
+
+/// Whether a raw answer is `status` with the security headers and a JSON
+/// error body naming `field`; what is wrong if not.
+pub fn check_json_error(answer: &str, status: u16, field: Option<&str>) -> Result<(), String> {
+    let (head, body) = answer.split_once("\r\n\r\n").ok_or("no complete answer")?;
+    if !head.starts_with(&format!("HTTP/1.1 {status} ")) {
+        return Err(format!("status is not {status}"));
+    }
     let head = head.to_ascii_lowercase();
     for (name, value) in SECURITY_HEADERS {
-        assert!(head.contains(&format!("{name}: {}", value.to_ascii_lowercase())), "no {name}: {head}");
+        if !head.contains(&format!("{name}: {}", value.to_ascii_lowercase())) {
+            return Err(format!("no {name}"));
+        }
     }
-    assert!(head.contains("content-type: application/json"), "{head}");
-    let json: Value = serde_json::from_str(body).unwrap_or_else(|e| panic!("not JSON ({e}): {body:?}"));
-    assert!(json["error"].as_str().is_some_and(|m| !m.is_empty()), "{json}");
-    assert_eq!(json["field"].as_str(), field, "{json}");
+    if !head.contains("content-type: application/json") {
+        return Err("not application/json".into());
+    }
+    let json: Value = serde_json::from_str(body).map_err(|e| format!("not JSON ({e})"))?;
+    if json["error"].as_str().is_none_or(str::is_empty) {
+        return Err("no error message".into());
+    }
+    if json["field"].as_str() != field {
+        return Err(format!("field {} instead of {field:?}", json["field"]));
+    }
+    Ok(())
 }
 
 /// What `f` logs (info level and above) on this thread.
