@@ -5,9 +5,18 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# Nothing here reads standard input. Cargo's compiler probe (`rustc -
-# --print=...`) has been seen to read an inherited stdin in CI and fail
-# parsing whatever text was there, so the suite never inherits one.
+# /dev/null must be the null device. haptex once replaced any output path
+# by rename, so `-o /dev/null` run as root turned it into a regular file;
+# then apt-get fails and cargo's compiler probe (`rustc - --print=...`),
+# reading an inherited stdin, parses stray text from it (the CI failure
+# this script used to work around). Say so plainly instead of failing later.
+if [ ! -c /dev/null ]; then
+    echo "scripts/test.sh: /dev/null is not a character device ($(ls -l /dev/null 2>&1))." >&2
+    echo "  Something replaced it (an older haptex run as root with -o /dev/null does that). Restore it as root:" >&2
+    echo "  rm -f /dev/null && mknod -m 666 /dev/null c 1 3" >&2
+    exit 1
+fi
+# Nothing here reads standard input: the suite never inherits one.
 exec </dev/null
 
 # The web GUI's browser test (crates/haptex-server/tests/browser.rs) drives

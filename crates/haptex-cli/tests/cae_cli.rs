@@ -143,3 +143,37 @@ fn bad_model_files_and_queries_fail_clearly() {
         assert!(stderr(&out).contains(fragment), "{args:?}: {}", stderr(&out));
     }
 }
+
+/// Issue 13: `cae loo` and `cae predict` without `--width` allocated the
+/// N x N leave-one-out matrix unchecked: 40 000 rows (12.8 GB) aborted with
+/// SIGABRT. The memory is estimated first and refused beyond the budget,
+/// with the flags that change it; a larger budget or a given width runs.
+#[test]
+fn leave_one_out_memory_is_bounded_by_a_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = String::from("a,y\n");
+    for i in 0..40_000 {
+        text += &format!("{},{}\n", i as f64 / 40_000.0, (i % 7) as f64);
+    }
+    let model = write(dir.path(), "big.csv", &text);
+    for command in [vec!["loo"], vec!["predict", "--at", "a=0.5"]] {
+        let mut args = vec!["cae"];
+        args.extend(command.iter().copied());
+        args.extend(["--model", &model, "--inputs", "a"]);
+        let out = haptex(&args);
+        assert_eq!(out.status.code(), Some(1), "{command:?}: {}", stderr(&out));
+        let message = stderr(&out);
+        assert!(message.contains("40000 x 40000") && message.contains("11.9 GiB"), "{message}");
+        assert!(message.contains("--memory-budget-mib") && message.contains("--width"), "{message}");
+    }
+    // With a width, no leave-one-out is needed.
+    let out = haptex(&["cae", "predict", "--model", &model, "--inputs", "a", "--at", "a=0.5", "--width", "0.01", "-q"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // A small model within a small budget runs; beyond it, it is refused.
+    let small: String = (0..300).fold(String::from("a,y\n"), |t, i| t + &format!("{},{}\n", i, i % 5));
+    let small = write(dir.path(), "small.csv", &small);
+    let out = haptex(&["cae", "loo", "--model", &small, "--inputs", "a", "--constant", "--memory-budget-mib", "1"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let big_budget = haptex(&["cae", "loo", "--model", &model, "--inputs", "a", "--memory-budget-mib", "0"]);
+    assert!(!big_budget.status.success() && stderr(&big_budget).contains("--memory-budget-mib"));
+}

@@ -108,6 +108,7 @@ fn user_profiles_import_as_measured_materials() {
         "my bump",
         "--licence",
         "CC0-1.0",
+        "--measured",
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let text = stdout(&haptex(&["library", "list", "--db", s(&db)]));
@@ -117,9 +118,43 @@ fn user_profiles_import_as_measured_materials() {
 
     let bad = dir.path().join("bad.csv");
     std::fs::write(&bad, "x_mm,mu\n0,1.1\n0,1.2\n").unwrap();
-    let out = haptex(&["library", "import", "--db", s(&db), "--profile", s(&bad), "--material", "x"]);
+    let out = haptex(&["library", "import", "--db", s(&db), "--profile", s(&bad), "--material", "x", "--measured"]);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("bad.csv, line 3, column 'x_mm'"), "{}", stderr(&out));
+}
+
+/// Issue 13: a profile's provenance must be stated (an FE-predicted profile
+/// used to enter the library as "measured" by default), and it is carried
+/// through list, sample and export.
+#[test]
+fn profile_import_requires_its_provenance() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("lib.sqlite");
+    let profile = dir.path().join("fe.csv");
+    std::fs::write(&profile, "x_mm,mu\n0,0.5\n1,0.6\n2,0.5\n").unwrap();
+    let import = |extra: &[&str]| {
+        let mut args = vec!["library", "import", "--db", s(&db), "--profile", s(&profile), "--material", "fe bump"];
+        args.extend_from_slice(extra);
+        haptex(&args)
+    };
+    let out = import(&[]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("--measured") && stderr(&out).contains("--synthetic"), "{}", stderr(&out));
+    assert!(!db.exists(), "a refused import created the library");
+    let out = import(&["--measured", "--synthetic"]);
+    assert!(!out.status.success(), "both kinds accepted");
+
+    let out = import(&["--synthetic", "--source", "haptex predict"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&haptex(&["library", "list", "--db", s(&db)]));
+    assert!(text.contains("fe bump") && text.contains("SYNTHETIC"), "{text}");
+    let out = haptex(&["library", "sample", "--db", s(&db), "--material", "fe bump", "--seed", "1"]);
+    assert!(stdout(&out).contains("SYNTHETIC"), "{}", stdout(&out));
+    let export = dir.path().join("export");
+    assert!(haptex(&["library", "export", "--db", s(&db), "--out", s(&export)]).status.success());
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(export.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(manifest["strokes"][0]["stroke"]["synthetic"], true);
 }
 
 #[test]
@@ -326,4 +361,35 @@ fn python_converter_produces_an_importable_recording() {
     // Unit conversion rounds in the last digits only.
     let diff = a.mu().iter().zip(b.mu()).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
     assert!(diff < 1e-9, "{diff}");
+}
+
+/// Issue 13: a multi-file output appears whole or is detectably
+/// incomplete. An export killed before its manifest leaves no manifest
+/// (the old one is removed first); a complete export lists the hash of
+/// every file it wrote, and the files match it.
+#[test]
+fn export_is_whole_or_detectably_incomplete() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/library/library.sqlite");
+    let export = dir.path().join("export");
+    assert!(haptex(&["library", "export", "--db", s(&db), "--out", s(&export)]).status.success());
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(export.join("manifest.json")).unwrap()).unwrap();
+    let files = manifest["files_sha256"].as_object().unwrap();
+    assert_eq!(files.len(), manifest["strokes"].as_array().unwrap().len());
+    assert!(files.len() >= 12);
+    let members: haptex_core::io::MemberHashes =
+        files.iter().map(|(k, v)| (k.clone(), v.as_str().unwrap().to_string())).collect();
+    haptex_core::io::verify_members(&export, &members).unwrap();
+
+    let killed = Command::new(env!("CARGO_BIN_EXE_haptex"))
+        .args(["library", "export", "--db", s(&db), "--out", s(&export)])
+        .env("HAPTEX_FAULT_INJECT", "before-marker")
+        .output()
+        .unwrap();
+    assert!(!killed.status.success(), "the fault hook did not fire");
+    assert!(!export.join("manifest.json").exists(), "an interrupted export kept a manifest");
+    // A rerun completes it.
+    assert!(haptex(&["library", "export", "--db", s(&db), "--out", s(&export)]).status.success());
+    assert!(export.join("manifest.json").exists());
 }

@@ -3,6 +3,8 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
+use haptex_core::signal::WavFormat;
+
 fn haptex(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_haptex")).args(args).output().expect("run haptex")
 }
@@ -57,9 +59,10 @@ fn voltage_then_play_writes_wav_sidecar_and_png() {
     assert_eq!(sidecar["sample_format"], "pcm24");
     assert_eq!(sidecar["source"]["trajectory"]["generator"], "minimum_jerk_strokes");
     assert_eq!(sidecar["n_samples"], 4801);
-    let vpfs = sidecar["volts_per_full_scale"].as_f64().unwrap();
-    let (spec, volts) = haptex_core::signal::read_wav_volts(Path::new(&wav), vpfs).unwrap();
-    assert_eq!((spec.sample_rate, spec.bits_per_sample, volts.len()), (8000, 24, 4801));
+    let read = haptex_core::signal::read_drive_wav(Path::new(&wav)).unwrap();
+    assert_eq!(read.scale.volts_per_full_scale, sidecar["volts_per_full_scale"].as_f64().unwrap());
+    assert_eq!((read.scale.sample_rate_hz, read.scale.sample_format, read.volts.len()), (8000, WavFormat::Pcm24, 4801));
+    let volts = read.volts;
     // The bump profile reaches U_max = 100 V: the sine's peak is 141.4 V.
     let peak = volts.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     assert!(peak > 141.0 && peak <= 141.43, "{peak}");
@@ -174,4 +177,157 @@ fn clamp_is_reported_and_amplifier_range_refused() {
     assert!(out.status.success(), "{}", stderr(&out));
     let out = haptex(&["play", "--profile", &u, "--velocity", "100", "--volts-per-full-scale", "120", "-o", &refused]);
     assert!(stderr(&out).contains("exceeds the WAV full scale"), "{}", stderr(&out));
+}
+
+/// Issue 13: a run killed between the WAV and its sidecar leaves a new WAV
+/// beside the old sidecar. The old sidecar here says twice the volts per
+/// full scale of the new WAV (the dangerous direction: an amplifier set by
+/// it would drive the display at twice the voltage). `play --check` and the
+/// reader refuse the pair; the WAV alone still carries its true scale.
+#[test]
+fn wav_and_sidecar_of_different_runs_are_never_paired() {
+    let dir = tempfile::tempdir().unwrap();
+    let u = write(dir.path(), "u.csv", "x_mm,voltage_v\n0,10\n10,40\n");
+    let wav = path(dir.path(), "drive.wav");
+    let play = |vpfs: &str, fault: Option<&str>| {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_haptex"));
+        command.args(["play", "--profile", &u, "--velocity", "100", "--volts-per-full-scale", vpfs, "-o", &wav]);
+        if let Some(point) = fault {
+            command.env("HAPTEX_FAULT_INJECT", point);
+        }
+        command.output().unwrap()
+    };
+    let first = play("200", None);
+    assert!(first.status.success(), "{}", stderr(&first));
+    let checked = haptex(&["play", "--check", &wav]);
+    assert!(checked.status.success() && stderr(&checked).contains("belongs to this WAV"), "{}", stderr(&checked));
+
+    // Killed after the WAV is renamed into place, before the sidecar.
+    let killed = play("100", Some("between-wav-and-sidecar"));
+    assert!(!killed.status.success(), "the fault hook did not fire: {}", stderr(&killed));
+    let sidecar: serde_json::Value = serde_json::from_slice(&std::fs::read(format!("{wav}.json")).unwrap()).unwrap();
+    assert_eq!(sidecar["volts_per_full_scale"], 200.0, "the old sidecar is expected beside the new WAV");
+
+    let checked = haptex(&["play", "--check", &wav]);
+    assert!(!checked.status.success(), "a mismatched pair passed --check: {}", stderr(&checked));
+    assert!(stderr(&checked).contains("does not belong to it"), "{}", stderr(&checked));
+    let e = haptex_core::signal::read_drive_wav(Path::new(&wav)).unwrap_err().to_string();
+    assert!(e.contains("SHA-256"), "{e}");
+    // Without the stale sidecar the WAV reads with its own (new) scale.
+    std::fs::remove_file(format!("{wav}.json")).unwrap();
+    let read = haptex_core::signal::read_drive_wav(Path::new(&wav)).unwrap();
+    assert_eq!(read.scale.volts_per_full_scale, 100.0);
+    // A rerun completes the pair and leaves no temporary behind.
+    assert!(play("100", None).status.success());
+    assert!(haptex(&["play", "--check", &wav]).status.success());
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+}
+
+/// A WAV whose samples were changed after haptex wrote it, or that haptex
+/// did not write (no scale chunk), is refused by `--check`.
+#[test]
+fn wav_without_a_matching_scale_chunk_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let u = write(dir.path(), "u.csv", "x_mm,voltage_v\n0,10\n10,40\n");
+    let wav = path(dir.path(), "drive.wav");
+    let out = haptex(&["play", "--profile", &u, "--velocity", "100", "-o", &wav]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let mut bytes = std::fs::read(&wav).unwrap();
+    bytes[100] ^= 0x40; // a sample byte (the data chunk starts at byte 44)
+    std::fs::write(&wav, &bytes).unwrap();
+    let checked = haptex(&["play", "--check", &wav]);
+    assert!(!checked.status.success());
+    assert!(stderr(&checked).contains("do not match the scale chunk"), "{}", stderr(&checked));
+
+    let plain = path(dir.path(), "plain.wav");
+    let spec =
+        hound::WavSpec { channels: 1, sample_rate: 8000, bits_per_sample: 16, sample_format: hound::SampleFormat::Int };
+    let mut writer = hound::WavWriter::create(&plain, spec).unwrap();
+    writer.write_sample(100i16).unwrap();
+    writer.finalize().unwrap();
+    let checked = haptex(&["play", "--check", &plain]);
+    assert!(!checked.status.success());
+    assert!(stderr(&checked).contains("no haptex scale chunk"), "{}", stderr(&checked));
+}
+
+/// Issue 13: `-o` naming a FIFO writes through it (it used to be replaced
+/// by a regular file); `-o -` writes to standard output; a directory is
+/// refused before any work.
+#[cfg(unix)]
+#[test]
+fn outputs_to_a_fifo_or_stdout_are_written_in_place() {
+    use std::io::Read;
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    let u = write(dir.path(), "u.csv", "x_mm,voltage_v\n0,10\n10,40\n");
+    let fifo = dir.path().join("f");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            std::fs::File::open(&fifo).unwrap().read_to_end(&mut bytes).unwrap();
+            bytes
+        })
+    };
+    let fifo_arg = fifo.to_str().unwrap();
+    let out = haptex(&["play", "--profile", &u, "--velocity", "100", "--format", "wav", "-o", fifo_arg]);
+    release(&fifo, &out);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let bytes = reader.join().unwrap();
+    assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo(), "the FIFO was replaced");
+    let (scale, volts) = haptex_core::signal::decode_drive_wav(&bytes).unwrap();
+    assert_eq!(volts.len(), scale.n_samples);
+    assert!(!Path::new(&format!("{fifo_arg}.json")).exists(), "a stream output got a sidecar");
+
+    let out = haptex(&[
+        "play",
+        "--profile",
+        &u,
+        "--velocity",
+        "100",
+        "--sample-rate",
+        "1000",
+        "--carrier-hz",
+        "100",
+        "-o",
+        "-",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("\nt_s,x_mm,envelope_v,signal_v\n") && text.lines().count() > 50, "{text}");
+
+    let out =
+        haptex(&["play", "--profile", &u, "--velocity", "100", "--format", "csv", "-o", dir.path().to_str().unwrap()]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("is a directory"), "{}", stderr(&out));
+    // Same class, another command: voltage into the FIFO.
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            let mut text = String::new();
+            std::fs::File::open(&fifo).unwrap().read_to_string(&mut text).unwrap();
+            text
+        })
+    };
+    let profile = write(dir.path(), "p.csv", "x_mm,mu\n0,1.1\n1,1.2\n");
+    let out = haptex(&["voltage", "--profile", &profile, "-o", fifo_arg]);
+    release(&fifo, &out);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(reader.join().unwrap().contains("x_mm,mu,voltage_v"));
+    assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+}
+
+/// If haptex failed without opening the FIFO, opens it for writing so the
+/// test's reader thread is not left waiting forever.
+#[cfg(unix)]
+fn release(fifo: &Path, out: &Output) {
+    if !out.status.success() {
+        let _ = std::fs::OpenOptions::new().write(true).open(fifo);
+    }
 }

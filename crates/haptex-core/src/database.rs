@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::cae::{Cae, CaeError, Diagnostics, LooErrors, ModelMatrix, Scratch, Widths};
+use crate::num::Num;
 
 /// The database's input columns, in order.
 pub const INPUTS: [&str; 3] = ["r_w_mm", "r_h_mm", "velocity_mm_s"];
@@ -359,7 +360,7 @@ impl TemplateModel {
             .zip(NAMES)
             .filter(|(((lo, hi), v), _)| *v < lo || *v > hi)
             .map(|(((lo, hi), v), (name, unit))| {
-                format!("{name} = {v} {unit} is outside the database range {lo} .. {hi} {unit}")
+                format!("{name} = {} {unit} is outside the database range {} .. {} {unit}", Num(*v), Num(*lo), Num(*hi))
             })
             .collect();
         (!outside.is_empty()).then(|| format!("{}: the estimate extrapolates the FE database", outside.join("; ")))

@@ -12,6 +12,7 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
+use crate::num::Num;
 use crate::profile::FrictionProfile;
 
 /// Vacuum permittivity eps0 in F/m (CODATA 2018).
@@ -23,8 +24,20 @@ const MM2: f64 = 1e-6;
 /// Invalid device or finger parameters, or a mapping that cannot be done.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ElectroError {
-    #[error("{name} must be a positive finite number, got {value}")]
+    #[error("{name} must be a positive finite number, got {}", Num(*value))]
     NotPositive { name: &'static str, value: f64 },
+    /// The device constants are each valid but together out of range.
+    #[error("the device constants give {quantity} = {}, which is not a usable device: {hint}", Num(*value))]
+    Degenerate { quantity: &'static str, value: f64, hint: &'static str },
+    /// A voltage came out non-finite: the profile's values are beyond what
+    /// the mapping can represent (never the device's fault: it was checked).
+    #[error(
+        "profile sample {index} (x = {} mm, mu = {}): the voltage is not finite; the profile's friction values \
+         are out of range for the mapping",
+        Num(*x_mm),
+        Num(*mu)
+    )]
+    NonFiniteVoltage { index: usize, x_mm: f64, mu: f64 },
     #[error(
         "the contact-area law A = k Fn^n with n = {exponent} makes the voltage depend on the \
          normal force: give Fn (--fn-n), or a profile with an fn_n column"
@@ -153,6 +166,24 @@ impl Device {
         self.contact.validate()?;
         positive("mu_hd", self.mu_hd)?;
         positive("u_max_v", self.u_max_v)?;
+        // Each constant may be fine and their combination still overflow
+        // (d_sc = 1e300 mm): the derived quantities must be finite too.
+        let ratio = self.force_ratio_per_v2(1.0);
+        if !(ratio.is_finite() && ratio > 0.0) {
+            return Err(ElectroError::Degenerate {
+                quantity: "Fe/Fn per V^2 at 1 N",
+                value: ratio,
+                hint: "check the thicknesses, permittivities and k (eq. 3)",
+            });
+        }
+        let mu_clip = self.mu_hd * (1.0 + self.u_max_v * self.u_max_v * ratio);
+        if !mu_clip.is_finite() {
+            return Err(ElectroError::Degenerate {
+                quantity: "mu_RS at U_max",
+                value: mu_clip,
+                hint: "U_max or mu_HD is far too large for these layers",
+            });
+        }
         Ok(())
     }
 
@@ -393,7 +424,8 @@ pub fn map_profile(
         Method::Normalized => {
             if !normalized_voltages(mu, device.u_max_v, &mut voltage_v) {
                 summary.warnings.push(format!(
-                    "the profile is constant (mu = {mu_min}): eq. (9) is undefined, all voltages are 0 V"
+                    "the profile is constant (mu = {}): eq. (9) is undefined, all voltages are 0 V",
+                    Num(mu_min)
                 ));
             }
         }
@@ -418,6 +450,9 @@ pub fn map_profile(
             summary.not_renderable = Regions::below(x, mu, device.mu_hd);
             summary.warnings.extend(physical_warnings(&summary));
         }
+    }
+    if let Some(index) = voltage_v.iter().position(|u| !u.is_finite()) {
+        return Err(ElectroError::NonFiniteVoltage { index, x_mm: x[index], mu: mu[index] });
     }
     (summary.voltage_min_v, summary.voltage_max_v) = min_max(&voltage_v);
     Ok(VoltageProfile { summary, x_mm: x.to_vec(), mu: mu.to_vec(), voltage_v })

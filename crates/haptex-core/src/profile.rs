@@ -9,6 +9,7 @@ use std::io::Write;
 use std::path::Path;
 
 use crate::io::{Table, TableError, WriteError, write_atomic, write_csv_row};
+use crate::num::Num;
 
 /// A friction profile is invalid, or its file could not be read.
 #[derive(Debug, thiserror::Error)]
@@ -46,7 +47,7 @@ impl FrictionProfile {
     pub fn from_forces(x_mm: Vec<f64>, ft_n: &[f64], fn_n: Vec<f64>) -> Result<Self, ProfileError> {
         validate(&x_mm, &[("ft_n", ft_n), ("fn_n", &fn_n)]).map_err(in_memory)?;
         check_normal_force(&fn_n).map_err(in_memory)?;
-        let mu = ft_n.iter().zip(&fn_n).map(|(t, n)| t / n).collect();
+        let mu = mu_from_forces(ft_n, &fn_n).map_err(in_memory)?;
         Ok(Self { x_mm, mu, fn_n: Some(fn_n) })
     }
 
@@ -81,10 +82,12 @@ impl FrictionProfile {
                     }
                 };
                 validate(&x_mm, &[("ft_n", ft), ("fn_n", fnn)]).map_err(at)?;
-                ft.iter().zip(fnn).map(|(t, n)| t / n).collect()
+                check_normal_force(fnn).map_err(at)?;
+                mu_from_forces(ft, fnn).map_err(at)?
             }
         };
         if let Some(fnn) = &fn_col {
+            validate(&x_mm, &[("fn_n", fnn)]).map_err(at)?;
             check_normal_force(fnn).map_err(at)?;
         }
         Ok(Self { x_mm, mu, fn_n: fn_col })
@@ -188,7 +191,7 @@ impl FrictionProfile {
     /// at the first sample; the last point may fall short of the end.
     pub fn resample_step(&self, dx_mm: f64) -> Result<Self, ProfileError> {
         if !(dx_mm.is_finite() && dx_mm > 0.0) {
-            return Err(ProfileError::Resample(format!("grid spacing must be positive, got {dx_mm} mm")));
+            return Err(ProfileError::Resample(format!("grid spacing must be positive, got {} mm", Num(dx_mm))));
         }
         let intervals = (self.span_mm() / dx_mm).floor();
         if intervals < 1.0 {
@@ -264,8 +267,43 @@ impl Cursor {
     }
 }
 
-/// Checks positions (finite, strictly increasing, at least two) and that each
-/// value column is finite and as long as the positions.
+/// The largest magnitude a value of each column may have: far beyond any
+/// physical value (a friction coefficient is below ~10, a fingertip force
+/// below ~10 N, a display below ~1 kV, a surface below a metre), and small
+/// enough that every difference, span and product computed from two of
+/// them stays finite. Positions and times beyond it are refused like
+/// non-finite ones, so no derived value can overflow.
+pub const MAX_MAGNITUDE: &[(&str, f64, &str)] = &[
+    ("x_mm", 1e6, "mm"),
+    ("mu", 1e6, ""),
+    ("ft_n", 1e6, "N"),
+    ("fn_n", 1e6, "N"),
+    ("voltage_v", 1e6, "V"),
+    ("t_s", 1e9, "s"),
+];
+
+/// Checks that every value of column `name` is finite and within its
+/// [`MAX_MAGNITUDE`].
+pub(crate) fn check_values(name: &'static str, values: &[f64]) -> Result<(), Violation> {
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        return Err((Some(i), name, format!("not a finite number: {}", Num(values[i]))));
+    }
+    if let Some(&(_, max, unit)) = MAX_MAGNITUDE.iter().find(|(n, _, _)| *n == name)
+        && let Some(i) = values.iter().position(|v| v.abs() > max)
+    {
+        let unit = if unit.is_empty() { String::new() } else { format!(" {unit}") };
+        return Err((
+            Some(i),
+            name,
+            format!("{}{unit} is out of range: |{name}| must be at most {}{unit}", Num(values[i]), Num(max)),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks positions (finite, in range, strictly increasing, at least two)
+/// and that each value column is finite, in range and as long as the
+/// positions.
 pub(crate) fn validate(x_mm: &[f64], columns: &[(&'static str, &[f64])]) -> Result<(), Violation> {
     if x_mm.len() < 2 {
         return Err((None, "x_mm", format!("a profile needs at least 2 points, got {}", x_mm.len())));
@@ -274,26 +312,44 @@ pub(crate) fn validate(x_mm: &[f64], columns: &[(&'static str, &[f64])]) -> Resu
         if values.len() != x_mm.len() {
             return Err((None, name, format!("{} values for {} positions", values.len(), x_mm.len())));
         }
-        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-            return Err((Some(i), name, format!("not a finite number: {}", values[i])));
-        }
+        check_values(name, values)?;
     }
-    if let Some(i) = x_mm.iter().position(|v| !v.is_finite()) {
-        return Err((Some(i), "x_mm", format!("not a finite number: {}", x_mm[i])));
-    }
+    check_values("x_mm", x_mm)?;
     if let Some(i) = x_mm.windows(2).position(|w| w[1] <= w[0]) {
         return Err((
             Some(i + 1),
             "x_mm",
-            format!("positions must be strictly increasing: {} follows {}", x_mm[i + 1], x_mm[i]),
+            format!("positions must be strictly increasing: {} follows {}", Num(x_mm[i + 1]), Num(x_mm[i])),
         ));
     }
     Ok(())
 }
 
+/// mu = ft / fn (paper eq. 4) from checked forces, itself checked: a tiny
+/// fn (5e-324 N) makes an infinite or absurd mu, refused at its row and
+/// blamed on fn_n.
+fn mu_from_forces(ft_n: &[f64], fn_n: &[f64]) -> Result<Vec<f64>, Violation> {
+    let mu: Vec<f64> = ft_n.iter().zip(fn_n).map(|(t, n)| t / n).collect();
+    check_values("mu", &mu).map_err(|(i, _, _)| {
+        let i = i.unwrap_or(0);
+        (
+            Some(i),
+            "fn_n",
+            format!(
+                "mu = ft_n / fn_n = {} / {} = {} is not a friction coefficient (|mu| <= {}): is fn_n in newtons?",
+                Num(ft_n[i]),
+                Num(fn_n[i]),
+                Num(mu[i]),
+                Num(MAX_MAGNITUDE[1].1)
+            ),
+        )
+    })?;
+    Ok(mu)
+}
+
 fn check_normal_force(fn_n: &[f64]) -> Result<(), Violation> {
     match fn_n.iter().position(|&f| f <= 0.0) {
-        Some(i) => Err((Some(i), "fn_n", format!("normal force must be positive, got {} N", fn_n[i]))),
+        Some(i) => Err((Some(i), "fn_n", format!("normal force must be positive, got {} N", Num(fn_n[i])))),
         None => Ok(()),
     }
 }

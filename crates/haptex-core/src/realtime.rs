@@ -31,6 +31,7 @@
 //! disagrees with the extrapolation, the difference is blended out linearly
 //! over `blend_s` instead of jumping.
 
+use crate::num::Num;
 use crate::signal::{Carrier, CarrierShape, EnvelopeLimiter, Extend, Limits, SignalError, VoltageCurve};
 
 /// Largest lookup table: 2^20 points.
@@ -159,7 +160,7 @@ impl RealtimeRenderer {
             if v.is_finite() && v >= 0.0 {
                 Ok(())
             } else {
-                Err(SignalError::Settings(format!("{name} must be a finite number >= 0, got {v}")))
+                Err(SignalError::Settings(format!("{name} must be a finite number >= 0, got {}", Num(v))))
             }
         };
         non_negative("horizon (s)", config.horizon_s)?;

@@ -14,6 +14,7 @@ use std::io::Write;
 use std::path::Path;
 
 use crate::io::{Table, TableError, WriteError, write_atomic, write_csv_row};
+use crate::num::Num;
 use crate::profile::Cursor;
 
 /// Most samples a generated trajectory may have (1e8: 28 h at 1 kHz).
@@ -126,7 +127,9 @@ impl Trajectory {
         let intervals = (duration_s * rate_hz).ceil().max(1.0);
         if intervals >= MAX_GENERATED_SAMPLES as f64 {
             return Err(TrajectoryError::Generator(format!(
-                "{duration_s} s at {rate_hz} Hz is more than {MAX_GENERATED_SAMPLES} samples"
+                "{} s at {} Hz is more than {MAX_GENERATED_SAMPLES} samples",
+                Num(duration_s),
+                Num(rate_hz)
             )));
         }
         let n = intervals as usize;
@@ -194,17 +197,21 @@ impl Trajectory {
 /// checking the generator parameters.
 fn sweep_duration(from_mm: f64, to_mm: f64, speed_mm_s: f64, rate_hz: f64) -> Result<f64, TrajectoryError> {
     let bad = |m: String| Err(TrajectoryError::Generator(m));
-    if !(from_mm.is_finite() && to_mm.is_finite()) {
-        return bad(format!("stroke ends must be finite, got {from_mm} and {to_mm} mm"));
+    if crate::profile::check_values("x_mm", &[from_mm, to_mm]).is_err() {
+        return bad(format!(
+            "stroke ends must be finite positions within 1e6 mm, got {} and {} mm",
+            Num(from_mm),
+            Num(to_mm)
+        ));
     }
     if from_mm == to_mm {
-        return bad(format!("stroke ends are equal ({from_mm} mm): the finger would not move"));
+        return bad(format!("stroke ends are equal ({} mm): the finger would not move", Num(from_mm)));
     }
     if !(speed_mm_s.is_finite() && speed_mm_s > 0.0) {
-        return bad(format!("speed must be a positive finite number, got {speed_mm_s} mm/s"));
+        return bad(format!("speed must be a positive finite number, got {} mm/s", Num(speed_mm_s)));
     }
     if !(rate_hz.is_finite() && rate_hz > 0.0) {
-        return bad(format!("sample rate must be a positive finite number, got {rate_hz} Hz"));
+        return bad(format!("sample rate must be a positive finite number, got {} Hz", Num(rate_hz)));
     }
     Ok((to_mm - from_mm).abs() / speed_mm_s)
 }
@@ -218,16 +225,13 @@ fn validate(t_s: &[f64], x_mm: &[f64]) -> Result<(), crate::profile::Violation> 
     if x_mm.len() != t_s.len() {
         return Err((None, "x_mm", format!("{} positions for {} times", x_mm.len(), t_s.len())));
     }
-    for (name, values) in [("t_s", t_s), ("x_mm", x_mm)] {
-        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-            return Err((Some(i), name, format!("not a finite number: {}", values[i])));
-        }
-    }
+    crate::profile::check_values("t_s", t_s)?;
+    crate::profile::check_values("x_mm", x_mm)?;
     if let Some(i) = t_s.windows(2).position(|w| w[1] <= w[0]) {
         return Err((
             Some(i + 1),
             "t_s",
-            format!("times must be strictly increasing: {} follows {}", t_s[i + 1], t_s[i]),
+            format!("times must be strictly increasing: {} follows {}", Num(t_s[i + 1]), Num(t_s[i])),
         ));
     }
     Ok(())

@@ -161,6 +161,33 @@ fn invalid_device_parameters_are_named() {
     }
 }
 
+/// Issue 13: constants that are each positive and finite but under- or
+/// overflow together (k = 5e-324 mm^2/N makes Fe/Fn = 0, so U = inf;
+/// U_max = 1e300 V makes the clip level infinite) are refused, not mapped;
+/// extreme friction values are refused by the profile, never blamed on the
+/// device.
+#[test]
+fn degenerate_device_is_refused_not_mapped() {
+    use haptex_core::electrovibration::ContactArea;
+    let p = profile(&[0.0, 1.0], &[1.0, 1.1]);
+    for device in [
+        Device { contact: ContactArea { k_mm2_per_n: 5e-324, ..ContactArea::PAPER }, ..Device::PAPER },
+        Device { u_max_v: 1e300, ..Device::PAPER },
+    ] {
+        for method in [Method::Physical, Method::Normalized] {
+            let err = map_profile(&p, &device, method, None).unwrap_err();
+            assert!(matches!(err, ElectroError::Degenerate { .. }), "{err}");
+            assert!(err.to_string().len() < 200, "{err}");
+        }
+    }
+    // Huge friction values never reach the device check: the profile
+    // refuses them.
+    assert!(FrictionProfile::new(vec![0.0, 1.0], vec![-1e308, 1e308]).is_err());
+    let wide = profile(&[0.0, 1.0], &[-1e6, 1e6]);
+    let v = map_profile(&wide, &Device::PAPER, Method::Normalized, None).unwrap();
+    assert_eq!(v.voltage_v, [0.0, 100.0]);
+}
+
 #[test]
 fn regions_merge_across_samples_and_handle_touching_points() {
     let x = [0.0, 1.0, 2.0, 3.0, 4.0];

@@ -8,7 +8,7 @@ use haptex_core::electrovibration::{Device, Method, map_profile};
 use haptex_core::profile::FrictionProfile;
 use haptex_core::signal::{
     Carrier, CarrierShape, Extend, Limits, RenderSettings, SignalError, VoltageCurve, WavFormat, WavOptions,
-    read_wav_volts, render, sidecar_path, write_wav,
+    read_drive_wav, render, sidecar_path, write_wav,
 };
 use haptex_core::trajectory::Trajectory;
 use rustfft::FftPlanner;
@@ -144,8 +144,15 @@ fn wav_reads_back_with_hound_at_rate_length_and_scale() {
         let path = dir.path().join(format!("{format:?}.wav"));
         let options = WavOptions { format, volts_per_full_scale: vpfs };
         let sidecar = write_wav(&path, &signal, &options, serde_json::json!({"test": true})).unwrap();
-        let (spec, volts) = read_wav_volts(&path, vpfs).unwrap();
+        let (spec, volts) = hound_volts(&path, vpfs);
         assert_eq!((spec.sample_rate, spec.channels), (44_100, 1));
+        // haptex's own reader takes the scale from the WAV and checks the
+        // sidecar: the same volts as hound's with the sidecar's scale.
+        let checked = read_drive_wav(&path).unwrap();
+        assert_eq!(checked.volts, volts);
+        let read_sidecar = checked.sidecar.as_ref().expect("the sidecar is found");
+        assert_eq!(read_sidecar.samples_sha256, sidecar.samples_sha256);
+        assert_eq!(checked.scale.volts_per_full_scale, vpfs);
         assert_eq!(volts.len(), signal.len());
         let tolerance = match format {
             WavFormat::Float32 => vpfs * 2f64.powi(-24),
@@ -162,6 +169,23 @@ fn wav_reads_back_with_hound_at_rate_length_and_scale() {
         assert_eq!(json["report"]["clip"]["clamped_samples"], signal.report.clip.clamped_samples);
         assert_eq!(sidecar.full_scale_value, format.full_scale());
     }
+}
+
+/// Reads a mono WAV with hound (an independent reader) as volts, given the
+/// volts per full scale.
+fn hound_volts(path: &std::path::Path, volts_per_full_scale: f64) -> (hound::WavSpec, Vec<f64>) {
+    let mut reader = hound::WavReader::open(path).unwrap();
+    let spec = reader.spec();
+    let volts = match spec.sample_format {
+        hound::SampleFormat::Float => {
+            reader.samples::<f32>().map(|s| f64::from(s.unwrap()) * volts_per_full_scale).collect()
+        }
+        hound::SampleFormat::Int => {
+            let full_scale = ((1i64 << (spec.bits_per_sample - 1)) - 1) as f64;
+            reader.samples::<i32>().map(|s| f64::from(s.unwrap()) / full_scale * volts_per_full_scale).collect()
+        }
+    };
+    (spec, volts)
 }
 
 /// A WAV whose full scale is below the drive's peak is refused and nothing

@@ -64,6 +64,53 @@ fn malformed_files_name_line_and_column() {
     }
 }
 
+/// Issue 13, "every value is finite": a derived value is checked like a
+/// given one. ft_n = 1e308 or fn_n = 5e-324 made mu = inf, which was
+/// written as `inf`, answered as JSON null and stored in the library.
+#[test]
+fn derived_friction_must_be_finite_and_in_range() {
+    let cases: &[(&str, u64, &str, &str)] = &[
+        ("x_mm,ft_n,fn_n\n0,1,1\n1,1e308,1e-300\n", 3, "ft_n", "out of range"),
+        ("x_mm,ft_n,fn_n\n0,1,1\n1,0.5,5e-324\n", 3, "fn_n", "mu = ft_n / fn_n = 0.5 / 5e-324"),
+        ("x_mm,ft_n,fn_n\n0,1,1\n1,0.5,1e-9\n", 3, "fn_n", "is not a friction coefficient"),
+        ("x_mm,mu\n0,1\n1,1e308\n", 3, "mu", "1e308 is out of range"),
+        ("x_mm,mu\n-1e300,1\n1e300,1\n", 2, "x_mm", "out of range"),
+        ("x_mm,mu,fn_n\n0,1,1\n1,1,1e300\n", 3, "fn_n", "out of range"),
+    ];
+    for (text, line, column, fragment) in cases {
+        let err = match read(text) {
+            Err(ProfileError::Table(e)) => e,
+            other => panic!("{text:?}: expected a table error, got {other:?}"),
+        };
+        assert_eq!((err.line, err.column.as_deref()), (Some(*line), Some(*column)), "{text:?}: {err}");
+        let message = err.to_string();
+        assert!(message.contains(fragment), "{text:?}: {message}");
+        assert!(message.len() < 300, "{message}");
+    }
+    // In memory, the same checks.
+    assert!(FrictionProfile::from_forces(vec![0.0, 1.0], &[1.0, 0.5], vec![1.0, 5e-324]).is_err());
+    assert!(FrictionProfile::new(vec![0.0, 1.0], vec![1.0, 1e7]).is_err());
+}
+
+/// Issue 13, "input size never costs more than linear time": a 1 MiB header
+/// of 10^5 distinct column names was checked for duplicates pairwise (13 s
+/// in the CLI, 31 s in the server). Read now in one pass; the deadline is
+/// 100 times the linear reader's time on a slow machine and a tenth of the
+/// old quadratic one's, so this fails on a return to quadratic cost, not on
+/// a busy machine.
+#[test]
+fn wide_header_is_read_in_linear_time() {
+    let names: Vec<String> = (0..100_000).map(|i| format!("c{i:08}")).collect();
+    let text = format!("{}\n", names.join(","));
+    assert_eq!(text.len(), 1_000_000);
+    let start = std::time::Instant::now();
+    let err = FrictionProfile::read_csv(text.as_bytes(), "wide.csv").unwrap_err();
+    let elapsed = start.elapsed();
+    assert!(err.to_string().contains("x_mm") && err.to_string().contains("(100000 columns)"), "{err}");
+    assert!(err.to_string().len() < 400, "the error quotes the whole header");
+    assert!(elapsed < std::time::Duration::from_secs(1), "{elapsed:?} for a 1 MiB header");
+}
+
 #[test]
 fn invalid_utf8_is_an_error_not_a_panic() {
     let bytes = b"x_mm,mu\n0,1\n1,\xff\xfe\n";
@@ -83,6 +130,12 @@ fn csv_like() -> impl Strategy<Value = String> {
         Just("NaN".to_string()),
         Just("-inf".to_string()),
         Just("1e400".to_string()),
+        // Finite but extreme: derived values (ft/fn, spans) must stay
+        // finite too (issue 13).
+        Just("1e308".to_string()),
+        Just("-1.7976931348623157e308".to_string()),
+        Just("5e-324".to_string()),
+        Just("1e7".to_string()),
         Just("\"2\"".to_string()),
         (-5.0f64..5.0).prop_map(|v| v.to_string()),
         (0u32..20).prop_map(|v| v.to_string()),
@@ -105,7 +158,8 @@ proptest! {
             Ok(p) => {
                 prop_assert!(p.len() >= 2);
                 prop_assert!(p.x_mm().windows(2).all(|w| w[1] > w[0]));
-                prop_assert!(p.mu().iter().all(|m| m.is_finite()));
+                prop_assert!(p.mu().iter().all(|m| m.is_finite() && m.abs() <= 1e6));
+                prop_assert!(p.span_mm().is_finite());
             }
             Err(ProfileError::Table(e)) => {
                 prop_assert!(e.line.is_some(), "{}", e);

@@ -207,3 +207,79 @@ fn csv_written_recordings_process_identically() {
     let config = ProcessingConfig::default();
     assert_eq!(process(&back, &config).unwrap().profile, process(&rec, &config).unwrap().profile);
 }
+
+/// Issue 13: metadata that names a device, a FIFO, a directory, a path
+/// outside the recording's directory (absolute, `..`, or a symbolic link
+/// leading out) is refused before anything is read from it, with the field
+/// and the reason. (`/dev/zero` used to be read until memory ran out; a
+/// FIFO would block forever.)
+#[test]
+fn recording_streams_must_be_regular_files_inside_its_directory() {
+    let outside = tempfile::tempdir().unwrap();
+    std::fs::write(outside.path().join("far.csv"), force_csv()).unwrap();
+    let far = outside.path().join("far.csv");
+    let cases: Vec<(String, &str)> = vec![
+        ("/dev/zero".into(), "not a file name inside the recording's directory"),
+        (far.display().to_string(), "not a file name inside the recording's directory"),
+        ("../s.force.csv".into(), "not a file name inside the recording's directory"),
+        ("".into(), "not a file name inside the recording's directory"),
+        ("link.csv".into(), "leads outside the recording's directory"),
+        ("sub".into(), "not a regular file"),
+        #[cfg(unix)]
+        ("fifo.csv".into(), "not a regular file"),
+        ("missing.csv".into(), "missing.csv"),
+    ];
+    for (file, expected) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("sub")).unwrap();
+        #[cfg(unix)]
+        {
+            std::os::unix::fs::symlink(&far, dir.path().join("link.csv")).unwrap();
+            let status = std::process::Command::new("mkfifo").arg(dir.path().join("fifo.csv")).status().unwrap();
+            assert!(status.success());
+        }
+        let meta = META.replace(r#""file": "s.force.csv""#, &format!(r#""file": {}"#, serde_json::json!(file)));
+        let path = write_recording(dir.path(), &meta, &force_csv(), &position_csv());
+        let message = Recording::load(&path).unwrap_err().to_string();
+        // Path errors name the metadata field; file errors name the file.
+        let names_field = expected.starts_with("not a file name") || expected.starts_with("leads outside");
+        assert!(!names_field || message.contains("force.file"), "{file:?}: {message}");
+        assert!(message.contains(expected), "{file:?}: {message}");
+    }
+    // A symbolic link that stays inside the directory is fine.
+    #[cfg(unix)]
+    {
+        let dir = tempfile::tempdir().unwrap();
+        let path = write_recording(dir.path(), META, &force_csv(), &position_csv());
+        std::fs::rename(dir.path().join("s.force.csv"), dir.path().join("real.csv")).unwrap();
+        std::os::unix::fs::symlink("real.csv", dir.path().join("s.force.csv")).unwrap();
+        Recording::load(&path).unwrap();
+    }
+}
+
+/// An NPY stream whose header claims more values than the file holds is
+/// refused before any allocation sized by the claim.
+#[test]
+fn npy_shape_larger_than_the_file_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("p.npy");
+    write_npy_f32(&path, &[&[0.0, 0.01], &[0.0, 1.0]]).unwrap();
+    let mut bytes = std::fs::read(&path).unwrap();
+    // Claim 4e12 rows in the header, keeping its length (NPY pads the
+    // header with spaces to a multiple of 64 bytes).
+    let header_end = bytes.iter().position(|&b| b == b'\n').unwrap();
+    let header = String::from_utf8_lossy(&bytes[10..header_end]).into_owned();
+    let claimed = header.replace("(2, 2", "(4000000000000, 2");
+    assert_ne!(header, claimed, "{header}");
+    let claimed = claimed.trim_end().to_string();
+    let padded = format!("{claimed:<width$}", width = header.len());
+    assert_eq!(padded.len(), header.len());
+    bytes.splice(10..header_end, padded.into_bytes());
+    std::fs::write(&path, &bytes).unwrap();
+    let meta = META.replace("s.position.csv", "p.npy");
+    std::fs::write(dir.path().join("s.force.csv"), force_csv()).unwrap();
+    let meta_path = dir.path().join("s.recording.json");
+    std::fs::write(&meta_path, meta).unwrap();
+    let message = Recording::load(&meta_path).unwrap_err().to_string();
+    assert!(message.contains("claims more values than the file"), "{message}");
+}

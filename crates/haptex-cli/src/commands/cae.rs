@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
-use haptex_core::cae::{Cae, ModelMatrix, OptimizeOptions, OptimizerReport, Widths, optimize_widths};
+use haptex_core::cae::{Cae, CaeError, ModelMatrix, OptimizeOptions, OptimizerReport, Widths, optimize_widths};
 use haptex_core::io::{Table, write_csv_row};
 use serde::Serialize;
 
@@ -37,9 +37,18 @@ struct ModelArgs {
     /// The input columns, comma-separated (every other column is an output).
     #[arg(long, value_name = "a,b,c", value_delimiter = ',', required = true)]
     inputs: Vec<String>,
+    /// Memory the leave-one-out may use, in MiB. Its N x N weight matrix
+    /// grows with the square of the model's rows (2048 MiB: N up to about
+    /// 16 000); larger models are refused before any work.
+    #[arg(long, value_name = "MIB", default_value_t = 2048, value_parser = clap::value_parser!(u64).range(1..=1 << 24))]
+    memory_budget_mib: u64,
 }
 
 impl ModelArgs {
+    fn memory_budget_bytes(&self) -> u64 {
+        self.memory_budget_mib << 20
+    }
+
     fn read(&self) -> anyhow::Result<ModelMatrix> {
         let inputs: Vec<&str> = self.inputs.iter().map(|s| s.trim()).collect();
         Ok(if self.model.as_os_str() == "-" {
@@ -161,8 +170,12 @@ fn predict(args: PredictArgs) -> anyhow::Result<()> {
     let widths = match args.widths.get()? {
         Some(w) => w,
         None => {
-            let options = OptimizeOptions { constant_only: true, ..OptimizeOptions::default() };
-            let optimum = optimize_widths(&matrix, options)?;
+            let options = OptimizeOptions {
+                constant_only: true,
+                memory_budget_bytes: args.model.memory_budget_bytes(),
+                ..OptimizeOptions::default()
+            };
+            let optimum = optimize_widths(&matrix, options).map_err(budget_hint)?;
             if !args.quiet {
                 eprintln!(
                     "width: {} (the constant width with the smallest leave-one-out error, RMSE {})",
@@ -239,13 +252,18 @@ fn loo(args: LooArgs) -> anyhow::Result<()> {
     let matrix = args.model.read()?;
     let (widths, errors, report) = match args.widths.get()? {
         Some(widths) => {
-            let mut loo = haptex_core::cae::Loo::new(&matrix)?;
+            let mut loo = haptex_core::cae::Loo::with_memory_budget(&matrix, args.model.memory_budget_bytes())
+                .map_err(budget_hint)?;
             (widths, loo.errors(widths), None)
         }
         None => {
-            let options =
-                OptimizeOptions { constant_only: args.constant, search_range: args.range, ..Default::default() };
-            let optimum = optimize_widths(&matrix, options)?;
+            let options = OptimizeOptions {
+                constant_only: args.constant,
+                search_range: args.range,
+                memory_budget_bytes: args.model.memory_budget_bytes(),
+                ..Default::default()
+            };
+            let optimum = optimize_widths(&matrix, options).map_err(budget_hint)?;
             (optimum.widths, optimum.errors, Some(optimum.report))
         }
     };
@@ -279,15 +297,27 @@ fn loo(args: LooArgs) -> anyhow::Result<()> {
     })
 }
 
+/// A memory-budget refusal says which flags change it.
+fn budget_hint(error: CaeError) -> anyhow::Error {
+    match error {
+        CaeError::TooLarge(message) => {
+            anyhow::anyhow!("{message}; the flags are --memory-budget-mib MIB and --width W")
+        }
+        other => other.into(),
+    }
+}
+
 /// Parses `name=value,name=value` into the input vector, in `inputs` order.
 fn parse_at(text: &str, inputs: &[String]) -> anyhow::Result<Vec<f64>> {
     let mut values: Vec<Option<f64>> = vec![None; inputs.len()];
+    let index: std::collections::HashMap<&str, usize> =
+        inputs.iter().enumerate().map(|(l, name)| (name.as_str(), l)).collect();
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let Some((name, value)) = pair.split_once('=') else {
             bail!("'{pair}' is not name=value");
         };
         let name = name.trim();
-        let Some(l) = inputs.iter().position(|i| i == name) else {
+        let Some(l) = index.get(name).copied() else {
             bail!("'{name}' is not an input of the model (inputs: {})", inputs.join(","));
         };
         let value: f64 = value.trim().parse().map_err(|_| anyhow::anyhow!("'{}' is not a number", value.trim()))?;

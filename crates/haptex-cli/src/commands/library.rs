@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand, ValueEnum};
 use haptex_core::FrictionProfile;
-use haptex_core::io::{write_atomic, write_csv_row};
+use haptex_core::io::{FileSet, write_atomic, write_csv_row};
 use haptex_core::library::{Added, ImportId, Library, ProfileProvenance, StoredProfile};
 use haptex_core::recording::format::METADATA_SUFFIX;
 use haptex_core::recording::synth::{DEMO_SEED, DEMO_STROKES_PER_MATERIAL, write_demo};
@@ -68,14 +68,17 @@ enum LibraryCommand {
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:
   haptex library import --db lab.sqlite recordings/velvet/ recordings/wood/P1-s1.recording.json
-  haptex library import --db lab.sqlite --profile bump.csv --material 'my bump' --source 'FE run 12' --licence CC0-1.0")]
+  haptex library import --db lab.sqlite --profile bump.csv --synthetic --material 'my bump' --source 'FE run 12' --licence CC0-1.0
+  haptex library import --db lab.sqlite --profile felt.csv --measured --material felt --source 'our rig, 2026-11-02'")]
+#[command(group = clap::ArgGroup::new("provenance").args(["measured", "synthetic"]).multiple(false))]
 struct ImportArgs {
     /// Recording metadata files (*.recording.json) or directories.
     #[arg(value_name = "RECORDING", required_unless_present = "profile", conflicts_with = "profile")]
     inputs: Vec<PathBuf>,
     /// A friction profile CSV (`x_mm,mu`, optionally with `fn_n`) to add as
-    /// a stroke of --material.
-    #[arg(long, value_name = "P.csv", requires = "material")]
+    /// a stroke of --material; say where it comes from with --measured or
+    /// --synthetic.
+    #[arg(long, value_name = "P.csv", requires_all = ["material", "provenance"])]
     profile: Option<PathBuf>,
     /// Material of the --profile (created if new).
     #[arg(long, value_name = "NAME", requires = "profile")]
@@ -89,7 +92,11 @@ struct ImportArgs {
     /// Licence of the --profile data.
     #[arg(long, default_value = "unspecified", requires = "profile")]
     licence: String,
-    /// The --profile is generated, not measured.
+    /// The --profile was measured on a real finger (a recording).
+    #[arg(long, requires = "profile")]
+    measured: bool,
+    /// The --profile is generated, not measured (an FE run, a CAE
+    /// prediction, a model, a drawing).
     #[arg(long, requires = "profile")]
     synthetic: bool,
     #[command(flatten)]
@@ -146,6 +153,10 @@ enum SampleFormat {
 
 /// Export profiles as CSV files, DIR/MATERIAL/stroke-ID.csv, with a
 /// DIR/manifest.json of the materials and every stroke's provenance.
+///
+/// The manifest is removed first and written last, listing the SHA-256 of
+/// every file (`files_sha256`): an export without a manifest, or with a
+/// file that does not match it, is incomplete (`sha256sum` checks it).
 #[derive(Debug, Args)]
 struct ExportArgs {
     /// Output directory (created if missing).
@@ -316,7 +327,11 @@ fn import(db: &Path, args: ImportArgs) -> anyhow::Result<()> {
         let provenance = ProfileProvenance {
             source: args.source.clone().unwrap_or_else(|| format!("user profile {}", profile_path.display())),
             licence: args.licence.clone(),
-            synthetic: args.synthetic,
+            synthetic: match (args.measured, args.synthetic) {
+                (true, false) => false,
+                (false, true) => true,
+                _ => bail!("say where --profile comes from: --measured or --synthetic"),
+            },
             origin_path: profile_path.display().to_string(),
         };
         let added = library.add_profile(run, material, &args.description, &profile, &provenance)?;
@@ -565,23 +580,28 @@ fn export(db: &Path, args: ExportArgs) -> anyhow::Result<()> {
         }
         None => library.materials()?,
     };
+    // The manifest is the export's marker: removed first, written last with
+    // the SHA-256 of every file, so an interrupted export has no manifest
+    // (or one whose hashes do not match) and is seen to be incomplete.
+    let mut set = FileSet::begin(&args.out, "manifest.json")?;
     let mut manifest_strokes = Vec::new();
     for material in &materials {
-        let dir = args.out.join(file_name(&material.name));
-        std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
         for stroke in library.strokes(&material.name)? {
             let stored = library.profile(stroke.id)?;
-            let file = dir.join(format!("stroke-{}.csv", stroke.id));
+            let file = format!("{}/stroke-{}.csv", file_name(&material.name), stroke.id);
             let mut comments = vec![format!("haptex library export: material {:?}", material.name)];
             comments.extend(stroke.provenance_lines());
-            write_atomic(&file, |w| stored.profile.write_csv_commented(w, &comments))?;
-            manifest_strokes
-                .push(serde_json::json!({ "file": file.strip_prefix(&args.out).unwrap_or(&file), "stroke": stroke }));
+            set.write(&file, |w| stored.profile.write_csv_commented(w, &comments))?;
+            manifest_strokes.push(serde_json::json!({ "file": file, "stroke": stroke }));
         }
     }
-    let manifest = args.out.join("manifest.json");
-    let json = serde_json::json!({ "library": db, "materials": materials, "strokes": manifest_strokes });
-    write_atomic(&manifest, |w| {
+    set.finish(|w, files| {
+        let json = serde_json::json!({
+            "library": db,
+            "materials": materials,
+            "strokes": manifest_strokes,
+            "files_sha256": files,
+        });
         serde_json::to_writer_pretty(&mut *w, &json)?;
         writeln!(w)
     })?;

@@ -7,9 +7,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use haptex_core::io::Table;
+use haptex_core::num::Num;
 use haptex_core::signal::{
-    Carrier, CarrierShape, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions, render, sidecar_path,
-    write_wav,
+    Carrier, CarrierShape, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions, read_drive_wav, render,
+    sidecar_path, write_wav,
 };
 use haptex_core::trajectory::Trajectory;
 use serde_json::json;
@@ -35,21 +36,31 @@ const GENERATED_RATE_HZ: f64 = 1000.0;
 /// sweep at constant --velocity, or --strokes back-and-forth minimum-jerk
 /// strokes at mean --velocity, between --from-mm and --to-mm (default: the
 /// profile's ends).
+///
+/// The WAV carries its own scale (volts per full scale) and the hash of its
+/// samples in a `hptx` chunk; `haptex play --check OUT.wav` verifies a WAV
+/// and its sidecar belong together before an amplifier is set by them.
 #[derive(Debug, Args)]
 #[command(
-    group = clap::ArgGroup::new("finger").required(true).args(["trajectory", "velocity"]),
+    group = clap::ArgGroup::new("finger").args(["trajectory", "velocity"]),
     allow_negative_numbers = true,
     after_help = "Examples:\n  \
         haptex voltage --profile data/examples/bump_friction.csv -o bump_u.csv\n  \
         haptex play --profile bump_u.csv --velocity 50 -o bump.wav --png bump.png\n  \
         haptex play --profile bump_u.csv --trajectory finger.csv --carrier square --carrier-hz 400 -o drive.csv\n  \
-        haptex play --profile bump_u.csv --velocity 80 --strokes 6 --slew-v-per-s 20000 -o strokes.wav"
+        haptex play --profile bump_u.csv --velocity 80 --strokes 6 --slew-v-per-s 20000 -o strokes.wav\n  \
+        haptex play --check bump.wav"
 )]
 pub struct PlayArgs {
+    /// Check a drive-signal WAV written by haptex instead of rendering one:
+    /// its samples against the scale chunk inside it, and its sidecar
+    /// (WAV.json, if present) against both. Exits non-zero on a mismatch.
+    #[arg(long, value_name = "WAV", exclusive = true)]
+    check: Option<PathBuf>,
     /// Voltage profile CSV (`x_mm,mu,voltage_v` from `haptex voltage`, or
     /// `x_mm,voltage_v`), or `-` for stdin. voltage_v is RMS volts.
-    #[arg(long, value_name = "U.csv")]
-    profile: PathBuf,
+    #[arg(long, value_name = "U.csv", required_unless_present = "check")]
+    profile: Option<PathBuf>,
     /// Finger trajectory CSV `t_s,x_mm` (times strictly increasing).
     #[arg(long, value_name = "T.csv", conflicts_with_all = ["velocity", "strokes"])]
     trajectory: Option<PathBuf>,
@@ -99,9 +110,16 @@ pub struct PlayArgs {
     /// values, zero, or repeat the profile as a tile.
     #[arg(long, value_enum, default_value_t = ExtendArg::Hold)]
     outside: ExtendArg,
-    /// Output: OUT.wav (plus OUT.wav.json) or OUT.csv; `-` writes CSV to stdout.
-    #[arg(short, long, value_name = "OUT")]
-    output: PathBuf,
+    /// Output: OUT.wav (plus OUT.wav.json) or OUT.csv; `-` writes CSV to
+    /// stdout. A FIFO or device (e.g. /dev/null) is written in place and
+    /// takes the format of --format (a WAV there gets no sidecar: its scale
+    /// is inside it).
+    #[arg(short, long, value_name = "OUT", required_unless_present = "check")]
+    output: Option<PathBuf>,
+    /// Output format, when -o's extension does not say (`-`, a FIFO, a
+    /// device): wav or csv.
+    #[arg(long, value_enum)]
+    format: Option<FormatArg>,
     /// Also write the signal as CSV (`t_s,x_mm,envelope_v,signal_v`).
     #[arg(long, value_name = "FILE.csv")]
     csv: Option<PathBuf>,
@@ -134,27 +152,42 @@ enum ExtendArg {
     Repeat,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Format {
+#[derive(Debug, Clone, Copy, PartialEq, ValueEnum)]
+enum FormatArg {
     Wav,
     Csv,
 }
 
 pub fn run(args: PlayArgs) -> anyhow::Result<()> {
-    let output = Output::new(Some(args.output.clone()));
-    let format = match output.path() {
-        None => Format::Csv,
-        Some(path) => match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-            Some("wav") => Format::Wav,
-            Some("csv") => Format::Csv,
-            _ => bail!(
-                "cannot tell the output format from {}: use a .wav or .csv file (or - for CSV on stdout)",
-                path.display()
-            ),
-        },
+    if let Some(wav) = &args.check {
+        return check(wav, args.quiet);
+    }
+    let (Some(profile), Some(output_path)) = (&args.profile, &args.output) else {
+        bail!("give --profile U.csv and -o OUT (or --check WAV)");
     };
+    if args.trajectory.is_none() && args.velocity.is_none() {
+        bail!("give --trajectory T.csv, or --velocity MM_PER_S to generate a trajectory");
+    }
+    let output = Output::new(Some(output_path.clone()));
+    let extension = output.path().and_then(|p| p.extension()).and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let format = match (args.format, extension.as_deref()) {
+        (Some(FormatArg::Wav), None | Some("wav")) | (None, Some("wav")) => FormatArg::Wav,
+        (Some(FormatArg::Csv), None | Some("csv")) | (None, Some("csv")) => FormatArg::Csv,
+        (None, None) if output.path().is_none() => FormatArg::Csv,
+        (Some(f), Some(e)) => bail!(
+            "--format {} does not match the extension .{e} of {}",
+            format!("{f:?}").to_lowercase(),
+            output_path.display()
+        ),
+        (None, _) => bail!(
+            "cannot tell the output format from {}: use a .wav or .csv file, or give --format wav|csv",
+            output_path.display()
+        ),
+    };
+    // Refuse a directory or special file before any work.
+    haptex_core::io::OutputTarget::of(output_path)?;
 
-    let curve = read_curve(&args.profile)?;
+    let curve = read_curve(profile)?;
     let (trajectory, trajectory_source) = trajectory(&args, &curve)?;
     let settings = RenderSettings {
         sample_rate_hz: args.sample_rate,
@@ -177,8 +210,8 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
 
     let mut written = Vec::new();
     match format {
-        Format::Wav => {
-            let path = output.path().expect("a WAV output is a file");
+        FormatArg::Wav => {
+            let path = output_path;
             let options = WavOptions {
                 format: match args.wav_format {
                     WavFormatArg::Pcm16 => WavFormat::Pcm16,
@@ -188,21 +221,26 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
                 volts_per_full_scale: args.volts_per_full_scale.unwrap_or(std::f64::consts::SQRT_2 * args.u_max),
             };
             let source = json!({
-                "profile": args.profile.display().to_string(),
+                "profile": profile.display().to_string(),
                 "trajectory": trajectory_source,
                 "command": std::env::args().collect::<Vec<_>>().join(" "),
                 "haptex_version": env!("CARGO_PKG_VERSION"),
             });
-            write_wav(path, &signal, &options, source)?;
+            let sidecar = write_wav(path, &signal, &options, source)?;
             written.push(format!(
-                "{} ({}, {} V per full scale)",
+                "{} ({}, {} V per full scale, in the WAV's hptx chunk; samples SHA-256 {})",
                 path.display(),
                 format!("{:?}", options.format).to_lowercase(),
-                options.volts_per_full_scale
+                Num(options.volts_per_full_scale),
+                sidecar.samples_sha256
             ));
-            written.push(sidecar_path(path).display().to_string());
+            if haptex_core::io::OutputTarget::of(path).is_ok_and(|t| t.is_file()) {
+                written.push(sidecar_path(path).display().to_string());
+            } else {
+                written.push("no sidecar for a stream output: the scale is inside the WAV".to_string());
+            }
         }
-        Format::Csv => {
+        FormatArg::Csv => {
             output.write(|w| signal.write_csv(w))?;
             if let Some(path) = output.path() {
                 written.push(path.display().to_string());
@@ -214,7 +252,7 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
         written.push(path.display().to_string());
     }
     if let Some(path) = &args.png {
-        let title = format!("haptex play: {}, {}", file_name(&args.profile), describe(&trajectory_source));
+        let title = format!("haptex play: {}, {}", file_name(profile), describe(&trajectory_source));
         signal.figure(&title).write_png(path)?;
         written.push(path.display().to_string());
     }
@@ -223,6 +261,36 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
         for w in written {
             eprintln!("wrote {w}");
         }
+    }
+    Ok(())
+}
+
+/// `--check WAV`: reads a drive-signal WAV with its checks (scale chunk,
+/// sample hash, sidecar) and says what it holds.
+fn check(path: &Path, quiet: bool) -> anyhow::Result<()> {
+    let wav = read_drive_wav(path)?;
+    let s = &wav.scale;
+    if !quiet {
+        eprintln!(
+            "{}: haptex drive signal, {} samples at {} Hz ({:.4} s), {}",
+            path.display(),
+            s.n_samples,
+            s.sample_rate_hz,
+            s.n_samples as f64 / f64::from(s.sample_rate_hz),
+            format!("{:?}", s.sample_format).to_lowercase()
+        );
+        eprintln!(
+            "scale: {} V at the amplifier output per full-scale sample ({}); peak {:.4} V",
+            Num(s.volts_per_full_scale),
+            s.conversion,
+            wav.peak_v()
+        );
+        eprintln!("samples: SHA-256 {} matches the scale chunk", s.samples_sha256);
+        match &wav.sidecar {
+            Some(_) => eprintln!("sidecar {}: belongs to this WAV (same hash and scale)", sidecar_path(path).display()),
+            None => eprintln!("sidecar {}: none (the WAV's own scale chunk is checked)", sidecar_path(path).display()),
+        }
+        eprintln!("ok");
     }
     Ok(())
 }

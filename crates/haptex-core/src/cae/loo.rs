@@ -21,6 +21,7 @@ use super::nelder_mead::{self, Options};
 use super::predict::{LOG_WEIGHT_CUTOFF, exp_near_zero};
 use super::widths::transpose;
 use super::{CaeError, Density, Kernel, ModelMatrix, Normalization, Widths};
+use crate::num::Num;
 
 /// Leave-one-out evaluation over one model matrix, with its buffers.
 #[derive(Debug)]
@@ -52,9 +53,40 @@ pub struct LooErrors {
     pub rmse_per_output: Vec<f64>,
 }
 
+/// The memory a leave-one-out evaluation may take by default: 2 GiB. Its
+/// N x N weight matrix grows with the square of the model size (N = 16 000
+/// is 2 GiB), so it is estimated and checked before anything is allocated.
+pub const DEFAULT_LOO_MEMORY_BYTES: u64 = 2 << 30;
+
 impl<'a> Loo<'a> {
+    /// Bytes of the working buffers of a leave-one-out over N model vectors
+    /// of D inputs and M outputs: the N x N weights, the N x M predictions
+    /// and the N x D normalized inputs, widths and kernel coefficients.
+    pub fn memory_bytes(n: usize, d: usize, m: usize) -> u128 {
+        let (n, d, m) = (n as u128, d as u128, m as u128);
+        8 * (n * n + n * m + 4 * n * d + 2 * n)
+    }
+
+    /// The leave-one-out evaluator of `matrix`, within the default memory
+    /// budget ([`DEFAULT_LOO_MEMORY_BYTES`]).
     pub fn new(matrix: &'a ModelMatrix) -> Result<Self, CaeError> {
+        Self::with_memory_budget(matrix, DEFAULT_LOO_MEMORY_BYTES)
+    }
+
+    /// The leave-one-out evaluator of `matrix`, refused with
+    /// [`CaeError::TooLarge`] if its buffers would exceed `budget_bytes`.
+    pub fn with_memory_budget(matrix: &'a ModelMatrix, budget_bytes: u64) -> Result<Self, CaeError> {
         let (n, d, m) = (matrix.n(), matrix.d(), matrix.m());
+        let needed = Self::memory_bytes(n, d, m);
+        if needed > u128::from(budget_bytes) {
+            return Err(CaeError::TooLarge(format!(
+                "leave-one-out over {n} model vectors needs a {n} x {n} weight matrix: about {} of memory, more \
+                 than the budget of {} (raise the budget, or give the kernel width so that no leave-one-out is \
+                 run)",
+                bytes_text(needed),
+                bytes_text(u128::from(budget_bytes))
+            )));
+        }
         let norm = Normalization::fit(matrix.inputs_flat(), d)?;
         let bn = norm.normalize_rows(matrix.inputs_flat());
         Ok(Self {
@@ -183,6 +215,16 @@ fn weight_row_lanes(kernel: &Kernel, x_t: &[f64], bi: &[f64], i: usize, row: &mu
     }
 }
 
+/// A byte count for a message, in binary units: `11.9 GiB`, `512.0 MiB`.
+fn bytes_text(bytes: u128) -> String {
+    let b = bytes as f64;
+    if b >= (1u64 << 30) as f64 {
+        format!("{:.1} GiB", b / (1u64 << 30) as f64)
+    } else {
+        format!("{:.1} MiB", b / (1u64 << 20) as f64)
+    }
+}
+
 /// How to search for the widths.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OptimizeOptions {
@@ -193,11 +235,18 @@ pub struct OptimizeOptions {
     /// Constant widths scanned (log-spaced over the range) before the
     /// simplex search starts from the best.
     pub scan_points: usize,
+    /// Largest memory the leave-one-out may take, bytes.
+    pub memory_budget_bytes: u64,
 }
 
 impl Default for OptimizeOptions {
     fn default() -> Self {
-        Self { constant_only: false, search_range: (0.005, 2.0), scan_points: 13 }
+        Self {
+            constant_only: false,
+            search_range: (0.005, 2.0),
+            scan_points: 13,
+            memory_budget_bytes: DEFAULT_LOO_MEMORY_BYTES,
+        }
     }
 }
 
@@ -241,9 +290,9 @@ pub fn optimize_widths(matrix: &ModelMatrix, options: OptimizeOptions) -> Result
     let (lo, hi) = options.search_range;
     Widths::range(lo, hi)?;
     if lo >= hi {
-        return Err(CaeError::Width(format!("the search range {lo} .. {hi} is empty")));
+        return Err(CaeError::Width(format!("the search range {} .. {} is empty", Num(lo), Num(hi))));
     }
-    let mut loo = Loo::new(matrix)?;
+    let mut loo = Loo::with_memory_budget(matrix, options.memory_budget_bytes)?;
     let (ln_lo, ln_hi) = (lo.ln(), hi.ln());
     let points = options.scan_points.max(2);
     let step = (ln_hi - ln_lo) / (points - 1) as f64;

@@ -6,10 +6,16 @@
 //! output. Inputs and outputs are stored row by row (row-major), so one
 //! model vector's outputs are contiguous: prediction streams through them.
 
+use std::collections::HashSet;
 use std::path::Path;
 
 use super::CaeError;
 use crate::io::Table;
+use crate::num::Num;
+
+/// Largest magnitude of a model value: squared differences of two values
+/// (the kernel distances, the leave-one-out residuals) stay finite.
+pub const MAX_MODEL_VALUE: f64 = 1e150;
 
 /// A model matrix: named inputs and outputs, N rows.
 #[derive(Debug, Clone, PartialEq)]
@@ -38,12 +44,12 @@ impl ModelMatrix {
         if m == 0 {
             return invalid("a model matrix needs at least one output".into());
         }
-        let names: Vec<&String> = inputs.iter().chain(&outputs).collect();
-        for (i, name) in names.iter().enumerate() {
+        let mut seen = HashSet::new();
+        for name in inputs.iter().chain(&outputs) {
             if name.is_empty() {
                 return invalid("empty column name".into());
             }
-            if names[..i].contains(name) {
+            if !seen.insert(name) {
                 return invalid(format!("column name '{name}' appears twice"));
             }
         }
@@ -61,6 +67,13 @@ impl ModelMatrix {
         if let Some(i) = b.iter().chain(&c).position(|v| !v.is_finite()) {
             return invalid(format!("value {i} is not finite"));
         }
+        if let Some(v) = b.iter().chain(&c).find(|v| v.abs() > MAX_MODEL_VALUE) {
+            return invalid(format!(
+                "value {} is beyond +-{} (squared distances would overflow)",
+                Num(*v),
+                Num(MAX_MODEL_VALUE)
+            ));
+        }
         Ok(Self { source_name: "<memory>".into(), inputs, outputs, b, c, lines: None })
     }
 
@@ -71,17 +84,18 @@ impl ModelMatrix {
         if inputs.is_empty() {
             return Err(CaeError::Inputs("no input columns named (--inputs a,b,c)".into()));
         }
-        for (i, name) in inputs.iter().enumerate() {
+        let mut input_set = HashSet::new();
+        for name in inputs {
             if name.is_empty() {
                 return Err(CaeError::Inputs("empty input name in the list of inputs".into()));
             }
-            if inputs[..i].contains(name) {
+            if !input_set.insert(*name) {
                 return Err(CaeError::Inputs(format!("input '{name}' is named twice in the list of inputs")));
             }
         }
         let input_columns = inputs.iter().map(|name| table.require(name)).collect::<Result<Vec<_>, _>>()?;
         let output_names: Vec<String> =
-            table.columns().iter().filter(|c| !inputs.contains(&c.as_str())).cloned().collect();
+            table.columns().iter().filter(|c| !input_set.contains(c.as_str())).cloned().collect();
         if output_names.is_empty() {
             return Err(table.error_at(None, None, "no output columns: every column is an input").into());
         }
@@ -90,6 +104,17 @@ impl ModelMatrix {
             return Err(table.error_at(None, None, format!("a model matrix needs at least 2 rows, got {n}")).into());
         }
         let output_columns: Vec<&[f64]> = output_names.iter().map(|name| table.column(name).unwrap()).collect();
+        let names = inputs.iter().copied().chain(output_names.iter().map(String::as_str));
+        for (name, column) in names.zip(input_columns.iter().chain(&output_columns)) {
+            if let Some(row) = column.iter().position(|v| v.abs() > MAX_MODEL_VALUE) {
+                let message = format!(
+                    "{} is beyond +-{} (squared distances would overflow)",
+                    Num(column[row]),
+                    Num(MAX_MODEL_VALUE)
+                );
+                return Err(table.error_at(Some(row), Some(name), message).into());
+            }
+        }
         let (d, m) = (inputs.len(), output_names.len());
         let mut b = Vec::with_capacity(n * d);
         let mut c = Vec::with_capacity(n * m);

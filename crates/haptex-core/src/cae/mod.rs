@@ -29,7 +29,10 @@ mod predict;
 mod prune;
 mod widths;
 
-pub use loo::{Loo, LooErrors, OptimizeOptions, OptimizerReport, ScanPoint, WidthOptimum, optimize_widths};
+pub use loo::{
+    DEFAULT_LOO_MEMORY_BYTES, Loo, LooErrors, OptimizeOptions, OptimizerReport, ScanPoint, WidthOptimum,
+    optimize_widths,
+};
 pub use matrix::ModelMatrix;
 pub use normalize::Normalization;
 pub use predict::{Cae, Diagnostics, EXTRAPOLATION_KERNEL_DISTANCE, LOG_WEIGHT_CUTOFF, Scratch};
@@ -56,4 +59,7 @@ pub enum CaeError {
     /// A query has the wrong number of inputs or a non-finite value.
     #[error("{0}")]
     Query(String),
+    /// The work asked for needs more memory than its budget.
+    #[error("{0}")]
+    TooLarge(String),
 }

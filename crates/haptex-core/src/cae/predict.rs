@@ -23,6 +23,7 @@
 use super::prune::{Pruning, weighted_sum};
 use super::widths::transpose;
 use super::{CaeError, Density, Kernel, ModelMatrix, Normalization, Widths};
+use crate::num::Num;
 
 /// A query whose nearest model vector is farther than this many kernel
 /// widths (sqrt(sum_l ((b_l - b_nl) / w_nl)^2) in normalized units) is
@@ -237,7 +238,7 @@ impl Cae {
             .outside_range
             .map(|l| {
                 let (lo, hi) = (self.norm.min(l), self.norm.min(l) + self.norm.range(l));
-                format!("; '{}' = {} is outside the database range {lo} .. {hi}", names[l], b[l])
+                format!("; '{}' = {} is outside the database range {} .. {}", names[l], Num(b[l]), Num(lo), Num(hi))
             })
             .unwrap_or_default();
         Some(format!(

@@ -25,6 +25,7 @@
 use serde::Serialize;
 
 use super::{CaeError, Normalization};
+use crate::num::Num;
 
 /// The width parameters: w_min and w_max in normalized input units
 /// (equal for a constant width).
@@ -51,7 +52,7 @@ impl Widths {
     pub fn range(w_min: f64, w_max: f64) -> Result<Self, CaeError> {
         for (name, w) in [("w_min", w_min), ("w_max", w_max)] {
             if !(w.is_finite() && w > 0.0) {
-                return Err(CaeError::Width(format!("{name} must be a positive finite number, got {w}")));
+                return Err(CaeError::Width(format!("{name} must be a positive finite number, got {}", Num(w))));
             }
             if !(Self::SMALLEST..=Self::LARGEST).contains(&w) {
                 return Err(CaeError::Width(format!(

@@ -1,10 +1,29 @@
-//! Atomic output: write to a temporary file beside the target, then rename.
+//! Output files: atomic replacement of regular files, direct writes to
+//! streams, and refusal of everything else.
 //!
-//! A reader never sees a half-written file, and a failed or interrupted
-//! write leaves the previous file (if any) untouched.
+//! What an output path names decides how it is written ([`OutputTarget`]):
+//!
+//! - a regular file, or a path that does not exist yet: written to a
+//!   temporary file beside it (`.haptex-PID-XXXXXX.tmp`), synced and renamed
+//!   over it, so that a reader never sees a half-written file and a failed
+//!   or killed write leaves the previous file untouched. A symbolic link to
+//!   a regular file keeps the link: its target is replaced;
+//! - `-`, a character device (`/dev/null`, a terminal), a FIFO, or a
+//!   descriptor path (`/dev/stdout`, `/dev/fd/N`, `/proc/self/fd/N`):
+//!   written directly, in place. Replacing them by rename would destroy
+//!   them (run as root, `-o /dev/null` used to turn the system's
+//!   `/dev/null` into a regular file);
+//! - a directory, block device, socket or anything else: refused with an
+//!   error saying what it is.
+//!
+//! A killed run leaves its temporary file behind; the next write into the
+//! same directory removes those of processes that are no longer running.
 
+use std::collections::HashSet;
+use std::fs::OpenOptions;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 /// An output file could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -15,33 +34,220 @@ pub struct WriteError {
     pub source: std::io::Error,
 }
 
-/// Writes `path` atomically: `fill` writes the content into a buffered
-/// temporary file in the same directory, which is synced and renamed over
-/// `path` only if `fill` succeeds.
+impl WriteError {
+    fn new(path: &Path, source: std::io::Error) -> Self {
+        Self { path: path.to_path_buf(), source }
+    }
+
+    fn refused(path: &Path, message: String) -> Self {
+        Self::new(path, std::io::Error::new(std::io::ErrorKind::InvalidInput, message))
+    }
+}
+
+/// How an output path is written.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum OutputTarget {
+    /// `-`: standard output.
+    Stdout,
+    /// A character device, FIFO or descriptor path, written in place.
+    Stream(PathBuf),
+    /// A regular file or a new path (symbolic links resolved), replaced
+    /// atomically.
+    File(PathBuf),
+}
+
+impl OutputTarget {
+    /// What `path` names, or an error if it is nothing haptex may write
+    /// (a directory, block device, socket ...).
+    pub fn of(path: &Path) -> Result<Self, WriteError> {
+        if path.as_os_str() == "-" {
+            return Ok(Self::Stdout);
+        }
+        if is_descriptor_path(path) {
+            return Ok(Self::Stream(path.to_path_buf()));
+        }
+        let metadata = match std::fs::metadata(path) {
+            Ok(m) => m,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                // A new file, or a dangling symbolic link (written as a new
+                // file in the link's place, as any tool would).
+                if path.file_name().is_none() {
+                    return Err(WriteError::refused(path, "not a file name".into()));
+                }
+                return Ok(Self::File(path.to_path_buf()));
+            }
+            Err(e) => return Err(WriteError::new(path, e)),
+        };
+        let kind = metadata.file_type();
+        if kind.is_file() {
+            // Replace the file a symbolic link points to, not the link.
+            let resolved = if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) {
+                std::fs::canonicalize(path).map_err(|e| WriteError::new(path, e))?
+            } else {
+                path.to_path_buf()
+            };
+            return Ok(Self::File(resolved));
+        }
+        if kind.is_dir() {
+            return Err(WriteError::refused(path, "is a directory, not a file".into()));
+        }
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::FileTypeExt;
+            if kind.is_char_device() || kind.is_fifo() {
+                return Ok(Self::Stream(path.to_path_buf()));
+            }
+            let what = if kind.is_block_device() {
+                "a block device"
+            } else if kind.is_socket() {
+                "a socket"
+            } else {
+                "a special file"
+            };
+            Err(WriteError::refused(
+                path,
+                format!(
+                    "is {what}: haptex writes regular files, character devices (/dev/null), FIFOs, or - for \
+                     standard output"
+                ),
+            ))
+        }
+        #[cfg(not(unix))]
+        Err(WriteError::refused(path, "is not a regular file".into()))
+    }
+
+    /// Whether the output replaces a file atomically (a regular file or a
+    /// new path), as opposed to a stream written in place.
+    pub fn is_file(&self) -> bool {
+        matches!(self, Self::File(_))
+    }
+}
+
+/// `/dev/stdout`, `/dev/stderr`, `/dev/fd/N`, `/proc/self/fd/N`: paths that
+/// stand for an open descriptor of this process. They are written in place
+/// whatever the descriptor is (a renamed file would not reach it).
+fn is_descriptor_path(path: &Path) -> bool {
+    let Some(text) = path.to_str() else { return false };
+    matches!(text, "/dev/stdout" | "/dev/stderr")
+        || ["/dev/fd/", "/proc/self/fd/"].iter().any(|prefix| {
+            text.strip_prefix(prefix).is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+        })
+}
+
+/// Writes the output `path` names (see the module documentation): a
+/// regular file or new path atomically, `-` and streams in place.
+/// `fill` writes the content into a buffered writer; for an atomic target
+/// nothing is replaced unless it succeeds.
 pub fn write_atomic<F>(path: &Path, fill: F) -> Result<(), WriteError>
 where
     F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
 {
-    let wrap = |source| WriteError { path: path.to_path_buf(), source };
+    match OutputTarget::of(path)? {
+        OutputTarget::Stdout => {
+            let stdout = std::io::stdout();
+            let mut writer = BufWriter::with_capacity(1 << 16, stdout.lock());
+            fill(&mut writer).and_then(|()| writer.flush()).map_err(|e| WriteError::new(path, e))
+        }
+        OutputTarget::Stream(stream) => {
+            let file = OpenOptions::new().write(true).open(&stream).map_err(|e| WriteError::new(path, e))?;
+            let mut writer = BufWriter::with_capacity(1 << 16, file);
+            fill(&mut writer).and_then(|()| writer.flush()).map_err(|e| WriteError::new(path, e))
+        }
+        OutputTarget::File(file) => replace_file(&file, fill).map_err(|e| WriteError::new(path, e)),
+    }
+}
+
+/// Writes `fill` to a temporary file beside `path` and renames it over
+/// `path`.
+fn replace_file<F>(path: &Path, fill: F) -> std::io::Result<()>
+where
+    F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
+{
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let tmp = tempfile::Builder::new().prefix(".haptex-").suffix(".tmp").tempfile_in(dir).map_err(wrap)?;
+    remove_stale_temporaries(dir);
+    let tmp = tempfile::Builder::new().prefix(&temporary_prefix()).suffix(TEMPORARY_SUFFIX).tempfile_in(dir)?;
     let mut writer = BufWriter::with_capacity(1 << 16, tmp);
-    fill(&mut writer).map_err(wrap)?;
-    let tmp = writer.into_inner().map_err(|e| wrap(e.into_error()))?;
+    fill(&mut writer)?;
+    let tmp = writer.into_inner().map_err(|e| e.into_error())?;
     // Temporary files are created private (0600); an output is an ordinary
     // file: keep the permissions of the file it replaces, or use 0644.
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
         let mode = std::fs::metadata(path).map(|m| m.permissions().mode() & 0o7777).unwrap_or(0o644);
-        tmp.as_file().set_permissions(std::fs::Permissions::from_mode(mode)).map_err(wrap)?;
+        tmp.as_file().set_permissions(std::fs::Permissions::from_mode(mode))?;
     }
-    tmp.as_file().sync_all().map_err(wrap)?;
-    tmp.persist(path).map_err(|e| wrap(e.error))?;
+    tmp.as_file().sync_all()?;
+    tmp.persist(path).map_err(|e| e.error)?;
     Ok(())
+}
+
+const TEMPORARY_PREFIX: &str = ".haptex-";
+const TEMPORARY_SUFFIX: &str = ".tmp";
+
+/// `.haptex-PID-`: the writing process is part of a temporary's name, so
+/// that a later run can tell a dead run's leftovers from a live run's file.
+pub(crate) fn temporary_prefix() -> String {
+    format!("{TEMPORARY_PREFIX}{}-", std::process::id())
+}
+
+/// Removes the `.haptex-PID-*.tmp` files (and directories) in `dir` whose
+/// process is no longer running: what killed runs left behind. Each
+/// directory is swept once per process; errors are ignored (a leftover is
+/// harmless, and another process may be sweeping too).
+pub fn remove_stale_temporaries(dir: &Path) {
+    static SWEPT: Mutex<Option<HashSet<PathBuf>>> = Mutex::new(None);
+    let key = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
+    match SWEPT.lock() {
+        Ok(mut swept) => {
+            if !swept.get_or_insert_with(HashSet::new).insert(key) {
+                return;
+            }
+        }
+        Err(_) => return,
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name.to_str().and_then(temporary_pid) else { continue };
+        if pid == std::process::id() || process_is_running(pid) {
+            continue;
+        }
+        let path = entry.path();
+        let _ = if entry.file_type().is_ok_and(|t| t.is_dir()) {
+            std::fs::remove_dir_all(&path)
+        } else {
+            std::fs::remove_file(&path)
+        };
+    }
+}
+
+/// The PID in a temporary's name `.haptex-PID-XXXX.tmp`, if it is one.
+fn temporary_pid(name: &str) -> Option<u32> {
+    let rest = name.strip_prefix(TEMPORARY_PREFIX)?.strip_suffix(TEMPORARY_SUFFIX)?;
+    let (pid, _) = rest.split_once('-')?;
+    pid.parse().ok()
+}
+
+/// Whether process `pid` is running. Linux: `/proc/PID` exists. Elsewhere
+/// a process cannot be checked without libc: assume it runs (never remove a
+/// live run's file).
+fn process_is_running(pid: u32) -> bool {
+    let proc = Path::new("/proc");
+    if proc.join("self").exists() { proc.join(pid.to_string()).exists() } else { true }
+}
+
+/// A test hook: if the environment variable `HAPTEX_FAULT_INJECT` equals
+/// `name`, the process aborts here, as if killed. Tests use it to check
+/// that an output interrupted between two of its files is detected.
+pub fn fault_point(name: &str) {
+    if std::env::var_os("HAPTEX_FAULT_INJECT").is_some_and(|v| v == name) {
+        eprintln!("haptex: HAPTEX_FAULT_INJECT={name}: aborting here (test hook)");
+        std::process::abort();
+    }
 }
 
 #[cfg(test)]
@@ -67,5 +273,23 @@ mod tests {
         }
         // No temporary file is left behind.
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn temporary_names_carry_the_pid() {
+        assert_eq!(temporary_pid(".haptex-1234-aBc123.tmp"), Some(1234));
+        assert_eq!(temporary_pid(".haptex-aBc123.tmp"), None);
+        assert_eq!(temporary_pid("haptex-1-x.tmp"), None);
+        assert!(temporary_prefix().starts_with(".haptex-"));
+    }
+
+    #[test]
+    fn descriptor_paths_are_streams() {
+        for p in ["/dev/stdout", "/dev/stderr", "/dev/fd/1", "/proc/self/fd/7"] {
+            assert!(is_descriptor_path(Path::new(p)), "{p}");
+        }
+        for p in ["/dev/fd/", "/dev/fd/x", "/dev/null", "out.csv", "/proc/self/fd/1/x"] {
+            assert!(!is_descriptor_path(Path::new(p)), "{p}");
+        }
     }
 }

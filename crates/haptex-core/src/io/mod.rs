@@ -1,10 +1,13 @@
 //! File formats shared by every haptex command: the numeric CSV table
-//! reader, CSV number formatting and atomic output.
+//! reader, CSV number formatting, output files (atomic replacement,
+//! streams) and multi-file outputs.
 
 mod atomic;
+mod fileset;
 mod table;
 
-pub use atomic::{WriteError, write_atomic};
+pub use atomic::{OutputTarget, WriteError, fault_point, remove_stale_temporaries, write_atomic};
+pub use fileset::{FileSet, MemberError, MemberHashes, sha256_file, sha256_hex, verify_members};
 pub use table::{MAX_LINE_BYTES, Table, TableError, TableErrorKind};
 
 use std::io::Write;

@@ -71,6 +71,8 @@ pub enum LibraryError {
     SyntheticMismatch { name: String, existing: &'static str, new: &'static str },
     #[error("stroke {id}: stored profile is corrupt: {message}")]
     Corrupt { id: i64, message: String },
+    #[error("not stored: the profile would not read back from the library: {0}")]
+    Unreadable(String),
     #[error("library database error: {0}")]
     Sqlite(#[from] rusqlite::Error),
 }
@@ -357,12 +359,8 @@ impl Library {
             self.conn.query_row("SELECT x_mm, mu, fn_n FROM profiles WHERE stroke_id = ?1", [stroke_id], |r| {
                 Ok((r.get(0)?, r.get(1)?, r.get(2)?))
             })?;
-        let corrupt = |message: String| LibraryError::Corrupt { id: stroke_id, message };
-        let profile = FrictionProfile::new(decode(&x), decode(&mu)).map_err(|e| corrupt(e.to_string()))?;
-        let profile = match fnn {
-            Some(f) => profile.with_normal_force(decode(&f)).map_err(|e| corrupt(e.to_string()))?,
-            None => profile,
-        };
+        let profile = read_back(&x, &mu, fnn.as_deref())
+            .map_err(|e| LibraryError::Corrupt { id: stroke_id, message: e.to_string() })?;
         Ok(StoredProfile { stroke, profile })
     }
 
@@ -509,6 +507,10 @@ impl Library {
 
     fn insert(&mut self, import: ImportId, row: &StrokeRow, profile: &FrictionProfile) -> Result<Added, LibraryError> {
         check_name(row.material)?;
+        // The library never accepts what it cannot read back: decode what
+        // would be stored exactly as `profile()` will.
+        read_back(&encode(profile.x_mm()), &encode(profile.mu()), profile.fn_n().map(encode).as_deref())
+            .map_err(|e| LibraryError::Unreadable(e.to_string()))?;
         let tx = self.conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
         if let Some(id) =
             tx.query_row("SELECT id FROM strokes WHERE content_sha256 = ?1", [row.sha256], |r| r.get(0)).optional()?
@@ -721,6 +723,15 @@ fn check_name(name: &str) -> Result<(), LibraryError> {
         return invalid("contains control characters");
     }
     Ok(())
+}
+
+/// A profile from its stored blobs, validated as any profile is.
+fn read_back(x: &[u8], mu: &[u8], fn_n: Option<&[u8]>) -> Result<FrictionProfile, crate::profile::ProfileError> {
+    let profile = FrictionProfile::new(decode(x), decode(mu))?;
+    match fn_n {
+        Some(f) => profile.with_normal_force(decode(f)),
+        None => Ok(profile),
+    }
 }
 
 fn encode(values: &[f64]) -> Vec<u8> {

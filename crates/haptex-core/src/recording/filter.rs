@@ -19,6 +19,7 @@
 use std::f64::consts::PI;
 
 use super::error::RecordingError;
+use crate::num::Num;
 
 /// A linear-phase (symmetric, odd-length) FIR low-pass filter.
 #[derive(Debug, Clone, PartialEq)]
@@ -49,7 +50,7 @@ impl LowPassFir {
     ) -> Result<Self, RecordingError> {
         let config = |name, message: String| Err(RecordingError::Config { name, message });
         if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
-            return config("sample rate", format!("must be positive, got {sample_rate_hz} Hz"));
+            return config("sample rate", format!("must be positive, got {} Hz", Num(sample_rate_hz)));
         }
         if !(passband_hz > 0.0 && stopband_hz > passband_hz && stopband_hz < sample_rate_hz / 2.0) {
             return config(
@@ -62,7 +63,7 @@ impl LowPassFir {
             );
         }
         if !(21.0..=200.0).contains(&attenuation_db) {
-            return config("stopband attenuation", format!("must be 21 to 200 dB, got {attenuation_db}"));
+            return config("stopband attenuation", format!("must be 21 to 200 dB, got {}", Num(attenuation_db)));
         }
         let a = attenuation_db;
         let beta = if a > 50.0 { 0.1102 * (a - 8.7) } else { 0.5842 * (a - 21.0).powf(0.4) + 0.07886 * (a - 21.0) };

@@ -24,6 +24,7 @@ use sha2::{Digest, Sha256};
 
 use super::error::{Place, RecordingError};
 use crate::io::{Table, WriteError, write_atomic, write_csv_row};
+use crate::num::Num;
 
 /// Value of the metadata's `format` field.
 pub const FORMAT: &str = "haptex-recording-1";
@@ -147,16 +148,32 @@ impl Recording {
     /// Reads and validates a recording from its metadata file.
     pub fn load(metadata_path: &Path) -> Result<Self, RecordingError> {
         let name = metadata_path.display().to_string();
-        let meta_bytes = read_bytes(metadata_path)?;
-        let meta: RecordingMeta = serde_json::from_slice(&meta_bytes)
-            .map_err(|e| RecordingError::Metadata { file: name.clone(), message: format!("invalid metadata: {e}") })?;
-        check_meta(&name, &meta)?;
+        let meta_bytes = read_bytes(metadata_path, MAX_METADATA_BYTES)?;
+        let meta = parse_meta(&name, &meta_bytes)?;
         let dir = metadata_path.parent().unwrap_or(Path::new(""));
-        let force_path = dir.join(&meta.force.file);
-        let position_path = dir.join(&meta.position.file);
-        let force_bytes = read_bytes(&force_path)?;
-        let position_bytes = read_bytes(&position_path)?;
+        let force_path = stream_path(&name, dir, "force.file", &meta.force.file)?;
+        let position_path = stream_path(&name, dir, "position.file", &meta.position.file)?;
+        let force_bytes = read_bytes(&force_path, MAX_STREAM_BYTES)?;
+        let position_bytes = read_bytes(&position_path, MAX_STREAM_BYTES)?;
+        Self::parse(
+            &name,
+            &meta_bytes,
+            (&force_path.display().to_string(), &force_bytes),
+            (&position_path.display().to_string(), &position_bytes),
+        )
+    }
 
+    /// Parses and validates a recording from the bytes of its metadata and
+    /// streams (what [`Recording::load`] does once the files are read; the
+    /// stream names' extensions, `.csv` or `.npy`, give their format).
+    pub fn parse(
+        name: &str,
+        meta_bytes: &[u8],
+        (force_name, force_bytes): (&str, &[u8]),
+        (position_name, position_bytes): (&str, &[u8]),
+    ) -> Result<Self, RecordingError> {
+        let meta = parse_meta(name, meta_bytes)?;
+        let name = name.to_string();
         let mut hash = Sha256::new();
         for part in [&meta_bytes, &force_bytes, &position_bytes] {
             hash.update((part.len() as u64).to_le_bytes());
@@ -164,14 +181,12 @@ impl Recording {
         }
         let sha256 = hex(&hash.finalize());
 
-        let force_name = force_path.display().to_string();
-        let force = read_stream(&force_bytes, &force_name, "force.file", &FORCE_COLUMNS)?;
-        let position_name = position_path.display().to_string();
-        let position = read_stream(&position_bytes, &position_name, "position.file", &POSITION_COLUMNS)?;
-        check_rate(&name, "force.rate_hz", &force_name, &force.columns[0], meta.force.rate_hz)?;
-        check_rate(&name, "position.rate_hz", &position_name, &position.columns[0], meta.position.rate_hz)?;
-        check_force_uniform(&force_name, &force.columns[0], meta.force.rate_hz, &|row| force.place(row))?;
-        check_spans((&force_name, &force.columns[0]), (&position_name, &position.columns[0]), meta.position.rate_hz)?;
+        let force = read_stream(force_bytes, force_name, "force.file", &FORCE_COLUMNS)?;
+        let position = read_stream(position_bytes, position_name, "position.file", &POSITION_COLUMNS)?;
+        check_rate(&name, "force.rate_hz", force_name, &force.columns[0], meta.force.rate_hz)?;
+        check_rate(&name, "position.rate_hz", position_name, &position.columns[0], meta.position.rate_hz)?;
+        check_force_uniform(force_name, &force.columns[0], meta.force.rate_hz, &|row| force.place(row))?;
+        check_spans((force_name, &force.columns[0]), (position_name, &position.columns[0]), meta.position.rate_hz)?;
 
         let [t_s, fn_n, ft_n]: [Vec<f64>; 3] = force.columns.try_into().expect("three force columns");
         let [tp_s, x_mm]: [Vec<f64>; 2] = position.columns.try_into().expect("two position columns");
@@ -277,12 +292,74 @@ fn write_csv_stream(path: &Path, names: &[&str], columns: &[&[f64]]) -> Result<(
     })
 }
 
-fn read_bytes(path: &Path) -> Result<Vec<u8>, RecordingError> {
-    std::fs::read(path).map_err(|e| RecordingError::Io { file: path.display().to_string(), message: e.to_string() })
+/// Largest metadata file read, in bytes (1 MiB; real ones are ~1 kB).
+pub const MAX_METADATA_BYTES: u64 = 1 << 20;
+/// Largest stream file read, in bytes (1 GiB: a CSV of 10 minutes of
+/// forces at 20 kHz is ~0.5 GB).
+pub const MAX_STREAM_BYTES: u64 = 1 << 30;
+
+/// The path of a stream named in the metadata (`field`), checked before
+/// anything is read from it: a plain relative path to a regular file inside
+/// the recording's directory (symbolic links resolved), so that metadata
+/// cannot make haptex read `/dev/zero`, a FIFO, or a file elsewhere.
+fn stream_path(file: &str, dir: &Path, field: &str, relative: &str) -> Result<PathBuf, RecordingError> {
+    use std::path::Component;
+    let named = Path::new(relative);
+    if relative.is_empty() || !named.components().all(|c| matches!(c, Component::Normal(_))) {
+        return Err(RecordingError::field(
+            file,
+            field,
+            format!(
+                "{relative:?} is not a file name inside the recording's directory (no absolute paths, no '..'): \
+                 streams sit beside their metadata"
+            ),
+        ));
+    }
+    let path = dir.join(named);
+    let resolved = std::fs::canonicalize(&path)
+        .map_err(|e| RecordingError::Io { file: path.display().to_string(), message: e.to_string() })?;
+    let home = std::fs::canonicalize(if dir.as_os_str().is_empty() { Path::new(".") } else { dir })
+        .map_err(|e| RecordingError::field(file, field, format!("{}: {e}", dir.display())))?;
+    if !resolved.starts_with(&home) {
+        return Err(RecordingError::field(
+            file,
+            field,
+            format!("{} leads outside the recording's directory (to {})", path.display(), resolved.display()),
+        ));
+    }
+    Ok(path)
+}
+
+/// Reads a file of at most `limit` bytes, refusing anything but a regular
+/// file, and a larger file, before reading it.
+fn read_bytes(path: &Path, limit: u64) -> Result<Vec<u8>, RecordingError> {
+    use std::io::Read;
+    let io = |message: String| RecordingError::Io { file: path.display().to_string(), message };
+    let metadata = std::fs::metadata(path).map_err(|e| io(e.to_string()))?;
+    if !metadata.is_file() {
+        return Err(io("not a regular file (a directory, device or FIFO): not read".into()));
+    }
+    if metadata.len() > limit {
+        return Err(io(format!("{} bytes: larger than the limit of {limit} bytes, not read", metadata.len())));
+    }
+    let mut bytes = Vec::with_capacity(metadata.len() as usize);
+    std::fs::File::open(path).and_then(|f| f.take(limit + 1).read_to_end(&mut bytes)).map_err(|e| io(e.to_string()))?;
+    if bytes.len() as u64 > limit {
+        return Err(io(format!("grew beyond the limit of {limit} bytes while being read")));
+    }
+    Ok(bytes)
 }
 
 fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Parses and checks a metadata file's bytes.
+fn parse_meta(name: &str, bytes: &[u8]) -> Result<RecordingMeta, RecordingError> {
+    let meta: RecordingMeta = serde_json::from_slice(bytes)
+        .map_err(|e| RecordingError::Metadata { file: name.to_string(), message: format!("invalid metadata: {e}") })?;
+    check_meta(name, &meta)?;
+    Ok(meta)
 }
 
 /// Checks the metadata fields that the JSON types cannot.
@@ -301,7 +378,11 @@ fn check_meta(file: &str, meta: &RecordingMeta) -> Result<(), RecordingError> {
     }
     for (field, rate) in [("force.rate_hz", meta.force.rate_hz), ("position.rate_hz", meta.position.rate_hz)] {
         if !(rate.is_finite() && rate > 0.0) {
-            return Err(RecordingError::field(file, field, format!("must be a positive rate in Hz, got {rate}")));
+            return Err(RecordingError::field(
+                file,
+                field,
+                format!("must be a positive rate in Hz, got {}", Num(rate)),
+            ));
         }
     }
     if meta.force.rate_hz < 2.0 * meta.position.rate_hz {
@@ -425,6 +506,15 @@ fn read_npy_columns(bytes: &[u8], file: &str, names: &[&str]) -> Result<Vec<Vec<
             names.join(", ")
         )));
     }
+    // The shape is the file's claim: check it against the bytes present
+    // before reading, so that no allocation is sized by it alone.
+    let fits = shape[0].checked_mul(k as u64).is_some_and(|n| n.saturating_mul(4) <= bytes.len() as u64);
+    if !fits {
+        return Err(npy_error(format!(
+            "array shape {shape:?} claims more values than the file's {} bytes hold",
+            bytes.len()
+        )));
+    }
     let rows = shape[0] as usize;
     let fortran = npy.order() == npyz::Order::Fortran;
     let dtype = npy.dtype().descr();
@@ -468,7 +558,7 @@ fn check_columns(
                 file,
                 place(i),
                 Some(name),
-                format!("not a finite number: {}", column[i]),
+                format!("not a finite number: {}", Num(column[i])),
             ));
         }
     }
@@ -486,7 +576,7 @@ fn check_columns(
             file,
             place(i + 1),
             Some("t_s"),
-            format!("time must increase strictly: {} s follows {} s", t[i + 1], t[i]),
+            format!("time must increase strictly: {} s follows {} s", Num(t[i + 1]), Num(t[i])),
         ));
     }
     Ok(())

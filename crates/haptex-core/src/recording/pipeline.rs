@@ -18,6 +18,7 @@ use super::filter::{LowPassFir, resample_filtered};
 use super::format::Recording;
 use super::location::{GridSeries, combine_segments, to_location_grid};
 use super::sliding::{Direction, SlidingCriteria, SlidingSegment, detect_sliding, finger_velocity};
+use crate::num::Num;
 use crate::profile::FrictionProfile;
 
 /// Which sliding directions contribute to a stroke's profile.
@@ -117,7 +118,7 @@ impl ProcessingConfig {
         ];
         for (name, value) in positive {
             if !(value.is_finite() && value > 0.0) {
-                return Err(RecordingError::Config { name, message: format!("must be positive, got {value}") });
+                return Err(RecordingError::Config { name, message: format!("must be positive, got {}", Num(value)) });
             }
         }
         let non_negative = [
@@ -128,7 +129,10 @@ impl ProcessingConfig {
         ];
         for (name, value) in non_negative {
             if !(value.is_finite() && value >= 0.0) {
-                return Err(RecordingError::Config { name, message: format!("must be zero or positive, got {value}") });
+                return Err(RecordingError::Config {
+                    name,
+                    message: format!("must be zero or positive, got {}", Num(value)),
+                });
             }
         }
         if self.passband_fraction >= self.stopband_fraction || self.stopband_fraction > 1.0 {

@@ -13,6 +13,7 @@
 //! | square | +1 for phase < 1/2, else -1     | 1          | none (s^2 = U^2 between edges) |
 //! | none   | 1 (s = U, a unipolar drive)     | 1          | none         |
 
+use crate::num::Num;
 use serde::{Deserialize, Serialize};
 
 /// Waveform of the carrier.
@@ -75,7 +76,7 @@ impl Carrier {
         }
         let f = self.frequency_hz;
         if !(f.is_finite() && f > 0.0) {
-            return Err(format!("carrier frequency must be a positive finite number, got {f} Hz"));
+            return Err(format!("carrier frequency must be a positive finite number, got {} Hz", Num(f)));
         }
         if f >= sample_rate_hz / 2.0 {
             return Err(format!(

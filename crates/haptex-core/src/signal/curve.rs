@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::electrovibration::VoltageProfile;
 use crate::io::Table;
+use crate::num::Num;
 use crate::profile::{ProfileError, validate};
 
 /// What the voltage is where the finger is outside the profile's span
@@ -124,7 +125,9 @@ impl From<&VoltageProfile> for VoltageCurve {
 
 fn check_non_negative(voltage_v: &[f64]) -> Result<(), (Option<usize>, &'static str, String)> {
     match voltage_v.iter().position(|&u| u < 0.0) {
-        Some(i) => Err((Some(i), "voltage_v", format!("an RMS voltage cannot be negative, got {} V", voltage_v[i]))),
+        Some(i) => {
+            Err((Some(i), "voltage_v", format!("an RMS voltage cannot be negative, got {} V", Num(voltage_v[i]))))
+        }
         None => Ok(()),
     }
 }

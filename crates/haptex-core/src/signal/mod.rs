@@ -29,7 +29,10 @@ use serde::{Deserialize, Serialize};
 pub use carrier::{Carrier, CarrierShape};
 pub use curve::{Extend, VoltageCurve};
 pub use safety::{ClipReport, EnvelopeLimiter, Limits};
-pub use wav::{WavFormat, WavOptions, WavSidecar, encode_wav, read_wav_volts, sidecar_path, write_wav};
+pub use wav::{
+    DriveWav, EncodedWav, SCALE_CHUNK_ID, ScaleChunk, WavFormat, WavOptions, WavSidecar, check_volts_per_full_scale,
+    decode_drive_wav, encode_wav, read_drive_wav, sidecar_path, write_wav,
+};
 
 use crate::io::{WriteError, write_csv_row};
 use crate::plot::{Figure, Panel};

@@ -5,6 +5,7 @@
 //! [`crate::realtime::RealtimeRenderer`]) pass every envelope sample through
 //! the same [`EnvelopeLimiter`].
 
+use crate::num::Num;
 use serde::{Deserialize, Serialize};
 
 /// The limits a drive signal must respect.
@@ -31,7 +32,7 @@ impl Limits {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(format!("{name} must be a positive finite number, got {v}"))
+                Err(format!("{name} must be a positive finite number, got {}", Num(v)))
             }
         };
         positive("U_max (V)", self.u_max_v)?;

@@ -1,19 +1,28 @@
 //! WAV output of a drive signal (mono, through `hound`) and its sidecar
-//! JSON, which records the scale in volts and how the signal was made.
+//! JSON, which records how the signal was made.
 //!
 //! Scale: a sample value v (an integer code, or a float) stands for
 //! v / full_scale * volts_per_full_scale volts at the amplifier output,
 //! with full_scale = 32767 (16-bit PCM), 8388607 (24-bit PCM) or 1.0
 //! (32-bit float). Codes are rounded to the nearest integer, without dither.
 //! A signal whose peak exceeds the full scale is refused, never clipped.
+//!
+//! The scale travels inside the WAV: a `hptx` chunk after the samples
+//! holds a JSON [`ScaleChunk`] with the volts per full scale and the
+//! SHA-256 of the sample bytes. Audio tools skip the chunk; haptex's reader
+//! ([`read_drive_wav`]) refuses a WAV without it, a WAV whose samples do not
+//! match its hash, and a sidecar that does not belong to the WAV (another
+//! hash or another scale), so that samples are never paired with the wrong
+//! scale, even after a run killed between writing the WAV and its sidecar.
 
-use std::io::Cursor;
+use std::io::{Cursor, Read};
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
 use super::{DriveSignal, SignalError, SignalReport};
-use crate::io::write_atomic;
+use crate::io::{OutputTarget, fault_point, sha256_hex, write_atomic};
+use crate::num::Num;
 
 /// Sample format of a WAV file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -68,6 +77,32 @@ pub struct WavOptions {
     pub volts_per_full_scale: f64,
 }
 
+/// The id of the WAV chunk that carries the scale.
+pub const SCALE_CHUNK_ID: [u8; 4] = *b"hptx";
+
+/// The content of the `hptx` chunk (JSON): what a sample stands for, and
+/// the hash that ties the scale to these samples.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScaleChunk {
+    /// Always "haptex drive signal".
+    pub kind: String,
+    pub sample_format: WavFormat,
+    /// The sample value that stands for `volts_per_full_scale`.
+    pub full_scale_value: f64,
+    /// Volts at the amplifier output for a full-scale sample.
+    pub volts_per_full_scale: f64,
+    pub sample_rate_hz: u32,
+    pub n_samples: usize,
+    /// Lowercase hex SHA-256 of the `data` chunk's bytes.
+    pub samples_sha256: String,
+    /// volts = sample / full_scale_value * volts_per_full_scale.
+    pub conversion: String,
+}
+
+const KIND: &str = "haptex drive signal";
+const CONVERSION: &str = "volts = sample / full_scale_value * volts_per_full_scale";
+
 /// The sidecar JSON written next to a WAV (`out.wav` -> `out.wav.json`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct WavSidecar {
@@ -86,6 +121,9 @@ pub struct WavSidecar {
     pub volts_per_full_scale: f64,
     /// volts = sample / full_scale_value * volts_per_full_scale.
     pub conversion: String,
+    /// SHA-256 of the WAV's sample bytes, as in its `hptx` chunk: the
+    /// sidecar belongs to the WAV whose samples have this hash.
+    pub samples_sha256: String,
     pub voltage_convention: String,
     /// Render settings, safety report and peak of the signal.
     pub report: SignalReport,
@@ -100,16 +138,30 @@ pub fn sidecar_path(wav: &Path) -> PathBuf {
     PathBuf::from(name)
 }
 
-/// Encodes `signal` as a mono WAV file in memory (what [`write_wav`] writes;
-/// a server sends these bytes). Refuses a signal whose peak exceeds
-/// `volts_per_full_scale`. `label` names the output in errors.
-pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Result<Vec<u8>, SignalError> {
-    let vpfs = options.volts_per_full_scale;
-    if !(vpfs.is_finite() && vpfs > 0.0) {
-        return Err(SignalError::Settings(format!(
-            "volts per full scale must be a positive finite number, got {vpfs}"
-        )));
+/// A WAV in memory with its scale chunk (what [`encode_wav`] returns).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EncodedWav {
+    /// The whole file.
+    pub bytes: Vec<u8>,
+    /// What its `hptx` chunk says.
+    pub scale: ScaleChunk,
+}
+
+/// Checks a volts-per-full-scale value: positive and finite.
+pub fn check_volts_per_full_scale(vpfs: f64) -> Result<f64, SignalError> {
+    if vpfs.is_finite() && vpfs > 0.0 {
+        Ok(vpfs)
+    } else {
+        Err(SignalError::Settings(format!("volts per full scale must be a positive finite number, got {}", Num(vpfs))))
     }
+}
+
+/// Encodes `signal` as a mono WAV file in memory, with its scale chunk
+/// (what [`write_wav`] writes; a server sends these bytes). Refuses a
+/// signal whose peak exceeds `volts_per_full_scale`. `label` names the
+/// output in errors.
+pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Result<EncodedWav, SignalError> {
+    let vpfs = check_volts_per_full_scale(options.volts_per_full_scale)?;
     let report = &signal.report;
     if report.peak_v > vpfs {
         return Err(SignalError::ExceedsFullScale { amplitude_v: report.peak_v, volts_per_full_scale: vpfs });
@@ -133,33 +185,86 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
         }
         writer.finalize().map_err(wav_error)?;
     }
-    Ok(bytes)
+    let data = data_chunk(&bytes).ok_or_else(|| SignalError::Wav {
+        path: label.to_string(),
+        message: "the encoder wrote no data chunk".into(),
+    })?;
+    let scale = ScaleChunk {
+        kind: KIND.into(),
+        sample_format: format,
+        full_scale_value: full_scale,
+        volts_per_full_scale: vpfs,
+        sample_rate_hz: report.sample_rate_hz,
+        n_samples: signal.len(),
+        samples_sha256: sha256_hex(&bytes[data]),
+        conversion: CONVERSION.into(),
+    };
+    append_chunk(&mut bytes, SCALE_CHUNK_ID, &serde_json::to_vec(&scale).expect("the scale chunk serializes"))
+        .map_err(|message| SignalError::Wav { path: label.to_string(), message })?;
+    Ok(EncodedWav { bytes, scale })
 }
 
-/// Writes `signal` as a mono WAV at `path` and its sidecar JSON at
-/// [`sidecar_path`], each atomically. Refuses a signal whose peak exceeds
-/// `volts_per_full_scale`. Returns the sidecar.
+/// The byte range of the `data` chunk's content in a RIFF/WAVE file.
+fn data_chunk(bytes: &[u8]) -> Option<std::ops::Range<usize>> {
+    let mut at = 12;
+    while at + 8 <= bytes.len() {
+        let size = u32::from_le_bytes(bytes[at + 4..at + 8].try_into().ok()?) as usize;
+        let start = at + 8;
+        let end = start.checked_add(size)?;
+        if &bytes[at..at + 4] == b"data" {
+            return (end <= bytes.len()).then_some(start..end);
+        }
+        at = end + (size & 1);
+    }
+    None
+}
+
+/// Appends a chunk (padded to an even length) to a RIFF file in memory and
+/// updates the RIFF size.
+fn append_chunk(bytes: &mut Vec<u8>, id: [u8; 4], content: &[u8]) -> Result<(), String> {
+    let size = u32::try_from(content.len()).map_err(|_| "chunk too large".to_string())?;
+    if bytes.len() % 2 == 1 {
+        bytes.push(0);
+    }
+    bytes.extend_from_slice(&id);
+    bytes.extend_from_slice(&size.to_le_bytes());
+    bytes.extend_from_slice(content);
+    if content.len() % 2 == 1 {
+        bytes.push(0);
+    }
+    let riff_size = u32::try_from(bytes.len() - 8).map_err(|_| "a WAV file is limited to 4 GiB".to_string())?;
+    bytes[4..8].copy_from_slice(&riff_size.to_le_bytes());
+    Ok(())
+}
+
+/// Writes `signal` as a mono WAV at `path` (with its scale chunk) and,
+/// when `path` is a file, its sidecar JSON at [`sidecar_path`], each
+/// atomically: the WAV first, then the sidecar, which carries the WAV's
+/// sample hash. A WAV written to a stream (`-`, a FIFO, a device) gets no
+/// sidecar; its scale is in the WAV. Refuses a signal whose peak exceeds
+/// `volts_per_full_scale`. Returns the sidecar (also when not written).
 pub fn write_wav(
     path: &Path,
     signal: &DriveSignal,
     options: &WavOptions,
     source: serde_json::Value,
 ) -> Result<WavSidecar, SignalError> {
-    let bytes = encode_wav(signal, options, &path.display().to_string())?;
-    write_atomic(path, |w| w.write_all(&bytes))?;
+    let target = OutputTarget::of(path)?;
+    let encoded = encode_wav(signal, options, &path.display().to_string())?;
     let report = &signal.report;
-    let (format, vpfs, full_scale) = (options.format, options.volts_per_full_scale, options.format.full_scale());
+    let scale = &encoded.scale;
     let sidecar = WavSidecar {
-        kind: "haptex drive signal".into(),
+        kind: KIND.into(),
         wav_file: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
         sample_rate_hz: report.sample_rate_hz,
         channels: 1,
         n_samples: signal.len(),
-        sample_format: format,
-        bits_per_sample: format.bits(),
-        full_scale_value: full_scale,
-        volts_per_full_scale: vpfs,
-        conversion: "volts = sample / full_scale_value * volts_per_full_scale".into(),
+        sample_format: scale.sample_format,
+        bits_per_sample: scale.sample_format.bits(),
+        full_scale_value: scale.full_scale_value,
+        volts_per_full_scale: scale.volts_per_full_scale,
+        conversion: CONVERSION.into(),
+        samples_sha256: scale.samples_sha256.clone(),
         voltage_convention: format!(
             "the envelope U is the RMS voltage of eq. (8); the drive is U times a unit-RMS carrier, peak = {} x U",
             report.carrier.peak_per_rms()
@@ -167,34 +272,198 @@ pub fn write_wav(
         report: report.clone(),
         source,
     };
-    let json = sidecar_path(path);
-    write_atomic(&json, |w| {
-        serde_json::to_writer_pretty(&mut *w, &sidecar).map_err(std::io::Error::from)?;
-        w.write_all(b"\n")
-    })?;
+    write_atomic(path, |w| w.write_all(&encoded.bytes))?;
+    if target.is_file() {
+        fault_point("between-wav-and-sidecar");
+        write_atomic(&sidecar_path(path), |w| {
+            serde_json::to_writer_pretty(&mut *w, &sidecar).map_err(std::io::Error::from)?;
+            w.write_all(b"\n")
+        })?;
+    }
     Ok(sidecar)
 }
 
-/// Reads a mono WAV back as volts, given its volts per full scale (from the
-/// sidecar). Returns the WAV's spec and the samples in V.
-pub fn read_wav_volts(path: &Path, volts_per_full_scale: f64) -> Result<(hound::WavSpec, Vec<f64>), SignalError> {
-    let wav_error = |e: hound::Error| SignalError::Wav { path: path.display().to_string(), message: e.to_string() };
-    let mut reader = hound::WavReader::open(path).map_err(wav_error)?;
-    let spec = reader.spec();
-    let volts: Result<Vec<f64>, hound::Error> = match (spec.sample_format, spec.bits_per_sample) {
-        (hound::SampleFormat::Float, 32) => {
-            reader.samples::<f32>().map(|s| s.map(|v| f64::from(v) * volts_per_full_scale)).collect()
-        }
-        (hound::SampleFormat::Int, bits @ (16 | 24)) => {
-            let full_scale = ((1i64 << (bits - 1)) - 1) as f64;
-            reader.samples::<i32>().map(|s| s.map(|v| f64::from(v) / full_scale * volts_per_full_scale)).collect()
-        }
-        (format, bits) => {
-            return Err(SignalError::Wav {
-                path: path.display().to_string(),
-                message: format!("unsupported sample format {format:?} with {bits} bits"),
-            });
+/// A haptex drive-signal WAV read back and checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DriveWav {
+    /// The scale chunk (checked against the samples).
+    pub scale: ScaleChunk,
+    /// The samples in V at the amplifier output.
+    pub volts: Vec<f64>,
+    /// The sidecar, when one was found beside the WAV (checked to belong
+    /// to it).
+    pub sidecar: Option<WavSidecar>,
+}
+
+impl DriveWav {
+    /// Largest |sample| in V.
+    pub fn peak_v(&self) -> f64 {
+        self.volts.iter().fold(0.0, |m, v| m.max(v.abs()))
+    }
+}
+
+/// Reads a haptex drive-signal WAV as volts, with the scale its `hptx`
+/// chunk gives, after checking that the chunk matches the samples (hash,
+/// count, format, rate) and that the sidecar beside it (`PATH.json`), if
+/// there is one, belongs to it (same hash, same scale). Any mismatch is an
+/// error: a WAV is never read with the wrong scale.
+pub fn read_drive_wav(path: &Path) -> Result<DriveWav, SignalError> {
+    let name = path.display().to_string();
+    let bad = |message: String| SignalError::Wav { path: name.clone(), message };
+    let metadata = std::fs::metadata(path).map_err(|e| bad(e.to_string()))?;
+    if !metadata.is_file() {
+        return Err(bad("not a regular file".into()));
+    }
+    if metadata.len() > u64::from(u32::MAX) + 8 {
+        return Err(bad(format!("{} bytes: larger than a WAV file can be (4 GiB)", metadata.len())));
+    }
+    let mut bytes = Vec::with_capacity(metadata.len() as usize);
+    std::fs::File::open(path)
+        .and_then(|f| f.take(metadata.len()).read_to_end(&mut bytes))
+        .map_err(|e| bad(e.to_string()))?;
+    let (scale, volts) = decode_drive_wav(&bytes).map_err(bad)?;
+    let sidecar_file = sidecar_path(path);
+    let sidecar = match std::fs::read(&sidecar_file) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+        Err(e) => return Err(bad(format!("cannot read its sidecar {}: {e}", sidecar_file.display()))),
+        Ok(text) => {
+            let sidecar: WavSidecar = serde_json::from_slice(&text)
+                .map_err(|e| bad(format!("its sidecar {} is not a haptex WAV sidecar: {e}", sidecar_file.display())))?;
+            check_sidecar(&sidecar, &scale).map_err(|m| {
+                bad(format!(
+                    "its sidecar {} does not belong to it: {m} (a run was interrupted between the two files, or \
+                     one was replaced; render the signal again)",
+                    sidecar_file.display()
+                ))
+            })?;
+            Some(sidecar)
         }
     };
-    Ok((spec, volts.map_err(wav_error)?))
+    Ok(DriveWav { scale, volts, sidecar })
+}
+
+/// Whether a sidecar describes the WAV whose scale chunk is `scale`.
+fn check_sidecar(sidecar: &WavSidecar, scale: &ScaleChunk) -> Result<(), String> {
+    if sidecar.samples_sha256 != scale.samples_sha256 {
+        return Err(format!(
+            "it is for samples with SHA-256 {}, the WAV's are {}",
+            sidecar.samples_sha256, scale.samples_sha256
+        ));
+    }
+    if sidecar.volts_per_full_scale.to_bits() != scale.volts_per_full_scale.to_bits()
+        || sidecar.full_scale_value.to_bits() != scale.full_scale_value.to_bits()
+        || sidecar.sample_format != scale.sample_format
+    {
+        return Err(format!(
+            "it says {} V per full scale ({:?}), the WAV says {} V ({:?})",
+            Num(sidecar.volts_per_full_scale),
+            sidecar.sample_format,
+            Num(scale.volts_per_full_scale),
+            scale.sample_format
+        ));
+    }
+    if sidecar.n_samples != scale.n_samples || sidecar.sample_rate_hz != scale.sample_rate_hz {
+        return Err(format!(
+            "it says {} samples at {} Hz, the WAV has {} at {} Hz",
+            sidecar.n_samples, sidecar.sample_rate_hz, scale.n_samples, scale.sample_rate_hz
+        ));
+    }
+    Ok(())
+}
+
+/// Decodes a haptex drive-signal WAV from its bytes: the scale chunk,
+/// checked against the fmt and data chunks, and the samples in volts.
+/// Linear in the input; chunk sizes are checked against the bytes present
+/// before anything is allocated from them.
+pub fn decode_drive_wav(bytes: &[u8]) -> Result<(ScaleChunk, Vec<f64>), String> {
+    if bytes.len() < 12 || &bytes[0..4] != b"RIFF" || &bytes[8..12] != b"WAVE" {
+        return Err("not a WAV file (no RIFF/WAVE header)".into());
+    }
+    let mut fmt: Option<&[u8]> = None;
+    let mut data: Option<&[u8]> = None;
+    let mut scale: Option<&[u8]> = None;
+    let mut at = 12usize;
+    while at < bytes.len() {
+        let header = bytes.get(at..at + 8).ok_or_else(|| format!("truncated chunk header at byte {at}"))?;
+        let id: [u8; 4] = header[0..4].try_into().expect("4 bytes");
+        let size = u32::from_le_bytes(header[4..8].try_into().expect("4 bytes")) as usize;
+        let start = at + 8;
+        let content = bytes.get(start..start.saturating_add(size)).ok_or_else(|| {
+            format!(
+                "chunk {:?} at byte {at} claims {size} bytes, the file ends {} bytes later",
+                String::from_utf8_lossy(&id),
+                bytes.len() - start
+            )
+        })?;
+        let slot = match &id {
+            b"fmt " => &mut fmt,
+            b"data" => &mut data,
+            id if *id == SCALE_CHUNK_ID => &mut scale,
+            _ => &mut None,
+        };
+        if slot.replace(content).is_some() {
+            return Err(format!("chunk {:?} appears twice", String::from_utf8_lossy(&id)));
+        }
+        at = start + size + (size & 1);
+    }
+    let fmt = fmt.ok_or("no fmt chunk")?;
+    let data = data.ok_or("no data chunk")?;
+    let scale_bytes = scale.ok_or(
+        "no haptex scale chunk (hptx): not a haptex drive signal, or written before the scale travelled with the \
+         samples; its volts per full scale cannot be checked, render it again",
+    )?;
+    let scale: ScaleChunk =
+        serde_json::from_slice(scale_bytes).map_err(|e| format!("the haptex scale chunk is not valid: {e}"))?;
+    let expected_full_scale = scale.sample_format.full_scale();
+    if scale.kind != KIND
+        || scale.full_scale_value.to_bits() != expected_full_scale.to_bits()
+        || check_volts_per_full_scale(scale.volts_per_full_scale).is_err()
+    {
+        return Err(format!(
+            "the haptex scale chunk is not consistent (kind {:?}, full scale {} for {:?}, {} V per full scale)",
+            scale.kind,
+            Num(scale.full_scale_value),
+            scale.sample_format,
+            Num(scale.volts_per_full_scale)
+        ));
+    }
+    let hash = sha256_hex(data);
+    if hash != scale.samples_sha256 {
+        return Err(format!(
+            "the samples do not match the scale chunk (SHA-256 {hash}, the chunk says {}): the file was changed \
+             after haptex wrote it",
+            scale.samples_sha256
+        ));
+    }
+    if fmt.len() < 16 {
+        return Err("fmt chunk shorter than 16 bytes".into());
+    }
+    let u16_at = |i: usize| u16::from_le_bytes([fmt[i], fmt[i + 1]]);
+    let (channels, rate, bits) = (u16_at(2), u32::from_le_bytes(fmt[4..8].try_into().expect("4 bytes")), u16_at(14));
+    let format = scale.sample_format;
+    if channels != 1 || rate != scale.sample_rate_hz || bits != format.bits() {
+        return Err(format!(
+            "the fmt chunk ({channels} channels, {rate} Hz, {bits} bits) does not match the scale chunk (1 channel, \
+             {} Hz, {:?})",
+            scale.sample_rate_hz, format
+        ));
+    }
+    let width = usize::from(format.bits() / 8);
+    if data.len() != scale.n_samples * width {
+        return Err(format!("{} data bytes for {} samples of {width} bytes", data.len(), scale.n_samples));
+    }
+    // volts = sample / full_scale_value * volts_per_full_scale, as written.
+    let vpfs = scale.volts_per_full_scale;
+    let volts = data
+        .chunks_exact(width)
+        .map(|s| {
+            let sample = match format {
+                WavFormat::Pcm16 => f64::from(i16::from_le_bytes([s[0], s[1]])),
+                WavFormat::Pcm24 => f64::from(i32::from_le_bytes([0, s[0], s[1], s[2]]) >> 8),
+                WavFormat::Float32 => f64::from(f32::from_le_bytes([s[0], s[1], s[2], s[3]])),
+            };
+            sample / expected_full_scale * vpfs
+        })
+        .collect();
+    Ok((scale, volts))
 }

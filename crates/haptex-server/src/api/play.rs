@@ -276,7 +276,7 @@ fn signal_error(error: SignalError) -> ApiError {
 }
 
 fn wav_response(signal: &DriveSignal, options: &WavOptions) -> Result<Response, ApiError> {
-    let bytes = encode_wav(signal, options, "response").map_err(signal_error)?;
+    let bytes = encode_wav(signal, options, "response").map_err(signal_error)?.bytes;
     let number = |v: f64| HeaderValue::from_str(&v.to_string()).unwrap_or_else(|_| HeaderValue::from_static("0"));
     Ok((
         [

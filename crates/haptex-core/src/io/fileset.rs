@@ -1,0 +1,188 @@
+//! Outputs made of several files (a database: model matrices and
+//! `metadata.json`; a library export: CSV files and `manifest.json`).
+//!
+//! One file of the set, the *marker*, describes the others and lists the
+//! SHA-256 of each. A [`FileSet`] removes the marker first, writes every
+//! member atomically, and writes the marker last (atomically too). So the
+//! set is either whole, or detectably incomplete: a run killed part way
+//! leaves no marker, and a member that does not match the marker's hash
+//! (a stray, older or half-updated file) is found by [`verify_members`].
+
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use sha2::{Digest, Sha256};
+
+use super::{WriteError, write_atomic};
+
+/// Members of a file set: path relative to the set's directory (with `/`
+/// separators) -> lowercase hex SHA-256 of the file's bytes.
+pub type MemberHashes = BTreeMap<String, String>;
+
+/// A multi-file output being written; see the module documentation.
+#[derive(Debug)]
+pub struct FileSet {
+    dir: PathBuf,
+    marker: PathBuf,
+    members: MemberHashes,
+}
+
+impl FileSet {
+    /// Starts writing a set in `dir` (created if needed) whose marker is
+    /// `dir/marker_name`: the marker is removed now, so that until
+    /// [`FileSet::finish`] the directory reads as incomplete.
+    pub fn begin(dir: &Path, marker_name: &str) -> Result<Self, WriteError> {
+        let wrap = |source| WriteError { path: dir.to_path_buf(), source };
+        std::fs::create_dir_all(dir).map_err(wrap)?;
+        let marker = dir.join(marker_name);
+        match std::fs::remove_file(&marker) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(source) => return Err(WriteError { path: marker, source }),
+        }
+        Ok(Self { dir: dir.to_path_buf(), marker, members: MemberHashes::new() })
+    }
+
+    /// The set's directory.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Writes member `relative` (a path inside the set's directory; its
+    /// parent directories are created) atomically and records its hash.
+    pub fn write<F>(&mut self, relative: &str, fill: F) -> Result<PathBuf, WriteError>
+    where
+        F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
+    {
+        let path = self.dir.join(relative);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent).map_err(|source| WriteError { path: parent.to_path_buf(), source })?;
+        }
+        let mut hasher = Sha256::new();
+        write_atomic(&path, |w| {
+            let mut hashing = HashingWriter { inner: w, hasher: &mut hasher };
+            fill(&mut hashing)
+        })?;
+        self.members.insert(relative.to_string(), hex(&hasher.finalize()));
+        Ok(path)
+    }
+
+    /// The members written so far and their hashes.
+    pub fn members(&self) -> &MemberHashes {
+        &self.members
+    }
+
+    /// Writes the marker last: `fill` gets the members' hashes to record.
+    pub fn finish<F>(self, fill: F) -> Result<PathBuf, WriteError>
+    where
+        F: FnOnce(&mut dyn Write, &MemberHashes) -> std::io::Result<()>,
+    {
+        super::fault_point("before-marker");
+        let members = self.members;
+        write_atomic(&self.marker, |w| fill(w, &members))?;
+        Ok(self.marker)
+    }
+}
+
+/// A member of a set is missing or differs from its recorded hash.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {problem} (the set was not written completely, or was changed since; write it again)", path.display())]
+pub struct MemberError {
+    pub path: PathBuf,
+    pub problem: String,
+}
+
+/// Checks that every member listed in `members` exists under `dir` with
+/// its recorded SHA-256.
+pub fn verify_members(dir: &Path, members: &MemberHashes) -> Result<(), MemberError> {
+    for (relative, expected) in members {
+        let path = dir.join(relative);
+        let actual = sha256_file(&path).map_err(|e| MemberError { path: path.clone(), problem: e.to_string() })?;
+        if &actual != expected {
+            return Err(MemberError {
+                path,
+                problem: format!("SHA-256 {actual} differs from {expected} recorded beside it"),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Lowercase hex SHA-256 of a file's bytes (read in blocks).
+pub fn sha256_file(path: &Path) -> std::io::Result<String> {
+    use std::io::Read;
+    let mut file = std::fs::File::open(path)?;
+    let mut hasher = Sha256::new();
+    let mut buffer = vec![0u8; 1 << 16];
+    loop {
+        match file.read(&mut buffer) {
+            Ok(0) => return Ok(hex(&hasher.finalize())),
+            Ok(n) => hasher.update(&buffer[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+/// Lowercase hex SHA-256 of bytes.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    hex(&Sha256::digest(bytes))
+}
+
+fn hex(bytes: &[u8]) -> String {
+    use std::fmt::Write as _;
+    bytes.iter().fold(String::with_capacity(2 * bytes.len()), |mut s, b| {
+        let _ = write!(s, "{b:02x}");
+        s
+    })
+}
+
+/// A writer that hashes what passes through it.
+struct HashingWriter<'a> {
+    inner: &'a mut dyn Write,
+    hasher: &'a mut Sha256,
+}
+
+impl Write for HashingWriter<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.hasher.update(&buf[..n]);
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn marker_lists_the_hashes_and_verification_finds_a_changed_member() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut set = FileSet::begin(dir.path(), "manifest.json").unwrap();
+        set.write("a/one.csv", |w| w.write_all(b"x,y\n1,2\n")).unwrap();
+        set.write("two.csv", |w| w.write_all(b"x\n3\n")).unwrap();
+        let members = set.members().clone();
+        set.finish(|w, m| writeln!(w, "{}", m.len())).unwrap();
+        assert_eq!(std::fs::read_to_string(dir.path().join("manifest.json")).unwrap(), "2\n");
+        assert_eq!(members["two.csv"], sha256_hex(b"x\n3\n"));
+        verify_members(dir.path(), &members).unwrap();
+        std::fs::write(dir.path().join("two.csv"), "x\n4\n").unwrap();
+        let e = verify_members(dir.path(), &members).unwrap_err();
+        assert!(e.to_string().contains("two.csv"), "{e}");
+        std::fs::remove_file(dir.path().join("a/one.csv")).unwrap();
+        assert!(verify_members(dir.path(), &members).is_err());
+    }
+
+    #[test]
+    fn beginning_a_set_removes_the_old_marker() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("metadata.json"), "{}").unwrap();
+        let _set = FileSet::begin(dir.path(), "metadata.json").unwrap();
+        assert!(!dir.path().join("metadata.json").exists());
+    }
+}

@@ -1,0 +1,115 @@
+//! Issue 13, "never destroy what the output path names": an output is
+//! renamed into place only over a regular file or a new path; streams are
+//! written in place, the rest is refused; a killed run's temporary files are
+//! removed by the next run.
+
+use std::io::Read;
+use std::path::Path;
+
+use haptex_core::io::{OutputTarget, write_atomic};
+
+#[cfg(unix)]
+fn mkfifo(path: &Path) {
+    let status = std::process::Command::new("mkfifo").arg(path).status().expect("mkfifo runs");
+    assert!(status.success());
+}
+
+#[cfg(unix)]
+fn is_fifo(path: &Path) -> bool {
+    use std::os::unix::fs::FileTypeExt;
+    std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_fifo())
+}
+
+/// A FIFO given as the output is written through, and is still a FIFO
+/// afterwards (it used to be replaced by a regular file).
+#[cfg(unix)]
+#[test]
+fn output_to_a_fifo_is_written_in_place_not_replaced() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("f");
+    mkfifo(&fifo);
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            let mut text = String::new();
+            std::fs::File::open(&fifo).unwrap().read_to_string(&mut text).unwrap();
+            text
+        })
+    };
+    write_atomic(&fifo, |w| w.write_all(b"x_mm,mu\n0,1\n")).unwrap();
+    assert_eq!(reader.join().unwrap(), "x_mm,mu\n0,1\n");
+    assert!(is_fifo(&fifo), "the FIFO was replaced");
+    // Nothing else appeared beside it.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+}
+
+/// Character devices and descriptor paths are streams; regular files and
+/// new paths are replaced atomically; `-` is standard output. Checked by
+/// classification only: a test must not risk the machine's /dev/null.
+#[cfg(unix)]
+#[test]
+fn output_to_a_device_is_a_stream() {
+    assert_eq!(OutputTarget::of(Path::new("/dev/null")).unwrap(), OutputTarget::Stream("/dev/null".into()));
+    assert_eq!(OutputTarget::of(Path::new("/dev/stdout")).unwrap(), OutputTarget::Stream("/dev/stdout".into()));
+    assert_eq!(OutputTarget::of(Path::new("-")).unwrap(), OutputTarget::Stdout);
+    let dir = tempfile::tempdir().unwrap();
+    let new = dir.path().join("new.csv");
+    assert_eq!(OutputTarget::of(&new).unwrap(), OutputTarget::File(new.clone()));
+}
+
+/// A directory (or a block device, socket ...) is refused with an error
+/// that says what it is, and is left as it was.
+#[test]
+fn output_to_a_directory_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("sub");
+    std::fs::create_dir(&target).unwrap();
+    let e = write_atomic(&target, |w| w.write_all(b"x")).unwrap_err();
+    assert!(e.to_string().contains("is a directory"), "{e}");
+    assert!(target.is_dir());
+    #[cfg(unix)]
+    {
+        let socket_path = dir.path().join("s.sock");
+        let _socket = std::os::unix::net::UnixListener::bind(&socket_path).unwrap();
+        let e = write_atomic(&socket_path, |w| w.write_all(b"x")).unwrap_err();
+        assert!(e.to_string().contains("is a socket"), "{e}");
+    }
+}
+
+/// A symbolic link to a regular file stays a link; its target gets the
+/// new content.
+#[cfg(unix)]
+#[test]
+fn output_through_a_symlink_replaces_the_target_and_keeps_the_link() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("real.csv");
+    std::fs::write(&target, "old\n").unwrap();
+    let link = dir.path().join("link.csv");
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    write_atomic(&link, |w| w.write_all(b"new\n")).unwrap();
+    assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "new\n");
+}
+
+/// Temporary files of processes that no longer run (killed writes) are
+/// removed by the next write into their directory; a live process's are
+/// kept.
+#[cfg(target_os = "linux")]
+#[test]
+fn killed_runs_temporaries_are_cleaned_by_the_next_run() {
+    let dir = tempfile::tempdir().unwrap();
+    // PIDs above the kernel's largest (4194304) never run.
+    let dead = dir.path().join(".haptex-999999999-Ab12Cd.tmp");
+    std::fs::write(&dead, "half").unwrap();
+    let dead_dir = dir.path().join(".haptex-999999998-Xy34Zw.tmp");
+    std::fs::create_dir(&dead_dir).unwrap();
+    std::fs::write(dead_dir.join("bump.csv"), "half").unwrap();
+    let live = dir.path().join(format!(".haptex-{}-Ef56Gh.tmp", std::process::id()));
+    std::fs::write(&live, "mine").unwrap();
+    let unrelated = dir.path().join(".haptex-notes.tmp");
+    std::fs::write(&unrelated, "a user's file").unwrap();
+
+    write_atomic(&dir.path().join("out.csv"), |w| w.write_all(b"x\n1\n")).unwrap();
+    assert!(!dead.exists() && !dead_dir.exists(), "a dead run's temporaries are left");
+    assert!(live.exists() && unrelated.exists());
+}

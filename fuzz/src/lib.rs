@@ -1,0 +1,169 @@
+//! One function per haptex parser, for the fuzz targets (`fuzz_targets/`,
+//! run by `cargo fuzz`) and the replay that times every corpus input
+//! (`src/bin/replay.rs`). Each function parses `data` and, when it is
+//! accepted, checks what haptex promises of accepted input (every value
+//! finite, the derived results finite, a read-back identical); a broken
+//! promise panics, which is what the fuzzer reports. Errors are the
+//! expected outcome for most inputs and are only checked to be short.
+
+use haptex_core::cae::{Cae, Loo, ModelMatrix, Widths};
+use haptex_core::electrovibration::{Device, Method, map_profile};
+use haptex_core::profile::FrictionProfile;
+use haptex_core::recording::Recording;
+use haptex_core::signal::{VoltageCurve, decode_drive_wav};
+use haptex_core::trajectory::Trajectory;
+
+/// The parsers, by name: what `replay` and the campaign script iterate.
+pub const TARGETS: &[(&str, fn(&[u8]))] = &[
+    ("profile_csv", profile_csv),
+    ("voltage_csv", voltage_csv),
+    ("trajectory_csv", trajectory_csv),
+    ("model_matrix", model_matrix),
+    ("recording", recording),
+    ("drive_wav", drive_wav),
+    ("finger_toml", finger_toml),
+    ("surface_file", surface_file),
+];
+
+/// An error message must stay readable whatever the input.
+fn short(message: String) {
+    assert!(message.len() < 2000, "an error message of {} bytes: {}", message.len(), &message[..200]);
+}
+
+/// Friction profile CSV -> profile -> voltages by eqs. (8) and (9).
+pub fn profile_csv(data: &[u8]) {
+    match FrictionProfile::read_csv(data, "f.csv") {
+        Ok(p) => {
+            assert!(p.x_mm().iter().chain(p.mu()).all(|v| v.is_finite()));
+            assert!(p.span_mm().is_finite() && p.span_mm() > 0.0);
+            for method in [Method::Physical, Method::Normalized] {
+                match map_profile(&p, &Device::PAPER, method, None) {
+                    Ok(v) => assert!(v.voltage_v.iter().all(|u| u.is_finite() && *u >= 0.0 && *u <= 100.0)),
+                    Err(e) => short(e.to_string()),
+                }
+            }
+        }
+        Err(e) => short(e.to_string()),
+    }
+}
+
+/// Voltage profile CSV (`haptex play --profile`).
+pub fn voltage_csv(data: &[u8]) {
+    match VoltageCurve::read_csv(data, "u.csv") {
+        Ok(c) => {
+            let (a, b) = c.span_mm();
+            assert!(a.is_finite() && b.is_finite() && b > a);
+        }
+        Err(e) => short(e.to_string()),
+    }
+}
+
+/// Finger trajectory CSV.
+pub fn trajectory_csv(data: &[u8]) {
+    match Trajectory::read_csv(data, "t.csv") {
+        Ok(t) => assert!(t.duration_s().is_finite() && t.duration_s() > 0.0),
+        Err(e) => short(e.to_string()),
+    }
+}
+
+/// CAE model matrix: the first header name is the input, the rest outputs;
+/// an accepted matrix is predicted from and, when small, leave-one-out
+/// evaluated (within a small memory budget).
+pub fn model_matrix(data: &[u8]) {
+    let header = data.split(|&b| b == b'\n').find(|l| !l.is_empty() && !l.starts_with(b"#"));
+    let first = header.and_then(|h| std::str::from_utf8(h).ok()).and_then(|h| h.split(',').next()).unwrap_or("a");
+    let input = first.trim().trim_matches('"').trim().to_string();
+    match ModelMatrix::read_csv(data, "m.csv", &[&input]) {
+        Ok(m) => {
+            let cae = Cae::new(m.clone(), Widths::constant(0.1).unwrap()).unwrap();
+            let mut scratch = cae.scratch();
+            let mut out = vec![0.0; m.m()];
+            let query = m.inputs_flat()[0];
+            if let Err(e) = cae.predict_into(&[query], &mut scratch, &mut out) {
+                short(e.to_string());
+            } else {
+                assert!(out.iter().all(|v| v.is_finite()), "prediction {out:?}");
+            }
+            match Loo::with_memory_budget(&m, 1 << 20) {
+                Ok(mut loo) => assert!(!loo.rmse(Widths::constant(0.1).unwrap()).is_nan()),
+                Err(e) => short(e.to_string()),
+            }
+        }
+        Err(e) => short(e.to_string()),
+    }
+}
+
+/// A recording: the input is split into metadata, force and position
+/// streams at `\n---\n`; the first byte chooses CSV or NPY streams.
+pub fn recording(data: &[u8]) {
+    let npy = data.first().is_some_and(|b| b & 1 == 1);
+    let body = data.get(1..).unwrap_or(&[]);
+    let mut parts = split(body, b"\n---\n");
+    let meta = parts.next().unwrap_or(&[]);
+    let force = parts.next().unwrap_or(&[]);
+    let position = parts.next().unwrap_or(&[]);
+    let ext = if npy { "npy" } else { "csv" };
+    match Recording::parse("r.recording.json", meta, (&format!("f.{ext}"), force), (&format!("p.{ext}"), position)) {
+        Ok(r) => assert!(r.duration_s().is_finite() && r.duration_s() > 0.0),
+        Err(e) => short(e.to_string()),
+    }
+}
+
+fn split<'a>(data: &'a [u8], separator: &'a [u8]) -> impl Iterator<Item = &'a [u8]> + 'a {
+    let mut rest = Some(data);
+    std::iter::from_fn(move || {
+        let r = rest?;
+        match r.windows(separator.len()).position(|w| w == separator) {
+            Some(i) => {
+                rest = Some(&r[i + separator.len()..]);
+                Some(&r[..i])
+            }
+            None => {
+                rest = None;
+                Some(r)
+            }
+        }
+    })
+}
+
+/// A drive-signal WAV read back with its scale chunk.
+pub fn drive_wav(data: &[u8]) {
+    match decode_drive_wav(data) {
+        Ok((scale, volts)) => {
+            assert_eq!(volts.len(), scale.n_samples);
+            assert!(volts.iter().all(|v| v.is_finite() && v.abs() <= scale.volts_per_full_scale * 1.0001));
+        }
+        Err(message) => short(message),
+    }
+}
+
+/// A finger model TOML, meshed at the coarse resolution when accepted.
+pub fn finger_toml(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else { return };
+    match haptex_fem::finger::FingerModel::from_toml(text, "f.toml") {
+        Ok(model) => {
+            if let Err(e) = model.mesh(haptex_fem::finger::Resolution::Coarse) {
+                short(e.to_string());
+            }
+        }
+        Err(e) => short(e.to_string()),
+    }
+}
+
+/// A surface height profile (`--surface file:H.csv`).
+pub fn surface_file(data: &[u8]) {
+    let dir = std::env::temp_dir().join(format!("haptex-fuzz-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let path = dir.join("h.csv");
+    if std::fs::write(&path, data).is_err() {
+        return;
+    }
+    match haptex_fem::surface::SurfaceShape::read_csv(&path) {
+        Ok(shape) => {
+            if let Err(e) = shape.validate() {
+                short(e.to_string());
+            }
+        }
+        Err(e) => short(e.to_string()),
+    }
+}
