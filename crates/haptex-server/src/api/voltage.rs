@@ -123,6 +123,12 @@ pub(crate) fn compute(
             ),
             Some(&format!("{prefix}fn_n")),
         ),
+        // Unreachable with the ranges of `params` and `fields`; named all
+        // the same: a profile sample, or the device as a whole.
+        ElectroError::NonFiniteVoltage { index, .. } => {
+            let field = if prefix.is_empty() { "mu".to_string() } else { format!("profile.mu[{index}]") };
+            ApiError::bad_request(e.to_string(), Some(&field))
+        }
         other => ApiError::bad_request(other.to_string(), Some(prefix.trim_end_matches('.')).filter(|p| !p.is_empty())),
     })?;
     let s = &voltage.summary;
