@@ -15,6 +15,16 @@ pub fn positive(text: &str) -> Result<f64, String> {
     }
 }
 
+/// A flag parser for a parameter with an accepted range (the table of
+/// [`haptex_core::ranges`], shared with the web API): a finite number in
+/// (0, max].
+pub fn in_range(range: haptex_core::ranges::Range) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync {
+    move |text: &str| {
+        let value: f64 = text.trim().parse().map_err(|_| format!("'{text}' is not a number"))?;
+        range.check(value).map_err(|e| e.to_string())
+    }
+}
+
 /// Where a command writes its main output: a file (written atomically) or stdout.
 #[derive(Debug, Clone)]
 pub enum Output {

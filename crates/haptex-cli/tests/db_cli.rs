@@ -152,7 +152,8 @@ fn killed_build_resumes_to_the_same_database() {
     let metadata: serde_json::Value = serde_json::from_str(&read(&killed.join("metadata.json"))).unwrap();
     assert!(metadata["build_wall_time_s"].is_null());
 
-    // A second build with another sweep in the same directory is refused.
+    // A second build with another sweep in the same directory is refused
+    // (a sweep that could make a database: two runs per template).
     let out = haptex(&[
         "db",
         "build",
@@ -162,7 +163,7 @@ fn killed_build_resumes_to_the_same_database() {
         "--templates",
         "bump",
         "--widths",
-        "1.5",
+        "1.5,2",
         "--heights",
         "0.3",
         "--velocities",
@@ -429,4 +430,46 @@ fn shipped_database_predicts_off_grid_fe_cases() {
     let stderr = text(&out.stderr);
     assert!(stderr.contains("warning: width r_w = 2.6 mm is outside the database range 0.5 .. 2.5 mm"), "{stderr}");
     assert!(text(&out.stdout).contains("# warning: width r_w = 2.6 mm"));
+}
+
+/// Issue 13: `db build --grid-points 1500` (column names collide at two
+/// decimals) and a one-case sweep (a CAE matrix needs two rows) computed
+/// every FE run and failed only at the merge. Everything the runs and the
+/// merge need is now checked first: the command fails with the reason and
+/// no run is started (no run file, no runs directory).
+#[test]
+fn db_build_refuses_what_the_merge_cannot_use_before_any_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("a-file");
+    std::fs::write(&file, "").unwrap();
+    let under_file = file.join("db");
+    let cases: [(&[&str], &str); 6] = [
+        (&["--grid-points", "1500"], "grid of 1500 points over xi = -5 .. 5 mm: the database names its columns"),
+        (
+            &["--templates", "bump", "--widths", "1", "--heights", "0.3", "--velocities", "20"],
+            "the sweep has 1 run per template (1 width x 1 height x 1 velocity); the database's CAE needs at least 2",
+        ),
+        (&["--widths", "1.0001,1.0002"], "two runs share the file name bump_w1.000_h0.100_v10.0.csv"),
+        (&["--widths", "0.0001,1"], "surface width r_w = 0.0001 mm is outside the supported range"),
+        (&["--velocities", "1e-9,20"], "velocity = 1e-9 mm/s is outside the supported range"),
+        (&["--out", under_file.to_str().unwrap(), "--widths", "1,2", "--heights", "0.3"], "a-file/db"),
+    ];
+    for (i, (args, expected)) in cases.iter().enumerate() {
+        let out_dir = tmp.path().join(format!("db{i}"));
+        let mut full = vec!["db", "build", "--jobs", "1", "--mesh", "coarse"];
+        if !args.contains(&"--out") {
+            full.extend(["--out", out_dir.to_str().unwrap()]);
+        }
+        full.extend(args.iter());
+        let out = haptex(&full);
+        let err = text(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(err.contains(expected), "{args:?}: expected '{expected}' in: {err}");
+        assert!(!err.contains("runs computed") && !err.contains("panicked"), "{err}");
+        assert!(!out_dir.join("runs").exists(), "{args:?}: a build that cannot merge created {}", out_dir.display());
+    }
+    assert!(
+        text(&haptex(&["db", "build", "--grid-points", "1500", "--out", tmp.path().to_str().unwrap()]).stderr)
+            .contains("at most 1001 points")
+    );
 }

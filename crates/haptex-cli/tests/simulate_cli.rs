@@ -76,7 +76,7 @@ fn simulate_rejects_bad_input_clearly() {
         (vec!["--surface", &surface], "h.csv, line 4, column 'x_mm'"),
         (vec!["--surface", "file:/nonexistent/h.csv"], "/nonexistent/h.csv"),
         (vec!["--surface", "bump", "--finger", "/nonexistent/f.toml"], "/nonexistent/f.toml"),
-        (vec!["--surface", "bump", "--mu-skin", "-1"], "skin friction must be >= 0"),
+        (vec!["--surface", "bump", "--mu-skin", "-1"], "skin friction mu = -1 is outside the supported range 0 .. 10"),
     ];
     for (args, fragment) in cases {
         let mut full = vec!["simulate", "-q", "--mesh", "coarse", "--slide", "0.5"];
@@ -85,4 +85,141 @@ fn simulate_rejects_bad_input_clearly() {
         assert!(!out.status.success(), "{args:?} succeeded");
         assert!(stderr(&out).contains(fragment), "{args:?}: {}", stderr(&out));
     }
+}
+
+/// The shipped finger model with `old` replaced by `new`, written to `dir`.
+fn finger_file(dir: &std::path::Path, name: &str, old: &str, new: &str) -> String {
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/finger/finger-2d.toml")).unwrap();
+    assert!(text.contains(old), "{old}");
+    let path = dir.join(name);
+    std::fs::write(&path, text.replace(old, new)).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+/// Issue 13: a finger file whose contact arc reaches the nail made the
+/// solver panic, and 7 Prony terms overflowed a fixed table. Now a bad
+/// field fails with the file, the line of its key and the field, before
+/// any output is written; 7 terms simulate.
+#[test]
+fn bad_finger_files_fail_with_file_line_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("profile.csv");
+    let cases = [
+        (
+            finger_file(dir.path(), "arc.toml", "contact_half_arc_mm = 6.0", "contact_half_arc_mm = 18"),
+            "arc.toml: line 77: contact.contact_half_arc_mm = 18 mm is longer than the contour allows (at most 14.4",
+        ),
+        (
+            finger_file(
+                dir.path(),
+                "nu.toml",
+                "e_mpa = 0.15         # range 0.1-0.2, middle\nnu = 0.48",
+                "e_mpa = 0.15\nnu = 0.5",
+            ),
+            "nu.toml: line 49: materials.dermis.nu = 0.5 is outside the supported range -0.9 .. 0.4999",
+        ),
+        (
+            finger_file(dir.path(), "huge.toml", "half_width_mm = 8.0", "half_width_mm = 1e300"),
+            "huge.toml: line 15: geometry.half_width_mm = 1e300 mm is outside the supported range 2 .. 20 mm",
+        ),
+        (
+            finger_file(dir.path(), "tau.toml", "{ g = 0.2, tau_s = 0.07 }", "{ g = 0.2, tau_s = -0.07 }"),
+            "tau.toml: line 67: viscoelasticity.prony[1].tau_s = -0.07 s is outside the supported range",
+        ),
+        (
+            finger_file(
+                dir.path(),
+                "many.toml",
+                "    { g = 0.2, tau_s = 1.4 },\n",
+                &"    { g = 0.001, tau_s = 1.4 },\n".repeat(40),
+            ),
+            "many.toml: line 65: viscoelasticity.prony has 42 terms; at most 32 are supported",
+        ),
+    ];
+    for (path, expected) in cases {
+        let out = haptex(&[
+            "simulate",
+            "-q",
+            "--surface",
+            "flat",
+            "--mesh",
+            "coarse",
+            "--finger",
+            &path,
+            "-o",
+            output.to_str().unwrap(),
+        ]);
+        let err = stderr(&out);
+        assert!(!out.status.success(), "{path} succeeded");
+        assert!(err.contains(expected), "{path}: expected '{expected}' in: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(!output.exists(), "no output for a refused model");
+    }
+
+    let seven = finger_file(
+        dir.path(),
+        "seven.toml",
+        "    { g = 0.2, tau_s = 1.4 },\n",
+        &(0..5).map(|i| format!("    {{ g = 0.05, tau_s = {} }},\n", 0.2 * 2f64.powi(i))).collect::<String>(),
+    );
+    let out = haptex(&[
+        "simulate",
+        "-q",
+        "--surface",
+        "flat",
+        "--mesh",
+        "coarse",
+        "--slide",
+        "0.3",
+        "--finger",
+        &seven,
+        "-o",
+        output.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(std::fs::read_to_string(&output).unwrap().lines().count() > 3);
+}
+
+/// Flags at absurd magnitudes, or that size a loop, a vector or the
+/// surface polyline: each is an error naming the setting, not a panic, an
+/// overflow or an allocation of gigabytes (before: --step 1e-300
+/// overflowed the step count, --vtk-every 1 over a long slide kept every
+/// frame, --width 1e-4 sampled the surface at 0.5 nm).
+#[test]
+fn extreme_simulate_flags_are_errors_not_panics() {
+    let dir = tempfile::tempdir().unwrap();
+    let vtk = dir.path().join("vtk");
+    let heights = dir.path().join("tall.csv");
+    std::fs::write(&heights, "x_mm,h_mm\n0,0\n1,1e300\n").unwrap();
+    let tall = format!("file:{}", heights.display());
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--step", "1e-300"], "steps of 1e-300 mm takes 9.999999999999999e300 steps; at most 1000000"),
+        (vec!["--slide", "1e300"], "slide = 1e300 mm is outside the supported range"),
+        (vec!["--velocity", "1e-300"], "velocity = 1e-300 mm/s is outside"),
+        (vec!["--press-time", "1e300"], "press time = 1e300 s is outside"),
+        (vec!["--penalty", "1e300"], "penalty = 1e300 MPa/mm is outside"),
+        (vec!["--mu-skin", "nan"], "skin friction mu = NaN is outside"),
+        (vec!["--indent", "1e300"], "indentation = 1e300 mm must be positive and less than the pulp"),
+        (vec!["--load", "1e300"], "load = 1e300 N/mm must be positive and at most 100 N/mm"),
+        (vec!["--x0", "1e300"], "surface x0 = 1e300 mm is outside"),
+        (vec!["--height", "-1e300"], "surface height r_h = -1e300 mm is outside"),
+        (vec!["--width", "1e-300"], "surface width r_w = 1e-300 mm is outside"),
+        (vec!["--width", "1e-3"], "takes 6000000 points, more than 4000000"),
+        (vec!["--slide", "1000", "--vtk", vtk.to_str().unwrap(), "--vtk-every", "1"], "at most 1000 are kept"),
+        (vec!["--surface", &tall], "tall.csv, line 3, column 'h_mm': h = 1e300 mm is outside"),
+    ];
+    for (args, fragment) in cases {
+        let mut full = vec!["simulate", "-q", "--mesh", "coarse"];
+        if !args.contains(&"--surface") {
+            full.extend(["--surface", "bump"]);
+        }
+        full.extend(args.iter());
+        let out = haptex(&full);
+        let err = stderr(&out);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(err.contains(fragment), "{args:?}: expected '{fragment}' in: {err}");
+        assert!(!err.contains("panicked") && err.len() < 400, "{args:?}: {err}");
+    }
+    assert!(!vtk.exists(), "nothing written for refused settings");
 }

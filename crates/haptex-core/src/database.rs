@@ -166,6 +166,13 @@ pub struct Metadata {
     pub sweep: Sweep,
     pub fe: FeSettings,
     pub templates: Vec<TemplateEntry>,
+    /// SHA-256 of each model-matrix file, by file name. `metadata.json` is
+    /// written last by `haptex db merge` (and removed when a merge starts),
+    /// so a database whose merge did not finish has none, and a matrix that
+    /// does not match its hash is refused when loaded. Absent in databases
+    /// merged before haptex recorded it (then not checked).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub files_sha256: Option<crate::io::MemberHashes>,
 }
 
 /// The identifier of the metadata format.
@@ -188,8 +195,16 @@ impl Metadata {
     /// Reads `metadata.json` from a database directory.
     pub fn read(dir: &Path) -> Result<Self, DatabaseError> {
         let path = dir.join("metadata.json");
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| DatabaseError::File { path: path.clone(), message: e.to_string() })?;
+        let text = std::fs::read_to_string(&path).map_err(|e| DatabaseError::File {
+            path: path.clone(),
+            message: if e.kind() == std::io::ErrorKind::NotFound {
+                "no metadata.json: not a database, or one whose build or merge did not finish (haptex db merge \
+                 writes it last)"
+                    .to_string()
+            } else {
+                e.to_string()
+            },
+        })?;
         let metadata: Self = serde_json::from_str(&text).map_err(|e| DatabaseError::File {
             path: path.clone(),
             message: format!("line {}, column {}: {e}", e.line(), e.column()),
@@ -243,6 +258,15 @@ impl TemplateModel {
     pub fn load_with(dir: &Path, metadata: &Metadata, template: Template) -> Result<Self, DatabaseError> {
         let entry = metadata.entry(template).ok_or(DatabaseError::MissingTemplate(template.name()))?;
         let path = dir.join(&entry.file);
+        if let Some(hashes) = &metadata.files_sha256 {
+            let expected = hashes.get(&entry.file).ok_or_else(|| DatabaseError::File {
+                path: dir.join("metadata.json"),
+                message: format!("files_sha256 lists no hash for {}", entry.file),
+            })?;
+            let member = crate::io::MemberHashes::from([(entry.file.clone(), expected.clone())]);
+            crate::io::verify_members(dir, &member)
+                .map_err(|e| DatabaseError::File { path: path.clone(), message: e.problem })?;
+        }
         let matrix = ModelMatrix::read_csv_file(&path, &INPUTS)?;
         if matrix.m() != metadata.grid.points {
             return Err(DatabaseError::File {

@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::num::Num;
 use crate::profile::FrictionProfile;
+use crate::ranges::{self, RangeError};
 
 /// Vacuum permittivity eps0 in F/m (CODATA 2018).
 pub const EPS0_F_PER_M: f64 = 8.8541878128e-12;
@@ -24,8 +25,9 @@ const MM2: f64 = 1e-6;
 /// Invalid device or finger parameters, or a mapping that cannot be done.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ElectroError {
-    #[error("{name} must be a positive finite number, got {}", Num(*value))]
-    NotPositive { name: &'static str, value: f64 },
+    /// A parameter outside its accepted range ([`crate::ranges`]).
+    #[error(transparent)]
+    OutOfRange(#[from] RangeError),
     /// The device constants are each valid but together out of range.
     #[error("the device constants give {quantity} = {}, which is not a usable device: {hint}", Num(*value))]
     Degenerate { quantity: &'static str, value: f64, hint: &'static str },
@@ -71,10 +73,10 @@ impl LayerStack {
     }
 
     fn validate(&self) -> Result<(), ElectroError> {
-        positive("d_sc_mm", self.d_sc_mm)?;
-        positive("eps_sc", self.eps_sc)?;
-        positive("d_i_mm", self.d_i_mm)?;
-        positive("eps_i", self.eps_i)?;
+        ranges::D_SC_MM.check(self.d_sc_mm)?;
+        ranges::EPS_SC.check(self.eps_sc)?;
+        ranges::D_I_MM.check(self.d_i_mm)?;
+        ranges::EPS_I.check(self.eps_i)?;
         Ok(())
     }
 }
@@ -111,8 +113,8 @@ impl ContactArea {
     }
 
     fn validate(&self) -> Result<(), ElectroError> {
-        positive("k_mm2_per_n", self.k_mm2_per_n)?;
-        positive("contact-area exponent", self.exponent)?;
+        ranges::K_MM2_PER_N.check(self.k_mm2_per_n)?;
+        ranges::AREA_EXPONENT.check(self.exponent)?;
         Ok(())
     }
 }
@@ -164,8 +166,8 @@ impl Device {
     pub fn validate(&self) -> Result<(), ElectroError> {
         self.stack.validate()?;
         self.contact.validate()?;
-        positive("mu_hd", self.mu_hd)?;
-        positive("u_max_v", self.u_max_v)?;
+        ranges::MU_HD.check(self.mu_hd)?;
+        ranges::U_MAX_V.check(self.u_max_v)?;
         // Each constant may be fine and their combination still overflow
         // (d_sc = 1e300 mm): the derived quantities must be finite too.
         let ratio = self.force_ratio_per_v2(1.0);
@@ -436,7 +438,7 @@ pub fn map_profile(
                 let f = fn_n
                     .or(profile.mean_fn_n())
                     .ok_or(ElectroError::NormalForceRequired { exponent: device.contact.exponent })?;
-                Some(positive("fn_n", f)?)
+                Some(ranges::FN_N.check(f)?)
             };
             // With the linear law Fe/Fn does not depend on Fn; evaluate at 1 N.
             let ratio = device.force_ratio_per_v2(fn_used.unwrap_or(1.0));
@@ -539,8 +541,4 @@ pub fn normalized_voltages(mu: &[f64], u_max_v: f64, out: &mut [f64]) -> bool {
 
 fn min_max(values: &[f64]) -> (f64, f64) {
     values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)))
-}
-
-fn positive(name: &'static str, value: f64) -> Result<f64, ElectroError> {
-    if value.is_finite() && value > 0.0 { Ok(value) } else { Err(ElectroError::NotPositive { name, value }) }
 }

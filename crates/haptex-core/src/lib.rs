@@ -11,6 +11,7 @@ pub mod io;
 pub mod library;
 pub mod num;
 pub mod profile;
+pub mod ranges;
 pub mod recording;
 
 pub use electrovibration::{Device, Method, VoltageProfile, VoltageSummary, map_profile};

@@ -14,7 +14,7 @@
 
 use crate::assembly::{DofMap, PRESCRIBED, Pattern};
 use crate::element::{Formulation, GAUSS_POINTS, Q4, deviator};
-use crate::material::{History, Material, MaterialError, StepCoefficients};
+use crate::material::{Material, MaterialError, StepCoefficients, advance_history, frozen_deviator, history_deviator};
 use crate::mesh::{Mesh, MeshError};
 
 /// The body cannot be built.
@@ -58,8 +58,13 @@ pub struct Body {
     pub geometry: Vec<Q4>,
     pub subdomains: Vec<SubdomainModel>,
     pub formulation: Formulation,
-    /// History at each Gauss point (4 per element), committed state.
-    pub history: Vec<History>,
+    /// Visco-elastic history at each Gauss point (4 per element), committed
+    /// state: the instantaneous deviator s0 of every point, and the internal
+    /// stresses h_i of all points in one array (point `4 e + gp` has its
+    /// material's number of Prony terms from `history_start[e] + gp * terms`).
+    history_s0: Vec<[f64; 4]>,
+    history_h: Vec<[f64; 4]>,
+    history_start: Vec<usize>,
     deformable: Vec<usize>,
 }
 
@@ -81,8 +86,24 @@ impl Body {
                 Some(SubdomainModel::Rigid) => {}
             }
         }
-        let history = vec![History::default(); 4 * mesh.n_elements()];
-        Ok(Self { mesh, geometry, subdomains, formulation, history, deformable })
+        let mut history_start = Vec::with_capacity(mesh.n_elements());
+        let mut terms = 0;
+        for &sd in &mesh.subdomain {
+            history_start.push(terms);
+            if let SubdomainModel::Deformable(m) = &subdomains[sd as usize] {
+                terms += 4 * m.prony.len();
+            }
+        }
+        Ok(Self {
+            history_s0: vec![[0.0; 4]; 4 * mesh.n_elements()],
+            history_h: vec![[0.0; 4]; terms],
+            history_start,
+            mesh,
+            geometry,
+            subdomains,
+            formulation,
+            deformable,
+        })
     }
 
     /// Indices of the deformable elements.
@@ -113,6 +134,13 @@ impl Body {
             .collect()
     }
 
+    /// The internal stresses h_i of Gauss point `gp` of deformable element `e`.
+    fn history_h(&self, e: usize, gp: usize) -> &[[f64; 4]] {
+        let n = self.material(e).prony.len();
+        let start = self.history_start[e] + gp * n;
+        &self.history_h[start..start + n]
+    }
+
     fn coefficients<'c>(&self, e: usize, c: &'c [Option<StepCoefficients>]) -> &'c StepCoefficients {
         c[self.mesh.subdomain[e] as usize].as_ref().expect("deformable element")
     }
@@ -137,12 +165,12 @@ impl Body {
     pub fn add_history_loads(&self, c: &[Option<StepCoefficients>], dofs: &DofMap, f_free: &mut [f64]) {
         for &e in &self.deformable {
             let coefficients = self.coefficients(e, c);
-            if coefficients.n_terms == 0 {
+            if coefficients.n_terms() == 0 {
                 continue;
             }
             let mut f = [0.0; 8];
             for gp in 0..4 {
-                let frozen = self.history[4 * e + gp].frozen_deviator(coefficients);
+                let frozen = frozen_deviator(&self.history_s0[4 * e + gp], self.history_h(e, gp), coefficients);
                 self.geometry[e].add_deviator_force(gp, &frozen, &mut f);
             }
             scatter_free(dofs, &self.mesh.elements[e], &f, -1.0, f_free);
@@ -171,11 +199,14 @@ impl Body {
         for i in 0..self.deformable.len() {
             let e = self.deformable[i];
             let ue = self.element_displacement(e, u);
-            let g0 = self.material(e).shear_mpa();
-            let coefficients = *self.coefficients(e, c);
+            let m = self.material(e);
+            let (g0, n) = (m.shear_mpa(), m.prony.len());
+            let coefficients = self.coefficients(e, c);
             for gp in 0..4 {
                 let s0 = deviator(&self.geometry[e].strain(gp, &ue)).map(|v| 2.0 * g0 * v);
-                self.history[4 * e + gp].advance(&coefficients, &s0);
+                let start = self.history_start[e] + gp * n;
+                let h = &mut self.history_h[start..start + n];
+                advance_history(&mut self.history_s0[4 * e + gp], h, coefficients, &s0);
             }
         }
     }
@@ -191,7 +222,7 @@ impl Body {
         let m = self.material(e);
         let ue = self.element_displacement(e, u);
         let p = m.bulk_mpa() * self.geometry[e].dilatation(self.formulation, gp, &ue);
-        let s = self.history[4 * e + gp].deviator(m.g_inf(), m.prony.len());
+        let s = history_deviator(&self.history_s0[4 * e + gp], self.history_h(e, gp), m.g_inf());
         [s[0] + p, s[1] + p, s[2] + p, s[3]]
     }
 
@@ -219,7 +250,7 @@ impl Body {
             let q = &self.geometry[e];
             let mut fe = [0.0; 8];
             for gp in 0..4 {
-                let s = self.history[4 * e + gp].deviator(m.g_inf(), m.prony.len());
+                let s = history_deviator(&self.history_s0[4 * e + gp], self.history_h(e, gp), m.g_inf());
                 q.add_deviator_force(gp, &s, &mut fe);
                 if self.formulation == Formulation::Plain {
                     q.add_pressure_force(

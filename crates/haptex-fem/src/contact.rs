@@ -330,7 +330,7 @@ mod tests {
         // One horizontal segment of length 1 at y = 0.
         let nodes = [[0.0, 0.0], [1.0, 0.0]];
         let set = ContactSet::new(&nodes, &[[0, 1]], 4);
-        let surface = RigidSurface::new(&SurfaceShape::Flat, -10.0, 10.0);
+        let surface = RigidSurface::new(&SurfaceShape::Flat, -10.0, 10.0).unwrap();
         (set, surface, ContactLaw { penalty_normal: 100.0, penalty_tangential: 50.0, mu: 0.5, smoothing_mm: 0.0 })
     }
 

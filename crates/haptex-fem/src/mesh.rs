@@ -1,6 +1,8 @@
 //! The finite-element mesh: nodes, 4-node elements with a subdomain tag,
 //! and the boundary loops the model drives and puts in contact.
 
+use haptex_core::num::Num;
+
 use crate::element::{JacobianError, Q4};
 
 /// A 2D mesh of 4-node quadrilaterals (nodes counter-clockwise, mm).
@@ -27,6 +29,14 @@ pub enum MeshError {
     },
     #[error("element {element} refers to node {node}, but the mesh has {n_nodes} nodes")]
     BadNode { element: usize, node: usize, n_nodes: usize },
+    #[error("mesh generation failed: element {element} near ({}, {}) mm is inverted: {source}", Num(at[0]), Num(at[1]))]
+    Inverted {
+        element: usize,
+        /// The element's centroid (mm).
+        at: [f64; 2],
+        #[source]
+        source: JacobianError,
+    },
     #[error("mesh generation failed: {0}")]
     Generation(String),
 }

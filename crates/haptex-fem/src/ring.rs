@@ -22,6 +22,8 @@
 //! spacing needed at a contact surface does not propagate to the inner
 //! curve as needle-shaped elements.
 
+use haptex_core::num::Num;
+
 use crate::mesh::{Mesh, MeshError};
 
 /// A 3-to-1 coarsening between row `after_row` and the next row.
@@ -57,11 +59,28 @@ pub struct RingMesh {
     pub params: Vec<[f64; 2]>,
 }
 
+/// Most nodes a ring mesh, and most angular nodes a contour, may have: a
+/// bound on the memory a specification can ask for (the finger's finest
+/// mesh has about 6000 nodes, 500 of them around the contour).
+pub const MAX_NODES: usize = 1_000_000;
+pub const MAX_CONTOUR_NODES: usize = 100_000;
+
 /// Builds the mesh of a ring.
 pub fn mesh_ring(spec: &RingSpec<'_>) -> Result<RingMesh, MeshError> {
     let fail = |m: String| Err(MeshError::Generation(m));
     if spec.phis.len() < 3 || spec.rows.len() < 2 {
         return fail("a ring needs at least 3 angular nodes and 2 rows".into());
+    }
+    if spec.phis.iter().chain(&spec.rows).any(|v| !v.is_finite()) {
+        return fail("angular parameters and rows must be finite numbers".into());
+    }
+    let n_nodes = spec.phis.len() as f64 * spec.rows.len() as f64;
+    if n_nodes > MAX_NODES as f64 {
+        return fail(format!(
+            "{} angular nodes x {} rows is more than {MAX_NODES} nodes",
+            spec.phis.len(),
+            spec.rows.len()
+        ));
     }
     if spec.phis.windows(2).any(|w| w[1] <= w[0]) || spec.rows.windows(2).any(|w| w[1] <= w[0]) {
         return fail("angular parameters and rows must be increasing".into());
@@ -95,8 +114,18 @@ pub fn mesh_ring(spec: &RingSpec<'_>) -> Result<RingMesh, MeshError> {
         };
     }
     builder.mesh.inner = row.iter().map(|&(_, n)| n).collect();
-    // Check every element once here, so a bad spec fails at generation.
-    builder.mesh.geometry()?;
+    // Check every element once here, so a bad spec fails at generation
+    // (saying where).
+    if let Err(e) = builder.mesh.geometry() {
+        return Err(match e {
+            MeshError::Jacobian { element, source } => {
+                let x = builder.mesh.element_coords(element);
+                let at = [0, 1].map(|k| x.iter().map(|p| 1000.0 * p[k] / 4.0).sum::<f64>().round() / 1000.0);
+                MeshError::Inverted { element, at, source }
+            }
+            other => other,
+        });
+    }
     Ok(RingMesh { mesh: builder.mesh, params: builder.params })
 }
 
@@ -207,13 +236,26 @@ fn wrap(phi: f64, reference: f64) -> f64 {
 /// transitions fit and a node sits at phi = 0), then a spacing growing
 /// linearly (rate 0.25) with the distance from the pad up to
 /// `coarse_spacing`. The total count is a multiple of 3. Returns the
-/// parameters (increasing from -phi_pad) and `n_fine`.
+/// parameters (increasing from -phi_pad) and `n_fine`. The pad must leave
+/// at least a fifth of the perimeter to the coarse part, and the count is
+/// at most [`MAX_CONTOUR_NODES`].
 pub fn contour_parameters(
     contour: &dyn Fn(f64) -> [f64; 2],
     half_arc: f64,
     pad_spacing: f64,
     coarse_spacing: f64,
-) -> (Vec<f64>, usize) {
+) -> Result<(Vec<f64>, usize), MeshError> {
+    let fail = |m: String| Err(MeshError::Generation(m));
+    if !(half_arc.is_finite() && half_arc > 0.0) {
+        return fail(format!("the pad's half-arc must be a positive length, got {} mm", Num(half_arc)));
+    }
+    if !(pad_spacing.is_finite() && pad_spacing > 0.0 && coarse_spacing.is_finite() && coarse_spacing > 0.0) {
+        return fail(format!(
+            "node spacings must be positive lengths, got {} and {} mm",
+            Num(pad_spacing),
+            Num(coarse_spacing)
+        ));
+    }
     // Arc length of the contour as a function of phi, tabulated.
     let table_n = 20_000;
     let mut phis = Vec::with_capacity(table_n + 1);
@@ -229,16 +271,44 @@ pub fn contour_parameters(
         arcs.push(s);
     }
     let perimeter = s;
+    if !(perimeter.is_finite() && perimeter > 0.0) {
+        return fail(format!("the contour's perimeter is {} mm", Num(perimeter)));
+    }
     let phi_at = |arc: f64| haptex_core::profile::interpolate(&arcs, &phis, arc.rem_euclid(perimeter));
-    let half = half_arc.min(0.4 * perimeter);
-    let n_fine = (18.0 * (2.0 * half / (18.0 * pad_spacing)).ceil()).max(18.0) as usize;
+    let half = half_arc;
+    if half > 0.4 * perimeter {
+        return fail(format!(
+            "the pad's half-arc {} mm is more than 0.4 of the contour's perimeter ({} mm)",
+            Num(half),
+            Num(perimeter)
+        ));
+    }
+    let fine_count = (18.0 * (2.0 * half / (18.0 * pad_spacing)).ceil()).max(18.0);
     let coarse_length = perimeter - 2.0 * half;
+    // At least the count of the coarse part at the coarse spacing.
+    if fine_count + coarse_length / coarse_spacing > MAX_CONTOUR_NODES as f64 {
+        return fail(format!(
+            "a contour of {} mm at a pad spacing of {} mm over +-{} mm needs more than {MAX_CONTOUR_NODES} nodes",
+            Num(perimeter),
+            Num(pad_spacing),
+            Num(half)
+        ));
+    }
+    let n_fine = fine_count as usize;
     let h = |u: f64| (pad_spacing + 0.25 * u.min(coarse_length - u)).min(coarse_spacing);
     let steps = 10_000;
     let mut cumulative = vec![0.0; steps + 1];
     for i in 0..steps {
         let u = coarse_length * (i as f64 + 0.5) / steps as f64;
         cumulative[i + 1] = cumulative[i] + coarse_length / steps as f64 / h(u);
+    }
+    if cumulative[steps] + n_fine as f64 > MAX_CONTOUR_NODES as f64 {
+        return fail(format!(
+            "a contour of {} mm with {} mm nodes growing to {} mm needs more than {MAX_CONTOUR_NODES} nodes",
+            Num(perimeter),
+            Num(pad_spacing),
+            Num(coarse_spacing)
+        ));
     }
     let mut n_coarse = cumulative[steps].round().max(3.0) as usize;
     while !(n_fine + n_coarse).is_multiple_of(3) {
@@ -256,7 +326,7 @@ pub fn contour_parameters(
         let u = haptex_core::profile::interpolate(&cumulative, &us, total * k as f64 / n_coarse as f64);
         params.push(phi_at(half + u));
     }
-    (params, n_fine)
+    Ok((params, n_fine))
 }
 
 #[cfg(test)]

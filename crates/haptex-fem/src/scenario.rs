@@ -8,6 +8,7 @@
 
 use std::time::Instant;
 
+use haptex_core::num::Num;
 use haptex_core::profile::FrictionProfile;
 use serde::Serialize;
 
@@ -82,39 +83,113 @@ impl Scenario {
         }
     }
 
-    fn validate(&self) -> Result<(), SimulationError> {
-        let positive = [
-            ("press time (s)", self.press_time_s),
-            ("slide (mm)", self.slide_mm),
-            ("velocity (mm/s)", self.velocity_mm_s),
-            ("step (mm)", self.step_mm),
-            ("penalty (MPa/mm)", self.penalty_mpa_per_mm),
-            (
-                "indentation or load",
-                match self.loading {
-                    Loading::Indent(v) | Loading::Load(v) => v,
-                },
-            ),
-        ];
-        for (name, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(SimulationError::Invalid(format!("{name} must be positive, got {v}")));
+    /// Checks every setting against [`limits`] and the finger model (an
+    /// indentation must stay within the pulp under the bone); the surface
+    /// against its own limits. Errors name the setting.
+    pub fn validate(&self) -> Result<(), SimulationError> {
+        let invalid = |m: String| Err(SimulationError::Invalid(m));
+        self.surface.validate().map_err(|e| SimulationError::Invalid(e.to_string()))?;
+        self.model.validate_fields().map_err(|e| SimulationError::Finger(FingerError::Invalid(e)))?;
+        let within = |name: &str, v: f64, (lo, hi): (f64, f64), unit: &str| {
+            if v.is_finite() && v >= lo && v <= hi {
+                Ok(())
+            } else {
+                invalid(format!(
+                    "{name} = {}{unit} is outside the supported range {} .. {}{unit}",
+                    Num(v),
+                    Num(lo),
+                    Num(hi)
+                ))
+            }
+        };
+        within("press time", self.press_time_s, limits::PRESS_TIME_S, " s")?;
+        within("slide", self.slide_mm, limits::SLIDE_MM, " mm")?;
+        within("velocity", self.velocity_mm_s, limits::VELOCITY_MM_S, " mm/s")?;
+        within("penalty", self.penalty_mpa_per_mm, limits::PENALTY_MPA_PER_MM, " MPa/mm")?;
+        if !(self.step_mm.is_finite() && self.step_mm > 0.0) {
+            return invalid(format!("the slide step must be a positive length, got {} mm", Num(self.step_mm)));
+        }
+        let steps = (self.slide_mm / self.step_mm).ceil();
+        if steps > limits::MAX_STEPS as f64 {
+            return invalid(format!(
+                "a slide of {} mm in steps of {} mm takes {} steps; at most {} are supported",
+                Num(self.slide_mm),
+                Num(self.step_mm),
+                Num(steps),
+                limits::MAX_STEPS
+            ));
+        }
+        if self.press_steps == 0 || self.press_steps > limits::MAX_STEPS {
+            return invalid(format!("the press needs 1 to {} steps, got {}", limits::MAX_STEPS, self.press_steps));
+        }
+        match self.loading {
+            Loading::Indent(indent) => {
+                let g = &self.model.geometry;
+                let pulp = g.bone_center_height_mm - g.bone_half_height_mm;
+                if !(indent.is_finite() && indent > 0.0 && indent < pulp) {
+                    return invalid(format!(
+                        "indentation = {} mm must be positive and less than the pulp under the bone ({} mm)",
+                        Num(indent),
+                        Num(pulp)
+                    ));
+                }
+            }
+            Loading::Load(load) => {
+                if !(load.is_finite() && load > 0.0 && load <= limits::LOAD_N_PER_MM) {
+                    return invalid(format!(
+                        "load = {} N/mm must be positive and at most {} N/mm",
+                        Num(load),
+                        Num(limits::LOAD_N_PER_MM)
+                    ));
+                }
             }
         }
-        if self.press_steps == 0 {
-            return Err(SimulationError::Invalid("the press needs at least one step".into()));
+        if let Some(mu) = self.mu_skin {
+            within("skin friction mu", mu, crate::finger::limits::MU_SKIN, "")?;
         }
-        if let Some(mu) = self.mu_skin
-            && !(mu.is_finite() && mu >= 0.0)
-        {
-            return Err(SimulationError::Invalid(format!("skin friction must be >= 0, got {mu}")));
+        if self.frame_every > 0 && steps / self.frame_every as f64 > limits::MAX_FRAMES as f64 {
+            return invalid(format!(
+                "a frame every {} slide steps of {} keeps {} full-field frames in memory; at most {} are kept \
+                 (for --vtk, a larger --vtk-every)",
+                self.frame_every,
+                Num(steps),
+                Num((steps / self.frame_every as f64).ceil()),
+                limits::MAX_FRAMES
+            ));
         }
-        if self.slide_mm / self.step_mm > 1e6 {
-            return Err(SimulationError::Invalid("more than 1e6 slide steps".into()));
-        }
-        self.surface.validate().map_err(|e| SimulationError::Invalid(e.to_string()))?;
+        let (x_min, x_max) = self.surface_range_mm();
+        RigidSurface::template_segments(&self.surface, x_min, x_max)
+            .map_err(|e| SimulationError::Invalid(e.to_string()))?;
         Ok(())
     }
+
+    /// The x range of the surface the finger can meet over the slide (mm).
+    pub fn surface_range_mm(&self) -> (f64, f64) {
+        let half = self.model.geometry.half_width_mm;
+        (-half - 2.0, half + self.slide_mm + 2.0)
+    }
+
+    /// The number of equal slide steps (at most `step_mm` each).
+    pub fn slide_steps(&self) -> Result<usize, SimulationError> {
+        self.validate()?;
+        Ok((self.slide_mm / self.step_mm).ceil() as usize)
+    }
+}
+
+/// The accepted ranges of the scenario's settings (see
+/// [`Scenario::validate`]): beyond any experiment, and bounding the time,
+/// the memory and the magnitudes a run can reach.
+pub mod limits {
+    /// Most press or slide steps.
+    pub const MAX_STEPS: usize = 1_000_000;
+    /// Most full-field frames kept (~0.3 MB each at the finest mesh).
+    pub const MAX_FRAMES: usize = 1000;
+    pub const PRESS_TIME_S: (f64, f64) = (1e-6, 1e6);
+    pub const SLIDE_MM: (f64, f64) = (1e-3, 1e4);
+    pub const VELOCITY_MM_S: (f64, f64) = (1e-3, 1e6);
+    pub const PENALTY_MPA_PER_MM: (f64, f64) = (1e-3, 1e6);
+    /// Largest normal load, N per mm of finger width.
+    pub const LOAD_N_PER_MM: f64 = 100.0;
 }
 
 /// The default slide step: 0.1 mm, or a tenth of the feature width if
@@ -220,8 +295,9 @@ pub struct Progress {
 pub fn build_problem(scenario: &Scenario) -> Result<(ContactProblem, f64), SimulationError> {
     scenario.validate()?;
     let finger = scenario.model.mesh(scenario.resolution)?;
-    let half = scenario.model.geometry.half_width_mm;
-    let surface = RigidSurface::new(&scenario.surface, -half - 2.0, half + scenario.slide_mm + 2.0);
+    let (x_min, x_max) = scenario.surface_range_mm();
+    let surface =
+        RigidSurface::new(&scenario.surface, x_min, x_max).map_err(|e| SimulationError::Invalid(e.to_string()))?;
     let contact = ContactSet::new(&finger.mesh.nodes, &finger.contact_segments, 4);
     // Lift the surface so that it just touches the undeformed finger.
     let lift_mm = contact
@@ -253,7 +329,7 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
     let started = Instant::now();
     let (problem, lift_mm) = build_problem(scenario)?;
     let mut solver = Solver::new(problem, scenario.settings, lift_mm)?;
-    let slide_steps = (scenario.slide_mm / scenario.step_mm).ceil() as usize;
+    let slide_steps = scenario.slide_steps()?;
     // Equal steps that end exactly at the slide length (so every step has
     // the same time step and shares one set of operators).
     let step_mm = scenario.slide_mm / slide_steps as f64;

@@ -59,6 +59,11 @@ pub struct ContactProblem {
     pub law: ContactLaw,
 }
 
+/// Most candidate contact nodes a problem may have: the condensed system
+/// holds several dense (2m)^2 matrices (the finger's finest mesh with the
+/// longest contact region has 811 nodes).
+pub const MAX_CONTACT_NODES: usize = 2000;
+
 /// Newton settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolverSettings {
@@ -73,6 +78,20 @@ pub struct SolverSettings {
 impl Default for SolverSettings {
     fn default() -> Self {
         Self { max_iterations: 100, relative_tolerance: 1e-9, absolute_force_n: 1e-9, max_cuts: 10 }
+    }
+}
+
+impl SolverSettings {
+    /// Iterations 1 ..= 10^4, halvings at most 40 (a step of 1e-12 of the
+    /// original), tolerances positive.
+    pub fn validate(&self) -> Result<(), SolveError> {
+        let ok = (1..=10_000).contains(&self.max_iterations)
+            && self.max_cuts <= 40
+            && self.relative_tolerance.is_finite()
+            && self.relative_tolerance > 0.0
+            && self.absolute_force_n.is_finite()
+            && self.absolute_force_n > 0.0;
+        if ok { Ok(()) } else { Err(SolveError::Settings(format!("out of range: {self:?}"))) }
     }
 }
 
@@ -104,6 +123,15 @@ pub enum SolveError {
     OutsideContactRegion { t_s: f64, node: usize, x_mm: f64 },
     #[error("the driven set lost contact under load control at t = {t_s:.6} s: no contact force can carry the load")]
     LostContact { t_s: f64 },
+    #[error("solver settings: {0}")]
+    Settings(String),
+    #[error("contact candidate node {node} is driven or rigid: the contact region must be free skin")]
+    PrescribedContactNode { node: usize },
+    #[error(
+        "{nodes} contact candidate nodes: at most {MAX_CONTACT_NODES} (the condensed contact system is dense, its \
+         memory grows with the square of this count)"
+    )]
+    TooManyContactNodes { nodes: usize },
 }
 
 /// The converged state after a step.
@@ -197,6 +225,10 @@ impl Solver {
     /// Analyses the problem: DOF numbering, stiffness pattern, symbolic
     /// factorization. `lift_mm` places the surface vertically.
     pub fn new(problem: ContactProblem, settings: SolverSettings, lift_mm: f64) -> Result<Self, SolveError> {
+        settings.validate()?;
+        if !lift_mm.is_finite() {
+            return Err(SolveError::Settings(format!("the surface's placement {lift_mm} mm is not finite")));
+        }
         let mut prescribed: Vec<usize> = problem.driven_nodes.iter().flat_map(|&n| [2 * n, 2 * n + 1]).collect();
         // Rigid subdomains' nodes must be driven; they are by construction of
         // the finger, checked here for other problems.
@@ -206,6 +238,12 @@ impl Solver {
             }
         }
         let dofs = DofMap::new(problem.body.mesh.n_nodes(), &prescribed);
+        if problem.contact.n_nodes() > MAX_CONTACT_NODES {
+            return Err(SolveError::TooManyContactNodes { nodes: problem.contact.n_nodes() });
+        }
+        if let Some(&node) = problem.contact.nodes.iter().find(|&&n| !dofs.is_free(2 * n) || !dofs.is_free(2 * n + 1)) {
+            return Err(SolveError::PrescribedContactNode { node });
+        }
         let pattern = Pattern::new(&dofs, &problem.body.mesh.elements, problem.body.deformable_elements());
         let m2 = 2 * problem.contact.n_nodes();
         let base = SparseCholesky::new(&pattern, m2)?;
@@ -366,25 +404,26 @@ impl Solver {
                     iterations += its;
                     last = Some(totals);
                 }
-                Err(failure) => {
+                Err(StepFailure::Fatal(e)) => {
+                    self.pending = pending;
+                    return Err(match e {
+                        // Newton does not know the time; the step does.
+                        SolveError::LostContact { .. } => SolveError::LostContact { t_s: self.t_s + fraction * dt_s },
+                        other => other,
+                    });
+                }
+                Err(StepFailure::Newton { residual, tolerance }) => {
                     let depth = (1.0 / fraction).log2().round() as u32;
                     if depth >= self.settings.max_cuts {
                         self.pending = pending;
-                        return Err(match failure {
-                            StepFailure::Newton { residual, tolerance } => SolveError::NotConverged {
-                                t_s: self.t_s + fraction * dt_s,
-                                step: self.steps + 1,
-                                slide_mm: target_slide,
-                                cuts: depth,
-                                residual,
-                                tolerance,
-                            },
-                            StepFailure::Fatal(e) => e,
+                        return Err(SolveError::NotConverged {
+                            t_s: self.t_s + fraction * dt_s,
+                            step: self.steps + 1,
+                            slide_mm: target_slide,
+                            cuts: depth,
+                            residual,
+                            tolerance,
                         });
-                    }
-                    if let StepFailure::Fatal(e) = failure {
-                        self.pending = pending;
-                        return Err(e);
                     }
                     cuts += 1;
                     let middle = 0.5 * (from + to);
@@ -422,7 +461,7 @@ impl Solver {
             let ops = &mut self.operators[k];
             let s = &mut self.scratch;
             s.u0_free.fill(0.0);
-            if ops.coefficients.iter().flatten().any(|c| c.n_terms > 0) {
+            if ops.coefficients.iter().flatten().any(|c| c.n_terms() > 0) {
                 self.problem.body.add_history_loads(&ops.coefficients, &self.dofs, &mut s.u0_free);
                 ops.cholesky.solve_vec(&mut s.u0_free);
             }
@@ -647,7 +686,7 @@ fn newton(
             }
         }
         if newton_direction(cond, s).is_none() {
-            return Err(StepFailure::Fatal(SolveError::LostContact { t_s: f64::NAN }));
+            return Err(StepFailure::Fatal(SolveError::LostContact { t_s: 0.0 }));
         }
         let ddy = s.last_ddy;
         // Backtracking line search on |S R|^2.

@@ -7,10 +7,12 @@
 //! y < h(x) on the polyline; its closest boundary point lies within the
 //! vertical distance h(x) - y of it, which bounds the segments searched.
 
+use std::io::Read;
 use std::path::Path;
 
 use haptex_core::database::Template;
 use haptex_core::io::{Table, TableError};
+use haptex_core::num::Num;
 use serde::{Deserialize, Serialize};
 
 /// The shape of a reference surface (all lengths in mm).
@@ -29,6 +31,24 @@ pub enum SurfaceShape {
     /// A height profile given point by point (x strictly increasing),
     /// linear between points and held flat beyond the ends.
     Sampled { x_mm: Vec<f64>, h_mm: Vec<f64> },
+}
+
+/// The accepted magnitudes of surface parameters (mm): far beyond any
+/// real surface, and far from where the solver's sums of positions and
+/// heights would lose their digits or overflow.
+pub mod limits {
+    /// |x0| of a template.
+    pub const X0_MM: f64 = 1e4;
+    /// Width r_w of a template: from 1 um to 10 m.
+    pub const WIDTH_MM: (f64, f64) = (1e-3, 1e4);
+    /// |r_h| of a template and |h| of a height profile.
+    pub const HEIGHT_MM: f64 = 1e3;
+    /// |x| of a height profile.
+    pub const X_MM: f64 = 1e6;
+    /// Most vertices of the polyline a surface is represented by (a
+    /// template is sampled at r_w/200, at most 5 um, over the slide): 4e6
+    /// vertices take 96 MB.
+    pub const MAX_VERTICES: usize = 4_000_000;
 }
 
 /// A surface definition is invalid.
@@ -52,7 +72,8 @@ impl SurfaceShape {
         }
     }
 
-    /// Checks the parameters: width > 0, finite height, sampled x increasing.
+    /// Checks the parameters against [`limits`]: width, x0 and height of a
+    /// template; point count, increasing x and magnitudes of a height profile.
     pub fn validate(&self) -> Result<(), SurfaceError> {
         let invalid = |m: String| Err(SurfaceError::Invalid(m));
         match self {
@@ -60,11 +81,28 @@ impl SurfaceShape {
             SurfaceShape::Bump { x0, width, height }
             | SurfaceShape::Edge { x0, width, height }
             | SurfaceShape::Sine { x0, width, height } => {
-                if !(width.is_finite() && *width > 0.0) {
-                    return invalid(format!("surface width must be positive, got {width} mm"));
+                let (lo, hi) = limits::WIDTH_MM;
+                if !(width.is_finite() && *width >= lo && *width <= hi) {
+                    return invalid(format!(
+                        "surface width r_w = {} mm is outside the supported range {} .. {} mm",
+                        Num(*width),
+                        Num(lo),
+                        Num(hi)
+                    ));
                 }
-                if !(x0.is_finite() && height.is_finite()) {
-                    return invalid(format!("surface x0 and height must be finite, got {x0} and {height} mm"));
+                if !(x0.is_finite() && x0.abs() <= limits::X0_MM) {
+                    return invalid(format!(
+                        "surface x0 = {} mm is outside the supported range +-{} mm",
+                        Num(*x0),
+                        Num(limits::X0_MM)
+                    ));
+                }
+                if !(height.is_finite() && height.abs() <= limits::HEIGHT_MM) {
+                    return invalid(format!(
+                        "surface height r_h = {} mm is outside the supported range +-{} mm",
+                        Num(*height),
+                        Num(limits::HEIGHT_MM)
+                    ));
                 }
                 Ok(())
             }
@@ -72,19 +110,50 @@ impl SurfaceShape {
                 if x_mm.len() < 2 || x_mm.len() != h_mm.len() {
                     return invalid("a sampled surface needs at least 2 points of x and h".into());
                 }
-                if x_mm.windows(2).any(|w| w[1] <= w[0]) || x_mm.iter().chain(h_mm).any(|v| !v.is_finite()) {
-                    return invalid("a sampled surface needs finite h and strictly increasing x".into());
+                if let Some(message) = Self::out_of_range_point(x_mm, h_mm) {
+                    return invalid(message.1);
+                }
+                if let Some(i) = x_mm.windows(2).position(|w| w[1] <= w[0]) {
+                    return invalid(format!(
+                        "a sampled surface needs strictly increasing x: point {} (x = {} mm) follows x = {} mm",
+                        i + 2,
+                        Num(x_mm[i + 1]),
+                        Num(x_mm[i])
+                    ));
                 }
                 Ok(())
             }
         }
     }
 
-    /// Reads a sampled height profile (`x_mm,h_mm` CSV).
+    /// The first point (index, message) of a height profile whose x or h is
+    /// not finite or beyond [`limits`].
+    fn out_of_range_point(x_mm: &[f64], h_mm: &[f64]) -> Option<(usize, String)> {
+        x_mm.iter().zip(h_mm).enumerate().find_map(|(i, (&x, &h))| {
+            if !(x.is_finite() && x.abs() <= limits::X_MM) {
+                Some((i, format!("x = {} mm is outside the supported range +-{} mm", Num(x), Num(limits::X_MM))))
+            } else if !(h.is_finite() && h.abs() <= limits::HEIGHT_MM) {
+                Some((i, format!("h = {} mm is outside the supported range +-{} mm", Num(h), Num(limits::HEIGHT_MM))))
+            } else {
+                None
+            }
+        })
+    }
+
+    /// Reads a sampled height profile (`x_mm,h_mm` CSV) from a file.
     pub fn read_csv(path: &Path) -> Result<Self, SurfaceError> {
-        let table = Table::read_file(path)?;
-        let x = table.require("x_mm")?.to_vec();
-        let h = table.require("h_mm")?.to_vec();
+        Self::from_table(Table::read_file(path)?)
+    }
+
+    /// Reads a sampled height profile (`x_mm,h_mm` CSV); `source_name`
+    /// labels errors, which name the line and the column.
+    pub fn read_csv_from<R: Read>(reader: R, source_name: &str) -> Result<Self, SurfaceError> {
+        Self::from_table(Table::read(reader, source_name)?)
+    }
+
+    fn from_table(table: Table) -> Result<Self, SurfaceError> {
+        let x = table.require("x_mm")?;
+        let h = table.require("h_mm")?;
         if x.len() < 2 {
             return Err(table.error_at(None, Some("x_mm"), "a height profile needs at least 2 points").into());
         }
@@ -93,11 +162,15 @@ impl SurfaceShape {
                 .error_at(
                     Some(i + 1),
                     Some("x_mm"),
-                    format!("x must be strictly increasing: {} follows {}", x[i + 1], x[i]),
+                    format!("x must be strictly increasing: {} follows {}", Num(x[i + 1]), Num(x[i])),
                 )
                 .into());
         }
-        Ok(SurfaceShape::Sampled { x_mm: x, h_mm: h })
+        if let Some((i, message)) = Self::out_of_range_point(x, h) {
+            let column = if x[i].abs() <= limits::X_MM { "h_mm" } else { "x_mm" };
+            return Err(table.error_at(Some(i), Some(column), message).into());
+        }
+        Ok(SurfaceShape::Sampled { x_mm: x.to_vec(), h_mm: h.to_vec() })
     }
 
     /// A length below which the shape has no detail (for sampling): a
@@ -141,13 +214,23 @@ impl RigidSurface {
     /// Samples `shape` over [x_min, x_max] (mm). Templates are sampled at
     /// 1/200 of their width (at most 5 um) — chord error below 1e-4 mm at
     /// the sharpest corner of the database range; sampled surfaces keep
-    /// their own points, padded flat to the range.
-    pub fn new(shape: &SurfaceShape, x_min: f64, x_max: f64) -> Self {
+    /// their own points, padded flat to the range. The shape must be valid
+    /// ([`SurfaceShape::validate`]) and the polyline at most
+    /// [`limits::MAX_VERTICES`] long.
+    pub fn new(shape: &SurfaceShape, x_min: f64, x_max: f64) -> Result<Self, SurfaceError> {
+        shape.validate()?;
+        if !(x_min.is_finite() && x_max.is_finite() && x_max > x_min) {
+            return Err(SurfaceError::Invalid(format!(
+                "the surface range {} .. {} mm is empty or not finite",
+                Num(x_min),
+                Num(x_max)
+            )));
+        }
+        let segments = Self::template_segments(shape, x_min, x_max)?;
         let (mut x, mut h) = match shape {
             SurfaceShape::Sampled { x_mm, h_mm } => (x_mm.clone(), h_mm.clone()),
             _ => {
-                let dx = shape.detail_mm().min(0.005);
-                let n = ((x_max - x_min) / dx).ceil() as usize;
+                let n = segments;
                 let x: Vec<f64> = (0..=n).map(|i| x_min + (x_max - x_min) * i as f64 / n as f64).collect();
                 let h = x.iter().map(|&x| shape.height(x)).collect();
                 (x, h)
@@ -169,7 +252,30 @@ impl RigidSurface {
         let spacing = (x[n - 1] - x[0]) / (n - 1) as f64;
         let uniform =
             x.windows(2).all(|w| ((w[1] - w[0]) / spacing - 1.0).abs() < 1e-9).then_some((x[0], 1.0 / spacing));
-        Self { x, h, arc, uniform }
+        Ok(Self { x, h, arc, uniform })
+    }
+
+    /// The number of segments a template is sampled with over [x_min,
+    /// x_max] (at r_w/200, at most 5 um; 0 for a sampled surface, which
+    /// keeps its points); an error beyond [`limits::MAX_VERTICES`].
+    pub fn template_segments(shape: &SurfaceShape, x_min: f64, x_max: f64) -> Result<usize, SurfaceError> {
+        if let SurfaceShape::Sampled { .. } = shape {
+            return Ok(0);
+        }
+        let dx = shape.detail_mm().min(0.005);
+        let count = ((x_max - x_min) / dx).ceil();
+        if count.is_nan() || count >= limits::MAX_VERTICES as f64 {
+            return Err(SurfaceError::Invalid(format!(
+                "sampling the surface over x = {} .. {} mm every {} mm (r_w/200, at most 5 um) takes {} points, more \
+                 than {}: widen the feature or shorten the slide",
+                Num(x_min),
+                Num(x_max),
+                Num(dx),
+                Num(count),
+                limits::MAX_VERTICES
+            )));
+        }
+        Ok(count as usize)
     }
 
     /// Index i of the segment [x_i, x_i+1] containing x (clamped to the range).
@@ -270,14 +376,15 @@ mod tests {
 
     #[test]
     fn projection_onto_flat_and_slope() {
-        let flat = RigidSurface::new(&SurfaceShape::Flat, -5.0, 5.0);
+        let flat = RigidSurface::new(&SurfaceShape::Flat, -5.0, 5.0).unwrap();
         assert!(flat.project([0.0, 0.1]).is_none());
         let p = flat.project([1.0, -0.01]).unwrap();
         assert!((p.depth - 0.01).abs() < 1e-15 && p.normal == [0.0, 1.0] && p.tangent == [1.0, 0.0]);
         assert!((p.arc_mm - 6.0).abs() < 1e-12);
         // A 45-degree ramp: a point below it projects perpendicular to it.
         let ramp =
-            RigidSurface::new(&SurfaceShape::Sampled { x_mm: vec![0.0, 10.0], h_mm: vec![0.0, 10.0] }, -1.0, 11.0);
+            RigidSurface::new(&SurfaceShape::Sampled { x_mm: vec![0.0, 10.0], h_mm: vec![0.0, 10.0] }, -1.0, 11.0)
+                .unwrap();
         let p = ramp.project([5.0, 4.0]).unwrap();
         assert!((p.depth - 0.5f64.sqrt()).abs() < 1e-12);
         assert!((p.normal[0] + 0.5f64.sqrt()).abs() < 1e-12 && (p.normal[1] - 0.5f64.sqrt()).abs() < 1e-12);
@@ -290,7 +397,8 @@ mod tests {
             &SurfaceShape::Sampled { x_mm: vec![0.0, 1.0, 1.001], h_mm: vec![1.0, 1.0, 0.0] },
             -2.0,
             3.0,
-        );
+        )
+        .unwrap();
         assert_eq!(s.range(), (-2.0, 3.0));
         assert_eq!(s.height(-1.0), 1.0);
         let p = s.project([0.95, 0.9]).unwrap();

@@ -19,7 +19,8 @@ use std::time::Instant;
 
 use haptex_core::cae::{ModelMatrix, OptimizeOptions, optimize_widths};
 use haptex_core::database::{self, FeSettings, Grid, INPUTS, Metadata, Sweep, Template, TemplateEntry};
-use haptex_core::io::{Table, write_atomic};
+use haptex_core::io::{FileSet, Table, write_atomic};
+use haptex_core::num::Num;
 use rayon::prelude::*;
 use sha2::{Digest, Sha256};
 
@@ -40,6 +41,18 @@ impl Run {
     /// The run's file name in the `runs/` directory.
     pub fn file_name(&self) -> String {
         format!("{}_w{:.3}_h{:.3}_v{:.1}.csv", self.template.name(), self.width_mm, self.height_mm, self.velocity_mm_s)
+    }
+
+    /// The run in words, for messages: `bump r_w = 1.3 mm, r_h = 0.27 mm,
+    /// v = 20 mm/s` (numbers quoted short whatever their size).
+    pub fn describe(&self) -> String {
+        format!(
+            "{} r_w = {} mm, r_h = {} mm, v = {} mm/s",
+            self.template.name(),
+            Num(self.width_mm),
+            Num(self.height_mm),
+            Num(self.velocity_mm_s)
+        )
     }
 
     /// The run's surface with its feature at `x0_mm`.
@@ -133,25 +146,30 @@ impl DatabaseSpec {
         scenario
     }
 
-    fn validate(&self) -> Result<(), SweepError> {
+    /// Checks everything a build needs before its first FE run: the grid
+    /// (and that `merge` can name its columns), the sweep (non-empty,
+    /// distinct run files, at least [`MIN_ROWS`] runs per template for the
+    /// CAE), the finger model (it meshes), and every run's scenario
+    /// (surface, steps, memory). `db merge` checks the same of the record
+    /// it merges.
+    pub fn validate(&self) -> Result<(), SweepError> {
+        let record = self.record();
+        record.validate()?;
         let g = &self.grid;
-        if g.points < 2 || !g.xi_min_mm.is_finite() || !g.xi_max_mm.is_finite() || g.xi_max_mm <= g.xi_min_mm {
-            return Err(SweepError::Invalid(format!(
-                "grid {} .. {} mm with {} points",
-                g.xi_min_mm, g.xi_max_mm, g.points
-            )));
-        }
         let min_step = self.max_step_mm.min(self.sweep.widths_mm.iter().cloned().fold(f64::INFINITY, f64::min) / 10.0);
         if g.xi_min_mm + self.x0_mm < min_step.max(self.max_step_mm) || g.xi_max_mm + self.x0_mm > self.slide_mm + 1e-9
         {
             return Err(SweepError::Invalid(format!(
                 "the grid xi = {} .. {} mm does not fit the slide 0 .. {} mm around x0 = {} mm",
-                g.xi_min_mm, g.xi_max_mm, self.slide_mm, self.x0_mm
+                Num(g.xi_min_mm),
+                Num(g.xi_max_mm),
+                Num(self.slide_mm),
+                Num(self.x0_mm)
             )));
         }
-        let s = &self.sweep;
-        if s.templates.is_empty() || s.widths_mm.is_empty() || s.heights_mm.is_empty() || s.velocities_mm_s.is_empty() {
-            return Err(SweepError::Invalid("the sweep is empty".into()));
+        self.model.validate().map_err(|e| SweepError::Invalid(format!("finger model {}: {e}", self.model_source)))?;
+        for run in record.runs() {
+            self.scenario(&run).validate().map_err(|error| SweepError::Run { run: run.describe(), error })?;
         }
         Ok(())
     }
@@ -219,7 +237,7 @@ impl DatabaseSpec {
     /// decimals like the run files).
     pub fn simulate(&self, run: &Run) -> Result<Vec<f64>, SweepError> {
         let result =
-            run_scenario(&self.scenario(run)).map_err(|source| SweepError::Run { run: run.file_name(), source })?;
+            run_scenario(&self.scenario(run)).map_err(|error| SweepError::Run { run: run.describe(), error })?;
         Ok(sample(&result.profile, self, &self.grid.positions()).into_iter().map(|m| (m * 1e6).round() / 1e6).collect())
     }
 }
@@ -233,7 +251,102 @@ pub struct SweepRecord {
     pub fe: FeSettings,
 }
 
+/// Fewest runs per template: a CAE model matrix needs two rows.
+pub const MIN_ROWS: usize = 2;
+
+/// Most runs in a sweep (the paper's has 540): a bound on the list of runs
+/// a build enumerates.
+pub const MAX_RUNS: usize = 1_000_000;
+
+/// Most grid points: a model matrix row (3 inputs and one Ft/Fn per point,
+/// ~9 bytes each) must stay under the CSV reader's 1 MiB line limit.
+pub const MAX_GRID_POINTS: usize = 50_000;
+
 impl SweepRecord {
+    /// What `merge` needs of a record: a grid of finite, distinct positions
+    /// whose column names (`mu@xi`, two decimals) are distinct; a sweep of
+    /// positive finite values, every run with its own file name, and at
+    /// least [`MIN_ROWS`] runs per template.
+    pub fn validate(&self) -> Result<(), SweepError> {
+        let invalid = |m: String| Err(SweepError::Invalid(m));
+        let g = &self.grid;
+        if g.points < 2 || !g.xi_min_mm.is_finite() || !g.xi_max_mm.is_finite() || g.xi_max_mm <= g.xi_min_mm {
+            return invalid(format!(
+                "grid xi = {} .. {} mm with {} points: needs at least 2 points over a finite range",
+                Num(g.xi_min_mm),
+                Num(g.xi_max_mm),
+                g.points
+            ));
+        }
+        if g.points > MAX_GRID_POINTS {
+            return invalid(format!("grid of {} points: at most {MAX_GRID_POINTS}", g.points));
+        }
+        let names = g.column_names();
+        let mut seen = std::collections::HashSet::with_capacity(names.len());
+        if let Some(name) = names.iter().find(|n| !seen.insert(n.as_str())) {
+            // Columns are named to 0.01 mm: positions must be 0.01 mm apart.
+            let most = ((g.xi_max_mm - g.xi_min_mm) / 0.01 + 1e-9).floor() as usize + 1;
+            return invalid(format!(
+                "grid of {} points over xi = {} .. {} mm: the database names its columns mu@<xi> to 0.01 mm, and \
+                 positions closer than that share a name ({name} twice); at most {most} points",
+                g.points,
+                Num(g.xi_min_mm),
+                Num(g.xi_max_mm)
+            ));
+        }
+        let s = &self.sweep;
+        if s.templates.is_empty() || s.widths_mm.is_empty() || s.heights_mm.is_empty() || s.velocities_mm_s.is_empty() {
+            return invalid("the sweep is empty: it needs templates, widths, heights and velocities".into());
+        }
+        for (name, values) in [("width", &s.widths_mm), ("height", &s.heights_mm), ("velocity", &s.velocities_mm_s)] {
+            if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
+                return invalid(format!("sweep {name} {} is not a positive number", Num(*v)));
+            }
+        }
+        let per_template = s.widths_mm.len().saturating_mul(s.heights_mm.len()).saturating_mul(s.velocities_mm_s.len());
+        let total = per_template.saturating_mul(s.templates.len());
+        if total > MAX_RUNS {
+            return invalid(format!(
+                "the sweep has {} templates x {} widths x {} heights x {} velocities = {} runs; at most {MAX_RUNS}",
+                s.templates.len(),
+                s.widths_mm.len(),
+                s.heights_mm.len(),
+                s.velocities_mm_s.len(),
+                if total == usize::MAX { "more than 10^19".to_string() } else { total.to_string() }
+            ));
+        }
+        if per_template < MIN_ROWS {
+            return invalid(format!(
+                "the sweep has {per_template} run per template ({} width x {} height x {} velocity); the database's \
+                 CAE needs at least {MIN_ROWS} (give more widths, heights or velocities)",
+                s.widths_mm.len(),
+                s.heights_mm.len(),
+                s.velocities_mm_s.len()
+            ));
+        }
+        let runs = self.runs();
+        let mut names = std::collections::HashMap::with_capacity(runs.len());
+        for run in &runs {
+            let name = run.file_name();
+            if name.len() > 200 {
+                return invalid(format!("run file name too long ({} bytes): {}...", name.len(), &name[..60]));
+            }
+            if let Some(other) = names.insert(name.clone(), run) {
+                return invalid(format!(
+                    "two runs share the file name {name} (r_w {} and {} mm, r_h {} and {} mm, v {} and {} mm/s): run \
+                     files name widths and heights to 0.001 mm and velocities to 0.1 mm/s",
+                    Num(other.width_mm),
+                    Num(run.width_mm),
+                    Num(other.height_mm),
+                    Num(run.height_mm),
+                    Num(other.velocity_mm_s),
+                    Num(run.velocity_mm_s)
+                ));
+            }
+        }
+        Ok(())
+    }
+
     fn read(dir: &Path) -> Result<Self, SweepError> {
         let path = dir.join("sweep.json");
         let text = std::fs::read_to_string(&path)
@@ -263,12 +376,10 @@ impl SweepRecord {
 pub enum SweepError {
     #[error("{0}")]
     Invalid(String),
-    #[error("run {run}: {source}")]
-    Run {
-        run: String,
-        #[source]
-        source: SimulationError,
-    },
+    /// A run failed (or would): `run` describes it, `error` says why (its
+    /// text is part of this error's, not a separate source).
+    #[error("run {run}: {error}")]
+    Run { run: String, error: SimulationError },
     #[error("{path}: {message}")]
     File { path: PathBuf, message: String },
     #[error("{0}")]
@@ -306,6 +417,11 @@ pub fn build_runs(
     let runs_dir = dir.join("runs");
     std::fs::create_dir_all(&runs_dir)
         .map_err(|e| SweepError::File { path: runs_dir.clone(), message: e.to_string() })?;
+    // Every run will write here, and the merge beside it: find out now, not
+    // after the first run.
+    for d in [dir, runs_dir.as_path()] {
+        probe_writable(d)?;
+    }
     // The build directory records its sweep; resuming with another sweep
     // would mix runs of different settings.
     let record = spec.record();
@@ -333,7 +449,7 @@ pub fn build_runs(
     pool.install(|| {
         pending.par_iter().try_for_each(|run| -> Result<(), SweepError> {
             let scenario = spec.scenario(run);
-            let result = run_scenario(&scenario).map_err(|source| SweepError::Run { run: run.file_name(), source })?;
+            let result = run_scenario(&scenario).map_err(|error| SweepError::Run { run: run.describe(), error })?;
             let mu = sample(&result.profile, spec, &spec.grid.positions());
             let path = runs_dir.join(run.file_name());
             write_atomic(&path, |w| write_run(w, run, &spec.grid, &mu, result.statistics.wall_time_s))?;
@@ -349,6 +465,14 @@ pub fn build_runs(
         wall_time_s: started.elapsed().as_secs_f64(),
         cpu_time_s: cpu.into_inner().unwrap_or(0.0),
     })
+}
+
+/// Creates and removes a file in `dir`, or says why it cannot.
+fn probe_writable(dir: &Path) -> Result<(), SweepError> {
+    let probe = dir.join(format!(".haptex-write-test-{}", std::process::id()));
+    std::fs::write(&probe, b"")
+        .and_then(|()| std::fs::remove_file(&probe))
+        .map_err(|e| SweepError::File { path: dir.into(), message: format!("cannot write here: {e}") })
 }
 
 fn run_scenario(scenario: &Scenario) -> Result<crate::scenario::SimulationResult, SimulationError> {
@@ -408,12 +532,12 @@ pub fn merge(sources: &[PathBuf], out: &Path, build_wall_time_s: Option<f64>) ->
             });
         }
     }
+    record.validate()?;
     let grid = record.grid;
-    let columns = grid.column_names();
-    let mut entries = Vec::new();
+    // Every run of every template, before anything is written.
     let mut cpu_time_s = 0.0;
     let mut missing = Vec::new();
-    std::fs::create_dir_all(out).map_err(|e| SweepError::File { path: out.into(), message: e.to_string() })?;
+    let mut tables = Vec::new();
     for &template in &record.sweep.templates {
         let runs: Vec<Run> = record.runs().into_iter().filter(|r| r.template == template).collect();
         let mut rows: Vec<(Run, Vec<f64>)> = Vec::with_capacity(runs.len());
@@ -428,34 +552,25 @@ pub fn merge(sources: &[PathBuf], out: &Path, build_wall_time_s: Option<f64>) ->
                 None => missing.push(run.file_name()),
             }
         }
-        if !missing.is_empty() {
-            continue;
-        }
+        tables.push((template, rows));
+    }
+    if !missing.is_empty() {
+        return Err(SweepError::MissingRuns { count: missing.len(), example: missing[0].clone() });
+    }
+    // Each template's model matrix as it will be written (6 decimals), and
+    // its LOO-optimal widths on that matrix; then the files.
+    let columns = grid.column_names();
+    let mut entries = Vec::new();
+    let mut texts = Vec::new();
+    for (template, rows) in &tables {
+        let mut text = Vec::new();
+        write_matrix(&mut text, *template, &columns, rows).map_err(|e| SweepError::Invalid(e.to_string()))?;
         let file = template.file_name();
-        let path = out.join(&file);
-        write_atomic(&path, |w| {
-            writeln!(
-                w,
-                "# haptex FE database, {} template: inputs {}, outputs Ft/Fn at xi = x - x0 (mm)",
-                template.name(),
-                INPUTS.join(",")
-            )?;
-            writeln!(w, "{},{}", INPUTS.join(","), columns.join(","))?;
-            for (run, mu) in &rows {
-                write!(w, "{},{},{}", run.width_mm, run.height_mm, run.velocity_mm_s)?;
-                for m in mu {
-                    write!(w, ",{m:.6}")?;
-                }
-                writeln!(w)?;
-            }
-            Ok(())
-        })?;
-        // LOO-optimal widths, on the matrix as written.
-        let matrix = ModelMatrix::read_csv_file(&path, &INPUTS)?;
+        let matrix = ModelMatrix::read_csv(text.as_slice(), &out.join(&file).display().to_string(), &INPUTS)?;
         let optimum = optimize_widths(&matrix, OptimizeOptions::default())?;
         entries.push(TemplateEntry {
-            template,
-            file,
+            template: *template,
+            file: file.clone(),
             rows: matrix.n(),
             widths: optimum.widths,
             loo_rmse: optimum.errors.rmse,
@@ -463,9 +578,14 @@ pub fn merge(sources: &[PathBuf], out: &Path, build_wall_time_s: Option<f64>) ->
             constant_width: optimum.report.constant.w,
             constant_width_rmse: optimum.report.constant.rmse,
         });
+        texts.push((file, text));
     }
-    if !missing.is_empty() {
-        return Err(SweepError::MissingRuns { count: missing.len(), example: missing[0].clone() });
+    // The database is a file set: metadata.json is removed now and written
+    // last with the SHA-256 of every matrix, so an interrupted merge leaves
+    // a directory that reads as incomplete, never a mix of old and new.
+    let mut set = FileSet::begin(out, "metadata.json")?;
+    for (file, text) in &texts {
+        set.write(file, |w| w.write_all(text))?;
     }
     let metadata = Metadata {
         format: database::FORMAT.into(),
@@ -477,10 +597,35 @@ pub fn merge(sources: &[PathBuf], out: &Path, build_wall_time_s: Option<f64>) ->
         sweep: record.sweep.clone(),
         fe: record.fe.clone(),
         templates: entries,
+        files_sha256: Some(set.members().clone()),
     };
     let json = serde_json::to_string_pretty(&metadata).expect("metadata serializes");
-    write_atomic(&out.join("metadata.json"), |w| writeln!(w, "{json}"))?;
+    set.finish(|w, _| writeln!(w, "{json}"))?;
     Ok(metadata)
+}
+
+/// A template's model matrix: a comment, the header, one row per run.
+fn write_matrix(
+    w: &mut dyn Write,
+    template: Template,
+    columns: &[String],
+    rows: &[(Run, Vec<f64>)],
+) -> std::io::Result<()> {
+    writeln!(
+        w,
+        "# haptex FE database, {} template: inputs {}, outputs Ft/Fn at xi = x - x0 (mm)",
+        template.name(),
+        INPUTS.join(",")
+    )?;
+    writeln!(w, "{},{}", INPUTS.join(","), columns.join(","))?;
+    for (run, mu) in rows {
+        write!(w, "{},{},{}", run.width_mm, run.height_mm, run.velocity_mm_s)?;
+        for m in mu {
+            write!(w, ",{m:.6}")?;
+        }
+        writeln!(w)?;
+    }
+    Ok(())
 }
 
 fn hex(bytes: &[u8]) -> String {

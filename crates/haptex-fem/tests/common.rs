@@ -70,7 +70,7 @@ pub fn cylinder_on_flat(
         [r * phi.sin(), radius - r * phi.cos()]
     };
     let contour = |phi: f64| map(phi, 0.0);
-    let (phis, n_fine) = contour_parameters(&contour, half_arc, pad, 8.0 * pad);
+    let (phis, n_fine) = contour_parameters(&contour, half_arc, pad, 8.0 * pad).unwrap();
     // Rows graded from the pad spacing at the surface, growing by 1.15.
     let depth = radius - core;
     let mut rows = vec![0.0];
@@ -98,7 +98,7 @@ pub fn cylinder_on_flat(
         driven_nodes: driven,
         contact,
         other_surface_nodes: other,
-        surface: RigidSurface::new(&SurfaceShape::Flat, -radius - 20.0, radius + 20.0),
+        surface: RigidSurface::new(&SurfaceShape::Flat, -radius - 20.0, radius + 20.0).unwrap(),
         law,
     }
 }

@@ -244,6 +244,8 @@ fn build(args: BuildArgs) -> anyhow::Result<()> {
     spec.grid.points = args.grid_points as usize;
     // The model is the shipped one; its provenance goes into the metadata.
     spec.model = FingerModel::default_model();
+    // Everything the runs and the merge need, before the first run.
+    spec.validate().context("db build: these settings cannot make a database (nothing was computed)")?;
 
     let shard = match args.shard {
         Some(s) => Some(s),

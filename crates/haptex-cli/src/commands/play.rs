@@ -8,6 +8,7 @@ use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use haptex_core::io::Table;
 use haptex_core::num::Num;
+use haptex_core::ranges;
 use haptex_core::signal::{
     Carrier, CarrierShape, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions, read_drive_wav, render,
     sidecar_path, write_wav,
@@ -15,7 +16,7 @@ use haptex_core::signal::{
 use haptex_core::trajectory::Trajectory;
 use serde_json::json;
 
-use crate::args::{Output, positive};
+use crate::args::{Output, in_range, positive};
 
 /// Rate at which generated trajectories are sampled (linear in between).
 const GENERATED_RATE_HZ: f64 = 1000.0;
@@ -83,25 +84,25 @@ pub struct PlayArgs {
     #[arg(long, value_enum, default_value_t = CarrierArg::Sine)]
     carrier: CarrierArg,
     /// Carrier frequency in Hz (below half the sample rate).
-    #[arg(long, value_name = "F", default_value_t = Carrier::DEFAULT.frequency_hz, value_parser = positive)]
+    #[arg(long, value_name = "F", default_value_t = Carrier::DEFAULT.frequency_hz, value_parser = in_range(ranges::CARRIER_HZ))]
     carrier_hz: f64,
     /// Output sample rate in Hz.
     #[arg(long, value_name = "HZ", default_value_t = 48_000, value_parser = clap::value_parser!(u32).range(1000..=768_000))]
     sample_rate: u32,
     /// Highest envelope in V RMS: higher requests are clamped (and reported).
-    #[arg(long, value_name = "V", default_value_t = Limits::DEFAULT.u_max_v, value_parser = positive)]
+    #[arg(long, value_name = "V", default_value_t = Limits::DEFAULT.u_max_v, value_parser = in_range(ranges::U_MAX_V))]
     u_max: f64,
     /// Largest rate of change of the envelope in V/s (default: no limit).
     /// The envelope then also fades in from 0 V at the start.
-    #[arg(long, value_name = "V_PER_S", value_parser = positive)]
+    #[arg(long, value_name = "V_PER_S", value_parser = in_range(ranges::SLEW_V_PER_S))]
     slew_v_per_s: Option<f64>,
     /// Peak output of the amplifier in V: a drive whose peak exceeds it is
     /// refused (default: no check beyond the WAV full scale).
-    #[arg(long, value_name = "V", value_parser = positive)]
+    #[arg(long, value_name = "V", value_parser = in_range(ranges::AMPLIFIER_RANGE_V))]
     amp_range_v: Option<f64>,
     /// Volts at the amplifier output for a full-scale WAV sample (default:
     /// sqrt(2) x --u-max, the peak of a sine at U_max). Written to the sidecar.
-    #[arg(long, value_name = "V", value_parser = positive)]
+    #[arg(long, value_name = "V", value_parser = in_range(ranges::VOLTS_PER_FULL_SCALE))]
     volts_per_full_scale: Option<f64>,
     /// WAV sample format.
     #[arg(long, value_enum, default_value_t = WavFormatArg::Pcm16)]

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Args, ValueEnum};
+use haptex_core::num::Num;
 use haptex_fem::finger::{FingerModel, Resolution};
 use haptex_fem::output;
 use haptex_fem::scenario::{self, Loading, Scenario, default_step_mm};
@@ -149,9 +150,11 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     scenario.step_mm = args.step.unwrap_or_else(|| default_step_mm(&surface));
     scenario.mu_skin = args.mu_skin;
     scenario.penalty_mpa_per_mm = args.penalty;
-    let slide_steps = (scenario.slide_mm / scenario.step_mm).ceil() as usize;
+    // Every setting is checked before anything is sized by it.
+    let slide_steps = scenario.slide_steps()?;
     if args.vtk.is_some() {
         scenario.frame_every = args.vtk_every.unwrap_or((slide_steps / 25).max(1)).max(1);
+        scenario.validate()?;
     }
 
     let bar = if args.quiet {
@@ -215,16 +218,22 @@ fn describe(args: &SimulateArgs, scenario: &Scenario) -> String {
     let surface = match &scenario.surface {
         SurfaceShape::Flat => "flat".to_string(),
         SurfaceShape::Sampled { .. } => args.surface.clone(),
-        _ => format!("{} x0 = {} mm, r_w = {} mm, r_h = {} mm", args.surface, args.x0, args.width, args.height),
+        _ => format!(
+            "{} x0 = {} mm, r_w = {} mm, r_h = {} mm",
+            args.surface,
+            Num(args.x0),
+            Num(args.width),
+            Num(args.height)
+        ),
     };
     let loading = match scenario.loading {
-        Loading::Indent(d) => format!("indent {d} mm"),
-        Loading::Load(f) => format!("load {f} N/mm"),
+        Loading::Indent(d) => format!("indent {} mm", Num(d)),
+        Loading::Load(f) => format!("load {} N/mm", Num(f)),
     };
     format!(
         "{surface}; {loading}, slide {} mm at {} mm/s, {} tissue, {:?} mesh",
-        scenario.slide_mm,
-        scenario.velocity_mm_s,
+        Num(scenario.slide_mm),
+        Num(scenario.velocity_mm_s),
         if scenario.viscoelastic { "visco-elastic" } else { "elastic" },
         scenario.resolution
     )

@@ -5,8 +5,9 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use haptex_core::electrovibration::{ContactArea, Device, LayerStack, Method, map_profile};
+use haptex_core::ranges;
 
-use crate::args::{Output, positive, read_profile};
+use crate::args::{Output, in_range, read_profile};
 
 /// Compute the voltage an electrovibration display must apply to reproduce a
 /// friction profile.
@@ -30,33 +31,33 @@ pub struct VoltageArgs {
     #[arg(long, value_enum, default_value_t = MethodArg::Physical)]
     method: MethodArg,
     /// Friction coefficient of the finger on the display with no voltage, mu_HD.
-    #[arg(long, default_value_t = Device::PAPER.mu_hd, value_parser = positive)]
+    #[arg(long, default_value_t = Device::PAPER.mu_hd, value_parser = in_range(ranges::MU_HD))]
     mu_hd: f64,
     /// Relative permittivity of the stratum corneum, eps_sc.
-    #[arg(long, default_value_t = LayerStack::PAPER.eps_sc, value_parser = positive)]
+    #[arg(long, default_value_t = LayerStack::PAPER.eps_sc, value_parser = in_range(ranges::EPS_SC))]
     eps_sc: f64,
     /// Relative permittivity of the display insulator, eps_i.
-    #[arg(long, default_value_t = LayerStack::PAPER.eps_i, value_parser = positive)]
+    #[arg(long, default_value_t = LayerStack::PAPER.eps_i, value_parser = in_range(ranges::EPS_I))]
     eps_i: f64,
     /// Stratum corneum thickness d_sc in mm.
-    #[arg(long, default_value_t = LayerStack::PAPER.d_sc_mm, value_parser = positive)]
+    #[arg(long, default_value_t = LayerStack::PAPER.d_sc_mm, value_parser = in_range(ranges::D_SC_MM))]
     d_sc_mm: f64,
     /// Insulator thickness d_i in mm.
-    #[arg(long, default_value_t = LayerStack::PAPER.d_i_mm, value_parser = positive)]
+    #[arg(long, default_value_t = LayerStack::PAPER.d_i_mm, value_parser = in_range(ranges::D_I_MM))]
     d_i_mm: f64,
     /// Contact-area coefficient k in mm^2/N (A = k Fn^n; mm^2/N^n when n != 1).
-    #[arg(long, default_value_t = ContactArea::PAPER.k_mm2_per_n, value_parser = positive)]
+    #[arg(long, default_value_t = ContactArea::PAPER.k_mm2_per_n, value_parser = in_range(ranges::K_MM2_PER_N))]
     k_mm2_per_n: f64,
     /// Contact-area exponent n in A = k Fn^n (1 = the paper's linear law;
     /// other values need the normal force, from --fn-n or an fn_n column).
-    #[arg(long, default_value_t = ContactArea::PAPER.exponent, value_parser = positive)]
+    #[arg(long, default_value_t = ContactArea::PAPER.exponent, value_parser = in_range(ranges::AREA_EXPONENT))]
     area_exponent: f64,
     /// Exploration normal force Fn in N (only used when --area-exponent != 1).
-    #[arg(long, value_parser = positive)]
+    #[arg(long, value_parser = in_range(ranges::FN_N))]
     fn_n: Option<f64>,
     /// Highest voltage the display can apply, U_max in V RMS: the clip level
     /// (physical) or the full scale (normalized).
-    #[arg(long, default_value_t = Device::PAPER.u_max_v, value_parser = positive)]
+    #[arg(long, default_value_t = Device::PAPER.u_max_v, value_parser = in_range(ranges::U_MAX_V))]
     u_max: f64,
     /// Output format (default: json if OUT ends in .json, else csv).
     #[arg(long, value_enum)]

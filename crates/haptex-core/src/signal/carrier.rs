@@ -74,14 +74,13 @@ impl Carrier {
         if self.shape == CarrierShape::None {
             return Ok(());
         }
-        let f = self.frequency_hz;
-        if !(f.is_finite() && f > 0.0) {
-            return Err(format!("carrier frequency must be a positive finite number, got {} Hz", Num(f)));
-        }
+        let f = crate::ranges::CARRIER_HZ.check(self.frequency_hz).map_err(|e| e.to_string())?;
         if f >= sample_rate_hz / 2.0 {
             return Err(format!(
-                "carrier frequency {f} Hz is not below the Nyquist frequency {} Hz of the {sample_rate_hz} Hz sample rate",
-                sample_rate_hz / 2.0
+                "carrier frequency {} Hz is not below the Nyquist frequency {} Hz of the {} Hz sample rate",
+                Num(f),
+                Num(sample_rate_hz / 2.0),
+                Num(sample_rate_hz)
             ));
         }
         Ok(())

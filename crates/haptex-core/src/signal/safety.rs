@@ -5,8 +5,9 @@
 //! [`crate::realtime::RealtimeRenderer`]) pass every envelope sample through
 //! the same [`EnvelopeLimiter`].
 
-use crate::num::Num;
 use serde::{Deserialize, Serialize};
+
+use crate::ranges;
 
 /// The limits a drive signal must respect.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -26,21 +27,15 @@ impl Limits {
     /// U_max = 100 V (the paper's Fig. 2), no slew limit, no amplifier range.
     pub const DEFAULT: Self = Self { u_max_v: 100.0, slew_v_per_s: None, amplifier_range_v: None };
 
-    /// Checks every limit is a positive finite number.
+    /// Checks every limit against its accepted range ([`crate::ranges`]).
     pub fn check(&self) -> Result<(), String> {
-        let positive = |name: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(format!("{name} must be a positive finite number, got {}", Num(v)))
-            }
-        };
-        positive("U_max (V)", self.u_max_v)?;
+        let check = |range: ranges::Range, v: f64| range.check(v).map(|_| ()).map_err(|e| e.to_string());
+        check(ranges::U_MAX_V, self.u_max_v)?;
         if let Some(s) = self.slew_v_per_s {
-            positive("slew limit (V/s)", s)?;
+            check(ranges::SLEW_V_PER_S, s)?;
         }
         if let Some(r) = self.amplifier_range_v {
-            positive("amplifier range (V)", r)?;
+            check(ranges::AMPLIFIER_RANGE_V, r)?;
         }
         Ok(())
     }

@@ -147,13 +147,10 @@ pub struct EncodedWav {
     pub scale: ScaleChunk,
 }
 
-/// Checks a volts-per-full-scale value: positive and finite.
+/// Checks a volts-per-full-scale value against its range
+/// ([`crate::ranges::VOLTS_PER_FULL_SCALE`]).
 pub fn check_volts_per_full_scale(vpfs: f64) -> Result<f64, SignalError> {
-    if vpfs.is_finite() && vpfs > 0.0 {
-        Ok(vpfs)
-    } else {
-        Err(SignalError::Settings(format!("volts per full scale must be a positive finite number, got {}", Num(vpfs))))
-    }
+    crate::ranges::VOLTS_PER_FULL_SCALE.check(vpfs).map_err(|e| SignalError::Settings(e.to_string()))
 }
 
 /// Encodes `signal` as a mono WAV file in memory, with its scale chunk
