@@ -8,9 +8,12 @@
 //! line) and quoting the value readably ([`Num`]: `1e308`, not 309
 //! digits). The ranges are wide (far beyond any finger, display or
 //! recording) but finite, so that no sum, span, ratio or square the server
-//! computes from accepted values can overflow to infinity or NaN.
+//! computes from accepted values can overflow to infinity or NaN. The
+//! maxima of the parameters haptex-core also knows (carrier, slew,
+//! amplifier range, WAV scale) are haptex-core's ([`haptex_core::ranges`]).
 
 use haptex_core::num::Num;
+use haptex_core::ranges;
 
 use crate::error::ApiError;
 
@@ -87,13 +90,19 @@ pub const VOLTAGE_V: Range = Range::new(0.0, 1e6, "V");
 /// Finger velocity of a generated stroke.
 pub const VELOCITY_MM_S: Range = Range::new(1e-6, 1e4, "mm/s");
 /// Carrier frequency (and below the Nyquist frequency of the sample rate).
-pub const CARRIER_HZ: Range = Range::new(1e-3, 1e5, "Hz");
+pub const CARRIER_HZ: Range = from_core(1e-3, ranges::CARRIER_HZ);
 /// Slew limit of the drive's envelope.
-pub const SLEW_V_PER_S: Range = Range::new(1e-3, 1e9, "V/s");
+pub const SLEW_V_PER_S: Range = from_core(1e-3, ranges::SLEW_V_PER_S);
 /// Peak output of the amplifier.
-pub const AMPLIFIER_RANGE_V: Range = Range::new(1e-3, 1e6, "V");
+pub const AMPLIFIER_RANGE_V: Range = from_core(1e-3, ranges::AMPLIFIER_RANGE_V);
 /// Volts of drive per WAV full scale.
-pub const VOLTS_PER_FULL_SCALE: Range = Range::new(1e-3, 1e6, "V");
+pub const VOLTS_PER_FULL_SCALE: Range = from_core(1e-3, ranges::VOLTS_PER_FULL_SCALE);
+
+/// haptex-core's range of a parameter (its maximum and unit, which the
+/// command line checks too), from `min` on.
+const fn from_core(min: f64, core: ranges::Range) -> Range {
+    Range::new(min, core.max, core.unit)
+}
 
 #[cfg(test)]
 mod tests {

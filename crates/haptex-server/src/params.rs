@@ -5,15 +5,18 @@
 //! shows (`GET /api/config`) and the OpenAPI description (a test checks
 //! they agree). Names and units are those of the `haptex voltage` flags.
 //!
-//! The ranges keep eq. (3) inside the floating-point range: at every
-//! corner of them, Fe/Fn per V^2, the voltage of eq. (8) and mu at U_max
-//! are finite and positive (a test walks the corners). So a value that
-//! would break the mapping is refused naming its own field, and the
-//! mapping's results need no field-less after-the-fact check.
+//! The maxima and units are haptex-core's ([`haptex_core::ranges`], which
+//! the command line checks too). The minimums are the server's: with
+//! them, eq. (3) stays inside the floating-point range at every corner of
+//! the ranges (Fe/Fn per V^2, the voltage of eq. (8) and mu at U_max are
+//! finite and positive; a test walks the corners), so a value that would
+//! break the mapping is refused naming its own field rather than by the
+//! library's check of the device as a whole.
 
 use std::collections::BTreeMap;
 
 use haptex_core::electrovibration::{ContactArea, Device, LayerStack, Method};
+use haptex_core::ranges;
 use serde::Serialize;
 
 use crate::error::ApiError;
@@ -39,72 +42,72 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
         name: "mu_hd",
         default: Some(Device::PAPER.mu_hd),
         min: 1e-3,
-        max: 10.0,
-        unit: "",
+        max: ranges::MU_HD.max,
+        unit: ranges::MU_HD.unit,
         description: "friction coefficient of the finger on the display with no voltage, mu_HD",
     },
     ParamSpec {
         name: "u_max_v",
         default: Some(Device::PAPER.u_max_v),
         min: 1e-3,
-        max: 10_000.0,
-        unit: "V",
+        max: ranges::U_MAX_V.max,
+        unit: ranges::U_MAX_V.unit,
         description: "highest voltage the display applies, U_max (RMS): clip level (physical) or full scale (normalized)",
     },
     ParamSpec {
         name: "eps_sc",
         default: Some(LayerStack::PAPER.eps_sc),
         min: 1.0,
-        max: 1e6,
-        unit: "",
+        max: ranges::EPS_SC.max,
+        unit: ranges::EPS_SC.unit,
         description: "relative permittivity of the stratum corneum, eps_sc",
     },
     ParamSpec {
         name: "eps_i",
         default: Some(LayerStack::PAPER.eps_i),
         min: 1.0,
-        max: 1e6,
-        unit: "",
+        max: ranges::EPS_I.max,
+        unit: ranges::EPS_I.unit,
         description: "relative permittivity of the display insulator, eps_i",
     },
     ParamSpec {
         name: "d_sc_mm",
         default: Some(LayerStack::PAPER.d_sc_mm),
         min: 1e-6,
-        max: 10.0,
-        unit: "mm",
+        max: ranges::D_SC_MM.max,
+        unit: ranges::D_SC_MM.unit,
         description: "stratum corneum thickness d_sc",
     },
     ParamSpec {
         name: "d_i_mm",
         default: Some(LayerStack::PAPER.d_i_mm),
         min: 1e-6,
-        max: 10.0,
-        unit: "mm",
+        max: ranges::D_I_MM.max,
+        unit: ranges::D_I_MM.unit,
         description: "insulator thickness d_i",
     },
     ParamSpec {
         name: "k_mm2_per_n",
         default: Some(ContactArea::PAPER.k_mm2_per_n),
         min: 1e-6,
-        max: 1e6,
-        unit: "mm^2/N",
+        max: ranges::K_MM2_PER_N.max,
+        unit: ranges::K_MM2_PER_N.unit,
         description: "contact-area coefficient k in A = k Fn^n",
     },
     ParamSpec {
         name: "area_exponent",
         default: Some(ContactArea::PAPER.exponent),
         min: 1e-3,
-        max: 2.0,
-        unit: "",
+        max: ranges::AREA_EXPONENT.max,
+        unit: ranges::AREA_EXPONENT.unit,
         description: "contact-area exponent n in A = k Fn^n (1: the paper's linear law; otherwise fn_n is needed)",
     },
     ParamSpec {
         name: "fn_n",
         default: None,
         min: 1e-6,
-        max: 100.0,
-        unit: "N",
+        max: ranges::FN_N.max,
+        unit: ranges::FN_N.unit,
         description: "exploration normal force Fn (used only when area_exponent != 1; default: the profile's mean fn_n)",
     },
 ];
