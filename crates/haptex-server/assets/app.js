@@ -387,7 +387,7 @@
       unit.textContent = p.unit ? `(${p.unit})` : '';
       label.append(unit);
       const input = document.createElement('input');
-      Object.assign(input, { type: 'number', id: `param-${p.name}`, step: 'any', min: 0, max: p.max });
+      Object.assign(input, { type: 'number', id: `param-${p.name}`, step: 'any', min: p.min, max: p.max });
       input.dataset.param = p.name;
       input.placeholder = p.default === null ? 'optional' : String(p.default);
       if (p.default !== null) input.value = String(p.default);

@@ -3,19 +3,18 @@
 //! embed too). Only these files are served: a path is looked up in the
 //! embedded set, never on disk.
 //!
-//! Every response carries the security headers of [`security_headers`]: a
+//! Every response carries the security headers of [`SECURITY_HEADERS`]: a
 //! Content-Security-Policy that allows scripts, styles and connections to
 //! this origin only, `nosniff`, no referrer, no framing.
 
-use axum::extract::Path;
+use axum::extract::rejection::PathRejection;
+use axum::extract::{Path, RawQuery};
 use axum::http::{HeaderMap, HeaderName, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use rust_embed::RustEmbed;
-use tower::ServiceBuilder;
-use tower::layer::util::{Identity, Stack};
-use tower_http::set_header::SetResponseHeaderLayer;
 
-use crate::error::ApiError;
+use crate::error::{ApiError, quote};
+use crate::input::Query;
 
 #[derive(RustEmbed)]
 #[folder = "assets/"]
@@ -30,40 +29,44 @@ pub const CONTENT_SECURITY_POLICY: &str = "default-src 'none'; script-src 'self'
      img-src 'self' data: blob:; media-src 'self' blob:; connect-src 'self' blob:; font-src 'self'; \
      base-uri 'none'; form-action 'none'; frame-ancestors 'none'";
 
-type HeaderLayers = Stack<
-    SetResponseHeaderLayer<HeaderValue>,
-    Stack<
-        SetResponseHeaderLayer<HeaderValue>,
-        Stack<SetResponseHeaderLayer<HeaderValue>, Stack<SetResponseHeaderLayer<HeaderValue>, Identity>>,
-    >,
->;
+/// The security headers every answer carries, as (name, value): the
+/// Content-Security-Policy above, no MIME sniffing, no referrer, no
+/// framing. [`add_security_headers`] sets them on the application's
+/// answers, [`crate::connection`] on the few answers hyper writes itself.
+pub const SECURITY_HEADERS: [(&str, &str); 4] = [
+    ("content-security-policy", CONTENT_SECURITY_POLICY),
+    ("x-content-type-options", "nosniff"),
+    ("referrer-policy", "no-referrer"),
+    ("x-frame-options", "DENY"),
+];
 
-/// Security headers on every response (set unless the handler set them).
-pub fn security_headers() -> ServiceBuilder<HeaderLayers> {
-    ServiceBuilder::new()
-        .layer(SetResponseHeaderLayer::if_not_present(
-            header::CONTENT_SECURITY_POLICY,
-            HeaderValue::from_static(CONTENT_SECURITY_POLICY),
-        ))
-        .layer(SetResponseHeaderLayer::if_not_present(
-            header::X_CONTENT_TYPE_OPTIONS,
-            HeaderValue::from_static("nosniff"),
-        ))
-        .layer(SetResponseHeaderLayer::if_not_present(header::REFERRER_POLICY, HeaderValue::from_static("no-referrer")))
-        .layer(SetResponseHeaderLayer::if_not_present(
-            HeaderName::from_static("x-frame-options"),
-            HeaderValue::from_static("DENY"),
-        ))
+/// Middleware: the security headers on every response (each set unless
+/// the handler set it).
+pub async fn add_security_headers(mut response: Response) -> Response {
+    let headers = response.headers_mut();
+    for (name, value) in SECURITY_HEADERS {
+        if !headers.contains_key(name) {
+            headers.insert(HeaderName::from_static(name), HeaderValue::from_static(value));
+        }
+    }
+    response
 }
 
 /// `GET /`: the GUI's page.
-pub async fn index(headers: HeaderMap) -> Response {
-    serve("index.html", &headers)
+pub async fn index(headers: HeaderMap, RawQuery(raw_query): RawQuery) -> Result<Response, ApiError> {
+    Query::parse(raw_query.as_deref())?.finish()?;
+    Ok(serve("index.html", &headers))
 }
 
 /// `GET /static/{*path}`: an embedded file, or 404.
-pub async fn file(Path(path): Path<String>, headers: HeaderMap) -> Response {
-    serve(&path, &headers)
+pub async fn file(
+    path: Result<Path<String>, PathRejection>,
+    headers: HeaderMap,
+    RawQuery(raw_query): RawQuery,
+) -> Result<Response, ApiError> {
+    let Path(path) = path.map_err(|e| ApiError::bad_request(e.body_text(), Some("path")))?;
+    Query::parse(raw_query.as_deref())?.finish()?;
+    Ok(serve(&path, &headers))
 }
 
 /// Names of the embedded files (for tests and docs).
@@ -73,7 +76,7 @@ pub fn names() -> Vec<String> {
 
 fn serve(path: &str, request: &HeaderMap) -> Response {
     let Some(file) = Assets::get(path) else {
-        return ApiError::not_found(format!("no such file: /static/{path}"), Some("path")).into_response();
+        return ApiError::not_found(format!("no such file: /static/{}", quote(path)), Some("path")).into_response();
     };
     let etag = format!("\"{}\"", hex(&file.metadata.sha256_hash()[..16]));
     let etag_value = HeaderValue::from_str(&etag).expect("hex is a valid header value");

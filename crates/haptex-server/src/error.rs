@@ -33,8 +33,18 @@ pub struct ApiError {
 }
 
 impl ApiError {
+    /// Longest message an answer carries (in bytes); longer ones are cut.
+    pub const MAX_MESSAGE_BYTES: usize = 2048;
+    /// Longest field name an answer carries (in bytes); longer ones are cut.
+    pub const MAX_FIELD_BYTES: usize = 256;
+
+    /// An error; a message or field name longer than the limits above (a
+    /// hostile name echoed back) is cut, so that an error answer stays
+    /// small whatever the request.
     pub fn new(status: StatusCode, message: impl Into<String>, field: Option<&str>) -> Self {
-        Self { status, message: message.into(), field: field.map(str::to_string), line: None }
+        let message = cut(message.into(), Self::MAX_MESSAGE_BYTES);
+        let field = field.map(|f| cut(f.to_string(), Self::MAX_FIELD_BYTES));
+        Self { status, message, field, line: None }
     }
 
     /// 400: the request is malformed or a value is out of range.
@@ -76,9 +86,37 @@ impl ApiError {
     /// rest are the server's.
     pub fn library(error: LibraryError) -> Self {
         match error {
-            LibraryError::UnknownMaterial { .. } => Self::not_found(error.to_string(), Some("name")),
+            LibraryError::UnknownMaterial { name, known } => Self::not_found(
+                format!("no material named {} in the library (it has: {known})", quote(&name)),
+                Some("name"),
+            ),
             other => Self::internal(other.to_string()),
         }
+    }
+}
+
+/// `text` cut to at most `max` bytes (at a character boundary), marked
+/// with "..." when cut.
+fn cut(mut text: String, max: usize) -> String {
+    if text.len() > max {
+        let mut end = max.saturating_sub(3);
+        while !text.is_char_boundary(end) {
+            end -= 1;
+        }
+        text.truncate(end);
+        text.push_str("...");
+    }
+    text
+}
+
+/// A text from the request (a path, a name, a header value) as an error
+/// message quotes it: in quotes with control characters escaped, its
+/// first 60 characters and its length when longer.
+pub fn quote(text: &str) -> String {
+    const KEEP: usize = 60;
+    match text.char_indices().nth(KEEP) {
+        None => format!("{text:?}"),
+        Some((end, _)) => format!("{:?}... ({} bytes)", &text[..end], text.len()),
     }
 }
 
@@ -113,19 +151,23 @@ struct JsonError;
 /// 405 for a wrong method, the timeout's 408, a rejection) gets the JSON
 /// error body, keeping its status and headers (`Allow` for 405).
 pub async fn json_client_errors(request: Request, next: Next) -> Response {
-    let (method, path) = (request.method().clone(), request.uri().path().to_string());
+    let (method, path) = (request.method().clone(), quote(request.uri().path()));
     let response = next.run(request).await;
     let status = response.status();
     if !status.is_client_error() || response.extensions().get::<JsonError>().is_some() {
         return response;
     }
     let (parts, _) = response.into_parts();
-    let message = match status {
-        StatusCode::METHOD_NOT_ALLOWED => format!("{method} is not allowed on {path} (the Allow header lists what is)"),
-        StatusCode::REQUEST_TIMEOUT => format!("{method} {path} took longer than the server's time limit per request"),
-        other => other.canonical_reason().unwrap_or("client error").to_lowercase(),
+    let (message, field) = match status {
+        StatusCode::METHOD_NOT_ALLOWED => {
+            (format!("{method} is not allowed on {path} (the Allow header lists what is)"), Some("method"))
+        }
+        StatusCode::REQUEST_TIMEOUT => {
+            (format!("{method} {path} took longer than the server's time limit per request"), None)
+        }
+        other => (other.canonical_reason().unwrap_or("client error").to_lowercase(), None),
     };
-    let mut rebuilt = ApiError::new(status, message, None).into_response();
+    let mut rebuilt = ApiError::new(status, message, field).into_response();
     for (name, value) in &parts.headers {
         if name != header::CONTENT_TYPE && name != header::CONTENT_LENGTH {
             rebuilt.headers_mut().insert(name.clone(), value.clone());
@@ -134,9 +176,9 @@ pub async fn json_client_errors(request: Request, next: Next) -> Response {
     rebuilt
 }
 
-/// Fallback for unknown routes: 404 JSON.
+/// Fallback for unknown routes: 404 JSON naming the path.
 pub async fn not_found(uri: Uri) -> ApiError {
-    ApiError::not_found(format!("no such route: {}", uri.path()), None)
+    ApiError::not_found(format!("no such route: {}", quote(uri.path())), Some("path"))
 }
 
 /// Response for a handler that panicked (a bug): 500 JSON; the panic is logged.

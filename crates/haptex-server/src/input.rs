@@ -3,16 +3,20 @@
 //! [`ApiError`] naming the field (a JSON path such as `profile.mu[3]`, a
 //! query parameter, or a CSV column with its line).
 
+use std::collections::HashSet;
+
 use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
 use axum::http::{HeaderMap, StatusCode, header};
-use haptex_core::io::TableError;
+use haptex_core::io::{Table, TableError};
+use haptex_core::num::Num;
 use haptex_core::profile::{FrictionProfile, ProfileError};
 use haptex_core::trajectory::{Trajectory, TrajectoryError};
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
-use crate::error::ApiError;
+use crate::error::{ApiError, quote};
+use crate::fields::{self, Range};
 
 /// The format of a request body.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -48,8 +52,8 @@ pub fn body_kind(headers: &HeaderMap, accepted: &[BodyKind]) -> Result<BodyKind,
     match kind {
         Some(k) if accepted.contains(&k) => Ok(k),
         _ => Err(ApiError::unsupported_media_type(format!(
-            "Content-Type {:?} is not accepted here: send {}",
-            value.to_str().unwrap_or("(not text)"),
+            "Content-Type {} is not accepted here: send {}",
+            quote(value.to_str().unwrap_or("(not text)")),
             names(accepted)
         ))),
     }
@@ -68,18 +72,42 @@ pub fn body_bytes(body: Result<Bytes, BytesRejection>, max_body_bytes: usize) ->
     }
 }
 
-/// Parses a JSON body; errors name the JSON path of the bad value.
+/// Parses a JSON body, an object (every body of this API is one); errors
+/// name the JSON path of the bad value (a field given twice is named
+/// too).
 pub fn parse_json<T: DeserializeOwned>(bytes: &[u8]) -> Result<T, ApiError> {
+    // serde would also read a struct from an array of its fields in order.
+    if bytes.iter().find(|b| !b.is_ascii_whitespace()) != Some(&b'{') {
+        return Err(ApiError::bad_request("the body must be a JSON object ({...})", Some("body")));
+    }
     let mut deserializer = serde_json::Deserializer::from_slice(bytes);
     let value = serde_path_to_error::deserialize(&mut deserializer).map_err(|e| {
         let path = e.path().to_string();
         // "." is the whole body, "?" a position serde could not name (a
         // truncated document).
         let field = if path == "." || path == "?" { "body".to_string() } else { path };
-        ApiError::bad_request(format!("invalid JSON body: {}", e.inner()), Some(&field))
+        let message = e.inner().to_string();
+        // Past the nesting limit the path is a pile of "[0]": name the
+        // top-level field it is in.
+        let field = if message.starts_with("recursion limit exceeded") {
+            field.split(['.', '[']).next().filter(|f| !f.is_empty()).unwrap_or("body").to_string()
+        } else {
+            field
+        };
+        let field = match duplicate_field(&message) {
+            Some(name) if field == "body" => name.to_string(),
+            Some(name) if !field.ends_with(name) => format!("{field}.{name}"),
+            _ => field,
+        };
+        ApiError::bad_request(format!("invalid JSON body: {message}"), Some(&field))
     })?;
     deserializer.end().map_err(|e| ApiError::bad_request(format!("invalid JSON body: {e}"), Some("body")))?;
     Ok(value)
+}
+
+/// The name in serde's "duplicate field `name`" message.
+fn duplicate_field(message: &str) -> Option<&str> {
+    message.strip_prefix("duplicate field `")?.split('`').next()
 }
 
 /// A query string as `name=value` pairs, consumed parameter by parameter;
@@ -94,10 +122,9 @@ impl Query {
     pub fn parse(raw: Option<&str>) -> Result<Self, ApiError> {
         let pairs: Vec<(String, String)> = serde_urlencoded::from_str(raw.unwrap_or(""))
             .map_err(|e| ApiError::bad_request(format!("malformed query string: {e}"), Some("query")))?;
-        for (i, (name, _)) in pairs.iter().enumerate() {
-            if pairs[..i].iter().any(|(n, _)| n == name) {
-                return Err(ApiError::bad_request("parameter given twice", Some(name)));
-            }
+        let mut seen = HashSet::with_capacity(pairs.len());
+        if let Some((name, _)) = pairs.iter().find(|(name, _)| !seen.insert(name.as_str())) {
+            return Err(ApiError::bad_request("parameter given twice", Some(name)));
         }
         Ok(Self { pairs })
     }
@@ -119,7 +146,7 @@ impl Query {
             .map(|text| {
                 text.trim().parse::<u64>().map_err(|_| {
                     ApiError::bad_request(
-                        format!("{name} must be a whole number from 0 to 2^64-1, got {text:?}"),
+                        format!("{name} must be a whole number from 0 to 2^64-1, got {}", quote(&text)),
                         Some(name),
                     )
                 })
@@ -132,7 +159,10 @@ impl Query {
         match self.take("format") {
             None => Ok(allowed[0]),
             Some(text) => allowed.iter().copied().find(|a| *a == text).ok_or_else(|| {
-                ApiError::bad_request(format!("unknown format {text:?}: use {}", allowed.join(" or ")), Some("format"))
+                ApiError::bad_request(
+                    format!("unknown format {}: use {}", quote(&text), allowed.join(" or ")),
+                    Some("format"),
+                )
             }),
         }
     }
@@ -148,12 +178,46 @@ impl Query {
 
 /// Parses a number given as text (a query parameter).
 pub fn parse_number(text: &str, field: &str) -> Result<f64, ApiError> {
-    let value: f64 =
-        text.trim().parse().map_err(|_| ApiError::bad_request(format!("not a number: {text:?}"), Some(field)))?;
+    let value: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| ApiError::bad_request(format!("not a number: {}", quote(text)), Some(field)))?;
     if value.is_finite() {
         Ok(value)
     } else {
-        Err(ApiError::bad_request(format!("not a finite number: {text:?}"), Some(field)))
+        Err(ApiError::bad_request(format!("not a finite number: {}", quote(text)), Some(field)))
+    }
+}
+
+/// A JSON object of numbers as `(name, value)` pairs in the order given,
+/// a name given twice kept twice (so that it can be refused, where a map
+/// would silently keep the last value).
+#[derive(Debug, Clone, Default)]
+pub struct Pairs(pub Vec<(String, f64)>);
+
+impl Pairs {
+    pub fn iter(&self) -> impl Iterator<Item = (&str, f64)> {
+        self.0.iter().map(|(k, v)| (k.as_str(), *v))
+    }
+}
+
+impl<'de> Deserialize<'de> for Pairs {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = Pairs;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an object of numbers")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Pairs, A::Error> {
+                let mut pairs = Vec::new();
+                while let Some(entry) = map.next_entry::<String, f64>()? {
+                    pairs.push(entry);
+                }
+                Ok(Pairs(pairs))
+            }
+        }
+        deserializer.deserialize_map(Visitor)
     }
 }
 
@@ -176,33 +240,94 @@ impl ProfileJson {
     /// names of errors.
     pub fn into_profile(self, prefix: &str, max_points: usize) -> Result<FrictionProfile, ApiError> {
         check_points(self.x_mm.len(), max_points, &format!("{prefix}x_mm"))?;
+        let columns = [
+            ("x_mm", Some(&self.x_mm)),
+            ("mu", self.mu.as_ref()),
+            ("ft_n", self.ft_n.as_ref()),
+            ("fn_n", self.fn_n.as_ref()),
+        ];
+        for (name, values) in columns {
+            if let Some(values) = values {
+                profile_range(name).check_all(values, &format!("{prefix}{name}"))?;
+            }
+        }
         let at = |e: ProfileError| profile_error(e, prefix);
-        match (self.mu, self.ft_n, self.fn_n) {
+        let profile = match (self.mu, self.ft_n, self.fn_n) {
             (Some(mu), None, fn_n) => {
                 let profile = FrictionProfile::new(self.x_mm, mu).map_err(at)?;
                 match fn_n {
-                    Some(f) => profile.with_normal_force(f).map_err(at),
-                    None => Ok(profile),
+                    Some(f) => profile.with_normal_force(f).map_err(at)?,
+                    None => profile,
                 }
             }
-            (None, Some(ft), Some(fn_n)) => FrictionProfile::from_forces(self.x_mm, &ft, fn_n).map_err(at),
+            (None, Some(ft), Some(fn_n)) => FrictionProfile::from_forces(self.x_mm, &ft, fn_n).map_err(at)?,
             (Some(_), Some(_), _) => {
-                Err(ApiError::bad_request("give mu, or ft_n and fn_n, not both", Some(&format!("{prefix}ft_n"))))
+                return Err(ApiError::bad_request(
+                    "give mu, or ft_n and fn_n, not both",
+                    Some(&format!("{prefix}ft_n")),
+                ));
             }
-            (None, _, _) => Err(ApiError::bad_request(
-                "a profile needs mu (or ft_n and fn_n) beside x_mm",
-                Some(&format!("{prefix}mu")),
-            )),
-        }
+            (None, _, _) => {
+                return Err(ApiError::bad_request(
+                    "a profile needs mu (or ft_n and fn_n) beside x_mm",
+                    Some(&format!("{prefix}mu")),
+                ));
+            }
+        };
+        check_derived_mu(&profile, |i, message| ApiError::bad_request(message, Some(&format!("{prefix}fn_n[{i}]"))))?;
+        Ok(profile)
+    }
+}
+
+/// The range of a profile column.
+fn profile_range(column: &str) -> Range {
+    match column {
+        "mu" => fields::MU,
+        "ft_n" => fields::FT_N,
+        "fn_n" => fields::FN_N,
+        _ => fields::POSITION_MM,
+    }
+}
+
+/// Checks mu where the profile derived it (mu = ft/fn, paper eq. 4)
+/// against the range a given mu has: a sample outside is refused,
+/// `at(index, message)` naming the field (fn_n, which the ratio divides
+/// by). A profile given with mu and fn_n passed the check on input, so
+/// this finds nothing there.
+fn check_derived_mu(profile: &FrictionProfile, at: impl Fn(usize, String) -> ApiError) -> Result<(), ApiError> {
+    let Some(fn_n) = profile.fn_n() else { return Ok(()) };
+    match fields::MU.first_outside(profile.mu()) {
+        None => Ok(()),
+        Some(i) => Err(at(
+            i,
+            format!(
+                "mu = ft_n / fn_n = {} at x = {} mm (fn_n = {} N): mu must be {}",
+                Num(profile.mu()[i]),
+                Num(profile.x_mm()[i]),
+                Num(fn_n[i]),
+                fields::MU.describe()
+            ),
+        )),
     }
 }
 
 /// Reads a friction profile CSV body (`x_mm,mu` or `x_mm,ft_n,fn_n`);
 /// errors name the line and column.
 pub fn profile_from_csv(bytes: &[u8], max_points: usize) -> Result<FrictionProfile, ApiError> {
-    let table = haptex_core::io::Table::read(bytes, "request body").map_err(table_error)?;
+    let table = Table::read(bytes, "request body").map_err(table_error)?;
     check_points(table.n_rows(), max_points, "body")?;
-    FrictionProfile::from_table(&table).map_err(|e| profile_error(e, ""))
+    for name in ["x_mm", "mu", "ft_n", "fn_n"] {
+        let range = profile_range(name);
+        if let Some(values) = table.column(name)
+            && let Some(row) = range.first_outside(values)
+        {
+            let message = range.refusal(name, values[row], name).message;
+            return Err(table_error(table.error_at(Some(row), Some(name), message)));
+        }
+    }
+    let profile = FrictionProfile::from_table(&table).map_err(|e| profile_error(e, ""))?;
+    check_derived_mu(&profile, |row, message| table_error(table.error_at(Some(row), Some("fn_n"), message)))?;
+    Ok(profile)
 }
 
 /// A finger trajectory in JSON: times in s and positions in mm.
@@ -216,6 +341,8 @@ pub struct TrajectoryJson {
 impl TrajectoryJson {
     pub fn into_trajectory(self, prefix: &str, max_points: usize) -> Result<Trajectory, ApiError> {
         check_points(self.t_s.len(), max_points, &format!("{prefix}t_s"))?;
+        fields::TIME_S.check_all(&self.t_s, &format!("{prefix}t_s"))?;
+        fields::POSITION_MM.check_all(&self.x_mm, &format!("{prefix}x_mm"))?;
         Trajectory::new(self.t_s, self.x_mm).map_err(|e| match e {
             TrajectoryError::Table(t) => table_error(t),
             TrajectoryError::Invalid { index, field, message } => {
@@ -235,7 +362,7 @@ pub fn check_points(n: usize, max_points: usize, field: &str) -> Result<(), ApiE
     }
 }
 
-fn profile_error(error: ProfileError, prefix: &str) -> ApiError {
+pub(crate) fn profile_error(error: ProfileError, prefix: &str) -> ApiError {
     match error {
         ProfileError::Table(t) => table_error(t),
         ProfileError::Invalid { index, field, message } => {

@@ -16,38 +16,52 @@
 //! - [`error`]: [`ApiError`] and the middleware that turns every 4xx into
 //!   the JSON error `{"error": message, "field": name}`;
 //! - [`params`]: device parameters with the paper's defaults and their
-//!   accepted ranges;
+//!   accepted ranges; [`fields`]: the ranges of every other number;
 //! - [`input`]: request bodies (JSON or `text/csv`) and query strings;
 //! - [`state`]: shared state ([`AppState`]: the FE database, the texture
 //!   library pool and the limits);
 //! - [`templates`]: the FE database of surface templates and the ranges of
 //!   their parameters;
 //! - [`assets`]: the GUI, embedded in the binary (rust-embed), and the
-//!   security headers.
+//!   security headers;
+//! - hardening: [`guard`] (head sizes, allowed hosts), `work` (CPU work
+//!   off the async workers, heavy requests in bounded slots), [`answers`]
+//!   (the memory of unread answers), `connection` (write timeout, hyper's
+//!   own answers made like ours), `access_log`.
 
+mod access_log;
+pub mod answers;
 mod api;
 pub mod assets;
+mod connection;
 pub mod error;
+pub mod fields;
+pub mod guard;
 pub mod input;
 pub mod params;
 pub mod routes;
 pub mod state;
 pub mod templates;
+mod work;
 
+use std::convert::Infallible;
 use std::future::Future;
 use std::net::SocketAddr;
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Duration;
 
 use axum::Router;
+use axum::body::Body;
 use axum::extract::DefaultBodyLimit;
 use axum::http::StatusCode;
+use axum::middleware::{from_fn, from_fn_with_state, map_response};
+use tower::ServiceExt;
 use tower_http::catch_panic::CatchPanicLayer;
 use tower_http::timeout::TimeoutLayer;
-use tower_http::trace::{DefaultMakeSpan, DefaultOnResponse, TraceLayer};
-use tracing::Level;
 
 pub use error::ApiError;
+pub use guard::{HostNameError, HostPolicy};
 pub use state::{AppState, Limits};
 
 /// How to start the server.
@@ -63,6 +77,12 @@ pub struct Config {
     /// `None` serves none.
     pub database: Option<PathBuf>,
     pub limits: Limits,
+    /// Host names to answer for besides `localhost` and IP addresses
+    /// (`haptex serve --allow-host`).
+    pub allowed_hosts: Vec<String>,
+    /// Log every request (`haptex serve --access-log`); errors are logged
+    /// either way.
+    pub access_log: bool,
 }
 
 impl Config {
@@ -83,50 +103,61 @@ pub enum ServeError {
     Library(#[from] haptex_core::library::LibraryError),
     #[error(transparent)]
     Database(#[from] haptex_core::database::DatabaseError),
+    #[error(transparent)]
+    HostName(#[from] HostNameError),
 }
 
 /// The whole application: API routes, GUI, middleware.
 ///
-/// Layers, outermost first: request logging (tracing), panic catcher
-/// (a 500, never a dropped connection), security headers, 4xx-to-JSON,
-/// timeout, body limit.
+/// Layers, outermost first: request log (errors always, every request
+/// with `access_log`), security headers (on every answer, a panic's
+/// included), panic catcher (a 500, never a dropped connection), the
+/// budget of unsent answers, 4xx-to-JSON, the request guard (head sizes,
+/// host), timeout (covering the body upload and the handler's work),
+/// body limit.
 pub fn app(state: AppState) -> Router {
     let limits = state.limits().clone();
     routes::router()
         .fallback(error::not_found)
-        .with_state(state)
+        .with_state(state.clone())
         .layer(DefaultBodyLimit::max(limits.max_body_bytes))
         .layer(TimeoutLayer::with_status_code(StatusCode::REQUEST_TIMEOUT, limits.request_timeout))
-        .layer(axum::middleware::from_fn(error::json_client_errors))
-        .layer(assets::security_headers())
+        .layer(from_fn_with_state(state.clone(), guard::check_request))
+        .layer(from_fn(error::json_client_errors))
+        .layer(from_fn_with_state(state.clone(), answers::budget))
         .layer(CatchPanicLayer::custom(error::panic_response))
-        .layer(
-            TraceLayer::new_for_http()
-                .make_span_with(DefaultMakeSpan::new().level(Level::INFO))
-                .on_response(DefaultOnResponse::new().level(Level::INFO).latency_unit(tower_http::LatencyUnit::Micros)),
-        )
+        .layer(map_response(assets::add_security_headers))
+        .layer(from_fn_with_state(state, access_log::log))
 }
 
 /// Serves the application on `listener` until `shutdown` completes, then
 /// stops accepting and lets the requests in flight finish (graceful
 /// shutdown, at most [`Limits::request_timeout`] more).
 ///
-/// HTTP/1.1 through hyper directly (not `axum::serve`) for the header-read
-/// timeout: a client that opens a connection and sends its headers slowly,
+/// HTTP/1.1 through hyper directly (not `axum::serve`) for the timeouts
+/// and limits of a connection: a client that sends its headers slowly,
 /// or not at all, is dropped after [`Limits::header_timeout`]; once the
-/// headers are in, [`Limits::request_timeout`] bounds the rest.
+/// headers are in, [`Limits::request_timeout`] bounds the rest; a client
+/// that reads nothing of its answer is dropped after
+/// [`Limits::write_timeout`]; hyper reads heads up to
+/// [`Limits::head_buffer_bytes`] so that the application's own checks
+/// answer oversized ones, and what hyper still answers itself is rewritten
+/// with the security headers and a JSON body (`connection`).
 pub async fn serve(
     listener: tokio::net::TcpListener,
     state: AppState,
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> Result<(), ServeError> {
     use hyper_util::rt::{TokioIo, TokioTimer};
-    use hyper_util::service::TowerToHyperService;
 
     let limits = state.limits().clone();
-    let service = TowerToHyperService::new(app(state));
+    let router = app(state);
+    let head = connection::HeadLimits { head_bytes: limits.head_buffer_bytes(), headers: 2 * limits.max_headers };
     let mut http = hyper::server::conn::http1::Builder::new();
-    http.timer(TokioTimer::new()).header_read_timeout(limits.header_timeout);
+    http.timer(TokioTimer::new())
+        .header_read_timeout(limits.header_timeout)
+        .max_buf_size(head.head_bytes)
+        .max_headers(head.headers);
     let connections = hyper_util::server::graceful::GracefulShutdown::new();
     let mut shutdown = std::pin::pin!(shutdown);
     loop {
@@ -143,7 +174,20 @@ pub async fn serve(
             () = &mut shutdown => break,
         };
         let _ = stream.set_nodelay(true);
-        let connection = connections.watch(http.serve_connection(TokioIo::new(stream), service.clone()));
+        let requests = Arc::new(connection::Requests::default());
+        let socket = connection::Socket::new(stream, Arc::clone(&requests), head, limits.write_timeout);
+        let router = router.clone();
+        let service = hyper::service::service_fn(move |request: hyper::Request<hyper::body::Incoming>| {
+            // Open from the head's arrival until hyper has taken the
+            // answer's last byte (see `connection`).
+            let open = requests.open();
+            let answer = router.clone().oneshot(request.map(Body::new));
+            async move {
+                let response = answer.await.unwrap_or_else(|never: Infallible| match never {});
+                Ok::<_, Infallible>(response.map(|body| Body::new(connection::Held::new(body, open))))
+            }
+        });
+        let connection = connections.watch(http.serve_connection(TokioIo::new(socket), service));
         tokio::spawn(async move {
             if let Err(e) = connection.await {
                 tracing::debug!(%peer, "connection ended with an error: {e}");
@@ -161,7 +205,9 @@ pub async fn serve(
 /// then shuts down gracefully. `on_listening` is called with the bound
 /// address once the server accepts connections.
 pub fn run(config: Config, on_listening: impl FnOnce(SocketAddr)) -> Result<(), ServeError> {
-    let mut state = AppState::new(config.library.as_deref(), config.limits.clone())?;
+    let mut state = AppState::new(config.library.as_deref(), config.limits.clone())?
+        .with_hosts(HostPolicy::new(&config.allowed_hosts)?)
+        .with_access_log(config.access_log);
     if let Some(dir) = &config.database {
         state = state.with_database(dir)?;
     }

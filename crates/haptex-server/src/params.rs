@@ -4,21 +4,33 @@
 //! One table, [`DEVICE_PARAMS`], serves validation, the defaults the GUI
 //! shows (`GET /api/config`) and the OpenAPI description (a test checks
 //! they agree). Names and units are those of the `haptex voltage` flags.
+//!
+//! The maxima and units are haptex-core's ([`haptex_core::ranges`], which
+//! the command line checks too). The minimums are the server's: with
+//! them, eq. (3) stays inside the floating-point range at every corner of
+//! the ranges (Fe/Fn per V^2, the voltage of eq. (8) and mu at U_max are
+//! finite and positive; a test walks the corners), so a value that would
+//! break the mapping is refused naming its own field rather than by the
+//! library's check of the device as a whole.
 
 use std::collections::BTreeMap;
 
 use haptex_core::electrovibration::{ContactArea, Device, LayerStack, Method};
+use haptex_core::ranges;
 use serde::Serialize;
 
 use crate::error::ApiError;
+use crate::fields::Range;
 
-/// One parameter: accepted when 0 < value <= `max`.
+/// One parameter: accepted when `min` <= value <= `max`.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct ParamSpec {
     pub name: &'static str,
     /// The paper's value (`None`: no default; the parameter is optional).
     pub default: Option<f64>,
-    /// Largest accepted value (inclusive); every parameter must be > 0.
+    /// Smallest accepted value (inclusive, > 0).
+    pub min: f64,
+    /// Largest accepted value (inclusive).
     pub max: f64,
     pub unit: &'static str,
     pub description: &'static str,
@@ -29,67 +41,83 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "mu_hd",
         default: Some(Device::PAPER.mu_hd),
-        max: 10.0,
-        unit: "",
+        min: 1e-3,
+        max: ranges::MU_HD.max,
+        unit: ranges::MU_HD.unit,
         description: "friction coefficient of the finger on the display with no voltage, mu_HD",
     },
     ParamSpec {
         name: "u_max_v",
         default: Some(Device::PAPER.u_max_v),
-        max: 10_000.0,
-        unit: "V",
+        min: 1e-3,
+        max: ranges::U_MAX_V.max,
+        unit: ranges::U_MAX_V.unit,
         description: "highest voltage the display applies, U_max (RMS): clip level (physical) or full scale (normalized)",
     },
     ParamSpec {
         name: "eps_sc",
         default: Some(LayerStack::PAPER.eps_sc),
-        max: 1e6,
-        unit: "",
+        min: 1.0,
+        max: ranges::EPS_SC.max,
+        unit: ranges::EPS_SC.unit,
         description: "relative permittivity of the stratum corneum, eps_sc",
     },
     ParamSpec {
         name: "eps_i",
         default: Some(LayerStack::PAPER.eps_i),
-        max: 1e6,
-        unit: "",
+        min: 1.0,
+        max: ranges::EPS_I.max,
+        unit: ranges::EPS_I.unit,
         description: "relative permittivity of the display insulator, eps_i",
     },
     ParamSpec {
         name: "d_sc_mm",
         default: Some(LayerStack::PAPER.d_sc_mm),
-        max: 10.0,
-        unit: "mm",
+        min: 1e-6,
+        max: ranges::D_SC_MM.max,
+        unit: ranges::D_SC_MM.unit,
         description: "stratum corneum thickness d_sc",
     },
     ParamSpec {
         name: "d_i_mm",
         default: Some(LayerStack::PAPER.d_i_mm),
-        max: 10.0,
-        unit: "mm",
+        min: 1e-6,
+        max: ranges::D_I_MM.max,
+        unit: ranges::D_I_MM.unit,
         description: "insulator thickness d_i",
     },
     ParamSpec {
         name: "k_mm2_per_n",
         default: Some(ContactArea::PAPER.k_mm2_per_n),
-        max: 1e6,
-        unit: "mm^2/N",
+        min: 1e-6,
+        max: ranges::K_MM2_PER_N.max,
+        unit: ranges::K_MM2_PER_N.unit,
         description: "contact-area coefficient k in A = k Fn^n",
     },
     ParamSpec {
         name: "area_exponent",
         default: Some(ContactArea::PAPER.exponent),
-        max: 2.0,
-        unit: "",
+        min: 1e-3,
+        max: ranges::AREA_EXPONENT.max,
+        unit: ranges::AREA_EXPONENT.unit,
         description: "contact-area exponent n in A = k Fn^n (1: the paper's linear law; otherwise fn_n is needed)",
     },
     ParamSpec {
         name: "fn_n",
         default: None,
-        max: 100.0,
-        unit: "N",
+        min: 1e-6,
+        max: ranges::FN_N.max,
+        unit: ranges::FN_N.unit,
         description: "exploration normal force Fn (used only when area_exponent != 1; default: the profile's mean fn_n)",
     },
 ];
+
+impl ParamSpec {
+    /// The accepted range.
+    pub fn range(&self) -> Range {
+        Range::new(self.min, self.max, self.unit)
+    }
+}
 
 /// Looks a parameter up by name.
 pub fn spec(name: &str) -> Option<&'static ParamSpec> {
@@ -106,16 +134,20 @@ pub struct DeviceRequest {
 
 impl DeviceRequest {
     /// The device from `(name, value)` pairs; missing parameters take the
-    /// paper's defaults. Unknown names and values out of (0, max] are
-    /// errors naming `prefix` + the parameter.
+    /// paper's defaults. Unknown names, names given twice and values out
+    /// of [min, max] are errors naming `prefix` + the parameter.
     pub fn from_pairs<'a>(pairs: impl IntoIterator<Item = (&'a str, f64)>, prefix: &str) -> Result<Self, ApiError> {
         let mut values: Vec<Option<f64>> = DEVICE_PARAMS.iter().map(|p| p.default).collect();
+        let mut given = vec![false; DEVICE_PARAMS.len()];
         for (name, value) in pairs {
             let field = format!("{prefix}{name}");
             let index = DEVICE_PARAMS.iter().position(|p| p.name == name).ok_or_else(|| {
                 let known: Vec<&str> = DEVICE_PARAMS.iter().map(|p| p.name).collect();
                 ApiError::bad_request(format!("unknown parameter (known: {})", known.join(", ")), Some(&field))
             })?;
+            if std::mem::replace(&mut given[index], true) {
+                return Err(ApiError::bad_request(format!("{name} is given twice"), Some(&field)));
+            }
             check_range(&DEVICE_PARAMS[index], value, &field)?;
             values[index] = Some(value);
         }
@@ -160,17 +192,10 @@ impl DeviceRequest {
     }
 }
 
-/// Checks 0 < value <= spec.max (and finite).
+/// Checks min <= value <= max (and finite); the error names `field`.
 pub fn check_range(spec: &ParamSpec, value: f64, field: &str) -> Result<f64, ApiError> {
-    if value.is_finite() && value > 0.0 && value <= spec.max {
-        Ok(value)
-    } else {
-        let unit = if spec.unit.is_empty() { String::new() } else { format!(" {}", spec.unit) };
-        Err(ApiError::bad_request(
-            format!("{} must be > 0 and <= {}{unit}, got {value}", spec.name, spec.max),
-            Some(field),
-        ))
-    }
+    let range = spec.range();
+    if range.contains(value) { Ok(value) } else { Err(range.refusal(spec.name, value, field)) }
 }
 
 /// Parses a mapping method: `physical` (eq. 8) or `normalized` (eq. 9).
@@ -205,6 +230,35 @@ mod tests {
         }
         let e = DeviceRequest::from_pairs([("u_max", 50.0)], "").unwrap_err();
         assert_eq!(e.field.as_deref(), Some("u_max"));
+        let e = DeviceRequest::from_pairs([("u_max_v", 50.0), ("u_max_v", 60.0)], "device.").unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("device.u_max_v"));
+    }
+
+    /// At every corner of the accepted ranges (2^9 devices, each with mu
+    /// at the ends of its own range), eq. (3)'s factor, the voltage of
+    /// eq. (8) and mu at U_max are finite: no accepted combination makes
+    /// the mapping overflow or underflow.
+    #[test]
+    fn device_ranges_keep_eq3_finite_at_every_corner() {
+        use haptex_core::electrovibration::PhysicalMapping;
+        let n = DEVICE_PARAMS.len();
+        for corner in 0..(1u32 << n) {
+            let pairs: Vec<(&str, f64)> = DEVICE_PARAMS
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (p.name, if corner & (1 << i) == 0 { p.min } else { p.max }))
+                .collect();
+            let request = DeviceRequest::from_pairs(pairs, "").unwrap();
+            let d = request.device;
+            let ratio = d.force_ratio_per_v2(request.fn_n.unwrap());
+            assert!(ratio.is_finite() && ratio > 0.0, "corner {corner:b}: Fe/Fn per V^2 = {ratio}");
+            let mapping = PhysicalMapping::new(d.mu_hd, ratio, d.u_max_v);
+            assert!(mapping.mu_clip.is_finite() && mapping.mu_clip > 0.0, "corner {corner:b}: {}", mapping.mu_clip);
+            for mu in [crate::fields::MU.min, crate::fields::MU.max, d.mu_hd, mapping.mu_clip] {
+                let u = mapping.voltage_v(mu);
+                assert!(u.is_finite() && u >= 0.0, "corner {corner:b}, mu {mu}: U = {u}");
+            }
+        }
     }
 
     /// Each parameter set by name comes back under that name: the table and
@@ -212,7 +266,7 @@ mod tests {
     #[test]
     fn every_parameter_reaches_its_device_field() {
         for (i, spec) in DEVICE_PARAMS.iter().enumerate() {
-            let value = spec.max / (i as f64 + 3.0);
+            let value = spec.min + (spec.max - spec.min) / (i as f64 + 3.0);
             let request = DeviceRequest::from_pairs([(spec.name, value)], "").unwrap();
             let values = request.values();
             assert_eq!(values.get(spec.name), Some(&value), "{}", spec.name);

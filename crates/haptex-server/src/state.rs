@@ -6,6 +6,7 @@
 //! user's own profile (in the request).
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -15,6 +16,7 @@ use serde::Serialize;
 use tokio::sync::Semaphore;
 
 use crate::error::ApiError;
+use crate::guard::HostPolicy;
 use crate::templates::TemplateSet;
 
 /// What one request may ask of the server.
@@ -28,8 +30,14 @@ pub struct Limits {
     pub max_wav_samples: usize,
     /// Most samples of a rendered drive signal returned as JSON.
     pub max_json_samples: usize,
+    /// Longest request target (path and query) in bytes; then 414.
+    pub max_uri_bytes: usize,
+    /// Largest header section (names and values) in bytes; then 431.
+    pub max_header_bytes: usize,
+    /// Most header fields in a request; then 431.
+    pub max_headers: usize,
     /// Longest time a request may take once its headers are in, body
-    /// upload included; then 408.
+    /// upload and processing included; then 408.
     #[serde(serialize_with = "seconds")]
     pub request_timeout: Duration,
     /// Longest wait for a request's headers (a new connection's first
@@ -37,6 +45,25 @@ pub struct Limits {
     /// connection is closed.
     #[serde(serialize_with = "seconds")]
     pub header_timeout: Duration,
+    /// Longest time a connection may accept none of the bytes of an answer
+    /// (a client that does not read); then it is closed and the answer
+    /// freed.
+    #[serde(serialize_with = "seconds")]
+    pub write_timeout: Duration,
+    /// A request body larger than this is heavy: its parsing and
+    /// computation take one of [`Limits::concurrent_heavy`] slots.
+    pub heavy_body_bytes: usize,
+    /// Heavy requests (bodies over `heavy_body_bytes`) processed at once;
+    /// others wait for a slot (within the request timeout).
+    pub concurrent_heavy: usize,
+    /// Most bytes of finished answers the server holds for their clients
+    /// at once (answers not yet handed to the connection). An answer of
+    /// more than `small_answer_bytes` that would pass it is refused with
+    /// 503.
+    pub max_unsent_answer_bytes: usize,
+    /// Answers up to this size (errors, health, small profiles) are never
+    /// refused for the budget above.
+    pub small_answer_bytes: usize,
     /// Drive-signal renders run at the same time (each holds up to
     /// `max_wav_samples` x 32 bytes of working memory).
     pub concurrent_renders: usize,
@@ -51,20 +78,38 @@ pub struct Limits {
 
 impl Limits {
     /// 1 MiB bodies, 100 000 points, 2 000 000 WAV samples (41.7 s at
-    /// 48 kHz), 200 000 JSON samples, 10 s per request, 10 s for headers,
-    /// 2 renders at once, 1 FE simulation at once (the other core serves
-    /// everything else) with a wait of up to 5 s for it.
+    /// 48 kHz), 200 000 JSON samples, 8 KiB request targets, 32 KiB and
+    /// 100 header fields, 10 s per request, 10 s for headers, 10 s without
+    /// write progress, bodies over 64 KiB two at a time, 64 MiB of unsent
+    /// answers, 2 renders at once, 1 FE simulation at once (the other core
+    /// serves everything else) with a wait of up to 5 s for it.
     pub const DEFAULT: Self = Self {
         max_body_bytes: 1 << 20,
         max_points: 100_000,
         max_wav_samples: 2_000_000,
         max_json_samples: 200_000,
+        max_uri_bytes: 8 << 10,
+        max_header_bytes: 32 << 10,
+        max_headers: 100,
         request_timeout: Duration::from_secs(10),
         header_timeout: Duration::from_secs(10),
+        write_timeout: Duration::from_secs(10),
+        heavy_body_bytes: 64 << 10,
+        concurrent_heavy: 2,
+        max_unsent_answer_bytes: 64 << 20,
+        small_answer_bytes: 64 << 10,
         concurrent_renders: 2,
         concurrent_simulations: 1,
         simulation_wait: Duration::from_secs(5),
     };
+
+    /// The read buffer hyper may fill with one request head: room for the
+    /// largest head these limits accept and more, so that an oversized
+    /// head reaches the server's own check (414 or 431 naming the field)
+    /// rather than hyper's bare answer.
+    pub fn head_buffer_bytes(&self) -> usize {
+        (4 * (self.max_uri_bytes + self.max_header_bytes)).max(64 << 10)
+    }
 }
 
 impl Default for Limits {
@@ -86,8 +131,13 @@ struct Inner {
     library: Option<Arc<LibraryPool>>,
     templates: Option<Arc<TemplateSet>>,
     limits: Limits,
-    renders: Semaphore,
+    hosts: HostPolicy,
+    access_log: bool,
+    heavy: Arc<Semaphore>,
+    renders: Arc<Semaphore>,
     simulations: Arc<Semaphore>,
+    /// Bytes of answers built and not yet handed to their connection.
+    unsent_answer_bytes: AtomicUsize,
 }
 
 /// A profile source the GUI can offer.
@@ -103,22 +153,54 @@ impl AppState {
     /// now so that a bad path fails at start, not at the first request).
     pub fn new(library: Option<&Path>, limits: Limits) -> Result<Self, LibraryError> {
         let library = library.map(LibraryPool::open).transpose()?.map(Arc::new);
-        Ok(Self::build(library, None, limits))
+        Ok(Self::build(library, None, limits, HostPolicy::default(), false))
     }
 
     /// This state, also serving the surface templates of the FE database in
     /// `dir` (loaded now, so that a bad database fails at start).
     pub fn with_database(self, dir: &Path) -> Result<Self, DatabaseError> {
         let templates = Some(Arc::new(TemplateSet::load(dir)?));
-        Ok(Self::build(self.0.library.clone(), templates, self.0.limits.clone()))
+        let i = &self.0;
+        Ok(Self::build(i.library.clone(), templates, i.limits.clone(), i.hosts.clone(), i.access_log))
     }
 
-    /// The state of these sources, with fresh render and simulation slots
-    /// for `limits`.
-    fn build(library: Option<Arc<LibraryPool>>, templates: Option<Arc<TemplateSet>>, limits: Limits) -> Self {
-        let renders = Semaphore::new(limits.concurrent_renders.max(1));
+    /// This state, answering requests for these host names too (besides
+    /// `localhost` and IP addresses; see [`HostPolicy`]).
+    pub fn with_hosts(self, hosts: HostPolicy) -> Self {
+        let i = &self.0;
+        Self::build(i.library.clone(), i.templates.clone(), i.limits.clone(), hosts, i.access_log)
+    }
+
+    /// This state, logging every request (method, path, status, latency)
+    /// at info level when `on`; errors are logged either way.
+    pub fn with_access_log(self, on: bool) -> Self {
+        let i = &self.0;
+        Self::build(i.library.clone(), i.templates.clone(), i.limits.clone(), i.hosts.clone(), on)
+    }
+
+    /// The state of these sources, with fresh slots and counters for
+    /// `limits`.
+    fn build(
+        library: Option<Arc<LibraryPool>>,
+        templates: Option<Arc<TemplateSet>>,
+        limits: Limits,
+        hosts: HostPolicy,
+        access_log: bool,
+    ) -> Self {
+        let heavy = Arc::new(Semaphore::new(limits.concurrent_heavy.max(1)));
+        let renders = Arc::new(Semaphore::new(limits.concurrent_renders.max(1)));
         let simulations = Arc::new(Semaphore::new(limits.concurrent_simulations));
-        Self(Arc::new(Inner { library, templates, limits, renders, simulations }))
+        Self(Arc::new(Inner {
+            library,
+            templates,
+            limits,
+            hosts,
+            access_log,
+            heavy,
+            renders,
+            simulations,
+            unsent_answer_bytes: AtomicUsize::new(0),
+        }))
     }
 
     /// The surface templates, or 404 if the server has no FE database.
@@ -148,8 +230,24 @@ impl AppState {
         self.0.library.is_some()
     }
 
+    /// The host names this server answers for.
+    pub fn hosts(&self) -> &HostPolicy {
+        &self.0.hosts
+    }
+
+    /// Whether every request is logged.
+    pub fn access_log(&self) -> bool {
+        self.0.access_log
+    }
+
+    /// Bounds the number of heavy requests (bodies over
+    /// [`Limits::heavy_body_bytes`]) processed at once.
+    pub fn heavy(&self) -> &Arc<Semaphore> {
+        &self.0.heavy
+    }
+
     /// Bounds the number of renders running at once.
-    pub fn renders(&self) -> &Semaphore {
+    pub fn renders(&self) -> &Arc<Semaphore> {
         &self.0.renders
     }
 
@@ -157,6 +255,30 @@ impl AppState {
     /// simulation switched off).
     pub fn simulations(&self) -> &Arc<Semaphore> {
         &self.0.simulations
+    }
+
+    /// Bytes of answers built and not yet handed to their connections (the
+    /// gauge that [`Limits::max_unsent_answer_bytes`] bounds).
+    pub fn unsent_answer_bytes(&self) -> usize {
+        self.0.unsent_answer_bytes.load(Ordering::Acquire)
+    }
+
+    /// Counts `bytes` of a new answer, if they fit the budget (`always`:
+    /// count them even if they do not); false when refused.
+    pub(crate) fn reserve_answer(&self, bytes: usize, always: bool) -> bool {
+        let max = self.0.limits.max_unsent_answer_bytes;
+        self.0
+            .unsent_answer_bytes
+            .fetch_update(Ordering::AcqRel, Ordering::Acquire, |held| {
+                let total = held.saturating_add(bytes);
+                (always || total <= max).then_some(total)
+            })
+            .is_ok()
+    }
+
+    /// Releases `bytes` counted by [`AppState::reserve_answer`].
+    pub(crate) fn release_answer(&self, bytes: usize) {
+        self.0.unsent_answer_bytes.fetch_sub(bytes, Ordering::AcqRel);
     }
 
     /// The profile sources available, in the order the GUI offers them.

@@ -30,7 +30,9 @@ use haptex_core::database::{DatabaseError, Metadata, Template, TemplateModel};
 use haptex_fem::sweep::DatabaseSpec;
 use serde::{Deserialize, Serialize};
 
-use crate::error::ApiError;
+use haptex_core::num::Num;
+
+use crate::error::{ApiError, quote};
 use crate::input::parse_json;
 
 /// How far beyond the database range a request may go: a factor 4 below
@@ -202,14 +204,14 @@ impl TemplateQuery {
         let model = Template::parse(&surface).and_then(|t| set.model(t)).ok_or_else(|| {
             let names: Vec<&str> = set.templates().map(Template::name).collect();
             ApiError::bad_request(
-                format!("unknown surface {surface:?}: this server has {}", names.join(", ")),
+                format!("unknown surface {}: this server has {}", quote(&surface), names.join(", ")),
                 Some("surface"),
             )
         })?;
         let x0_mm = body.x0_mm.unwrap_or(DEFAULT_X0_MM);
         if !(x0_mm.is_finite() && x0_mm.abs() <= MAX_ABS_X0_MM) {
             return Err(ApiError::bad_request(
-                format!("x0_mm = {x0_mm} mm: give a position from {} to {MAX_ABS_X0_MM} mm", -MAX_ABS_X0_MM),
+                format!("x0_mm = {} mm: give a position from {} to {MAX_ABS_X0_MM} mm", Num(x0_mm), -MAX_ABS_X0_MM),
                 Some("x0_mm"),
             ));
         }
@@ -218,15 +220,16 @@ impl TemplateQuery {
             if !range.accepts(value) {
                 return Err(ApiError::bad_request(
                     format!(
-                        "{} = {value} {} is out of range: this server accepts {} .. {} {} (the FE database covers \
+                        "{} = {} {} is out of range: this server accepts {} .. {} {} (the FE database covers \
                          {} .. {} {}; beyond a factor {REACH} of it an estimate would be meaningless)",
                         range.name,
+                        Num(value),
                         range.unit,
-                        range.accepted[0],
-                        range.accepted[1],
+                        Num(range.accepted[0]),
+                        Num(range.accepted[1]),
                         range.unit,
-                        range.database[0],
-                        range.database[1],
+                        Num(range.database[0]),
+                        Num(range.database[1]),
                         range.unit,
                     ),
                     Some(range.name),

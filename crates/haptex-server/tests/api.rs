@@ -11,24 +11,19 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use axum::Router;
-use axum::body::{Body, Bytes};
-use axum::http::{HeaderMap, Method, Request, StatusCode, header};
+use axum::body::Body;
+use axum::http::{Method, Request, StatusCode, header};
 use haptex_core::database::{Metadata, Template, TemplateModel};
 use haptex_core::electrovibration::{Device, Method as MapMethod, map_profile};
 use haptex_core::io::Table;
 use haptex_core::library::Library;
 use haptex_core::profile::FrictionProfile;
-use haptex_server::{AppState, Limits, app, params::DEVICE_PARAMS, routes};
+use haptex_server::{AppState, Limits, app, fields, params::DEVICE_PARAMS, routes};
 use serde_json::{Value, json};
-use tower::ServiceExt;
 
-fn shipped_library() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/library/library.sqlite")
-}
+mod common;
 
-fn shipped_db() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/db")
-}
+use common::{Answer, send_to, shipped_db, shipped_library, shipped_state};
 
 fn bump_csv() -> String {
     std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/examples/bump_friction.csv"))
@@ -38,59 +33,7 @@ fn bump_csv() -> String {
 /// The application on the shipped texture library and FE database (the
 /// state is loaded once and shared by the tests).
 fn server() -> Router {
-    static STATE: std::sync::OnceLock<AppState> = std::sync::OnceLock::new();
-    let state = STATE.get_or_init(|| {
-        AppState::new(Some(&shipped_library()), Limits::DEFAULT).unwrap().with_database(&shipped_db()).unwrap()
-    });
-    app(state.clone())
-}
-
-struct Answer {
-    status: StatusCode,
-    headers: HeaderMap,
-    body: Bytes,
-}
-
-impl Answer {
-    fn json(&self) -> Value {
-        serde_json::from_slice(&self.body)
-            .unwrap_or_else(|e| panic!("not JSON ({e}): {}", String::from_utf8_lossy(&self.body)))
-    }
-
-    fn text(&self) -> String {
-        String::from_utf8(self.body.to_vec()).unwrap()
-    }
-
-    fn content_type(&self) -> &str {
-        self.headers.get(header::CONTENT_TYPE).map(|v| v.to_str().unwrap()).unwrap_or("")
-    }
-
-    /// Asserts a JSON error with this status and field; returns the body.
-    #[track_caller]
-    fn error(&self, status: StatusCode, field: Option<&str>) -> Value {
-        assert_eq!(self.status, status, "{}", String::from_utf8_lossy(&self.body));
-        assert!(self.content_type().starts_with("application/json"), "content type {}", self.content_type());
-        let body = self.json();
-        let message = body["error"].as_str().expect("an error message");
-        assert!(!message.is_empty());
-        assert!(body.as_object().unwrap().contains_key("field"), "{body}");
-        assert_eq!(body["field"].as_str(), field, "{body}");
-        body
-    }
-
-    #[track_caller]
-    fn ok(&self) -> &Self {
-        assert_eq!(self.status, StatusCode::OK, "{}", String::from_utf8_lossy(&self.body));
-        self
-    }
-}
-
-async fn send_to(router: Router, request: Request<Body>) -> Answer {
-    let response = router.oneshot(request).await.unwrap();
-    let status = response.status();
-    let headers = response.headers().clone();
-    let body = axum::body::to_bytes(response.into_body(), usize::MAX).await.unwrap();
-    Answer { status, headers, body }
+    app(shipped_state())
 }
 
 async fn send(request: Request<Body>) -> Answer {
@@ -142,7 +85,7 @@ async fn health_answers_ok_with_security_headers_and_no_cors() {
             .unwrap(),
     )
     .await;
-    preflight.error(StatusCode::METHOD_NOT_ALLOWED, None);
+    preflight.error(StatusCode::METHOD_NOT_ALLOWED, Some("method"));
     assert!(preflight.headers.get(header::ACCESS_CONTROL_ALLOW_ORIGIN).is_none());
 }
 
@@ -191,9 +134,40 @@ async fn openapi_describes_every_route_and_the_parameter_ranges() {
     for spec in DEVICE_PARAMS {
         let property = &schema[spec.name];
         assert_eq!(property["maximum"].as_f64(), Some(spec.max), "{}", spec.name);
-        assert_eq!(property["exclusiveMinimum"].as_f64(), Some(0.0), "{}", spec.name);
+        assert_eq!(property["minimum"].as_f64(), Some(spec.min), "{}", spec.name);
         assert_eq!(property["default"].as_f64(), spec.default, "{}", spec.name);
     }
+    // The ranges of every other number (`haptex_server::fields`).
+    let range = |schema: &Value| (schema["minimum"].as_f64(), schema["maximum"].as_f64());
+    let expect = |r: fields::Range| (Some(r.min), Some(r.max));
+    let profile = &doc["components"]["schemas"]["FrictionProfile"]["properties"];
+    for (name, r) in [("x_mm", fields::POSITION_MM), ("mu", fields::MU), ("ft_n", fields::FT_N), ("fn_n", fields::FN_N)]
+    {
+        assert_eq!(range(&profile[name]["items"]), expect(r), "FrictionProfile.{name}");
+    }
+    let play = &doc["paths"]["/api/play"]["post"]["requestBody"]["content"]["application/json"]["schema"]["properties"];
+    for (path, r) in [
+        ("voltage.x_mm[]", fields::POSITION_MM),
+        ("voltage.voltage_v[]", fields::VOLTAGE_V),
+        ("trajectory.t_s[]", fields::TIME_S),
+        ("trajectory.x_mm[]", fields::POSITION_MM),
+        ("stroke.velocity_mm_s", fields::VELOCITY_MM_S),
+        ("stroke.from_mm", fields::POSITION_MM),
+        ("stroke.to_mm", fields::POSITION_MM),
+        ("carrier.frequency_hz", fields::CARRIER_HZ),
+        ("slew_v_per_s", fields::SLEW_V_PER_S),
+        ("amplifier_range_v", fields::AMPLIFIER_RANGE_V),
+        ("volts_per_full_scale", fields::VOLTS_PER_FULL_SCALE),
+    ] {
+        let mut schema = play;
+        for part in path.trim_end_matches("[]").split('.') {
+            schema = if std::ptr::eq(schema, play) { &schema[part] } else { &schema["properties"][part] };
+        }
+        let schema = if path.ends_with("[]") { &schema["items"] } else { schema };
+        assert_eq!(range(schema), expect(r), "/api/play {path}");
+    }
+    let u_max = DEVICE_PARAMS.iter().find(|p| p.name == "u_max_v").unwrap();
+    assert_eq!(range(&play["u_max_v"]), (Some(u_max.min), Some(u_max.max)));
     // Every route answers something other than 404 for its own path.
     for (method, path) in routes::list() {
         let uri = path.replace("{path}", "app.js").replace("{name}", "velvet");
@@ -226,12 +200,12 @@ fn openapi_is_a_valid_openapi_document() {
 
 #[tokio::test]
 async fn unknown_routes_and_wrong_methods_are_json_errors() {
-    get("/api/nothing-here").await.error(StatusCode::NOT_FOUND, None);
-    get("/nothing-here").await.error(StatusCode::NOT_FOUND, None);
+    get("/api/nothing-here").await.error(StatusCode::NOT_FOUND, Some("path"));
+    get("/nothing-here").await.error(StatusCode::NOT_FOUND, Some("path"));
     let answer = get("/api/voltage").await;
-    answer.error(StatusCode::METHOD_NOT_ALLOWED, None);
+    answer.error(StatusCode::METHOD_NOT_ALLOWED, Some("method"));
     assert_eq!(answer.headers.get(header::ALLOW).unwrap(), "POST");
-    post_json("/api/health", &json!({})).await.error(StatusCode::METHOD_NOT_ALLOWED, None);
+    post_json("/api/health", &json!({})).await.error(StatusCode::METHOD_NOT_ALLOWED, Some("method"));
 }
 
 // ------------------------------------------------------------- static
@@ -402,12 +376,17 @@ async fn voltage_bad_json_is_refused_naming_the_field() {
             "device.u_max_v",
         ),
         // A power-law contact area needs the normal force.
-        (json!({ "profile": good, "device": { "area_exponent": 0.5 } }).to_string(), StatusCode::BAD_REQUEST, "device"),
-        // Constants whose eq. (3) factor underflows: refused, not NaN.
+        (
+            json!({ "profile": good, "device": { "area_exponent": 0.5 } }).to_string(),
+            StatusCode::BAD_REQUEST,
+            "device.fn_n",
+        ),
+        // Constants whose eq. (3) factor would underflow: refused by their
+        // own range, naming the field, not NaN.
         (
             json!({ "profile": good, "device": { "d_sc_mm": 1e-300, "d_i_mm": 1e-300 } }).to_string(),
             StatusCode::BAD_REQUEST,
-            "device",
+            "device.d_i_mm",
         ),
     ];
     for (body, status, field) in cases {
@@ -488,8 +467,7 @@ async fn a_stalled_upload_times_out_with_a_json_408() {
         let _ = stopped.await;
     }));
     let mut socket = tokio::net::TcpStream::connect(addr).await.unwrap();
-    let partial =
-        "POST /api/voltage HTTP/1.1\r\nHost: x\r\nContent-Type: text/csv\r\nContent-Length: 1000\r\n\r\nx_mm,mu\n0,1\n";
+    let partial = "POST /api/voltage HTTP/1.1\r\nHost: localhost\r\nContent-Type: text/csv\r\nContent-Length: 1000\r\n\r\nx_mm,mu\n0,1\n";
     socket.write_all(partial.as_bytes()).await.unwrap();
     let mut response = Vec::new();
     let read = tokio::time::timeout(Duration::from_secs(5), socket.read_to_end(&mut response)).await;
@@ -514,7 +492,7 @@ async fn stalled_headers_are_disconnected() {
     let server = tokio::spawn(haptex_server::serve(listener, AppState::new(None, limits).unwrap(), async {
         let _ = stopped.await;
     }));
-    for partial in ["", "GET /api/health HTTP/1.1\r\nHost: x\r\n"] {
+    for partial in ["", "GET /api/health HTTP/1.1\r\nHost: localhost\r\n"] {
         let mut socket = tokio::net::TcpStream::connect(addr).await.unwrap();
         socket.write_all(partial.as_bytes()).await.unwrap();
         let mut response = Vec::new();
@@ -525,7 +503,7 @@ async fn stalled_headers_are_disconnected() {
     }
     // A complete request on a new connection is still served.
     let mut socket = tokio::net::TcpStream::connect(addr).await.unwrap();
-    socket.write_all(b"GET /api/health HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n").await.unwrap();
+    socket.write_all(b"GET /api/health HTTP/1.1\r\nHost: localhost\r\nConnection: close\r\n\r\n").await.unwrap();
     let mut response = Vec::new();
     socket.read_to_end(&mut response).await.unwrap();
     assert!(String::from_utf8_lossy(&response).starts_with("HTTP/1.1 200"));
@@ -733,7 +711,7 @@ async fn play_bad_input_is_refused() {
         (
             json!({ "voltage": voltage, "stroke": stroke, "carrier": { "shape": "sine", "frequency_hz": 30000.0 } }),
             StatusCode::BAD_REQUEST,
-            "carrier",
+            "carrier.frequency_hz",
         ),
         (
             json!({ "voltage": voltage, "stroke": stroke, "carrier": { "shape": "triangle", "frequency_hz": 100.0 } }),

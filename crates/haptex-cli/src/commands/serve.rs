@@ -17,12 +17,18 @@ use haptex_server::{Config, Limits};
 /// downloads. The default address serves this machine only; to use it
 /// from a phone on the same network, listen on all interfaces with
 /// --addr 0.0.0.0:8080 and open http://THIS-MACHINE'S-IP:8080/.
-/// Ctrl-C stops the server after the requests in flight. Requests are
-/// logged to stderr (RUST_LOG=debug for more, RUST_LOG=warn for less).
+/// The server answers requests addressed to localhost or to an IP address
+/// (a phone uses the address); to reach it by a host name, name it with
+/// --allow-host (requests for other names are refused: a web page of
+/// another site could otherwise reach the API by DNS rebinding).
+/// Ctrl-C stops the server after the requests in flight. Errors are
+/// logged to stderr; --access-log logs every request too (RUST_LOG=debug
+/// also logs every refused request with its field).
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:\n  \
     haptex serve\n  \
     haptex serve --addr 0.0.0.0:8080\n  \
+    haptex serve --addr 0.0.0.0:8080 --allow-host mypc.local --access-log\n  \
     haptex serve --library my-lab.sqlite --addr 127.0.0.1:9000\n  \
     haptex serve --db my-db/   (a database built by `haptex db build --out my-db`)")]
 pub struct ServeArgs {
@@ -37,6 +43,15 @@ pub struct ServeArgs {
     /// the shipped data/db).
     #[arg(long, value_name = "DIR")]
     db: Option<PathBuf>,
+    /// Also answer requests addressed to this host name (repeatable; e.g.
+    /// mypc.local). localhost, *.localhost and IP addresses are always
+    /// answered.
+    #[arg(long = "allow-host", value_name = "NAME")]
+    allow_host: Vec<String>,
+    /// Log every request to stderr (method, path, status, latency); off by
+    /// default, errors are logged either way.
+    #[arg(long)]
+    access_log: bool,
 }
 
 pub fn run(args: ServeArgs) -> anyhow::Result<()> {
@@ -55,8 +70,14 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
             db.display()
         );
     }
-    let config =
-        Config { addr: args.addr, library: Some(library.clone()), database: Some(db.clone()), limits: Limits::DEFAULT };
+    let config = Config {
+        addr: args.addr,
+        library: Some(library.clone()),
+        database: Some(db.clone()),
+        limits: Limits::DEFAULT,
+        allowed_hosts: args.allow_host,
+        access_log: args.access_log,
+    };
     haptex_server::run(config, |addr| {
         eprintln!("haptex serve: library {}, FE database {}", library.display(), db.display());
         if addr.ip().is_unspecified() {
@@ -73,11 +94,11 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Request logging to stderr: RUST_LOG if set, else info for the server.
+/// Logging to stderr: RUST_LOG if set, else info for the server (errors,
+/// start and stop; each request with --access-log).
 fn init_logging() {
     use tracing_subscriber::EnvFilter;
-    let filter =
-        EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("haptex_server=info,tower_http=info"));
+    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("haptex_server=info"));
     // Fails only if a subscriber is already set, which then logs instead.
     let ansi = std::io::IsTerminal::is_terminal(&std::io::stderr());
     let _ = tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).with_ansi(ansi).try_init();

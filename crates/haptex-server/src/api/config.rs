@@ -4,16 +4,19 @@
 //! and the limits.
 
 use axum::Json;
-use axum::extract::State;
+use axum::extract::{RawQuery, State};
 use haptex_core::signal::{Carrier, RenderSettings};
 use serde_json::{Value, json};
 
+use crate::error::ApiError;
+use crate::input::Query;
 use crate::params::DEVICE_PARAMS;
 use crate::state::AppState;
 
-pub async fn get(State(state): State<AppState>) -> Json<Value> {
+pub async fn get(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -> Result<Json<Value>, ApiError> {
+    Query::parse(raw_query.as_deref())?.finish()?;
     let play = RenderSettings::DEFAULT;
-    Json(json!({
+    Ok(Json(json!({
         "version": env!("CARGO_PKG_VERSION"),
         "sources": state.sources(),
         "device_params": DEVICE_PARAMS,
@@ -28,5 +31,5 @@ pub async fn get(State(state): State<AppState>) -> Json<Value> {
         },
         "limits": state.limits(),
         "voltage_convention": "every voltage is RMS: a sine carrier of peak sqrt(2) U gives the same mean electrostatic force",
-    }))
+    })))
 }

@@ -9,6 +9,7 @@ use axum::Json;
 use axum::extract::rejection::PathRejection;
 use axum::extract::{Path, RawQuery, State};
 use axum::response::{IntoResponse, Response};
+use haptex_core::library::SampledProfile;
 use serde_json::{Value, json};
 
 use crate::error::ApiError;
@@ -34,13 +35,18 @@ pub async fn sample(
     let format = query.take_format(&["json", "csv"])?;
     query.finish()?;
     let pool = state.library()?;
-    let (sampled, total) = pool
-        .with(move |library| {
-            let sampled = library.sample(&name, seed).map_err(ApiError::library)?;
-            let total = library.strokes(&name).map_err(ApiError::library)?.len();
-            Ok((sampled, total))
-        })
-        .await?;
+    // The library read, the answer and its serialization on a blocking
+    // thread (a stroke can have many thousand points).
+    pool.with(move |library| {
+        let sampled = library.sample(&name, seed).map_err(ApiError::library)?;
+        let total = library.strokes(&name).map_err(ApiError::library)?.len();
+        answer(&sampled, total, format)
+    })
+    .await
+}
+
+/// The sample's answer: JSON, or CSV with the provenance in comments.
+fn answer(sampled: &SampledProfile, total: usize, format: &str) -> Result<Response, ApiError> {
     let stroke = &sampled.stored.stroke;
     let profile = &sampled.stored.profile;
     if format == "csv" {

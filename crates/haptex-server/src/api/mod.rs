@@ -33,26 +33,42 @@ pub(crate) struct TemplateCall {
     pub request: TemplateQuery,
 }
 
+/// A template request whose query, content type and body size are
+/// checked; [`TemplateBody::parse`] (CPU work) checks the body.
+pub(crate) struct TemplateBody {
+    format: &'static str,
+    set: Arc<TemplateSet>,
+    pub bytes: Bytes,
+}
+
 impl TemplateCall {
-    pub fn new(
+    pub fn start(
         state: &AppState,
         headers: &HeaderMap,
         raw_query: Option<&str>,
         body: Result<Bytes, BytesRejection>,
-    ) -> Result<Self, ApiError> {
+    ) -> Result<TemplateBody, ApiError> {
         let mut query = Query::parse(raw_query)?;
         let format = query.take_format(&["json", "csv"])?;
         query.finish()?;
         body_kind(headers, &[BodyKind::Json])?;
         let set = Arc::clone(state.templates()?);
-        let request = TemplateQuery::parse(&body_bytes(body, state.limits().max_body_bytes)?, &set)?;
-        Ok(Self { format, set, request })
+        let bytes = body_bytes(body, state.limits().max_body_bytes)?;
+        Ok(TemplateBody { format, set, bytes })
     }
 
     /// The requested template's model (present: the request was checked
     /// against the set).
     pub fn model(&self) -> Result<&TemplateModel, ApiError> {
         self.set.model(self.request.template).ok_or_else(|| ApiError::internal("a template without its model"))
+    }
+}
+
+impl TemplateBody {
+    /// Parses and checks the body.
+    pub fn parse(self) -> Result<TemplateCall, ApiError> {
+        let request = TemplateQuery::parse(&self.bytes, &self.set)?;
+        Ok(TemplateCall { format: self.format, set: self.set, request })
     }
 }
 

@@ -2,12 +2,17 @@
 //! (hand-written, `src/openapi.json`; a test checks it lists exactly the
 //! routes of [`crate::routes::table`]).
 
+use axum::extract::RawQuery;
 use axum::http::{HeaderValue, header};
 use axum::response::IntoResponse;
+
+use crate::error::ApiError;
+use crate::input::Query;
 
 /// The OpenAPI document.
 pub const OPENAPI_JSON: &str = include_str!("../openapi.json");
 
-pub async fn get() -> impl IntoResponse {
-    ([(header::CONTENT_TYPE, HeaderValue::from_static("application/json"))], OPENAPI_JSON)
+pub async fn get(RawQuery(raw_query): RawQuery) -> Result<impl IntoResponse, ApiError> {
+    Query::parse(raw_query.as_deref())?.finish()?;
+    Ok(([(header::CONTENT_TYPE, HeaderValue::from_static("application/json"))], OPENAPI_JSON))
 }

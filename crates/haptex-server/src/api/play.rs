@@ -15,18 +15,22 @@ use axum::extract::rejection::BytesRejection;
 use axum::extract::{RawQuery, State};
 use axum::http::{HeaderMap, HeaderName, HeaderValue, header};
 use axum::response::{IntoResponse, Response};
+use haptex_core::num::Num;
+use haptex_core::profile::ProfileError;
 use haptex_core::signal::{
-    Carrier, DriveSignal, Extend, Limits, RenderSettings, SignalError, VoltageCurve, WavFormat, WavOptions, encode_wav,
-    render,
+    Carrier, CarrierShape, DriveSignal, Extend, Limits, RenderSettings, SignalError, VoltageCurve, WavFormat,
+    WavOptions, encode_wav, render,
 };
 use haptex_core::trajectory::Trajectory;
 use serde::Deserialize;
 use serde_json::json;
 
 use crate::error::ApiError;
+use crate::fields;
 use crate::input::{BodyKind, Query, TrajectoryJson, body_bytes, body_kind, check_points, parse_json};
 use crate::params::{check_range, spec};
 use crate::state::AppState;
+use crate::work;
 
 /// Finger speed of a generated stroke when the GUI has no other, mm/s.
 pub const DEFAULT_VELOCITY_MM_S: f64 = 50.0;
@@ -34,8 +38,6 @@ pub const DEFAULT_VELOCITY_MM_S: f64 = 50.0;
 const STROKE_RATE_HZ: f64 = 1000.0;
 /// Sample rates accepted, Hz.
 const SAMPLE_RATES_HZ: std::ops::RangeInclusive<u32> = 1000..=192_000;
-/// Fastest generated finger speed accepted, mm/s.
-const MAX_VELOCITY_MM_S: f64 = 10_000.0;
 /// Most back-and-forth strokes of a generated trajectory.
 const MAX_STROKES: u32 = 1000;
 
@@ -106,77 +108,112 @@ pub async fn post(
     let limits = state.limits().clone();
     Query::parse(raw_query.as_deref())?.finish()?;
     body_kind(&headers, &[BodyKind::Json])?;
-    let body: PlayBody = parse_json(&body_bytes(body, limits.max_body_bytes)?)?;
+    let bytes = body_bytes(body, limits.max_body_bytes)?;
+    let job = work::cpu(&state, bytes.len(), move || Job::parse(&bytes, &limits)).await?;
+    let permit = work::slot(state.renders()).await?;
+    work::blocking(Some(permit), move || job.run()).await
+}
 
-    check_points(body.voltage.x_mm.len(), limits.max_points, "voltage.x_mm")?;
-    let curve = VoltageCurve::new(body.voltage.x_mm, body.voltage.voltage_v).map_err(|e| match e {
-        haptex_core::profile::ProfileError::Invalid { index, field, message } => {
-            ApiError::bad_request(message, Some(&format!("voltage.{field}[{index}]")))
-        }
-        other => ApiError::bad_request(other.to_string(), Some("voltage")),
-    })?;
-    let format = body.format.unwrap_or(PlayFormat::Wav);
-    let sample_rate_hz = body.sample_rate_hz.unwrap_or(RenderSettings::DEFAULT.sample_rate_hz);
-    if !SAMPLE_RATES_HZ.contains(&sample_rate_hz) {
-        return Err(ApiError::bad_request(
-            format!(
-                "sample rate must be {} to {} Hz, got {sample_rate_hz}",
-                SAMPLE_RATES_HZ.start(),
-                SAMPLE_RATES_HZ.end()
-            ),
-            Some("sample_rate_hz"),
-        ));
-    }
-    let u_max_spec = spec("u_max_v").expect("u_max_v is a device parameter");
-    let u_max_v = match body.u_max_v {
-        Some(u) => check_range(u_max_spec, u, "u_max_v")?,
-        None => Limits::DEFAULT.u_max_v,
-    };
-    for (name, value) in [("slew_v_per_s", body.slew_v_per_s), ("amplifier_range_v", body.amplifier_range_v)] {
-        if let Some(v) = value
-            && !(v.is_finite() && v > 0.0)
-        {
-            return Err(ApiError::bad_request(format!("{name} must be a positive finite number, got {v}"), Some(name)));
-        }
-    }
-    let settings = RenderSettings {
-        sample_rate_hz,
-        carrier: body.carrier.unwrap_or(Carrier::DEFAULT),
-        limits: Limits { u_max_v, slew_v_per_s: body.slew_v_per_s, amplifier_range_v: body.amplifier_range_v },
-        extend: body.outside.unwrap_or_default(),
-    };
-    settings.check().map_err(|e| ApiError::bad_request(e.to_string(), Some("carrier")))?;
-    let max_samples = match format {
-        PlayFormat::Wav => limits.max_wav_samples,
-        PlayFormat::Json => limits.max_json_samples,
-    };
-    let (field, trajectory) = trajectory(body.trajectory, body.stroke, &curve, sample_rate_hz, max_samples, &limits)?;
-    let samples = trajectory.duration_s() * f64::from(sample_rate_hz) + 1.0;
-    if samples > max_samples as f64 {
-        return Err(ApiError::too_large(
-            format!(
-                "{:.3} s at {sample_rate_hz} Hz is {samples:.0} samples, more than the {max_samples} a {} answer may have",
-                trajectory.duration_s(),
-                if format == PlayFormat::Wav { "WAV" } else { "JSON" }
-            ),
-            Some(field),
-        ));
-    }
-    let wav = WavOptions {
-        format: body.wav_format.unwrap_or(WavFormat::Pcm16),
-        volts_per_full_scale: body.volts_per_full_scale.unwrap_or(std::f64::consts::SQRT_2 * u_max_v),
-    };
+/// A checked request: everything the render needs.
+struct Job {
+    curve: VoltageCurve,
+    trajectory: Trajectory,
+    settings: RenderSettings,
+    format: PlayFormat,
+    wav: WavOptions,
+}
 
-    let _permit = state.renders().acquire().await.map_err(|_| ApiError::unavailable("the server is shutting down"))?;
-    tokio::task::spawn_blocking(move || {
-        let signal = render(&curve, &trajectory, &settings).map_err(signal_error)?;
-        match format {
-            PlayFormat::Wav => wav_response(&signal, &wav),
+impl Job {
+    /// Parses and checks the body: every field in its range, the whole
+    /// render within the sample limit of its format.
+    fn parse(bytes: &[u8], limits: &crate::Limits) -> Result<Self, ApiError> {
+        let body: PlayBody = parse_json(bytes)?;
+        check_points(body.voltage.x_mm.len(), limits.max_points, "voltage.x_mm")?;
+        fields::POSITION_MM.check_all(&body.voltage.x_mm, "voltage.x_mm")?;
+        fields::VOLTAGE_V.check_all(&body.voltage.voltage_v, "voltage.voltage_v")?;
+        let curve = VoltageCurve::new(body.voltage.x_mm, body.voltage.voltage_v).map_err(|e| match e {
+            ProfileError::Invalid { index, field, message } => {
+                ApiError::bad_request(message, Some(&format!("voltage.{field}[{index}]")))
+            }
+            other => ApiError::bad_request(other.to_string(), Some("voltage")),
+        })?;
+        let format = body.format.unwrap_or(PlayFormat::Wav);
+        let sample_rate_hz = body.sample_rate_hz.unwrap_or(RenderSettings::DEFAULT.sample_rate_hz);
+        if !SAMPLE_RATES_HZ.contains(&sample_rate_hz) {
+            return Err(ApiError::bad_request(
+                format!(
+                    "sample_rate_hz must be from {} to {} Hz, got {sample_rate_hz}",
+                    SAMPLE_RATES_HZ.start(),
+                    SAMPLE_RATES_HZ.end()
+                ),
+                Some("sample_rate_hz"),
+            ));
+        }
+        let carrier = body.carrier.unwrap_or(Carrier::DEFAULT);
+        if carrier.shape != CarrierShape::None {
+            let f = fields::CARRIER_HZ.check(carrier.frequency_hz, "carrier.frequency_hz")?;
+            let nyquist = f64::from(sample_rate_hz) / 2.0;
+            if f >= nyquist {
+                return Err(ApiError::bad_request(
+                    format!(
+                        "frequency_hz must be below the Nyquist frequency of the sample rate ({} Hz), got {}",
+                        Num(nyquist),
+                        Num(f)
+                    ),
+                    Some("carrier.frequency_hz"),
+                ));
+            }
+        }
+        let u_max_v = match body.u_max_v {
+            Some(u) => check_range(spec("u_max_v").expect("u_max_v is a device parameter"), u, "u_max_v")?,
+            None => Limits::DEFAULT.u_max_v,
+        };
+        let slew_v_per_s = body.slew_v_per_s.map(|v| fields::SLEW_V_PER_S.check(v, "slew_v_per_s")).transpose()?;
+        let amplifier_range_v =
+            body.amplifier_range_v.map(|v| fields::AMPLIFIER_RANGE_V.check(v, "amplifier_range_v")).transpose()?;
+        // Checked whatever the format, so that a request is valid or not
+        // independently of the answer it asks for.
+        let volts_per_full_scale = match body.volts_per_full_scale {
+            Some(v) => fields::VOLTS_PER_FULL_SCALE.check(v, "volts_per_full_scale")?,
+            None => std::f64::consts::SQRT_2 * u_max_v,
+        };
+        let settings = RenderSettings {
+            sample_rate_hz,
+            carrier,
+            limits: Limits { u_max_v, slew_v_per_s, amplifier_range_v },
+            extend: body.outside.unwrap_or_default(),
+        };
+        settings.check().map_err(|e| ApiError::bad_request(e.to_string(), Some("carrier")))?;
+        let max_samples = match format {
+            PlayFormat::Wav => limits.max_wav_samples,
+            PlayFormat::Json => limits.max_json_samples,
+        };
+        let (field, trajectory) =
+            trajectory(body.trajectory, body.stroke, &curve, sample_rate_hz, max_samples, limits)?;
+        let samples = trajectory.duration_s() * f64::from(sample_rate_hz) + 1.0;
+        if samples > max_samples as f64 {
+            return Err(ApiError::too_large(
+                format!(
+                    "{} s at {sample_rate_hz} Hz is {} samples, more than the {max_samples} a {} answer may have",
+                    Num(trajectory.duration_s()),
+                    Num(samples.round()),
+                    if format == PlayFormat::Wav { "WAV" } else { "JSON" }
+                ),
+                Some(field),
+            ));
+        }
+        let wav = WavOptions { format: body.wav_format.unwrap_or(WavFormat::Pcm16), volts_per_full_scale };
+        Ok(Self { curve, trajectory, settings, format, wav })
+    }
+
+    /// Renders the drive and builds the answer.
+    fn run(self) -> Result<Response, ApiError> {
+        let signal = render(&self.curve, &self.trajectory, &self.settings).map_err(signal_error)?;
+        match self.format {
+            PlayFormat::Wav => wav_response(&signal, &self.wav),
             PlayFormat::Json => Ok(Json(json_answer(&signal)).into_response()),
         }
-    })
-    .await
-    .map_err(|e| ApiError::internal(format!("render task failed: {e}")))?
+    }
 }
 
 /// The trajectory to render, and the request field it came from.
@@ -191,43 +228,30 @@ fn trajectory(
     match (given, stroke) {
         (Some(t), None) => Ok(("trajectory", t.into_trajectory("trajectory.", limits.max_points)?)),
         (None, Some(s)) => {
-            let field = |name: &str| format!("stroke.{name}");
-            if !(s.velocity_mm_s.is_finite() && s.velocity_mm_s > 0.0 && s.velocity_mm_s <= MAX_VELOCITY_MM_S) {
-                return Err(ApiError::bad_request(
-                    format!("velocity must be > 0 and <= {MAX_VELOCITY_MM_S} mm/s, got {}", s.velocity_mm_s),
-                    Some(&field("velocity_mm_s")),
-                ));
-            }
+            let velocity = fields::VELOCITY_MM_S.check(s.velocity_mm_s, "stroke.velocity_mm_s")?;
             let strokes = s.strokes.unwrap_or(1);
             if !(1..=MAX_STROKES).contains(&strokes) {
                 return Err(ApiError::bad_request(
-                    format!("strokes must be 1 to {MAX_STROKES}, got {strokes}"),
-                    Some(&field("strokes")),
+                    format!("strokes must be from 1 to {MAX_STROKES}, got {strokes}"),
+                    Some("stroke.strokes"),
                 ));
             }
             let (x0, x1) = curve.span_mm();
-            let (from, to) = (s.from_mm.unwrap_or(x0), s.to_mm.unwrap_or(x1));
-            for (name, v) in [("from_mm", from), ("to_mm", to)] {
-                if !(v.is_finite() && v.abs() <= 1e6) {
-                    return Err(ApiError::bad_request(
-                        format!("{v} mm is not a position in [-1e6, 1e6] mm"),
-                        Some(&field(name)),
-                    ));
-                }
-            }
+            let from = fields::POSITION_MM.check(s.from_mm.unwrap_or(x0), "stroke.from_mm")?;
+            let to = fields::POSITION_MM.check(s.to_mm.unwrap_or(x1), "stroke.to_mm")?;
             // Refuse before generating: the render is at least this long.
-            let duration_s = (to - from).abs() / s.velocity_mm_s * f64::from(strokes);
+            let duration_s = (to - from).abs() / velocity * f64::from(strokes);
             let samples = duration_s * f64::from(sample_rate_hz.max(STROKE_RATE_HZ as u32)) + 1.0;
             if samples > max_samples as f64 {
                 return Err(ApiError::too_large(
-                    format!("a {duration_s:.3} s stroke at {sample_rate_hz} Hz is more than {max_samples} samples"),
+                    format!("a {} s stroke at {sample_rate_hz} Hz is more than {max_samples} samples", Num(duration_s)),
                     Some("stroke"),
                 ));
             }
             let generated = if strokes == 1 {
-                Trajectory::constant_velocity(from, to, s.velocity_mm_s, STROKE_RATE_HZ)
+                Trajectory::constant_velocity(from, to, velocity, STROKE_RATE_HZ)
             } else {
-                Trajectory::strokes(from, to, s.velocity_mm_s, strokes as usize, STROKE_RATE_HZ)
+                Trajectory::strokes(from, to, velocity, strokes as usize, STROKE_RATE_HZ)
             };
             Ok(("stroke", generated.map_err(|e| ApiError::bad_request(e.to_string(), Some("stroke")))?))
         }

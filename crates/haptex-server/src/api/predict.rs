@@ -28,6 +28,7 @@ use serde_json::json;
 use crate::error::ApiError;
 use crate::state::AppState;
 use crate::templates::{TemplateQuery, TemplateSet};
+use crate::work;
 
 pub async fn post(
     State(state): State<AppState>,
@@ -35,47 +36,51 @@ pub async fn post(
     RawQuery(raw_query): RawQuery,
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Response, ApiError> {
-    let call = super::TemplateCall::new(&state, &headers, raw_query.as_deref(), body)?;
-    let (format, set, request) = (call.format, &call.set, call.request);
-    let TemplateQuery { template, x0_mm: x0, query } = request;
-    let model = call.model()?;
-    let entry = set.metadata().entry(template).ok_or_else(|| ApiError::internal("a template without its entry"))?;
-    let ranges = TemplateSet::ranges(model);
+    let body = super::TemplateCall::start(&state, &headers, raw_query.as_deref(), body)?;
+    work::cpu(&state, body.bytes.len(), move || {
+        let call = body.parse()?;
+        let (format, set, request) = (call.format, &call.set, call.request);
+        let TemplateQuery { template, x0_mm: x0, query } = request;
+        let model = call.model()?;
+        let entry = set.metadata().entry(template).ok_or_else(|| ApiError::internal("a template without its entry"))?;
+        let ranges = TemplateSet::ranges(model);
 
-    let prediction =
-        model.predict(x0, query[0], query[1], query[2]).map_err(|e| ApiError::bad_request(e.to_string(), None))?;
-    let source = model.describe(&query, &prediction, entry);
-    let warning = model.warning(&query, prediction.fe_row, &prediction.diagnostics);
-    let Prediction { x_mm, mu, fe_row, diagnostics } = prediction;
-    let profile = FrictionProfile::new(x_mm, mu)
-        .map_err(|e| ApiError::internal(format!("the predicted profile is invalid: {e}")))?;
+        let prediction =
+            model.predict(x0, query[0], query[1], query[2]).map_err(|e| ApiError::bad_request(e.to_string(), None))?;
+        let source = model.describe(&query, &prediction, entry);
+        let warning = model.warning(&query, prediction.fe_row, &prediction.diagnostics);
+        let Prediction { x_mm, mu, fe_row, diagnostics } = prediction;
+        let profile = FrictionProfile::new(x_mm, mu)
+            .map_err(|e| ApiError::internal(format!("the predicted profile is invalid: {e}")))?;
 
-    if format == "csv" {
-        let mut comments = vec![format!("haptex predict: {}", template.describe_query(x0, &query)), source];
-        comments.extend(warning.map(|w| format!("warning: {w}")));
-        let bytes = super::to_csv(|w| profile.write_csv_commented(w, &comments))?;
-        return Ok(super::csv_response(
-            bytes,
-            &format!("{}-w{}-h{}-v{}.csv", template.name(), query[0], query[1], query[2]),
-        ));
-    }
+        if format == "csv" {
+            let mut comments = vec![format!("haptex predict: {}", template.describe_query(x0, &query)), source];
+            comments.extend(warning.map(|w| format!("warning: {w}")));
+            let bytes = super::to_csv(|w| profile.write_csv_commented(w, &comments))?;
+            return Ok(super::csv_response(
+                bytes,
+                &format!("{}-w{}-h{}-v{}.csv", template.name(), query[0], query[1], query[2]),
+            ));
+        }
 
-    let outside: Vec<&str> =
-        ranges.iter().zip(query).filter(|(r, v)| !r.in_database(*v)).map(|(r, _)| r.name).collect();
-    let h_mm = request.heights(profile.x_mm());
-    let mut answer = super::profile::profile_json(&profile);
-    answer["surface"] = json!(template.name());
-    answer["formula"] = json!(super::templates::formula(template));
-    answer["parameters"] = request.parameters_json();
-    answer["fe_exact"] = json!(fe_row.is_some());
-    answer["fe_row"] = json!(fe_row.map(|r| r + 1));
-    answer["source"] = json!(source);
-    answer["extrapolation"] = json!(warning.is_some());
-    answer["outside_database"] = json!(outside);
-    answer["warnings"] = json!(warning.into_iter().collect::<Vec<_>>());
-    answer["diagnostics"] = json!(diagnostics);
-    answer["loo_rmse"] = json!(entry.loo_rmse);
-    answer["loo_rmse_relative_to_range"] = json!(entry.loo_rmse_relative_to_range);
-    answer["h_mm"] = json!(h_mm);
-    Ok(Json(answer).into_response())
+        let outside: Vec<&str> =
+            ranges.iter().zip(query).filter(|(r, v)| !r.in_database(*v)).map(|(r, _)| r.name).collect();
+        let h_mm = request.heights(profile.x_mm());
+        let mut answer = super::profile::profile_json(&profile);
+        answer["surface"] = json!(template.name());
+        answer["formula"] = json!(super::templates::formula(template));
+        answer["parameters"] = request.parameters_json();
+        answer["fe_exact"] = json!(fe_row.is_some());
+        answer["fe_row"] = json!(fe_row.map(|r| r + 1));
+        answer["source"] = json!(source);
+        answer["extrapolation"] = json!(warning.is_some());
+        answer["outside_database"] = json!(outside);
+        answer["warnings"] = json!(warning.into_iter().collect::<Vec<_>>());
+        answer["diagnostics"] = json!(diagnostics);
+        answer["loo_rmse"] = json!(entry.loo_rmse);
+        answer["loo_rmse_relative_to_range"] = json!(entry.loo_rmse_relative_to_range);
+        answer["h_mm"] = json!(h_mm);
+        Ok(Json(answer).into_response())
+    })
+    .await
 }

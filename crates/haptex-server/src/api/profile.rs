@@ -16,6 +16,7 @@ use serde_json::json;
 use crate::error::ApiError;
 use crate::input::{BodyKind, ProfileJson, Query, body_bytes, body_kind, parse_json, profile_from_csv};
 use crate::state::AppState;
+use crate::work;
 
 pub async fn post(
     State(state): State<AppState>,
@@ -23,23 +24,26 @@ pub async fn post(
     RawQuery(raw_query): RawQuery,
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Response, ApiError> {
-    let limits = state.limits();
+    let limits = state.limits().clone();
     let mut query = Query::parse(raw_query.as_deref())?;
     let format = query.take_format(&["json", "csv"])?;
     query.finish()?;
     let kind = body_kind(&headers, &[BodyKind::Json, BodyKind::Csv])?;
     let bytes = body_bytes(body, limits.max_body_bytes)?;
-    let profile = match kind {
-        BodyKind::Json => parse_json::<ProfileJson>(&bytes)?.into_profile("", limits.max_points)?,
-        BodyKind::Csv => profile_from_csv(&bytes, limits.max_points)?,
-    };
-    Ok(match format {
-        "csv" => {
-            let comments = vec![format!("haptex friction profile, {} points", profile.len())];
-            super::csv_response(super::to_csv(|w| profile.write_csv_commented(w, &comments))?, "profile.csv")
-        }
-        _ => Json(profile_json(&profile)).into_response(),
+    work::cpu(&state, bytes.len(), move || {
+        let profile = match kind {
+            BodyKind::Json => parse_json::<ProfileJson>(&bytes)?.into_profile("", limits.max_points)?,
+            BodyKind::Csv => profile_from_csv(&bytes, limits.max_points)?,
+        };
+        Ok(match format {
+            "csv" => {
+                let comments = vec![format!("haptex friction profile, {} points", profile.len())];
+                super::csv_response(super::to_csv(|w| profile.write_csv_commented(w, &comments))?, "profile.csv")
+            }
+            _ => Json(profile_json(&profile)).into_response(),
+        })
     })
+    .await
 }
 
 /// A profile and its summary as JSON (`fn_n` and `mean_fn_n` are null

@@ -24,13 +24,15 @@ use axum::extract::rejection::BytesRejection;
 use axum::extract::{RawQuery, State};
 use axum::http::{HeaderMap, StatusCode};
 use axum::response::{IntoResponse, Response};
+use haptex_core::num::Num;
 use haptex_core::profile::FrictionProfile;
-use haptex_fem::sweep::Run;
+use haptex_fem::sweep::{DatabaseSpec, Run};
 use serde_json::json;
 
 use crate::error::ApiError;
 use crate::state::AppState;
 use crate::templates::{TemplateQuery, TemplateSet};
+use crate::work;
 
 pub async fn post(
     State(state): State<AppState>,
@@ -38,24 +40,31 @@ pub async fn post(
     RawQuery(raw_query): RawQuery,
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Response, ApiError> {
-    let call = super::TemplateCall::new(&state, &headers, raw_query.as_deref(), body)?;
-    let (format, set, request) = (call.format, &call.set, call.request);
-    let TemplateQuery { template, x0_mm, query } = request;
-    let model = call.model()?;
-    for (range, value) in TemplateSet::ranges(model).iter().zip(query) {
-        if !range.simulates(value) {
-            return Err(ApiError::bad_request(
-                format!(
-                    "{} = {value} {}: the FE model runs on demand for {} .. {} {} (from the database's smallest \
-                     value, which the mesh resolves, to the slider's end); use POST /api/predict beyond",
-                    range.name, range.unit, range.simulate[0], range.simulate[1], range.unit
-                ),
-                Some(range.name),
-            ));
+    let body = super::TemplateCall::start(&state, &headers, raw_query.as_deref(), body)?;
+    let call = work::cpu(&state, body.bytes.len(), move || {
+        let call = body.parse()?;
+        for (range, value) in TemplateSet::ranges(call.model()?).iter().zip(call.request.query) {
+            if !range.simulates(value) {
+                return Err(ApiError::bad_request(
+                    format!(
+                        "{} = {} {}: the FE model runs on demand for {} .. {} {} (from the database's smallest \
+                         value, which the mesh resolves, to the slider's end); use POST /api/predict beyond",
+                        range.name,
+                        Num(value),
+                        range.unit,
+                        Num(range.simulate[0]),
+                        Num(range.simulate[1]),
+                        range.unit
+                    ),
+                    Some(range.name),
+                ));
+            }
         }
-    }
+        Ok(call)
+    })
+    .await?;
     let spec = std::sync::Arc::clone(
-        set.fe().map_err(|why| ApiError::not_found(format!("FE simulation is not available: {why}"), None))?,
+        call.set.fe().map_err(|why| ApiError::not_found(format!("FE simulation is not available: {why}"), None))?,
     );
 
     let limits = state.limits();
@@ -69,15 +78,20 @@ pub async fn post(
                 ))
             })?
             .map_err(|_| ApiError::unavailable("the server is shutting down"))?;
+    work::blocking(Some(permit), move || answer(call, &spec)).await
+}
+
+/// Runs the FE model for `call` and builds the answer (on a blocking
+/// thread, in a simulation slot).
+fn answer(call: super::TemplateCall, spec: &DatabaseSpec) -> Result<Response, ApiError> {
+    let (format, set, request) = (call.format, &call.set, call.request);
+    let TemplateQuery { template, x0_mm, query } = request;
+    let model = call.model()?;
     let run = Run { template, width_mm: query[0], height_mm: query[1], velocity_mm_s: query[2] };
     let started = Instant::now();
-    let fe = tokio::task::spawn_blocking(move || {
-        let _permit = permit;
-        spec.simulate(&run)
-    })
-    .await
-    .map_err(|e| ApiError::internal(format!("FE task failed: {e}")))?
-    .map_err(|e| ApiError::new(StatusCode::UNPROCESSABLE_ENTITY, format!("the FE simulation failed: {e}"), None))?;
+    let fe = spec
+        .simulate(&run)
+        .map_err(|e| ApiError::new(StatusCode::UNPROCESSABLE_ENTITY, format!("the FE simulation failed: {e}"), None))?;
     let seconds = started.elapsed().as_secs_f64();
 
     let x_mm: Vec<f64> = model.positions().iter().map(|xi| x0_mm + xi).collect();

@@ -21,14 +21,18 @@ use axum::extract::rejection::BytesRejection;
 use axum::extract::{RawQuery, State};
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
-use haptex_core::electrovibration::{Method, VoltageProfile, map_profile};
+use haptex_core::electrovibration::{ElectroError, Method, VoltageProfile, map_profile};
+use haptex_core::num::Num;
 use haptex_core::profile::FrictionProfile;
 use serde::{Deserialize, Serialize};
 
 use crate::error::ApiError;
-use crate::input::{BodyKind, ProfileJson, Query, body_bytes, body_kind, parse_json, parse_number, profile_from_csv};
+use crate::input::{
+    BodyKind, Pairs, ProfileJson, Query, body_bytes, body_kind, parse_json, parse_number, profile_from_csv,
+};
 use crate::params::{DEVICE_PARAMS, DeviceRequest, parse_method};
 use crate::state::AppState;
+use crate::work;
 
 /// The JSON body.
 #[derive(Debug, Deserialize)]
@@ -37,9 +41,10 @@ struct VoltageBody {
     profile: ProfileJson,
     #[serde(default)]
     method: Option<Method>,
-    /// Device and finger parameters by name (`params::DEVICE_PARAMS`).
+    /// Device and finger parameters by name (`params::DEVICE_PARAMS`), in
+    /// the order given (a name given twice is refused, not overwritten).
     #[serde(default)]
-    device: BTreeMap<String, f64>,
+    device: Pairs,
 }
 
 /// The JSON answer: the parameters used (defaults filled in), the summary
@@ -57,63 +62,86 @@ pub async fn post(
     RawQuery(raw_query): RawQuery,
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Response, ApiError> {
-    let limits = state.limits();
+    let limits = state.limits().clone();
     let mut query = Query::parse(raw_query.as_deref())?;
     let format = query.take_format(&["json", "csv"])?;
     let kind = body_kind(&headers, &[BodyKind::Json, BodyKind::Csv])?;
     let bytes = body_bytes(body, limits.max_body_bytes)?;
-    let (profile, method, request) = match kind {
-        BodyKind::Json => {
-            query.finish()?;
-            let body: VoltageBody = parse_json(&bytes)?;
-            let request = DeviceRequest::from_pairs(body.device.iter().map(|(k, v)| (k.as_str(), *v)), "device.")?;
-            let profile = body.profile.into_profile("profile.", limits.max_points)?;
-            (profile, body.method.unwrap_or(Method::Physical), request)
-        }
-        BodyKind::Csv => {
-            let method = query.take("method").map(|m| parse_method(&m, "method")).transpose()?;
-            let mut pairs = Vec::new();
-            for (name, text) in query.take_all() {
-                if !DEVICE_PARAMS.iter().any(|p| p.name == name) {
-                    return Err(ApiError::bad_request(
-                        "unknown query parameter (with a CSV body the query takes format, method and the device \
-                         parameters)",
-                        Some(&name),
-                    ));
-                }
-                let value = parse_number(&text, &name)?;
-                pairs.push((name, value));
+    work::cpu(&state, bytes.len(), move || {
+        let (profile, method, request, prefix) = match kind {
+            BodyKind::Json => {
+                query.finish()?;
+                let body: VoltageBody = parse_json(&bytes)?;
+                let request = DeviceRequest::from_pairs(body.device.iter(), "device.")?;
+                let profile = body.profile.into_profile("profile.", limits.max_points)?;
+                (profile, body.method.unwrap_or(Method::Physical), request, "device.")
             }
-            let request = DeviceRequest::from_pairs(pairs.iter().map(|(k, v)| (k.as_str(), *v)), "")?;
-            let profile = profile_from_csv(&bytes, limits.max_points)?;
-            (profile, method.unwrap_or(Method::Physical), request)
-        }
-    };
-    let voltage = compute(&profile, method, &request)?;
-    Ok(match format {
-        "csv" => super::csv_response(super::to_csv(|w| voltage.write_csv(w))?, "voltage.csv"),
-        _ => Json(VoltageAnswer { parameters: request.values(), voltage: &voltage }).into_response(),
+            BodyKind::Csv => {
+                let method = query.take("method").map(|m| parse_method(&m, "method")).transpose()?;
+                let mut pairs = Vec::new();
+                for (name, text) in query.take_all() {
+                    if !DEVICE_PARAMS.iter().any(|p| p.name == name) {
+                        return Err(ApiError::bad_request(
+                            "unknown query parameter (with a CSV body the query takes format, method and the \
+                             device parameters)",
+                            Some(&name),
+                        ));
+                    }
+                    let value = parse_number(&text, &name)?;
+                    pairs.push((name, value));
+                }
+                let request = DeviceRequest::from_pairs(pairs.iter().map(|(k, v)| (k.as_str(), *v)), "")?;
+                let profile = profile_from_csv(&bytes, limits.max_points)?;
+                (profile, method.unwrap_or(Method::Physical), request, "")
+            }
+        };
+        let voltage = compute(&profile, method, &request, prefix)?;
+        Ok(match format {
+            "csv" => super::csv_response(super::to_csv(|w| voltage.write_csv(w))?, "voltage.csv"),
+            _ => Json(VoltageAnswer { parameters: request.values(), voltage: &voltage }).into_response(),
+        })
     })
+    .await
 }
 
-/// Maps the profile; a device whose constants make eq. (8) overflow (a
-/// non-finite result) is refused rather than answered with NaN or null.
+/// Maps the profile. The ranges of the device parameters and of the
+/// profile keep every result finite (`params`, `fields`); a non-finite
+/// number would be a bug, answered 500 rather than as NaN or null.
+/// `prefix` starts the field names of errors (`device.` for a JSON body).
 pub(crate) fn compute(
     profile: &FrictionProfile,
     method: Method,
     request: &DeviceRequest,
+    prefix: &str,
 ) -> Result<VoltageProfile, ApiError> {
-    let voltage = map_profile(profile, &request.device, method, request.fn_n)
-        .map_err(|e| ApiError::bad_request(e.to_string(), Some("device")))?;
+    let voltage = map_profile(profile, &request.device, method, request.fn_n).map_err(|e| match e {
+        ElectroError::NormalForceRequired { exponent } => ApiError::bad_request(
+            format!(
+                "the contact-area law A = k Fn^n with n = {} makes the voltage depend on the normal force: give \
+                 fn_n, or a profile with an fn_n column",
+                Num(exponent)
+            ),
+            Some(&format!("{prefix}fn_n")),
+        ),
+        // Unreachable with the ranges of `params` and `fields`; named all
+        // the same: a profile sample, or the device as a whole.
+        ElectroError::NonFiniteVoltage { index, .. } => {
+            let field = if prefix.is_empty() { "mu".to_string() } else { format!("profile.mu[{index}]") };
+            ApiError::bad_request(e.to_string(), Some(&field))
+        }
+        other => ApiError::bad_request(other.to_string(), Some(prefix.trim_end_matches('.')).filter(|p| !p.is_empty())),
+    })?;
     let s = &voltage.summary;
+    let regions = [&s.clipped, &s.not_renderable];
     let finite = voltage.voltage_v.iter().all(|u| u.is_finite())
-        && [s.fe_over_fn_per_v2, s.mu_at_u_max].iter().flatten().all(|v| v.is_finite() && *v > 0.0);
+        && [s.fe_over_fn_per_v2, s.mu_at_u_max].iter().flatten().all(|v| v.is_finite() && *v > 0.0)
+        && regions.iter().all(|r| {
+            r.length_mm.is_finite()
+                && r.fraction_of_length.is_finite()
+                && r.ranges_mm.iter().flatten().all(|x| x.is_finite())
+        });
     if !finite {
-        return Err(ApiError::bad_request(
-            "these device constants put Fe/Fn per V^2 (eq. 3) outside the floating-point range: check the \
-             thicknesses, permittivities and k",
-            Some("device"),
-        ));
+        return Err(ApiError::internal("the voltage mapping gave a non-finite number for accepted input (a bug)"));
     }
     Ok(voltage)
 }

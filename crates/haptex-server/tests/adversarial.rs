@@ -1,0 +1,609 @@
+//! The adversarial table (issue 13): every route of `routes::table()`
+//! under oversized, malformed, non-finite and hostile input, over real
+//! TCP connections to `haptex_server::serve` (so that hyper's own parsing
+//! is part of it). Each case must get its 4xx with the security headers
+//! and a JSON error naming the field at fault (never a 5xx, never a bare
+//! answer), while `/api/health`, asked every 10 ms by another client,
+//! answers within 50 ms throughout.
+//!
+//! The table is built from one valid request per route: generic cases
+//! (method, query, host, head sizes, content type, body shape and size)
+//! derived from it for every route, and each route's own fields (every
+//! number at 1e308, -1e308, 5e-324, 1e999 where that is out of range,
+//! wrong types, hostile strings and names). A route of the table without
+//! a valid request here fails the test: a new route must come with its
+//! cases.
+
+mod common;
+
+use std::collections::BTreeSet;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use haptex_server::params::DEVICE_PARAMS;
+use haptex_server::routes;
+use serde_json::{Value, json};
+
+use common::{RawServer, check_json_error, shipped_state};
+
+/// One request of the table and the answer it must get.
+#[derive(Debug, Clone)]
+struct Case {
+    /// The route (method and path as in `routes::table()`).
+    route: (&'static str, &'static str),
+    what: String,
+    method: String,
+    target: String,
+    headers: Vec<(String, String)>,
+    body: Vec<u8>,
+    status: u16,
+    field: Option<String>,
+}
+
+impl Case {
+    /// The request as bytes: `Host: localhost` and `Content-Length` unless
+    /// the case sets its own.
+    fn bytes(&self) -> Vec<u8> {
+        let mut head = format!("{} {} HTTP/1.1\r\n", self.method, self.target);
+        let has = |name: &str| self.headers.iter().any(|(n, _)| n.eq_ignore_ascii_case(name));
+        if !has("host") && !has("x-no-host") {
+            head.push_str("Host: localhost\r\n");
+        }
+        if !has("content-length") && !has("transfer-encoding") {
+            head.push_str(&format!("Content-Length: {}\r\n", self.body.len()));
+        }
+        for (name, value) in self.headers.iter().filter(|(n, _)| n != "x-no-host") {
+            head.push_str(&format!("{name}: {value}\r\n"));
+        }
+        head.push_str("Connection: close\r\n\r\n");
+        let mut bytes = head.into_bytes();
+        bytes.extend_from_slice(&self.body);
+        bytes
+    }
+}
+
+/// A valid request of a route, from which its cases are derived.
+#[derive(Debug, Clone)]
+struct Valid {
+    route: (&'static str, &'static str),
+    target: &'static str,
+    content_type: Option<&'static str>,
+    body: Vec<u8>,
+}
+
+impl Valid {
+    /// A case: this request changed by `change`, expecting `status` and
+    /// `field`.
+    fn case(&self, what: impl Into<String>, status: u16, field: Option<&str>, change: impl FnOnce(&mut Case)) -> Case {
+        let mut case = Case {
+            route: self.route,
+            what: what.into(),
+            method: self.route.0.to_string(),
+            target: self.target.to_string(),
+            headers: self.content_type.map(|c| vec![("Content-Type".to_string(), c.to_string())]).unwrap_or_default(),
+            body: self.body.clone(),
+            status,
+            field: field.map(str::to_string),
+        };
+        change(&mut case);
+        case
+    }
+
+    /// A case with this JSON body.
+    fn json(&self, what: impl Into<String>, body: &Value, status: u16, field: &str) -> Case {
+        let body = body.to_string().into_bytes();
+        self.case(what, status, Some(field), |c| c.body = body)
+    }
+
+    /// A case with `target` (the query changed).
+    fn target(&self, what: impl Into<String>, target: String, status: u16, field: &str) -> Case {
+        self.case(what, status, Some(field), |c| c.target = target)
+    }
+}
+
+/// Sets the JSON value at `path` (`a.b`, `a.b[1]`).
+fn set(body: &Value, path: &str, value: Value) -> Value {
+    let mut body = body.clone();
+    let mut at = &mut body;
+    for part in path.split('.') {
+        match part.split_once('[') {
+            Some((name, index)) => {
+                let i: usize = index.trim_end_matches(']').parse().unwrap();
+                at = &mut at[name][i];
+            }
+            None => at = &mut at[part],
+        }
+    }
+    *at = value;
+    body
+}
+
+/// The body with `path` set to a raw JSON text (for numbers JSON cannot
+/// hold, such as 1e999): set to a marker, then replaced in the text.
+fn set_raw(body: &Value, path: &str, raw: &str) -> Vec<u8> {
+    set(body, path, json!("@@raw@@")).to_string().replace("\"@@raw@@\"", raw).into_bytes()
+}
+
+const EXTREMES: [(&str, f64); 3] = [("1e308", 1e308), ("-1e308", -1e308), ("5e-324", 5e-324)];
+
+/// Cases for a numeric JSON field accepted in [min, max]: each extreme
+/// outside it, 1e999 (not a JSON number serde can hold), a string, null
+/// where the field is required, an array, a huge exponent.
+fn number_cases(valid: &Valid, body: &Value, path: &str, min: f64, max: f64, cases: &mut Vec<Case>) {
+    for (text, value) in EXTREMES {
+        if !(min..=max).contains(&value) {
+            cases.push(valid.json(format!("{path} = {text}"), &set(body, path, json!(value)), 400, path));
+        }
+    }
+    for raw in ["1e999", "-1e999", "\"1.5\"", "[1]", "{}", "true"] {
+        let bytes = set_raw(body, path, raw);
+        cases.push(valid.case(format!("{path} = {raw}"), 400, Some(path), |c| c.body = bytes));
+    }
+}
+
+/// A string of `n` characters mixing control characters, quotes, path
+/// traversal and non-ASCII.
+fn hostile(n: usize) -> String {
+    "../\u{0}\u{1b}[31m\"\\\n\r\u{202e}é∞".chars().cycle().take(n).collect()
+}
+
+fn valid_requests() -> Vec<Valid> {
+    let json_ct = Some("application/json");
+    let profile = json!({ "x_mm": [0.0, 1.0, 2.0], "mu": [1.0, 1.2, 1.1] });
+    vec![
+        Valid { route: ("GET", "/"), target: "/", content_type: None, body: vec![] },
+        Valid { route: ("GET", "/static/{*path}"), target: "/static/app.js", content_type: None, body: vec![] },
+        Valid { route: ("GET", "/api/health"), target: "/api/health", content_type: None, body: vec![] },
+        Valid { route: ("GET", "/api/config"), target: "/api/config", content_type: None, body: vec![] },
+        Valid { route: ("GET", "/api/openapi.json"), target: "/api/openapi.json", content_type: None, body: vec![] },
+        Valid { route: ("GET", "/api/templates"), target: "/api/templates", content_type: None, body: vec![] },
+        Valid {
+            route: ("POST", "/api/predict"),
+            target: "/api/predict",
+            content_type: json_ct,
+            body: json!({ "surface": "bump", "x0_mm": 5, "width_mm": 1.3, "height_mm": 0.27, "velocity_mm_s": 20 })
+                .to_string()
+                .into_bytes(),
+        },
+        Valid {
+            route: ("POST", "/api/simulate"),
+            target: "/api/simulate",
+            content_type: json_ct,
+            body: json!({ "surface": "bump", "width_mm": 1.5, "height_mm": 0.3, "velocity_mm_s": 20 })
+                .to_string()
+                .into_bytes(),
+        },
+        Valid {
+            route: ("POST", "/api/voltage"),
+            target: "/api/voltage",
+            content_type: json_ct,
+            body: json!({ "profile": profile, "method": "physical", "device": { "u_max_v": 100 } })
+                .to_string()
+                .into_bytes(),
+        },
+        Valid {
+            route: ("POST", "/api/profile"),
+            target: "/api/profile",
+            content_type: json_ct,
+            body: profile.to_string().into_bytes(),
+        },
+        Valid { route: ("GET", "/api/materials"), target: "/api/materials", content_type: None, body: vec![] },
+        Valid {
+            route: ("GET", "/api/materials/{name}/sample"),
+            target: "/api/materials/velvet/sample?seed=7",
+            content_type: None,
+            body: vec![],
+        },
+        Valid {
+            route: ("POST", "/api/play"),
+            target: "/api/play",
+            content_type: json_ct,
+            body: json!({
+                "voltage": { "x_mm": [0.0, 10.0], "voltage_v": [50.0, 80.0] },
+                "stroke": { "velocity_mm_s": 50.0 },
+                "format": "json",
+            })
+            .to_string()
+            .into_bytes(),
+        },
+    ]
+}
+
+/// Cases every route gets.
+fn generic_cases(valid: &Valid) -> Vec<Case> {
+    let mut cases = Vec::new();
+    let (method, _) = valid.route;
+    let with_query = |q: &str| {
+        let sep = if valid.target.contains('?') { '&' } else { '?' };
+        format!("{}{sep}{q}", valid.target)
+    };
+    let other = if method == "GET" { "POST" } else { "GET" };
+    cases.push(valid.case(format!("{other} instead of {method}"), 405, Some("method"), |c| c.method = other.into()));
+    cases.push(valid.case("DELETE", 405, Some("method"), |c| c.method = "DELETE".into()));
+    cases.push(valid.target("unknown query parameter", with_query("zz_unknown=1"), 400, "zz_unknown"));
+    cases.push(valid.target("parameter given twice", with_query("format=json&format=json"), 400, "format"));
+    cases.push(valid.target("control characters as a name", with_query("%01%0A%1B=1"), 400, "\u{1}\n\u{1b}"));
+    cases.push(valid.target(
+        "a 200-character name",
+        with_query(&format!("{}=1", "q".repeat(200))),
+        400,
+        &"q".repeat(200),
+    ));
+    cases.push(valid.target("invalid UTF-8 in the query", with_query("a=%FF%FE"), 400, "a"));
+    cases.push(valid.target("a target over 8 KiB", with_query(&format!("a={}", "b".repeat(9000))), 414, "uri"));
+    cases.push(valid.case("another site's host (DNS rebinding)", 421, Some("host"), |c| {
+        c.headers.push(("Host".into(), "rebind.attacker.example".into()))
+    }));
+    cases.push(valid.case("a host with a bad port", 421, Some("host"), |c| {
+        c.headers.push(("Host".into(), "localhost:80x".into()))
+    }));
+    cases.push(valid.case("two Host headers", 400, Some("host"), |c| {
+        c.headers.push(("Host".into(), "localhost".into()));
+        c.headers.push(("Host".into(), "127.0.0.1".into()));
+    }));
+    cases.push(valid.case("no Host", 400, Some("host"), |c| c.headers.push(("x-no-host".into(), String::new()))));
+    cases.push(
+        valid.case("a 40 KiB header field", 431, Some("x-big"), |c| {
+            c.headers.push(("X-Big".into(), "v".repeat(40 << 10)))
+        }),
+    );
+    cases.push(valid.case("150 header fields", 431, Some("headers"), |c| {
+        c.headers.extend((0..150).map(|i| (format!("X-H{i}"), "v".into())))
+    }));
+    cases.push(valid.case("a header field without a colon", 400, Some("request"), |c| {
+        c.headers.push(("Not a header".into(), "x".into()))
+    }));
+    if method == "POST" {
+        let json_only = valid.route.1 != "/api/voltage" && valid.route.1 != "/api/profile";
+        cases.push(valid.case("no Content-Type", 415, Some("content-type"), |c| c.headers.clear()));
+        for ct in ["text/plain", "application/xml", "multipart/form-data; boundary=x", "application/json\u{1}"] {
+            let status_field = if ct.contains('\u{1}') { (400, "request") } else { (415, "content-type") };
+            cases.push(valid.case(format!("Content-Type {ct:?}"), status_field.0, Some(status_field.1), |c| {
+                c.headers = vec![("Content-Type".into(), ct.into())]
+            }));
+        }
+        if json_only {
+            cases.push(valid.case("a CSV body", 415, Some("content-type"), |c| {
+                c.headers = vec![("Content-Type".into(), "text/csv".into())];
+                c.body = b"x_mm,mu\n0,1\n1,1\n".to_vec();
+            }));
+        }
+        cases.push(valid.case("an empty body", 400, Some("body"), |c| c.body.clear()));
+        for (what, body) in [
+            ("a truncated document", b"{".to_vec()),
+            ("an array", b"[]".to_vec()),
+            ("null", b"null".to_vec()),
+            ("a number", b"1e999".to_vec()),
+            ("trailing bytes", [valid.body.as_slice(), b" x"].concat()),
+            ("invalid UTF-8", b"\xff\xfe{}".to_vec()),
+            ("100 000 nested arrays", "[".repeat(100_000).into_bytes()),
+            ("NaN", b"NaN".to_vec()),
+        ] {
+            cases.push(valid.case(format!("JSON: {what}"), 400, Some("body"), |c| c.body = body));
+        }
+        let mut big = valid.body.clone();
+        big.resize(2 << 20, b' ');
+        cases.push(valid.case("a 2 MiB body", 413, Some("body"), |c| c.body = big));
+        cases.push(valid.case("a chunked body with a bad chunk", 400, Some("body"), |c| {
+            c.headers.push(("Transfer-Encoding".into(), "chunked".into()));
+            c.body = b"zz\r\nabc\r\n0\r\n\r\n".to_vec();
+        }));
+        let body: Value = serde_json::from_slice(&valid.body).unwrap();
+        cases.push(valid.json("an unknown field", &set(&body, "zz_unknown", json!(1)), 400, "zz_unknown"));
+        let first = body.as_object().unwrap().keys().next().unwrap().clone();
+        let nested = format!("{{\"{first}\": {}", "[".repeat(100_000)).into_bytes();
+        // In an array of numbers the first element is already of the wrong type.
+        let at = if body[&first].is_array() { format!("{first}[0]") } else { first.clone() };
+        cases.push(valid.case(format!("100 000 nested arrays in {first}"), 400, Some(&at), |c| c.body = nested));
+        let text = String::from_utf8(valid.body.clone()).unwrap();
+        let duplicated = text.replacen('{', &format!("{{\"{first}\": {},", body[&first]), 1).into_bytes();
+        cases.push(valid.case(format!("{first} given twice"), 400, Some(&first), |c| c.body = duplicated));
+    }
+    cases
+}
+
+/// Each route's own fields.
+fn route_cases(valid: &Valid) -> Vec<Case> {
+    let mut cases = Vec::new();
+    let body: Value = if valid.body.is_empty() { Value::Null } else { serde_json::from_slice(&valid.body).unwrap() };
+    match valid.route.1 {
+        "/static/{*path}" => {
+            for (what, target) in [
+                ("traversal", "/static/../Cargo.toml".to_string()),
+                ("encoded traversal", "/static/..%2F..%2Fetc%2Fpasswd".to_string()),
+                ("NUL", "/static/app.js%00.png".to_string()),
+                ("control characters", "/static/%1B%5B31m%0A".to_string()),
+                ("a 6000-character name", format!("/static/{}", "a".repeat(6000))),
+                ("invalid UTF-8", "/static/%FF%FE".to_string()),
+            ] {
+                let status = if what == "invalid UTF-8" { 400 } else { 404 };
+                cases.push(valid.target(what, target, status, "path"));
+            }
+        }
+        "/api/materials/{name}/sample" => {
+            for (what, name) in [
+                ("traversal", "..%2F..%2Fetc".to_string()),
+                ("SQL", "velvet'%20OR%20'1'='1".to_string()),
+                ("NUL", "velvet%00".to_string()),
+                ("control characters", "%1B%5B31m%0A%0D".to_string()),
+                ("a 6000-character name", "m".repeat(6000)),
+            ] {
+                cases.push(valid.target(what, format!("/api/materials/{name}/sample"), 404, "name"));
+            }
+            cases.push(valid.target("invalid UTF-8", "/api/materials/%FF%FE/sample".into(), 400, "name"));
+            for seed in ["-1", "1e308", "18446744073709551616", "abc", "%00", "1.5"] {
+                cases.push(valid.target(
+                    format!("seed = {seed}"),
+                    format!("/api/materials/velvet/sample?seed={seed}"),
+                    400,
+                    "seed",
+                ));
+            }
+            cases.push(valid.target("format=xml", "/api/materials/velvet/sample?format=xml".into(), 400, "format"));
+            cases.push(valid.target("seed twice", "/api/materials/velvet/sample?seed=1&seed=2".into(), 400, "seed"));
+        }
+        "/api/predict" | "/api/simulate" => {
+            for (path, min, max) in [
+                ("width_mm", 0.5, 3.0),
+                ("height_mm", 0.1, 0.6),
+                ("velocity_mm_s", 10.0, 122.0),
+                ("x0_mm", -1000.0, 1000.0),
+            ] {
+                number_cases(valid, &body, path, min, max, &mut cases);
+            }
+            for surface in [json!("dome"), json!(hostile(100_000)), json!(1), json!(null), json!(["bump"])] {
+                cases.push(valid.json("a bad surface", &set(&body, "surface", surface), 400, "surface"));
+            }
+            cases.push(valid.target("format=xml", format!("{}?format=xml", valid.target), 400, "format"));
+        }
+        "/api/voltage" | "/api/profile" => {
+            let prefix = if valid.route.1 == "/api/voltage" { "profile." } else { "" };
+            let at = |name: &str| format!("{prefix}{name}");
+            // Arrays: extreme values out of range, wrong types, too many.
+            for (name, min, max) in [("x_mm", -1e6, 1e6), ("mu", -1e3, 1e3)] {
+                number_cases(valid, &body, &format!("{}[1]", at(name)), min, max, &mut cases);
+            }
+            let forces = |ft: Value, fn_n: Value| {
+                let profile = json!({ "x_mm": [0.0, 1.0, 2.0], "ft_n": ft, "fn_n": fn_n });
+                if prefix.is_empty() { profile } else { set(&body, "profile", profile) }
+            };
+            for (ft, fn_n, field) in [
+                (json!([0.1, 1e308, 0.1]), json!([0.2, 0.2, 0.2]), at("ft_n[1]")),
+                (json!([0.1, 0.1, 0.1]), json!([0.2, 5e-324, 0.2]), at("fn_n[1]")),
+                (json!([0.1, 10.0, 0.1]), json!([0.2, 1e-5, 0.2]), at("fn_n[1]")),
+                (json!([0.1, 0.1, 0.1]), json!([0.2, -0.2, 0.2]), at("fn_n[1]")),
+                (json!([0.1, 0.1, 0.1]), json!([0.2, 0.2]), at("fn_n[0]")),
+            ] {
+                cases.push(valid.json(format!("forces {ft} / {fn_n}"), &forces(ft, fn_n), 400, &field));
+            }
+            let n = 100_001;
+            let many = json!({ "x_mm": vec![0; n], "mu": vec![1; n] });
+            let many = if prefix.is_empty() { many } else { set(&body, "profile", many) };
+            cases.push(valid.json("100 001 points", &many, 413, &at("x_mm")));
+            // CSV bodies: the same numbers in columns, named with the line.
+            for (csv, field) in [
+                ("x_mm,mu\n0,1\n1e308,1\n".to_string(), "x_mm"),
+                ("x_mm,mu\n0,1\n1,-1e308\n".to_string(), "mu"),
+                ("x_mm,ft_n,fn_n\n0,0.1,0.2\n1,1e308,0.2\n".to_string(), "ft_n"),
+                ("x_mm,ft_n,fn_n\n0,0.1,0.2\n1,0.1,5e-324\n".to_string(), "fn_n"),
+                ("x_mm,mu\n0,1\n1,1e999\n".to_string(), "mu"),
+                ("x_mm,mu\n0,1\n1,nan\n".to_string(), "mu"),
+                (format!("x_mm,mu\n0,1\n1,{}\n", "9".repeat(100_000)), "mu"),
+                (format!("x_mm,mu\n0,1\n1,{}\n", hostile(50)), "mu"),
+                ("x_mm,mu\n0,1\n1,1\n1,1\n".to_string(), "x_mm"),
+                ("x_mm,x_mm\n0,1\n".to_string(), "x_mm"),
+                (format!("x_mm,mu{}\n0,1\n", ",c".repeat(10)), "c"),
+                ("\u{feff}\u{0}x_mm,mu\n0,1\n1,1\n".to_string(), "x_mm"),
+                (format!("x_mm,mu\n{}", "0,1,".repeat(200_000)), "body"),
+            ] {
+                cases.push(valid.case(format!("CSV {:?}", &csv[..csv.len().min(40)]), 400, Some(field), |c| {
+                    c.headers = vec![("Content-Type".into(), "text/csv".into())];
+                    c.target = valid.target.to_string();
+                    c.body = csv.into_bytes();
+                }));
+            }
+            let csv_body = b"x_mm,mu\n0,1\n1,1.2\n".to_vec();
+            let csv = |what: String, target: String, status: u16, field: &str| {
+                let body = csv_body.clone();
+                valid.case(what, status, Some(field), |c| {
+                    c.headers = vec![("Content-Type".into(), "text/csv".into())];
+                    c.target = target;
+                    c.body = body;
+                })
+            };
+            if valid.route.1 == "/api/voltage" {
+                for spec in DEVICE_PARAMS {
+                    let field = format!("device.{}", spec.name);
+                    number_cases(valid, &body, &field, spec.min, spec.max, &mut cases);
+                    for text in ["1e308", "-1e308", "5e-324", "1e999", "NaN", "inf", "abc", "", "%00"] {
+                        let target = format!("/api/voltage?{}={text}", spec.name);
+                        cases.push(csv(format!("CSV with {}={text}", spec.name), target, 400, spec.name));
+                    }
+                }
+                let twice = set(&body, "device", json!({}));
+                let text = twice.to_string().replace("\"device\":{}", "\"device\":{\"u_max_v\":50,\"u_max_v\":60}");
+                cases.push(
+                    valid.case("device.u_max_v given twice", 400, Some("device.u_max_v"), |c| {
+                        c.body = text.into_bytes()
+                    }),
+                );
+                for method in [json!("eq10"), json!(hostile(1000)), json!(1)] {
+                    cases.push(valid.json("a bad method", &set(&body, "method", method), 400, "method"));
+                }
+                cases.push(csv("CSV with method=eq10".into(), "/api/voltage?method=eq10".into(), 400, "method"));
+                cases.push(csv(
+                    "CSV with u_max_v twice".into(),
+                    "/api/voltage?u_max_v=1&u_max_v=2".into(),
+                    400,
+                    "u_max_v",
+                ));
+                let power_law = set(&body, "device", json!({ "area_exponent": 0.5 }));
+                cases.push(valid.json("a power law without fn_n", &power_law, 400, "device.fn_n"));
+            }
+        }
+        "/api/play" => {
+            for (path, min, max) in [
+                ("voltage.x_mm[1]", -1e6, 1e6),
+                ("voltage.voltage_v[1]", 0.0, 1e6),
+                ("stroke.velocity_mm_s", 1e-6, 1e4),
+                ("u_max_v", 1e-3, 1e4),
+                ("slew_v_per_s", 1e-3, 1e9),
+                ("amplifier_range_v", 1e-3, 1e5),
+                ("volts_per_full_scale", 1e-3, 1e5),
+                ("stroke.from_mm", -1e6, 1e6),
+                ("carrier.frequency_hz", 1e-3, 1e6),
+            ] {
+                let body = if path.starts_with("carrier") {
+                    set(&body, "carrier", json!({ "shape": "sine", "frequency_hz": 1000.0 }))
+                } else {
+                    body.clone()
+                };
+                number_cases(valid, &body, path, min, max, &mut cases);
+            }
+            let trajectory = set(&body, "stroke", Value::Null).as_object().unwrap().clone();
+            let mut with_trajectory = Value::Object(trajectory);
+            with_trajectory.as_object_mut().unwrap().remove("stroke");
+            let with_trajectory =
+                set(&with_trajectory, "trajectory", json!({ "t_s": [0.0, 0.1], "x_mm": [0.0, 10.0] }));
+            number_cases(valid, &with_trajectory, "trajectory.t_s[1]", -1e6, 1e6, &mut cases);
+            number_cases(valid, &with_trajectory, "trajectory.x_mm[1]", -1e6, 1e6, &mut cases);
+            for (path, value, status, field) in [
+                ("sample_rate_hz", json!(1e308), 400, "sample_rate_hz"),
+                ("sample_rate_hz", json!(-48000), 400, "sample_rate_hz"),
+                ("sample_rate_hz", json!(10), 400, "sample_rate_hz"),
+                ("stroke.strokes", json!(1e308), 400, "stroke.strokes"),
+                ("stroke.strokes", json!(0), 400, "stroke.strokes"),
+                ("stroke.strokes", json!(1_000_000), 400, "stroke.strokes"),
+                ("stroke.velocity_mm_s", json!(1e-6), 413, "stroke"),
+                ("format", json!(hostile(1000)), 400, "format"),
+                ("wav_format", json!("mp3"), 400, "wav_format"),
+                ("outside", json!("wrap"), 400, "outside"),
+                ("carrier", json!({ "shape": "triangle", "frequency_hz": 100 }), 400, "carrier.shape"),
+                ("carrier", json!({ "shape": "sine", "frequency_hz": 30000 }), 400, "carrier.frequency_hz"),
+                ("voltage", json!({ "x_mm": [0.0, 1.0], "voltage_v": [1.0, -1.0] }), 400, "voltage.voltage_v[1]"),
+                ("voltage", json!({ "x_mm": [1.0, 0.0], "voltage_v": [1.0, 1.0] }), 400, "voltage.x_mm[1]"),
+                ("voltage", json!({ "x_mm": vec![0; 100_001], "voltage_v": vec![0; 100_001] }), 413, "voltage.x_mm"),
+            ] {
+                cases.push(valid.json(format!("{path} = {value:.40}"), &set(&body, path, value), status, field));
+            }
+            let long = set(&with_trajectory, "trajectory", json!({ "t_s": [0.0, 1e5], "x_mm": [0.0, 10.0] }));
+            cases.push(valid.json("a trajectory of 1e5 s", &long, 413, "trajectory"));
+            let wav = set(&body, "format", json!("wav"));
+            for (path, value) in [("volts_per_full_scale", json!(0)), ("volts_per_full_scale", json!(-1))] {
+                cases.push(valid.json(format!("WAV with {path} = {value}"), &set(&wav, path, value), 400, path));
+            }
+        }
+        _ => {}
+    }
+    cases
+}
+
+/// Sends every case on its own connection, two clients at a time, while
+/// two more upload maximal bodies back to back and another asks
+/// `/api/health` every 10 ms; checks each answer.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_route_answers_hostile_input_with_a_4xx_naming_the_field() {
+    let valid = valid_requests();
+    let served: BTreeSet<(String, String)> =
+        routes::table().iter().map(|e| (e.method.to_string(), e.path.to_string())).collect();
+    let covered: BTreeSet<(String, String)> =
+        valid.iter().map(|v| (v.route.0.to_string(), v.route.1.to_string())).collect();
+    assert_eq!(covered, served, "every route of routes::table() needs its valid request and cases here");
+
+    let server = Arc::new(RawServer::start(shipped_state()).await);
+    // The valid requests are served (so the cases' refusals are theirs).
+    for v in &valid {
+        let case = v.case("the valid request", 200, None, |_| {});
+        let answer = server.raw(&case.bytes()).await;
+        assert!(
+            answer.starts_with("HTTP/1.1 200"),
+            "{} {}: {}",
+            v.route.0,
+            v.route.1,
+            &answer[..answer.len().min(300)]
+        );
+    }
+    let mut cases: Vec<Case> = valid.iter().flat_map(|v| [generic_cases(v), route_cases(v)].concat()).collect();
+    for v in &valid {
+        let n = cases.iter().filter(|c| c.route == v.route).count();
+        assert!(n >= 15, "{} {}: only {n} cases", v.route.0, v.route.1);
+    }
+
+    let stop = Arc::new(AtomicBool::new(false));
+    let health = {
+        let (server, stop) = (server.clone(), stop.clone());
+        tokio::spawn(async move {
+            let mut worst = Duration::ZERO;
+            let mut n = 0;
+            while !stop.load(Ordering::Relaxed) {
+                let t = Instant::now();
+                let answer = server.get("/api/health").await;
+                worst = worst.max(t.elapsed());
+                n += 1;
+                assert!(answer.starts_with("HTTP/1.1 200"), "{answer}");
+                tokio::time::sleep(Duration::from_millis(10)).await;
+            }
+            (n, worst)
+        })
+    };
+    // Two clients keep the server busy with maximal uploads meanwhile.
+    let uploads = [
+        ("/api/profile", "text/csv", common::maximal_csv()),
+        ("/api/voltage", "application/json", common::maximal_voltage_json()),
+    ]
+    .map(|(uri, content_type, body)| {
+        let (server, stop) = (server.clone(), stop.clone());
+        tokio::spawn(async move {
+            let request = format!(
+                "POST {uri} HTTP/1.1\r\nHost: localhost\r\nContent-Type: {content_type}\r\nContent-Length: {}\r\n\
+                 Connection: close\r\n\r\n{body}",
+                body.len()
+            );
+            let mut n = 0;
+            while !stop.load(Ordering::Relaxed) {
+                let answer = server.raw(request.as_bytes()).await;
+                assert!(answer.starts_with("HTTP/1.1 200"), "{}", &answer[..answer.len().min(300)]);
+                n += 1;
+            }
+            n
+        })
+    });
+    let total = cases.len();
+    let half = cases.split_off(total / 2);
+    let senders = [cases, half].map(|cases| {
+        let server = server.clone();
+        tokio::spawn(async move {
+            let mut failures = Vec::new();
+            for case in cases {
+                let answer = server.raw(&case.bytes()).await;
+                if let Err(e) = check_json_error(&answer, case.status, case.field.as_deref()) {
+                    let shown: String = answer.chars().take(400).collect();
+                    failures.push(format!(
+                        "{} {} [{}]: expected {} {:?}: {e}; got: {shown:?}",
+                        case.route.0, case.route.1, case.what, case.status, case.field
+                    ));
+                }
+            }
+            failures
+        })
+    });
+    let mut failures = Vec::new();
+    for sender in senders {
+        failures.extend(sender.await.unwrap());
+    }
+    stop.store(true, Ordering::Relaxed);
+    let (n, worst) = health.await.unwrap();
+    let mut uploaded = 0;
+    for u in uploads {
+        uploaded += u.await.unwrap();
+    }
+    eprintln!(
+        "{total} cases over {} routes with {uploaded} maximal uploads meanwhile; /api/health: {n} answers, worst \
+         {worst:?}",
+        valid.len()
+    );
+    assert!(failures.is_empty(), "{} of {total} cases failed:\n{}", failures.len(), failures.join("\n"));
+    assert!(worst < Duration::from_millis(50), "/api/health took {worst:?} during the table");
+    Arc::try_unwrap(server).ok().unwrap().stop().await;
+}
