@@ -23,6 +23,7 @@ pub const TARGETS: &[(&str, fn(&[u8]))] = &[
     ("drive_wav", drive_wav),
     ("finger_toml", finger_toml),
     ("surface_file", surface_file),
+    ("http_body", http_body),
 ];
 
 /// An error message must stay readable whatever the input.
@@ -165,5 +166,68 @@ pub fn surface_file(data: &[u8]) {
             }
         }
         Err(e) => short(e.to_string()),
+    }
+}
+
+/// The web API: the first byte picks a route and body type, the rest is
+/// the request body (or, for the material sample, the name and query).
+/// Every answer must be a 2xx, or a 4xx (or 503) with a JSON error body
+/// that has an `error` message and a `field` key; never a 5xx otherwise.
+pub fn http_body(data: &[u8]) {
+    use axum::body::Body;
+    use axum::http::{Request, header};
+    use tower::ServiceExt;
+
+    static APP: std::sync::OnceLock<(tokio::runtime::Runtime, axum::Router)> = std::sync::OnceLock::new();
+    let (runtime, router) = APP.get_or_init(|| {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let state = haptex_server::AppState::new(
+            Some(&root.join("data/library/library.sqlite")),
+            haptex_server::Limits::DEFAULT,
+        )
+        .and_then(|s| Ok(s.with_database(&root.join("data/db")).expect("the shipped database loads")))
+        .expect("the shipped library opens");
+        let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build().expect("a runtime");
+        (runtime, haptex_server::app(state))
+    });
+    const ROUTES: &[(&str, &str)] = &[
+        ("/api/profile", "text/csv"),
+        ("/api/profile", "application/json"),
+        ("/api/profile?format=csv", "text/csv"),
+        ("/api/voltage", "text/csv"),
+        ("/api/voltage?method=normalized&format=csv", "text/csv"),
+        ("/api/voltage", "application/json"),
+        ("/api/play", "application/json"),
+        ("/api/predict", "application/json"),
+        ("/api/predict?format=csv", "application/json"),
+    ];
+    let (Some(&selector), body) = (data.first(), data.get(1..).unwrap_or(&[])) else { return };
+    let request = if usize::from(selector) < ROUTES.len() {
+        let (uri, content_type) = ROUTES[usize::from(selector)];
+        Request::post(uri)
+            .header(header::HOST, "localhost")
+            .header(header::CONTENT_TYPE, content_type)
+            .body(Body::from(body.to_vec()))
+    } else {
+        // A GET with the bytes in the path and query of the sample route.
+        let text: String = String::from_utf8_lossy(body).chars().filter(|c| !c.is_control() && *c != ' ').collect();
+        Request::get(format!("/api/materials/{text}")).header(header::HOST, "localhost").body(Body::empty())
+    };
+    let Ok(request) = request else { return };
+    let (status, bytes) = runtime.block_on(async {
+        let response = router.clone().oneshot(request).await.expect("the router is infallible");
+        let status = response.status();
+        let bytes = axum::body::to_bytes(response.into_body(), usize::MAX).await.expect("the body is read");
+        (status, bytes)
+    });
+    assert!(
+        !status.is_server_error() || status.as_u16() == 503,
+        "{status}: {}",
+        String::from_utf8_lossy(&bytes[..bytes.len().min(300)])
+    );
+    if status.is_client_error() || status.as_u16() == 503 {
+        let json: serde_json::Value = serde_json::from_slice(&bytes).expect("an error answer is JSON");
+        assert!(json["error"].is_string() && json.get("field").is_some(), "{json}");
+        assert!(bytes.len() <= 4096, "an error answer of {} bytes", bytes.len());
     }
 }

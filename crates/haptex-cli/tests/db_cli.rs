@@ -473,3 +473,47 @@ fn db_build_refuses_what_the_merge_cannot_use_before_any_run() {
             .contains("at most 1001 points")
     );
 }
+
+/// Issue 13: a multi-file output appears whole or is detectably incomplete.
+/// A merge killed after writing the matrices, before metadata.json, leaves
+/// no metadata.json (it is removed when the merge starts), which `predict`
+/// reports; a rerun completes it; a matrix changed afterwards does not
+/// match the hash metadata.json records and is refused.
+#[test]
+fn interrupted_merge_leaves_a_detectably_incomplete_database() {
+    let tmp = tempfile::tempdir().unwrap();
+    let built = tmp.path().join("built");
+    let out = build(&built, &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let (from, db) = (built.to_str().unwrap(), tmp.path().join("db"));
+    let merge = |fault: Option<&str>| {
+        let env: Vec<(&str, &str)> = fault.map(|f| ("HAPTEX_FAULT_INJECT", f)).into_iter().collect();
+        haptex_env(&["db", "merge", "--from", from, "--out", db.to_str().unwrap()], &env)
+    };
+    let predict = || {
+        let args = ["--surface", "bump", "--x0", "5", "--width", "1.5", "--height", "0.3", "--velocity", "30"];
+        let mut all = vec!["predict", "--db", db.to_str().unwrap()];
+        all.extend_from_slice(&args);
+        haptex(&all)
+    };
+    assert!(merge(None).status.success());
+    assert!(predict().status.success(), "{}", text(&predict().stderr));
+
+    let killed = merge(Some("before-marker"));
+    assert!(!killed.status.success(), "the fault hook did not fire: {}", text(&killed.stderr));
+    assert!(db.join("bump.csv").exists() && !db.join("metadata.json").exists());
+    let out = predict();
+    assert!(!out.status.success());
+    assert!(text(&out.stderr).contains("did not finish"), "{}", text(&out.stderr));
+
+    assert!(merge(None).status.success());
+    assert!(predict().status.success());
+    let metadata: serde_json::Value = serde_json::from_str(&read(&db.join("metadata.json"))).unwrap();
+    assert_eq!(metadata["files_sha256"].as_object().unwrap().len(), 2);
+    let mut matrix = read(&db.join("bump.csv"));
+    matrix = matrix.replacen("0.3,20", "0.3,21", 1);
+    std::fs::write(db.join("bump.csv"), matrix).unwrap();
+    let out = predict();
+    assert!(!out.status.success());
+    assert!(text(&out.stderr).contains("SHA-256"), "{}", text(&out.stderr));
+}

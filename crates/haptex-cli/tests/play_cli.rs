@@ -132,7 +132,11 @@ fn bad_inputs_name_file_line_and_field() {
     }
     let bad_u = write(dir.path(), "bad_u.csv", "x_mm,voltage_v\n0,1\n1,-5\n");
     let out = haptex(&["play", "--profile", &bad_u, "--velocity", "10", "-o", &wav]);
-    assert!(stderr(&out).contains("bad_u.csv, line 3, column 'voltage_v': an RMS voltage cannot be negative"));
+    assert!(
+        stderr(&out).contains("bad_u.csv, line 3, column 'voltage_v': voltage_v must be from 0 to 1000000 V, got -5"),
+        "{}",
+        stderr(&out)
+    );
     let out = haptex(&["play", "--profile", &u, "--velocity", "10", "-o", &path(dir.path(), "o.mp3")]);
     assert!(stderr(&out).contains("use a .wav or .csv file"), "{}", stderr(&out));
     let out = haptex(&["play", "--profile", &u, "-o", &wav]);

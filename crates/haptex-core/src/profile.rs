@@ -46,7 +46,6 @@ impl FrictionProfile {
     /// mu = ft / fn (paper eq. 4); fn must be positive.
     pub fn from_forces(x_mm: Vec<f64>, ft_n: &[f64], fn_n: Vec<f64>) -> Result<Self, ProfileError> {
         validate(&x_mm, &[("ft_n", ft_n), ("fn_n", &fn_n)]).map_err(in_memory)?;
-        check_normal_force(&fn_n).map_err(in_memory)?;
         let mu = mu_from_forces(ft_n, &fn_n).map_err(in_memory)?;
         Ok(Self { x_mm, mu, fn_n: Some(fn_n) })
     }
@@ -56,7 +55,6 @@ impl FrictionProfile {
     /// Fn of a recorded stroke.
     pub fn with_normal_force(mut self, fn_n: Vec<f64>) -> Result<Self, ProfileError> {
         validate(&self.x_mm, &[("fn_n", &fn_n)]).map_err(in_memory)?;
-        check_normal_force(&fn_n).map_err(in_memory)?;
         self.fn_n = Some(fn_n);
         Ok(self)
     }
@@ -82,13 +80,11 @@ impl FrictionProfile {
                     }
                 };
                 validate(&x_mm, &[("ft_n", ft), ("fn_n", fnn)]).map_err(at)?;
-                check_normal_force(fnn).map_err(at)?;
                 mu_from_forces(ft, fnn).map_err(at)?
             }
         };
         if let Some(fnn) = &fn_col {
             validate(&x_mm, &[("fn_n", fnn)]).map_err(at)?;
-            check_normal_force(fnn).map_err(at)?;
         }
         Ok(Self { x_mm, mu, fn_n: fn_col })
     }
@@ -267,36 +263,18 @@ impl Cursor {
     }
 }
 
-/// The largest magnitude a value of each column may have: far beyond any
-/// physical value (a friction coefficient is below ~10, a fingertip force
-/// below ~10 N, a display below ~1 kV, a surface below a metre), and small
-/// enough that every difference, span and product computed from two of
-/// them stays finite. Positions and times beyond it are refused like
-/// non-finite ones, so no derived value can overflow.
-pub const MAX_MAGNITUDE: &[(&str, f64, &str)] = &[
-    ("x_mm", 1e6, "mm"),
-    ("mu", 1e6, ""),
-    ("ft_n", 1e6, "N"),
-    ("fn_n", 1e6, "N"),
-    ("voltage_v", 1e6, "V"),
-    ("t_s", 1e9, "s"),
-];
-
-/// Checks that every value of column `name` is finite and within its
-/// [`MAX_MAGNITUDE`].
+/// Checks that every value of column `name` is finite and, when the
+/// column is a quantity with an accepted range ([`crate::ranges`]: x_mm,
+/// mu, ft_n, fn_n, t_s, voltage_v), within it, so that no span, ratio or
+/// difference computed from the values can overflow.
 pub(crate) fn check_values(name: &'static str, values: &[f64]) -> Result<(), Violation> {
     if let Some(i) = values.iter().position(|v| !v.is_finite()) {
         return Err((Some(i), name, format!("not a finite number: {}", Num(values[i]))));
     }
-    if let Some(&(_, max, unit)) = MAX_MAGNITUDE.iter().find(|(n, _, _)| *n == name)
-        && let Some(i) = values.iter().position(|v| v.abs() > max)
+    if let Some(range) = crate::ranges::of(name)
+        && let Some(i) = range.first_outside(values)
     {
-        let unit = if unit.is_empty() { String::new() } else { format!(" {unit}") };
-        return Err((
-            Some(i),
-            name,
-            format!("{}{unit} is out of range: |{name}| must be at most {}{unit}", Num(values[i]), Num(max)),
-        ));
+        return Err((Some(i), name, range.refusal(values[i]).to_string()));
     }
     Ok(())
 }
@@ -336,22 +314,15 @@ fn mu_from_forces(ft_n: &[f64], fn_n: &[f64]) -> Result<Vec<f64>, Violation> {
             Some(i),
             "fn_n",
             format!(
-                "mu = ft_n / fn_n = {} / {} = {} is not a friction coefficient (|mu| <= {}): is fn_n in newtons?",
+                "mu = ft_n / fn_n = {} / {} = {} is not a friction coefficient (mu must be {}): is fn_n in newtons?",
                 Num(ft_n[i]),
                 Num(fn_n[i]),
                 Num(mu[i]),
-                Num(MAX_MAGNITUDE[1].1)
+                crate::ranges::MU.describe()
             ),
         )
     })?;
     Ok(mu)
-}
-
-fn check_normal_force(fn_n: &[f64]) -> Result<(), Violation> {
-    match fn_n.iter().position(|&f| f <= 0.0) {
-        Some(i) => Err((Some(i), "fn_n", format!("normal force must be positive, got {} N", Num(fn_n[i])))),
-        None => Ok(()),
-    }
 }
 
 fn in_memory((index, field, message): Violation) -> ProfileError {

@@ -1,82 +1,132 @@
-//! The accepted range of every physical parameter a user sets: the one
-//! table the command line, the web API and the library check against, so a
-//! value accepted in one place is accepted in all (and a value that makes
-//! a derived quantity overflow is refused where it is given).
+//! The accepted range of every number a user gives haptex: device and
+//! signal parameters, and the quantities of profile, voltage and
+//! trajectory files. The one table the command line, the file readers and
+//! the web API check against, so that a value accepted in one place is
+//! accepted in all.
 //!
-//! Each parameter must be finite, > 0 and <= its maximum. The maxima are
-//! far beyond any real device (a display's insulator is microns thick, its
-//! voltage hundreds of volts) but keep every derived value (Fe/Fn, the
-//! clip level, a full-scale code) finite.
+//! Each value must be finite and within [min, max]. The ranges are far
+//! beyond any real finger or display (an insulator is microns thick, a
+//! display's voltage hundreds of volts, a friction coefficient below 10)
+//! but finite, so that every sum, span, ratio and square computed from
+//! accepted values stays finite: eq. (3) and the clip level of eq. (8)
+//! stay inside the floating-point range at every corner of the device
+//! ranges (a test of the web API walks the corners).
 
 use crate::num::Num;
 
-/// A parameter's name (as the flag and the API field spell it), largest
-/// accepted value and unit.
+/// A quantity's name (as the flag, the API field and the CSV column spell
+/// it), accepted interval and unit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Range {
     pub name: &'static str,
+    pub min: f64,
     pub max: f64,
     pub unit: &'static str,
 }
 
 /// A value outside its [`Range`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{name} must be > 0 and <= {}{}, got {}", Num(*max), unit_text(unit), Num(*value))]
+#[error("{name} must be {}, got {}", range_text(*min, *max, unit), Num(*value))]
 pub struct RangeError {
     pub name: &'static str,
     pub value: f64,
+    pub min: f64,
     pub max: f64,
     pub unit: &'static str,
 }
 
-fn unit_text(unit: &str) -> String {
-    if unit.is_empty() { String::new() } else { format!(" {unit}") }
+fn range_text(min: f64, max: f64, unit: &str) -> String {
+    let unit = if unit.is_empty() { String::new() } else { format!(" {unit}") };
+    format!("from {} to {}{unit}", Num(min), Num(max))
 }
 
 impl Range {
-    /// The value if it is finite, > 0 and <= the maximum.
+    /// Whether `value` is finite and within [min, max].
+    pub fn contains(&self, value: f64) -> bool {
+        value.is_finite() && value >= self.min && value <= self.max
+    }
+
+    /// The value, if it is within the range.
     pub fn check(&self, value: f64) -> Result<f64, RangeError> {
-        if value.is_finite() && value > 0.0 && value <= self.max {
-            Ok(value)
-        } else {
-            Err(RangeError { name: self.name, value, max: self.max, unit: self.unit })
-        }
+        if self.contains(value) { Ok(value) } else { Err(self.refusal(value)) }
+    }
+
+    /// The error for `value`.
+    pub fn refusal(&self, value: f64) -> RangeError {
+        RangeError { name: self.name, value, min: self.min, max: self.max, unit: self.unit }
+    }
+
+    /// `from MIN to MAX UNIT`, for messages and documentation.
+    pub fn describe(&self) -> String {
+        range_text(self.min, self.max, self.unit)
+    }
+
+    /// The index of the first value outside the range.
+    pub fn first_outside(&self, values: &[f64]) -> Option<usize> {
+        values.iter().position(|v| !self.contains(*v))
     }
 }
 
-const fn range(name: &'static str, max: f64, unit: &'static str) -> Range {
-    Range { name, max, unit }
+const fn range(name: &'static str, min: f64, max: f64, unit: &'static str) -> Range {
+    Range { name, min, max, unit }
 }
 
-/// Friction coefficient of the finger on the display, mu_HD.
-pub const MU_HD: Range = range("mu_hd", 10.0, "");
-/// Highest voltage of the display, U_max (RMS).
-pub const U_MAX_V: Range = range("u_max_v", 10_000.0, "V");
-/// Relative permittivity of the stratum corneum.
-pub const EPS_SC: Range = range("eps_sc", 1e6, "");
-/// Relative permittivity of the insulator.
-pub const EPS_I: Range = range("eps_i", 1e6, "");
-/// Stratum corneum thickness.
-pub const D_SC_MM: Range = range("d_sc_mm", 10.0, "mm");
-/// Insulator thickness.
-pub const D_I_MM: Range = range("d_i_mm", 10.0, "mm");
-/// Contact-area coefficient k of A = k Fn^n.
-pub const K_MM2_PER_N: Range = range("k_mm2_per_n", 1e6, "mm^2/N");
-/// Contact-area exponent n of A = k Fn^n.
-pub const AREA_EXPONENT: Range = range("area_exponent", 2.0, "");
-/// Exploration normal force Fn.
-pub const FN_N: Range = range("fn_n", 100.0, "N");
-/// Envelope slew limit.
-pub const SLEW_V_PER_S: Range = range("slew_v_per_s", 1e9, "V/s");
-/// Peak output of the amplifier.
-pub const AMPLIFIER_RANGE_V: Range = range("amplifier_range_v", 100_000.0, "V");
-/// Volts at the amplifier output for a full-scale WAV sample.
-pub const VOLTS_PER_FULL_SCALE: Range = range("volts_per_full_scale", 100_000.0, "V");
-/// Carrier frequency (also below the Nyquist frequency of the rate).
-pub const CARRIER_HZ: Range = range("carrier_hz", 1e6, "Hz");
+// Quantities of files and request bodies.
 
-/// Every range, in the order the GUI and the docs list them.
+/// Positions along the surface (profiles, voltage curves, trajectories,
+/// stroke ends): +-1 km.
+pub const POSITION_MM: Range = range("x_mm", -1e6, 1e6, "mm");
+/// Friction coefficients, given or derived (mu = ft/fn).
+pub const MU: Range = range("mu", -1e3, 1e3, "");
+/// Tangential (friction) force.
+pub const FT_N: Range = range("ft_n", -100.0, 100.0, "N");
+/// Normal force of a profile, and the exploration force of eq. (8).
+pub const FN_N: Range = range("fn_n", 1e-6, 100.0, "N");
+/// Times of a trajectory: +-11.6 days.
+pub const TIME_S: Range = range("t_s", -1e6, 1e6, "s");
+/// RMS voltages of a voltage profile.
+pub const VOLTAGE_V: Range = range("voltage_v", 0.0, 1e6, "V");
+
+// Device (eqs. 3-9).
+
+/// Friction coefficient of the finger on the display, mu_HD.
+pub const MU_HD: Range = range("mu_hd", 1e-3, 10.0, "");
+/// Highest voltage of the display, U_max (RMS).
+pub const U_MAX_V: Range = range("u_max_v", 1e-3, 10_000.0, "V");
+/// Relative permittivity of the stratum corneum.
+pub const EPS_SC: Range = range("eps_sc", 1.0, 1e6, "");
+/// Relative permittivity of the insulator.
+pub const EPS_I: Range = range("eps_i", 1.0, 1e6, "");
+/// Stratum corneum thickness.
+pub const D_SC_MM: Range = range("d_sc_mm", 1e-6, 10.0, "mm");
+/// Insulator thickness.
+pub const D_I_MM: Range = range("d_i_mm", 1e-6, 10.0, "mm");
+/// Contact-area coefficient k of A = k Fn^n.
+pub const K_MM2_PER_N: Range = range("k_mm2_per_n", 1e-6, 1e6, "mm^2/N");
+/// Contact-area exponent n of A = k Fn^n.
+pub const AREA_EXPONENT: Range = range("area_exponent", 1e-3, 2.0, "");
+
+// Drive signal.
+
+/// Envelope slew limit.
+pub const SLEW_V_PER_S: Range = range("slew_v_per_s", 1e-3, 1e9, "V/s");
+/// Peak output of the amplifier.
+pub const AMPLIFIER_RANGE_V: Range = range("amplifier_range_v", 1e-3, 100_000.0, "V");
+/// Volts at the amplifier output for a full-scale WAV sample.
+pub const VOLTS_PER_FULL_SCALE: Range = range("volts_per_full_scale", 1e-3, 100_000.0, "V");
+/// Carrier frequency (also below the Nyquist frequency of the rate).
+pub const CARRIER_HZ: Range = range("carrier_hz", 1e-3, 1e6, "Hz");
+/// Finger speed of a generated stroke.
+pub const VELOCITY_MM_S: Range = range("velocity_mm_s", 1e-6, 1e4, "mm/s");
+
+/// Every range, in the order the docs list them.
 pub const ALL: &[Range] = &[
+    POSITION_MM,
+    MU,
+    FT_N,
+    FN_N,
+    TIME_S,
+    VOLTAGE_V,
     MU_HD,
     U_MAX_V,
     EPS_SC,
@@ -85,12 +135,17 @@ pub const ALL: &[Range] = &[
     D_I_MM,
     K_MM2_PER_N,
     AREA_EXPONENT,
-    FN_N,
     SLEW_V_PER_S,
     AMPLIFIER_RANGE_V,
     VOLTS_PER_FULL_SCALE,
     CARRIER_HZ,
+    VELOCITY_MM_S,
 ];
+
+/// The range of a file column or body field by its name, if it has one.
+pub fn of(name: &str) -> Option<&'static Range> {
+    ALL.iter().find(|r| r.name == name)
+}
 
 #[cfg(test)]
 mod tests {
@@ -103,7 +158,8 @@ mod tests {
         for bad in [0.0, -1.0, 10_000.5, f64::NAN, f64::INFINITY, 1e308] {
             assert!(U_MAX_V.check(bad).is_err(), "{bad}");
         }
-        assert_eq!(U_MAX_V.check(1e308).unwrap_err().to_string(), "u_max_v must be > 0 and <= 10000 V, got 1e308");
+        assert_eq!(U_MAX_V.check(1e308).unwrap_err().to_string(), "u_max_v must be from 0.001 to 10000 V, got 1e308");
+        assert_eq!(FN_N.check(5e-324).unwrap_err().to_string(), "fn_n must be from 1e-6 to 100 N, got 5e-324");
         let names: std::collections::HashSet<_> = ALL.iter().map(|r| r.name).collect();
         assert_eq!(names.len(), ALL.len());
     }

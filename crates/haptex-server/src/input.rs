@@ -9,14 +9,12 @@ use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
 use axum::http::{HeaderMap, StatusCode, header};
 use haptex_core::io::{Table, TableError};
-use haptex_core::num::Num;
 use haptex_core::profile::{FrictionProfile, ProfileError};
 use haptex_core::trajectory::{Trajectory, TrajectoryError};
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
 use crate::error::{ApiError, quote};
-use crate::fields::{self, Range};
 
 /// The format of a request body.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -240,17 +238,9 @@ impl ProfileJson {
     /// names of errors.
     pub fn into_profile(self, prefix: &str, max_points: usize) -> Result<FrictionProfile, ApiError> {
         check_points(self.x_mm.len(), max_points, &format!("{prefix}x_mm"))?;
-        let columns = [
-            ("x_mm", Some(&self.x_mm)),
-            ("mu", self.mu.as_ref()),
-            ("ft_n", self.ft_n.as_ref()),
-            ("fn_n", self.fn_n.as_ref()),
-        ];
-        for (name, values) in columns {
-            if let Some(values) = values {
-                profile_range(name).check_all(values, &format!("{prefix}{name}"))?;
-            }
-        }
+        // haptex-core checks every column against its range
+        // (haptex_core::ranges, as for a file), and mu = ft/fn after the
+        // division; its errors name the column and sample.
         let at = |e: ProfileError| profile_error(e, prefix);
         let profile = match (self.mu, self.ft_n, self.fn_n) {
             (Some(mu), None, fn_n) => {
@@ -274,40 +264,7 @@ impl ProfileJson {
                 ));
             }
         };
-        check_derived_mu(&profile, |i, message| ApiError::bad_request(message, Some(&format!("{prefix}fn_n[{i}]"))))?;
         Ok(profile)
-    }
-}
-
-/// The range of a profile column.
-fn profile_range(column: &str) -> Range {
-    match column {
-        "mu" => fields::MU,
-        "ft_n" => fields::FT_N,
-        "fn_n" => fields::FN_N,
-        _ => fields::POSITION_MM,
-    }
-}
-
-/// Checks mu where the profile derived it (mu = ft/fn, paper eq. 4)
-/// against the range a given mu has: a sample outside is refused,
-/// `at(index, message)` naming the field (fn_n, which the ratio divides
-/// by). A profile given with mu and fn_n passed the check on input, so
-/// this finds nothing there.
-fn check_derived_mu(profile: &FrictionProfile, at: impl Fn(usize, String) -> ApiError) -> Result<(), ApiError> {
-    let Some(fn_n) = profile.fn_n() else { return Ok(()) };
-    match fields::MU.first_outside(profile.mu()) {
-        None => Ok(()),
-        Some(i) => Err(at(
-            i,
-            format!(
-                "mu = ft_n / fn_n = {} at x = {} mm (fn_n = {} N): mu must be {}",
-                Num(profile.mu()[i]),
-                Num(profile.x_mm()[i]),
-                Num(fn_n[i]),
-                fields::MU.describe()
-            ),
-        )),
     }
 }
 
@@ -316,18 +273,7 @@ fn check_derived_mu(profile: &FrictionProfile, at: impl Fn(usize, String) -> Api
 pub fn profile_from_csv(bytes: &[u8], max_points: usize) -> Result<FrictionProfile, ApiError> {
     let table = Table::read(bytes, "request body").map_err(table_error)?;
     check_points(table.n_rows(), max_points, "body")?;
-    for name in ["x_mm", "mu", "ft_n", "fn_n"] {
-        let range = profile_range(name);
-        if let Some(values) = table.column(name)
-            && let Some(row) = range.first_outside(values)
-        {
-            let message = range.refusal(name, values[row], name).message;
-            return Err(table_error(table.error_at(Some(row), Some(name), message)));
-        }
-    }
-    let profile = FrictionProfile::from_table(&table).map_err(|e| profile_error(e, ""))?;
-    check_derived_mu(&profile, |row, message| table_error(table.error_at(Some(row), Some("fn_n"), message)))?;
-    Ok(profile)
+    FrictionProfile::from_table(&table).map_err(|e| profile_error(e, ""))
 }
 
 /// A finger trajectory in JSON: times in s and positions in mm.
@@ -341,8 +287,6 @@ pub struct TrajectoryJson {
 impl TrajectoryJson {
     pub fn into_trajectory(self, prefix: &str, max_points: usize) -> Result<Trajectory, ApiError> {
         check_points(self.t_s.len(), max_points, &format!("{prefix}t_s"))?;
-        fields::TIME_S.check_all(&self.t_s, &format!("{prefix}t_s"))?;
-        fields::POSITION_MM.check_all(&self.x_mm, &format!("{prefix}x_mm"))?;
         Trajectory::new(self.t_s, self.x_mm).map_err(|e| match e {
             TrajectoryError::Table(t) => table_error(t),
             TrajectoryError::Invalid { index, field, message } => {

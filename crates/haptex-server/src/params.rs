@@ -5,13 +5,13 @@
 //! shows (`GET /api/config`) and the OpenAPI description (a test checks
 //! they agree). Names and units are those of the `haptex voltage` flags.
 //!
-//! The maxima and units are haptex-core's ([`haptex_core::ranges`], which
-//! the command line checks too). The minimums are the server's: with
-//! them, eq. (3) stays inside the floating-point range at every corner of
-//! the ranges (Fe/Fn per V^2, the voltage of eq. (8) and mu at U_max are
-//! finite and positive; a test walks the corners), so a value that would
-//! break the mapping is refused naming its own field rather than by the
-//! library's check of the device as a whole.
+//! The ranges and units are haptex-core's ([`haptex_core::ranges`], which
+//! the command line checks too). With them, eq. (3) stays inside the
+//! floating-point range at every corner of the ranges (Fe/Fn per V^2, the
+//! voltage of eq. (8) and mu at U_max are finite and positive; a test walks
+//! the corners), so a value that would break the mapping is refused naming
+//! its own field rather than by the library's check of the device as a
+//! whole.
 
 use std::collections::BTreeMap;
 
@@ -20,7 +20,7 @@ use haptex_core::ranges;
 use serde::Serialize;
 
 use crate::error::ApiError;
-use crate::fields::Range;
+use haptex_core::ranges::Range;
 
 /// One parameter: accepted when `min` <= value <= `max`.
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -41,7 +41,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "mu_hd",
         default: Some(Device::PAPER.mu_hd),
-        min: 1e-3,
+        min: ranges::MU_HD.min,
         max: ranges::MU_HD.max,
         unit: ranges::MU_HD.unit,
         description: "friction coefficient of the finger on the display with no voltage, mu_HD",
@@ -49,7 +49,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "u_max_v",
         default: Some(Device::PAPER.u_max_v),
-        min: 1e-3,
+        min: ranges::U_MAX_V.min,
         max: ranges::U_MAX_V.max,
         unit: ranges::U_MAX_V.unit,
         description: "highest voltage the display applies, U_max (RMS): clip level (physical) or full scale (normalized)",
@@ -57,7 +57,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "eps_sc",
         default: Some(LayerStack::PAPER.eps_sc),
-        min: 1.0,
+        min: ranges::EPS_SC.min,
         max: ranges::EPS_SC.max,
         unit: ranges::EPS_SC.unit,
         description: "relative permittivity of the stratum corneum, eps_sc",
@@ -65,7 +65,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "eps_i",
         default: Some(LayerStack::PAPER.eps_i),
-        min: 1.0,
+        min: ranges::EPS_I.min,
         max: ranges::EPS_I.max,
         unit: ranges::EPS_I.unit,
         description: "relative permittivity of the display insulator, eps_i",
@@ -73,7 +73,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "d_sc_mm",
         default: Some(LayerStack::PAPER.d_sc_mm),
-        min: 1e-6,
+        min: ranges::D_SC_MM.min,
         max: ranges::D_SC_MM.max,
         unit: ranges::D_SC_MM.unit,
         description: "stratum corneum thickness d_sc",
@@ -81,7 +81,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "d_i_mm",
         default: Some(LayerStack::PAPER.d_i_mm),
-        min: 1e-6,
+        min: ranges::D_I_MM.min,
         max: ranges::D_I_MM.max,
         unit: ranges::D_I_MM.unit,
         description: "insulator thickness d_i",
@@ -89,7 +89,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "k_mm2_per_n",
         default: Some(ContactArea::PAPER.k_mm2_per_n),
-        min: 1e-6,
+        min: ranges::K_MM2_PER_N.min,
         max: ranges::K_MM2_PER_N.max,
         unit: ranges::K_MM2_PER_N.unit,
         description: "contact-area coefficient k in A = k Fn^n",
@@ -97,7 +97,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "area_exponent",
         default: Some(ContactArea::PAPER.exponent),
-        min: 1e-3,
+        min: ranges::AREA_EXPONENT.min,
         max: ranges::AREA_EXPONENT.max,
         unit: ranges::AREA_EXPONENT.unit,
         description: "contact-area exponent n in A = k Fn^n (1: the paper's linear law; otherwise fn_n is needed)",
@@ -105,7 +105,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "fn_n",
         default: None,
-        min: 1e-6,
+        min: ranges::FN_N.min,
         max: ranges::FN_N.max,
         unit: ranges::FN_N.unit,
         description: "exploration normal force Fn (used only when area_exponent != 1; default: the profile's mean fn_n)",
@@ -115,7 +115,7 @@ pub const DEVICE_PARAMS: &[ParamSpec] = &[
 impl ParamSpec {
     /// The accepted range.
     pub fn range(&self) -> Range {
-        Range::new(self.min, self.max, self.unit)
+        Range { name: self.name, min: self.min, max: self.max, unit: self.unit }
     }
 }
 
@@ -194,8 +194,7 @@ impl DeviceRequest {
 
 /// Checks min <= value <= max (and finite); the error names `field`.
 pub fn check_range(spec: &ParamSpec, value: f64, field: &str) -> Result<f64, ApiError> {
-    let range = spec.range();
-    if range.contains(value) { Ok(value) } else { Err(range.refusal(spec.name, value, field)) }
+    crate::fields::check(spec.range(), value, field)
 }
 
 /// Parses a mapping method: `physical` (eq. 8) or `normalized` (eq. 9).
@@ -254,7 +253,7 @@ mod tests {
             assert!(ratio.is_finite() && ratio > 0.0, "corner {corner:b}: Fe/Fn per V^2 = {ratio}");
             let mapping = PhysicalMapping::new(d.mu_hd, ratio, d.u_max_v);
             assert!(mapping.mu_clip.is_finite() && mapping.mu_clip > 0.0, "corner {corner:b}: {}", mapping.mu_clip);
-            for mu in [crate::fields::MU.min, crate::fields::MU.max, d.mu_hd, mapping.mu_clip] {
+            for mu in [ranges::MU.min, ranges::MU.max, d.mu_hd, mapping.mu_clip] {
                 let u = mapping.voltage_v(mu);
                 assert!(u.is_finite() && u >= 0.0, "corner {corner:b}, mu {mu}: U = {u}");
             }

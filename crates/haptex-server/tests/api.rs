@@ -18,7 +18,8 @@ use haptex_core::electrovibration::{Device, Method as MapMethod, map_profile};
 use haptex_core::io::Table;
 use haptex_core::library::Library;
 use haptex_core::profile::FrictionProfile;
-use haptex_server::{AppState, Limits, app, fields, params::DEVICE_PARAMS, routes};
+use haptex_core::ranges;
+use haptex_server::{AppState, Limits, app, params::DEVICE_PARAMS, routes};
 use serde_json::{Value, json};
 
 mod common;
@@ -137,27 +138,27 @@ async fn openapi_describes_every_route_and_the_parameter_ranges() {
         assert_eq!(property["minimum"].as_f64(), Some(spec.min), "{}", spec.name);
         assert_eq!(property["default"].as_f64(), spec.default, "{}", spec.name);
     }
-    // The ranges of every other number (`haptex_server::fields`).
+    // The ranges of every other number (`haptex_core::ranges`).
     let range = |schema: &Value| (schema["minimum"].as_f64(), schema["maximum"].as_f64());
-    let expect = |r: fields::Range| (Some(r.min), Some(r.max));
+    let expect = |r: ranges::Range| (Some(r.min), Some(r.max));
     let profile = &doc["components"]["schemas"]["FrictionProfile"]["properties"];
-    for (name, r) in [("x_mm", fields::POSITION_MM), ("mu", fields::MU), ("ft_n", fields::FT_N), ("fn_n", fields::FN_N)]
+    for (name, r) in [("x_mm", ranges::POSITION_MM), ("mu", ranges::MU), ("ft_n", ranges::FT_N), ("fn_n", ranges::FN_N)]
     {
         assert_eq!(range(&profile[name]["items"]), expect(r), "FrictionProfile.{name}");
     }
     let play = &doc["paths"]["/api/play"]["post"]["requestBody"]["content"]["application/json"]["schema"]["properties"];
     for (path, r) in [
-        ("voltage.x_mm[]", fields::POSITION_MM),
-        ("voltage.voltage_v[]", fields::VOLTAGE_V),
-        ("trajectory.t_s[]", fields::TIME_S),
-        ("trajectory.x_mm[]", fields::POSITION_MM),
-        ("stroke.velocity_mm_s", fields::VELOCITY_MM_S),
-        ("stroke.from_mm", fields::POSITION_MM),
-        ("stroke.to_mm", fields::POSITION_MM),
-        ("carrier.frequency_hz", fields::CARRIER_HZ),
-        ("slew_v_per_s", fields::SLEW_V_PER_S),
-        ("amplifier_range_v", fields::AMPLIFIER_RANGE_V),
-        ("volts_per_full_scale", fields::VOLTS_PER_FULL_SCALE),
+        ("voltage.x_mm[]", ranges::POSITION_MM),
+        ("voltage.voltage_v[]", ranges::VOLTAGE_V),
+        ("trajectory.t_s[]", ranges::TIME_S),
+        ("trajectory.x_mm[]", ranges::POSITION_MM),
+        ("stroke.velocity_mm_s", ranges::VELOCITY_MM_S),
+        ("stroke.from_mm", ranges::POSITION_MM),
+        ("stroke.to_mm", ranges::POSITION_MM),
+        ("carrier.frequency_hz", ranges::CARRIER_HZ),
+        ("slew_v_per_s", ranges::SLEW_V_PER_S),
+        ("amplifier_range_v", ranges::AMPLIFIER_RANGE_V),
+        ("volts_per_full_scale", ranges::VOLTS_PER_FULL_SCALE),
     ] {
         let mut schema = play;
         for part in path.trim_end_matches("[]").split('.') {

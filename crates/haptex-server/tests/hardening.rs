@@ -188,7 +188,12 @@ async fn derived_values_are_checked_like_given_ones() {
     let cases: &[(&str, &str, &str, &str)] = &[
         ("x_mm,ft_n,fn_n\n0,0.1,0.2\n1,1e308,0.2\n", "ft_n", "profile.ft_n[1]", "1e308"),
         ("x_mm,ft_n,fn_n\n0,0.1,0.2\n1,0.1,5e-324\n", "fn_n", "profile.fn_n[1]", "5e-324"),
-        ("x_mm,ft_n,fn_n\n0,0.1,0.2\n1,10,1e-5\n", "fn_n", "profile.fn_n[1]", "mu = ft_n / fn_n = 999999.99"),
+        (
+            "x_mm,ft_n,fn_n\n0,0.1,0.2\n1,10,1e-5\n",
+            "fn_n",
+            "profile.fn_n[1]",
+            "mu = ft_n / fn_n = 10 / 0.00001 = 999999.99",
+        ),
         ("x_mm,mu,fn_n\n0,1,0.2\n1,1,5e-324\n", "fn_n", "profile.fn_n[1]", "5e-324"),
         ("x_mm,mu\n-1e308,1\n1e308,1\n", "x_mm", "profile.x_mm[0]", "-1e308"),
         ("x_mm,mu\n0,-1e308\n1,1e308\n", "mu", "profile.mu[0]", "-1e308"),

@@ -7,7 +7,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::electrovibration::VoltageProfile;
 use crate::io::Table;
-use crate::num::Num;
 use crate::profile::{ProfileError, validate};
 
 /// What the voltage is where the finger is outside the profile's span
@@ -43,7 +42,6 @@ impl VoltageCurve {
             message,
         };
         validate(&x_mm, &[("voltage_v", &voltage_v)]).map_err(in_memory)?;
-        check_non_negative(&voltage_v).map_err(in_memory)?;
         Ok(Self { x_mm, voltage_v })
     }
 
@@ -56,7 +54,6 @@ impl VoltageCurve {
         let x_mm = table.require("x_mm")?.to_vec();
         let voltage_v = table.require("voltage_v")?.to_vec();
         validate(&x_mm, &[("voltage_v", &voltage_v)]).map_err(at)?;
-        check_non_negative(&voltage_v).map_err(at)?;
         Ok(Self { x_mm, voltage_v })
     }
 
@@ -123,15 +120,6 @@ impl From<&VoltageProfile> for VoltageCurve {
     }
 }
 
-fn check_non_negative(voltage_v: &[f64]) -> Result<(), (Option<usize>, &'static str, String)> {
-    match voltage_v.iter().position(|&u| u < 0.0) {
-        Some(i) => {
-            Err((Some(i), "voltage_v", format!("an RMS voltage cannot be negative, got {} V", Num(voltage_v[i]))))
-        }
-        None => Ok(()),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -157,7 +145,7 @@ mod tests {
         let c = VoltageCurve::read_csv("x_mm,voltage_v\n0,1\n1,2\n".as_bytes(), "u.csv").unwrap();
         assert_eq!(c.max_v(), 2.0);
         let e = VoltageCurve::read_csv("x_mm,voltage_v\n0,1\n1,-2\n".as_bytes(), "u.csv").unwrap_err();
-        assert_eq!(e.to_string(), "u.csv, line 3, column 'voltage_v': an RMS voltage cannot be negative, got -2 V");
+        assert_eq!(e.to_string(), "u.csv, line 3, column 'voltage_v': voltage_v must be from 0 to 1000000 V, got -2");
         let e = VoltageCurve::read_csv("x_mm,mu\n0,1\n1,2\n".as_bytes(), "u.csv").unwrap_err();
         assert!(e.to_string().starts_with("u.csv, line 1, column 'voltage_v': required column is missing"), "{e}");
         let e = VoltageCurve::read_csv("x_mm,voltage_v\n0,1\n0,2\n".as_bytes(), "u.csv").unwrap_err();

@@ -31,6 +31,7 @@ use crate::input::{BodyKind, Query, TrajectoryJson, body_bytes, body_kind, check
 use crate::params::{check_range, spec};
 use crate::state::AppState;
 use crate::work;
+use haptex_core::ranges;
 
 /// Finger speed of a generated stroke when the GUI has no other, mm/s.
 pub const DEFAULT_VELOCITY_MM_S: f64 = 50.0;
@@ -129,8 +130,7 @@ impl Job {
     fn parse(bytes: &[u8], limits: &crate::Limits) -> Result<Self, ApiError> {
         let body: PlayBody = parse_json(bytes)?;
         check_points(body.voltage.x_mm.len(), limits.max_points, "voltage.x_mm")?;
-        fields::POSITION_MM.check_all(&body.voltage.x_mm, "voltage.x_mm")?;
-        fields::VOLTAGE_V.check_all(&body.voltage.voltage_v, "voltage.voltage_v")?;
+        // haptex-core checks positions and voltages against their ranges.
         let curve = VoltageCurve::new(body.voltage.x_mm, body.voltage.voltage_v).map_err(|e| match e {
             ProfileError::Invalid { index, field, message } => {
                 ApiError::bad_request(message, Some(&format!("voltage.{field}[{index}]")))
@@ -151,7 +151,7 @@ impl Job {
         }
         let carrier = body.carrier.unwrap_or(Carrier::DEFAULT);
         if carrier.shape != CarrierShape::None {
-            let f = fields::CARRIER_HZ.check(carrier.frequency_hz, "carrier.frequency_hz")?;
+            let f = fields::check(ranges::CARRIER_HZ, carrier.frequency_hz, "carrier.frequency_hz")?;
             let nyquist = f64::from(sample_rate_hz) / 2.0;
             if f >= nyquist {
                 return Err(ApiError::bad_request(
@@ -168,13 +168,16 @@ impl Job {
             Some(u) => check_range(spec("u_max_v").expect("u_max_v is a device parameter"), u, "u_max_v")?,
             None => Limits::DEFAULT.u_max_v,
         };
-        let slew_v_per_s = body.slew_v_per_s.map(|v| fields::SLEW_V_PER_S.check(v, "slew_v_per_s")).transpose()?;
-        let amplifier_range_v =
-            body.amplifier_range_v.map(|v| fields::AMPLIFIER_RANGE_V.check(v, "amplifier_range_v")).transpose()?;
+        let slew_v_per_s =
+            body.slew_v_per_s.map(|v| fields::check(ranges::SLEW_V_PER_S, v, "slew_v_per_s")).transpose()?;
+        let amplifier_range_v = body
+            .amplifier_range_v
+            .map(|v| fields::check(ranges::AMPLIFIER_RANGE_V, v, "amplifier_range_v"))
+            .transpose()?;
         // Checked whatever the format, so that a request is valid or not
         // independently of the answer it asks for.
         let volts_per_full_scale = match body.volts_per_full_scale {
-            Some(v) => fields::VOLTS_PER_FULL_SCALE.check(v, "volts_per_full_scale")?,
+            Some(v) => fields::check(ranges::VOLTS_PER_FULL_SCALE, v, "volts_per_full_scale")?,
             None => std::f64::consts::SQRT_2 * u_max_v,
         };
         let settings = RenderSettings {
@@ -228,7 +231,7 @@ fn trajectory(
     match (given, stroke) {
         (Some(t), None) => Ok(("trajectory", t.into_trajectory("trajectory.", limits.max_points)?)),
         (None, Some(s)) => {
-            let velocity = fields::VELOCITY_MM_S.check(s.velocity_mm_s, "stroke.velocity_mm_s")?;
+            let velocity = fields::check(ranges::VELOCITY_MM_S, s.velocity_mm_s, "stroke.velocity_mm_s")?;
             let strokes = s.strokes.unwrap_or(1);
             if !(1..=MAX_STROKES).contains(&strokes) {
                 return Err(ApiError::bad_request(
@@ -237,8 +240,8 @@ fn trajectory(
                 ));
             }
             let (x0, x1) = curve.span_mm();
-            let from = fields::POSITION_MM.check(s.from_mm.unwrap_or(x0), "stroke.from_mm")?;
-            let to = fields::POSITION_MM.check(s.to_mm.unwrap_or(x1), "stroke.to_mm")?;
+            let from = fields::check(ranges::POSITION_MM, s.from_mm.unwrap_or(x0), "stroke.from_mm")?;
+            let to = fields::check(ranges::POSITION_MM, s.to_mm.unwrap_or(x1), "stroke.to_mm")?;
             // Refuse before generating: the render is at least this long.
             let duration_s = (to - from).abs() / velocity * f64::from(strokes);
             let samples = duration_s * f64::from(sample_rate_hz.max(STROKE_RATE_HZ as u32)) + 1.0;
