@@ -38,4 +38,4 @@ for t in "${targets[@]}"; do
 done
 echo "total: $total executions"
 echo "replaying every corpus with a timer (linear-time check):"
-cargo run --quiet --release --bin replay -- corpus
+cargo run --quiet --release --example replay -- corpus
