@@ -304,7 +304,10 @@ impl TemplateModel {
         out: &mut [f64],
     ) -> Result<(Option<usize>, Diagnostics), DatabaseError> {
         if inputs.iter().any(|v| !v.is_finite()) {
-            return Err(DatabaseError::Query(format!("parameters must be finite numbers, got {inputs:?}")));
+            return Err(DatabaseError::Query(format!(
+                "parameters must be finite numbers, got {}",
+                crate::num::Nums(inputs)
+            )));
         }
         let diagnostics = self.cae.predict_into(inputs, scratch, out)?;
         let row = self.exact_row(inputs);

@@ -19,4 +19,5 @@ pub use profile::{FrictionProfile, ProfileError};
 pub mod plot;
 pub mod realtime;
 pub mod signal;
+pub mod text;
 pub mod trajectory;

@@ -42,8 +42,8 @@ impl ApiError {
     /// hostile name echoed back) is cut, so that an error answer stays
     /// small whatever the request.
     pub fn new(status: StatusCode, message: impl Into<String>, field: Option<&str>) -> Self {
-        let message = cut(message.into(), Self::MAX_MESSAGE_BYTES);
-        let field = field.map(|f| cut(f.to_string(), Self::MAX_FIELD_BYTES));
+        let message = cut(printable(message.into()), Self::MAX_MESSAGE_BYTES);
+        let field = field.map(|f| cut(printable(f.to_string()), Self::MAX_FIELD_BYTES));
         Self { status, message, field, line: None }
     }
 
@@ -95,6 +95,17 @@ impl ApiError {
     }
 }
 
+/// `text` with control characters escaped (`\0`, `\n`, `\u{1b}`), so
+/// that the cut below bounds the answer: JSON would write each as six
+/// bytes.
+fn printable(text: String) -> String {
+    if text.chars().any(char::is_control) {
+        text.chars().map(|c| if c.is_control() { c.escape_debug().to_string() } else { c.to_string() }).collect()
+    } else {
+        text
+    }
+}
+
 /// `text` cut to at most `max` bytes (at a character boundary), marked
 /// with "..." when cut.
 fn cut(mut text: String, max: usize) -> String {
@@ -110,14 +121,10 @@ fn cut(mut text: String, max: usize) -> String {
 }
 
 /// A text from the request (a path, a name, a header value) as an error
-/// message quotes it: in quotes with control characters escaped, its
-/// first 60 characters and its length when longer.
+/// message quotes it ([`haptex_core::text::Quoted`]: in quotes, control
+/// characters escaped, cut with its length when long).
 pub fn quote(text: &str) -> String {
-    const KEEP: usize = 60;
-    match text.char_indices().nth(KEEP) {
-        None => format!("{text:?}"),
-        Some((end, _)) => format!("{:?}... ({} bytes)", &text[..end], text.len()),
-    }
+    haptex_core::text::Quoted(text).to_string()
 }
 
 impl std::fmt::Display for ApiError {

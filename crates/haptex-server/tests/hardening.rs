@@ -393,3 +393,26 @@ fn access_log_is_off_by_default_and_errors_are_always_logged() {
     });
     assert!(errors.contains("ERROR") && errors.contains("/api/materials"), "{errors}");
 }
+
+/// Found by the fuzz campaign (fuzz/, target http_body): a CSV header of
+/// 1000 NUL bytes made the error name that column, and JSON wrote each NUL
+/// as six bytes: a 4 KB answer echoing binary. Whatever the request, an
+/// error answer is short and printable.
+#[tokio::test]
+async fn error_answers_are_short_and_printable_whatever_the_request() {
+    let router = app(shipped_state());
+    let headers = [
+        format!("{}#\nx_mm,mu\n0,1\n1,1\n", "\0".repeat(1000)),
+        format!("x_mm,{}\n0,1\n1,1\n", "\u{1b}[31m".repeat(3000)),
+        format!("x_mm,{}\n0,1\n1,1\n", "m".repeat(500_000)),
+    ];
+    for csv in headers {
+        let request = Request::post("/api/voltage").header(header::CONTENT_TYPE, "text/csv").body(Body::from(csv));
+        let answer = send_to(router.clone(), request.unwrap()).await;
+        assert_eq!(answer.status, StatusCode::BAD_REQUEST);
+        assert!(answer.body.len() < 1024, "an error answer of {} bytes: {}", answer.body.len(), answer.text());
+        let json = answer.json();
+        let message = json["error"].as_str().unwrap();
+        assert!(!message.chars().any(char::is_control), "{message:?}");
+    }
+}

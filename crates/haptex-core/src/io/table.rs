@@ -21,6 +21,8 @@ pub enum TableErrorKind {
     NoHeader,
     #[error("empty column name in the header")]
     EmptyColumnName,
+    #[error("column name {name} has a control character (fields are separated by commas; is this a CSV file?)")]
+    ControlCharacter { name: String },
     #[error("column name appears twice in the header")]
     DuplicateColumn,
     #[error("required column is missing (the header has: {present})")]
@@ -119,8 +121,12 @@ impl Table {
             if name.is_empty() {
                 return Err(error(Some(header_line), None, TableErrorKind::EmptyColumnName));
             }
+            if name.chars().any(char::is_control) {
+                let name = column_label(name);
+                return Err(error(Some(header_line), None, TableErrorKind::ControlCharacter { name }));
+            }
             if index.insert(name.to_string(), columns.len()).is_some() {
-                return Err(error(Some(header_line), Some(name.to_string()), TableErrorKind::DuplicateColumn));
+                return Err(error(Some(header_line), Some(column_label(name)), TableErrorKind::DuplicateColumn));
             }
             columns.push(name.to_string());
         }
@@ -131,8 +137,8 @@ impl Table {
             let mut found = 0;
             for field in row.split(|&b| b == b',') {
                 if found < columns.len() {
-                    let value =
-                        parse_number(field).map_err(|kind| error(Some(line), Some(columns[found].clone()), kind))?;
+                    let value = parse_number(field)
+                        .map_err(|kind| error(Some(line), Some(column_label(&columns[found])), kind))?;
                     data[found].push(value);
                 }
                 found += 1;
@@ -197,7 +203,7 @@ impl Table {
         self.column(name).ok_or_else(|| TableError {
             source_name: self.source_name.clone(),
             line: Some(self.header_line),
-            column: Some(name.to_string()),
+            column: Some(column_label(name)),
             kind: TableErrorKind::MissingColumn { present: self.header_summary() },
         })
     }
@@ -225,7 +231,7 @@ impl Table {
         TableError {
             source_name: self.source_name.clone(),
             line: Some(row.and_then(|r| self.lines.get(r).copied()).unwrap_or(self.header_line)),
-            column: column.map(str::to_string),
+            column: column.map(column_label),
             kind: TableErrorKind::Invalid(message.into()),
         }
     }
@@ -318,6 +324,13 @@ fn parse_number(field: &[u8]) -> Result<f64, TableErrorKind> {
     if value.is_finite() { Ok(value) } else { Err(TableErrorKind::NonFinite { text: quote(text) }) }
 }
 
+/// A column name as an error names it: whole if short, else its first 40
+/// characters and its length (an error never carries a megabyte), with
+/// control characters escaped.
+fn column_label(name: &str) -> String {
+    quote(&name.escape_debug().to_string())
+}
+
 /// A field as quoted in an error: whole if short, else its first 40
 /// characters and how long it was (a message never carries a megabyte).
 fn quote(text: &str) -> String {
@@ -368,6 +381,22 @@ mod tests {
         // A line just under the limit is fine.
         let ok = format!("x\n0.{}\n", "1".repeat(MAX_LINE_BYTES - 10));
         assert_eq!(read(&ok).unwrap().n_rows(), 1);
+    }
+
+    /// A column name is named short and printable in errors, whatever the
+    /// header holds; a name with a control character is refused.
+    #[test]
+    fn column_names_in_errors_are_short_and_printable() {
+        let long = "c".repeat(5000);
+        let e = read(&format!("{long}\nx\n")).unwrap_err();
+        let column = e.column.clone().unwrap();
+        assert!(column.len() < 80 && column.ends_with("(5000 bytes)"), "{column}");
+        assert!(e.to_string().len() < 200, "{e}");
+        let e = read(&format!("x,{}#\n1,2\n", "\0".repeat(1000))).unwrap_err();
+        assert!(matches!(e.kind, TableErrorKind::ControlCharacter { .. }), "{e}");
+        assert!(e.to_string().len() < 200 && !e.to_string().contains('\0'), "{e}");
+        let e = read("x\tmu\n1\t2\n").unwrap_err();
+        assert!(e.to_string().contains("separated by commas"), "{e}");
     }
 
     #[test]

@@ -36,6 +36,7 @@ use sha2::{Digest, Sha256};
 use crate::profile::FrictionProfile;
 use crate::recording::rng::SplitMix64;
 use crate::recording::{ProcessedStroke, ProcessingConfig, Recording};
+use crate::text::Quoted;
 
 pub use schema::SCHEMA_VERSION;
 
@@ -58,15 +59,16 @@ pub enum LibraryError {
          `haptex library upgrade --db {path}`"
     )]
     OlderSchema { path: String, found: i64, supported: i64 },
-    #[error("no material named {name:?} in the library (it has: {known})")]
+    #[error("no material named {} in the library (it has: {known})", Quoted(name))]
     UnknownMaterial { name: String, known: String },
     #[error("no stroke with id {0} in the library")]
     UnknownStroke(i64),
-    #[error("invalid material name {name:?}: {message}")]
+    #[error("invalid material name {}: {message}", Quoted(name))]
     InvalidName { name: String, message: String },
     #[error(
-        "material {name:?} holds {existing} strokes, this one is {new}: a material never mixes synthetic and \
-         measured data; import it under another name (e.g. {name}-{new}) or into another library (--db)"
+        "material {} holds {existing} strokes, this one is {new}: a material never mixes synthetic and \
+         measured data; import it under another name (e.g. {name}-{new}) or into another library (--db)",
+        Quoted(name)
     )]
     SyntheticMismatch { name: String, existing: &'static str, new: &'static str },
     #[error("stroke {id}: stored profile is corrupt: {message}")]

@@ -25,6 +25,7 @@ use sha2::{Digest, Sha256};
 use super::error::{Place, RecordingError};
 use crate::io::{Table, WriteError, write_atomic, write_csv_row};
 use crate::num::Num;
+use crate::text::Quoted;
 
 /// Value of the metadata's `format` field.
 pub const FORMAT: &str = "haptex-recording-1";
@@ -310,8 +311,9 @@ fn stream_path(file: &str, dir: &Path, field: &str, relative: &str) -> Result<Pa
             file,
             field,
             format!(
-                "{relative:?} is not a file name inside the recording's directory (no absolute paths, no '..'): \
-                 streams sit beside their metadata"
+                "{} is not a file name inside the recording's directory (no absolute paths, no '..'): streams \
+                 sit beside their metadata",
+                Quoted(relative)
             ),
         ));
     }
@@ -368,7 +370,7 @@ fn check_meta(file: &str, meta: &RecordingMeta) -> Result<(), RecordingError> {
         return Err(RecordingError::field(
             file,
             "format",
-            format!("is {:?}; this haptex reads {FORMAT:?}", meta.format),
+            format!("is {}; this haptex reads {FORMAT:?}", Quoted(&meta.format)),
         ));
     }
     for (field, value) in [("material", &meta.material), ("participant", &meta.participant)] {
@@ -407,8 +409,9 @@ fn check_meta(file: &str, meta: &RecordingMeta) -> Result<(), RecordingError> {
                 file,
                 field,
                 format!(
-                    "is {unit:?}; haptex recordings are in {word} ({expected:?}): convert the data when exporting \
-                     them (docs/recordings.md)"
+                    "is {}; haptex recordings are in {word} ({expected:?}): convert the data when exporting them \
+                     (docs/recordings.md)",
+                    Quoted(unit)
                 ),
             ));
         }
