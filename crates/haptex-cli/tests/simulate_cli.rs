@@ -58,8 +58,21 @@ fn simulate_writes_profile_history_vtk_and_png() {
     assert!(
         vtu.contains("Name=\"displacement\"") && vtu.contains("Name=\"subdomain\"") && vtu.ends_with("</VTKFile>\n")
     );
+    // The frames are a file set: the collection lists each frame's hash.
+    let frame_0 = std::fs::read(dir.path().join("vtk/frame_0000.vtu")).unwrap();
+    assert!(pvd.contains(&format!("{}  frame_0000.vtu", haptex_core::io::sha256_hex(&frame_0))), "{pvd}");
     let png = std::fs::read(p("finger.png")).unwrap();
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    // Issue 13: a run killed before the collection is written leaves none
+    // (the old one is removed first), not an old collection over new frames.
+    let killed = std::process::Command::new(env!("CARGO_BIN_EXE_haptex"))
+        .args(["simulate", "--surface", "bump", "--x0", "2", "--width", "1", "--height", "0.2", "--slide", "4"])
+        .args(["--mesh", "coarse", "-q", "--vtk", &p("vtk")])
+        .env("HAPTEX_FAULT_INJECT", "before-marker")
+        .output()
+        .unwrap();
+    assert!(!killed.status.success(), "the fault hook did not fire");
+    assert!(!dir.path().join("vtk/simulation.pvd").exists() && dir.path().join("vtk/frame_0000.vtu").exists());
 }
 
 #[test]

@@ -5,7 +5,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use haptex_core::io::{WriteError, write_atomic, write_csv_row};
+use haptex_core::io::{FileSet, WriteError, write_csv_row};
 use haptex_core::plot::{Figure, PlotError};
 
 use crate::drawing::{MeshView, mesh_panel};
@@ -56,20 +56,27 @@ pub fn write_profile(result: &SimulationResult, description: &str, w: &mut dyn W
 /// missing). Points are the reference positions with a `displacement`
 /// vector (use ParaView's Warp By Vector); cells carry the subdomain id
 /// (0-5 as in the finger model, 6 = rigid surface) and the stress.
+///
+/// The frames are a file set whose marker is `simulation.pvd`: removed
+/// first, written last (with each frame's SHA-256 in an XML comment), so a
+/// run interrupted while writing leaves no collection that could name a
+/// mix of old and new frames.
 pub fn write_vtk_series(result: &SimulationResult, dir: &Path) -> Result<Vec<std::path::PathBuf>, WriteError> {
-    std::fs::create_dir_all(dir).map_err(|source| WriteError { path: dir.to_path_buf(), source })?;
+    let mut set = FileSet::begin(dir, "simulation.pvd")?;
     let mut written = Vec::new();
     let mut entries = Vec::new();
     for (k, frame) in result.frames.iter().enumerate() {
         let name = format!("frame_{k:04}.vtu");
-        let path = dir.join(&name);
-        write_atomic(&path, |w| write_vtu(result, frame, w))?;
+        written.push(set.write(&name, |w| write_vtu(result, frame, w))?);
         entries.push((frame.t_s, name));
-        written.push(path);
     }
-    let pvd = dir.join("simulation.pvd");
-    write_atomic(&pvd, |w| {
+    let pvd = set.finish(|w, hashes| {
         writeln!(w, "<?xml version=\"1.0\"?>")?;
+        writeln!(w, "<!-- written by haptex simulate; SHA-256 of each frame:")?;
+        for (name, hash) in hashes {
+            writeln!(w, "     {hash}  {name}")?;
+        }
+        writeln!(w, "-->")?;
         writeln!(w, "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">")?;
         writeln!(w, "  <Collection>")?;
         for (t, name) in &entries {

@@ -230,8 +230,18 @@ impl Recording {
 
     /// Writes the recording as `dir/STEM.recording.json` with its two streams
     /// `STEM.force.EXT` and `STEM.position.EXT` (NPY: float32). Each file is
-    /// written atomically. Returns the metadata path.
+    /// written atomically, and the metadata, which names the streams, is
+    /// removed first and written last: an interrupted write leaves no
+    /// metadata (so no recording an import would find), never one beside
+    /// streams of another write. Returns the metadata path.
     pub fn write(&self, dir: &Path, stem: &str, format: StreamFormat) -> Result<PathBuf, WriteError> {
+        let meta_path = dir.join(format!("{stem}{METADATA_SUFFIX}"));
+        match std::fs::remove_file(&meta_path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(WriteError { path: meta_path, source: e });
+            }
+            _ => {}
+        }
         let ext = format.extension();
         let force_file = format!("{stem}.force.{ext}");
         let position_file = format!("{stem}.position.{ext}");
@@ -250,7 +260,7 @@ impl Recording {
         let mut meta = self.meta.clone();
         meta.force.file = force_file;
         meta.position.file = position_file;
-        let meta_path = dir.join(format!("{stem}{METADATA_SUFFIX}"));
+        crate::io::fault_point("before-recording-metadata");
         write_atomic(&meta_path, |w| {
             serde_json::to_writer_pretty(&mut *w, &meta).map_err(std::io::Error::from)?;
             w.write_all(b"\n")
