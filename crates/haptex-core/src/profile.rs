@@ -76,7 +76,7 @@ impl FrictionProfile {
                     (Some(ft), Some(fnn)) => (ft, fnn),
                     _ => {
                         let missing = if table.column("ft_n").is_none() { "mu (or ft_n and fn_n)" } else { "fn_n" };
-                        return Err(table.require(missing).unwrap_err().into());
+                        return Err(table.missing(missing).into());
                     }
                 };
                 validate(&x_mm, &[("ft_n", ft), ("fn_n", fnn)]).map_err(at)?;

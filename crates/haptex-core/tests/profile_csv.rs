@@ -41,6 +41,10 @@ fn malformed_files_name_line_and_column() {
         ("x,mu\n0,1\n1,1\n", Some(1), Some("x_mm"), "missing"),
         ("x_mm,friction\n0,1\n1,1\n", Some(1), Some("mu (or ft_n and fn_n)"), "missing"),
         ("x_mm,ft_n\n0,1\n1,1\n", Some(1), Some("fn_n"), "missing"),
+        // Found by the fuzz campaign: a column named like the message's
+        // description of what is missing (the reader asked the table for it
+        // and unwrapped the "error").
+        ("x_mm,mu (or ft_n and fn_n)\n0,1\n1,1\n", Some(1), Some("mu (or ft_n and fn_n)"), "missing"),
         ("x_mm,ft_n,fn_n\n0,1,1\n1,1,0\n", Some(3), Some("fn_n"), "fn_n must be from 1e-6 to 100 N, got 0"),
         ("x_mm,ft_n,fn_n\n0,1,-2\n1,1,1\n", Some(2), Some("fn_n"), "fn_n must be from 1e-6 to 100 N, got -2"),
         ("x_mm,mu,mu\n0,1,1\n1,1,1\n", Some(1), Some("mu"), "twice"),

@@ -200,12 +200,18 @@ impl Table {
 
     /// A column's values, or a "missing column" error naming the header line.
     pub fn require(&self, name: &str) -> Result<&[f64], TableError> {
-        self.column(name).ok_or_else(|| TableError {
+        self.column(name).ok_or_else(|| self.missing(name))
+    }
+
+    /// The "required column is missing" error for `what` (a column name, or
+    /// a description such as `mu (or ft_n and fn_n)`), at the header line.
+    pub fn missing(&self, what: &str) -> TableError {
+        TableError {
             source_name: self.source_name.clone(),
             line: Some(self.header_line),
-            column: Some(column_label(name)),
+            column: Some(column_label(what)),
             kind: TableErrorKind::MissingColumn { present: self.header_summary() },
-        })
+        }
     }
 
     /// The header's column names for a message: all of them if there are

@@ -504,7 +504,7 @@ fn missing_column(table: &Table, name: &str) -> RecordingError {
             )
             .into();
     }
-    table.require(name).map(|_| ()).unwrap_err().into()
+    table.missing(name).into()
 }
 
 /// Reads a 2-D float NPY array with `names.len()` columns (C or Fortran order).
