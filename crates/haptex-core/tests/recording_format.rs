@@ -283,3 +283,31 @@ fn npy_shape_larger_than_the_file_is_refused() {
     let message = Recording::load(&meta_path).unwrap_err().to_string();
     assert!(message.contains("claims more values than the file"), "{message}");
 }
+
+/// Found by the fuzz campaign: an NPY header whose shape is 90 nested
+/// brackets (`'shape': [[[[...`) took the NPY library's header parser
+/// exponential time (over 10 s). A header that is not the plain dictionary
+/// numpy writes is refused before it is parsed.
+#[test]
+fn npy_header_with_nested_brackets_is_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut header = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': {}", "[".repeat(90));
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend((header.len() as u16).to_le_bytes());
+    bytes.extend(header.bytes());
+    bytes.extend([0u8; 64]);
+    std::fs::write(dir.path().join("p.npy"), &bytes).unwrap();
+    std::fs::write(dir.path().join("s.force.csv"), force_csv()).unwrap();
+    let meta_path = dir.path().join("s.recording.json");
+    std::fs::write(&meta_path, META.replace("s.position.csv", "p.npy")).unwrap();
+    let start = std::time::Instant::now();
+    let message = Recording::load(&meta_path).unwrap_err().to_string();
+    assert!(message.contains("not the plain dictionary numpy writes"), "{message}");
+    // Exponential before the fix (over 10 s); a guard against its return,
+    // not a timing of the reader.
+    assert!(start.elapsed() < std::time::Duration::from_secs(2), "{:?}", start.elapsed());
+}

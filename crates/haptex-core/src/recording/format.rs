@@ -510,6 +510,7 @@ fn missing_column(table: &Table, name: &str) -> RecordingError {
 /// Reads a 2-D float NPY array with `names.len()` columns (C or Fortran order).
 fn read_npy_columns(bytes: &[u8], file: &str, names: &[&str]) -> Result<Vec<Vec<f64>>, RecordingError> {
     let npy_error = |message: String| RecordingError::invalid(file, Place::File, None, message);
+    check_npy_header(bytes).map_err(|m| npy_error(format!("not a valid NPY file: {m}")))?;
     let npy = npyz::NpyFile::new(bytes).map_err(|e| npy_error(format!("not a valid NPY file: {e}")))?;
     let shape = npy.shape().to_vec();
     let k = names.len();
@@ -547,6 +548,34 @@ fn read_npy_columns(bytes: &[u8], file: &str, names: &[&str]) -> Result<Vec<Vec<
             if fortran { flat[c * rows..(c + 1) * rows].to_vec() } else { (0..rows).map(|r| flat[r * k + c]).collect() }
         })
         .collect())
+}
+
+/// Checks that an NPY header is the plain dictionary numpy writes
+/// (`{'descr': '<f4', 'fortran_order': False, 'shape': (N, K), }`) before
+/// the NPY library parses it: its Python-literal parser takes exponential
+/// time on nested brackets (`'shape': [[[[...`, found by the fuzz
+/// campaign), which no numpy header has.
+fn check_npy_header(bytes: &[u8]) -> Result<(), String> {
+    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
+        return Err("no NPY magic".into());
+    }
+    let (length, start) = match bytes[6] {
+        1 => (usize::from(u16::from_le_bytes([bytes[8], bytes[9]])), 10),
+        2 | 3 if bytes.len() >= 12 => (u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize, 12),
+        version => return Err(format!("NPY version {version} is not supported")),
+    };
+    const MAX_HEADER_BYTES: usize = 4096;
+    if length > MAX_HEADER_BYTES {
+        return Err(format!("a header of {length} bytes (numpy writes under {MAX_HEADER_BYTES})"));
+    }
+    let header = bytes.get(start..start + length).ok_or("the header is cut short")?;
+    let count = |c: u8| header.iter().filter(|&&b| b == c).count();
+    if count(b'{') != 1 || count(b'}') != 1 || count(b'(') > 1 || count(b')') > 1 || count(b'[') > 0 {
+        return Err("the header is not the plain dictionary numpy writes ({'descr': ..., 'fortran_order': ..., \
+                    'shape': (..)})"
+            .into());
+    }
+    Ok(())
 }
 
 /// Every value finite, at least two rows, time strictly increasing.
