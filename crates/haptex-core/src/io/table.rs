@@ -123,7 +123,7 @@ impl Table {
             }
             if name.chars().any(char::is_control) {
                 let name = column_label(name);
-                return Err(error(Some(header_line), None, TableErrorKind::ControlCharacter { name }));
+                return Err(error(Some(header_line), Some(name.clone()), TableErrorKind::ControlCharacter { name }));
             }
             if index.insert(name.to_string(), columns.len()).is_some() {
                 return Err(error(Some(header_line), Some(column_label(name)), TableErrorKind::DuplicateColumn));
