@@ -69,6 +69,40 @@ impl Template {
         }
     }
 
+    /// h(x), h'(x) and h''(x) of [`Template::height_mm`] (mm, 1, 1/mm):
+    /// the surface's slope and curvature, which a contact computation on
+    /// the exact curve needs. The edge's smoothstep is C1: its h'' jumps at
+    /// both ends of the rise (0 outside, 6 r_h / r_w^2 at its foot).
+    pub fn height_derivatives_mm(self, x: f64, x0: f64, width: f64, height: f64) -> [f64; 3] {
+        match self {
+            Template::Bump => {
+                let s = 0.5 * width;
+                let u = (x - x0) / s;
+                let h = height * (-u * u).exp();
+                [h, -2.0 * u / s * h, (4.0 * u * u - 2.0) / (s * s) * h]
+            }
+            Template::Edge => {
+                let t = (x - x0 + width) / width;
+                if t <= 0.0 {
+                    [0.0, 0.0, 0.0]
+                } else if t >= 1.0 {
+                    [height, 0.0, 0.0]
+                } else {
+                    [
+                        height * t * t * (3.0 - 2.0 * t),
+                        height * 6.0 * t * (1.0 - t) / width,
+                        height * (6.0 - 12.0 * t) / (width * width),
+                    ]
+                }
+            }
+            Template::Sine => {
+                let k = std::f64::consts::TAU / width;
+                let (sin, cos) = (k * (x - x0)).sin_cos();
+                [height * sin, height * k * cos, -height * k * k * sin]
+            }
+        }
+    }
+
     /// A query in words, as the headers of predicted and simulated
     /// profiles give it: `bump x0=5 mm r_w=1.3 mm r_h=0.27 mm velocity=20
     /// mm/s` (`query`: r_w, r_h, velocity).
@@ -449,6 +483,32 @@ mod tests {
         assert_eq!((p[0], p[250], p[500]), (-5.0, 0.0, 5.0));
         assert!((p[1] + 4.98).abs() < 1e-12);
         assert_eq!(g.column_names()[1], "mu@-4.98");
+    }
+
+    /// The derivatives agree with central differences of height_mm (step
+    /// 1e-5 mm: truncation ~1e-10 relative, round-off ~1e-11) and the value
+    /// with height_mm itself, for every template over its feature.
+    #[test]
+    fn height_derivatives_match_differences() {
+        for template in [Template::Bump, Template::Edge, Template::Sine] {
+            for i in 0..=400 {
+                let (x0, w, a) = (5.0, 1.5, 0.3);
+                let x = 3.0 + 4.0 * i as f64 / 400.0 + 1e-3;
+                let [h, h1, h2] = template.height_derivatives_mm(x, x0, w, a);
+                let f = |x: f64| template.height_mm(x, x0, w, a);
+                let d = 1e-5;
+                assert!((h - f(x)).abs() < 1e-15, "{template:?} h at {x}");
+                let fd1 = (f(x + d) - f(x - d)) / (2.0 * d);
+                assert!((h1 - fd1).abs() < 1e-8, "{template:?} h' at {x}: {h1} vs {fd1}");
+                let fd2 = (f(x + d) - 2.0 * f(x) + f(x - d)) / (d * d);
+                // The edge's h'' jumps at the ends of its rise: skip those.
+                let near_kink = template == Template::Edge && ((x - x0).abs() < d || (x - x0 + w).abs() < d);
+                assert!(
+                    near_kink || (h2 - fd2).abs() < 1e-4 * (1.0 + h2.abs()),
+                    "{template:?} h'' at {x}: {h2} vs {fd2}"
+                );
+            }
+        }
     }
 
     #[test]

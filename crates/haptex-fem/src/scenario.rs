@@ -311,6 +311,7 @@ pub fn build_problem(scenario: &Scenario) -> Result<(ContactProblem, f64), Simul
         penalty_tangential: scenario.penalty_mpa_per_mm,
         mu,
         smoothing_mm: scenario.smoothing_mm,
+        geometric_tangent: false,
     };
     let body = Body::new(finger.mesh, scenario.model.subdomain_models(scenario.viscoelastic), Formulation::BBar)?;
     let problem = ContactProblem {

@@ -65,32 +65,55 @@ pub struct ContactProblem {
 pub const MAX_CONTACT_NODES: usize = 2000;
 
 /// Newton settings.
+///
+/// A step has converged when both hold:
+///
+/// - the force residual |S R|_inf (N per mm of width) is at most
+///   `relative_tolerance` times the current contact force scale: the
+///   largest nodal contact force, or, if larger, the force of
+///   `floor_penetration_mm` of penetration at one contact point (penalty x
+///   depth x the smallest point weight). The floor is what the contact
+///   discretization resolves; it matters only while the first points touch,
+///   when the contact force itself is near 0;
+/// - the part of the last Newton correction that was not taken, (1 - alpha)
+///   |dv|_inf with alpha the line search's step, is at most
+///   `increment_tolerance_mm`: the iterate is where Newton's method
+///   pointed, not merely somewhere along a damped step where the residual
+///   happens to dip (a full step leaves nothing untaken).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolverSettings {
     pub max_iterations: usize,
-    /// Converged when |S R|_inf <= relative_tolerance * max(|F|_inf, absolute_force_n).
     pub relative_tolerance: f64,
-    pub absolute_force_n: f64,
+    pub floor_penetration_mm: f64,
+    pub increment_tolerance_mm: f64,
     /// Halvings of a step before giving up.
     pub max_cuts: u32,
 }
 
 impl Default for SolverSettings {
     fn default() -> Self {
-        Self { max_iterations: 100, relative_tolerance: 1e-9, absolute_force_n: 1e-9, max_cuts: 10 }
+        Self {
+            max_iterations: 100,
+            relative_tolerance: 1e-9,
+            floor_penetration_mm: 1e-3,
+            increment_tolerance_mm: 1e-6,
+            max_cuts: 10,
+        }
     }
 }
 
 impl SolverSettings {
     /// Iterations 1 ..= 10^4, halvings at most 40 (a step of 1e-12 of the
-    /// original), tolerances positive.
+    /// original), tolerances and the floor's depth positive and finite.
     pub fn validate(&self) -> Result<(), SolveError> {
         let ok = (1..=10_000).contains(&self.max_iterations)
             && self.max_cuts <= 40
             && self.relative_tolerance.is_finite()
             && self.relative_tolerance > 0.0
-            && self.absolute_force_n.is_finite()
-            && self.absolute_force_n > 0.0;
+            && self.floor_penetration_mm.is_finite()
+            && self.floor_penetration_mm > 0.0
+            && self.increment_tolerance_mm.is_finite()
+            && self.increment_tolerance_mm > 0.0;
         if ok { Ok(()) } else { Err(SolveError::Settings(format!("out of range: {self:?}"))) }
     }
 }
@@ -113,9 +136,19 @@ pub enum SolveError {
     Factor(#[from] FactorError),
     #[error(
         "Newton iteration did not converge at t = {t_s:.6} s (step {step}, slide {slide_mm:.4} mm) after {cuts} step \
-         halvings: force residual {residual:.3e} N/mm (tolerance {tolerance:.3e})"
+         halvings: force residual {residual:.3e} N/mm (tolerance {tolerance:.3e}), Newton correction not taken \
+         {correction_mm:.3e} mm (tolerance {correction_tolerance_mm:.1e})"
     )]
-    NotConverged { t_s: f64, step: usize, slide_mm: f64, cuts: u32, residual: f64, tolerance: f64 },
+    NotConverged {
+        t_s: f64,
+        step: usize,
+        slide_mm: f64,
+        cuts: u32,
+        residual: f64,
+        tolerance: f64,
+        correction_mm: f64,
+        correction_tolerance_mm: f64,
+    },
     #[error(
         "the skin touches the surface outside the meshed contact region at t = {t_s:.6} s (node {node}, x = \
          {x_mm:.3} mm): enlarge contact.contact_half_arc_mm in the finger model"
@@ -214,6 +247,9 @@ pub struct Solver {
     pub forces: Vec<f64>,
     pub steps: usize,
     pub placement_lift_mm: f64,
+    /// The force floor of the convergence test (N per mm of width): see
+    /// [`SolverSettings`].
+    force_floor_n: f64,
     pub total_iterations: usize,
     pending: Vec<(f64, f64)>,
     /// Elements touching the driven nodes, and a force buffer, for reactions.
@@ -295,12 +331,15 @@ impl Solver {
             forces: vec![0.0; m2],
             steps: 0,
             placement_lift_mm: lift_mm,
+            force_floor_n: 0.0,
             total_iterations: 0,
             pending: Vec::with_capacity(2 * settings.max_cuts as usize + 2),
             reaction_elements: Vec::new(),
             reaction_forces: vec![0.0; 2 * n_nodes],
         };
         solver.reaction_elements = solver.problem.body.elements_touching(&solver.problem.driven_nodes);
+        let lightest = solver.problem.contact.point_weights().into_iter().fold(f64::INFINITY, f64::min);
+        solver.force_floor_n = solver.problem.law.penalty_normal * settings.floor_penetration_mm * lightest;
         let placement = solver.placement(0.0);
         let u_s = solver.candidate_displacements();
         solver.problem.contact.initialize(&u_s, &solver.problem.surface, placement);
@@ -412,7 +451,7 @@ impl Solver {
                         other => other,
                     });
                 }
-                Err(StepFailure::Newton { residual, tolerance }) => {
+                Err(StepFailure::Newton { residual, tolerance, correction_mm }) => {
                     let depth = (1.0 / fraction).log2().round() as u32;
                     if depth >= self.settings.max_cuts {
                         self.pending = pending;
@@ -423,6 +462,8 @@ impl Solver {
                             cuts: depth,
                             residual,
                             tolerance,
+                            correction_mm,
+                            correction_tolerance_mm: self.settings.increment_tolerance_mm,
                         });
                     }
                     cuts += 1;
@@ -474,7 +515,13 @@ impl Solver {
             }
         }
         let ops = &self.operators[k];
-        let condensed = Condensed { m2, compliance: &ops.compliance, stiffness: &ops.stiffness, load };
+        let condensed = Condensed {
+            m2,
+            compliance: &ops.compliance,
+            stiffness: &ops.stiffness,
+            load,
+            force_floor_n: self.force_floor_n,
+        };
         // Predictor: the last converged pad displacement. (Extrapolating
         // the last increment was tried and is worse: near a feature's top it
         // lifts the pad off and Newton restarts from no contact at all.)
@@ -563,7 +610,7 @@ impl Solver {
 
 /// Why one attempt at a step failed.
 enum StepFailure {
-    Newton { residual: f64, tolerance: f64 },
+    Newton { residual: f64, tolerance: f64, correction_mm: f64 },
     Fatal(SolveError),
 }
 
@@ -574,6 +621,8 @@ struct Condensed<'a> {
     stiffness: &'a [f64],
     /// Vertical load on the driven set (load control), N per mm of width.
     load: Option<f64>,
+    /// The convergence test's force floor, N per mm of width.
+    force_floor_n: f64,
 }
 
 impl Condensed<'_> {
@@ -666,7 +715,14 @@ fn newton(
     }
     let mut totals = contact.evaluate(&s.v, surface, placement, law, &mut s.forces, &mut s.blocks);
     let (mut norm, mut merit, mut scale) = cond.residual(s, false, *dy);
-    let tolerance_of = |scale: f64| settings.relative_tolerance * scale.max(settings.absolute_force_n);
+    let tolerance_of = |scale: f64| settings.relative_tolerance * scale.max(cond.force_floor_n);
+    // The part of the last Newton correction not taken (mm): none at the
+    // start (the last converged state, or the full stick-predictor step).
+    let mut correction = 0.0f64;
+    let mut stalls = 0usize;
+    let converged = |norm: f64, scale: f64, correction: f64| {
+        norm <= tolerance_of(scale) && correction <= settings.increment_tolerance_mm
+    };
     for iteration in 0..settings.max_iterations {
         if !norm.is_finite() {
             break;
@@ -677,11 +733,11 @@ fn newton(
                 totals.active_points, totals.slipping_points
             );
         }
-        if norm <= tolerance_of(scale) {
+        if converged(norm, scale, correction) {
             // Confirm with S v computed afresh (no drift of the updates).
             cond.stiffness_times(&s.v, &mut s.sv);
             (norm, merit, scale) = cond.residual(s, false, *dy);
-            if norm <= tolerance_of(scale) {
+            if converged(norm, scale, correction) {
                 return Ok((iteration, totals));
             }
         }
@@ -716,17 +772,27 @@ fn newton(
             alpha *= 0.5;
         }
         if !accepted {
-            // No decrease along the Newton direction (the active set changes
-            // within the step): take the full step anyway and let the
-            // iteration limit decide.
+            // No sufficient decrease down to 1/128 of the Newton step: the
+            // residual has a kink within the step (a point entering or
+            // leaving contact, or changing between stick and slip), or the
+            // step crosses an instability (the skin slipping off a sharp
+            // crest). Alternate two ways out: the full step, which can jump
+            // to the other side of a crest (on the sine at r_w 0.5 mm only
+            // it converged), and a short step, 1/256 of Newton's, which moves
+            // the iterate just off the kink (on the half-disc at penalty 1000
+            // the full step alone threw the residual back to the same 1.72e-3
+            // N/mm every 5 to 10 iterations until the step was halved).
+            stalls += 1;
+            alpha = if stalls % 2 == 1 { 1.0 } else { 1.0 / 256.0 };
             for r in 0..m2 {
-                s.v[r] += s.dv[r];
-                s.sv[r] += s.sdv[r];
+                s.v[r] += alpha * s.dv[r];
+                s.sv[r] += alpha * s.sdv[r];
             }
-            *dy += ddy;
+            *dy += alpha * ddy;
             totals = contact.evaluate(&s.v, surface, placement, law, &mut s.forces, &mut s.blocks);
             (norm, merit, scale) = cond.residual(s, false, *dy);
         }
+        correction = (1.0 - alpha) * s.dv.iter().fold(ddy.abs(), |m, v| m.max(v.abs()));
         if debug {
             eprintln!("  alpha {}", if accepted { alpha } else { f64::NAN });
         }
@@ -734,14 +800,14 @@ fn newton(
     // The last update may have converged: check it as the loop's head would
     // (else a converged step were cut, or reported as failed with a residual
     // below its tolerance).
-    if norm.is_finite() && norm <= tolerance_of(scale) {
+    if norm.is_finite() && converged(norm, scale, correction) {
         cond.stiffness_times(&s.v, &mut s.sv);
         (norm, _, scale) = cond.residual(s, false, *dy);
-        if norm <= tolerance_of(scale) {
+        if converged(norm, scale, correction) {
             return Ok((settings.max_iterations, totals));
         }
     }
-    Err(StepFailure::Newton { residual: norm, tolerance: tolerance_of(scale) })
+    Err(StepFailure::Newton { residual: norm, tolerance: tolerance_of(scale), correction_mm: correction })
 }
 
 /// The Newton direction of the condensed problem at the current iterate

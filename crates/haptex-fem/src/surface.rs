@@ -1,11 +1,12 @@
 //! The rigid reference surface y = h(x): the templates of design.md (flat,
-//! bump, edge, sine) or a sampled height profile, represented as a fine
-//! polyline so that every shape — smooth or with corners — is handled by
-//! the same exact closest-point projection.
+//! bump, edge, sine) evaluated by their formulas, or a sampled height
+//! profile through a C1 monotone cubic. Contact sees the exact curve, with
+//! a normal that turns continuously; a fine polyline through it only
+//! locates the closest point before it is refined on the curve.
 //!
 //! The rigid body occupies y < h(x). A point is inside (penetrating) iff
-//! y < h(x) on the polyline; its closest boundary point lies within the
-//! vertical distance h(x) - y of it, which bounds the segments searched.
+//! y < h(x); its closest boundary point lies within the vertical distance
+//! h(x) - y of it, which bounds the segments searched.
 
 use std::io::Read;
 use std::path::Path;
@@ -28,8 +29,9 @@ pub enum SurfaceShape {
     Edge { x0: f64, width: f64, height: f64 },
     /// h = r_h sin(2 pi (x - x0) / r_w): phase x0, period r_w, amplitude r_h.
     Sine { x0: f64, width: f64, height: f64 },
-    /// A height profile given point by point (x strictly increasing),
-    /// linear between points and held flat beyond the ends.
+    /// A height profile given point by point (x strictly increasing): the
+    /// monotone cubic through the points (PCHIP: C1, no overshoot, flat
+    /// where the data turn) and held flat beyond the ends.
     Sampled { x_mm: Vec<f64>, h_mm: Vec<f64> },
 }
 
@@ -61,14 +63,15 @@ pub enum SurfaceError {
 }
 
 impl SurfaceShape {
-    /// Height h(x) in mm.
+    /// Height h(x) in mm (for a sampled profile this builds its
+    /// interpolant, O(points): [`RigidSurface::height`] for many x).
     pub fn height(&self, x: f64) -> f64 {
         match self {
             SurfaceShape::Flat => 0.0,
             SurfaceShape::Bump { x0, width, height } => Template::Bump.height_mm(x, *x0, *width, *height),
             SurfaceShape::Edge { x0, width, height } => Template::Edge.height_mm(x, *x0, *width, *height),
             SurfaceShape::Sine { x0, width, height } => Template::Sine.height_mm(x, *x0, *width, *height),
-            SurfaceShape::Sampled { x_mm, h_mm } => haptex_core::profile::interpolate(x_mm, h_mm, x),
+            SurfaceShape::Sampled { .. } => Curve::new(self).eval(x)[0],
         }
     }
 
@@ -186,7 +189,8 @@ impl SurfaceShape {
     }
 }
 
-/// The closest point of the surface to a penetrating point.
+/// The closest point of the surface to a penetrating point, with what the
+/// contact tangent needs of the curve there.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Projection {
     /// Distance to the surface (> 0: penetration depth), mm.
@@ -197,26 +201,141 @@ pub struct Projection {
     pub tangent: [f64; 2],
     /// Arc-length coordinate of the closest point along the surface, mm.
     pub arc_mm: f64,
+    /// Signed curvature kappa at the closest point (1/mm): d tangent / ds =
+    /// kappa normal; negative on a crest (convex rigid body), positive in a
+    /// valley.
+    pub curvature: f64,
+    /// d arc / ds at the closest point: 1 up to the interpolation of the
+    /// arc coordinate (within 1e-9).
+    pub arc_rate: f64,
 }
 
-/// A surface as a polyline over a range of x, in its own frame.
+/// The exact curve y = h(x) behind the search polyline: the templates'
+/// formulas, or a C1 monotone cubic through a sampled profile's points.
+#[derive(Debug, Clone)]
+enum Curve {
+    Flat,
+    Template {
+        template: Template,
+        x0: f64,
+        width: f64,
+        height: f64,
+    },
+    /// Piecewise cubic Hermite: knots, values, slopes; flat beyond the ends.
+    Hermite {
+        x: Vec<f64>,
+        h: Vec<f64>,
+        d: Vec<f64>,
+    },
+}
+
+impl Curve {
+    fn new(shape: &SurfaceShape) -> Self {
+        match shape {
+            SurfaceShape::Flat => Curve::Flat,
+            SurfaceShape::Bump { x0, width, height } => {
+                Curve::Template { template: Template::Bump, x0: *x0, width: *width, height: *height }
+            }
+            SurfaceShape::Edge { x0, width, height } => {
+                Curve::Template { template: Template::Edge, x0: *x0, width: *width, height: *height }
+            }
+            SurfaceShape::Sine { x0, width, height } => {
+                Curve::Template { template: Template::Sine, x0: *x0, width: *width, height: *height }
+            }
+            SurfaceShape::Sampled { x_mm, h_mm } => {
+                Curve::Hermite { x: x_mm.clone(), h: h_mm.clone(), d: pchip_slopes(x_mm, h_mm) }
+            }
+        }
+    }
+
+    /// h, h' and h'' at x.
+    fn eval(&self, x: f64) -> [f64; 3] {
+        match self {
+            Curve::Flat => [0.0; 3],
+            Curve::Template { template, x0, width, height } => template.height_derivatives_mm(x, *x0, *width, *height),
+            Curve::Hermite { x: knots, h, d } => {
+                let n = knots.len();
+                if x <= knots[0] {
+                    return [h[0], 0.0, 0.0];
+                }
+                if x >= knots[n - 1] {
+                    return [h[n - 1], 0.0, 0.0];
+                }
+                let i = knots.partition_point(|&v| v <= x).saturating_sub(1).min(n - 2);
+                hermite(knots[i], knots[i + 1], h[i], h[i + 1], d[i], d[i + 1], x)
+            }
+        }
+    }
+}
+
+/// Value, first and second derivative at x of the cubic Hermite
+/// interpolant on [a, b] with values (ya, yb) and slopes (da, db).
+fn hermite(a: f64, b: f64, ya: f64, yb: f64, da: f64, db: f64, x: f64) -> [f64; 3] {
+    let l = b - a;
+    let t = (x - a) / l;
+    let (t2, t3) = (t * t, t * t * t);
+    let value = (2.0 * t3 - 3.0 * t2 + 1.0) * ya
+        + (t3 - 2.0 * t2 + t) * l * da
+        + (-2.0 * t3 + 3.0 * t2) * yb
+        + (t3 - t2) * l * db;
+    let first = ((6.0 * t2 - 6.0 * t) * ya + (-6.0 * t2 + 6.0 * t) * yb) / l
+        + (3.0 * t2 - 4.0 * t + 1.0) * da
+        + (3.0 * t2 - 2.0 * t) * db;
+    let second = ((12.0 * t - 6.0) * (ya - yb) / l + (6.0 * t - 4.0) * da + (6.0 * t - 2.0) * db) / l;
+    [value, first, second]
+}
+
+/// Slopes of the monotone piecewise cubic Hermite interpolant (PCHIP,
+/// Fritsch & Carlson 1980, with the weighted harmonic mean of Fritsch &
+/// Butland 1984 at interior knots, as SciPy's PchipInterpolator): no
+/// overshoot between knots, a flat knot where the data turn. The end slopes
+/// are 0, so the curve joins the flat continuation beyond the ends with a
+/// continuous slope.
+pub fn pchip_slopes(x: &[f64], h: &[f64]) -> Vec<f64> {
+    let n = x.len();
+    let mut d = vec![0.0; n];
+    for k in 1..n.saturating_sub(1) {
+        let (h0, h1) = (x[k] - x[k - 1], x[k + 1] - x[k]);
+        let (s0, s1) = ((h[k] - h[k - 1]) / h0, (h[k + 1] - h[k]) / h1);
+        if s0 == 0.0 || s1 == 0.0 || (s0 > 0.0) != (s1 > 0.0) {
+            continue;
+        }
+        let (w1, w2) = (2.0 * h1 + h0, h1 + 2.0 * h0);
+        d[k] = (w1 + w2) / (w1 / s0 + w2 / s1);
+    }
+    d
+}
+
+/// Sampling step of the search polyline: at most 5 um.
+const MAX_SEGMENT_MM: f64 = 0.005;
+
+/// A surface over a range of x, in its own frame: the exact curve, and a
+/// polyline through it (vertices at most 5 um apart) that locates the
+/// closest point before it is refined on the curve.
 #[derive(Debug, Clone)]
 pub struct RigidSurface {
+    curve: Curve,
     x: Vec<f64>,
     h: Vec<f64>,
+    /// Arc length at each vertex, and d arc / dx there: the arc coordinate
+    /// between vertices is their cubic Hermite interpolant.
     arc: Vec<f64>,
+    arc_slope: Vec<f64>,
     /// (first x, 1/spacing) when the vertices are uniformly spaced: O(1)
     /// segment lookup (templates), else binary search (sampled files).
     uniform: Option<(f64, f64)>,
 }
 
 impl RigidSurface {
-    /// Samples `shape` over [x_min, x_max] (mm). Templates are sampled at
-    /// 1/200 of their width (at most 5 um) — chord error below 1e-4 mm at
-    /// the sharpest corner of the database range; sampled surfaces keep
-    /// their own points, padded flat to the range. The shape must be valid
-    /// ([`SurfaceShape::validate`]) and the polyline at most
-    /// [`limits::MAX_VERTICES`] long.
+    /// The surface `shape` over [x_min, x_max] (mm). Contact is computed on
+    /// the exact curve: the templates' formulas with their derivatives, or
+    /// for a sampled profile the C1 monotone cubic through its points (flat
+    /// beyond its ends). A continuous normal is what lets Newton's method
+    /// converge while the skin slides over a crest (docs/fem.md, "Solver").
+    /// The search polyline samples templates at r_w/200 (at most 5 um) and
+    /// sampled profiles at their points, subdivided to at most 5 um over the
+    /// range. The shape must be valid ([`SurfaceShape::validate`]) and the
+    /// polyline at most [`limits::MAX_VERTICES`] long.
     pub fn new(shape: &SurfaceShape, x_min: f64, x_max: f64) -> Result<Self, SurfaceError> {
         shape.validate()?;
         if !(x_min.is_finite() && x_max.is_finite() && x_max > x_min) {
@@ -227,43 +346,68 @@ impl RigidSurface {
             )));
         }
         let segments = Self::template_segments(shape, x_min, x_max)?;
-        let (mut x, mut h) = match shape {
-            SurfaceShape::Sampled { x_mm, h_mm } => (x_mm.clone(), h_mm.clone()),
-            _ => {
-                let n = segments;
-                let x: Vec<f64> = (0..=n).map(|i| x_min + (x_max - x_min) * i as f64 / n as f64).collect();
-                let h = x.iter().map(|&x| shape.height(x)).collect();
-                (x, h)
+        let curve = Curve::new(shape);
+        let mut x: Vec<f64> = match shape {
+            SurfaceShape::Sampled { x_mm, .. } => {
+                let mut x = Vec::with_capacity(segments + 3);
+                for w in x_mm.windows(2) {
+                    x.push(w[0]);
+                    let overlaps = w[1] > x_min && w[0] < x_max;
+                    let pieces = if overlaps { ((w[1] - w[0]) / MAX_SEGMENT_MM).ceil() as usize } else { 1 };
+                    x.extend((1..pieces).map(|k| w[0] + (w[1] - w[0]) * k as f64 / pieces as f64));
+                }
+                x.push(x_mm[x_mm.len() - 1]);
+                x
             }
+            _ => (0..=segments).map(|i| x_min + (x_max - x_min) * i as f64 / segments as f64).collect(),
         };
         if x[0] > x_min {
             x.insert(0, x_min);
-            h.insert(0, h[0]);
         }
         if x[x.len() - 1] < x_max {
             x.push(x_max);
-            h.push(h[h.len() - 1]);
         }
+        let h: Vec<f64> = x.iter().map(|&x| curve.eval(x)[0]).collect();
+        let arc_slope: Vec<f64> = x.iter().map(|&x| curve.eval(x)[1].hypot(1.0)).collect();
         let mut arc = vec![0.0; x.len()];
+        // Arc length of each segment: 3-point Gauss-Legendre of |c'(x)|
+        // (error ~ l^6 |L^(6)|, far below 1e-12 mm on 5 um segments).
+        let (nodes, weights) = ([-(0.6f64.sqrt()), 0.0, 0.6f64.sqrt()], [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0]);
         for i in 1..x.len() {
-            arc[i] = arc[i - 1] + (x[i] - x[i - 1]).hypot(h[i] - h[i - 1]);
+            let (a, b) = (x[i - 1], x[i]);
+            let length: f64 = nodes
+                .iter()
+                .zip(&weights)
+                .map(|(&xi, &w)| 0.5 * w * curve.eval(0.5 * (a + b) + 0.5 * (b - a) * xi)[1].hypot(1.0))
+                .sum::<f64>()
+                * (b - a);
+            arc[i] = arc[i - 1] + length;
         }
         let n = x.len();
         let spacing = (x[n - 1] - x[0]) / (n - 1) as f64;
         let uniform =
             x.windows(2).all(|w| ((w[1] - w[0]) / spacing - 1.0).abs() < 1e-9).then_some((x[0], 1.0 / spacing));
-        Ok(Self { x, h, arc, uniform })
+        Ok(Self { curve, x, h, arc, arc_slope, uniform })
     }
 
-    /// The number of segments a template is sampled with over [x_min,
-    /// x_max] (at r_w/200, at most 5 um; 0 for a sampled surface, which
-    /// keeps its points); an error beyond [`limits::MAX_VERTICES`].
+    /// The number of segments of the search polyline over [x_min, x_max]:
+    /// a template's at r_w/200 (at most 5 um), a sampled profile's points
+    /// with every interval over the range cut to at most 5 um; an error
+    /// beyond [`limits::MAX_VERTICES`].
     pub fn template_segments(shape: &SurfaceShape, x_min: f64, x_max: f64) -> Result<usize, SurfaceError> {
-        if let SurfaceShape::Sampled { .. } = shape {
-            return Ok(0);
-        }
-        let dx = shape.detail_mm().min(0.005);
-        let count = ((x_max - x_min) / dx).ceil();
+        let (count, dx) = match shape {
+            SurfaceShape::Sampled { x_mm, .. } => {
+                let count: f64 = x_mm
+                    .windows(2)
+                    .map(|w| if w[1] > x_min && w[0] < x_max { ((w[1] - w[0]) / MAX_SEGMENT_MM).ceil() } else { 1.0 })
+                    .sum();
+                (count, MAX_SEGMENT_MM)
+            }
+            _ => {
+                let dx = shape.detail_mm().min(MAX_SEGMENT_MM);
+                (((x_max - x_min) / dx).ceil(), dx)
+            }
+        };
         if count.is_nan() || count >= limits::MAX_VERTICES as f64 {
             return Err(SurfaceError::Invalid(format!(
                 "sampling the surface over x = {} .. {} mm every {} mm (r_w/200, at most 5 um) takes {} points, more \
@@ -295,45 +439,105 @@ impl RigidSurface {
         (self.x[0], self.x[self.x.len() - 1])
     }
 
-    /// Polyline height at x (held flat outside the range).
+    /// Height h(x) of the exact curve (held flat outside the range).
     pub fn height(&self, x: f64) -> f64 {
-        let i = self.segment(x);
-        let t = ((x - self.x[i]) / (self.x[i + 1] - self.x[i])).clamp(0.0, 1.0);
-        self.h[i] + t * (self.h[i + 1] - self.h[i])
+        let (lo, hi) = self.range();
+        self.curve.eval(x.clamp(lo, hi))[0]
     }
 
-    /// Highest point over [a, b].
+    /// Highest vertex of the search polyline over [a, b] (within its
+    /// chord error of the curve's maximum).
     pub fn max_height(&self, a: f64, b: f64) -> f64 {
         let i0 = self.x.partition_point(|&v| v < a);
         let i1 = self.x.partition_point(|&v| v <= b);
         self.h[i0..i1].iter().cloned().fold(self.height(a).max(self.height(b)), f64::max)
     }
 
-    /// Lowest point over [a, b].
+    /// Lowest vertex of the search polyline over [a, b].
     pub fn min_height(&self, a: f64, b: f64) -> f64 {
         let i0 = self.x.partition_point(|&v| v < a);
         let i1 = self.x.partition_point(|&v| v <= b);
         self.h[i0..i1].iter().cloned().fold(self.height(a).min(self.height(b)), f64::min)
     }
 
-    /// Arc-length coordinate of the surface point below x.
-    pub fn arc_at(&self, x: f64) -> f64 {
+    /// Arc coordinate at x and its derivative d arc / dx: the cubic Hermite
+    /// interpolant of the vertices' arc lengths and slopes (C1, within 1e-9
+    /// of the true arc length's slope).
+    fn arc_and_rate(&self, x: f64) -> (f64, f64) {
+        let (lo, hi) = self.range();
+        if x <= lo {
+            return (self.arc[0] - (lo - x), 1.0);
+        }
+        if x >= hi {
+            let n = self.x.len() - 1;
+            return (self.arc[n] + (x - hi), 1.0);
+        }
         let i = self.segment(x);
-        let t = ((x - self.x[i]) / (self.x[i + 1] - self.x[i])).clamp(0.0, 1.0);
-        self.arc[i] + t * (self.arc[i + 1] - self.arc[i])
+        let [a, rate, _] = hermite(
+            self.x[i],
+            self.x[i + 1],
+            self.arc[i],
+            self.arc[i + 1],
+            self.arc_slope[i],
+            self.arc_slope[i + 1],
+            x,
+        );
+        (a, rate)
     }
 
-    /// The closest surface point of `p` (surface frame) if p is inside the
-    /// rigid body (y < h(x)), else `None`.
+    /// Arc-length coordinate of the surface point below x.
+    pub fn arc_at(&self, x: f64) -> f64 {
+        self.arc_and_rate(x).0
+    }
+
+    /// The closest point of the exact curve to `p` (surface frame) if p is
+    /// inside the rigid body (y < h(x)), else `None`.
+    ///
+    /// The closest vertex-or-chord point of the polyline gives a start and
+    /// a bracket; the distance is then minimized on the curve itself by a
+    /// Newton iteration on g'(s) = (s - p_x) + (h(s) - p_y) h'(s),
+    /// safeguarded by bisection. The result's normal and tangent are the
+    /// curve's own at the closest point, so they vary continuously with p
+    /// (a polyline's jump at each vertex kept Newton's method from
+    /// converging over crests).
     pub fn project(&self, p: [f64; 2]) -> Option<Projection> {
-        let vertical = self.height(p[0]) - p[1];
+        let [hp, slope, second] = self.curve_at(p[0]);
+        let vertical = hp - p[1];
         if vertical.is_nan() || vertical <= 0.0 {
             return None;
         }
-        // Segments meeting the window [x - vertical, x + vertical].
+        let s = if slope == 0.0 && second == 0.0 && matches!(self.curve, Curve::Flat) {
+            p[0]
+        } else {
+            self.closest_parameter(p, vertical)
+        };
+        let [h, h1, h2] = self.curve_at(s);
+        let length = h1.hypot(1.0);
+        let normal = [-h1 / length, 1.0 / length];
+        let tangent = [1.0 / length, h1 / length];
+        // Signed depth along the normal (the distance at the closest point).
+        let depth = (s - p[0]) * normal[0] + (h - p[1]) * normal[1];
+        if !(depth > 0.0) {
+            return None;
+        }
+        let curvature = h2 / (length * length * length);
+        let (arc_mm, rate) = self.arc_and_rate(s);
+        Some(Projection { depth, normal, tangent, arc_mm, curvature, arc_rate: rate / length })
+    }
+
+    /// h, h', h'' of the curve, held flat outside the range.
+    fn curve_at(&self, x: f64) -> [f64; 3] {
+        let (lo, hi) = self.range();
+        if x < lo || x > hi { [self.curve.eval(x.clamp(lo, hi))[0], 0.0, 0.0] } else { self.curve.eval(x) }
+    }
+
+    /// The parameter s of the curve point closest to p (which lies `vertical`
+    /// below the curve, so |s - p_x| <= vertical).
+    fn closest_parameter(&self, p: [f64; 2], vertical: f64) -> f64 {
+        // The polyline's closest point over the window [x - v, x + v].
         let first = self.segment(p[0] - vertical);
         let last = (self.segment(p[0] + vertical) + 1).max(first + 1);
-        let mut best = (f64::INFINITY, 0usize, 0.0);
+        let mut best = (f64::INFINITY, first, 0.0);
         for i in first..last {
             let (ax, ay) = (self.x[i], self.h[i]);
             let (dx, dy) = (self.x[i + 1] - ax, self.h[i + 1] - ay);
@@ -343,19 +547,55 @@ impl RigidSurface {
                 best = (d2, i, t);
             }
         }
-        let (d2, i, t) = best;
-        let (dx, dy) = (self.x[i + 1] - self.x[i], self.h[i + 1] - self.h[i]);
-        let length = dx.hypot(dy);
-        let c = [self.x[i] + t * dx, self.h[i] + t * dy];
-        let depth = d2.sqrt();
-        // Outward normal: from the point to its closest point; on a segment
-        // interior (or for a point on the surface) this is the segment normal.
-        let normal = if t > 0.0 && t < 1.0 || depth < 1e-12 {
-            [-dy / length, dx / length]
-        } else {
-            [(c[0] - p[0]) / depth, (c[1] - p[1]) / depth]
+        let (_, i, t) = best;
+        let start = self.x[i] + t * (self.x[i + 1] - self.x[i]);
+        // g'(s) and g''(s) of g(s) = |c(s) - p|^2 / 2.
+        let derivatives = |s: f64| {
+            let [h, h1, h2] = self.curve_at(s);
+            ((s - p[0]) + (h - p[1]) * h1, 1.0 + h1 * h1 + (h - p[1]) * h2)
         };
-        Some(Projection { depth, normal, tangent: [normal[1], -normal[0]], arc_mm: self.arc[i] + t * length })
+        // Bracket: the neighbouring vertices, widened until g' changes sign
+        // (a few segments at most on a smooth curve).
+        let n = self.x.len();
+        let (mut a, mut b) = (i.saturating_sub(1), (i + 2).min(n - 1));
+        let (mut ga, mut gb) = (derivatives(self.x[a]).0, derivatives(self.x[b]).0);
+        for _ in 0..8 {
+            if ga <= 0.0 && gb >= 0.0 {
+                break;
+            }
+            if ga > 0.0 && a > 0 {
+                a = a.saturating_sub(2);
+                ga = derivatives(self.x[a]).0;
+            }
+            if gb < 0.0 && b < n - 1 {
+                b = (b + 2).min(n - 1);
+                gb = derivatives(self.x[b]).0;
+            }
+        }
+        if !(ga <= 0.0 && gb >= 0.0) {
+            return start;
+        }
+        let (mut lo, mut hi) = (self.x[a], self.x[b]);
+        let mut s = start.clamp(lo, hi);
+        for _ in 0..60 {
+            let (g, g2) = derivatives(s);
+            if g == 0.0 {
+                break;
+            }
+            if g < 0.0 {
+                lo = s;
+            } else {
+                hi = s;
+            }
+            let newton = s - g / g2;
+            let next = if g2 > 0.0 && newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
+            if (next - s).abs() <= 1e-15 * (1.0 + s.abs()) || hi - lo <= 1e-15 * (1.0 + s.abs()) {
+                s = next;
+                break;
+            }
+            s = next;
+        }
+        s
     }
 }
 
@@ -382,9 +622,10 @@ mod tests {
         assert!((p.depth - 0.01).abs() < 1e-15 && p.normal == [0.0, 1.0] && p.tangent == [1.0, 0.0]);
         assert!((p.arc_mm - 6.0).abs() < 1e-12);
         // A 45-degree ramp: a point below it projects perpendicular to it.
-        let ramp =
-            RigidSurface::new(&SurfaceShape::Sampled { x_mm: vec![0.0, 10.0], h_mm: vec![0.0, 10.0] }, -1.0, 11.0)
-                .unwrap();
+        // (Eleven points: the interpolant is straight between the inner
+        // ones, and joins the flat continuation smoothly at the ends.)
+        let line: Vec<f64> = (0..=10).map(f64::from).collect();
+        let ramp = RigidSurface::new(&SurfaceShape::Sampled { x_mm: line.clone(), h_mm: line }, -1.0, 11.0).unwrap();
         let p = ramp.project([5.0, 4.0]).unwrap();
         assert!((p.depth - 0.5f64.sqrt()).abs() < 1e-12);
         assert!((p.normal[0] + 0.5f64.sqrt()).abs() < 1e-12 && (p.normal[1] - 0.5f64.sqrt()).abs() < 1e-12);

@@ -20,7 +20,13 @@ use haptex_fem::solver::{Drive, Solver, SolverSettings};
 #[test]
 fn cattaneo_mindlin_stick_zone() {
     let mu = 0.5;
-    let law = ContactLaw { penalty_normal: 2000.0, penalty_tangential: 2000.0, mu, smoothing_mm: 0.0 };
+    let law = ContactLaw {
+        penalty_normal: 2000.0,
+        penalty_tangential: 2000.0,
+        mu,
+        smoothing_mm: 0.0,
+        geometric_tangent: false,
+    };
     let problem = common::cylinder_on_flat(8.0, 2.0, 0.025, 2.0, Material::elastic(1.0, 0.4999), law);
     let mut solver = Solver::new(problem, SolverSettings::default(), 0.0).unwrap();
     let delta = 0.08;

@@ -24,7 +24,13 @@ use haptex_fem::solver::{Drive, Solver, SolverSettings};
 #[test]
 fn hertz_line_contact_half_width_and_peak_pressure() {
     let (e, nu, radius) = (1.0, 0.3, 8.0);
-    let law = ContactLaw { penalty_normal: 2000.0, penalty_tangential: 2000.0, mu: 0.0, smoothing_mm: 0.0 };
+    let law = ContactLaw {
+        penalty_normal: 2000.0,
+        penalty_tangential: 2000.0,
+        mu: 0.0,
+        smoothing_mm: 0.0,
+        geometric_tangent: false,
+    };
     let problem = common::cylinder_on_flat(radius, 2.0, 0.025, 2.0, Material::elastic(e, nu), law);
     let mut solver = Solver::new(problem, SolverSettings::default(), 0.0).unwrap();
     let delta = 0.08;

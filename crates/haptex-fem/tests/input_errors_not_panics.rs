@@ -295,7 +295,13 @@ fn finger_file_reader_bounds_its_input() {
 /// (before: an index of usize::MAX in the first step).
 #[test]
 fn driven_contact_node_is_refused_by_the_solver() {
-    let law = ContactLaw { penalty_normal: 200.0, penalty_tangential: 200.0, mu: 0.5, smoothing_mm: 0.0 };
+    let law = ContactLaw {
+        penalty_normal: 200.0,
+        penalty_tangential: 200.0,
+        mu: 0.5,
+        smoothing_mm: 0.0,
+        geometric_tangent: false,
+    };
     let mut problem = common::cylinder_on_flat(8.0, 2.0, 0.2, 2.0, Material::elastic(1.0, 0.3), law);
     let node = problem.contact.nodes[3];
     problem.driven_nodes.push(node);

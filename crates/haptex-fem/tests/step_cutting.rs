@@ -18,7 +18,13 @@ use haptex_fem::solver::{ContactProblem, Drive, SolveError, Solver, SolverSettin
 const DELTA_MM: f64 = 0.08;
 
 fn problem() -> ContactProblem {
-    let law = ContactLaw { penalty_normal: 2000.0, penalty_tangential: 2000.0, mu: 0.0, smoothing_mm: 0.0 };
+    let law = ContactLaw {
+        penalty_normal: 2000.0,
+        penalty_tangential: 2000.0,
+        mu: 0.0,
+        smoothing_mm: 0.0,
+        geometric_tangent: false,
+    };
     common::cylinder_on_flat(8.0, 2.0, 0.05, 2.0, Material::elastic(1.0, 0.3), law)
 }
 
