@@ -22,12 +22,8 @@ use crate::mesh::{Mesh, MeshError};
 pub enum BodyError {
     #[error(transparent)]
     Mesh(#[from] MeshError),
-    #[error("subdomain {subdomain}: {source}")]
-    Material {
-        subdomain: usize,
-        #[source]
-        source: MaterialError,
-    },
+    #[error("subdomain {subdomain}: {cause}")]
+    Material { subdomain: usize, cause: MaterialError },
     #[error("element {element} has subdomain {subdomain}, but only {n} materials are given")]
     MissingMaterial { element: usize, subdomain: usize, n: usize },
 }
@@ -73,7 +69,7 @@ impl Body {
         let geometry = mesh.geometry()?;
         for (i, s) in subdomains.iter().enumerate() {
             if let SubdomainModel::Deformable(m) = s {
-                m.validate().map_err(|source| BodyError::Material { subdomain: i, source })?;
+                m.validate().map_err(|cause| BodyError::Material { subdomain: i, cause })?;
             }
         }
         let mut deformable = Vec::new();

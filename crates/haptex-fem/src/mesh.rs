@@ -21,21 +21,18 @@ pub struct Mesh {
 /// A mesh is unusable.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MeshError {
-    #[error("element {element}: {source}")]
-    Jacobian {
-        element: usize,
-        #[source]
-        source: JacobianError,
-    },
+    // The cause is part of the message, not also a `source()`: a caller
+    // printing the chain (anyhow's {:#}) would print it twice.
+    #[error("element {element}: {cause}")]
+    Jacobian { element: usize, cause: JacobianError },
     #[error("element {element} refers to node {node}, but the mesh has {n_nodes} nodes")]
     BadNode { element: usize, node: usize, n_nodes: usize },
-    #[error("mesh generation failed: element {element} near ({}, {}) mm is inverted: {source}", Num(at[0]), Num(at[1]))]
+    #[error("mesh generation failed: element {element} near ({}, {}) mm is inverted: {cause}", Num(at[0]), Num(at[1]))]
     Inverted {
         element: usize,
         /// The element's centroid (mm).
         at: [f64; 2],
-        #[source]
-        source: JacobianError,
+        cause: JacobianError,
     },
     #[error("mesh generation failed: {0}")]
     Generation(String),
@@ -73,7 +70,7 @@ impl Mesh {
                 if let Some(&node) = nodes.iter().find(|&&n| n >= self.nodes.len()) {
                     return Err(MeshError::BadNode { element: e, node, n_nodes: self.nodes.len() });
                 }
-                Q4::new(&self.element_coords(e)).map_err(|source| MeshError::Jacobian { element: e, source })
+                Q4::new(&self.element_coords(e)).map_err(|cause| MeshError::Jacobian { element: e, cause })
             })
             .collect()
     }

@@ -118,10 +118,10 @@ pub fn mesh_ring(spec: &RingSpec<'_>) -> Result<RingMesh, MeshError> {
     // (saying where).
     if let Err(e) = builder.mesh.geometry() {
         return Err(match e {
-            MeshError::Jacobian { element, source } => {
+            MeshError::Jacobian { element, cause } => {
                 let x = builder.mesh.element_coords(element);
                 let at = [0, 1].map(|k| x.iter().map(|p| 1000.0 * p[k] / 4.0).sum::<f64>().round() / 1000.0);
-                MeshError::Inverted { element, at, source }
+                MeshError::Inverted { element, at, cause }
             }
             other => other,
         });

@@ -93,8 +93,8 @@ impl Config {
 /// The server could not start or stopped with an error.
 #[derive(Debug, thiserror::Error)]
 pub enum ServeError {
-    #[error("cannot listen on {addr}: {source}")]
-    Bind { addr: SocketAddr, source: std::io::Error },
+    #[error("cannot listen on {addr}: {cause}")]
+    Bind { addr: SocketAddr, cause: std::io::Error },
     #[error("cannot start the async runtime: {0}")]
     Runtime(std::io::Error),
     #[error("server error: {0}")]
@@ -215,7 +215,7 @@ pub fn run(config: Config, on_listening: impl FnOnce(SocketAddr)) -> Result<(), 
     runtime.block_on(async move {
         let listener = tokio::net::TcpListener::bind(config.addr)
             .await
-            .map_err(|source| ServeError::Bind { addr: config.addr, source })?;
+            .map_err(|cause| ServeError::Bind { addr: config.addr, cause })?;
         on_listening(listener.local_addr()?);
         serve(listener, state, shutdown_signal()).await
     })?;

@@ -27,16 +27,17 @@ use std::sync::Mutex;
 
 /// An output file could not be written.
 #[derive(Debug, thiserror::Error)]
-#[error("cannot write {}: {source}", path.display())]
+#[error("cannot write {}: {cause}", path.display())]
 pub struct WriteError {
     pub path: PathBuf,
-    #[source]
-    pub source: std::io::Error,
+    /// Part of the message, not also a `source()` (a printed error chain
+    /// would repeat it).
+    pub cause: std::io::Error,
 }
 
 impl WriteError {
     fn new(path: &Path, source: std::io::Error) -> Self {
-        Self { path: path.to_path_buf(), source }
+        Self { path: path.to_path_buf(), cause: source }
     }
 
     fn refused(path: &Path, message: String) -> Self {

@@ -33,13 +33,13 @@ impl FileSet {
     /// `dir/marker_name`: the marker is removed now, so that until
     /// [`FileSet::finish`] the directory reads as incomplete.
     pub fn begin(dir: &Path, marker_name: &str) -> Result<Self, WriteError> {
-        let wrap = |source| WriteError { path: dir.to_path_buf(), source };
+        let wrap = |source| WriteError { path: dir.to_path_buf(), cause: source };
         std::fs::create_dir_all(dir).map_err(wrap)?;
         let marker = dir.join(marker_name);
         match std::fs::remove_file(&marker) {
             Ok(()) => {}
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-            Err(source) => return Err(WriteError { path: marker, source }),
+            Err(source) => return Err(WriteError { path: marker, cause: source }),
         }
         Ok(Self { dir: dir.to_path_buf(), marker, members: MemberHashes::new() })
     }
@@ -57,7 +57,8 @@ impl FileSet {
     {
         let path = self.dir.join(relative);
         if let Some(parent) = path.parent() {
-            std::fs::create_dir_all(parent).map_err(|source| WriteError { path: parent.to_path_buf(), source })?;
+            std::fs::create_dir_all(parent)
+                .map_err(|source| WriteError { path: parent.to_path_buf(), cause: source })?;
         }
         let mut hasher = Sha256::new();
         write_atomic(&path, |w| {

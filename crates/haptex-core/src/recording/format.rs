@@ -238,7 +238,7 @@ impl Recording {
         let meta_path = dir.join(format!("{stem}{METADATA_SUFFIX}"));
         match std::fs::remove_file(&meta_path) {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                return Err(WriteError { path: meta_path, source: e });
+                return Err(WriteError { path: meta_path, cause: e });
             }
             _ => {}
         }

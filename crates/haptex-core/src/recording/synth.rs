@@ -514,7 +514,7 @@ pub fn write_demo(dir: &Path, seed: u64, strokes_per_material: usize) -> Result<
     let mut paths = Vec::new();
     for (stem, recording) in demo_recordings(seed, strokes_per_material) {
         let sub = dir.join(&recording.meta.material);
-        std::fs::create_dir_all(&sub).map_err(|source| WriteError { path: sub.clone(), source })?;
+        std::fs::create_dir_all(&sub).map_err(|source| WriteError { path: sub.clone(), cause: source })?;
         paths.push(recording.write(&sub, &stem, StreamFormat::Npy)?);
     }
     Ok(paths)
