@@ -15,6 +15,12 @@ pub fn positive(text: &str) -> Result<f64, String> {
     }
 }
 
+/// Parses a finite number >= 0 (a length that may be zero).
+pub fn non_negative(text: &str) -> Result<f64, String> {
+    let value: f64 = text.trim().parse().map_err(|_| format!("'{text}' is not a number"))?;
+    if value.is_finite() && value >= 0.0 { Ok(value) } else { Err(format!("must be a finite number >= 0, got {text}")) }
+}
+
 /// A flag parser for a parameter with an accepted range (the table of
 /// [`haptex_core::ranges`], shared with the web API): a finite number in
 /// (0, max].

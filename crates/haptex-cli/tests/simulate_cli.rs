@@ -236,3 +236,39 @@ fn extreme_simulate_flags_are_errors_not_panics() {
     }
     assert!(!vtk.exists(), "nothing written for refused settings");
 }
+
+/// `--slide 0` is a press only (issue 14): the output is the press curve
+/// `t_s,indent_mm,fn_n,ft_n,contact_mm`, ending at the indentation, with a
+/// positive normal force growing over the press.
+#[test]
+fn press_only_writes_the_press_curve() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("press.csv");
+    let out =
+        haptex(&["simulate", "--surface", "flat", "--slide", "0", "--mesh", "coarse", "-o", path.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("press only: Fn = "), "{}", stderr(&out));
+    let text = std::fs::read_to_string(&path).unwrap();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip_while(|l| l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert!(text.lines().any(|l| l == "t_s,indent_mm,fn_n,ft_n,contact_mm"), "{text}");
+    assert_eq!(rows.len(), 10, "one row per press step");
+    assert!((rows[9][1] - 0.25).abs() < 1e-12, "ends at the 0.25 mm indentation: {:?}", rows[9]);
+    assert!(rows.windows(2).all(|w| w[1][2] > w[0][2] && w[0][2] > 0.0), "Fn grows over the press");
+}
+
+/// An error's cause is printed once (issue 14 found "element 927: element
+/// has a non-positive Jacobian (...): element has a non-positive Jacobian
+/// (...)"; the same doubling was in every error that formats its cause).
+#[test]
+fn error_causes_are_printed_once() {
+    let out = haptex(&["simulate", "--surface", "flat", "--slide", "1", "-q", "-o", "/nonexistent-dir/x.csv"]);
+    assert!(!out.status.success());
+    let message = stderr(&out);
+    let cause = "No such file or directory";
+    assert_eq!(message.matches(cause).count(), 1, "{message}");
+}

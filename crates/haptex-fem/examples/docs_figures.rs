@@ -61,8 +61,8 @@ fn main() {
     ] {
         figure = figure.panel(Panel::new("finger position on the surface x (mm)", "Ft/Fn").title(label).line(
             "",
-            r.profile.x_mm(),
-            r.profile.mu(),
+            r.profile.as_ref().unwrap().x_mm(),
+            r.profile.as_ref().unwrap().mu(),
         ));
     }
     figure.write_png(&dir.join("fem_profiles.png")).unwrap();
@@ -73,13 +73,18 @@ fn main() {
     for velocity in [10.0, 20.0, 50.0, 100.0] {
         let r = simulate(bump.clone(), velocity, true);
         let fn_n: Vec<f64> = r.history.iter().filter(|h| h.slide_mm > 0.0).map(|h| h.fn_n).collect();
-        mu_panel = mu_panel.line(format!("{velocity} mm/s"), r.profile.x_mm(), r.profile.mu());
-        fn_panel = fn_panel.line(format!("{velocity} mm/s"), r.profile.x_mm(), &fn_n);
+        mu_panel = mu_panel.line(
+            format!("{velocity} mm/s"),
+            r.profile.as_ref().unwrap().x_mm(),
+            r.profile.as_ref().unwrap().mu(),
+        );
+        fn_panel = fn_panel.line(format!("{velocity} mm/s"), r.profile.as_ref().unwrap().x_mm(), &fn_n);
     }
     let r = simulate(bump, 20.0, false);
     let fn_n: Vec<f64> = r.history.iter().filter(|h| h.slide_mm > 0.0).map(|h| h.fn_n).collect();
-    mu_panel = mu_panel.line("elastic (any velocity)", r.profile.x_mm(), r.profile.mu());
-    fn_panel = fn_panel.line("elastic (any velocity)", r.profile.x_mm(), &fn_n);
+    mu_panel =
+        mu_panel.line("elastic (any velocity)", r.profile.as_ref().unwrap().x_mm(), r.profile.as_ref().unwrap().mu());
+    fn_panel = fn_panel.line("elastic (any velocity)", r.profile.as_ref().unwrap().x_mm(), &fn_n);
     Figure::new("velocity dependence over the bump (x0 = 5, r_w = 1.5, r_h = 0.3 mm)")
         .size(1000, 330)
         .panel(mu_panel)

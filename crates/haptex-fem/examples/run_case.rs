@@ -47,7 +47,7 @@ fn main() {
         let h = &result.history[scenario.press_steps..];
         let x: Vec<f64> = h.iter().map(|r| r.slide_mm).collect();
         let fig = Figure::new(format!("{kind} w={width} h={height}"))
-            .panel(Panel::new("x (mm)", "Ft/Fn").line("mu", &x, result.profile.mu()))
+            .panel(Panel::new("x (mm)", "Ft/Fn").line("mu", &x, result.profile.as_ref().unwrap().mu()))
             .panel(
                 Panel::new("x (mm)", "force (N/mm)")
                     .line("Fn", &x, &h.iter().map(|r| r.fn_n).collect::<Vec<_>>())
@@ -61,10 +61,10 @@ fn main() {
         fig.write_png(std::path::Path::new(out)).unwrap();
     }
     if let Some(out) = args.iter().find_map(|a| a.strip_prefix("csv=")) {
-        result.profile.write_csv_file(std::path::Path::new(out)).unwrap();
+        result.profile.as_ref().unwrap().write_csv_file(std::path::Path::new(out)).unwrap();
     }
-    let mu = result.profile.mu();
-    let x = result.profile.x_mm();
+    let mu = result.profile.as_ref().unwrap().mu();
+    let x = result.profile.as_ref().unwrap().x_mm();
     for i in (0..mu.len()).step_by(mu.len() / 20) {
         let h = &result.history[scenario.press_steps + i];
         println!(

@@ -39,15 +39,33 @@ pub fn write_history(result: &SimulationResult, w: &mut dyn Write) -> std::io::R
 
 /// Writes the friction profile `x_mm,mu,ft_n,fn_n`: x is the finger's
 /// position on the surface, mu = Ft/Fn; a `haptex voltage` input as is.
+/// A press-only run (no profile) writes its press curve instead (see
+/// [`write_press_curve`]).
 pub fn write_profile(result: &SimulationResult, description: &str, w: &mut dyn Write) -> std::io::Result<()> {
+    let Some(p) = &result.profile else {
+        return write_press_curve(result, description, w);
+    };
     writeln!(w, "# haptex simulate: {description}")?;
     writeln!(w, "# x_mm: finger position on the surface; mu = ft_n/fn_n (forces per mm of finger width)")?;
     writeln!(w, "x_mm,mu,ft_n,fn_n")?;
-    let p = &result.profile;
     let fn_n = p.fn_n().unwrap_or(&[]);
     for i in 0..p.len() {
         let f = fn_n.get(i).copied().unwrap_or(f64::NAN);
         write_csv_row(w, &[p.x_mm()[i], p.mu()[i], p.mu()[i] * f, f])?;
+    }
+    Ok(())
+}
+
+/// Writes the press of a press-only run, step by step:
+/// `t_s,indent_mm,fn_n,ft_n,contact_mm` with indent_mm the downward
+/// displacement of bone and nail since first touch, and the forces on the
+/// finger per mm of width (Fn pressing, Ft along -x).
+pub fn write_press_curve(result: &SimulationResult, description: &str, w: &mut dyn Write) -> std::io::Result<()> {
+    writeln!(w, "# haptex simulate (press only): {description}")?;
+    writeln!(w, "# indent_mm: bone and nail moved down since first touch; forces in N per mm of finger width")?;
+    writeln!(w, "t_s,indent_mm,fn_n,ft_n,contact_mm")?;
+    for r in &result.history {
+        write_csv_row(w, &[r.t_s, -r.drive_y_mm, r.fn_n, r.ft_n, r.contact_mm])?;
     }
     Ok(())
 }

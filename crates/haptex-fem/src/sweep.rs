@@ -100,7 +100,8 @@ impl DatabaseSpec {
             sweep: Sweep {
                 templates: Template::ALL.to_vec(),
                 widths_mm: (0..9).map(|i| 0.5 + 0.25 * i as f64).collect(),
-                heights_mm: (1..=5).map(|i| 0.1 * i as f64).collect(),
+                // i / 10, not 0.1 i: 0.1 * 3 is 0.30000000000000004.
+                heights_mm: (1..=5).map(|i| i as f64 / 10.0).collect(),
                 velocities_mm_s: vec![10.0, 20.0, 50.0, 100.0],
             },
             grid: Grid { xi_min_mm: -5.0, xi_max_mm: 5.0, points: 501 },
@@ -238,7 +239,8 @@ impl DatabaseSpec {
     pub fn simulate(&self, run: &Run) -> Result<Vec<f64>, SweepError> {
         let result =
             run_scenario(&self.scenario(run)).map_err(|error| SweepError::Run { run: run.describe(), error })?;
-        Ok(sample(&result.profile, self, &self.grid.positions()).into_iter().map(|m| (m * 1e6).round() / 1e6).collect())
+        let profile = slid(&result, run)?;
+        Ok(sample(profile, self, &self.grid.positions()).into_iter().map(|m| (m * 1e6).round() / 1e6).collect())
     }
 }
 
@@ -450,7 +452,7 @@ pub fn build_runs(
         pending.par_iter().try_for_each(|run| -> Result<(), SweepError> {
             let scenario = spec.scenario(run);
             let result = run_scenario(&scenario).map_err(|error| SweepError::Run { run: run.describe(), error })?;
-            let mu = sample(&result.profile, spec, &spec.grid.positions());
+            let mu = sample(slid(&result, run)?, spec, &spec.grid.positions());
             let path = runs_dir.join(run.file_name());
             write_atomic(&path, |w| write_run(w, run, &spec.grid, &mu, result.statistics.wall_time_s))?;
             *cpu.lock().expect("no panics while holding the lock") += result.statistics.wall_time_s;
@@ -480,6 +482,15 @@ fn run_scenario(scenario: &Scenario) -> Result<crate::scenario::SimulationResult
 }
 
 /// The profile sampled at xi + x0 by linear interpolation.
+/// The profile of a run (a database's runs always slide: their grid must
+/// fit the slide, checked when the spec is read).
+fn slid<'a>(
+    result: &'a crate::scenario::SimulationResult,
+    run: &Run,
+) -> Result<&'a haptex_core::FrictionProfile, SweepError> {
+    result.profile.as_ref().ok_or_else(|| SweepError::Invalid(format!("{}: the run did not slide", run.describe())))
+}
+
 fn sample(profile: &haptex_core::FrictionProfile, spec: &DatabaseSpec, xi: &[f64]) -> Vec<f64> {
     xi.iter().map(|xi| profile.mu_at(xi + spec.x0_mm)).collect()
 }

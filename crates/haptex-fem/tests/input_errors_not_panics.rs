@@ -99,7 +99,7 @@ fn many_prony_terms_are_supported_and_too_many_are_an_error() {
     scenario.resolution = Resolution::Coarse;
     scenario.slide_mm = 0.3;
     let result = run(&scenario, &mut |_| {}).unwrap();
-    let mu = result.profile.mu();
+    let mu = result.profile.as_ref().unwrap().mu();
     assert!(mu.iter().all(|m| m.is_finite() && *m > 0.0 && *m <= 0.5 + 1e-9), "{mu:?}");
 
     let many = "prony = [\n".to_string()

@@ -12,7 +12,7 @@ use haptex_fem::surface::SurfaceShape;
 fn profile(resolution: Resolution) -> Vec<f64> {
     let mut scenario = Scenario::paper(SurfaceShape::Bump { x0: 5.0, width: 1.5, height: 0.3 });
     scenario.resolution = resolution;
-    run(&scenario, &mut |_| {}).unwrap().profile.mu().to_vec()
+    run(&scenario, &mut |_| {}).unwrap().profile.unwrap().mu().to_vec()
 }
 
 fn relative_rms(a: &[f64], reference: &[f64]) -> f64 {

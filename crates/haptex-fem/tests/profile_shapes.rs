@@ -26,7 +26,7 @@ fn argmin(v: &[f64]) -> usize {
 #[test]
 fn bump_raises_then_lowers_friction() {
     let r = simulate(SurfaceShape::Bump { x0: 5.0, width: 1.5, height: 0.3 }, 20.0, true);
-    let (x, mu) = (r.profile.x_mm(), r.profile.mu());
+    let (x, mu) = (r.profile.as_ref().unwrap().x_mm(), r.profile.as_ref().unwrap().mu());
     let (hi, lo) = (argmax(mu), argmin(&mu[5..]) + 5);
     eprintln!("max {:.3} at {:.2} mm, min {:.3} at {:.2} mm", mu[hi], x[hi], mu[lo], x[lo]);
     assert!(x[hi] < 5.0 && x[lo] > 5.0, "climb before the top, descent after");
@@ -42,7 +42,7 @@ fn bump_raises_then_lowers_friction() {
 #[test]
 fn edge_gives_a_single_transient() {
     let r = simulate(SurfaceShape::Edge { x0: 5.0, width: 1.5, height: 0.3 }, 20.0, true);
-    let (x, mu) = (r.profile.x_mm(), r.profile.mu());
+    let (x, mu) = (r.profile.as_ref().unwrap().x_mm(), r.profile.as_ref().unwrap().mu());
     // One excursion above mu: a single contiguous run away from 0.5.
     let away: Vec<bool> = mu.iter().zip(x).map(|(m, x)| *x > 0.5 && (m - 0.5).abs() > 0.005).collect();
     let runs = away.windows(2).filter(|w| !w[0] && w[1]).count() + usize::from(away[0]);
@@ -55,7 +55,7 @@ fn edge_gives_a_single_transient() {
 fn sine_profile_is_periodic_at_the_surface_period() {
     let period = 2.0;
     let r = simulate(SurfaceShape::Sine { x0: 5.0, width: period, height: 0.2 }, 20.0, true);
-    let (x, mu) = (r.profile.x_mm(), r.profile.mu());
+    let (x, mu) = (r.profile.as_ref().unwrap().x_mm(), r.profile.as_ref().unwrap().mu());
     // After the press transient (x > 2 mm), mu(x + P) ~ mu(x): the change
     // over one period is small next to the profile's own variation. (The
     // slow relaxation of the visco-elastic finger leaves a small drift.)
@@ -87,12 +87,20 @@ fn velocity_dependence_only_with_viscoelasticity() {
     let bump = SurfaceShape::Bump { x0: 5.0, width: 1.5, height: 0.3 };
     let slow = simulate(bump.clone(), 10.0, false);
     let fast = simulate(bump.clone(), 100.0, false);
-    for (a, b) in slow.profile.mu().iter().zip(fast.profile.mu()) {
+    for (a, b) in slow.profile.as_ref().unwrap().mu().iter().zip(fast.profile.as_ref().unwrap().mu()) {
         assert!((a - b).abs() < 1e-9, "elastic: {a} vs {b}");
     }
     let slow = simulate(bump.clone(), 10.0, true);
     let fast = simulate(bump, 100.0, true);
-    let difference = slow.profile.mu().iter().zip(fast.profile.mu()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    let difference = slow
+        .profile
+        .as_ref()
+        .unwrap()
+        .mu()
+        .iter()
+        .zip(fast.profile.as_ref().unwrap().mu())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
     let fn_ratio = fast.history.last().unwrap().fn_n / slow.history.last().unwrap().fn_n;
     eprintln!("visco-elastic: max |mu(10) - mu(100)| = {difference:.4}, Fn(100)/Fn(10) at the end = {fn_ratio:.3}");
     assert!(difference > 0.005, "visco-elastic profiles should differ with velocity");

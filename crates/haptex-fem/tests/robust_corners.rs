@@ -16,7 +16,7 @@ fn corners(make: fn(f64, f64) -> SurfaceShape) {
             let surface = make(width, height);
             let scenario = Scenario::paper(surface.clone());
             let result = run(&scenario, &mut |_| {}).unwrap_or_else(|e| panic!("{surface:?}: {e}"));
-            let p = &result.profile;
+            let p = result.profile.as_ref().unwrap();
             assert!(
                 (p.x_mm()[p.len() - 1] - 10.0).abs() < 1e-9,
                 "{surface:?}: slide ended at {}",

@@ -25,8 +25,8 @@ fn steady_sliding_flat_equals_coulomb_mu() {
     for viscoelastic in [false, true] {
         for mu in [0.3, 0.5, 0.8] {
             let result = flat(viscoelastic, mu);
-            let profile = result.profile.mu();
-            let x = result.profile.x_mm();
+            let profile = result.profile.as_ref().unwrap().mu();
+            let x = result.profile.as_ref().unwrap().x_mm();
             // Fully sliding after the first millimetre.
             for (x, m) in x.iter().zip(profile).filter(|(x, _)| **x >= 1.0) {
                 assert!((m / mu - 1.0).abs() < 0.01, "viscoelastic {viscoelastic}, mu {mu}: Ft/Fn = {m} at x = {x}");

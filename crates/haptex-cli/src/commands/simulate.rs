@@ -12,7 +12,7 @@ use haptex_fem::scenario::{self, Loading, Scenario, default_step_mm};
 use haptex_fem::surface::SurfaceShape;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::args::{Output, positive};
+use crate::args::{Output, non_negative, positive};
 
 /// Simulate a finger pad sliding over a surface (2D plane-strain FE) and
 /// write its friction profile.
@@ -51,8 +51,9 @@ pub struct SimulateArgs {
     /// Press with a constant normal load instead (N per mm of finger width).
     #[arg(long, value_parser = positive)]
     load: Option<f64>,
-    /// Slide distance in mm.
-    #[arg(long, default_value_t = 10.0, value_parser = positive)]
+    /// Slide distance in mm; 0 for a press only (the output is then the
+    /// press curve `t_s,indent_mm,fn_n,ft_n,contact_mm`).
+    #[arg(long, default_value_t = 10.0, value_parser = non_negative)]
     slide: f64,
     /// Slide per step in mm (default: 0.1, or width/10 if smaller).
     #[arg(long, value_parser = positive)]
@@ -191,7 +192,7 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     }
     if !args.quiet {
         let s = result.statistics;
-        let mu = result.profile.mu();
+        let mu = result.profile.as_ref().map(|p| p.mu()).unwrap_or(&[]);
         let (lo, hi) = mu.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &m| (a.min(m), b.max(m)));
         eprintln!("{description}");
         eprintln!(
@@ -202,7 +203,15 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
             "solved {} steps, {} Newton iterations, {} step halvings in {:.2} s",
             s.steps, s.newton_iterations, s.step_cuts, s.wall_time_s
         );
-        eprintln!("Ft/Fn over the slide: {lo:.4} .. {hi:.4}");
+        match result.history.last() {
+            Some(last) if result.profile.is_none() => eprintln!(
+                "press only: Fn = {:.6} N/mm at {} mm, contact {:.3} mm",
+                last.fn_n,
+                Num(-last.drive_y_mm),
+                last.contact_mm
+            ),
+            _ => eprintln!("Ft/Fn over the slide: {lo:.4} .. {hi:.4}"),
+        }
         for (label, path) in
             [("profile", &args.output), ("history", &args.history), ("VTK series", &args.vtk), ("PNG", &args.png)]
         {
