@@ -41,7 +41,8 @@ pub struct ContactLaw {
     pub smoothing_mm: f64,
     /// Include the curvature (geometric) term in the contact tangent: the
     /// exact derivative, but a negative stiffness on crests (see
-    /// [`ContactSet::evaluate`]); off in simulations.
+    /// [`ContactSet::evaluate`]). Simulations start each step with it; the
+    /// solver drops it at the step's first stall.
     pub geometric_tangent: bool,
 }
 
@@ -251,13 +252,10 @@ impl ContactSet {
             //       - eps_T r/(1 + kappa d) tau tau       (stick)
             //       - mu p' sign(t) tau n                 (slip)
             // with r = d arc / ds of the arc coordinate. The geometric term
-            // (the normal turning as the point moves) is included only with
-            // `law.geometric_tangent`: on a crest (kappa < 0) it is a negative
-            // stiffness, a point on a hilltop, and on crests sharper than
-            // the skin's Gauss-point spacing (the sine at r_w 0.5 mm, crest
-            // radius 13-16 um) it made Newton's method fail on every mesh.
-            // Without it the iteration converges, to the same equilibrium
-            // (the residual is exact either way).
+            // (the normal turning as the point moves) is included with
+            // `law.geometric_tangent`; the solver starts each step with it
+            // and drops it where Newton's method stalls (see solver.rs: on a
+            // crest it is a negative stiffness, a point on a hilltop).
             let kappa = if law.geometric_tangent { projection.curvature } else { 0.0 };
             let along = 1.0 / (1.0 + projection.curvature * projection.depth);
             let geometric = [

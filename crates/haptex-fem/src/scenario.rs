@@ -103,13 +103,16 @@ impl Scenario {
             }
         };
         within("press time", self.press_time_s, limits::PRESS_TIME_S, " s")?;
-        within("slide", self.slide_mm, limits::SLIDE_MM, " mm")?;
+        // A slide of exactly 0 is a press-only run (no friction profile).
+        if self.slide_mm != 0.0 {
+            within("slide", self.slide_mm, limits::SLIDE_MM, " mm")?;
+        }
         within("velocity", self.velocity_mm_s, limits::VELOCITY_MM_S, " mm/s")?;
         within("penalty", self.penalty_mpa_per_mm, limits::PENALTY_MPA_PER_MM, " MPa/mm")?;
         if !(self.step_mm.is_finite() && self.step_mm > 0.0) {
             return invalid(format!("the slide step must be a positive length, got {} mm", Num(self.step_mm)));
         }
-        let steps = (self.slide_mm / self.step_mm).ceil();
+        let steps = if self.slide_mm == 0.0 { 0.0 } else { (self.slide_mm / self.step_mm).ceil() };
         if steps > limits::MAX_STEPS as f64 {
             return invalid(format!(
                 "a slide of {} mm in steps of {} mm takes {} steps; at most {} are supported",
@@ -169,9 +172,13 @@ impl Scenario {
         (-half - 2.0, half + self.slide_mm + 2.0)
     }
 
-    /// The number of equal slide steps (at most `step_mm` each).
+    /// The number of equal slide steps (at most `step_mm` each); 0 for a
+    /// press-only run.
     pub fn slide_steps(&self) -> Result<usize, SimulationError> {
         self.validate()?;
+        if self.slide_mm == 0.0 {
+            return Ok(0);
+        }
         Ok((self.slide_mm / self.step_mm).ceil() as usize)
     }
 }
@@ -268,8 +275,10 @@ pub struct Statistics {
 #[derive(Debug, Clone)]
 pub struct SimulationResult {
     pub history: Vec<HistoryRow>,
-    /// Ft/Fn against the finger's position on the surface, over the slide.
-    pub profile: FrictionProfile,
+    /// Ft/Fn against the finger's position on the surface, over the slide
+    /// (`None` for a press-only run, `slide_mm` = 0: the press is in
+    /// `history`).
+    pub profile: Option<FrictionProfile>,
     /// Snapshots: after the press first, then every `frame_every` steps and
     /// the step where the finger reaches the feature.
     pub frames: Vec<Frame>,
@@ -311,7 +320,7 @@ pub fn build_problem(scenario: &Scenario) -> Result<(ContactProblem, f64), Simul
         penalty_tangential: scenario.penalty_mpa_per_mm,
         mu,
         smoothing_mm: scenario.smoothing_mm,
-        geometric_tangent: false,
+        geometric_tangent: true,
     };
     let body = Body::new(finger.mesh, scenario.model.subdomain_models(scenario.viscoelastic), Formulation::BBar)?;
     let problem = ContactProblem {
@@ -333,7 +342,7 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
     let slide_steps = scenario.slide_steps()?;
     // Equal steps that end exactly at the slide length (so every step has
     // the same time step and shares one set of operators).
-    let step_mm = scenario.slide_mm / slide_steps as f64;
+    let step_mm = if slide_steps == 0 { 0.0 } else { scenario.slide_mm / slide_steps as f64 };
     let total_steps = scenario.press_steps + slide_steps;
     let mut history = Vec::with_capacity(total_steps + 1);
     let mut frames = Vec::new();
@@ -407,8 +416,14 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
     if frames.last().is_some_and(|f| f.slide_mm != solver.slide_mm) {
         frames.push(frame(&solver));
     }
-    let profile = FrictionProfile::from_forces(x, &ft, fn_n)
-        .map_err(|e| SimulationError::Invalid(format!("the computed profile is invalid: {e}")))?;
+    let profile = if slide_steps == 0 {
+        None
+    } else {
+        Some(
+            FrictionProfile::from_forces(x, &ft, fn_n)
+                .map_err(|e| SimulationError::Invalid(format!("the computed profile is invalid: {e}")))?,
+        )
+    };
     let (free_dofs, factor_nnz) = solver.sizes();
     let statistics = Statistics {
         nodes: solver.problem.body.mesh.n_nodes(),

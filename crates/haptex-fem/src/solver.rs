@@ -154,8 +154,6 @@ pub enum SolveError {
          {x_mm:.3} mm): enlarge contact.contact_half_arc_mm in the finger model"
     )]
     OutsideContactRegion { t_s: f64, node: usize, x_mm: f64 },
-    #[error("the driven set lost contact under load control at t = {t_s:.6} s: no contact force can carry the load")]
-    LostContact { t_s: f64 },
     #[error("solver settings: {0}")]
     Settings(String),
     #[error("contact candidate node {node} is driven or rigid: the contact region must be free skin")]
@@ -445,11 +443,7 @@ impl Solver {
                 }
                 Err(StepFailure::Fatal(e)) => {
                     self.pending = pending;
-                    return Err(match e {
-                        // Newton does not know the time; the step does.
-                        SolveError::LostContact { .. } => SolveError::LostContact { t_s: self.t_s + fraction * dt_s },
-                        other => other,
-                    });
+                    return Err(e);
                 }
                 Err(StepFailure::Newton { residual, tolerance, correction_mm }) => {
                     let depth = (1.0 / fraction).log2().round() as u32;
@@ -676,6 +670,12 @@ impl Condensed<'_> {
     }
 }
 
+/// Largest and smallest damping of pseudo-transient continuation: beyond
+/// the largest a step hardly moves (1e-8 of Newton's), below the smallest
+/// the step is Newton's to 1e-12.
+const MAX_DAMPING: f64 = 1e8;
+const MIN_DAMPING: f64 = 1e-12;
+
 /// Semi-smooth Newton with backtracking on the condensed contact problem.
 /// On entry `s.v` holds the predictor; on success `s.v`/`s.forces` hold the
 /// solution and `dy` the change of the driven y (load control).
@@ -690,6 +690,11 @@ fn newton(
     s: &mut Scratch,
     dy: &mut f64,
 ) -> Result<(usize, ContactTotals), StepFailure> {
+    // The contact tangent starts with its geometric term (the exact
+    // derivative: quadratic convergence where the surface is curved) and
+    // drops it for the rest of the step at the first stall (see below).
+    let mut law = *law;
+    let law = &mut law;
     let m2 = cond.m2;
     let debug = std::env::var_os("HAPTEX_DEBUG").is_some();
     // The step's constant products, and S v exactly.
@@ -705,7 +710,7 @@ fn newton(
     if contact.committed.iter().any(|p| p.active && !p.slipping) {
         contact.evaluate_with(&s.v, surface, placement, law, true, &mut s.forces, &mut s.blocks);
         cond.residual(s, false, *dy);
-        if newton_direction(cond, s).is_some() {
+        if newton_direction(cond, s, 0.0).is_some() {
             for r in 0..m2 {
                 s.v[r] += s.dv[r];
                 s.sv[r] += s.sdv[r];
@@ -719,6 +724,9 @@ fn newton(
     // The part of the last Newton correction not taken (mm): none at the
     // start (the last converged state, or the full stick-predictor step).
     let mut correction = 0.0f64;
+    // Damping of pseudo-transient continuation (0: Newton's method with a
+    // line search).
+    let mut damping = 0.0f64;
     let mut stalls = 0usize;
     let converged = |norm: f64, scale: f64, correction: f64| {
         norm <= tolerance_of(scale) && correction <= settings.increment_tolerance_mm
@@ -741,10 +749,48 @@ fn newton(
                 return Ok((iteration, totals));
             }
         }
-        if newton_direction(cond, s).is_none() {
-            return Err(StepFailure::Fatal(SolveError::LostContact { t_s: 0.0 }));
+        if newton_direction(cond, s, damping).is_none() {
+            // Under load control, an iterate with nothing in contact: the
+            // load row has no contact force to act on. This attempt failed
+            // and the step is halved. (It used to end the run as "lost
+            // contact", but an iterate is not the finger: the finger rides
+            // over a bump under a constant load, and the full Newton step
+            // off the bump's far side may overshoot.)
+            break;
         }
         let ddy = s.last_ddy;
+        if damping > 0.0 {
+            // Pseudo-transient continuation: the full damped step, and the
+            // damping updated by switched evolution relaxation (Mulder & van
+            // Leer 1985): it shrinks as the residual falls, so the iteration
+            // turns into Newton's near the solution, and grows when the
+            // residual rises. (Growing it faster when the residual does not
+            // fall, 4x, stalled the sharp sine on the fine mesh: the damped
+            // steps became too short to cross to the next equilibrium.)
+            for r in 0..m2 {
+                s.v[r] += s.dv[r];
+                s.sv[r] += s.sdv[r];
+            }
+            *dy += ddy;
+            let previous = norm;
+            totals = contact.evaluate(&s.v, surface, placement, law, &mut s.forces, &mut s.blocks);
+            (norm, merit, scale) = cond.residual(s, false, *dy);
+            // The part of Newton's step the damping held back, about
+            // damping |dv|.
+            correction = damping * s.dv.iter().fold(ddy.abs(), |m, v| m.max(v.abs()));
+            damping = if norm.is_finite() && previous > 0.0 {
+                (damping * norm / previous).clamp(0.0, MAX_DAMPING)
+            } else {
+                MAX_DAMPING
+            };
+            if damping < MIN_DAMPING {
+                damping = 0.0;
+            }
+            if debug {
+                eprintln!("  damped step, damping now {damping:.3e}");
+            }
+            continue;
+        }
         // Backtracking line search on |S R|^2.
         let mut alpha = 1.0;
         let mut accepted = false;
@@ -772,23 +818,39 @@ fn newton(
             alpha *= 0.5;
         }
         if !accepted {
-            // No sufficient decrease down to 1/128 of the Newton step: the
+            // No sufficient decrease down to 1/128 of the Newton step. The
             // residual has a kink within the step (a point entering or
-            // leaving contact, or changing between stick and slip), or the
-            // step crosses an instability (the skin slipping off a sharp
-            // crest). Alternate two ways out: the full step, which can jump
-            // to the other side of a crest (on the sine at r_w 0.5 mm only
-            // it converged), and a short step, 1/256 of Newton's, which moves
-            // the iterate just off the kink (on the half-disc at penalty 1000
-            // the full step alone threw the residual back to the same 1.72e-3
-            // N/mm every 5 to 10 iterations until the step was halved).
+            // leaving contact, or changing between stick and slip), or there
+            // is no equilibrium near the iterate at all: the skin snaps off
+            // a sharp crest, and the next equilibrium is on the crest's other
+            // side. Newton's method with a line search cannot cross that
+            // (the full step alone cycled through the same state on the
+            // half-disc at penalty 1000; short steps stall on the sine at
+            // r_w 0.5 mm). Switch, for the rest of the step, to
+            // pseudo-transient continuation: an overdamped motion of the pad
+            // towards the next stable equilibrium, which becomes Newton's
+            // method again as the residual falls.
+            //
+            // The geometric term of the tangent is dropped with it: on a
+            // crest it is a negative stiffness (a point on a hilltop), and
+            // where crests are sharper than the Gauss points are apart it
+            // makes the linearised problem indefinite. The residual is exact
+            // either way, so the equilibrium found is the same.
+            law.geometric_tangent = false;
             stalls += 1;
-            alpha = if stalls % 2 == 1 { 1.0 } else { 1.0 / 256.0 };
-            for r in 0..m2 {
-                s.v[r] += alpha * s.dv[r];
-                s.sv[r] += alpha * s.sdv[r];
+            if stalls == 1 {
+                // The first time, the full Newton step: one active-set
+                // change is usually all there is (a frictionless press).
+                alpha = 1.0;
+                for r in 0..m2 {
+                    s.v[r] += s.dv[r];
+                    s.sv[r] += s.sdv[r];
+                }
+                *dy += ddy;
+            } else {
+                damping = 1.0;
+                alpha = 0.0;
             }
-            *dy += alpha * ddy;
             totals = contact.evaluate(&s.v, surface, placement, law, &mut s.forces, &mut s.blocks);
             (norm, merit, scale) = cond.residual(s, false, *dy);
         }
@@ -815,7 +877,15 @@ fn newton(
 /// `s.blocks`): `s.dv`, its image `s.sdv` = S dv, and `s.last_ddy` for the
 /// driven y under load control. `None` when under load control nothing is
 /// in contact (the load cannot be carried).
-fn newton_direction(cond: &Condensed<'_>, s: &mut Scratch) -> Option<()> {
+///
+/// With `damping` > 0 the direction is that of pseudo-transient
+/// continuation (Kelley & Keyes 1998): the system (gamma I - C D) dv = -R
+/// with gamma = 1 + damping, i.e. a pseudo-time step of 1/damping with the
+/// pad's own stiffness as the "mass" (in force form (gamma S - D) dv = -S R).
+/// It vanishes as damping goes to 0, so a converged state is the exact
+/// equilibrium either way.
+fn newton_direction(cond: &Condensed<'_>, s: &mut Scratch, damping: f64) -> Option<()> {
+    let gamma = 1.0 + damping;
     let m2 = cond.m2;
     // Active DOFs: those touched by a tangent block.
     s.active.clear();
@@ -870,7 +940,7 @@ fn newton_direction(cond: &Condensed<'_>, s: &mut Scratch) -> Option<()> {
         let mut j = s.lu.matrix_mut(size);
         for col in 0..n_a {
             for (row, &dof) in s.active.iter().enumerate() {
-                j[(row, col)] = if row == col { 1.0 } else { 0.0 } - cd[col * m2 + dof];
+                j[(row, col)] = if row == col { gamma } else { 0.0 } - cd[col * m2 + dof];
             }
         }
         if with_load {
@@ -920,6 +990,12 @@ fn newton_direction(cond: &Condensed<'_>, s: &mut Scratch) -> Option<()> {
             for row in 0..n_a {
                 s.sdv[s.active[row]] += d[col * n_a + row] * x;
             }
+        }
+    }
+    if damping != 0.0 {
+        for r in 0..m2 {
+            s.dv[r] /= gamma;
+            s.sdv[r] /= gamma;
         }
     }
     for &dof in &s.active {

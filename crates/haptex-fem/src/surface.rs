@@ -517,7 +517,7 @@ impl RigidSurface {
         let tangent = [1.0 / length, h1 / length];
         // Signed depth along the normal (the distance at the closest point).
         let depth = (s - p[0]) * normal[0] + (h - p[1]) * normal[1];
-        if !(depth > 0.0) {
+        if depth.is_nan() || depth <= 0.0 {
             return None;
         }
         let curvature = h2 / (length * length * length);
