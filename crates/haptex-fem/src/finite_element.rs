@@ -69,7 +69,7 @@ pub fn mean_dilatation(q: &Q4, u: &[f64; 8]) -> f64 {
 /// The instantaneous isochoric stress S0_iso (11, 22, 33, 12) at each Gauss
 /// point (what the visco-elastic history records).
 pub fn isochoric_stresses(q: &Q4, u: &[f64; 8], law: &NeoHookean) -> [[f64; 4]; 4] {
-    std::array::from_fn(|gp| law.isochoric(&deformation_gradient(q, gp, u)).stress)
+    std::array::from_fn(|gp| law.isochoric_stress(&deformation_gradient(q, gp, u)))
 }
 
 /// Internal nodal forces (u_a, v_a interleaved; N per mm of width) of the
@@ -93,14 +93,20 @@ pub fn internal_force(
     for gp in 0..4 {
         let f = deformation_gradient(q, gp, u);
         let j = det(&f);
-        if !(j > 0.0) {
+        if j.is_nan() || j <= 0.0 {
             return Err(Inverted { gauss_point: gp, det_f: j });
         }
         let w = q.weight[gp];
         let n = &q.grad[gp];
         area += w * j;
-        let response = law.isochoric(&f);
-        let s: [f64; 4] = std::array::from_fn(|k| shear_ratio * response.stress[k] + frozen[gp][k]);
+        let (s0, d) = match tangent {
+            Some(_) => {
+                let response = law.isochoric(&f);
+                (response.stress, response.tangent)
+            }
+            None => (law.isochoric_stress(&f), [[0.0; 3]; 3]),
+        };
+        let s: [f64; 4] = std::array::from_fn(|k| shear_ratio * s0[k] + frozen[gp][k]);
         let sm = [[s[0], s[3]], [s[3], s[1]]];
         // P = F S (in plane).
         let mut p = [[0.0; 2]; 2];
@@ -126,7 +132,6 @@ pub fn internal_force(
                     b[2][2 * a + i] = f[i][0] * n[a][1] + f[i][1] * n[a][0];
                 }
             }
-            let d = response.tangent;
             let mut db = [[0.0; 8]; 3];
             for r in 0..3 {
                 for c in 0..8 {
@@ -150,7 +155,7 @@ pub fn internal_force(
         }
     }
     let j_bar = area / q.area;
-    if !(j_bar > 0.0) {
+    if j_bar.is_nan() || j_bar <= 0.0 {
         return Err(Inverted { gauss_point: 4, det_f: j_bar });
     }
     let (pressure, stiffness) = law.volumetric(j_bar);

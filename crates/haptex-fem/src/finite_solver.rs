@@ -195,9 +195,9 @@ pub struct FiniteSettings {
     /// Outer iterations per step attempt before it is cut.
     pub max_iterations: usize,
     /// Converged when the free-DOF residual |f_int - P F|_inf is at most
-    /// this times the largest nodal contact force (or `absolute_force_n`).
+    /// this times the largest nodal contact force, floored as the contact
+    /// Newton's (`SolverSettings::floor_penetration_mm`).
     pub relative_tolerance: f64,
-    pub absolute_force_n: f64,
     /// Anderson window (0: plain initial-stiffness iteration).
     pub anderson_depth: usize,
     /// Rebuild the condensed operators on the tangent stiffness of the
@@ -208,13 +208,7 @@ pub struct FiniteSettings {
 
 impl Default for FiniteSettings {
     fn default() -> Self {
-        Self {
-            max_iterations: 60,
-            relative_tolerance: 1e-8,
-            absolute_force_n: 1e-9,
-            anderson_depth: 5,
-            tangent_refresh_steps: 1,
-        }
+        Self { max_iterations: 60, relative_tolerance: 1e-8, anderson_depth: 5, tangent_refresh_steps: 1 }
     }
 }
 
@@ -433,7 +427,7 @@ impl FiniteSolver {
                         other => other,
                     });
                 }
-                Err(StepFailure::Newton { residual, tolerance }) => {
+                Err(StepFailure::Newton { residual, tolerance, correction_mm }) => {
                     let depth = (1.0 / fraction).log2().round() as u32;
                     if depth >= self.inner.settings.max_cuts {
                         self.pending = pending;
@@ -444,6 +438,8 @@ impl FiniteSolver {
                             cuts: depth,
                             residual,
                             tolerance,
+                            correction_mm,
+                            correction_tolerance_mm: self.inner.settings.increment_tolerance_mm,
                         });
                     }
                     cuts += 1;
@@ -529,7 +525,9 @@ impl FiniteSolver {
         }
         self.iterate[n] = y_target;
         self.anderson.reset();
-        let tolerance_of = |scale: f64| settings.relative_tolerance * scale.max(settings.absolute_force_n);
+        let floor = inner.force_floor_n;
+        let tolerance_of = |scale: f64| settings.relative_tolerance * scale.max(floor);
+        let mut change = f64::NAN;
         let mut newton_iterations = 0;
         let mut last_norm = f64::INFINITY;
         let mut residual = f64::INFINITY;
@@ -558,7 +556,11 @@ impl FiniteSolver {
                 if debug {
                     eprintln!("finite: outer {outer}: {e}");
                 }
-                return Err(StepFailure::Newton { residual: f64::INFINITY, tolerance: f64::NAN });
+                return Err(StepFailure::Newton {
+                    residual: f64::INFINITY,
+                    tolerance: f64::NAN,
+                    correction_mm: f64::NAN,
+                });
             }
             for (g, &d) in inner.dofs.free.iter().enumerate() {
                 if d != PRESCRIBED {
@@ -606,7 +608,7 @@ impl FiniteSolver {
             }
             if norm <= tolerance {
                 self.outer_iterations += outer;
-                let relative = norm / scale.max(settings.absolute_force_n);
+                let relative = norm / scale.max(floor);
                 self.worst_relative_residual = self.worst_relative_residual.max(relative);
                 return self.commit(k, dt_s, slide_mm, [x_drive, y], newton_iterations, totals);
             }
@@ -625,7 +627,13 @@ impl FiniteSolver {
                 s.u0_s[c] = self.image[row];
                 s.psi_y_s[c] = ops.psi[1][row];
             }
-            let condensed = Condensed { m2, compliance: &ops.compliance, stiffness: &ops.stiffness, load };
+            let condensed = Condensed {
+                m2,
+                compliance: &ops.compliance,
+                stiffness: &ops.stiffness,
+                load,
+                force_floor_n: inner.force_floor_n,
+            };
             let mut dy = 0.0;
             let (its, _) = newton(
                 &condensed,
@@ -664,9 +672,10 @@ impl FiniteSolver {
                 self.image[i] += self.f_free[i];
             }
             self.image[n] = y + dy;
+            change = (0..=n).map(|i| (self.image[i] - self.iterate[i]).abs()).fold(0.0, f64::max);
             self.anderson.step(&mut self.iterate, &self.image);
         }
-        Err(StepFailure::Newton { residual, tolerance })
+        Err(StepFailure::Newton { residual, tolerance, correction_mm: change })
     }
 
     /// Commits the converged iterate in `self.x` (contact trial states and

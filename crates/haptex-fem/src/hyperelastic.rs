@@ -89,21 +89,7 @@ impl NeoHookean {
     /// dS/dE = -2/3 mu J^(-2/3) (I x C^-1 + C^-1 x I) + 2/9 mu J^(-2/3) I1 C^-1 x C^-1
     ///         + 2/3 mu J^(-2/3) I1 (C^-1 (.) C^-1)    (Holzapfel 2000, eq. 6.168).
     pub fn isochoric(&self, f: &[[f64; 2]; 2]) -> IsochoricResponse {
-        // C = F^T F (in plane), C33 = 1.
-        let c11 = f[0][0] * f[0][0] + f[1][0] * f[1][0];
-        let c22 = f[0][1] * f[0][1] + f[1][1] * f[1][1];
-        let c12 = f[0][0] * f[0][1] + f[1][0] * f[1][1];
-        let j = f[0][0] * f[1][1] - f[0][1] * f[1][0];
-        let det_c = j * j;
-        let ci = [[c22 / det_c, -c12 / det_c], [-c12 / det_c, c11 / det_c]];
-        let i1 = c11 + c22 + 1.0;
-        let a = self.mu * j.powf(-2.0 / 3.0);
-        let stress = [
-            a * (1.0 - i1 / 3.0 * ci[0][0]),
-            a * (1.0 - i1 / 3.0 * ci[1][1]),
-            a * (1.0 - i1 / 3.0),
-            -a * i1 / 3.0 * ci[0][1],
-        ];
+        let (stress, ci, i1, a) = self.isochoric_parts(f);
         let delta = |p: usize, q: usize| if p == q { 1.0 } else { 0.0 };
         let mut tangent = [[0.0; 3]; 3];
         for (r, &(i, jj)) in VOIGT.iter().enumerate() {
@@ -114,6 +100,33 @@ impl NeoHookean {
             }
         }
         IsochoricResponse { stress, tangent }
+    }
+
+    /// The isochoric second Piola-Kirchhoff stress alone (see
+    /// [`NeoHookean::isochoric`]).
+    pub fn isochoric_stress(&self, f: &[[f64; 2]; 2]) -> [f64; 4] {
+        self.isochoric_parts(f).0
+    }
+
+    /// S0_iso, the in-plane C^-1, I1 and mu J^(-2/3).
+    fn isochoric_parts(&self, f: &[[f64; 2]; 2]) -> ([f64; 4], [[f64; 2]; 2], f64, f64) {
+        // C = F^T F (in plane), C33 = 1.
+        let c11 = f[0][0] * f[0][0] + f[1][0] * f[1][0];
+        let c22 = f[0][1] * f[0][1] + f[1][1] * f[1][1];
+        let c12 = f[0][0] * f[0][1] + f[1][0] * f[1][1];
+        let j = f[0][0] * f[1][1] - f[0][1] * f[1][0];
+        let det_c = j * j;
+        let ci = [[c22 / det_c, -c12 / det_c], [-c12 / det_c, c11 / det_c]];
+        let i1 = c11 + c22 + 1.0;
+        let cube_root = j.cbrt();
+        let a = self.mu / (cube_root * cube_root);
+        let stress = [
+            a * (1.0 - i1 / 3.0 * ci[0][0]),
+            a * (1.0 - i1 / 3.0 * ci[1][1]),
+            a * (1.0 - i1 / 3.0),
+            -a * i1 / 3.0 * ci[0][1],
+        ];
+        (stress, ci, i1, a)
     }
 
     /// The Cauchy stress (xx, yy, zz, xy) of a homogeneous deformation `f`

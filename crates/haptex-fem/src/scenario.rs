@@ -471,7 +471,9 @@ fn frame(solver: &AnySolver) -> Frame {
     Frame { t_s: state.t_s, slide_mm: state.slide_mm, displacement: state.u.clone(), stress }
 }
 
-/// The solver of the scenario's kinematics.
+/// The solver of the scenario's kinematics (one per run: the size of the
+/// unboxed variant does not matter).
+#[allow(clippy::large_enum_variant)]
 enum AnySolver {
     Small(Solver),
     Finite(Box<FiniteSolver>),

@@ -4,6 +4,9 @@
 //! uniaxial compression and Prony relaxation against the analytic
 //! neo-Hookean solutions. Each test names its source and tolerance.
 
+// Numeric checks index several arrays with one loop variable (as the library).
+#![allow(clippy::needless_range_loop)]
+
 mod common;
 
 use haptex_fem::body::{Body, SubdomainModel};
