@@ -200,15 +200,15 @@ pub struct FiniteSettings {
     pub relative_tolerance: f64,
     /// Anderson window (0: plain initial-stiffness iteration).
     pub anderson_depth: usize,
-    /// Rebuild the condensed operators on the tangent stiffness of the
-    /// committed state every this many steps (1: every step; 0: never,
-    /// the small-strain stiffness throughout).
-    pub tangent_refresh_steps: usize,
+    /// Rebuild the condensed operators on the tangent stiffness once per
+    /// step, at the first outer iterate (false: the small-strain stiffness
+    /// throughout, which diverges on the shipped finger).
+    pub tangent_per_step: bool,
 }
 
 impl Default for FiniteSettings {
     fn default() -> Self {
-        Self { max_iterations: 60, relative_tolerance: 1e-8, anderson_depth: 5, tangent_refresh_steps: 1 }
+        Self { max_iterations: 60, relative_tolerance: 1e-8, anderson_depth: 5, tangent_per_step: true }
     }
 }
 
@@ -351,8 +351,10 @@ pub struct FiniteSolver {
     /// place of the small-strain ones of the same step size.
     tangent_ops: Option<StepOperators>,
     tangent_values: Vec<f64>,
-    /// Steps since the tangent operators were built.
-    tangent_age: usize,
+    /// Contact Newton iterations and the drive's x of an attempt that
+    /// stopped unconverged (to resume it).
+    last_newton_iterations: usize,
+    x_drive: f64,
 }
 
 impl FiniteSolver {
@@ -361,8 +363,8 @@ impl FiniteSolver {
         if let Some(v) = std::env::var("HAPTEX_FINITE_TOL").ok().and_then(|v| v.parse().ok()) {
             finite_settings.relative_tolerance = v;
         }
-        if let Some(v) = std::env::var("HAPTEX_FINITE_REFRESH").ok().and_then(|v| v.parse().ok()) {
-            finite_settings.tangent_refresh_steps = v;
+        if let Some(v) = std::env::var("HAPTEX_FINITE_TANGENT").ok().and_then(|v| v.parse().ok()) {
+            finite_settings.tangent_per_step = v;
         }
         let body_state = FiniteBody::new(&inner.problem.body);
         let n_dofs = inner.u.len();
@@ -387,7 +389,8 @@ impl FiniteSolver {
             pending: Vec::with_capacity(2 * inner.settings.max_cuts as usize + 2),
             tangent_ops: None,
             tangent_values: vec![0.0; inner.pattern.nnz()],
-            tangent_age: 0,
+            last_newton_iterations: 0,
+            x_drive: 0.0,
             inner,
         }
     }
@@ -466,35 +469,34 @@ impl FiniteSolver {
     /// Newton iterations summed over the outer iterations.
     fn try_step(&mut self, dt_s: f64, slide_mm: f64, drive: Drive) -> Result<(usize, ContactTotals), StepFailure> {
         let k = self.inner.operators_for(dt_s).map_err(StepFailure::Fatal)?;
-        let refresh = self.finite_settings.tangent_refresh_steps;
-        if refresh == 0 {
-            return self.attempt(k, dt_s, slide_mm, drive);
+        let max = self.finite_settings.max_iterations;
+        if !self.finite_settings.tangent_per_step {
+            return self.attempt(k, dt_s, slide_mm, drive, false, max);
         }
-        let stale = self.tangent_ops.as_ref().is_none_or(|o| o.dt_s != dt_s) || self.tangent_age >= refresh;
-        if stale {
-            self.build_tangent_operators(k).map_err(StepFailure::Fatal)?;
+        // One outer iteration on the last tangent (or the small-strain
+        // stiffness), which moves the pad to this step's contact; then the
+        // tangent at that iterate for the rest of the step.
+        match self.attempt(k, dt_s, slide_mm, drive, false, 1) {
+            Err(StepFailure::Newton { .. }) => {}
+            other => return other,
         }
-        let fresh = self.tangent_age == 0;
-        self.tangent_age += 1;
-        match self.attempt(k, dt_s, slide_mm, drive) {
-            // An older tangent may be what failed: retry once on a fresh one
-            // before the step is cut.
-            Err(StepFailure::Newton { .. }) if !fresh => {
-                self.build_tangent_operators(k).map_err(StepFailure::Fatal)?;
-                self.tangent_age = 1;
-                self.attempt(k, dt_s, slide_mm, drive)
-            }
-            other => other,
-        }
+        let iterations = self.last_newton_iterations;
+        self.build_tangent_operators(k, true).map_err(StepFailure::Fatal)?;
+        let (its, totals) = self.attempt(k, dt_s, slide_mm, drive, true, max)?;
+        Ok((iterations + its, totals))
     }
 
-    /// One attempt at a step with the current operators.
+    /// One attempt at a step with the current operators, at most
+    /// `max_outer` outer iterations, from the predictor or (`resume`) from
+    /// the iterate where the last attempt stopped.
     fn attempt(
         &mut self,
         k: usize,
         dt_s: f64,
         slide_mm: f64,
         drive: Drive,
+        resume: bool,
+        max_outer: usize,
     ) -> Result<(usize, ContactTotals), StepFailure> {
         let debug = std::env::var_os("HAPTEX_DEBUG").is_some();
         let placement = self.inner.placement(slide_mm);
@@ -518,12 +520,14 @@ impl FiniteSolver {
         // the change of the drive.
         let ops = &*ops_k;
         let change = [x_drive - inner.drive_mm[0], y_target - inner.drive_mm[1]];
-        for (g, &d) in inner.dofs.free.iter().enumerate() {
-            if d != PRESCRIBED {
-                self.iterate[d] = inner.u[g] + change[0] * ops.psi[0][d] + change[1] * ops.psi[1][d];
+        if !resume {
+            for (g, &d) in inner.dofs.free.iter().enumerate() {
+                if d != PRESCRIBED {
+                    self.iterate[d] = inner.u[g] + change[0] * ops.psi[0][d] + change[1] * ops.psi[1][d];
+                }
             }
+            self.iterate[n] = y_target;
         }
-        self.iterate[n] = y_target;
         self.anderson.reset();
         let floor = inner.force_floor_n;
         let tolerance_of = |scale: f64| settings.relative_tolerance * scale.max(floor);
@@ -532,7 +536,7 @@ impl FiniteSolver {
         let mut last_norm = f64::INFINITY;
         let mut residual = f64::INFINITY;
         let mut tolerance = f64::NAN;
-        for outer in 0..settings.max_iterations {
+        for outer in 0..=max_outer {
             // The global displacement of the iterate.
             let y = self.iterate[n];
             for (g, &d) in inner.dofs.free.iter().enumerate() {
@@ -617,6 +621,9 @@ impl FiniteSolver {
                 self.anderson.reset();
             }
             last_norm = norm;
+            if outer == max_outer {
+                break;
+            }
             // u0 = x_f - K0^-1 f_int(x).
             ops_k.cholesky.solve_vec(&mut self.f_free);
             for i in 0..n {
@@ -675,6 +682,9 @@ impl FiniteSolver {
             change = (0..=n).map(|i| (self.image[i] - self.iterate[i]).abs()).fold(0.0, f64::max);
             self.anderson.step(&mut self.iterate, &self.image);
         }
+        self.outer_iterations += max_outer;
+        self.last_newton_iterations = newton_iterations;
+        self.x_drive = x_drive;
         Err(StepFailure::Newton { residual, tolerance, correction_mm: change })
     }
 
@@ -717,8 +727,20 @@ impl FiniteSolver {
     /// of operator set `k`) on the tangent stiffness at the committed
     /// state, into `self.tangent_ops`. Leaves them unset when the tangent
     /// is not positive definite.
-    fn build_tangent_operators(&mut self, k: usize) -> Result<(), SolveError> {
+    fn build_tangent_operators(&mut self, k: usize, at_iterate: bool) -> Result<(), SolveError> {
         let timer = std::time::Instant::now();
+        if at_iterate {
+            // The global displacement of the iterate where the last attempt
+            // stopped.
+            let n = self.inner.dofs.n_free;
+            for (g, &d) in self.inner.dofs.free.iter().enumerate() {
+                self.x[g] = if d != PRESCRIBED { self.iterate[d] } else { 0.0 };
+            }
+            for &node in &self.inner.problem.driven_nodes {
+                self.x[2 * node] = self.x_drive;
+                self.x[2 * node + 1] = self.iterate[n];
+            }
+        }
         let inner = &mut self.inner;
         let body = &inner.problem.body;
         let coefficients = inner.operators[k].coefficients.clone();
@@ -733,7 +755,7 @@ impl FiniteSolver {
             driven[node] = true;
         }
         for &e in body.deformable_elements() {
-            let ue = body.element_displacement(e, &inner.u);
+            let ue = body.element_displacement(e, if at_iterate { &self.x } else { &inner.u });
             let (ratio, frozen) = self.body_state.stress_parts(body, e, Some(&coefficients));
             let mut ke = [[0.0; 8]; 8];
             internal_force(&body.geometry[e], &ue, self.body_state.law(body, e), ratio, &frozen, Some(&mut ke))
@@ -803,7 +825,6 @@ impl FiniteSolver {
             cholesky.solve_vec(response);
         }
         self.tangent_ops = Some(StepOperators { dt_s, coefficients, cholesky, phi, compliance, stiffness, psi });
-        self.tangent_age = 0;
         if std::env::var_os("HAPTEX_DEBUG").is_some() {
             eprintln!("finite: tangent operators for dt {dt_s}: {:.1} ms", timer.elapsed().as_secs_f64() * 1e3);
         }
