@@ -43,7 +43,7 @@ pub struct Inverted {
 }
 
 /// The in-plane deformation gradient F = I + grad_X u at Gauss point `gp`
-/// (f[i][k] = dx_i / dX_k).
+/// (`f[i][k]` = dx_i / dX_k).
 pub fn deformation_gradient(q: &Q4, gp: usize, u: &[f64; 8]) -> [[f64; 2]; 2] {
     let mut f = [[1.0, 0.0], [0.0, 1.0]];
     for a in 0..4 {

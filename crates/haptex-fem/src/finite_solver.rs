@@ -3,36 +3,42 @@
 //! contact is the same penalty-Coulomb law on the deformed configuration
 //! (the contact points move with the displaced skin nodes; the surface's
 //! closest point, normal and arc are evaluated there by
-//! [`ContactSet::evaluate`]).
+//! [`crate::contact::ContactSet::evaluate`]).
 //!
 //! # Algorithm
 //!
 //! The body is no longer linear, so the exact condensation of
 //! [`crate::solver`] no longer solves the problem by itself. It is kept as
-//! the inner solve of a modified Newton iteration on the body's
-//! nonlinearity (initial-stiffness method): with K0 the small-strain
-//! algorithmic stiffness of the step size (whose Cholesky factor, pad
-//! compliance C and responses Phi the small-strain solver already builds),
-//! each outer iteration maps an iterate x (free displacements, and the
-//! driven y under load control) to
+//! the inner solve of an outer iteration on the body's nonlinearity: with K
+//! an SPD stiffness whose condensation (Cholesky factor, pad compliance C,
+//! its inverse S, drive responses psi) is at hand, each outer iteration
+//! maps an iterate x (free displacements, and the driven y under load
+//! control) to
 //!
 //! ```text
-//!   u0   = x_f - K0^-1 f_int(x)                 one sparse solve
-//!   G(x) = u0 + dy psi_y + Phi F(v),   v = G(x)_s, solved exactly by the
-//!                                      condensed contact Newton
+//!   u0   = x_f - K^-1 f_int(x)                         one sparse solve
+//!   v    = u0_s + dy psi_s + C F(v)                     the contact Newton
+//!   G(x) = u0 + dy psi + K^-1 P S (v - u0_s - dy psi_s) one sparse solve
 //! ```
 //!
-//! whose fixed point satisfies f_int(u) = P F(u_s): the full nonlinear
-//! equilibrium on every free DOF. The map converges linearly at the rate
-//! of |I - K0^-1 K_T| (strains of a few percent: fast); Anderson
-//! acceleration (Walker & Ni 2011, a window of a few iterates) speeds it
-//! up and is restarted whenever the residual grows. Convergence is checked
-//! on the true residual at the iterate, f_int(x) - P F(x_s) on all free
-//! DOFs (and the load under load control), against a tolerance relative to
-//! the largest nodal contact force. A step that does not converge, or in
-//! which an element inverts, is retried in halves exactly like the
-//! small-strain solver's; if that fails the solver's error names the time,
-//! the step and the residual.
+//! (the last term puts the pad exactly at v). Its fixed point satisfies
+//! f_int(u) = P F(u_s), the full nonlinear equilibrium on every free DOF,
+//! whatever K is; K only sets the rate, |I - K^-1 K_T| where contact does
+//! not dominate. Anderson acceleration (Walker & Ni 2011, 5 iterates)
+//! speeds it up and is restarted whenever the residual grows. Convergence
+//! is checked on the true residual at the iterate, f_int(x) - P F(x_s) on
+//! all free DOFs (and the load under load control), within 1e-8 of the
+//! largest nodal contact force.
+//!
+//! K: the small-strain stiffness of the step size (its condensation exists
+//! already) diverges at the end of the press on the shipped finger, so K is
+//! the tangent stiffness, condensed anew (a factorization and one solve per
+//! pad DOF, the costly part) at the current iterate whenever an outer
+//! iteration contracts the residual by less than
+//! [`FiniteSettings::rebuild_contraction`]; the first step starts on the
+//! small-strain one. A step that does not converge, or in which an element
+//! inverts, is retried in halves exactly like the small-strain solver's; if
+//! that fails the solver's error names the time, the step and the residual.
 
 use crate::assembly::{DofMap, PRESCRIBED};
 use crate::body::{Body, SubdomainModel};

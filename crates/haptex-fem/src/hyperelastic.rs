@@ -75,7 +75,7 @@ impl NeoHookean {
     }
 
     /// The isochoric energy mu/2 (I1bar - 3) for the in-plane deformation
-    /// gradient `f` (f[i][j] = dx_i/dX_j, F33 = 1).
+    /// gradient `f` (`f[i][j]` = dx_i/dX_j, F33 = 1).
     pub fn isochoric_energy(&self, f: &[[f64; 2]; 2]) -> f64 {
         let j = f[0][0] * f[1][1] - f[0][1] * f[1][0];
         let i1 = f[0][0] * f[0][0] + f[0][1] * f[0][1] + f[1][0] * f[1][0] + f[1][1] * f[1][1] + 1.0;
