@@ -16,8 +16,9 @@ use crate::body::{Body, BodyError};
 use crate::contact::{ContactLaw, ContactSet};
 use crate::element::Formulation;
 use crate::finger::{FingerError, FingerModel, Resolution};
+use crate::finite_solver::{FiniteSettings, FiniteSolver};
 use crate::mesh::Mesh;
-use crate::solver::{ContactProblem, Drive, SolveError, Solver, SolverSettings};
+use crate::solver::{ContactProblem, Drive, SolveError, Solver, SolverSettings, StepReport};
 use crate::surface::{RigidSurface, SurfaceShape};
 
 /// How the finger is pressed.
@@ -30,6 +31,18 @@ pub enum Loading {
     Load(f64),
 }
 
+/// The body's kinematics.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Kinematics {
+    /// Small strain, linear visco-elastic tissue (the paper's model).
+    #[default]
+    Small,
+    /// Finite strain: total Lagrangian, neo-Hookean tissue with the same
+    /// moduli and Prony series ([`crate::finite_solver`]).
+    Finite,
+}
+
 /// Everything that defines a simulation.
 #[derive(Debug, Clone)]
 pub struct Scenario {
@@ -37,6 +50,7 @@ pub struct Scenario {
     pub model: FingerModel,
     pub resolution: Resolution,
     pub viscoelastic: bool,
+    pub kinematics: Kinematics,
     pub loading: Loading,
     /// Duration of the press (s) and its number of steps.
     pub press_time_s: f64,
@@ -69,6 +83,7 @@ impl Scenario {
             model: FingerModel::default_model(),
             resolution: Resolution::Default,
             viscoelastic: true,
+            kinematics: Kinematics::Small,
             loading: Loading::Indent(0.25),
             press_time_s: 0.1,
             press_steps: 10,
@@ -338,7 +353,11 @@ pub fn build_problem(scenario: &Scenario) -> Result<(ContactProblem, f64), Simul
 pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<SimulationResult, SimulationError> {
     let started = Instant::now();
     let (problem, lift_mm) = build_problem(scenario)?;
-    let mut solver = Solver::new(problem, scenario.settings, lift_mm)?;
+    let small = Solver::new(problem, scenario.settings, lift_mm)?;
+    let mut solver = match scenario.kinematics {
+        Kinematics::Small => AnySolver::Small(small),
+        Kinematics::Finite => AnySolver::Finite(Box::new(FiniteSolver::new(small, FiniteSettings::default()))),
+    };
     let slide_steps = scenario.slide_steps()?;
     // Equal steps that end exactly at the slide length (so every step has
     // the same time step and shares one set of operators).
@@ -347,7 +366,7 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
     let mut history = Vec::with_capacity(total_steps + 1);
     let mut frames = Vec::new();
     let dt_press = scenario.press_time_s / scenario.press_steps as f64;
-    let record = |solver: &mut Solver, report: &crate::solver::StepReport| HistoryRow {
+    let record = |solver: &mut AnySolver, report: &StepReport| HistoryRow {
         t_s: report.t_s,
         slide_mm: report.slide_mm,
         fn_n: report.totals.force[1],
@@ -413,7 +432,7 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
         }
         progress(Progress { step: scenario.press_steps + k, total_steps, t_s: report.t_s, slide_mm: slide });
     }
-    if frames.last().is_some_and(|f| f.slide_mm != solver.slide_mm) {
+    if frames.last().is_some_and(|f| f.slide_mm != solver.state().slide_mm) {
         frames.push(frame(&solver));
     }
     let profile = if slide_steps == 0 {
@@ -424,6 +443,7 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
                 .map_err(|e| SimulationError::Invalid(format!("the computed profile is invalid: {e}")))?,
         )
     };
+    let solver = solver.state();
     let (free_dofs, factor_nnz) = solver.sizes();
     let statistics = Statistics {
         nodes: solver.problem.body.mesh.n_nodes(),
@@ -448,18 +468,54 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
     })
 }
 
-fn frame(solver: &Solver) -> Frame {
-    let body = &solver.problem.body;
+fn frame(solver: &AnySolver) -> Frame {
+    let state = solver.state();
+    let body = &state.problem.body;
     let stress = (0..body.mesh.n_elements())
         .map(|e| {
             if body.deformable_elements().binary_search(&e).is_ok() {
-                body.element_stress(e, &solver.u)
+                match solver {
+                    AnySolver::Small(_) => body.element_stress(e, &state.u),
+                    AnySolver::Finite(f) => f.body_state.element_stress(body, e, &state.u),
+                }
             } else {
                 [0.0; 4]
             }
         })
         .collect();
-    Frame { t_s: solver.t_s, slide_mm: solver.slide_mm, displacement: solver.u.clone(), stress }
+    Frame { t_s: state.t_s, slide_mm: state.slide_mm, displacement: state.u.clone(), stress }
+}
+
+/// The solver of the scenario's kinematics (one per run: the size of the
+/// unboxed variant does not matter).
+#[allow(clippy::large_enum_variant)]
+enum AnySolver {
+    Small(Solver),
+    Finite(Box<FiniteSolver>),
+}
+
+impl AnySolver {
+    fn advance(&mut self, dt_s: f64, slide_mm: f64, drive: Drive) -> Result<StepReport, SolveError> {
+        match self {
+            Self::Small(s) => s.advance(dt_s, slide_mm, drive),
+            Self::Finite(s) => s.advance(dt_s, slide_mm, drive),
+        }
+    }
+
+    fn driven_reaction(&mut self) -> [f64; 2] {
+        match self {
+            Self::Small(s) => s.driven_reaction(),
+            Self::Finite(s) => s.driven_reaction(),
+        }
+    }
+
+    /// The committed state (displacement, time, slide, problem).
+    fn state(&self) -> &Solver {
+        match self {
+            Self::Small(s) => s,
+            Self::Finite(s) => &s.inner,
+        }
+    }
 }
 
 /// Where the finger is over the feature's characteristic point.

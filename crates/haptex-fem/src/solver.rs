@@ -180,62 +180,62 @@ pub struct StepReport {
 }
 
 /// Operators that depend on the step size.
-struct StepOperators {
-    dt_s: f64,
-    coefficients: Vec<Option<StepCoefficients>>,
-    cholesky: SparseCholesky,
+pub(crate) struct StepOperators {
+    pub(crate) dt_s: f64,
+    pub(crate) coefficients: Vec<Option<StepCoefficients>>,
+    pub(crate) cholesky: SparseCholesky,
     /// n_free x 2m, column-major.
-    phi: Vec<f64>,
+    pub(crate) phi: Vec<f64>,
     /// 2m x 2m compliance and its inverse, column-major.
-    compliance: Vec<f64>,
-    stiffness: Vec<f64>,
+    pub(crate) compliance: Vec<f64>,
+    pub(crate) stiffness: Vec<f64>,
     /// Free response to a unit translation of the driven set in x and in y.
-    psi: [Vec<f64>; 2],
+    pub(crate) psi: [Vec<f64>; 2],
 }
 
 /// Work arrays of the Newton iteration, allocated once.
-struct Scratch {
-    last_ddy: f64,
+pub(crate) struct Scratch {
+    pub(crate) last_ddy: f64,
     /// S v, S v_trial, S u0_s, S psi_s, S dv.
-    sv: Vec<f64>,
-    sv_trial: Vec<f64>,
-    su0: Vec<f64>,
-    spsi: Vec<f64>,
-    sdv: Vec<f64>,
+    pub(crate) sv: Vec<f64>,
+    pub(crate) sv_trial: Vec<f64>,
+    pub(crate) su0: Vec<f64>,
+    pub(crate) spsi: Vec<f64>,
+    pub(crate) sdv: Vec<f64>,
     /// D on the active DOFs, dense.
-    d_active: Vec<f64>,
-    u0_free: Vec<f64>,
-    u_next: Vec<f64>,
-    u0_s: Vec<f64>,
-    psi_y_s: Vec<f64>,
-    v: Vec<f64>,
-    v_trial: Vec<f64>,
-    dv: Vec<f64>,
-    forces: Vec<f64>,
-    forces_trial: Vec<f64>,
-    residual: Vec<f64>,
-    force_residual: Vec<f64>,
-    blocks: Vec<Block>,
-    blocks_trial: Vec<Block>,
-    active: Vec<usize>,
-    position: Vec<usize>,
-    cd: Vec<f64>,
-    rhs: Vec<f64>,
-    lu: DenseLu,
+    pub(crate) d_active: Vec<f64>,
+    pub(crate) u0_free: Vec<f64>,
+    pub(crate) u_next: Vec<f64>,
+    pub(crate) u0_s: Vec<f64>,
+    pub(crate) psi_y_s: Vec<f64>,
+    pub(crate) v: Vec<f64>,
+    pub(crate) v_trial: Vec<f64>,
+    pub(crate) dv: Vec<f64>,
+    pub(crate) forces: Vec<f64>,
+    pub(crate) forces_trial: Vec<f64>,
+    pub(crate) residual: Vec<f64>,
+    pub(crate) force_residual: Vec<f64>,
+    pub(crate) blocks: Vec<Block>,
+    pub(crate) blocks_trial: Vec<Block>,
+    pub(crate) active: Vec<usize>,
+    pub(crate) position: Vec<usize>,
+    pub(crate) cd: Vec<f64>,
+    pub(crate) rhs: Vec<f64>,
+    pub(crate) lu: DenseLu,
 }
 
 /// The solver and the committed state.
 pub struct Solver {
     pub problem: ContactProblem,
     pub settings: SolverSettings,
-    dofs: DofMap,
-    base: SparseCholesky,
-    pattern: Pattern,
+    pub(crate) dofs: DofMap,
+    pub(crate) base: SparseCholesky,
+    pub(crate) pattern: Pattern,
     values: Vec<f64>,
     /// Free index of each candidate DOF (2 per candidate node).
-    candidate_free: Vec<usize>,
-    operators: Vec<StepOperators>,
-    scratch: Scratch,
+    pub(crate) candidate_free: Vec<usize>,
+    pub(crate) operators: Vec<StepOperators>,
+    pub(crate) scratch: Scratch,
     /// Committed global displacement.
     pub u: Vec<f64>,
     pub t_s: f64,
@@ -247,7 +247,7 @@ pub struct Solver {
     pub placement_lift_mm: f64,
     /// The force floor of the convergence test (N per mm of width): see
     /// [`SolverSettings`].
-    force_floor_n: f64,
+    pub(crate) force_floor_n: f64,
     pub total_iterations: usize,
     pending: Vec<(f64, f64)>,
     /// Elements touching the driven nodes, and a force buffer, for reactions.
@@ -349,7 +349,7 @@ impl Solver {
         (self.dofs.n_free, self.base.factor_nnz())
     }
 
-    fn placement(&self, slide_mm: f64) -> SurfacePlacement {
+    pub(crate) fn placement(&self, slide_mm: f64) -> SurfacePlacement {
         SurfacePlacement { slide_mm, lift_mm: self.placement_lift_mm }
     }
 
@@ -358,7 +358,7 @@ impl Solver {
     }
 
     /// The operators for step size `dt_s`, built on first use.
-    fn operators_for(&mut self, dt_s: f64) -> Result<usize, SolveError> {
+    pub(crate) fn operators_for(&mut self, dt_s: f64) -> Result<usize, SolveError> {
         if let Some(i) = self.operators.iter().position(|o| o.dt_s == dt_s) {
             return Ok(i);
         }
@@ -603,20 +603,20 @@ impl Solver {
 }
 
 /// Why one attempt at a step failed.
-enum StepFailure {
+pub(crate) enum StepFailure {
     Newton { residual: f64, tolerance: f64, correction_mm: f64 },
     Fatal(SolveError),
 }
 
 /// The condensed operators of one step.
-struct Condensed<'a> {
-    m2: usize,
-    compliance: &'a [f64],
-    stiffness: &'a [f64],
+pub(crate) struct Condensed<'a> {
+    pub(crate) m2: usize,
+    pub(crate) compliance: &'a [f64],
+    pub(crate) stiffness: &'a [f64],
     /// Vertical load on the driven set (load control), N per mm of width.
-    load: Option<f64>,
+    pub(crate) load: Option<f64>,
     /// The convergence test's force floor, N per mm of width.
-    force_floor_n: f64,
+    pub(crate) force_floor_n: f64,
 }
 
 impl Condensed<'_> {
@@ -680,7 +680,7 @@ const MIN_DAMPING: f64 = 1e-12;
 /// On entry `s.v` holds the predictor; on success `s.v`/`s.forces` hold the
 /// solution and `dy` the change of the driven y (load control).
 #[allow(clippy::too_many_arguments)]
-fn newton(
+pub(crate) fn newton(
     cond: &Condensed<'_>,
     contact: &mut ContactSet,
     surface: &RigidSurface,

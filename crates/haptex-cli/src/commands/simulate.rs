@@ -8,7 +8,7 @@ use clap::{Args, ValueEnum};
 use haptex_core::num::Num;
 use haptex_fem::finger::{FingerModel, Resolution};
 use haptex_fem::output;
-use haptex_fem::scenario::{self, Loading, Scenario, default_step_mm};
+use haptex_fem::scenario::{self, Kinematics, Loading, Scenario, default_step_mm};
 use haptex_fem::surface::SurfaceShape;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -67,6 +67,11 @@ pub struct SimulateArgs {
     /// Tissue model.
     #[arg(long, value_enum, default_value_t = MaterialArg::Viscoelastic)]
     material: MaterialArg,
+    /// Kinematics: small strain (the paper's model) or finite strain
+    /// (total Lagrangian, neo-Hookean tissue with the same moduli and Prony
+    /// series; about 3x slower).
+    #[arg(long, value_enum, default_value_t = KinematicsArg::Small)]
+    kinematics: KinematicsArg,
     /// Mesh resolution (pad node spacing 0.2, 0.1, 0.05 mm).
     #[arg(long, value_enum, default_value_t = MeshArg::Default)]
     mesh: MeshArg,
@@ -100,6 +105,12 @@ pub struct SimulateArgs {
 enum MaterialArg {
     Elastic,
     Viscoelastic,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum KinematicsArg {
+    Small,
+    Finite,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -140,6 +151,10 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
         MeshArg::Fine => Resolution::Fine,
     };
     scenario.viscoelastic = matches!(args.material, MaterialArg::Viscoelastic);
+    scenario.kinematics = match args.kinematics {
+        KinematicsArg::Small => Kinematics::Small,
+        KinematicsArg::Finite => Kinematics::Finite,
+    };
     scenario.loading = match (args.indent, args.load) {
         (_, Some(load)) => Loading::Load(load),
         (Some(indent), None) => Loading::Indent(indent),
@@ -240,10 +255,11 @@ fn describe(args: &SimulateArgs, scenario: &Scenario) -> String {
         Loading::Load(f) => format!("load {} N/mm", Num(f)),
     };
     format!(
-        "{surface}; {loading}, slide {} mm at {} mm/s, {} tissue, {:?} mesh",
+        "{surface}; {loading}, slide {} mm at {} mm/s, {} tissue, {:?} mesh{}",
         Num(scenario.slide_mm),
         Num(scenario.velocity_mm_s),
         if scenario.viscoelastic { "visco-elastic" } else { "elastic" },
-        scenario.resolution
+        scenario.resolution,
+        if scenario.kinematics == Kinematics::Finite { ", finite strain" } else { "" }
     )
 }
