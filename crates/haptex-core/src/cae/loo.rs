@@ -336,7 +336,11 @@ pub fn optimize_widths(matrix: &ModelMatrix, options: OptimizeOptions) -> Result
         );
         iterations += varying.iterations;
         converged &= varying.converged;
-        if varying.f < best.1 {
+        // Kept only if they lower the error by more than the search's own
+        // resolution (f_tol): the shipped bump database's search once
+        // "improved" on the constant width by moving w_max 4e-10 away from
+        // w_min, which bought nothing but non-constant widths.
+        if varying.f < best.1 * (1.0 - nm.f_tol) {
             best = (to_widths(&varying.x), varying.f);
         }
     }
