@@ -152,13 +152,30 @@ def main():
                f"{100 * (lin['fn_n'][i] / mu0['fn_n'][i] - 1):+.2f} %."]
     md.append("")
 
+    # haptex's finite-strain option (if run.sh found it) against the NLGEOM press
+    fin_path = os.path.join(hx, "flat_finite_history.csv")
+    if os.path.exists(fin_path) and nlg is not None:
+        hf = read_csv(fin_path)
+        press_f = {round(-d, 6): f for d, f, s in zip(hf["drive_y_mm"], hf["fn_n"], hf["slide_mm"]) if s == 0.0}
+        md += ["## Press: haptex `--kinematics finite` vs CalculiX NLGEOM (neo-Hookean)", "",
+               "| indent mm | haptex finite P' | ccx NLGEOM P' | ccx vs haptex finite | haptex finite/small | ccx NLGEOM/linear |", "|---|---|---|---|---|---|"]
+        for i, d in enumerate(nlg["indent_mm"]):
+            pf, pn = press_f.get(round(d, 6), float("nan")), nlg["fn_n"][i]
+            ph, pl = press_h.get(round(d, 6), float("nan")), lin["fn_n"][i]
+            md.append(f"| {d:.3f} | {pf:.6f} | {pn:.6f} | {100 * (pn / pf - 1):+.2f} % | {100 * (pf / ph - 1):+.2f} % | {100 * (pn / pl - 1):+.2f} % |")
+        md.append("")
+
     # ---------------- slides ----------------
     for case in ("flat", "bump"):
         h = read_csv(os.path.join(hx, f"{case}.csv"))
         cl, cn = load(f"{case}_linear.csv"), load(f"{case}_nlgeom.csv")
         md += [f"## {case.capitalize()} slide, mu = 0.5", ""]
         md += ["| run | x range mm | Fn at x = 0.1 | Fn max | Ft max | mu min (at x) | mu max (at x) | mu at last x | first x with mu >= 0.499 |", "|---|---|---|---|---|---|---|---|---|"]
-        for label, d, fcol in (("haptex small strain", h, "fn_n"), ("ccx linear", cl, "fn_n"), ("ccx NLGEOM", cn, "fn_n")):
+        hf = load(os.path.join("haptex", f"{case}_finite.csv"))
+        for label, d, fcol in (("haptex small strain", h, "fn_n"), ("ccx linear", cl, "fn_n"), ("ccx NLGEOM", cn, "fn_n"),
+                               ("haptex finite strain", hf, "fn_n")):
+            if d is None and label.startswith("haptex finite"):
+                continue
             if d is None:
                 md.append(f"| {label} | no run |  |  |  |  |  |  |  |")
                 continue
@@ -170,6 +187,8 @@ def main():
                       f"{x[np.argmax(mu >= 0.499)]:.2f} |")
         md.append("")
         pairs = (("ccx linear vs haptex", cl, h), ("ccx NLGEOM vs ccx linear", cn, cl), ("ccx NLGEOM vs haptex", cn, h))
+        if hf is not None:
+            pairs += (("ccx NLGEOM vs haptex finite", cn, hf), ("haptex finite vs haptex small", hf, h))
         md += ["Differences on haptex's x grid, over the range where both ran (interpolated linearly in x):", "",
                "| comparison | x range mm | mu RMS diff | mu RMS diff, x >= 2 mm | mu max abs diff (at x) | Fn rel. RMS diff | Fn rel. max diff (at x) | Ft rel. RMS diff |", "|---|---|---|---|---|---|---|---|"]
         for label, a, b in pairs:
@@ -198,7 +217,8 @@ def main():
         h = read_csv(os.path.join(hx, "bump.csv"))
         cl = load("bump_linear.csv")
         md += ["## Bump variants (decks/variants, `run.sh variants`)", "",
-               "Where each run got to, and its Ft/Fn against haptex's (and the reference ccx linear run's) on haptex's x grid where both ran.", "",
+               "Where each run got to, and its Ft/Fn against haptex's (small strain; for the NLGEOM variant haptex `--kinematics finite` when available) "
+               "and the reference ccx linear run's, on haptex's x grid where both ran.", "",
                "| run | last x mm | mu RMS diff vs haptex, x >= 2 mm | mu max abs diff vs haptex (at x) | mu RMS diff vs ccx linear (reference deck), x >= 2 mm | mu max (at x) |",
                "|---|---|---|---|---|---|"]
         for path in variants:
@@ -207,7 +227,9 @@ def main():
             xg = h["x_mm"]
             vm = interp_on(xg, v["x_mm"], v["mu"])
             cols = []
-            for ref in (h, cl):
+            hfin = load(os.path.join("haptex", "bump_finite.csv"))
+            refs = (hfin if (hfin is not None and "nlgeom" in name) else h, cl)
+            for ref in refs:
                 rm = interp_on(xg, ref["x_mm"], ref["mu"])
                 ok = ~(np.isnan(vm) | np.isnan(rm)) & (xg >= 2.0 - 1e-9)
                 if ok.any():

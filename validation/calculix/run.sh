@@ -27,10 +27,17 @@ export OMP_NUM_THREADS=1 CCX_NPROC_EQUATION_SOLVER=1 CCX_NPROC_STIFFNESS=1 CCX_N
 cd "$HERE"
 mkdir -p work runs results/haptex decks
 
-echo "== versions"
-"$CCX" -v 2>&1 | grep -m1 -i version || true
-"$HAPTEX" --version
-date -u +"%Y-%m-%dT%H:%M:%SZ"
+echo "== versions (also in results/provenance.txt)"
+{
+    echo "date: $(date -u +%Y-%m-%dT%H:%M:%SZ)"
+    echo "ccx: $("$CCX" -v 2>&1 | grep -m1 -i version | sed 's/^ *//') ($(command -v "$CCX"); Debian package $(dpkg-query -W -f='${Package} ${Version}' calculix-ccx 2>/dev/null || echo '?'))"
+    echo "haptex: $("$HAPTEX" --version) ($HAPTEX, sha256 $(sha256sum "$HAPTEX" | cut -d' ' -f1), modified $(date -u -r "$HAPTEX" +%Y-%m-%dT%H:%M:%SZ))"
+    hrepo="$(git -C "$(dirname "$HAPTEX")" rev-parse --show-toplevel 2>/dev/null || true)"
+    [[ -n "$hrepo" ]] && echo "haptex checkout: $hrepo at $(git -C "$hrepo" rev-parse HEAD)$(git -C "$hrepo" diff --quiet HEAD -- crates 2>/dev/null || echo ' (crates/ modified)') (the binary may be older than HEAD)"
+    echo "this checkout: $(git -C "$REPO" rev-parse HEAD) ($(git -C "$REPO" rev-parse --abbrev-ref HEAD))"
+    echo "machine: $(lscpu | sed -n 's/^Model name: *//p'), $(nproc --all) CPUs, $(lscpu | sed -n 's/^Hypervisor vendor: *//p') guest, $(free -g | awk '/Mem:/ {print $2}') GB, Linux $(uname -r)"
+    echo "threads: OMP_NUM_THREADS=$OMP_NUM_THREADS"
+} | tee results/provenance.txt
 
 echo "== haptex mesh export (frame 0 = after the 0.25 mm press; reference node positions)"
 rm -rf work/mesh_vtk
@@ -45,6 +52,15 @@ echo "== haptex's own curves (small strain, B-bar Q4, elastic)"
     -o results/haptex/flat.csv --history results/haptex/flat_history.csv
 "$HAPTEX" simulate --finger "$FINGER" --material elastic --surface bump --x0 5 --width 1.5 --height 0.3 -q \
     -o results/haptex/bump.csv --history results/haptex/bump_history.csv
+# haptex's finite-strain option, where the binary has it (added on main on 2026-11-25):
+# compared with the NLGEOM runs
+rm -f results/haptex/*_finite*.csv
+if "$HAPTEX" simulate --help | grep -q -- '--kinematics'; then
+    "$HAPTEX" simulate --finger "$FINGER" --material elastic --kinematics finite --surface flat -q \
+        -o results/haptex/flat_finite.csv --history results/haptex/flat_finite_history.csv
+    "$HAPTEX" simulate --finger "$FINGER" --material elastic --kinematics finite --surface bump --x0 5 --width 1.5 --height 0.3 -q \
+        -o results/haptex/bump_finite.csv --history results/haptex/bump_finite_history.csv
+fi
 rm -rf work/press_*
 "$HAPTEX" simulate --finger "$FINGER" --material elastic --surface flat --slide 0.2 --mu-skin 0 -q \
     -o work/press_mu0.csv --history results/haptex/press_mu0_history.csv
