@@ -384,6 +384,19 @@ mod tests {
 
     /// The tangent blocks are the derivative of the forces (finite
     /// differences, 1e-6 relative), in stick and in slip.
+    /// The tangent blocks of one segment's two nodes as a 4 x 4 matrix.
+    fn assembled(blocks: &[Block]) -> [[f64; 4]; 4] {
+        let mut k = [[0.0; 4]; 4];
+        for b in blocks {
+            for p in 0..2 {
+                for q in 0..2 {
+                    k[2 * b.i + p][2 * b.j + q] += b.d[p][q];
+                }
+            }
+        }
+        k
+    }
+
     #[test]
     fn tangent_matches_finite_differences() {
         for slide in [0.0001, 0.05] {
@@ -394,14 +407,7 @@ mod tests {
             let mut f0 = [0.0; 4];
             let mut blocks = Vec::new();
             set.evaluate(&u, &surface, placement, &law, &mut f0, &mut blocks);
-            let mut k = [[0.0; 4]; 4];
-            for b in &blocks {
-                for p in 0..2 {
-                    for q in 0..2 {
-                        k[2 * b.i + p][2 * b.j + q] += b.d[p][q];
-                    }
-                }
-            }
+            let k = assembled(&blocks);
             let h = 1e-7;
             for j in 0..4 {
                 let mut up = u;
@@ -450,14 +456,7 @@ mod tests {
                 let totals = set.evaluate(&u, &surface, placement, &law, &mut f0, &mut blocks);
                 assert_eq!(totals.active_points, 4);
                 assert_eq!(totals.slipping_points, if slide < -0.01 { 4 } else { 0 }, "slide {slide}");
-                let mut k = [[0.0; 4]; 4];
-                for b in &blocks {
-                    for p in 0..2 {
-                        for q in 0..2 {
-                            k[2 * b.i + p][2 * b.j + q] += b.d[p][q];
-                        }
-                    }
-                }
+                let k = assembled(&blocks);
                 let h = 1e-8;
                 for j in 0..4 {
                     let (mut up, mut down) = (u, u);

@@ -46,7 +46,9 @@ use crate::contact::ContactTotals;
 use crate::finite_element::{Inverted, cauchy_stress, internal_force, isochoric_stresses};
 use crate::hyperelastic::NeoHookean;
 use crate::material::{StepCoefficients, advance_history, frozen_deviator, history_deviator};
-use crate::solver::{Condensed, Drive, SolveError, Solver, StepFailure, StepOperators, StepReport, newton};
+use crate::solver::{
+    Condensed, Drive, SolveError, Solver, StepFailure, StepOperators, StepReport, Stepping, advance_halving, newton,
+};
 
 /// The finite-strain state of the body: the neo-Hookean law of every
 /// deformable subdomain and the visco-elastic history (isochoric second
@@ -361,7 +363,6 @@ pub struct FiniteSolver {
     anderson: Anderson,
     reaction_elements: Vec<usize>,
     reaction_forces: Vec<f64>,
-    pending: Vec<(f64, f64)>,
     /// Operators built on the tangent stiffness at a recent state, used in
     /// place of the small-strain ones of the same step size.
     tangent_ops: Option<StepOperators>,
@@ -373,6 +374,16 @@ pub struct FiniteSolver {
     /// An attempt stops early when an iteration reduces the residual by
     /// less than this factor (to rebuild the tangent).
     slow_ratio: f64,
+}
+
+impl Stepping for FiniteSolver {
+    fn committed(&mut self) -> &mut Solver {
+        &mut self.inner
+    }
+
+    fn try_step(&mut self, dt_s: f64, slide_mm: f64, drive: Drive) -> Result<(usize, ContactTotals), StepFailure> {
+        self.try_step_finite(dt_s, slide_mm, drive)
+    }
 }
 
 impl FiniteSolver {
@@ -397,7 +408,6 @@ impl FiniteSolver {
             anderson: Anderson::new(finite_settings.anderson_depth, n_free + 1),
             reaction_elements,
             reaction_forces: vec![0.0; n_dofs],
-            pending: Vec::with_capacity(2 * inner.settings.max_cuts as usize + 2),
             tangent_ops: None,
             tangent_values: vec![0.0; inner.pattern.nnz()],
             last_newton_iterations: 0,
@@ -410,71 +420,17 @@ impl FiniteSolver {
     /// As [`Solver::advance`]: advances to `slide_mm` with the driven set
     /// loaded by `drive` over `dt_s`, halving the step on failure.
     pub fn advance(&mut self, dt_s: f64, slide_mm: f64, drive: Drive) -> Result<StepReport, SolveError> {
-        let start_drive = self.inner.drive_mm;
-        let start_slide = self.inner.slide_mm;
-        let mut iterations = 0;
-        let mut cuts = 0;
-        let mut pending = std::mem::take(&mut self.pending);
-        pending.clear();
-        pending.push((0.0f64, 1.0f64));
-        let mut last = None;
-        while let Some((from, to)) = pending.pop() {
-            let fraction = to - from;
-            let target_slide = start_slide + to * (slide_mm - start_slide);
-            let target_drive = match drive {
-                Drive::Displacement(d) => Drive::Displacement([
-                    start_drive[0] + to * (d[0] - start_drive[0]),
-                    start_drive[1] + to * (d[1] - start_drive[1]),
-                ]),
-                Drive::Load { x_mm, fy_n } => Drive::Load { x_mm: start_drive[0] + to * (x_mm - start_drive[0]), fy_n },
-            };
-            match self.try_step(fraction * dt_s, target_slide, target_drive) {
-                Ok((its, totals)) => {
-                    iterations += its;
-                    last = Some(totals);
-                }
-                Err(StepFailure::Fatal(e)) => {
-                    self.pending = pending;
-                    return Err(e);
-                }
-                Err(StepFailure::Newton { residual, tolerance, correction_mm }) => {
-                    let depth = (1.0 / fraction).log2().round() as u32;
-                    if depth >= self.inner.settings.max_cuts {
-                        self.pending = pending;
-                        return Err(SolveError::NotConverged {
-                            t_s: self.inner.t_s + fraction * dt_s,
-                            step: self.inner.steps + 1,
-                            slide_mm: target_slide,
-                            cuts: depth,
-                            residual,
-                            tolerance,
-                            correction_mm,
-                            correction_tolerance_mm: self.inner.settings.increment_tolerance_mm,
-                        });
-                    }
-                    cuts += 1;
-                    let middle = 0.5 * (from + to);
-                    pending.push((middle, to));
-                    pending.push((from, middle));
-                }
-            }
-        }
-        self.pending = pending;
-        self.inner.steps += 1;
-        self.inner.total_iterations += iterations;
-        Ok(StepReport {
-            t_s: self.inner.t_s,
-            slide_mm: self.inner.slide_mm,
-            drive_mm: self.inner.drive_mm,
-            totals: last.expect("at least one sub-step"),
-            iterations,
-            cuts,
-        })
+        advance_halving(self, dt_s, slide_mm, drive)
     }
 
     /// One attempt at a step; commits only on success. Returns the contact
     /// Newton iterations summed over the outer iterations.
-    fn try_step(&mut self, dt_s: f64, slide_mm: f64, drive: Drive) -> Result<(usize, ContactTotals), StepFailure> {
+    fn try_step_finite(
+        &mut self,
+        dt_s: f64,
+        slide_mm: f64,
+        drive: Drive,
+    ) -> Result<(usize, ContactTotals), StepFailure> {
         let k = self.inner.operators_for(dt_s).map_err(StepFailure::Fatal)?;
         let max = self.finite_settings.max_iterations;
         if !self.finite_settings.tangent_per_step {

@@ -415,73 +415,16 @@ impl Solver {
     /// time `dt_s`, halving the step on failure. Returns the report of the
     /// (possibly subdivided) step.
     pub fn advance(&mut self, dt_s: f64, slide_mm: f64, drive: Drive) -> Result<StepReport, SolveError> {
-        let start_drive = self.drive_mm;
-        let start_slide = self.slide_mm;
-        let mut iterations = 0;
-        let mut cuts = 0;
-        // Remaining work as fractions of the step: a stack of (from, to).
-        // Work still to do, as fractions (from, to) of the step: a stack that
-        // step halving pushes onto (kept in the solver: no allocation).
-        let mut pending = std::mem::take(&mut self.pending);
-        pending.clear();
-        pending.push((0.0f64, 1.0f64));
-        let mut last = None;
-        while let Some((from, to)) = pending.pop() {
-            let fraction = to - from;
-            let target_slide = start_slide + to * (slide_mm - start_slide);
-            let target_drive = match drive {
-                Drive::Displacement(d) => Drive::Displacement([
-                    start_drive[0] + to * (d[0] - start_drive[0]),
-                    start_drive[1] + to * (d[1] - start_drive[1]),
-                ]),
-                Drive::Load { x_mm, fy_n } => Drive::Load { x_mm: start_drive[0] + to * (x_mm - start_drive[0]), fy_n },
-            };
-            match self.try_step(fraction * dt_s, target_slide, target_drive) {
-                Ok((its, totals)) => {
-                    iterations += its;
-                    last = Some(totals);
-                }
-                Err(StepFailure::Fatal(e)) => {
-                    self.pending = pending;
-                    return Err(e);
-                }
-                Err(StepFailure::Newton { residual, tolerance, correction_mm }) => {
-                    let depth = (1.0 / fraction).log2().round() as u32;
-                    if depth >= self.settings.max_cuts {
-                        self.pending = pending;
-                        return Err(SolveError::NotConverged {
-                            t_s: self.t_s + fraction * dt_s,
-                            step: self.steps + 1,
-                            slide_mm: target_slide,
-                            cuts: depth,
-                            residual,
-                            tolerance,
-                            correction_mm,
-                            correction_tolerance_mm: self.settings.increment_tolerance_mm,
-                        });
-                    }
-                    cuts += 1;
-                    let middle = 0.5 * (from + to);
-                    pending.push((middle, to));
-                    pending.push((from, middle));
-                }
-            }
-        }
-        self.pending = pending;
-        self.steps += 1;
-        self.total_iterations += iterations;
-        Ok(StepReport {
-            t_s: self.t_s,
-            slide_mm: self.slide_mm,
-            drive_mm: self.drive_mm,
-            totals: last.expect("at least one sub-step"),
-            iterations,
-            cuts,
-        })
+        advance_halving(self, dt_s, slide_mm, drive)
     }
 
     /// One attempt at a step; commits only on success.
-    fn try_step(&mut self, dt_s: f64, slide_mm: f64, drive: Drive) -> Result<(usize, ContactTotals), StepFailure> {
+    fn try_step_small(
+        &mut self,
+        dt_s: f64,
+        slide_mm: f64,
+        drive: Drive,
+    ) -> Result<(usize, ContactTotals), StepFailure> {
         let k = self.operators_for(dt_s).map_err(StepFailure::Fatal)?;
         let placement = self.placement(slide_mm);
         let m2 = self.candidate_free.len();
@@ -600,6 +543,101 @@ impl Solver {
         }
         r
     }
+}
+
+/// A solver that advances by attempts that commit only on success: the
+/// small-strain [`Solver`] and the finite-strain one, which share the
+/// committed state (time, slide, drive, step count, settings, the stack of
+/// pending sub-steps) held in a [`Solver`].
+pub(crate) trait Stepping {
+    /// The committed state.
+    fn committed(&mut self) -> &mut Solver;
+    /// One attempt at a step of `dt_s` to `slide_mm` under `drive`.
+    fn try_step(&mut self, dt_s: f64, slide_mm: f64, drive: Drive) -> Result<(usize, ContactTotals), StepFailure>;
+}
+
+impl Stepping for Solver {
+    fn committed(&mut self) -> &mut Solver {
+        self
+    }
+
+    fn try_step(&mut self, dt_s: f64, slide_mm: f64, drive: Drive) -> Result<(usize, ContactTotals), StepFailure> {
+        self.try_step_small(dt_s, slide_mm, drive)
+    }
+}
+
+/// Advances `solver` to `slide_mm` with the driven set loaded by `drive`
+/// over `dt_s`, retrying a failed attempt in halves (nothing is committed
+/// from it) down to 1/2^max_cuts of the step; past that, the error names
+/// the time, the step, the slide and the residual.
+pub(crate) fn advance_halving<S: Stepping>(
+    solver: &mut S,
+    dt_s: f64,
+    slide_mm: f64,
+    drive: Drive,
+) -> Result<StepReport, SolveError> {
+    let state = solver.committed();
+    let (start_drive, start_slide) = (state.drive_mm, state.slide_mm);
+    // Work still to do, as fractions (from, to) of the step: a stack that
+    // step halving pushes onto (kept in the solver: no allocation).
+    let mut pending = std::mem::take(&mut state.pending);
+    pending.clear();
+    pending.push((0.0f64, 1.0f64));
+    let (mut iterations, mut cuts, mut last) = (0, 0, None);
+    while let Some((from, to)) = pending.pop() {
+        let fraction = to - from;
+        let target_slide = start_slide + to * (slide_mm - start_slide);
+        let target_drive = match drive {
+            Drive::Displacement(d) => Drive::Displacement([
+                start_drive[0] + to * (d[0] - start_drive[0]),
+                start_drive[1] + to * (d[1] - start_drive[1]),
+            ]),
+            Drive::Load { x_mm, fy_n } => Drive::Load { x_mm: start_drive[0] + to * (x_mm - start_drive[0]), fy_n },
+        };
+        match solver.try_step(fraction * dt_s, target_slide, target_drive) {
+            Ok((its, totals)) => {
+                iterations += its;
+                last = Some(totals);
+            }
+            Err(StepFailure::Fatal(e)) => {
+                solver.committed().pending = pending;
+                return Err(e);
+            }
+            Err(StepFailure::Newton { residual, tolerance, correction_mm }) => {
+                let depth = (1.0 / fraction).log2().round() as u32;
+                let state = solver.committed();
+                if depth >= state.settings.max_cuts {
+                    state.pending = pending;
+                    return Err(SolveError::NotConverged {
+                        t_s: state.t_s + fraction * dt_s,
+                        step: state.steps + 1,
+                        slide_mm: target_slide,
+                        cuts: depth,
+                        residual,
+                        tolerance,
+                        correction_mm,
+                        correction_tolerance_mm: state.settings.increment_tolerance_mm,
+                    });
+                }
+                cuts += 1;
+                let middle = 0.5 * (from + to);
+                pending.push((middle, to));
+                pending.push((from, middle));
+            }
+        }
+    }
+    let state = solver.committed();
+    state.pending = pending;
+    state.steps += 1;
+    state.total_iterations += iterations;
+    Ok(StepReport {
+        t_s: state.t_s,
+        slide_mm: state.slide_mm,
+        drive_mm: state.drive_mm,
+        totals: last.expect("at least one sub-step"),
+        iterations,
+        cuts,
+    })
 }
 
 /// Why one attempt at a step failed.

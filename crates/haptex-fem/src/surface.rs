@@ -367,8 +367,13 @@ impl RigidSurface {
         if x[x.len() - 1] < x_max {
             x.push(x_max);
         }
-        let h: Vec<f64> = x.iter().map(|&x| curve.eval(x)[0]).collect();
-        let arc_slope: Vec<f64> = x.iter().map(|&x| curve.eval(x)[1].hypot(1.0)).collect();
+        let (h, arc_slope): (Vec<f64>, Vec<f64>) = x
+            .iter()
+            .map(|&x| {
+                let [h, slope, _] = curve.eval(x);
+                (h, slope.hypot(1.0))
+            })
+            .unzip();
         let mut arc = vec![0.0; x.len()];
         // Arc length of each segment: 3-point Gauss-Legendre of |c'(x)|
         // (error ~ l^6 |L^(6)|, far below 1e-12 mm on 5 um segments).
