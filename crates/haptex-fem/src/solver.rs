@@ -80,9 +80,16 @@ pub const MAX_CONTACT_NODES: usize = 2000;
 ///   `increment_tolerance_mm`: the iterate is where Newton's method
 ///   pointed, not merely somewhere along a damped step where the residual
 ///   happens to dip (a full step leaves nothing untaken).
+///
+/// Newton's method has `max_iterations`; a step that falls back to
+/// pseudo-transient continuation (see [`newton`]) gets
+/// `continuation_iterations` more, since crossing to the next equilibrium
+/// after a snap takes a few hundred short damped steps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolverSettings {
     pub max_iterations: usize,
+    /// Further iterations once continuation has started.
+    pub continuation_iterations: usize,
     pub relative_tolerance: f64,
     pub floor_penetration_mm: f64,
     pub increment_tolerance_mm: f64,
@@ -94,6 +101,7 @@ impl Default for SolverSettings {
     fn default() -> Self {
         Self {
             max_iterations: 100,
+            continuation_iterations: 1000,
             relative_tolerance: 1e-9,
             floor_penetration_mm: 1e-3,
             increment_tolerance_mm: 1e-6,
@@ -103,10 +111,11 @@ impl Default for SolverSettings {
 }
 
 impl SolverSettings {
-    /// Iterations 1 ..= 10^4, halvings at most 40 (a step of 1e-12 of the
+    /// Iterations 1 ..= 10^4 (continuation at most 10^5), halvings at most 40 (a step of 1e-12 of the
     /// original), tolerances and the floor's depth positive and finite.
     pub fn validate(&self) -> Result<(), SolveError> {
         let ok = (1..=10_000).contains(&self.max_iterations)
+            && self.continuation_iterations <= 100_000
             && self.max_cuts <= 40
             && self.relative_tolerance.is_finite()
             && self.relative_tolerance > 0.0
@@ -708,10 +717,16 @@ impl Condensed<'_> {
     }
 }
 
-/// Largest and smallest damping of pseudo-transient continuation: beyond
-/// the largest a step hardly moves (1e-8 of Newton's), below the smallest
-/// the step is Newton's to 1e-12.
-const MAX_DAMPING: f64 = 1e8;
+/// Damping of pseudo-transient continuation while the residual is at or
+/// above its value where continuation started (a pseudo-time step of 1/10
+/// of the pad's own relaxation), and the smallest, below which the step is
+/// Newton's to 1e-12. Measured on the half-disc over the sharpest corners
+/// (r_w 0.5, r_h 0.5 mm): the skin resting on a crest sits at an unstable
+/// or vanishing equilibrium, the residual grows by about 0.9/(1 + damping)
+/// per damped step while the skin snaps to the crest's other side, and
+/// with damping 1 the iterates, too long, overshoot the new equilibrium and
+/// cycle between active sets; with 10 all of them cross.
+const CONTINUATION_DAMPING: f64 = 10.0;
 const MIN_DAMPING: f64 = 1e-12;
 
 /// Semi-smooth Newton with backtracking on the condensed contact problem.
@@ -766,11 +781,17 @@ pub(crate) fn newton(
     // line search).
     let mut damping = 0.0f64;
     let mut stalls = 0usize;
+    // The residual where continuation started, and the iteration limit
+    // (raised when it starts).
+    let mut continuation_start = 0.0f64;
+    let mut limit = settings.max_iterations;
     let converged = |norm: f64, scale: f64, correction: f64| {
         norm <= tolerance_of(scale) && correction <= settings.increment_tolerance_mm
     };
-    for iteration in 0..settings.max_iterations {
-        if !norm.is_finite() {
+    let mut iterations = 0;
+    for iteration in 0.. {
+        iterations = iteration;
+        if iteration >= limit || !norm.is_finite() {
             break;
         }
         if debug {
@@ -798,28 +819,32 @@ pub(crate) fn newton(
         }
         let ddy = s.last_ddy;
         if damping > 0.0 {
-            // Pseudo-transient continuation: the full damped step, and the
-            // damping updated by switched evolution relaxation (Mulder & van
-            // Leer 1985): it shrinks as the residual falls, so the iteration
-            // turns into Newton's near the solution, and grows when the
-            // residual rises. (Growing it faster when the residual does not
-            // fall, 4x, stalled the sharp sine on the fine mesh: the damped
-            // steps became too short to cross to the next equilibrium.)
+            // Pseudo-transient continuation: the full damped step, with
+            // the damping proportional to the residual relative to where
+            // continuation started, capped at CONTINUATION_DAMPING: it
+            // shrinks as the residual falls below that, so the iteration
+            // turns into Newton's near the solution, and stays put while the
+            // residual rises. Switched evolution relaxation (Mulder & van
+            // Leer 1985: the damping follows the residual's last change)
+            // failed on the sharpest corners both ways: grown as the residual
+            // rose, the steps became too short for the skin to snap across
+            // a crest (the residual grows while it does); shrunk at each
+            // fall of an oscillating residual after the snap, the iteration
+            // turned into the cycling Newton's method again.
             for r in 0..m2 {
                 s.v[r] += s.dv[r];
                 s.sv[r] += s.sdv[r];
             }
             *dy += ddy;
-            let previous = norm;
             totals = contact.evaluate(&s.v, surface, placement, law, &mut s.forces, &mut s.blocks);
             (norm, merit, scale) = cond.residual(s, false, *dy);
             // The part of Newton's step the damping held back, about
             // damping |dv|.
             correction = damping * s.dv.iter().fold(ddy.abs(), |m, v| m.max(v.abs()));
-            damping = if norm.is_finite() && previous > 0.0 {
-                (damping * norm / previous).clamp(0.0, MAX_DAMPING)
+            damping = if norm.is_finite() && continuation_start > 0.0 {
+                (CONTINUATION_DAMPING * (norm / continuation_start).min(1.0)).max(0.5 * damping)
             } else {
-                MAX_DAMPING
+                CONTINUATION_DAMPING
             };
             if damping < MIN_DAMPING {
                 damping = 0.0;
@@ -886,7 +911,9 @@ pub(crate) fn newton(
                 }
                 *dy += ddy;
             } else {
-                damping = 1.0;
+                damping = CONTINUATION_DAMPING;
+                continuation_start = norm;
+                limit = limit.max(iteration + 1 + settings.continuation_iterations);
                 alpha = 0.0;
             }
             totals = contact.evaluate(&s.v, surface, placement, law, &mut s.forces, &mut s.blocks);
@@ -904,7 +931,7 @@ pub(crate) fn newton(
         cond.stiffness_times(&s.v, &mut s.sv);
         (norm, _, scale) = cond.residual(s, false, *dy);
         if converged(norm, scale, correction) {
-            return Ok((settings.max_iterations, totals));
+            return Ok((iterations, totals));
         }
     }
     Err(StepFailure::Newton { residual: norm, tolerance: tolerance_of(scale), correction_mm: correction })

@@ -21,9 +21,11 @@
 //!
 //! Completion: the whole slide, finite Ft/Fn, Fn > 0 and global
 //! equilibrium (contact force = driven-set reaction) to 1e-6 at every step.
-//! 8 runs of the half-disc on the sharpest corner do not complete yet (91
-//! runs do): they are listed by
-//! `open_case` and kept in the ignored test `sharp_corners_still_open`.
+//! All 100 runs complete. The last 9 to do so, the half-disc on the
+//! sharpest corner (bump: fine mesh, penalty 1000; edge: a quarter step,
+//! visco-elastic; sine: penalty 1000, half and a quarter step, and the
+//! fine + penalty 1000 + quarter-step combination), needed the continuation
+//! of docs/fem.md ("Snapping over sharp crests").
 //!
 //! Agreement (RMS of the difference of Ft/Fn over the slide against the
 //! default-settings run of the same body and surface), on the resolved
@@ -166,7 +168,6 @@ fn all_corners(body: Body) {
     let failures: Vec<String> = makers
         .iter()
         .flat_map(|make| corners(*make))
-        .filter(|s| !open_case(body, s, Variant::Default))
         .filter_map(|s| complete(body, &s, Variant::Default).err())
         .collect();
     assert!(failures.is_empty(), "{} runs failed:\n{}", failures.len(), failures.join("\n"));
@@ -217,21 +218,6 @@ const SHARP_BUMP: SurfaceShape = SurfaceShape::Bump { x0: 5.0, width: 0.5, heigh
 const SHARP_EDGE: SurfaceShape = SurfaceShape::Edge { x0: 5.0, width: 0.5, height: 0.5 };
 const SHARP_SINE: SurfaceShape = SurfaceShape::Sine { x0: 5.0, width: 0.5, height: 0.5 };
 
-/// The runs of the matrix that do not complete yet (issue 14, open): all
-/// the soft half-disc on the sharpest corner, features as tall as they are
-/// wide (measured 2026-11-25). They are
-/// excluded from the tests below and run, as a record, by
-/// `sharp_corners_still_open` (`cargo test -- --ignored`).
-fn open_case(body: Body, surface: &SurfaceShape, variant: Variant) -> bool {
-    use Variant::*;
-    match (body, surface) {
-        (Body::HalfDisc, s) if *s == SHARP_BUMP => matches!(variant, Fine | Penalty(1000.0)),
-        (Body::HalfDisc, s) if *s == SHARP_EDGE => matches!(variant, StepFraction(0.25) | OtherMaterial),
-        (Body::HalfDisc, s) if *s == SHARP_SINE => matches!(variant, Penalty(1000.0) | StepFraction(_)),
-        _ => false,
-    }
-}
-
 const VARIANTS: [Variant; 7] = [
     Variant::Coarse,
     Variant::Fine,
@@ -269,24 +255,26 @@ fn finger_issue_bump_every_setting() {
     assert_none(one_factor_at_a_time(Body::Finger, ISSUE_BUMP, true));
 }
 
-/// The sharp corners, every setting that completes today (completion only:
-/// see the module's notes on agreement).
+/// The sharp corners, every setting (completion only: see the module's
+/// notes on agreement), the finger.
 #[test]
-fn sharp_corners_every_setting() {
-    assert_none(sharp_corner_failures(false));
+fn finger_sharp_corners_every_setting() {
+    assert_none(sharp_corner_failures(Body::Finger));
 }
 
-/// Runs the sharp corners at the default and every one-factor variant,
-/// those that are open cases or those that are not; returns the failures.
-fn sharp_corner_failures(open: bool) -> Vec<String> {
+/// The same, the half-disc.
+#[test]
+fn half_disc_sharp_corners_every_setting() {
+    assert_none(sharp_corner_failures(Body::HalfDisc));
+}
+
+/// Runs the sharp corners at the default and every one-factor variant;
+/// returns the failures.
+fn sharp_corner_failures(body: Body) -> Vec<String> {
     let mut failures = Vec::new();
-    for body in [Body::Finger, Body::HalfDisc] {
-        for surface in [SHARP_BUMP, SHARP_EDGE, SHARP_SINE] {
-            for variant in std::iter::once(Variant::Default).chain(VARIANTS) {
-                if open_case(body, &surface, variant) == open {
-                    failures.extend(complete(body, &surface, variant).err());
-                }
-            }
+    for surface in [SHARP_BUMP, SHARP_EDGE, SHARP_SINE] {
+        for variant in std::iter::once(Variant::Default).chain(VARIANTS) {
+            failures.extend(complete(body, &surface, variant).err());
         }
     }
     failures
@@ -295,21 +283,15 @@ fn sharp_corner_failures(open: bool) -> Vec<String> {
 #[test]
 fn extreme_combinations_complete() {
     let mut failures = Vec::new();
-    for (body, surface) in [(Body::Finger, ISSUE_BUMP), (Body::HalfDisc, ISSUE_BUMP), (Body::Finger, SHARP_SINE)] {
+    for (body, surface) in [
+        (Body::Finger, ISSUE_BUMP),
+        (Body::HalfDisc, ISSUE_BUMP),
+        (Body::Finger, SHARP_SINE),
+        (Body::HalfDisc, SHARP_SINE),
+    ] {
         for variant in [Variant::FinePenalty1000QuarterStep, Variant::CoarsePenalty50Viscoelastic] {
             failures.extend(complete(body, &surface, variant).err());
         }
     }
-    assert_none(failures);
-}
-
-/// The open cases of the matrix: they fail today (Newton's method and its
-/// fallbacks stall where the skin slides off a crest as tall as it is
-/// wide). Kept as a record of what is left; `cargo test -- --ignored`.
-#[test]
-#[ignore = "issue 14 open: the sharpest corner does not complete in these variants (docs/fem.md, Limits)"]
-fn sharp_corners_still_open() {
-    let mut failures = sharp_corner_failures(true);
-    failures.extend(complete(Body::HalfDisc, &SHARP_SINE, Variant::FinePenalty1000QuarterStep).err());
     assert_none(failures);
 }
