@@ -40,6 +40,8 @@
 //! inverts, is retried in halves exactly like the small-strain solver's; if
 //! that fails the solver's error names the time, the step and the residual.
 
+use std::time::Instant;
+
 use crate::assembly::{DofMap, PRESCRIBED};
 use crate::body::{Body, SubdomainModel};
 use crate::contact::ContactTotals;
@@ -229,6 +231,52 @@ impl Default for FiniteSettings {
     }
 }
 
+/// Where the finite-strain solve spends its time: counts and wall time
+/// summed per phase over the run (read it from [`FiniteSolver::profile`];
+/// `haptex simulate` prints it when `HAPTEX_PROFILE` is set).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FiniteProfile {
+    /// Tangent rebuilds (condensations on the tangent stiffness).
+    pub rebuilds: usize,
+    /// Element tangents and their assembly, seconds.
+    pub assembly_s: f64,
+    /// Sparse numeric factorizations, seconds.
+    pub factorization_s: f64,
+    /// The pad compliance and its inverse (and the drive responses), seconds.
+    pub condensation_s: f64,
+    /// Residual evaluations (internal forces and contact), their number and seconds.
+    pub residuals: usize,
+    pub residual_s: f64,
+    /// Sparse single-vector solves of the outer iteration, their number and seconds.
+    pub solves: usize,
+    pub solve_s: f64,
+    /// The contact Newton of the outer iterations, seconds.
+    pub contact_newton_s: f64,
+    /// Anderson updates, seconds.
+    pub anderson_s: f64,
+}
+
+impl std::fmt::Display for FiniteProfile {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let ms = |s: f64| s * 1e3;
+        write!(
+            f,
+            "{} tangent rebuilds (assembly {:.0} ms, factorization {:.0} ms, condensation {:.0} ms); \
+             {} residuals {:.0} ms; {} solves {:.0} ms; contact Newton {:.0} ms; Anderson {:.0} ms",
+            self.rebuilds,
+            ms(self.assembly_s),
+            ms(self.factorization_s),
+            ms(self.condensation_s),
+            self.residuals,
+            ms(self.residual_s),
+            self.solves,
+            ms(self.solve_s),
+            ms(self.contact_newton_s),
+            ms(self.anderson_s),
+        )
+    }
+}
+
 /// Anderson acceleration (type II, Walker & Ni 2011) of a fixed-point
 /// iteration x -> G(x), with all memory allocated once.
 struct Anderson {
@@ -353,6 +401,8 @@ pub struct FiniteSolver {
     /// Largest free-DOF residual of a converged step relative to its
     /// largest nodal contact force.
     pub worst_relative_residual: f64,
+    /// Time per phase over the run.
+    pub profile: FiniteProfile,
     x: Vec<f64>,
     f_int: Vec<f64>,
     f_free: Vec<f64>,
@@ -398,6 +448,7 @@ impl FiniteSolver {
             finite_settings,
             outer_iterations: 0,
             worst_relative_residual: 0.0,
+            profile: FiniteProfile::default(),
             x: vec![0.0; n_dofs],
             f_int: vec![0.0; n_dofs],
             f_free: vec![0.0; n_free],
@@ -503,7 +554,10 @@ impl FiniteSolver {
         let mut last_norm = f64::INFINITY;
         let mut residual = f64::INFINITY;
         let mut tolerance = f64::NAN;
+        // Outer iterations (maps x -> G(x)) performed.
+        let mut performed = 0;
         for outer in 0..=max_outer {
+            performed = outer;
             // The global displacement of the iterate.
             let y = self.iterate[n];
             for (g, &d) in inner.dofs.free.iter().enumerate() {
@@ -514,6 +568,7 @@ impl FiniteSolver {
                 self.x[2 * node + 1] = y;
             }
             // Its residual on every free DOF: f_int(x) - P F(x_s).
+            let timer = Instant::now();
             self.f_int.fill(0.0);
             let ops = &*ops_k;
             let body = &inner.problem.body;
@@ -568,6 +623,8 @@ impl FiniteSolver {
             }
             residual = norm;
             tolerance = tolerance_of(scale);
+            self.profile.residuals += 1;
+            self.profile.residual_s += timer.elapsed().as_secs_f64();
             if debug {
                 eprintln!(
                     "finite: outer {outer}: residual {norm:.3e} (tolerance {tolerance:.3e}), {} active",
@@ -593,7 +650,10 @@ impl FiniteSolver {
                 break;
             }
             // u0 = x_f - K0^-1 f_int(x).
+            let timer = Instant::now();
             ops_k.cholesky.solve_vec(&mut self.f_free);
+            self.profile.solves += 1;
+            self.profile.solve_s += timer.elapsed().as_secs_f64();
             for i in 0..n {
                 self.image[i] = self.iterate[i] - self.f_free[i];
             }
@@ -610,6 +670,7 @@ impl FiniteSolver {
                 force_floor_n: inner.force_floor_n,
             };
             let mut dy = 0.0;
+            let timer = Instant::now();
             let (its, _) = newton(
                 &condensed,
                 &mut inner.problem.contact,
@@ -621,6 +682,7 @@ impl FiniteSolver {
                 &mut dy,
             )?;
             newton_iterations += its;
+            self.profile.contact_newton_s += timer.elapsed().as_secs_f64();
             // G(x) = u0 + dy psi_y + K^-1 P Fpad, with the pad forces Fpad =
             // S (v - u0_s - dy psi_s) that put the pad exactly at the
             // contact Newton's v (Fpad is its F(v) up to the inner force
@@ -642,15 +704,20 @@ impl FiniteSolver {
                 let column = &ops.stiffness[r * m2..(r + 1) * m2];
                 self.f_free[row] = column.iter().zip(&self.pad_gap).map(|(a, b)| a * b).sum();
             }
+            let timer = Instant::now();
             ops_k.cholesky.solve_vec(&mut self.f_free);
+            self.profile.solves += 1;
+            self.profile.solve_s += timer.elapsed().as_secs_f64();
             for i in 0..n {
                 self.image[i] += self.f_free[i];
             }
             self.image[n] = y + dy;
             change = (0..=n).map(|i| (self.image[i] - self.iterate[i]).abs()).fold(0.0, f64::max);
+            let timer = Instant::now();
             self.anderson.step(&mut self.iterate, &self.image);
+            self.profile.anderson_s += timer.elapsed().as_secs_f64();
         }
-        self.outer_iterations += max_outer;
+        self.outer_iterations += performed;
         self.last_newton_iterations = newton_iterations;
         self.x_drive = x_drive;
         Err(StepFailure::Newton { residual, tolerance, correction_mm: change })
@@ -696,7 +763,9 @@ impl FiniteSolver {
     /// state, into `self.tangent_ops`. Leaves them unset when the tangent
     /// is not positive definite.
     fn build_tangent_operators(&mut self, k: usize, at_iterate: bool) -> Result<(), SolveError> {
-        let timer = std::time::Instant::now();
+        let timer = Instant::now();
+        let phase = Instant::now();
+        self.profile.rebuilds += 1;
         if at_iterate {
             // The global displacement of the iterate where the last attempt
             // stopped.
@@ -753,8 +822,13 @@ impl FiniteSolver {
                 }
             }
         }
+        self.profile.assembly_s += phase.elapsed().as_secs_f64();
+        let phase = Instant::now();
         let mut cholesky = inner.base.share(m2);
-        if cholesky.factorize(values).is_err() {
+        let factorized = cholesky.factorize(values);
+        self.profile.factorization_s += phase.elapsed().as_secs_f64();
+        let phase = Instant::now();
+        if factorized.is_err() {
             self.tangent_ops = None;
             return Ok(());
         }
@@ -798,6 +872,7 @@ impl FiniteSolver {
             cholesky.solve_vec(response);
         }
         self.tangent_ops = Some(StepOperators { dt_s, coefficients, cholesky, phi, compliance, stiffness, psi });
+        self.profile.condensation_s += phase.elapsed().as_secs_f64();
         if std::env::var_os("HAPTEX_DEBUG").is_some() {
             eprintln!("finite: tangent operators for dt {dt_s}: {:.1} ms", timer.elapsed().as_secs_f64() * 1e3);
         }
