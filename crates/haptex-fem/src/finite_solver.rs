@@ -47,6 +47,7 @@ use crate::body::{Body, SubdomainModel};
 use crate::contact::ContactTotals;
 use crate::finite_element::{Inverted, cauchy_stress, internal_force, isochoric_stresses};
 use crate::hyperelastic::NeoHookean;
+use crate::linalg::{SparseCholesky, schur_operators};
 use crate::material::{StepCoefficients, advance_history, frozen_deviator, history_deviator};
 use crate::solver::{
     Condensed, Drive, SolveError, Solver, StepFailure, StepOperators, StepReport, Stepping, advance_halving, newton,
@@ -417,6 +418,10 @@ pub struct FiniteSolver {
     /// place of the small-strain ones of the same step size.
     tangent_ops: Option<StepOperators>,
     tangent_values: Vec<f64>,
+    /// The symbolic analysis of the tangent with the pad DOFs ordered last
+    /// (made on the first rebuild), and the pad block of its factor.
+    tangent_base: Option<SparseCholesky>,
+    trailing_factor: Vec<f64>,
     /// Contact Newton iterations and the drive's x of an attempt that
     /// stopped unconverged (to resume it).
     last_newton_iterations: usize,
@@ -461,6 +466,8 @@ impl FiniteSolver {
             reaction_forces: vec![0.0; n_dofs],
             tangent_ops: None,
             tangent_values: vec![0.0; inner.pattern.nnz()],
+            tangent_base: None,
+            trailing_factor: vec![0.0; m2 * m2],
             last_newton_iterations: 0,
             x_drive: 0.0,
             slow_ratio: f64::INFINITY,
@@ -824,53 +831,30 @@ impl FiniteSolver {
         }
         self.profile.assembly_s += phase.elapsed().as_secs_f64();
         let phase = Instant::now();
-        let mut cholesky = inner.base.share(m2);
+        // The pad-last factorization (one symbolic analysis per run): the
+        // condensed stiffness is the trailing block of its factor.
+        if self.tangent_base.is_none() {
+            self.tangent_base = Some(SparseCholesky::with_trailing(&inner.pattern, &inner.candidate_free, 1)?);
+        }
+        let (mut cholesky, mut compliance, mut stiffness) = match (self.tangent_ops.take(), &self.tangent_base) {
+            (Some(ops), _) => (ops.cholesky, ops.compliance, ops.stiffness),
+            (None, Some(base)) => (base.share(1), vec![0.0; m2 * m2], vec![0.0; m2 * m2]),
+            (None, None) => unreachable!("the pad-last analysis was just made"),
+        };
         let factorized = cholesky.factorize(values);
         self.profile.factorization_s += phase.elapsed().as_secs_f64();
         let phase = Instant::now();
         if factorized.is_err() {
-            self.tangent_ops = None;
             return Ok(());
         }
-        let mut phi = match self.tangent_ops.take() {
-            Some(ops) => ops.phi,
-            None => vec![0.0; n * m2],
-        };
-        phi.fill(0.0);
-        for (c, &row) in inner.candidate_free.iter().enumerate() {
-            phi[c * n + row] = 1.0;
-        }
-        cholesky.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut phi, n, m2));
-        let mut compliance = vec![0.0; m2 * m2];
-        for c in 0..m2 {
-            for (r, &row) in inner.candidate_free.iter().enumerate() {
-                compliance[c * m2 + r] = phi[c * n + row];
-            }
-        }
-        // Symmetrize (round-off) before the inverse.
-        for c in 0..m2 {
-            for r in 0..c {
-                let v = 0.5 * (compliance[c * m2 + r] + compliance[r * m2 + c]);
-                compliance[c * m2 + r] = v;
-                compliance[r * m2 + c] = v;
-            }
-        }
-        let c_mat = faer::MatRef::from_column_major_slice(&compliance, m2, m2);
-        let Ok(llt) = c_mat.llt(faer::Side::Lower) else {
-            self.tangent_ops = None;
-            return Ok(());
-        };
-        use faer::linalg::solvers::DenseSolveCore;
-        let s_mat = llt.inverse();
-        let mut stiffness = vec![0.0; m2 * m2];
-        for c in 0..m2 {
-            for r in 0..m2 {
-                stiffness[c * m2 + r] = s_mat[(r, c)];
-            }
-        }
+        cholesky.trailing_factor(&mut self.trailing_factor);
+        schur_operators(&mut self.trailing_factor, m2, &mut compliance, &mut stiffness);
         for response in psi.iter_mut() {
             cholesky.solve_vec(response);
         }
+        // Phi, the response to unit pad forces, is not needed here: G(x)
+        // puts the pad at v by one sparse solve.
+        let phi = Vec::new();
         self.tangent_ops = Some(StepOperators { dt_s, coefficients, cholesky, phi, compliance, stiffness, psi });
         self.profile.condensation_s += phase.elapsed().as_secs_f64();
         if std::env::var_os("HAPTEX_DEBUG").is_some() {
