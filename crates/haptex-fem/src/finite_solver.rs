@@ -47,7 +47,7 @@ use crate::body::{Body, SubdomainModel};
 use crate::contact::ContactTotals;
 use crate::finite_element::{Inverted, cauchy_stress, internal_force, isochoric_stresses};
 use crate::hyperelastic::NeoHookean;
-use crate::linalg::{SparseCholesky, schur_operators};
+use crate::linalg::{SparseCholesky, lower_transpose_solve, lower_transpose_times, schur_operators};
 use crate::material::{StepCoefficients, advance_history, frozen_deviator, history_deviator};
 use crate::solver::{
     Condensed, Drive, SolveError, Solver, StepFailure, StepOperators, StepReport, Stepping, advance_halving, newton,
@@ -422,6 +422,10 @@ pub struct FiniteSolver {
     /// (made on the first rebuild), and the pad block of its factor.
     tangent_base: Option<SparseCholesky>,
     trailing_factor: Vec<f64>,
+    trailing_scratch: Vec<f64>,
+    /// A solve's forward half (factor order) and its trailing part.
+    sweep: Vec<f64>,
+    sweep_trailing: Vec<f64>,
     /// Contact Newton iterations and the drive's x of an attempt that
     /// stopped unconverged (to resume it).
     last_newton_iterations: usize,
@@ -468,6 +472,9 @@ impl FiniteSolver {
             tangent_values: vec![0.0; inner.pattern.nnz()],
             tangent_base: None,
             trailing_factor: vec![0.0; m2 * m2],
+            trailing_scratch: vec![0.0; m2 * m2],
+            sweep: vec![0.0; n_free],
+            sweep_trailing: vec![0.0; m2],
             last_newton_iterations: 0,
             x_drive: 0.0,
             slow_ratio: f64::INFINITY,
@@ -527,9 +534,12 @@ impl FiniteSolver {
         let placement = self.inner.placement(slide_mm);
         let settings = self.finite_settings;
         let inner = &mut self.inner;
-        let ops_k: &mut StepOperators = match self.tangent_ops.as_mut() {
-            Some(o) if o.dt_s == dt_s => o,
-            _ => &mut inner.operators[k],
+        // The tangent operators come with the pad block L_tt of their
+        // pad-last factor (`self.trailing_factor`): G(x) then costs one
+        // solve (see below) instead of two.
+        let (ops_k, pad_last): (&mut StepOperators, bool) = match self.tangent_ops.as_mut() {
+            Some(o) if o.dt_s == dt_s => (o, true),
+            _ => (&mut inner.operators[k], false),
         };
         let n = inner.dofs.n_free;
         let m2 = inner.candidate_free.len();
@@ -656,17 +666,30 @@ impl FiniteSolver {
             if outer == max_outer || slow {
                 break;
             }
-            // u0 = x_f - K0^-1 f_int(x).
+            // u0 = x_f - K^-1 f_int(x). With the pad-last factor only its
+            // pad rows are needed now: u0_s = x_s - L_tt^-T y_t, y = L^-1 f
+            // (the forward half of the solve).
             let timer = Instant::now();
-            ops_k.cholesky.solve_vec(&mut self.f_free);
+            if pad_last {
+                ops_k.cholesky.forward(&self.f_free, &mut self.sweep);
+                self.sweep_trailing.copy_from_slice(&self.sweep[n - m2..]);
+                lower_transpose_solve(&self.trailing_factor, m2, &mut self.sweep_trailing);
+                for (c, &row) in inner.candidate_free.iter().enumerate() {
+                    s.u0_s[c] = self.iterate[row] - self.sweep_trailing[c];
+                }
+            } else {
+                ops_k.cholesky.solve_vec(&mut self.f_free);
+                for i in 0..n {
+                    self.image[i] = self.iterate[i] - self.f_free[i];
+                }
+                for (c, &row) in inner.candidate_free.iter().enumerate() {
+                    s.u0_s[c] = self.image[row];
+                }
+            }
             self.profile.solves += 1;
             self.profile.solve_s += timer.elapsed().as_secs_f64();
-            for i in 0..n {
-                self.image[i] = self.iterate[i] - self.f_free[i];
-            }
             let ops = &*ops_k;
             for (c, &row) in inner.candidate_free.iter().enumerate() {
-                s.u0_s[c] = self.image[row];
                 s.psi_y_s[c] = ops.psi[1][row];
             }
             let condensed = Condensed {
@@ -697,26 +720,44 @@ impl FiniteSolver {
             // measure the inner one amplified by the contact's stiffness
             // over the tissue's, D C ~ 10^3, and stall above the
             // tolerance). One sparse solve, cheaper than Phi Fpad.
+            for c in 0..m2 {
+                self.pad_gap[c] = s.v[c] - s.u0_s[c] - dy * s.psi_y_s[c];
+            }
+            let timer = Instant::now();
+            if pad_last {
+                // G(x) = x + dy psi_y + K^-1 (P S w - f_int), w the pad gap:
+                // with S = L_tt L_tt^T, L^-1 P S w = [0; L_tt^T w], so the
+                // backward half of the solve finishes it.
+                for value in &mut self.sweep[..n - m2] {
+                    *value = -*value;
+                }
+                lower_transpose_times(&self.trailing_factor, m2, &self.pad_gap, &mut self.sweep_trailing);
+                for (value, add) in self.sweep[n - m2..].iter_mut().zip(&self.sweep_trailing) {
+                    *value = add - *value;
+                }
+                ops_k.cholesky.backward(&mut self.sweep, &mut self.f_free);
+                for i in 0..n {
+                    self.image[i] = self.iterate[i] + self.f_free[i];
+                }
+            } else {
+                self.f_free.fill(0.0);
+                for (r, &row) in inner.candidate_free.iter().enumerate() {
+                    // S is symmetric: row r is column r.
+                    let column = &ops.stiffness[r * m2..(r + 1) * m2];
+                    self.f_free[row] = column.iter().zip(&self.pad_gap).map(|(a, b)| a * b).sum();
+                }
+                ops_k.cholesky.solve_vec(&mut self.f_free);
+                for i in 0..n {
+                    self.image[i] += self.f_free[i];
+                }
+            }
+            self.profile.solves += 1;
+            self.profile.solve_s += timer.elapsed().as_secs_f64();
             if load.is_some() {
+                let ops = &*ops_k;
                 for i in 0..n {
                     self.image[i] += dy * ops.psi[1][i];
                 }
-            }
-            for (c, &row) in inner.candidate_free.iter().enumerate() {
-                self.pad_gap[c] = s.v[c] - self.image[row];
-            }
-            self.f_free.fill(0.0);
-            for (r, &row) in inner.candidate_free.iter().enumerate() {
-                // S is symmetric: row r is column r.
-                let column = &ops.stiffness[r * m2..(r + 1) * m2];
-                self.f_free[row] = column.iter().zip(&self.pad_gap).map(|(a, b)| a * b).sum();
-            }
-            let timer = Instant::now();
-            ops_k.cholesky.solve_vec(&mut self.f_free);
-            self.profile.solves += 1;
-            self.profile.solve_s += timer.elapsed().as_secs_f64();
-            for i in 0..n {
-                self.image[i] += self.f_free[i];
             }
             self.image[n] = y + dy;
             change = (0..=n).map(|i| (self.image[i] - self.iterate[i]).abs()).fold(0.0, f64::max);
@@ -848,7 +889,7 @@ impl FiniteSolver {
             return Ok(());
         }
         cholesky.trailing_factor(&mut self.trailing_factor);
-        schur_operators(&mut self.trailing_factor, m2, &mut compliance, &mut stiffness);
+        schur_operators(&self.trailing_factor, m2, &mut self.trailing_scratch, &mut compliance, &mut stiffness);
         for response in psi.iter_mut() {
             cholesky.solve_vec(response);
         }

@@ -220,6 +220,67 @@ impl SparseCholesky {
         self.solve_in_place(MatMut::from_column_major_slice_mut(b, n, 1));
     }
 
+    /// The forward half of a solve: y = L^-1 Pi b, Pi the fill-reducing
+    /// ordering; `y` is in the factor's order, so with
+    /// [`SparseCholesky::with_trailing`] its last entries are those of the
+    /// trailing unknowns, in their given order.
+    pub fn forward(&mut self, b: &[f64], y: &mut [f64]) {
+        assert!(self.factorized, "solve before a successful factorization");
+        let n = self.n();
+        assert!(b.len() == n && y.len() == n, "vectors of the wrong size");
+        match self.symbolic.perm() {
+            Some(perm) => {
+                for (yi, &from) in y.iter_mut().zip(perm.arrays().0) {
+                    *yi = b[from];
+                }
+            }
+            None => y.copy_from_slice(b),
+        }
+        let rhs = MatMut::from_column_major_slice_mut(y, n, 1);
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(symbolic) => {
+                faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef::new(symbolic, &self.l_values)
+                    .l_solve_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut self.solve_scratch));
+            }
+            SymbolicCholeskyRaw::Simplicial(symbolic) => {
+                let l = SparseColMatRef::new(symbolic.factor(), &self.l_values);
+                faer::sparse::linalg::triangular_solve::solve_lower_triangular_in_place(l, Conj::No, rhs, Par::Seq);
+            }
+        }
+    }
+
+    /// The backward half of a solve: x = Pi^T L^-T y (`y`, in the factor's
+    /// order, is overwritten). `backward(forward(b))` solves A x = b.
+    pub fn backward(&mut self, y: &mut [f64], x: &mut [f64]) {
+        assert!(self.factorized, "solve before a successful factorization");
+        let n = self.n();
+        assert!(x.len() == n && y.len() == n, "vectors of the wrong size");
+        let rhs = MatMut::from_column_major_slice_mut(y, n, 1);
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(symbolic) => {
+                faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef::new(symbolic, &self.l_values)
+                    .l_transpose_solve_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut self.solve_scratch));
+            }
+            SymbolicCholeskyRaw::Simplicial(symbolic) => {
+                let l = SparseColMatRef::new(symbolic.factor(), &self.l_values);
+                faer::sparse::linalg::triangular_solve::solve_lower_triangular_transpose_in_place(
+                    l,
+                    Conj::No,
+                    rhs,
+                    Par::Seq,
+                );
+            }
+        }
+        match self.symbolic.perm() {
+            Some(perm) => {
+                for (&yi, &to) in y.iter().zip(perm.arrays().0) {
+                    x[to] = yi;
+                }
+            }
+            None => x.copy_from_slice(y),
+        }
+    }
+
     /// Number of unknowns ordered last ([`SparseCholesky::with_trailing`]).
     pub fn trailing(&self) -> usize {
         self.trailing
@@ -279,49 +340,66 @@ impl SparseCholesky {
 /// factor `l` (m x m, column-major lower, see
 /// [`SparseCholesky::trailing_factor`]): the stiffness S = L L^T and the
 /// compliance C = S^-1 = L^-T L^-1, both column-major and exactly
-/// symmetric. `l` is overwritten with L^-1.
-pub fn schur_operators(l: &mut [f64], m: usize, compliance: &mut [f64], stiffness: &mut [f64]) {
-    use faer::linalg::matmul::matmul;
+/// symmetric. `inverse` (m x m) is scratch (it ends with L^-1 in its lower
+/// triangle).
+pub fn schur_operators(l: &[f64], m: usize, inverse: &mut [f64], compliance: &mut [f64], stiffness: &mut [f64]) {
+    use faer::linalg::matmul::triangular::{BlockStructure, matmul};
     use faer::{Accum, MatRef};
-    {
-        let factor = MatRef::from_column_major_slice(l, m, m);
-        matmul(
-            MatMut::from_column_major_slice_mut(stiffness, m, m),
-            Accum::Replace,
-            factor,
-            factor.transpose(),
-            1.0,
-            Par::Seq,
-        );
-    }
-    // L^-1: solve L X = I, in the compliance's buffer, then back into l.
-    compliance.fill(0.0);
-    for i in 0..m {
-        compliance[i * m + i] = 1.0;
-    }
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-        MatRef::from_column_major_slice(l, m, m),
-        MatMut::from_column_major_slice_mut(compliance, m, m),
+    let factor = MatRef::from_column_major_slice(l, m, m);
+    // Lower halves only (half the work of full products), then mirrored.
+    matmul(
+        MatMut::from_column_major_slice_mut(stiffness, m, m),
+        BlockStructure::TriangularLower,
+        Accum::Replace,
+        factor,
+        BlockStructure::TriangularLower,
+        factor.transpose(),
+        BlockStructure::TriangularUpper,
+        1.0,
         Par::Seq,
     );
-    l.copy_from_slice(compliance);
-    let inverse = MatRef::from_column_major_slice(l, m, m);
+    inverse.fill(0.0);
+    faer::linalg::triangular_inverse::invert_lower_triangular(
+        MatMut::from_column_major_slice_mut(inverse, m, m),
+        factor,
+        Par::Seq,
+    );
+    let inverse = MatRef::from_column_major_slice(inverse, m, m);
     matmul(
         MatMut::from_column_major_slice_mut(compliance, m, m),
+        BlockStructure::TriangularLower,
         Accum::Replace,
         inverse.transpose(),
+        BlockStructure::TriangularUpper,
         inverse,
+        BlockStructure::TriangularLower,
         1.0,
         Par::Seq,
     );
     for matrix in [compliance, stiffness] {
         for c in 0..m {
-            for r in 0..c {
-                let v = 0.5 * (matrix[c * m + r] + matrix[r * m + c]);
-                matrix[c * m + r] = v;
-                matrix[r * m + c] = v;
+            for r in c + 1..m {
+                matrix[r * m + c] = matrix[c * m + r];
             }
         }
+    }
+}
+
+/// Solves L^T x = b in place for a dense lower-triangular `l` (m x m,
+/// column-major).
+pub fn lower_transpose_solve(l: &[f64], m: usize, x: &mut [f64]) {
+    for i in (0..m).rev() {
+        let column = &l[i * m..(i + 1) * m];
+        let below: f64 = column[i + 1..].iter().zip(&x[i + 1..]).map(|(a, b)| a * b).sum();
+        x[i] = (x[i] - below) / column[i];
+    }
+}
+
+/// out = L^T x for a dense lower-triangular `l` (m x m, column-major).
+pub fn lower_transpose_times(l: &[f64], m: usize, x: &[f64], out: &mut [f64]) {
+    for (i, o) in out.iter_mut().enumerate().take(m) {
+        let column = &l[i * m..(i + 1) * m];
+        *o = column[i..].iter().zip(&x[i..]).map(|(a, b)| a * b).sum();
     }
 }
 
@@ -444,8 +522,8 @@ mod trailing_tests {
         assert_eq!(last.trailing(), m);
         let mut l = vec![0.0; m * m];
         last.trailing_factor(&mut l);
-        let (mut compliance, mut stiffness) = (vec![0.0; m * m], vec![0.0; m * m]);
-        schur_operators(&mut l, m, &mut compliance, &mut stiffness);
+        let (mut inverse, mut compliance, mut stiffness) = (vec![0.0; m * m], vec![0.0; m * m], vec![0.0; m * m]);
+        schur_operators(&l, m, &mut inverse, &mut compliance, &mut stiffness);
         let scale = compliance.iter().fold(0.0f64, |a, b| a.max(b.abs()));
         for c in 0..m {
             for (r, &row) in trailing.iter().enumerate() {
@@ -461,13 +539,34 @@ mod trailing_tests {
                 assert!((v - expected).abs() < 1e-10, "(S C)[{r},{c}] = {v}");
             }
         }
-        // Solves with the pad-last factorization agree with the AMD ones.
-        let mut b: Vec<f64> = (0..n).map(|i| ((i * 7) % 11) as f64 - 5.0).collect();
-        let mut b2 = b.clone();
+        // Solves with the pad-last factorization agree with the AMD ones,
+        // whole or in halves.
+        let rhs: Vec<f64> = (0..n).map(|i| ((i * 7) % 11) as f64 - 5.0).collect();
+        let (mut b, mut b2) = (rhs.clone(), rhs.clone());
         amd.solve_vec(&mut b);
         last.solve_vec(&mut b2);
         let scale = b.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         assert!(b.iter().zip(&b2).all(|(x, y)| (x - y).abs() < 1e-12 * scale));
+        let (mut y, mut x) = (vec![0.0; n], vec![0.0; n]);
+        last.forward(&rhs, &mut y);
+        // The trailing part of the solution from the forward half alone:
+        // x_t = L_tt^-T y_t.
+        let mut x_t = y[n - m..].to_vec();
+        lower_transpose_solve(&l, m, &mut x_t);
+        for (c, &row) in trailing.iter().enumerate() {
+            assert!((x_t[c] - b[row]).abs() < 1e-12 * scale, "x_t[{c}]");
+        }
+        last.backward(&mut y, &mut x);
+        assert!(b.iter().zip(&x).all(|(p, q)| (p - q).abs() < 1e-12 * scale));
+        // A load on the trailing unknowns only: L^-1 Pi P g = [0; L_tt^-1 g],
+        // and L_tt^-1 S w = L_tt^T w.
+        let w: Vec<f64> = (0..m).map(|i| (i % 3) as f64 - 1.0).collect();
+        let mut y = vec![0.0; n];
+        lower_transpose_times(&l, m, &w, &mut y[n - m..]);
+        last.backward(&mut y, &mut x);
+        for (c, &row) in trailing.iter().enumerate() {
+            assert!((x[row] - w[c]).abs() < 1e-10, "pad displacement {c}");
+        }
         // Invalid sets are errors, not panics.
         assert!(SparseCholesky::with_trailing(&pattern, &[n], 1).is_err());
         assert!(SparseCholesky::with_trailing(&pattern, &[0, 0], 1).is_err());
