@@ -496,15 +496,21 @@ impl FiniteSolver {
         slide_mm: f64,
         drive: Drive,
     ) -> Result<(usize, ContactTotals), StepFailure> {
-        let k = self.inner.operators_for(dt_s).map_err(StepFailure::Fatal)?;
         let max = self.finite_settings.max_iterations;
         if !self.finite_settings.tangent_per_step {
-            return self.attempt(k, dt_s, slide_mm, drive, false, max);
+            let k = self.inner.operators_for(dt_s).map_err(StepFailure::Fatal)?;
+            return self.attempt(Some(k), dt_s, slide_mm, drive, false, max);
         }
-        // Iterate on the last tangent (or, at first, the small-strain
-        // stiffness) while it contracts the residual well; when it does not,
-        // rebuild the tangent at the iterate reached (the first iteration
-        // has moved the pad to this step's contact) and go on from there.
+        // Iterate on the last tangent while it contracts the residual well;
+        // when it does not, rebuild the tangent at the iterate reached (the
+        // first iteration has moved the pad to this step's contact) and go
+        // on from there. A step of another size (the first, the slide's
+        // first, a halved one) starts on the tangent at the committed state
+        // (at rest, the small-strain stiffness).
+        if !self.tangent_fits(dt_s) {
+            self.build_tangent_operators(dt_s, false).map_err(StepFailure::Fatal)?;
+        }
+        let k = self.fallback_operators(dt_s)?;
         self.slow_ratio = self.finite_settings.rebuild_contraction;
         let result = self.attempt(k, dt_s, slide_mm, drive, false, max);
         self.slow_ratio = f64::INFINITY;
@@ -513,17 +519,33 @@ impl FiniteSolver {
             other => return other,
         }
         let iterations = self.last_newton_iterations;
-        self.build_tangent_operators(k, true).map_err(StepFailure::Fatal)?;
+        self.build_tangent_operators(dt_s, true).map_err(StepFailure::Fatal)?;
+        let k = self.fallback_operators(dt_s)?;
         let (its, totals) = self.attempt(k, dt_s, slide_mm, drive, true, max)?;
         Ok((iterations + its, totals))
     }
 
-    /// One attempt at a step with the current operators, at most
+    /// Whether the tangent operators at hand are of step size `dt_s`.
+    fn tangent_fits(&self, dt_s: f64) -> bool {
+        self.tangent_ops.as_ref().is_some_and(|o| o.dt_s == dt_s)
+    }
+
+    /// The small-strain operators of step size `dt_s` when there are no
+    /// tangent ones of that size (the tangent was not positive definite).
+    fn fallback_operators(&mut self, dt_s: f64) -> Result<Option<usize>, StepFailure> {
+        if self.tangent_fits(dt_s) {
+            return Ok(None);
+        }
+        self.inner.operators_for(dt_s).map(Some).map_err(StepFailure::Fatal)
+    }
+
+    /// One attempt at a step with the current operators (the tangent ones
+    /// if of this step size, else the small-strain set `k`), at most
     /// `max_outer` outer iterations, from the predictor or (`resume`) from
     /// the iterate where the last attempt stopped.
     fn attempt(
         &mut self,
-        k: usize,
+        k: Option<usize>,
         dt_s: f64,
         slide_mm: f64,
         drive: Drive,
@@ -537,9 +559,14 @@ impl FiniteSolver {
         // The tangent operators come with the pad block L_tt of their
         // pad-last factor (`self.trailing_factor`): G(x) then costs one
         // solve (see below) instead of two.
-        let (ops_k, pad_last): (&mut StepOperators, bool) = match self.tangent_ops.as_mut() {
-            Some(o) if o.dt_s == dt_s => (o, true),
-            _ => (&mut inner.operators[k], false),
+        let (ops_k, pad_last): (&mut StepOperators, bool) = match (self.tangent_ops.as_mut(), k) {
+            (Some(o), _) if o.dt_s == dt_s => (o, true),
+            (_, Some(k)) => (&mut inner.operators[k], false),
+            _ => {
+                return Err(StepFailure::Fatal(SolveError::Settings(format!(
+                    "no operators for the step size {dt_s} s"
+                ))));
+            }
         };
         let n = inner.dofs.n_free;
         let m2 = inner.candidate_free.len();
@@ -775,7 +802,7 @@ impl FiniteSolver {
     /// forces evaluated there).
     fn commit(
         &mut self,
-        k: usize,
+        k: Option<usize>,
         dt_s: f64,
         slide_mm: f64,
         drive_mm: [f64; 2],
@@ -796,7 +823,16 @@ impl FiniteSolver {
                 }));
             }
         }
-        self.body_state.commit(&inner.problem.body, &inner.operators[k].coefficients, u);
+        let coefficients = match (&self.tangent_ops, k) {
+            (Some(o), _) if o.dt_s == dt_s => &o.coefficients,
+            (_, Some(k)) => &inner.operators[k].coefficients,
+            _ => {
+                return Err(StepFailure::Fatal(SolveError::Settings(format!(
+                    "no operators for the step size {dt_s} s"
+                ))));
+            }
+        };
+        self.body_state.commit(&inner.problem.body, coefficients, u);
         inner.problem.contact.commit();
         inner.u.copy_from_slice(u);
         inner.forces.copy_from_slice(&self.contact_forces);
@@ -806,11 +842,12 @@ impl FiniteSolver {
         Ok((iterations, totals))
     }
 
-    /// Builds the condensed operators of the step size `dt_s` (coefficients
-    /// of operator set `k`) on the tangent stiffness at the committed
-    /// state, into `self.tangent_ops`. Leaves them unset when the tangent
-    /// is not positive definite.
-    fn build_tangent_operators(&mut self, k: usize, at_iterate: bool) -> Result<(), SolveError> {
+    /// Builds the condensed operators of the step size `dt_s` on the
+    /// tangent stiffness at the committed state or (`at_iterate`) at the
+    /// iterate where the last attempt stopped, into `self.tangent_ops`.
+    /// Leaves them unset when the tangent is not positive definite, and as
+    /// they were when an element is inverted there.
+    fn build_tangent_operators(&mut self, dt_s: f64, at_iterate: bool) -> Result<(), SolveError> {
         let timer = Instant::now();
         let phase = Instant::now();
         self.profile.rebuilds += 1;
@@ -828,8 +865,7 @@ impl FiniteSolver {
         }
         let inner = &mut self.inner;
         let body = &inner.problem.body;
-        let coefficients = inner.operators[k].coefficients.clone();
-        let dt_s = inner.operators[k].dt_s;
+        let coefficients = body.step_coefficients(dt_s);
         let values = &mut self.tangent_values;
         values.fill(0.0);
         let n = inner.dofs.n_free;
