@@ -430,6 +430,9 @@ pub struct FiniteSolver {
     /// stopped unconverged (to resume it).
     last_newton_iterations: usize,
     x_drive: f64,
+    /// The residual, contact scale and totals at the iterate where the
+    /// last attempt stopped (evaluated there: not evaluated again).
+    stopped: Option<(f64, f64, ContactTotals)>,
     /// An attempt stops early when an iteration reduces the residual by
     /// less than this factor (to rebuild the tangent).
     slow_ratio: f64,
@@ -477,6 +480,7 @@ impl FiniteSolver {
             sweep_trailing: vec![0.0; m2],
             last_newton_iterations: 0,
             x_drive: 0.0,
+            stopped: None,
             slow_ratio: f64::INFINITY,
             inner,
         }
@@ -591,6 +595,9 @@ impl FiniteSolver {
             self.iterate[n] = y_target;
         }
         self.anderson.reset();
+        if !resume {
+            self.stopped = None;
+        }
         let floor = inner.force_floor_n;
         let tolerance_of = |scale: f64| settings.relative_tolerance * scale.max(floor);
         let mut change = f64::NAN;
@@ -611,64 +618,74 @@ impl FiniteSolver {
                 self.x[2 * node] = x_drive;
                 self.x[2 * node + 1] = y;
             }
-            // Its residual on every free DOF: f_int(x) - P F(x_s).
-            let timer = Instant::now();
-            self.f_int.fill(0.0);
-            let ops = &*ops_k;
-            let body = &inner.problem.body;
-            if let Err(e) = self.body_state.add_internal_forces(
-                body,
-                Some(&ops.coefficients),
-                body.deformable_elements(),
-                &self.x,
-                &mut self.f_int,
-            ) {
-                if debug {
-                    eprintln!("finite: outer {outer}: {e}");
+            // Its residual on every free DOF: f_int(x) - P F(x_s), unless
+            // the last attempt stopped at this iterate after evaluating it
+            // (`self.f_free`, the contact forces and trial states are then
+            // those of this iterate).
+            let reuse = if outer == 0 && resume { self.stopped.take() } else { None };
+            let (norm, scale, totals) = if let Some(stopped) = reuse {
+                stopped
+            } else {
+                let timer = Instant::now();
+                self.f_int.fill(0.0);
+                let ops = &*ops_k;
+                let body = &inner.problem.body;
+                if let Err(e) = self.body_state.add_internal_forces(
+                    body,
+                    Some(&ops.coefficients),
+                    body.deformable_elements(),
+                    &self.x,
+                    &mut self.f_int,
+                ) {
+                    if debug {
+                        eprintln!("finite: outer {outer}: {e}");
+                    }
+                    return Err(StepFailure::Newton {
+                        residual: f64::INFINITY,
+                        tolerance: f64::NAN,
+                        correction_mm: f64::NAN,
+                    });
                 }
-                return Err(StepFailure::Newton {
-                    residual: f64::INFINITY,
-                    tolerance: f64::NAN,
-                    correction_mm: f64::NAN,
-                });
-            }
-            for (g, &d) in inner.dofs.free.iter().enumerate() {
-                if d != PRESCRIBED {
-                    self.f_free[d] = self.f_int[g];
+                for (g, &d) in inner.dofs.free.iter().enumerate() {
+                    if d != PRESCRIBED {
+                        self.f_free[d] = self.f_int[g];
+                    }
                 }
-            }
+                let s = &mut inner.scratch;
+                for (c, &node) in inner.problem.contact.nodes.iter().enumerate() {
+                    s.v[2 * c] = self.x[2 * node];
+                    s.v[2 * c + 1] = self.x[2 * node + 1];
+                }
+                let totals = inner.problem.contact.evaluate(
+                    &s.v,
+                    &inner.problem.surface,
+                    placement,
+                    &inner.problem.law,
+                    &mut self.contact_forces,
+                    &mut s.blocks,
+                );
+                let scale = self.contact_forces.iter().fold(0.0f64, |m, f| m.max(f.abs()));
+                let mut norm: f64 = 0.0;
+                for (c, &row) in inner.candidate_free.iter().enumerate() {
+                    self.f_free[row] -= self.contact_forces[c];
+                }
+                for &r in &self.f_free {
+                    norm = norm.max(r.abs());
+                }
+                if let Some(load) = load {
+                    let total: f64 = (0..m2 / 2).map(|i| self.contact_forces[2 * i + 1]).sum();
+                    norm = norm.max((total - load).abs());
+                }
+                for (c, &row) in inner.candidate_free.iter().enumerate() {
+                    self.f_free[row] += self.contact_forces[c];
+                }
+                self.profile.residuals += 1;
+                self.profile.residual_s += timer.elapsed().as_secs_f64();
+                (norm, scale, totals)
+            };
             let s = &mut inner.scratch;
-            for (c, &node) in inner.problem.contact.nodes.iter().enumerate() {
-                s.v[2 * c] = self.x[2 * node];
-                s.v[2 * c + 1] = self.x[2 * node + 1];
-            }
-            let totals = inner.problem.contact.evaluate(
-                &s.v,
-                &inner.problem.surface,
-                placement,
-                &inner.problem.law,
-                &mut self.contact_forces,
-                &mut s.blocks,
-            );
-            let scale = self.contact_forces.iter().fold(0.0f64, |m, f| m.max(f.abs()));
-            let mut norm: f64 = 0.0;
-            for (c, &row) in inner.candidate_free.iter().enumerate() {
-                self.f_free[row] -= self.contact_forces[c];
-            }
-            for &r in &self.f_free {
-                norm = norm.max(r.abs());
-            }
-            if let Some(load) = load {
-                let total: f64 = (0..m2 / 2).map(|i| self.contact_forces[2 * i + 1]).sum();
-                norm = norm.max((total - load).abs());
-            }
-            for (c, &row) in inner.candidate_free.iter().enumerate() {
-                self.f_free[row] += self.contact_forces[c];
-            }
             residual = norm;
             tolerance = tolerance_of(scale);
-            self.profile.residuals += 1;
-            self.profile.residual_s += timer.elapsed().as_secs_f64();
             if debug {
                 eprintln!(
                     "finite: outer {outer}: residual {norm:.3e} (tolerance {tolerance:.3e}), {} active",
@@ -691,6 +708,7 @@ impl FiniteSolver {
             let slow = outer >= 1 && norm > self.slow_ratio * last_norm;
             last_norm = norm;
             if outer == max_outer || slow {
+                self.stopped = Some((norm, scale, totals));
                 break;
             }
             // u0 = x_f - K^-1 f_int(x). With the pad-last factor only its
