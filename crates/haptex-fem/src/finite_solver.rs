@@ -274,7 +274,9 @@ pub struct FiniteProfile {
     /// Residual evaluations (internal forces and contact), their number and seconds.
     pub residuals: usize,
     pub residual_s: f64,
-    /// Sparse single-vector solves of the outer iteration, their number and seconds.
+    /// Sparse single-vector solves of the outer iteration (or, with the
+    /// pad-last factor, forward and backward sweeps: two per iteration),
+    /// their number and seconds.
     pub solves: usize,
     pub solve_s: f64,
     /// The contact Newton of the outer iterations, seconds.
