@@ -1,11 +1,20 @@
 //! Linear algebra on top of faer: the sparse Cholesky factorization of the
 //! stiffness (symbolic analysis once, numeric factorization per time-step
 //! size, solves without allocation) and small dense helpers.
+//!
+//! A factorization can also order a given set of unknowns (the pad's) last
+//! ([`SparseCholesky::with_trailing`]). With K = [K_ii K_it; K_ti K_tt] in
+//! that order, L = [L_ii 0; L_ti L_tt], and the Schur complement
+//! S = K_tt - K_ti K_ii^-1 K_it, the condensed stiffness of the trailing
+//! unknowns, is L_tt L_tt^T: it comes with the factorization, without one
+//! solve per trailing unknown ([`SparseCholesky::trailing_factor`],
+//! [`schur_operators`]).
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+    factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
@@ -20,6 +29,8 @@ pub enum FactorError {
     NotPositiveDefinite(String),
     #[error("sparse factorization failed: {0}")]
     Faer(String),
+    #[error("invalid set of unknowns to order last: {0}")]
+    Trailing(String),
 }
 
 /// A sparse LL^T factorization with a fixed pattern.
@@ -31,6 +42,8 @@ pub struct SparseCholesky {
     solve_scratch: MemBuffer,
     solve_columns: usize,
     factorized: bool,
+    /// Number of unknowns ordered last (0: AMD throughout).
+    trailing: usize,
 }
 
 impl SparseCholesky {
@@ -57,26 +70,106 @@ impl SparseCholesky {
             },
         )
         .map_err(faer_error)?;
-        Ok(Self::with_symbolic(Arc::new(symbolic_matrix), Arc::new(symbolic), max_rhs))
+        Ok(Self::with_symbolic(Arc::new(symbolic_matrix), Arc::new(symbolic), max_rhs, 0))
+    }
+
+    /// Symbolic analysis of `pattern` with the unknowns `trailing` ordered
+    /// last, in that order, and the others by AMD on their own graph: the
+    /// last `trailing.len()` columns of the factor are then the Cholesky
+    /// factor of the Schur complement on `trailing` (see the module doc and
+    /// [`SparseCholesky::trailing_factor`]).
+    pub fn with_trailing(pattern: &Pattern, trailing: &[usize], max_rhs: usize) -> Result<Self, FactorError> {
+        let faer_error = |e: faer::sparse::FaerError| FactorError::Faer(format!("{e:?}"));
+        let n = pattern.n;
+        // Interior numbering (order kept, so the lower triangle stays lower
+        // and sorted); usize::MAX for the trailing unknowns.
+        let mut interior = vec![0usize; n];
+        for &t in trailing {
+            if t >= n {
+                return Err(FactorError::Trailing(format!("unknown {t} of {n}")));
+            }
+            if interior[t] == usize::MAX {
+                return Err(FactorError::Trailing(format!("unknown {t} listed twice")));
+            }
+            interior[t] = usize::MAX;
+        }
+        let mut interior_to_full = Vec::with_capacity(n - trailing.len());
+        for (j, slot) in interior.iter_mut().enumerate() {
+            if *slot != usize::MAX {
+                *slot = interior_to_full.len();
+                interior_to_full.push(j);
+            }
+        }
+        let ni = interior_to_full.len();
+        let mut col_ptr = Vec::with_capacity(ni + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        for &j in &interior_to_full {
+            for &i in &pattern.row_idx[pattern.col_ptr[j]..pattern.col_ptr[j + 1]] {
+                if interior[i] != usize::MAX {
+                    row_idx.push(interior[i]);
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+        let mut perm = vec![0usize; ni];
+        let mut perm_inv = vec![0usize; ni];
+        if ni > 0 {
+            let sub = SymbolicSparseColMat::new_checked(ni, ni, col_ptr, None, row_idx);
+            let mut memory = MemBuffer::try_new(faer::sparse::linalg::amd::order_maybe_unsorted_scratch::<usize>(
+                ni,
+                sub.compute_nnz(),
+            ))
+            .map_err(|_| FactorError::Faer("out of memory for the ordering".into()))?;
+            faer::sparse::linalg::amd::order_maybe_unsorted(
+                &mut perm,
+                &mut perm_inv,
+                sub.as_ref(),
+                Default::default(),
+                MemStack::new(&mut memory),
+            )
+            .map_err(faer_error)?;
+        }
+        // Position -> unknown, and its inverse.
+        let forward: Vec<usize> = perm.iter().map(|&p| interior_to_full[p]).chain(trailing.iter().copied()).collect();
+        let mut inverse = vec![0usize; n];
+        for (position, &unknown) in forward.iter().enumerate() {
+            inverse[unknown] = position;
+        }
+        let symbolic_matrix =
+            SymbolicSparseColMat::new_checked(n, n, pattern.col_ptr.clone(), None, pattern.row_idx.clone());
+        let ordering = faer::perm::PermRef::new_checked(&forward, &inverse, n);
+        let symbolic = factorize_symbolic_cholesky(
+            symbolic_matrix.as_ref(),
+            Side::Lower,
+            SymmetricOrdering::Custom(ordering),
+            CholeskySymbolicParams {
+                supernodal_flop_ratio_threshold: faer::sparse::linalg::SupernodalThreshold::FORCE_SUPERNODAL,
+                ..Default::default()
+            },
+        )
+        .map_err(faer_error)?;
+        Ok(Self::with_symbolic(Arc::new(symbolic_matrix), Arc::new(symbolic), max_rhs, trailing.len()))
     }
 
     fn with_symbolic(
         pattern: Arc<SymbolicSparseColMat<usize>>,
         symbolic: Arc<SymbolicCholesky<usize>>,
         max_rhs: usize,
+        trailing: usize,
     ) -> Self {
         let factor_scratch =
             MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()));
         let solve_columns = max_rhs.max(1);
         let solve_scratch = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(solve_columns, Par::Seq));
         let l_values = vec![0.0; symbolic.len_val()];
-        Self { pattern, symbolic, l_values, factor_scratch, solve_scratch, solve_columns, factorized: false }
+        Self { pattern, symbolic, l_values, factor_scratch, solve_scratch, solve_columns, factorized: false, trailing }
     }
 
     /// A second factorization of the same pattern, sharing the symbolic
     /// analysis (for another time-step size).
     pub fn share(&self, max_rhs: usize) -> Self {
-        Self::with_symbolic(self.pattern.clone(), self.symbolic.clone(), max_rhs)
+        Self::with_symbolic(self.pattern.clone(), self.symbolic.clone(), max_rhs, self.trailing)
     }
 
     /// Number of unknowns.
@@ -125,6 +218,188 @@ impl SparseCholesky {
     pub fn solve_vec(&mut self, b: &mut [f64]) {
         let n = b.len();
         self.solve_in_place(MatMut::from_column_major_slice_mut(b, n, 1));
+    }
+
+    /// The forward half of a solve: y = L^-1 Pi b, Pi the fill-reducing
+    /// ordering; `y` is in the factor's order, so with
+    /// [`SparseCholesky::with_trailing`] its last entries are those of the
+    /// trailing unknowns, in their given order.
+    pub fn forward(&mut self, b: &[f64], y: &mut [f64]) {
+        assert!(self.factorized, "solve before a successful factorization");
+        let n = self.n();
+        assert!(b.len() == n && y.len() == n, "vectors of the wrong size");
+        match self.symbolic.perm() {
+            Some(perm) => {
+                for (yi, &from) in y.iter_mut().zip(perm.arrays().0) {
+                    *yi = b[from];
+                }
+            }
+            None => y.copy_from_slice(b),
+        }
+        let rhs = MatMut::from_column_major_slice_mut(y, n, 1);
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(symbolic) => {
+                faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef::new(symbolic, &self.l_values)
+                    .l_solve_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut self.solve_scratch));
+            }
+            SymbolicCholeskyRaw::Simplicial(symbolic) => {
+                let l = SparseColMatRef::new(symbolic.factor(), &self.l_values);
+                faer::sparse::linalg::triangular_solve::solve_lower_triangular_in_place(l, Conj::No, rhs, Par::Seq);
+            }
+        }
+    }
+
+    /// The backward half of a solve: x = Pi^T L^-T y (`y`, in the factor's
+    /// order, is overwritten). `backward(forward(b))` solves A x = b.
+    pub fn backward(&mut self, y: &mut [f64], x: &mut [f64]) {
+        assert!(self.factorized, "solve before a successful factorization");
+        let n = self.n();
+        assert!(x.len() == n && y.len() == n, "vectors of the wrong size");
+        let rhs = MatMut::from_column_major_slice_mut(y, n, 1);
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(symbolic) => {
+                faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef::new(symbolic, &self.l_values)
+                    .l_transpose_solve_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut self.solve_scratch));
+            }
+            SymbolicCholeskyRaw::Simplicial(symbolic) => {
+                let l = SparseColMatRef::new(symbolic.factor(), &self.l_values);
+                faer::sparse::linalg::triangular_solve::solve_lower_triangular_transpose_in_place(
+                    l,
+                    Conj::No,
+                    rhs,
+                    Par::Seq,
+                );
+            }
+        }
+        match self.symbolic.perm() {
+            Some(perm) => {
+                for (&yi, &to) in y.iter().zip(perm.arrays().0) {
+                    x[to] = yi;
+                }
+            }
+            None => x.copy_from_slice(y),
+        }
+    }
+
+    /// Number of unknowns ordered last ([`SparseCholesky::with_trailing`]).
+    pub fn trailing(&self) -> usize {
+        self.trailing
+    }
+
+    /// Writes the trailing block L_tt of the factor (m x m, m =
+    /// [`SparseCholesky::trailing`], column-major, zero above the
+    /// diagonal; rows and columns in the order the trailing unknowns were
+    /// given) into `out`: L_tt L_tt^T is the Schur complement of the
+    /// factorized matrix on them.
+    pub fn trailing_factor(&self, out: &mut [f64]) {
+        assert!(self.factorized, "trailing factor before a successful factorization");
+        let m = self.trailing;
+        assert_eq!(out.len(), m * m, "trailing factor buffer of the wrong size");
+        out.fill(0.0);
+        let first = self.n() - m;
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(symbolic) => {
+                let factor =
+                    faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef::new(symbolic, &self.l_values);
+                for s in 0..symbolic.n_supernodes() {
+                    let node = factor.supernode(s);
+                    let values = node.val();
+                    let (start, width) = (node.start(), values.ncols());
+                    if start + width <= first {
+                        continue;
+                    }
+                    for local_col in 0..width {
+                        let col = start + local_col;
+                        if col < first {
+                            continue;
+                        }
+                        let target = &mut out[(col - first) * m..(col - first + 1) * m];
+                        for local_row in local_col..width {
+                            target[start + local_row - first] = values[(local_row, local_col)];
+                        }
+                        for (k, &row) in node.pattern().iter().enumerate() {
+                            target[row - first] = values[(width + k, local_col)];
+                        }
+                    }
+                }
+            }
+            SymbolicCholeskyRaw::Simplicial(symbolic) => {
+                let (col_ptr, row_idx) = (symbolic.col_ptr(), symbolic.row_idx());
+                for col in first..self.n() {
+                    let target = &mut out[(col - first) * m..(col - first + 1) * m];
+                    for slot in col_ptr[col]..col_ptr[col + 1] {
+                        target[row_idx[slot] - first] = self.l_values[slot];
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The condensed operators of the trailing unknowns from the trailing
+/// factor `l` (m x m, column-major lower, see
+/// [`SparseCholesky::trailing_factor`]): the stiffness S = L L^T and the
+/// compliance C = S^-1 = L^-T L^-1, both column-major and exactly
+/// symmetric. `inverse` (m x m) is scratch (it ends with L^-1 in its lower
+/// triangle).
+pub fn schur_operators(l: &[f64], m: usize, inverse: &mut [f64], compliance: &mut [f64], stiffness: &mut [f64]) {
+    use faer::linalg::matmul::triangular::{BlockStructure, matmul};
+    use faer::{Accum, MatRef};
+    let factor = MatRef::from_column_major_slice(l, m, m);
+    // Lower halves only (half the work of full products), then mirrored.
+    matmul(
+        MatMut::from_column_major_slice_mut(stiffness, m, m),
+        BlockStructure::TriangularLower,
+        Accum::Replace,
+        factor,
+        BlockStructure::TriangularLower,
+        factor.transpose(),
+        BlockStructure::TriangularUpper,
+        1.0,
+        Par::Seq,
+    );
+    inverse.fill(0.0);
+    faer::linalg::triangular_inverse::invert_lower_triangular(
+        MatMut::from_column_major_slice_mut(inverse, m, m),
+        factor,
+        Par::Seq,
+    );
+    let inverse = MatRef::from_column_major_slice(inverse, m, m);
+    matmul(
+        MatMut::from_column_major_slice_mut(compliance, m, m),
+        BlockStructure::TriangularLower,
+        Accum::Replace,
+        inverse.transpose(),
+        BlockStructure::TriangularUpper,
+        inverse,
+        BlockStructure::TriangularLower,
+        1.0,
+        Par::Seq,
+    );
+    for matrix in [compliance, stiffness] {
+        for c in 0..m {
+            for r in c + 1..m {
+                matrix[r * m + c] = matrix[c * m + r];
+            }
+        }
+    }
+}
+
+/// Solves L^T x = b in place for a dense lower-triangular `l` (m x m,
+/// column-major).
+pub fn lower_transpose_solve(l: &[f64], m: usize, x: &mut [f64]) {
+    for i in (0..m).rev() {
+        let column = &l[i * m..(i + 1) * m];
+        let below: f64 = column[i + 1..].iter().zip(&x[i + 1..]).map(|(a, b)| a * b).sum();
+        x[i] = (x[i] - below) / column[i];
+    }
+}
+
+/// out = L^T x for a dense lower-triangular `l` (m x m, column-major).
+pub fn lower_transpose_times(l: &[f64], m: usize, x: &[f64], out: &mut [f64]) {
+    for (i, o) in out.iter_mut().enumerate().take(m) {
+        let column = &l[i * m..(i + 1) * m];
+        *o = column[i..].iter().zip(&x[i..]).map(|(a, b)| a * b).sum();
     }
 }
 
@@ -186,6 +461,115 @@ mod tests {
         let mut check = vec![0.0; n_links];
         symmetric_matvec_add(&pattern, &values, &b, &mut check);
         assert!(check.iter().zip(&rhs).all(|(a, b)| (a - b).abs() < 1e-12));
+    }
+}
+
+#[cfg(test)]
+mod trailing_tests {
+    use super::*;
+    use crate::assembly::{DofMap, Pattern};
+
+    /// On a 4 x 3 grid of bilinear elements with one edge fixed, the
+    /// trailing block of the pad-last factorization gives the same
+    /// condensed stiffness and compliance as one solve per trailing
+    /// unknown with the AMD factorization.
+    #[test]
+    fn trailing_factor_is_the_schur_complement() {
+        let (nx, ny) = (5, 4);
+        let node = |i: usize, j: usize| j * nx + i;
+        let mut elements = Vec::new();
+        for j in 0..ny - 1 {
+            for i in 0..nx - 1 {
+                elements.push([node(i, j), node(i + 1, j), node(i + 1, j + 1), node(i, j + 1)]);
+            }
+        }
+        // Fixed bottom edge; the top edge's DOFs are the trailing ones.
+        let prescribed: Vec<usize> = (0..nx).flat_map(|i| [2 * node(i, 0), 2 * node(i, 0) + 1]).collect();
+        let dofs = DofMap::new(nx * ny, &prescribed);
+        let all: Vec<usize> = (0..elements.len()).collect();
+        let pattern = Pattern::new(&dofs, &elements, &all);
+        // An SPD element matrix: a spring between every pair of DOFs of
+        // the same direction, of varying stiffness, plus a small diagonal.
+        let mut values = vec![0.0; pattern.nnz()];
+        for e in 0..elements.len() {
+            let mut k = [[0.0; 8]; 8];
+            for a in 0..8 {
+                k[a][a] += 0.01 * (1 + e % 3) as f64;
+                for b in 0..8 {
+                    if a != b && a % 2 == b % 2 {
+                        let w = 1.0 + 0.1 * ((a + b + e) % 5) as f64;
+                        k[a][a] += w;
+                        k[a][b] -= w;
+                    }
+                }
+            }
+            pattern.add_element(e, &k, &mut values);
+        }
+        // Trailing: the top edge, in reverse order (any order is kept).
+        let trailing: Vec<usize> =
+            (0..nx).rev().flat_map(|i| [dofs.free[2 * node(i, ny - 1) + 1], dofs.free[2 * node(i, ny - 1)]]).collect();
+        let m = trailing.len();
+        let n = pattern.n;
+        let mut amd = SparseCholesky::new(&pattern, m).unwrap();
+        amd.factorize(&values).unwrap();
+        let mut phi = vec![0.0; n * m];
+        for (c, &row) in trailing.iter().enumerate() {
+            phi[c * n + row] = 1.0;
+        }
+        amd.solve_in_place(MatMut::from_column_major_slice_mut(&mut phi, n, m));
+        let mut last = SparseCholesky::with_trailing(&pattern, &trailing, 1).unwrap();
+        last.factorize(&values).unwrap();
+        assert_eq!(last.trailing(), m);
+        let mut l = vec![0.0; m * m];
+        last.trailing_factor(&mut l);
+        let (mut inverse, mut compliance, mut stiffness) = (vec![0.0; m * m], vec![0.0; m * m], vec![0.0; m * m]);
+        schur_operators(&l, m, &mut inverse, &mut compliance, &mut stiffness);
+        let scale = compliance.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        for c in 0..m {
+            for (r, &row) in trailing.iter().enumerate() {
+                let expected = phi[c * n + row];
+                assert!((compliance[c * m + r] - expected).abs() < 1e-12 * scale, "C[{r},{c}]");
+            }
+        }
+        // S C = I.
+        for c in 0..m {
+            for r in 0..m {
+                let v: f64 = (0..m).map(|k| stiffness[k * m + r] * compliance[c * m + k]).sum();
+                let expected = if r == c { 1.0 } else { 0.0 };
+                assert!((v - expected).abs() < 1e-10, "(S C)[{r},{c}] = {v}");
+            }
+        }
+        // Solves with the pad-last factorization agree with the AMD ones,
+        // whole or in halves.
+        let rhs: Vec<f64> = (0..n).map(|i| ((i * 7) % 11) as f64 - 5.0).collect();
+        let (mut b, mut b2) = (rhs.clone(), rhs.clone());
+        amd.solve_vec(&mut b);
+        last.solve_vec(&mut b2);
+        let scale = b.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        assert!(b.iter().zip(&b2).all(|(x, y)| (x - y).abs() < 1e-12 * scale));
+        let (mut y, mut x) = (vec![0.0; n], vec![0.0; n]);
+        last.forward(&rhs, &mut y);
+        // The trailing part of the solution from the forward half alone:
+        // x_t = L_tt^-T y_t.
+        let mut x_t = y[n - m..].to_vec();
+        lower_transpose_solve(&l, m, &mut x_t);
+        for (c, &row) in trailing.iter().enumerate() {
+            assert!((x_t[c] - b[row]).abs() < 1e-12 * scale, "x_t[{c}]");
+        }
+        last.backward(&mut y, &mut x);
+        assert!(b.iter().zip(&x).all(|(p, q)| (p - q).abs() < 1e-12 * scale));
+        // A load on the trailing unknowns only: L^-1 Pi P g = [0; L_tt^-1 g],
+        // and L_tt^-1 S w = L_tt^T w.
+        let w: Vec<f64> = (0..m).map(|i| (i % 3) as f64 - 1.0).collect();
+        let mut y = vec![0.0; n];
+        lower_transpose_times(&l, m, &w, &mut y[n - m..]);
+        last.backward(&mut y, &mut x);
+        for (c, &row) in trailing.iter().enumerate() {
+            assert!((x[row] - w[c]).abs() < 1e-10, "pad displacement {c}");
+        }
+        // Invalid sets are errors, not panics.
+        assert!(SparseCholesky::with_trailing(&pattern, &[n], 1).is_err());
+        assert!(SparseCholesky::with_trailing(&pattern, &[0, 0], 1).is_err());
     }
 }
 

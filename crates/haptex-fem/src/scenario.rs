@@ -443,6 +443,11 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
                 .map_err(|e| SimulationError::Invalid(format!("the computed profile is invalid: {e}")))?,
         )
     };
+    if let AnySolver::Finite(f) = &solver
+        && std::env::var_os("HAPTEX_PROFILE").is_some()
+    {
+        eprintln!("finite-strain profile: {} outer iterations; {}", f.outer_iterations, f.profile);
+    }
     let solver = solver.state();
     let (free_dofs, factor_nnz) = solver.sizes();
     let statistics = Statistics {
