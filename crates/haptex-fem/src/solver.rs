@@ -111,8 +111,9 @@ impl Default for SolverSettings {
 }
 
 impl SolverSettings {
-    /// Iterations 1 ..= 10^4 (continuation at most 10^5), halvings at most 40 (a step of 1e-12 of the
-    /// original), tolerances and the floor's depth positive and finite.
+    /// Iterations 1 ..= 10^4 (continuation at most 10^5), halvings at most
+    /// 40 (a step of 1e-12 of the original), tolerances and the floor's
+    /// depth positive and finite.
     pub fn validate(&self) -> Result<(), SolveError> {
         let ok = (1..=10_000).contains(&self.max_iterations)
             && self.continuation_iterations <= 100_000
@@ -821,10 +822,10 @@ pub(crate) fn newton(
         if damping > 0.0 {
             // Pseudo-transient continuation: the full damped step, with
             // the damping proportional to the residual relative to where
-            // continuation started, capped at CONTINUATION_DAMPING: it
-            // shrinks as the residual falls below that, so the iteration
-            // turns into Newton's near the solution, and stays put while the
-            // residual rises. Switched evolution relaxation (Mulder & van
+            // continuation started, capped at CONTINUATION_DAMPING and at
+            // most halved per iteration: it shrinks as the residual falls
+            // below that, so the iteration turns into Newton's near the
+            // solution, and stays put while the residual rises. Switched evolution relaxation (Mulder & van
             // Leer 1985: the damping follows the residual's last change)
             // failed on the sharpest corners both ways: grown as the residual
             // rose, the steps became too short for the skin to snap across

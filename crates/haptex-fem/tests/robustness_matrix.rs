@@ -180,17 +180,8 @@ fn one_factor_at_a_time(body: Body, surface: SurfaceShape, resolved: bool) -> Ve
         Ok(r) => r,
         Err(e) => return vec![e],
     };
-    let variants = [
-        Variant::Coarse,
-        Variant::Fine,
-        Variant::Penalty(50.0),
-        Variant::Penalty(1000.0),
-        Variant::StepFraction(0.5),
-        Variant::StepFraction(0.25),
-        Variant::OtherMaterial,
-    ];
     let mut failures = Vec::new();
-    for variant in variants {
+    for variant in VARIANTS {
         let result = match complete(body, &surface, variant) {
             Ok(r) => r,
             Err(e) => {
