@@ -4,6 +4,8 @@ use std::io::Write;
 use std::path::{Component, Path, PathBuf};
 
 use anyhow::Context;
+use haptex_core::electrovibration::LayerStack;
+use haptex_core::ranges;
 
 /// Parses a positive, finite number (for physical constants and limits).
 pub fn positive(text: &str) -> Result<f64, String> {
@@ -101,4 +103,27 @@ fn normalize(path: &Path) -> PathBuf {
         }
     }
     out
+}
+
+/// The dielectric layers of eq. (3), as flags (defaults: the paper's Fig. 2).
+#[derive(Debug, Clone, clap::Args)]
+pub struct LayerStackArgs {
+    /// Relative permittivity of the stratum corneum, eps_sc.
+    #[arg(long, default_value_t = LayerStack::PAPER.eps_sc, value_parser = in_range(ranges::EPS_SC))]
+    pub eps_sc: f64,
+    /// Relative permittivity of the display insulator, eps_i.
+    #[arg(long, default_value_t = LayerStack::PAPER.eps_i, value_parser = in_range(ranges::EPS_I))]
+    pub eps_i: f64,
+    /// Stratum corneum thickness d_sc in mm.
+    #[arg(long, default_value_t = LayerStack::PAPER.d_sc_mm, value_parser = in_range(ranges::D_SC_MM))]
+    pub d_sc: f64,
+    /// Insulator thickness d_i in mm.
+    #[arg(long, default_value_t = LayerStack::PAPER.d_i_mm, value_parser = in_range(ranges::D_I_MM))]
+    pub d_i: f64,
+}
+
+impl LayerStackArgs {
+    pub fn stack(&self) -> LayerStack {
+        LayerStack { d_sc_mm: self.d_sc, eps_sc: self.eps_sc, d_i_mm: self.d_i, eps_i: self.eps_i }
+    }
 }

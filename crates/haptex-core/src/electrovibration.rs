@@ -72,7 +72,7 @@ impl LayerStack {
         (d_sc / self.eps_sc + d_i / self.eps_i) * (d_sc + d_i)
     }
 
-    fn validate(&self) -> Result<(), ElectroError> {
+    pub fn validate(&self) -> Result<(), ElectroError> {
         ranges::D_SC_MM.check(self.d_sc_mm)?;
         ranges::EPS_SC.check(self.eps_sc)?;
         ranges::D_I_MM.check(self.d_i_mm)?;

@@ -44,6 +44,9 @@ pub struct ContactLaw {
     /// [`ContactSet::evaluate`]). Simulations start each step with it; the
     /// solver drops it at the step's first stall.
     pub geometric_tangent: bool,
+    /// Electrostatic attraction towards the surface (a display under
+    /// voltage), if any.
+    pub electrostatic: Option<Electrostatic>,
 }
 
 impl ContactLaw {
@@ -66,6 +69,71 @@ impl ContactLaw {
         } else {
             (e * (depth - 0.5 * delta), e)
         }
+    }
+}
+
+/// Electrostatic attraction of the skin towards a flat display under a
+/// voltage U: a normal traction on the skin pulling it onto the display,
+/// with an air gap g between skin and display in series with the two
+/// dielectric layers of eq. (3), as an air layer of permittivity 1 added
+/// to both of its sums:
+///
+///   p_e(g) = eps0 U^2 / (2 (a + g)(b + g)),   a = d_sc/eps_sc + d_i/eps_i,   b = d_sc + d_i.
+///
+/// At g = 0 (skin in contact) this is eq. (3) divided by the area
+/// (Kaczmarek et al. 2006), so its integral over the contact length is
+/// eq. (3)'s Fe on that length; for g much larger than the layers it is
+/// the force between two plates in air, eps0 U^2 / (2 g^2). (Shultz,
+/// Peshkin and Colgate, "Surface haptics via electroadhesion", IEEE World
+/// Haptics 2015, model the finger-display interface as such a series
+/// stack.) Skin near the edge of the contact, not touching, is attracted
+/// too: with the paper's layers a = 0.22 um, so the attraction halves at a
+/// gap of 0.22 um and falls as a/g beyond.
+///
+/// The gap is the vertical distance of the skin above the display (0
+/// where it penetrates) and the traction acts vertically: the law is for a
+/// flat display.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Electrostatic {
+    /// Traction at zero gap, MPa: eps0 U^2 / (2 a b).
+    pub pressure_mpa: f64,
+    /// a = d_sc/eps_sc + d_i/eps_i, mm.
+    pub electric_mm: f64,
+    /// b = d_sc + d_i, mm.
+    pub thickness_mm: f64,
+}
+
+impl Electrostatic {
+    /// Gaps beyond this many electric lengths a have their traction's
+    /// derivative left out of the tangent (its force is kept): there
+    /// |dp/dg| < p_e(0) / 900 a, so Newton's method stays quadratic where
+    /// the traction matters and the active set does not grow over the
+    /// whole pad.
+    pub const TANGENT_GAPS: f64 = 30.0;
+
+    /// The law for `u_v` volts (RMS) across `stack`.
+    pub fn new(stack: &haptex_core::electrovibration::LayerStack, u_v: f64) -> Self {
+        let electric_mm = stack.d_sc_mm / stack.eps_sc + stack.d_i_mm / stack.eps_i;
+        let thickness_mm = stack.d_sc_mm + stack.d_i_mm;
+        // eps0 U^2 / (2 a b) with a, b in m gives Pa; 1e-6 MPa per Pa.
+        let pa =
+            haptex_core::electrovibration::EPS0_F_PER_M * u_v * u_v / (2.0 * electric_mm * 1e-3 * thickness_mm * 1e-3);
+        Self { pressure_mpa: pa * 1e-6, electric_mm, thickness_mm }
+    }
+
+    /// Traction (MPa, attractive) and its derivative with respect to the
+    /// gap (MPa/mm) at gap `gap_mm` (<= 0: in contact, the traction of g = 0).
+    pub fn traction(&self, gap_mm: f64) -> (f64, f64) {
+        let g = gap_mm.max(0.0);
+        let (a, b) = (self.electric_mm, self.thickness_mm);
+        let p = self.pressure_mpa * a * b / ((a + g) * (b + g));
+        let dp = if gap_mm > 0.0 { -p * (1.0 / (a + g) + 1.0 / (b + g)) } else { 0.0 };
+        (p, dp)
+    }
+
+    /// Whether the traction's gap derivative enters the tangent at `gap_mm`.
+    fn in_tangent(&self, gap_mm: f64) -> bool {
+        gap_mm > 0.0 && gap_mm < Self::TANGENT_GAPS * self.electric_mm
     }
 }
 
@@ -116,6 +184,12 @@ pub struct ContactTotals {
     pub force: [f64; 2],
     /// Length of skin boundary in contact (reference), mm.
     pub contact_mm: f64,
+    /// Electrostatic attraction on the finger (N per mm of width, > 0:
+    /// pulling it onto the surface); its force is in the nodal forces, not
+    /// in `force`.
+    pub electrostatic_n: f64,
+    /// The part of it on skin in contact (N per mm of width).
+    pub electrostatic_contact_n: f64,
     pub active_points: usize,
     pub slipping_points: usize,
 }
@@ -226,6 +300,28 @@ impl ContactSet {
             let (s, shape, w) = self.points[k];
             let previous = self.committed[k];
             let x = placement.to_surface(self.position(k, u));
+            if let Some(e) = law.electrostatic.filter(|e| e.pressure_mpa > 0.0) {
+                // The vertical gap above the (flat) display; <= 0 in contact.
+                let gap = x[1] - surface.height(x[0]);
+                let (p, dp) = e.traction(gap);
+                let nodes = self.segments[s];
+                for (a, &na) in nodes.iter().zip(&shape) {
+                    forces[2 * a + 1] -= na * w * p;
+                }
+                if e.in_tangent(gap) {
+                    // d f_y / d y = -w dp/dg (> 0: the attraction grows as
+                    // the skin approaches).
+                    for (a, &na) in nodes.iter().zip(&shape) {
+                        for (b, &nb) in nodes.iter().zip(&shape) {
+                            blocks.push(Block { i: *a, j: *b, d: [[0.0, 0.0], [0.0, -na * nb * w * dp]] });
+                        }
+                    }
+                }
+                totals.electrostatic_n += w * p;
+                if gap < 0.0 {
+                    totals.electrostatic_contact_n += w * p;
+                }
+            }
             let Some(projection) = surface.project(x) else {
                 self.trial[k] = PointState { arc_mm: surface.arc_at(x[0]), ..PointState::default() };
                 continue;
@@ -364,6 +460,7 @@ mod tests {
                 mu: 0.5,
                 smoothing_mm: 0.0,
                 geometric_tangent: false,
+                electrostatic: None,
             },
         )
     }
@@ -441,6 +538,7 @@ mod tests {
             mu: 0.5,
             smoothing_mm: 2e-4,
             geometric_tangent: true,
+            electrostatic: None,
         };
         for (a, b) in [(0.2, 0.45), (-0.1, 0.12)] {
             let bump = SurfaceShape::Bump { x0: 0.0, width: 1.5, height: 0.3 };

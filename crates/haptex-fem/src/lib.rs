@@ -14,6 +14,7 @@ pub mod analytic;
 pub mod assembly;
 pub mod body;
 pub mod contact;
+pub mod display;
 pub mod drawing;
 pub mod element;
 pub mod finger;

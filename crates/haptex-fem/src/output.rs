@@ -13,10 +13,15 @@ use crate::finger::subdomain;
 use crate::scenario::{Frame, SimulationResult};
 
 /// Writes `t_s,slide_mm,fn_n,ft_n,contact_mm` and diagnostic columns
-/// (forces per mm of finger width).
+/// (forces per mm of finger width), then the display's `voltage_v`, the
+/// electrostatic attraction `fe_n` and its part on skin in contact
+/// `fe_contact_n` (0 on a passive surface).
 pub fn write_history(result: &SimulationResult, w: &mut dyn Write) -> std::io::Result<()> {
     writeln!(w, "# haptex simulate force history; forces in N per mm of finger width (2D plane strain)")?;
-    writeln!(w, "t_s,slide_mm,fn_n,ft_n,contact_mm,drive_y_mm,reaction_x_n,reaction_y_n,newton_iterations,step_cuts")?;
+    writeln!(
+        w,
+        "t_s,slide_mm,fn_n,ft_n,contact_mm,drive_y_mm,reaction_x_n,reaction_y_n,newton_iterations,step_cuts,voltage_v,fe_n,fe_contact_n"
+    )?;
     for r in &result.history {
         write_csv_row(
             w,
@@ -31,6 +36,9 @@ pub fn write_history(result: &SimulationResult, w: &mut dyn Write) -> std::io::R
                 r.reaction_n[1],
                 r.iterations as f64,
                 r.cuts as f64,
+                r.voltage_v,
+                r.fe_n,
+                r.fe_contact_n,
             ],
         )?;
     }

@@ -14,6 +14,7 @@ use serde::Serialize;
 
 use crate::body::{Body, BodyError};
 use crate::contact::{ContactLaw, ContactSet};
+use crate::display::Display;
 use crate::element::Formulation;
 use crate::finger::{FingerError, FingerModel, Resolution};
 use crate::finite_solver::{FiniteSettings, FiniteSolver};
@@ -70,6 +71,9 @@ pub struct Scenario {
     /// the end of the press and the step nearest the feature).
     pub frame_every: usize,
     pub settings: SolverSettings,
+    /// The surface is an electrovibration display with this electrode (the
+    /// surface must then be flat; its friction is `mu_skin`, mu_HD).
+    pub display: Option<Display>,
 }
 
 impl Scenario {
@@ -95,6 +99,7 @@ impl Scenario {
             smoothing_mm: 2e-4,
             frame_every: 0,
             settings: SolverSettings::default(),
+            display: None,
         }
     }
 
@@ -175,6 +180,12 @@ impl Scenario {
                 limits::MAX_FRAMES
             ));
         }
+        if let Some(display) = &self.display {
+            if self.surface != SurfaceShape::Flat {
+                return invalid("a display is flat: the surface must be flat when a voltage is applied".into());
+            }
+            display.validate().map_err(|e| SimulationError::Invalid(e.to_string()))?;
+        }
         let (x_min, x_max) = self.surface_range_mm();
         RigidSurface::template_segments(&self.surface, x_min, x_max)
             .map_err(|e| SimulationError::Invalid(e.to_string()))?;
@@ -247,12 +258,21 @@ pub enum SimulationError {
 pub struct HistoryRow {
     pub t_s: f64,
     pub slide_mm: f64,
-    /// Normal force on the finger (up), N/mm.
+    /// Normal force the finger applies (N/mm): the contact force on it (up)
+    /// less the electrostatic attraction, which in equilibrium is the bone
+    /// and nail reaction, what a force plate under the surface measures.
     pub fn_n: f64,
     /// Friction force on the finger, opposing its motion over the surface, N/mm.
     pub ft_n: f64,
     /// Length of skin in contact, mm.
     pub contact_mm: f64,
+    /// Display voltage at this step (V RMS; 0 on a passive surface).
+    pub voltage_v: f64,
+    /// Electrostatic attraction on the finger (N/mm; 0 on a passive surface).
+    pub fe_n: f64,
+    /// The part of `fe_n` on skin in contact (N/mm): eq. (3) on the contact
+    /// length; the rest pulls skin near the contact's edges.
+    pub fe_contact_n: f64,
     /// Vertical displacement of bone and nail, mm (negative: pressed down).
     pub drive_y_mm: f64,
     /// Reaction on bone and nail from the tissue's stresses, N/mm (x, y).
@@ -336,6 +356,7 @@ pub fn build_problem(scenario: &Scenario) -> Result<(ContactProblem, f64), Simul
         mu,
         smoothing_mm: scenario.smoothing_mm,
         geometric_tangent: true,
+        electrostatic: None,
     };
     let body = Body::new(finger.mesh, scenario.model.subdomain_models(scenario.viscoelastic), Formulation::BBar)?;
     let problem = ContactProblem {
@@ -345,6 +366,7 @@ pub fn build_problem(scenario: &Scenario) -> Result<(ContactProblem, f64), Simul
         other_surface_nodes: finger.other_surface_nodes,
         surface,
         law,
+        display: scenario.display.clone(),
     };
     Ok((problem, lift_mm))
 }
@@ -369,9 +391,12 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
     let record = |solver: &mut AnySolver, report: &StepReport| HistoryRow {
         t_s: report.t_s,
         slide_mm: report.slide_mm,
-        fn_n: report.totals.force[1],
+        fn_n: report.totals.force[1] - report.totals.electrostatic_n,
         ft_n: -report.totals.force[0],
         contact_mm: report.totals.contact_mm,
+        voltage_v: solver.state().problem.display.as_ref().map_or(0.0, |d| d.voltage_at(report.slide_mm)),
+        fe_n: report.totals.electrostatic_n,
+        fe_contact_n: report.totals.electrostatic_contact_n,
         drive_y_mm: report.drive_mm[1],
         reaction_n: solver.driven_reaction(),
         iterations: report.iterations,

@@ -41,6 +41,7 @@ use faer::linalg::solvers::DenseSolveCore;
 use crate::assembly::{DofMap, Pattern};
 use crate::body::Body;
 use crate::contact::{Block, ContactLaw, ContactSet, ContactTotals, SurfacePlacement};
+use crate::display::Display;
 use crate::linalg::{DenseLu, FactorError, SparseCholesky};
 use crate::material::StepCoefficients;
 use crate::surface::RigidSurface;
@@ -57,6 +58,10 @@ pub struct ContactProblem {
     pub other_surface_nodes: Vec<usize>,
     pub surface: RigidSurface,
     pub law: ContactLaw,
+    /// A display's electrode: the surface then attracts the skin with the
+    /// voltage at the finger's position (`law.electrostatic` is set from it
+    /// at every step).
+    pub display: Option<Display>,
 }
 
 /// Most candidate contact nodes a problem may have: the condensed system
@@ -604,6 +609,12 @@ pub(crate) fn advance_halving<S: Stepping>(
             ]),
             Drive::Load { x_mm, fy_n } => Drive::Load { x_mm: start_drive[0] + to * (x_mm - start_drive[0]), fy_n },
         };
+        // The voltage is the one at the finger's position at the end of the
+        // (sub-)step, as every other load of the implicit step.
+        let problem = &mut solver.committed().problem;
+        if let Some(display) = &problem.display {
+            problem.law.electrostatic = Some(display.electrostatic_at(target_slide));
+        }
         match solver.try_step(fraction * dt_s, target_slide, target_drive) {
             Ok((its, totals)) => {
                 iterations += its;

@@ -26,6 +26,7 @@ fn cattaneo_mindlin_stick_zone() {
         mu,
         smoothing_mm: 0.0,
         geometric_tangent: false,
+        electrostatic: None,
     };
     let problem = common::cylinder_on_flat(8.0, 2.0, 0.025, 2.0, Material::elastic(1.0, 0.4999), law);
     let mut solver = Solver::new(problem, SolverSettings::default(), 0.0).unwrap();

@@ -100,5 +100,6 @@ pub fn cylinder_on_flat(
         other_surface_nodes: other,
         surface: RigidSurface::new(&SurfaceShape::Flat, -radius - 20.0, radius + 20.0).unwrap(),
         law,
+        display: None,
     }
 }

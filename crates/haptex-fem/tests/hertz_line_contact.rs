@@ -30,6 +30,7 @@ fn hertz_line_contact_half_width_and_peak_pressure() {
         mu: 0.0,
         smoothing_mm: 0.0,
         geometric_tangent: false,
+        electrostatic: None,
     };
     let problem = common::cylinder_on_flat(radius, 2.0, 0.025, 2.0, Material::elastic(e, nu), law);
     let mut solver = Solver::new(problem, SolverSettings::default(), 0.0).unwrap();

@@ -301,6 +301,7 @@ fn driven_contact_node_is_refused_by_the_solver() {
         mu: 0.5,
         smoothing_mm: 0.0,
         geometric_tangent: false,
+        electrostatic: None,
     };
     let mut problem = common::cylinder_on_flat(8.0, 2.0, 0.2, 2.0, Material::elastic(1.0, 0.3), law);
     let node = problem.contact.nodes[3];

@@ -24,6 +24,7 @@ fn problem() -> ContactProblem {
         mu: 0.0,
         smoothing_mm: 0.0,
         geometric_tangent: false,
+        electrostatic: None,
     };
     common::cylinder_on_flat(8.0, 2.0, 0.05, 2.0, Material::elastic(1.0, 0.3), law)
 }

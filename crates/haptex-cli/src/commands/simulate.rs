@@ -12,7 +12,11 @@ use haptex_fem::scenario::{self, Kinematics, Loading, Scenario, default_step_mm}
 use haptex_fem::surface::SurfaceShape;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::args::{Output, non_negative, positive};
+use haptex_core::ranges;
+use haptex_core::signal::{Extend, VoltageCurve};
+use haptex_fem::display::Display;
+
+use crate::args::{LayerStackArgs, Output, in_range, non_negative, positive};
 
 /// Simulate a finger pad sliding over a surface (2D plane-strain FE) and
 /// write its friction profile.
@@ -30,9 +34,25 @@ use crate::args::{Output, non_negative, positive};
                   haptex simulate --surface file:heights.csv --history history.csv --vtk vtk/"
 )]
 pub struct SimulateArgs {
-    /// Surface: flat, bump, edge, sine, or file:H.csv (columns x_mm,h_mm).
+    /// Surface: flat, bump, edge, sine, file:H.csv (columns x_mm,h_mm), or
+    /// display: a flat electrovibration display under the voltage of
+    /// --voltage or --constant-voltage at the finger's position.
     #[arg(long, value_name = "SURFACE")]
     surface: String,
+    /// With --surface display: the voltage profile U(x) (CSV with x_mm and
+    /// voltage_v columns, as `haptex voltage` writes), x the finger's
+    /// position on the display; the first/last voltage is held beyond it.
+    #[arg(long, value_name = "U.csv", conflicts_with = "constant_voltage")]
+    voltage: Option<PathBuf>,
+    /// With --surface display: one voltage (V RMS) over the whole slide.
+    #[arg(long, value_name = "V", value_parser = in_range(ranges::VOLTAGE_V))]
+    constant_voltage: Option<f64>,
+    /// With --surface display: skin-display friction coefficient mu_HD
+    /// (default: the finger model's skin friction, 0.5).
+    #[arg(long, conflicts_with = "mu_skin")]
+    mu_display: Option<f64>,
+    #[command(flatten)]
+    stack: LayerStackArgs,
     /// Feature position x0 in mm (bump top, edge top, sine phase).
     #[arg(long, default_value_t = 5.0, allow_negative_numbers = true)]
     x0: f64,
@@ -126,19 +146,44 @@ fn parse_surface(args: &SimulateArgs) -> anyhow::Result<SurfaceShape> {
         anyhow::bail!("--x0 and --height must be finite numbers");
     }
     Ok(match args.surface.as_str() {
-        "flat" => SurfaceShape::Flat,
+        "flat" | "display" => SurfaceShape::Flat,
         "bump" => SurfaceShape::Bump { x0, width, height },
         "edge" => SurfaceShape::Edge { x0, width, height },
         "sine" => SurfaceShape::Sine { x0, width, height },
         other => match other.strip_prefix("file:") {
             Some(path) => SurfaceShape::read_csv(std::path::Path::new(path))?,
-            None => anyhow::bail!("--surface must be flat, bump, edge, sine or file:H.csv, got '{other}'"),
+            None => anyhow::bail!("--surface must be flat, bump, edge, sine, display or file:H.csv, got '{other}'"),
         },
     })
 }
 
+/// The display of `--surface display`, or `None`; voltage flags without it
+/// are an error (they would be silently ignored).
+fn parse_display(args: &SimulateArgs) -> anyhow::Result<Option<Display>> {
+    let display = args.surface == "display";
+    if !display {
+        for (given, flag) in [
+            (args.voltage.is_some(), "--voltage"),
+            (args.constant_voltage.is_some(), "--constant-voltage"),
+            (args.mu_display.is_some(), "--mu-display"),
+        ] {
+            if given {
+                anyhow::bail!("{flag} applies to --surface display only (got --surface {})", args.surface);
+            }
+        }
+        return Ok(None);
+    }
+    let voltage = match (&args.voltage, args.constant_voltage) {
+        (Some(path), _) => VoltageCurve::read_csv_file(path)?,
+        (None, Some(u)) => VoltageCurve::new(vec![0.0, 1.0], vec![u, u])?,
+        (None, None) => anyhow::bail!("--surface display needs --voltage U.csv or --constant-voltage V"),
+    };
+    Ok(Some(Display { voltage, extend: Extend::Hold, stack: args.stack.stack() }))
+}
+
 pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     let surface = parse_surface(&args)?;
+    let display = parse_display(&args)?;
     let model = match &args.finger {
         Some(path) => FingerModel::read(path)?,
         None => FingerModel::default_model(),
@@ -164,7 +209,8 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     scenario.slide_mm = args.slide;
     scenario.velocity_mm_s = args.velocity;
     scenario.step_mm = args.step.unwrap_or_else(|| default_step_mm(&surface));
-    scenario.mu_skin = args.mu_skin;
+    scenario.mu_skin = args.mu_skin.or(args.mu_display);
+    scenario.display = display;
     scenario.penalty_mpa_per_mm = args.penalty;
     // Every setting is checked before anything is sized by it.
     let slide_steps = scenario.slide_steps()?;
