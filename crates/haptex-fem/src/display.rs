@@ -50,7 +50,7 @@ impl Display {
         self.stack.validate()?;
         for (&x_mm, &voltage_v) in self.voltage.x_mm().iter().zip(self.voltage.voltage_v()) {
             let pressure_mpa = Electrostatic::new(&self.stack, voltage_v).pressure_mpa;
-            if !(pressure_mpa <= MAX_PRESSURE_MPA) {
+            if pressure_mpa.is_nan() || pressure_mpa > MAX_PRESSURE_MPA {
                 return Err(DisplayError::TooStrong { voltage_v, x_mm, pressure_mpa });
             }
         }
