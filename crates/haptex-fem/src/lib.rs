@@ -25,6 +25,7 @@ pub mod linalg;
 pub mod material;
 pub mod mesh;
 pub mod output;
+pub mod render;
 pub mod ring;
 pub mod scenario;
 pub mod solver;

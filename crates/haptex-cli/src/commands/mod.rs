@@ -1,6 +1,7 @@
 //! One module per `haptex` subcommand.
 
 pub mod cae;
+pub mod check;
 pub mod db;
 pub mod library;
 pub mod play;

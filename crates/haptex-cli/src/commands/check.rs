@@ -1,0 +1,330 @@
+//! `haptex check`: the FE finger on the display under eq. (8)'s voltage,
+//! the friction it feels against the target, and (`--compensate`) the
+//! voltage corrected until it feels the target.
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+use haptex_core::electrovibration::{ContactArea, Device, Method, VoltageProfile, VoltageSummary};
+use haptex_core::num::Num;
+use haptex_core::plot::{Figure, Panel};
+use haptex_core::ranges;
+use haptex_fem::finger::{FingerModel, Resolution};
+use haptex_fem::render::{self, Check, CheckMetrics, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping};
+use haptex_fem::scenario::Loading;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::args::{LayerStackArgs, in_range, non_negative, positive, read_profile};
+
+/// Check a friction profile on the finger model: slide the FE finger on the
+/// display under eq. (8)'s voltage and compare the friction it feels with
+/// the target.
+///
+/// The finger (2D plane strain, per mm of width) is pressed onto the flat
+/// display with a constant normal load and slid over the profile's span
+/// (after a run-up, so that it slides steadily from the first position);
+/// the voltage at each moment is U at the finger's position. The display's
+/// friction mu_HD is the skin's on the FE display too. Reported over the
+/// renderable region (mu_HD <= mu_RS <= mu at U_max): RMS and largest
+/// error, the lag of the felt profile, how much detail finer than the
+/// contact survives, and the contact-area coefficient k as the FE finger
+/// sees it. With --compensate, U(x) is corrected run by run (in U^2, each
+/// trial clipped to [0, U_max]) until the felt friction stops improving.
+#[derive(Debug, Args)]
+#[command(after_help = "Examples:\n  haptex predict --surface bump --x0 5 --width 1.5 --height 0.3 -o bump.csv\n  \
+                  haptex check --profile bump.csv --png check.png\n  \
+                  haptex check --profile bump.csv --compensate --voltage-out u-compensated.csv")]
+pub struct CheckArgs {
+    /// Target friction profile CSV (`x_mm,mu` or `x_mm,ft_n,fn_n`), or `-` for stdin.
+    #[arg(long, value_name = "P.csv")]
+    profile: PathBuf,
+    /// Friction of the finger on the display with no voltage, mu_HD (also
+    /// the FE's skin-display friction; default: the finger model's skin
+    /// friction, 0.5, the flat-surface value of the FE profiles).
+    #[arg(long, value_parser = in_range(ranges::MU_HD))]
+    mu_hd: Option<f64>,
+    /// Highest voltage the display can apply, U_max in V RMS.
+    #[arg(long, default_value_t = Device::PAPER.u_max_v, value_parser = in_range(ranges::U_MAX_V))]
+    u_max: f64,
+    /// Contact-area coefficient k of eq. (8) in mm^2/N (A = k Fn).
+    #[arg(long, default_value_t = ContactArea::PAPER.k_mm2_per_n, value_parser = in_range(ranges::K_MM2_PER_N))]
+    k: f64,
+    /// Use eq. (8) with the FE finger's own k (its contact length per unit
+    /// normal force, measured on a first run) instead of --k.
+    #[arg(long)]
+    fe_k: bool,
+    #[command(flatten)]
+    stack: LayerStackArgs,
+    /// Normal load the finger presses with, N per mm of finger width
+    /// (default 0.0133: what the paper's 0.25 mm press reaches on a flat
+    /// surface).
+    #[arg(long, value_parser = positive, conflicts_with = "indent")]
+    load: Option<f64>,
+    /// Press by a displacement of bone and nail instead (mm), the paper's
+    /// FE loading.
+    #[arg(long, value_parser = positive)]
+    indent: Option<f64>,
+    /// Sliding velocity in mm/s.
+    #[arg(long, default_value_t = 20.0, value_parser = positive)]
+    velocity: f64,
+    /// Slide per FE step in mm (the voltage is sampled at each step: use
+    /// a tenth of the finest detail).
+    #[arg(long, default_value_t = 0.05, value_parser = positive)]
+    step: f64,
+    /// Slide before the profile's first position, mm.
+    #[arg(long, default_value_t = 1.0)]
+    run_up: f64,
+    /// Tissue model.
+    #[arg(long, value_enum, default_value_t = MaterialArg::Viscoelastic)]
+    material: MaterialArg,
+    /// Mesh resolution.
+    #[arg(long, value_enum, default_value_t = MeshArg::Default)]
+    mesh: MeshArg,
+    /// Finger model file (default: the shipped data/finger/finger-2d.toml).
+    #[arg(long, value_name = "FILE")]
+    finger: Option<PathBuf>,
+    /// Correct the voltage with further FE runs until the felt friction
+    /// stops improving.
+    #[arg(long)]
+    compensate: bool,
+    /// With --compensate: most FE runs, eq. (8)'s included.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=100))]
+    max_runs: u32,
+    /// With --compensate: stop once the felt friction's RMS error is below
+    /// this (in units of mu).
+    #[arg(long, default_value_t = 1e-4, value_parser = non_negative)]
+    tolerance: f64,
+    /// CSV of the check: x_mm,target_mu,voltage_v,felt_mu,k_fe_mm2_per_n.
+    #[arg(short, long, value_name = "C.csv")]
+    output: Option<PathBuf>,
+    /// The voltage applied (the compensated one with --compensate) as a
+    /// `haptex voltage` profile (x_mm,mu,voltage_v), for `haptex play`.
+    #[arg(long, value_name = "U.csv")]
+    voltage_out: Option<PathBuf>,
+    /// PNG: target and felt friction, and the voltage.
+    #[arg(long, value_name = "F.png")]
+    png: Option<PathBuf>,
+    /// No progress bar or summary.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum MaterialArg {
+    Elastic,
+    Viscoelastic,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum MeshArg {
+    Coarse,
+    Default,
+    Fine,
+}
+
+pub fn run(args: CheckArgs) -> anyhow::Result<()> {
+    let target = read_profile(&args.profile)?;
+    let model = match &args.finger {
+        Some(path) => FingerModel::read(path)?,
+        None => FingerModel::default_model(),
+    };
+    let mu_hd = args.mu_hd.unwrap_or(model.contact.mu_skin);
+    let mut settings = RenderSettings::new(mu_hd, args.load.unwrap_or(DEFAULT_LOAD_N_PER_MM));
+    settings.device = Device {
+        stack: args.stack.stack(),
+        contact: ContactArea { k_mm2_per_n: args.k, exponent: 1.0 },
+        mu_hd,
+        u_max_v: args.u_max,
+    };
+    settings.device.validate()?;
+    let scenario = &mut settings.scenario;
+    scenario.model = model;
+    scenario.resolution = match args.mesh {
+        MeshArg::Coarse => Resolution::Coarse,
+        MeshArg::Default => Resolution::Default,
+        MeshArg::Fine => Resolution::Fine,
+    };
+    scenario.viscoelastic = matches!(args.material, MaterialArg::Viscoelastic);
+    if let Some(indent) = args.indent {
+        scenario.loading = Loading::Indent(indent);
+    }
+    scenario.velocity_mm_s = args.velocity;
+    scenario.step_mm = args.step;
+    settings.run_up_mm = args.run_up;
+
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        let bar = ProgressBar::new(0);
+        bar.set_style(
+            ProgressStyle::with_template("{spinner} check [{bar:30}] {pos}/{len} steps, {msg} ({elapsed})")
+                .expect("valid template")
+                .progress_chars("=> "),
+        );
+        bar
+    };
+    let mut report = |run: usize, p: haptex_fem::scenario::Progress| {
+        bar.set_length(p.total_steps as u64);
+        bar.set_position(p.step as u64);
+        bar.set_message(format!("FE run {}, x = {:.2} mm", run + 1, p.slide_mm));
+    };
+    let mut lines = Vec::new();
+    if args.fe_k {
+        let first = render::check(&target, &settings, &mut |p| report(0, p))?;
+        let k = first.metrics.k_fe_mm2_per_n;
+        lines.push(format!(
+            "eq. (8) with k = {} mm^2/N: RMS error {:.3e}; the FE finger's k is {k:.1} mm^2/N",
+            Num(args.k),
+            first.metrics.rms_error,
+        ));
+        settings.device.contact.k_mm2_per_n = ranges::K_MM2_PER_N.check(k)?;
+    }
+    let (check, label) = if args.compensate {
+        let stopping = Stopping { max_runs: args.max_runs as usize, tolerance: args.tolerance, ..Stopping::default() };
+        let c = render::compensate(&target, &settings, stopping, &mut report)?;
+        for (i, t) in c.trials.iter().enumerate() {
+            lines.push(format!(
+                "trial {} ({}): RMS error {:.3e}, max {:.3e}",
+                i + 1,
+                if i == 0 { "eq. 8" } else { "compensated" },
+                t.metrics.rms_error,
+                t.metrics.max_error
+            ));
+        }
+        let best = c.best;
+        (c.trials.into_iter().nth(best).expect("best trial exists"), format!("compensated (trial {})", best + 1))
+    } else {
+        (render::check(&target, &settings, &mut |p| report(0, p))?, "eq. (8)".to_string())
+    };
+    bar.finish_and_clear();
+    let m = check.metrics;
+    lines.extend(describe(&m, &settings));
+    let header = format!(
+        "haptex check: {} on the FE finger ({}, load {}), voltage {label}",
+        args.profile.display(),
+        if settings.scenario.viscoelastic { "visco-elastic" } else { "elastic" },
+        match settings.scenario.loading {
+            Loading::Load(f) => format!("{} N/mm", Num(f)),
+            Loading::Indent(d) => format!("indent {} mm", Num(d)),
+        }
+    );
+    if let Some(path) = &args.output {
+        haptex_core::io::write_atomic(path, |w| {
+            writeln!(w, "# {header}")?;
+            for line in &lines {
+                writeln!(w, "# {line}")?;
+            }
+            writeln!(w, "x_mm,target_mu,voltage_v,felt_mu,k_fe_mm2_per_n")?;
+            for i in 0..check.target.len() {
+                haptex_core::io::write_csv_row(
+                    w,
+                    &[
+                        check.target.x_mm()[i],
+                        check.target.mu()[i],
+                        check.voltage_v[i],
+                        check.felt.mu[i],
+                        check.felt.k_mm2_per_n[i],
+                    ],
+                )?;
+            }
+            Ok(())
+        })?;
+    }
+    if let Some(path) = &args.voltage_out {
+        let profile = voltage_profile(&check, &settings.device);
+        haptex_core::io::write_atomic(path, |w| {
+            writeln!(w, "# {header}; felt-friction RMS error {} over the renderable region", Num(m.rms_error))?;
+            profile.write_csv(w)
+        })?;
+    }
+    if let Some(path) = &args.png {
+        figure(&check, &header, &settings).write_png(path)?;
+    }
+    if !args.quiet {
+        eprintln!("{header}");
+        for line in &lines {
+            eprintln!("{line}");
+        }
+        for (label, path) in [("check", &args.output), ("voltage", &args.voltage_out), ("PNG", &args.png)] {
+            if let Some(p) = path {
+                eprintln!("wrote {label}: {}", p.display());
+            }
+        }
+    }
+    Ok(())
+}
+
+fn describe(m: &CheckMetrics, settings: &RenderSettings) -> Vec<String> {
+    let d = &settings.device;
+    let k_paper = d.contact.k_mm2_per_n;
+    vec![
+        format!(
+            "felt friction against the target over the renderable region: RMS error {:.3e}, max {:.3e}, lag {:.3} mm",
+            m.rms_error, m.max_error, m.lag_mm
+        ),
+        format!(
+            "not renderable (mu_RS < mu_HD = {}): {:.1}% of the length; above mu at U_max: {:.1}%",
+            Num(d.mu_hd),
+            100.0 * m.not_renderable_fraction,
+            100.0 * m.clipped_fraction
+        ),
+        match m.detail_retained {
+            Some(r) => format!(
+                "detail finer than the contact ({:.2} mm): target RMS {:.4}, {:.0}% of it felt",
+                m.contact_mm,
+                m.target_detail_rms,
+                100.0 * r
+            ),
+            None => format!("the target has no detail finer than the contact ({:.2} mm)", m.contact_mm),
+        },
+        format!(
+            "contact-area coefficient: eq. (8) used k = {k_paper:.1} mm^2/N; the FE finger's contact length per \
+             normal force is {:.1} mm^2/N (per mm of width; --fe-k uses it)",
+            m.k_fe_mm2_per_n
+        ),
+    ]
+}
+
+/// The applied voltage as a voltage profile (`haptex voltage`'s format).
+fn voltage_profile(check: &Check, device: &Device) -> VoltageProfile {
+    let (lo, hi) = check.voltage_v.iter().fold((f64::INFINITY, 0.0f64), |(a, b), &u| (a.min(u), b.max(u)));
+    let mu = check.target.mu();
+    let (mu_min, mu_max) = mu.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &m| (a.min(m), b.max(m)));
+    let x = check.target.x_mm();
+    VoltageProfile {
+        summary: VoltageSummary {
+            method: Method::Physical,
+            n_points: x.len(),
+            x_min_mm: x[0],
+            x_max_mm: x[x.len() - 1],
+            mu_min,
+            mu_max,
+            u_max_v: device.u_max_v,
+            voltage_min_v: lo,
+            voltage_max_v: hi,
+            mu_hd: Some(device.mu_hd),
+            fn_n: None,
+            fe_over_fn_per_v2: Some(device.force_ratio_per_v2(1.0)),
+            mu_at_u_max: None,
+            clipped: Default::default(),
+            not_renderable: Default::default(),
+            warnings: Vec::new(),
+        },
+        x_mm: x.to_vec(),
+        mu: mu.to_vec(),
+        voltage_v: check.voltage_v.clone(),
+    }
+}
+
+fn figure(check: &Check, title: &str, settings: &RenderSettings) -> Figure {
+    let x = check.target.x_mm();
+    let hd = vec![settings.device.mu_hd; x.len()];
+    Figure::new(title)
+        .panel(
+            Panel::new("x (mm)", "Ft/Fn")
+                .line("target mu_RS", x, check.target.mu())
+                .line("felt on the FE finger", x, &check.felt.mu)
+                .line("mu_HD", x, &hd),
+        )
+        .panel(Panel::new("x (mm)", "U (V RMS)").line("applied voltage", x, &check.voltage_v))
+}

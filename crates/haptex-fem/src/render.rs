@@ -1,0 +1,431 @@
+//! Closing the loop (the paper's validation, section 2.4, and beyond it):
+//! the FE finger slides on the display under a voltage U(x), and the
+//! friction it feels is compared with the reference profile U(x) was
+//! designed for; then U(x) is corrected until the finger feels the target.
+//!
+//! # The check
+//!
+//! The target mu_RS(x) on [a, b] is mapped to U(x) by eq. (8) with the
+//! device's constants (or any other U(x) is given); the finger is pressed
+//! onto the display and slid over [a - run_up, b] with the voltage at its
+//! position, so that the pre-sliding at the start of the slide (the
+//! friction rising from 0 while the pad shears) is over before x = a. The
+//! felt profile Ft/Fn (Fn the net normal force the finger applies) is then
+//! compared with the target over the *renderable region*, where mu_HD <=
+//! mu_RS <= mu at U_max: RMS and largest error, the spatial lag (the shift
+//! of the felt profile that best matches the target), and how much of the
+//! target's detail finer than the contact survives ([`CheckMetrics`]).
+//!
+//! # The compensated voltage
+//!
+//! The force is linear in U^2, so the correction works on w(x) = U(x)^2.
+//! Each FE run is one trial of an iterative learning control (Bristow,
+//! Tharayil and Alleyne, "A survey of iterative learning control", IEEE
+//! Control Systems Magazine 26(3), 2006): with e_n(x) = felt_n(x) -
+//! target(x),
+//!
+//! ```text
+//!   w_{n+1}(x) = clip( w_n(x) - e_n(x + lag_n) / (mu_HD beta_n),  0, U_max^2 )
+//! ```
+//!
+//! where beta_n is the gain d(mu_felt/mu_HD)/dw the run itself shows (the
+//! least-squares slope of felt/mu_HD - 1 against w over the renderable
+//! region: eq. (8)'s Fe/Fn per V^2 as the finger model sees it) and lag_n
+//! the run's measured lag (the finger feels U(x) a little after x, while
+//! the pad shears; correcting at x + lag puts the correction where it acts).
+//! Eq. (8)'s voltage is the first trial; every trial is clipped to [0,
+//! U_max]; the iteration stops when the RMS error is below a tolerance,
+//! stops falling, or after a number of FE runs ([`Stopping`]), and keeps
+//! the best trial. It cannot help where
+//! the target is below mu_HD (the display cannot lower friction) or above
+//! mu at U_max, nor with detail finer than the pad's pre-sliding length
+//! (about 0.03 mm on the shipped finger).
+
+use haptex_core::electrovibration::{Device, ElectroError, Method, map_profile};
+use haptex_core::num::Num;
+use haptex_core::profile::{FrictionProfile, ProfileError};
+use haptex_core::signal::{Extend, VoltageCurve};
+use serde::Serialize;
+
+use crate::display::Display;
+use crate::scenario::{self, Progress, Scenario, SimulationError, SimulationResult};
+use crate::surface::SurfaceShape;
+
+/// The check could not be done.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error(transparent)]
+    Electro(#[from] ElectroError),
+    #[error(transparent)]
+    Profile(#[from] ProfileError),
+    #[error("the finger model on the display: {0}")]
+    Simulation(#[from] SimulationError),
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// Limits of a check: a slide of at most this many FE steps (at the
+/// default 0.1 mm step, 10 m of profile; each step costs about 3 ms).
+pub const MAX_CHECK_STEPS: usize = 100_000;
+
+/// How a check is run.
+#[derive(Debug, Clone)]
+pub struct RenderSettings {
+    /// The display and the finger's contact-area law of eq. (8). Its mu_HD
+    /// is the skin-display friction of the FE model too.
+    pub device: Device,
+    /// The finger, mesh, tissue model, loading, velocity and slide step;
+    /// its surface, display, slide and skin friction are set by the check.
+    pub scenario: Scenario,
+    /// Slide before the target's first position (mm), so that the finger
+    /// is in steady sliding when it reaches it.
+    pub run_up_mm: f64,
+}
+
+impl RenderSettings {
+    /// The paper's device (with mu_HD = `mu_hd`) and finger, pressed with a
+    /// constant normal load of `load_n_per_mm` (a user presses with a
+    /// force, not a displacement), 20 mm/s, 1 mm run-up.
+    pub fn new(mu_hd: f64, load_n_per_mm: f64) -> Self {
+        let mut scenario = Scenario::paper(SurfaceShape::Flat);
+        scenario.loading = crate::scenario::Loading::Load(load_n_per_mm);
+        Self { device: Device { mu_hd, ..Device::PAPER }, scenario, run_up_mm: 1.0 }
+    }
+}
+
+/// The default normal load of a check, N per mm of finger width: about
+/// what the paper's 0.25 mm indentation reaches on the shipped finger on a
+/// flat surface (0.0133 N/mm after the slide's 0.6 s of relaxation).
+pub const DEFAULT_LOAD_N_PER_MM: f64 = 0.0133;
+
+/// What the finger felt on the display.
+#[derive(Debug, Clone)]
+pub struct Felt {
+    /// The FE run (its positions are the slide, from 0 at x = a - run_up).
+    pub result: SimulationResult,
+    /// Felt Ft/Fn at the target's positions.
+    pub mu: Vec<f64>,
+    /// Contact length over net normal force at the target's positions, mm^2/N.
+    pub k_mm2_per_n: Vec<f64>,
+}
+
+/// How well the felt friction follows the target.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CheckMetrics {
+    /// RMS and largest |felt - target| over the renderable region.
+    pub rms_error: f64,
+    pub max_error: f64,
+    /// Fraction of the target's length where mu_RS < mu_HD (the display
+    /// cannot lower friction) and where mu_RS is above mu at U_max.
+    pub not_renderable_fraction: f64,
+    pub clipped_fraction: f64,
+    /// The shift (mm, > 0: the felt profile comes later) within +-0.1 mm
+    /// that best aligns felt and target over the renderable region.
+    pub lag_mm: f64,
+    /// RMS of the target's detail finer than the contact (the target less
+    /// its Gaussian average over the contact length), and the fraction of
+    /// it the felt profile keeps (RMS of the felt detail over the target's;
+    /// `None` when the target has no such detail).
+    pub target_detail_rms: f64,
+    pub detail_retained: Option<f64>,
+    /// The contact-area coefficient as the FE finger sees it: its contact
+    /// length per unit net normal force (mm per N/mm = mm^2/N), averaged
+    /// over the target; eq. (8)'s k per mm of finger width.
+    pub k_fe_mm2_per_n: f64,
+    /// Mean contact length over the target, mm.
+    pub contact_mm: f64,
+}
+
+/// One check: the target, the voltage, what was felt and how well.
+#[derive(Debug, Clone)]
+pub struct Check {
+    pub target: FrictionProfile,
+    /// U(x) in V RMS at the target's positions.
+    pub voltage_v: Vec<f64>,
+    pub felt: Felt,
+    pub metrics: CheckMetrics,
+}
+
+/// Where the target is renderable: mu_HD <= mu <= mu at U_max.
+fn renderable(device: &Device, mu: f64) -> bool {
+    let mu_clip = device.mu_hd * (1.0 + device.u_max_v * device.u_max_v * device.force_ratio_per_v2(1.0));
+    mu >= device.mu_hd && mu <= mu_clip
+}
+
+/// Eq. (8)'s voltage for `target` (clipped at U_max).
+pub fn eq8_voltage(target: &FrictionProfile, device: &Device) -> Result<Vec<f64>, RenderError> {
+    Ok(map_profile(target, device, Method::Physical, None)?.voltage_v)
+}
+
+/// Checks the settings against the target before any FE run.
+fn validate(target: &FrictionProfile, settings: &RenderSettings) -> Result<(), RenderError> {
+    settings.device.validate()?;
+    if !(settings.run_up_mm.is_finite() && (0.0..=100.0).contains(&settings.run_up_mm)) {
+        return Err(RenderError::Invalid(format!("run-up = {} mm must be from 0 to 100 mm", Num(settings.run_up_mm))));
+    }
+    let slide = target.span_mm() + settings.run_up_mm;
+    let steps = (slide / settings.scenario.step_mm).ceil();
+    if steps.is_nan() || steps > MAX_CHECK_STEPS as f64 {
+        return Err(RenderError::Invalid(format!(
+            "the check slides {} mm in steps of {} mm: {} steps, at most {MAX_CHECK_STEPS}; check a shorter \
+             profile or use a larger step",
+            Num(slide),
+            Num(settings.scenario.step_mm),
+            Num(steps)
+        )));
+    }
+    Ok(())
+}
+
+/// Slides the FE finger over the display under `voltage_v` (V RMS at the
+/// target's positions) and returns what it felt there.
+pub fn feel(
+    target: &FrictionProfile,
+    voltage_v: &[f64],
+    settings: &RenderSettings,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Felt, RenderError> {
+    validate(target, settings)?;
+    let x = target.x_mm();
+    let start = x[0] - settings.run_up_mm;
+    // The FE's position is the slide s from 0; the target's x = start + s.
+    let shifted: Vec<f64> = x.iter().map(|&x| x - start).collect();
+    let voltage = VoltageCurve::new(shifted, voltage_v.to_vec())?;
+    let mut scenario = settings.scenario.clone();
+    scenario.surface = SurfaceShape::Flat;
+    scenario.mu_skin = Some(settings.device.mu_hd);
+    scenario.slide_mm = x[x.len() - 1] - start;
+    scenario.display = Some(Display { voltage, extend: Extend::Hold, stack: settings.device.stack });
+    let result = scenario::run(&scenario, progress)?;
+    let slide: Vec<f64> = result.history.iter().filter(|r| r.slide_mm > 0.0).map(|r| r.slide_mm).collect();
+    let rows: Vec<_> = result.history.iter().filter(|r| r.slide_mm > 0.0).collect();
+    let mu_run: Vec<f64> = rows.iter().map(|r| r.ft_n / r.fn_n).collect();
+    let k_run: Vec<f64> = rows.iter().map(|r| r.contact_mm / r.fn_n).collect();
+    let at = |values: &[f64], x: f64| haptex_core::profile::interpolate(&slide, values, x - start);
+    let mu = x.iter().map(|&x| at(&mu_run, x)).collect();
+    let k_mm2_per_n = x.iter().map(|&x| at(&k_run, x)).collect();
+    Ok(Felt { result, mu, k_mm2_per_n })
+}
+
+/// The metrics of a felt profile against its target.
+pub fn metrics(target: &FrictionProfile, felt: &Felt, device: &Device) -> CheckMetrics {
+    let (x, mu) = (target.x_mm(), target.mu());
+    let n = x.len();
+    // Trapezoid weights: the length each sample stands for.
+    let weight: Vec<f64> = (0..n).map(|i| 0.5 * (x[(i + 1).min(n - 1)] - x[i.saturating_sub(1)])).collect();
+    let inside: Vec<bool> = mu.iter().map(|&m| renderable(device, m)).collect();
+    let span = target.span_mm().max(f64::MIN_POSITIVE);
+    let fraction = |f: &dyn Fn(usize) -> bool| (0..n).filter(|&i| f(i)).map(|i| weight[i]).sum::<f64>() / span;
+    let not_renderable_fraction = fraction(&|i| mu[i] < device.mu_hd).max(0.0);
+    let clipped_fraction = fraction(&|i| mu[i] >= device.mu_hd && !inside[i]).max(0.0);
+    let rms_of = |shift: f64| {
+        let (mut sum, mut length) = (0.0, 0.0);
+        for i in (0..n).filter(|&i| inside[i]) {
+            let felt = haptex_core::profile::interpolate(x, &felt.mu, x[i] + shift);
+            sum += weight[i] * (felt - mu[i]).powi(2);
+            length += weight[i];
+        }
+        if length > 0.0 { (sum / length).sqrt() } else { 0.0 }
+    };
+    let rms_error = rms_of(0.0);
+    let max_error = (0..n).filter(|&i| inside[i]).map(|i| (felt.mu[i] - mu[i]).abs()).fold(0.0, f64::max);
+    // Lag: the best shift on a 0.005 mm grid within +-0.1 mm (three
+    // times the pad's pre-sliding length: a larger shift would only align
+    // unrelated detail).
+    let mut lag_mm = 0.0;
+    let mut best = rms_error;
+    for k in -20..=20 {
+        let shift = 0.005 * k as f64;
+        let e = rms_of(shift);
+        if e < best - 1e-15 {
+            (best, lag_mm) = (e, shift);
+        }
+    }
+    let k_fe_mm2_per_n = mean(&felt.k_mm2_per_n);
+    let contact_mm =
+        mean(&felt.result.history.iter().filter(|r| r.slide_mm > 0.0).map(|r| r.contact_mm).collect::<Vec<_>>());
+    // Detail finer than the contact: the profile less its Gaussian average
+    // with a standard deviation of half the contact length.
+    let sigma = 0.5 * contact_mm;
+    let detail = |values: &[f64]| -> Vec<f64> {
+        let smooth = gaussian_smooth(x, values, sigma);
+        values.iter().zip(&smooth).map(|(v, s)| v - s).collect()
+    };
+    let (dt, df) = (detail(mu), detail(&felt.mu));
+    let rms = |d: &[f64]| ((0..n).map(|i| weight[i] * d[i] * d[i]).sum::<f64>() / span).sqrt();
+    let target_detail_rms = rms(&dt);
+    let detail_retained = (target_detail_rms > 1e-4).then(|| rms(&df) / target_detail_rms);
+    CheckMetrics {
+        rms_error,
+        max_error,
+        not_renderable_fraction,
+        clipped_fraction,
+        lag_mm,
+        target_detail_rms,
+        detail_retained,
+        k_fe_mm2_per_n,
+        contact_mm,
+    }
+}
+
+fn mean(v: &[f64]) -> f64 {
+    if v.is_empty() { 0.0 } else { v.iter().sum::<f64>() / v.len() as f64 }
+}
+
+/// Gaussian average of `values` at each of `x` (sorted) over +-3 sigma,
+/// O(n * window).
+fn gaussian_smooth(x: &[f64], values: &[f64], sigma: f64) -> Vec<f64> {
+    if sigma.is_nan() || sigma <= 0.0 {
+        return values.to_vec();
+    }
+    let (mut lo, mut hi) = (0, 0);
+    x.iter()
+        .map(|&xi| {
+            while x[lo] < xi - 3.0 * sigma {
+                lo += 1;
+            }
+            while hi < x.len() && x[hi] <= xi + 3.0 * sigma {
+                hi += 1;
+            }
+            let (mut sum, mut total) = (0.0, 0.0);
+            for j in lo..hi {
+                let w = (-0.5 * ((x[j] - xi) / sigma).powi(2)).exp();
+                sum += w * values[j];
+                total += w;
+            }
+            sum / total
+        })
+        .collect()
+}
+
+/// Maps `target` by eq. (8), runs the finger on the display and measures.
+pub fn check(
+    target: &FrictionProfile,
+    settings: &RenderSettings,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Check, RenderError> {
+    let voltage_v = eq8_voltage(target, &settings.device)?;
+    check_voltage(target, voltage_v, settings, progress)
+}
+
+/// Runs the finger on the display under `voltage_v` and measures.
+pub fn check_voltage(
+    target: &FrictionProfile,
+    voltage_v: Vec<f64>,
+    settings: &RenderSettings,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Check, RenderError> {
+    if voltage_v.len() != target.len() {
+        return Err(RenderError::Invalid(format!(
+            "{} voltages for {} profile positions",
+            voltage_v.len(),
+            target.len()
+        )));
+    }
+    if let Some(i) = voltage_v.iter().position(|&u| !(u >= 0.0 && u <= settings.device.u_max_v)) {
+        return Err(RenderError::Invalid(format!(
+            "voltage {} V at x = {} mm is outside 0 .. U_max = {} V",
+            Num(voltage_v[i]),
+            Num(target.x_mm()[i]),
+            Num(settings.device.u_max_v)
+        )));
+    }
+    let felt = feel(target, &voltage_v, settings, progress)?;
+    let metrics = metrics(target, &felt, &settings.device);
+    Ok(Check { target: target.clone(), voltage_v, felt, metrics })
+}
+
+/// The trials of a compensation.
+#[derive(Debug, Clone)]
+pub struct Compensation {
+    /// Every trial's check, eq. (8) first.
+    pub trials: Vec<Check>,
+    /// Index of the best trial (smallest RMS error).
+    pub best: usize,
+}
+
+impl Compensation {
+    pub fn best(&self) -> &Check {
+        &self.trials[self.best]
+    }
+}
+
+/// When a compensation stops.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stopping {
+    /// Most FE runs, eq. (8)'s included (1 ..= 100).
+    pub max_runs: usize,
+    /// Stop once the RMS error over the renderable region is below this
+    /// (in units of mu).
+    pub tolerance: f64,
+    /// Stop when a trial's RMS error is above this fraction of the best so
+    /// far (the error has stopped falling).
+    pub min_reduction: f64,
+}
+
+impl Default for Stopping {
+    /// 8 runs; a tolerance of 1e-4 in mu, ten times below the FE profiles'
+    /// own discretization error (docs/fem.md, "Convergence"); stop when a
+    /// run takes off less than 10% of the error.
+    fn default() -> Self {
+        Self { max_runs: 8, tolerance: 1e-4, min_reduction: 0.9 }
+    }
+}
+
+/// Iterates U(x) from eq. (8)'s until the finger feels the target (module
+/// docs), as `stopping` says. `progress` is told the trial number (from 0)
+/// and the FE's progress.
+pub fn compensate(
+    target: &FrictionProfile,
+    settings: &RenderSettings,
+    stopping: Stopping,
+    progress: &mut dyn FnMut(usize, Progress),
+) -> Result<Compensation, RenderError> {
+    let Stopping { max_runs, tolerance, min_reduction } = stopping;
+    if !(1..=100).contains(&max_runs) {
+        return Err(RenderError::Invalid(format!("the compensation needs 1 to 100 FE runs, got {max_runs}")));
+    }
+    if !(tolerance.is_finite() && tolerance >= 0.0 && (0.0..=1.0).contains(&min_reduction)) {
+        return Err(RenderError::Invalid(format!(
+            "the compensation's tolerance ({}) must be >= 0 and its reduction ({}) from 0 to 1",
+            Num(tolerance),
+            Num(min_reduction)
+        )));
+    }
+    let device = settings.device;
+    let u_max2 = device.u_max_v * device.u_max_v;
+    let (x, mu) = (target.x_mm(), target.mu());
+    let mut trials: Vec<Check> = Vec::new();
+    let mut w: Vec<f64> = eq8_voltage(target, &device)?.iter().map(|u| u * u).collect();
+    let mut best = 0;
+    for run in 0..max_runs {
+        let voltage: Vec<f64> = w.iter().map(|&w| w.clamp(0.0, u_max2).sqrt().min(device.u_max_v)).collect();
+        let trial = check_voltage(target, voltage, settings, &mut |p| progress(run, p))?;
+        let best_error = trials.get(best).map_or(f64::INFINITY, |b| b.metrics.rms_error);
+        let error = trial.metrics.rms_error;
+        trials.push(trial);
+        if error < best_error {
+            best = trials.len() - 1;
+        }
+        if error <= tolerance || (run > 0 && error > min_reduction * best_error) {
+            break;
+        }
+        // The gain as this trial shows it: felt/mu_HD - 1 against w.
+        let last = &trials[trials.len() - 1];
+        let (mut num, mut den) = (0.0, 0.0);
+        for i in 0..x.len() {
+            if renderable(&device, mu[i]) && w[i] > 0.0 {
+                num += (last.felt.mu[i] / device.mu_hd - 1.0) * w[i];
+                den += w[i] * w[i];
+            }
+        }
+        let beta = if den > 0.0 && num > 0.0 { num / den } else { device.force_ratio_per_v2(1.0) };
+        let lag = last.metrics.lag_mm;
+        for i in 0..x.len() {
+            // w(x) acts on the friction felt at x + lag.
+            let error = haptex_core::profile::interpolate(x, &last.felt.mu, x[i] + lag) - target.mu_at(x[i] + lag);
+            w[i] = (w[i] - error / (device.mu_hd * beta)).clamp(0.0, u_max2);
+        }
+    }
+    Ok(Compensation { trials, best })
+}

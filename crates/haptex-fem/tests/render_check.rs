@@ -1,0 +1,95 @@
+//! Closing the loop (issue 15, parts 3-4): the FE finger on the display
+//! under eq. (8)'s voltage, and the compensated voltage.
+
+use haptex_core::profile::FrictionProfile;
+use haptex_fem::render::{self, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping};
+use haptex_fem::scenario::{self, Scenario};
+use haptex_fem::surface::SurfaceShape;
+
+/// The FE finger's profile on a template (the database's runs: paper
+/// scenario, default mesh, visco-elastic, 20 mm/s).
+fn fe_profile(surface: SurfaceShape) -> FrictionProfile {
+    scenario::run(&Scenario::paper(surface), &mut |_| {}).unwrap().profile.unwrap()
+}
+
+fn settings() -> RenderSettings {
+    let mut s = RenderSettings::new(0.5, DEFAULT_LOAD_N_PER_MM);
+    s.scenario.step_mm = 0.05;
+    s
+}
+
+#[test]
+fn compensation_cuts_the_eq8_error_by_three_within_eight_runs() {
+    // Issue 15's acceptance: on the bump, edge and sine at the database's
+    // central case (r_w 1.5, r_h 0.3 mm) and two more (a bump narrower
+    // than the contact, a long high sine period), the compensated
+    // voltage's felt-friction RMS error over the renderable region is at
+    // most a third of eq. (8)'s, within 8 FE runs. Measured (docs/fem.md,
+    // "Closing the loop"): the factor is 20-200 in 3-4 runs.
+    let cases = [
+        SurfaceShape::Bump { x0: 5.0, width: 1.5, height: 0.3 },
+        SurfaceShape::Edge { x0: 5.0, width: 1.5, height: 0.3 },
+        SurfaceShape::Sine { x0: 5.0, width: 1.5, height: 0.3 },
+        SurfaceShape::Bump { x0: 5.0, width: 0.5, height: 0.2 },
+        SurfaceShape::Sine { x0: 5.0, width: 2.5, height: 0.5 },
+    ];
+    let settings = settings();
+    for surface in cases {
+        let target = fe_profile(surface.clone());
+        let c = render::compensate(&target, &settings, Stopping::default(), &mut |_, _| {}).unwrap();
+        assert!(c.trials.len() <= 8);
+        for t in &c.trials {
+            assert!(t.voltage_v.iter().all(|&u| (0.0..=settings.device.u_max_v).contains(&u)));
+        }
+        let eq8 = c.trials[0].metrics.rms_error;
+        let best = c.best().metrics.rms_error;
+        assert!(best <= eq8 / 3.0, "{surface:?}: eq. (8) {eq8:.3e}, compensated {best:.3e}");
+    }
+}
+
+#[test]
+fn a_target_the_display_cannot_render_is_reported_not_an_error() {
+    // A target below mu_HD everywhere: U = 0, the finger feels mu_HD, the
+    // whole length is reported not renderable and the renderable error is
+    // 0 (nothing to compare).
+    let x: Vec<f64> = (0..=50).map(|i| 0.1 * i as f64).collect();
+    let target = FrictionProfile::new(x.clone(), vec![0.3; x.len()]).unwrap();
+    let check = render::check(&target, &settings(), &mut |_| {}).unwrap();
+    assert!(check.voltage_v.iter().all(|&u| u == 0.0));
+    assert!((check.metrics.not_renderable_fraction - 1.0).abs() < 1e-12);
+    assert_eq!(check.metrics.rms_error, 0.0);
+    assert!(check.felt.mu.iter().all(|&m| (m - 0.5).abs() < 1e-8));
+}
+
+#[test]
+fn a_constant_target_is_felt_with_the_fe_finger_own_k() {
+    // mu_RS = 0.55 everywhere: eq. (8) with the FE finger's own k (its
+    // contact length per normal force) renders it within the attraction
+    // of the skin near the contact's edges through the air gap, which
+    // eq. (8) leaves out (6% of Fe: 0.003 in mu at Fe/Fn = 0.1); the
+    // compensated voltage within the 1e-4 tolerance.
+    let x: Vec<f64> = (0..=40).map(|i| 0.1 * i as f64).collect();
+    let target = FrictionProfile::new(x.clone(), vec![0.55; x.len()]).unwrap();
+    let mut s = settings();
+    let first = render::check(&target, &s, &mut |_| {}).unwrap();
+    s.device.contact.k_mm2_per_n = first.metrics.k_fe_mm2_per_n;
+    let with_fe_k = render::check(&target, &s, &mut |_| {}).unwrap();
+    assert!(with_fe_k.metrics.rms_error < 0.004, "{:?}", with_fe_k.metrics);
+    assert!(with_fe_k.metrics.rms_error < first.metrics.rms_error);
+    let c = render::compensate(&target, &s, Stopping::default(), &mut |_, _| {}).unwrap();
+    assert!(c.best().metrics.rms_error <= 1e-4, "{:?}", c.best().metrics);
+}
+
+#[test]
+fn bad_settings_are_refused_before_any_run() {
+    let x: Vec<f64> = (0..=10).map(|i| i as f64).collect();
+    let target = FrictionProfile::new(x.clone(), vec![0.6; x.len()]).unwrap();
+    let mut s = settings();
+    s.run_up_mm = -1.0;
+    assert!(render::check(&target, &s, &mut |_| {}).unwrap_err().to_string().contains("run-up"));
+    let s = settings();
+    let stopping = Stopping { max_runs: 0, ..Stopping::default() };
+    assert!(render::compensate(&target, &s, stopping, &mut |_, _| {}).is_err());
+    let e = render::check_voltage(&target, vec![150.0; x.len()], &s, &mut |_| {}).unwrap_err();
+    assert!(e.to_string().contains("U_max"), "{e}");
+}
