@@ -93,9 +93,10 @@ impl RenderSettings {
     }
 }
 
-/// The default normal load of a check, N per mm of finger width: about
-/// what the paper's 0.25 mm indentation reaches on the shipped finger on a
-/// flat surface (0.0133 N/mm after the slide's 0.6 s of relaxation).
+/// The default normal load of a check, N per mm of finger width: the
+/// force of the paper's 0.25 mm press on a flat surface with the shipped
+/// finger's elastic tissue (the visco-elastic finger's press reaches
+/// 0.0098 N/mm and relaxes to 0.0075 N/mm over the slide).
 pub const DEFAULT_LOAD_N_PER_MM: f64 = 0.0133;
 
 /// What the finger felt on the display.

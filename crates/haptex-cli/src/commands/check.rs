@@ -56,8 +56,8 @@ pub struct CheckArgs {
     #[command(flatten)]
     stack: LayerStackArgs,
     /// Normal load the finger presses with, N per mm of finger width
-    /// (default 0.0133: what the paper's 0.25 mm press reaches on a flat
-    /// surface).
+    /// (default 0.0133: the force of the paper's 0.25 mm press on a flat
+    /// surface with the elastic tissue).
     #[arg(long, value_parser = positive, conflicts_with = "indent")]
     load: Option<f64>,
     /// Press by a displacement of bone and nail instead (mm), the paper's
