@@ -290,6 +290,39 @@ pub struct Frame {
     pub displacement: Vec<f64>,
     /// Element stress (xx, yy, zz, xy), MPa, averaged over Gauss points.
     pub stress: Vec<[f64; 4]>,
+    /// The contact points of the skin (every Gauss point of the candidate
+    /// region, in contact or not).
+    pub contact: Vec<ContactPoint>,
+}
+
+/// A contact point of a [`Frame`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ContactPoint {
+    /// Current position (lab frame), mm.
+    pub position_mm: [f64; 2],
+    /// Integration weight (reference length), mm.
+    pub weight_mm: f64,
+    /// Normal pressure and tangential traction, MPa (0 out of contact).
+    pub pressure_mpa: f64,
+    pub traction_mpa: f64,
+}
+
+impl Frame {
+    /// The contact half-width (mm) as the CalculiX reference measures it
+    /// (validation/calculix/extract.py): twice the square root of the
+    /// pressure-weighted second moment of x about the pressure centroid,
+    /// which is the half-width a for Hertz's elliptical pressure (whose
+    /// second moment is a^2/4). `None` without contact.
+    pub fn contact_half_width_mm(&self) -> Option<f64> {
+        let forces: Vec<(f64, f64)> =
+            self.contact.iter().map(|c| (c.position_mm[0], c.pressure_mpa * c.weight_mm)).collect();
+        let total: f64 = forces.iter().map(|(_, f)| f).sum();
+        if total <= 0.0 {
+            return None;
+        }
+        let centre = forces.iter().map(|(x, f)| x * f).sum::<f64>() / total;
+        Some(2.0 * (forces.iter().map(|(x, f)| (x - centre).powi(2) * f).sum::<f64>() / total).sqrt())
+    }
 }
 
 /// Size and effort of a run.
@@ -513,7 +546,20 @@ fn frame(solver: &AnySolver) -> Frame {
             }
         })
         .collect();
-    Frame { t_s: state.t_s, slide_mm: state.slide_mm, displacement: state.u.clone(), stress }
+    let contact_set = &state.problem.contact;
+    let u_s: Vec<f64> = contact_set.nodes.iter().flat_map(|&n| [state.u[2 * n], state.u[2 * n + 1]]).collect();
+    let contact = contact_set
+        .pressure_profile(&u_s)
+        .into_iter()
+        .zip(contact_set.point_weights())
+        .map(|((position_mm, pressure_mpa, traction_mpa), weight_mm)| ContactPoint {
+            position_mm,
+            weight_mm,
+            pressure_mpa,
+            traction_mpa,
+        })
+        .collect();
+    Frame { t_s: state.t_s, slide_mm: state.slide_mm, displacement: state.u.clone(), stress, contact }
 }
 
 /// The solver of the scenario's kinematics (one per run: the size of the
