@@ -309,6 +309,34 @@ pub fn pchip_slopes(x: &[f64], h: &[f64]) -> Vec<f64> {
 /// Sampling step of the search polyline: at most 5 um.
 const MAX_SEGMENT_MM: f64 = 0.005;
 
+/// The vertices of a sampled profile's interval [a, b] inside the search
+/// polyline over [x_min, x_max]: the interval is cut into `pieces` equal
+/// parts of at most 5 um, and of their inner points k = 1 .. pieces - 1
+/// (at a + (b - a) k / pieces) only k = first ..= last, those over the
+/// range with one beyond each end of it, are kept. So the polyline has 5 um
+/// segments wherever the range reaches, and a wide interval (x = 0 and
+/// 1e6 mm in a file) adds the range's vertices, not (b - a) / 5 um of them.
+/// In f64 (pieces, first, last), so that an unvalidated shape gives a
+/// count that [`RigidSurface::template_segments`] refuses, not a wrap.
+fn subdivision(a: f64, b: f64, x_min: f64, x_max: f64) -> (f64, f64, f64) {
+    if !(b > x_min && a < x_max) {
+        return (1.0, 1.0, 0.0);
+    }
+    let pieces = ((b - a) / MAX_SEGMENT_MM).ceil();
+    let step = (b - a) / pieces;
+    let first = (((x_min - a) / step).floor() - 1.0).max(1.0);
+    let last = (((x_max - a) / step).ceil() + 1.0).min(pieces - 1.0);
+    (pieces, first, last)
+}
+
+/// The number of inner vertices [`subdivision`] keeps (NaN or infinite for
+/// a non-finite interval).
+fn inner_vertices(a: f64, b: f64, x_min: f64, x_max: f64) -> f64 {
+    let (_, first, last) = subdivision(a, b, x_min, x_max);
+    let n = last - first + 1.0;
+    if n.is_nan() || n > 0.0 { n } else { 0.0 }
+}
+
 /// A surface over a range of x, in its own frame: the exact curve, and a
 /// polyline through it (vertices at most 5 um apart) that locates the
 /// closest point before it is refined on the curve.
@@ -352,9 +380,11 @@ impl RigidSurface {
                 let mut x = Vec::with_capacity(segments + 3);
                 for w in x_mm.windows(2) {
                     x.push(w[0]);
-                    let overlaps = w[1] > x_min && w[0] < x_max;
-                    let pieces = if overlaps { ((w[1] - w[0]) / MAX_SEGMENT_MM).ceil() as usize } else { 1 };
-                    x.extend((1..pieces).map(|k| w[0] + (w[1] - w[0]) * k as f64 / pieces as f64));
+                    // Validated, finite, and counted by `template_segments`.
+                    let (pieces, first, last) = subdivision(w[0], w[1], x_min, x_max);
+                    if first <= last {
+                        x.extend((first as usize..=last as usize).map(|k| w[0] + (w[1] - w[0]) * k as f64 / pieces));
+                    }
                 }
                 x.push(x_mm[x_mm.len() - 1]);
                 x
@@ -397,15 +427,13 @@ impl RigidSurface {
 
     /// The number of segments of the search polyline over [x_min, x_max]:
     /// a template's at r_w/200 (at most 5 um), a sampled profile's points
-    /// with every interval over the range cut to at most 5 um; an error
+    /// with the part of every interval over the range cut to at most 5 um
+    /// (O(points + range / 5 um), whatever the intervals' widths); an error
     /// beyond [`limits::MAX_VERTICES`].
     pub fn template_segments(shape: &SurfaceShape, x_min: f64, x_max: f64) -> Result<usize, SurfaceError> {
         let (count, dx) = match shape {
             SurfaceShape::Sampled { x_mm, .. } => {
-                let count: f64 = x_mm
-                    .windows(2)
-                    .map(|w| if w[1] > x_min && w[0] < x_max { ((w[1] - w[0]) / MAX_SEGMENT_MM).ceil() } else { 1.0 })
-                    .sum();
+                let count: f64 = x_mm.windows(2).map(|w| 1.0 + inner_vertices(w[0], w[1], x_min, x_max)).sum();
                 (count, MAX_SEGMENT_MM)
             }
             _ => {
@@ -634,6 +662,41 @@ mod tests {
         let p = ramp.project([5.0, 4.0]).unwrap();
         assert!((p.depth - 0.5f64.sqrt()).abs() < 1e-12);
         assert!((p.normal[0] + 0.5f64.sqrt()).abs() < 1e-12 && (p.normal[1] - 0.5f64.sqrt()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn wide_sampled_interval_is_subdivided_over_the_range_only() {
+        // Two points 1e6 mm apart (both within limits::X_MM) across the
+        // finger's range: the interval used to be cut into 5 um pieces over
+        // its whole width (2e8 vertices, refused by the scenario).
+        let shape = SurfaceShape::Sampled { x_mm: vec![0.0, 1e6], h_mm: vec![0.0, 0.0] };
+        let segments = RigidSurface::template_segments(&shape, -10.0, 20.0).unwrap();
+        assert!(segments <= 4010, "{segments}");
+        let s = RigidSurface::new(&shape, -10.0, 20.0).unwrap();
+        assert_eq!(s.range(), (-10.0, 1e6));
+        assert!(s.x.len() <= segments + 3);
+        assert!(s.x.windows(2).all(|w| w[1] > w[0]));
+        // 5 um segments from the first point (before it, the flat
+        // continuation is one segment) to beyond the range's end.
+        let i = s.x.partition_point(|&v| v <= 20.0);
+        assert_eq!(s.x[1], 0.0);
+        assert!(s.x[1..=i].windows(2).all(|w| w[1] - w[0] <= MAX_SEGMENT_MM * (1.0 + 1e-9)));
+        // A slope over the range on a wide interval: finite heights, arcs
+        // and projections, and the same polyline vertices over the range
+        // as the full subdivision would give.
+        let shape = SurfaceShape::Sampled { x_mm: vec![-1e6, 5.0, 1e6], h_mm: vec![-1e3, 0.0, 1e3] };
+        let s = RigidSurface::new(&shape, -10.0, 20.0).unwrap();
+        assert!(s.x.len() < 6100, "{}", s.x.len());
+        for k in 0..=30 {
+            let x = -10.0 + k as f64;
+            let h = s.height(x);
+            assert!(h.is_finite() && s.arc_at(x).is_finite());
+            let p = s.project([x, h - 0.01]).unwrap();
+            assert!(p.depth > 0.0 && p.depth <= 0.01 + 1e-12 && p.arc_mm.is_finite());
+        }
+        let step = (5.0 + 1e6) / ((5.0 + 1e6) / MAX_SEGMENT_MM).ceil();
+        let k = ((-10.0 + 1e6) / step).floor() as usize;
+        assert!(s.x.contains(&(-1e6 + (5.0 + 1e6) * k as f64 / ((5.0 + 1e6) / MAX_SEGMENT_MM).ceil())));
     }
 
     #[test]
