@@ -286,7 +286,11 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
 
 fn describe(args: &SimulateArgs, scenario: &Scenario) -> String {
     let surface = match &scenario.surface {
-        SurfaceShape::Flat => "flat".to_string(),
+        SurfaceShape::Flat => match (&scenario.display, &args.voltage, args.constant_voltage) {
+            (Some(_), Some(path), _) => format!("display, voltage from {}", path.display()),
+            (Some(_), None, Some(u)) => format!("display, constant {} V", Num(u)),
+            _ => "flat".to_string(),
+        },
         SurfaceShape::Sampled { .. } => args.surface.clone(),
         _ => format!(
             "{} x0 = {} mm, r_w = {} mm, r_h = {} mm",

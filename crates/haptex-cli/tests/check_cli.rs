@@ -1,0 +1,112 @@
+//! `haptex simulate --surface display` and `haptex check` end to end:
+//! outputs, the voltage limit, and bad input.
+
+use std::process::{Command, Output};
+
+fn haptex(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_haptex")).args(args).output().expect("run haptex")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Rows of a CSV after its `#` lines, as numbers, with the header.
+fn table(text: &str) -> (Vec<String>, Vec<Vec<f64>>) {
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let header = lines.next().unwrap().split(',').map(str::to_string).collect();
+    (header, lines.map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect())
+}
+
+#[test]
+fn check_writes_the_felt_profile_and_a_voltage_within_u_max() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    // A raised plateau: 0.5 (mu_HD) then 0.56 then 0.5.
+    let mut target = String::from("x_mm,mu\n");
+    for i in 0..=40 {
+        let x = 0.1 * i as f64;
+        target += &format!("{x},{}\n", if (1.0..3.0).contains(&x) { 0.56 } else { 0.5 });
+    }
+    std::fs::write(p("target.csv"), target).unwrap();
+    let out = haptex(&[
+        "check",
+        "--profile",
+        &p("target.csv"),
+        "--compensate",
+        "--max-runs",
+        "3",
+        "--mesh",
+        "coarse",
+        "--step",
+        "0.1",
+        "-o",
+        &p("check.csv"),
+        "--voltage-out",
+        &p("u.csv"),
+        "--png",
+        &p("check.png"),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.contains("trial 1 (eq. 8)") && err.contains("FE finger's contact length"), "{err}");
+    let (header, rows) = table(&std::fs::read_to_string(p("check.csv")).unwrap());
+    assert_eq!(header, ["x_mm", "target_mu", "voltage_v", "felt_mu", "k_fe_mm2_per_n"]);
+    assert_eq!(rows.len(), 41);
+    // The voltage file pairs its samples with the stated limit and stays
+    // within it; the check's voltage column is the same voltage.
+    let text = std::fs::read_to_string(p("u.csv")).unwrap();
+    assert!(text.starts_with("# haptex check:"), "{text}");
+    let (header, u) = table(&text);
+    assert_eq!(header, ["x_mm", "mu", "voltage_v"]);
+    for (a, b) in u.iter().zip(&rows) {
+        assert!(a[2] >= 0.0 && a[2] <= 100.0);
+        assert_eq!(a[2], b[2]);
+    }
+    assert!(std::fs::metadata(p("check.png")).unwrap().len() > 1000);
+
+    // The voltage drives the FE display as `simulate --surface display`.
+    let out = haptex(&[
+        "simulate",
+        "--surface",
+        "display",
+        "--voltage",
+        &p("u.csv"),
+        "--load",
+        "0.0133",
+        "--slide",
+        "2",
+        "--mesh",
+        "coarse",
+        "-q",
+        "-o",
+        &p("felt.csv"),
+        "--history",
+        &p("history.csv"),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (header, rows) = table(&std::fs::read_to_string(p("history.csv")).unwrap());
+    assert_eq!(&header[header.len() - 3..], ["voltage_v", "fe_n", "fe_contact_n"]);
+    assert!(rows.iter().any(|r| r[r.len() - 2] > 0.0));
+}
+
+#[test]
+fn bad_display_and_check_input_is_refused_clearly() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    std::fs::write(p("u.csv"), "x_mm,voltage_v\n0,10\n1,-5\n").unwrap();
+    for (args, expected) in [
+        (vec!["simulate", "--surface", "display", "-q"], "--voltage"),
+        (vec!["simulate", "--surface", "bump", "--constant-voltage", "50", "-q"], "display only"),
+        (vec!["simulate", "--surface", "display", "--voltage", &p("u.csv"), "-q"], "line 3"),
+        (vec!["simulate", "--surface", "display", "--constant-voltage", "5000", "-q"], "MPa"),
+        (vec!["simulate", "--surface", "display", "--constant-voltage", "nan", "-q"], "voltage"),
+        (vec!["check", "--profile", &p("missing.csv"), "-q"], "missing.csv"),
+    ] {
+        let out = haptex(&args);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        let err = stderr(&out);
+        assert!(err.contains(expected), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
