@@ -7,8 +7,9 @@
 //! expected outcome for most inputs and are only checked to be short.
 
 use haptex_core::cae::{Cae, Loo, ModelMatrix, Widths};
-use haptex_core::electrovibration::{Device, Method, map_profile};
+use haptex_core::electrovibration::{Device, Method, map_profile, map_profile_relative};
 use haptex_core::profile::FrictionProfile;
+use haptex_core::relative::FlatMu;
 use haptex_core::recording::Recording;
 use haptex_core::signal::{VoltageCurve, decode_drive_wav};
 use haptex_core::trajectory::Trajectory;
@@ -31,16 +32,22 @@ fn short(message: String) {
     assert!(message.len() < 2000, "an error message of {} bytes: {}", message.len(), &message[..200]);
 }
 
-/// Friction profile CSV -> profile -> voltages by eqs. (8) and (9).
+/// Friction profile CSV -> profile -> voltages by eqs. (8) and (9), as it
+/// is and relative to its median (paper Fig. 2, `--relative`).
 pub fn profile_csv(data: &[u8]) {
     match FrictionProfile::read_csv(data, "f.csv") {
         Ok(p) => {
             assert!(p.x_mm().iter().chain(p.mu()).all(|v| v.is_finite()));
             assert!(p.span_mm().is_finite() && p.span_mm() > 0.0);
             for method in [Method::Physical, Method::Normalized] {
-                match map_profile(&p, &Device::PAPER, method, None) {
-                    Ok(v) => assert!(v.voltage_v.iter().all(|u| u.is_finite() && *u >= 0.0 && *u <= 100.0)),
-                    Err(e) => short(e.to_string()),
+                for mapped in [
+                    map_profile(&p, &Device::PAPER, method, None),
+                    map_profile_relative(&p, &Device::PAPER, method, None, FlatMu::Median),
+                ] {
+                    match mapped {
+                        Ok(v) => assert!(v.voltage_v.iter().all(|u| u.is_finite() && *u >= 0.0 && *u <= 100.0)),
+                        Err(e) => short(e.to_string()),
+                    }
                 }
             }
         }

@@ -168,6 +168,26 @@ pub struct FeSettings {
     pub penalty_mpa_per_mm: f64,
 }
 
+impl FeSettings {
+    /// The flat-surface friction of the database's profiles, the mu_flat of
+    /// a relative profile ([`crate::relative`]): on a flat surface, once the
+    /// whole contact slips, Ft/Fn equals the skin's Coulomb coefficient.
+    pub fn flat_mu(&self) -> f64 {
+        self.mu_skin
+    }
+
+    /// A comment line for predicted profiles: their flat-surface friction,
+    /// and how to map them as the paper's Fig. 2 does.
+    pub fn flat_mu_comment(&self) -> String {
+        format!(
+            "flat-surface friction mu_flat = {} (Ft/Fn on a flat surface: the FE skin friction mu_skin); for eq. (8) \
+             as in the paper's Fig. 2: haptex voltage --relative --flat-mu {}",
+            Num(self.flat_mu()),
+            Num(self.flat_mu())
+        )
+    }
+}
+
 /// The CAE set-up of one template's matrix.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TemplateEntry {

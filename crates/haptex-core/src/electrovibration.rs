@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use crate::num::Num;
 use crate::profile::FrictionProfile;
 use crate::ranges::{self, RangeError};
+use crate::relative::{FlatMu, Relative, RelativeError};
 
 /// Vacuum permittivity eps0 in F/m (CODATA 2018).
 pub const EPS0_F_PER_M: f64 = 8.8541878128e-12;
@@ -45,6 +46,10 @@ pub enum ElectroError {
          normal force: give Fn (--fn-n), or a profile with an fn_n column"
     )]
     NormalForceRequired { exponent: f64 },
+    /// The relative profile (paper Fig. 2a) cannot be made: mu_flat is
+    /// invalid, or makes the profile leave the range of mu.
+    #[error(transparent)]
+    Relative(#[from] RelativeError),
 }
 
 /// The two dielectric layers between finger and electrode (paper eq. 3):
@@ -309,12 +314,20 @@ pub struct VoltageSummary {
     /// Where mu_RS < mu_HD: not renderable by electrovibration, U = 0 V there
     /// (physical method).
     pub not_renderable: Regions,
+    /// When the profile was made relative to its flat-surface friction
+    /// before the mapping (paper Fig. 2a): how. `mu`, `mu_min` and `mu_max`
+    /// are then the relative values.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub relative: Option<Relative>,
     pub warnings: Vec<String>,
 }
 
 impl fmt::Display for VoltageSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "method: {}", self.method)?;
+        if let Some(relative) = &self.relative {
+            writeln!(f, "{}", relative.describe())?;
+        }
         writeln!(
             f,
             "profile: {} points, x {} .. {} mm, mu {:.4} .. {:.4}",
@@ -374,13 +387,26 @@ pub struct VoltageProfile {
 
 impl VoltageProfile {
     /// Writes `x_mm,mu,voltage_v` CSV, after a comment line stating the
-    /// RMS convention.
+    /// RMS convention and, for a relative profile, one saying how it was
+    /// made (the `mu` column is then the relative friction).
     pub fn write_csv(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
         writeln!(
             w,
             "# haptex voltage profile, method {}; voltage_v is the RMS (effective) voltage; a sine carrier needs peak sqrt(2)*voltage_v",
             self.summary.method
         )?;
+        if let Some(relative) = &self.summary.relative {
+            let role = match self.summary.method {
+                Method::Physical => "clip level",
+                Method::Normalized => "full scale",
+            };
+            writeln!(
+                w,
+                "# {}; the mu column is the relative friction; U_max = {} V ({role})",
+                relative.describe(),
+                Num(self.summary.u_max_v)
+            )?;
+        }
         w.write_all(b"x_mm,mu,voltage_v\n")?;
         for i in 0..self.x_mm.len() {
             crate::io::write_csv_row(w, &[self.x_mm[i], self.mu[i], self.voltage_v[i]])?;
@@ -401,6 +427,35 @@ pub fn map_profile(
     fn_n: Option<f64>,
 ) -> Result<VoltageProfile, ElectroError> {
     device.validate()?;
+    map_validated(profile, device, method, fn_n, None)
+}
+
+/// Maps a friction profile made relative to its flat-surface friction, as
+/// the paper does for Fig. 2 ([`crate::relative`]): mu_rel = mu / mu_flat *
+/// mu_HD, with mu_flat as `flat` says, then eq. (8) or (9) as
+/// [`map_profile`] does. The summary records mu_flat, where it came from
+/// and mu_HD; the voltage profile's `mu` is the relative friction, so the
+/// file is consistent with its voltages (eq. 8 with the device's mu_HD).
+pub fn map_profile_relative(
+    profile: &FrictionProfile,
+    device: &Device,
+    method: Method,
+    fn_n: Option<f64>,
+    flat: FlatMu,
+) -> Result<VoltageProfile, ElectroError> {
+    device.validate()?;
+    let relative = Relative::new(profile, flat, device.mu_hd)?;
+    let scaled = relative.apply(profile)?;
+    map_validated(&scaled, device, method, fn_n, Some(relative))
+}
+
+fn map_validated(
+    profile: &FrictionProfile,
+    device: &Device,
+    method: Method,
+    fn_n: Option<f64>,
+    relative: Option<Relative>,
+) -> Result<VoltageProfile, ElectroError> {
     let (x, mu) = (profile.x_mm(), profile.mu());
     let (mu_min, mu_max) = min_max(mu);
     let mut voltage_v = vec![0.0; mu.len()];
@@ -420,6 +475,7 @@ pub fn map_profile(
         mu_at_u_max: None,
         clipped: Regions::default(),
         not_renderable: Regions::default(),
+        relative,
         warnings: Vec::new(),
     };
     match method {
@@ -464,11 +520,16 @@ fn physical_warnings(s: &VoltageSummary) -> Vec<String> {
     let mut warnings = Vec::new();
     let percent = |r: &Regions| 100.0 * r.fraction_of_length;
     if s.not_renderable.fraction_of_length >= 1.0 {
-        warnings.push(
+        warnings.push(if s.relative.is_some() {
+            "mu_RS < mu_HD over the whole profile: the profile never rises above its flat-surface friction \
+             mu_flat, so U = 0 V everywhere; check mu_flat, or use --method normalized"
+                .to_string()
+        } else {
             "mu_RS < mu_HD over the whole profile: electrovibration can only raise friction, so U = 0 V \
-             everywhere; lower --mu-hd or use --method normalized"
-                .to_string(),
-        );
+             everywhere; lower --mu-hd, map the profile relative to its flat-surface friction as the paper's \
+             Fig. 2 does (--relative), or use --method normalized"
+                .to_string()
+        });
     } else if !s.not_renderable.is_empty() {
         warnings.push(format!(
             "mu_RS < mu_HD over {:.2}% of the length: not renderable by electrovibration, U = 0 V there",

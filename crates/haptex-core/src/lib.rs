@@ -13,8 +13,9 @@ pub mod num;
 pub mod profile;
 pub mod ranges;
 pub mod recording;
+pub mod relative;
 
-pub use electrovibration::{Device, Method, VoltageProfile, VoltageSummary, map_profile};
+pub use electrovibration::{Device, Method, VoltageProfile, VoltageSummary, map_profile, map_profile_relative};
 pub use profile::{FrictionProfile, ProfileError};
 pub mod plot;
 pub mod realtime;

@@ -152,6 +152,32 @@ impl FrictionProfile {
         self.fn_n.as_ref().map(|f| f.iter().sum::<f64>() / f.len() as f64)
     }
 
+    /// The median of the friction values (the mean of the middle two for an
+    /// even count): the typical level of the profile, unmoved by its
+    /// features as long as they cover less than half of it
+    /// ([`crate::relative`] uses it as the default flat-surface friction).
+    pub fn median_mu(&self) -> f64 {
+        let mut values = self.mu.clone();
+        let n = values.len();
+        let (below, middle, _) = values.select_nth_unstable_by(n / 2, f64::total_cmp);
+        let middle = *middle;
+        if n % 2 == 1 {
+            middle
+        } else {
+            // The largest of the lower half is the other middle value.
+            let lower = below.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            0.5 * (lower + middle)
+        }
+    }
+
+    /// The same positions and normal force with the friction values `mu`,
+    /// which the caller has checked: one per position, finite and within
+    /// [`crate::ranges::MU`].
+    pub(crate) fn with_checked_mu(&self, mu: Vec<f64>) -> Self {
+        debug_assert!(mu.len() == self.mu.len() && crate::ranges::MU.first_outside(&mu).is_none());
+        Self { x_mm: self.x_mm.clone(), mu, fn_n: self.fn_n.clone() }
+    }
+
     /// Number of samples (at least 2).
     pub fn len(&self) -> usize {
         self.x_mm.len()
@@ -359,6 +385,16 @@ mod tests {
         assert!((r.mu()[3] - 0.9).abs() < 1e-15);
         assert!(p.resample_step(2.0).is_err());
         assert!(p.resample_step(0.0).is_err());
+    }
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        let odd = FrictionProfile::new(vec![0.0, 1.0, 2.0, 3.0, 4.0], vec![0.9, 0.5, 0.5, 2.0, 0.4]).unwrap();
+        assert_eq!(odd.median_mu(), 0.5);
+        let even = FrictionProfile::new(vec![0.0, 1.0, 2.0, 3.0], vec![0.7, 0.1, 0.3, 5.0]).unwrap();
+        assert_eq!(even.median_mu(), 0.5);
+        // The profile itself is not reordered.
+        assert_eq!(even.mu(), [0.7, 0.1, 0.3, 5.0]);
     }
 
     #[test]

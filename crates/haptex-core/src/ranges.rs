@@ -105,6 +105,10 @@ pub const D_I_MM: Range = range("d_i_mm", 1e-6, 10.0, "mm");
 pub const K_MM2_PER_N: Range = range("k_mm2_per_n", 1e-6, 1e6, "mm^2/N");
 /// Contact-area exponent n of A = k Fn^n.
 pub const AREA_EXPONENT: Range = range("area_exponent", 1e-3, 2.0, "");
+/// Flat-surface friction mu_flat of a reference profile, the value a
+/// relative profile (paper Fig. 2a) is divided by ([`crate::relative`]): a
+/// friction coefficient of finger on a surface, the range of mu_HD.
+pub const FLAT_MU: Range = range("flat_mu", 1e-3, 10.0, "");
 
 // Drive signal.
 
@@ -135,6 +139,7 @@ pub const ALL: &[Range] = &[
     D_I_MM,
     K_MM2_PER_N,
     AREA_EXPONENT,
+    FLAT_MU,
     SLEW_V_PER_S,
     AMPLIFIER_RANGE_V,
     VOLTS_PER_FULL_SCALE,

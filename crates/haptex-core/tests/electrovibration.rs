@@ -3,9 +3,10 @@
 
 use haptex_core::electrovibration::{
     ContactArea, Device, ElectroError, LayerStack, Method, Regions, electrostatic_force_n, map_profile,
-    required_force_n, voltage_for_force_v,
+    map_profile_relative, required_force_n, voltage_for_force_v,
 };
 use haptex_core::profile::FrictionProfile;
+use haptex_core::relative::{FlatMu, FlatSource, RelativeError};
 use proptest::prelude::*;
 
 /// The paper's device with U_max raised so that nothing clips.
@@ -187,6 +188,96 @@ fn degenerate_device_is_refused_not_mapped() {
     assert_eq!(v.voltage_v, [0.0, 100.0]);
 }
 
+/// Paper Fig. 2 (issue 15): an FE-like bump profile around the skin
+/// friction 0.5, mapped with the paper's device (mu_HD = 1). As it is,
+/// eq. (8) gives 0 V everywhere (0.6 < mu_HD); relative to its flat value
+/// mu_flat = 0.5 it is mu/0.5 * 1 = 1.0, 1.1, 1.15, 0.9, 1.0, and eq. (8)
+/// by hand with the Fig. 2 constants, U = sqrt(50217.6 (mu_rel - 1)) V
+/// (docs/physics.md), gives 0, sqrt(5021.76) = 70.864, sqrt(7532.64) =
+/// 86.791, 0 (below flat: not renderable), 0 V. Tolerance 0.01 V (the
+/// rounding of 50217.6).
+#[test]
+fn relative_bump_gives_the_hand_computed_eq8_voltages() {
+    let p = profile(&[0.0, 1.0, 2.0, 3.0, 4.0], &[0.5, 0.55, 0.575, 0.45, 0.5]);
+    let raw = map_profile(&p, &Device::PAPER, Method::Physical, None).unwrap();
+    assert!(raw.voltage_v.iter().all(|&u| u == 0.0), "{:?}", raw.voltage_v);
+    assert_eq!(raw.summary.relative, None);
+
+    let v = map_profile_relative(&p, &Device::PAPER, Method::Physical, None, FlatMu::Given(0.5)).unwrap();
+    for (u, expected) in v.voltage_v.iter().zip([0.0, 70.864, 86.791, 0.0, 0.0]) {
+        assert!((u - expected).abs() < 0.01, "U = {u}, expected {expected}: {:?}", v.voltage_v);
+    }
+    assert!(v.voltage_v[1] > 0.0 && v.voltage_v[2] > v.voltage_v[1]);
+    assert_eq!(v.mu, [1.0, 1.1, 1.15, 0.9, 1.0]);
+    let r = v.summary.relative.unwrap();
+    assert_eq!((r.flat_mu, r.flat_mu_source, r.mu_hd), (0.5, FlatSource::Given, 1.0));
+    // Where mu < mu_flat the display cannot follow: reported as usual, on
+    // the relative profile (1.15 at x = 2 mm to 0.9 at 3 mm crosses 1 at
+    // 2.6 mm; back to 1, not below it, at 4 mm).
+    let below = &v.summary.not_renderable.ranges_mm;
+    assert!(below.len() == 1 && (below[0][0] - 2.6).abs() < 1e-12 && below[0][1] == 4.0, "{below:?}");
+    let text = v.summary.to_string();
+    assert!(text.contains("mu_flat = 0.5 (given) and mu_HD = 1"), "{text}");
+
+    // Eq. (8) of the relative profile does not depend on mu_HD.
+    for mu_hd in [0.3, 2.5] {
+        let w =
+            map_profile_relative(&p, &Device { mu_hd, ..Device::PAPER }, Method::Physical, None, FlatMu::Given(0.5))
+                .unwrap();
+        for (a, b) in w.voltage_v.iter().zip(&v.voltage_v) {
+            assert!((a - b).abs() < 1e-9, "mu_HD {mu_hd}: {a} vs {b}");
+        }
+    }
+    // Eq. (9) sees only the pattern: the same voltages to rounding.
+    let pattern = map_profile(&p, &Device::PAPER, Method::Normalized, None).unwrap();
+    let relative = map_profile_relative(&p, &Device::PAPER, Method::Normalized, None, FlatMu::Median).unwrap();
+    for (a, b) in pattern.voltage_v.iter().zip(&relative.voltage_v) {
+        assert!((a - b).abs() < 1e-12, "{a} vs {b}");
+    }
+    assert_eq!(relative.summary.relative.unwrap().flat_mu_source, FlatSource::Median);
+}
+
+/// The relative CSV says how the profile was made, and its U_max is the
+/// largest voltage it can hold.
+#[test]
+fn relative_csv_comments_name_mu_flat_mu_hd_and_u_max() {
+    let p = profile(&[0.0, 1.0, 2.0], &[0.5, 0.8, 0.5]);
+    let device = Device { mu_hd: 0.8, u_max_v: 60.0, ..Device::PAPER };
+    let v = map_profile_relative(&p, &device, Method::Physical, None, FlatMu::Given(0.5)).unwrap();
+    let mut bytes = Vec::new();
+    v.write_csv(&mut bytes).unwrap();
+    let text = String::from_utf8(bytes).unwrap();
+    let comment = text.lines().nth(1).unwrap();
+    assert_eq!(
+        comment,
+        "# relative profile (paper Fig. 2a): mu = mu_profile / mu_flat * mu_HD with mu_flat = 0.5 (given) and \
+         mu_HD = 0.8; the mu column is the relative friction; U_max = 60 V (clip level)"
+    );
+    // 0.8 / 0.5 = 1.6 relative to mu_HD needs 141.7 V: clipped at 60 V.
+    assert_eq!(v.voltage_v, [0.0, 60.0, 0.0]);
+    let table = haptex_core::io::Table::read(text.as_bytes(), "v").unwrap();
+    assert_eq!(table.column("mu").unwrap(), [0.8, 0.8 / 0.5 * 0.8, 0.8]);
+}
+
+#[test]
+fn relative_bad_flat_values_are_typed_errors() {
+    let p = profile(&[0.0, 1.0, 2.0], &[0.5, 0.6, 0.5]);
+    for bad in [0.0, -0.5, f64::NAN, f64::INFINITY] {
+        let err = map_profile_relative(&p, &Device::PAPER, Method::Physical, None, FlatMu::Given(bad)).unwrap_err();
+        assert!(
+            matches!(&err, ElectroError::Relative(RelativeError::OutOfRange(e)) if e.name == "flat_mu"),
+            "{bad}: {err}"
+        );
+    }
+    let below_zero = profile(&[0.0, 1.0, 2.0], &[-0.1, -0.1, 0.2]);
+    let err = map_profile_relative(&below_zero, &Device::PAPER, Method::Physical, None, FlatMu::Median).unwrap_err();
+    assert!(matches!(err, ElectroError::Relative(RelativeError::Median { median }) if median == -0.1), "{err}");
+    // The device is checked first, as without --relative.
+    let err = map_profile_relative(&p, &Device { mu_hd: 0.0, ..Device::PAPER }, Method::Physical, None, FlatMu::Median)
+        .unwrap_err();
+    assert!(matches!(&err, ElectroError::OutOfRange(e) if e.name == "mu_hd"), "{err}");
+}
+
 #[test]
 fn regions_merge_across_samples_and_handle_touching_points() {
     let x = [0.0, 1.0, 2.0, 3.0, 4.0];
@@ -215,6 +306,27 @@ proptest! {
                 prop_assert!(w[1] >= w[0], "{method}: {} after {}", w[1], w[0]);
             }
             prop_assert!(v.voltage_v.iter().all(|u| u.is_finite() && *u >= 0.0 && *u <= u_max));
+        }
+    }
+
+    /// A constant profile made relative is exactly mu_HD everywhere,
+    /// whatever its level and mu_HD, whether mu_flat is given or the
+    /// median: the display with no voltage stands for the flat surface, and
+    /// eq. (8) gives exactly 0 V with nothing reported as not renderable.
+    #[test]
+    fn relative_constant_profile_is_exactly_mu_hd(
+        level in 1e-3f64..10.0,
+        mu_hd in 1e-3f64..10.0,
+        n in 2usize..20,
+    ) {
+        let x: Vec<f64> = (0..n).map(|i| i as f64).collect();
+        let p = FrictionProfile::new(x, vec![level; n]).unwrap();
+        let device = Device { mu_hd, ..Device::PAPER };
+        for flat in [FlatMu::Given(level), FlatMu::Median] {
+            let v = map_profile_relative(&p, &device, Method::Physical, None, flat).unwrap();
+            prop_assert!(v.mu.iter().all(|&m| m == mu_hd), "{:?} -> {:?}, mu_HD {}", flat, v.mu, mu_hd);
+            prop_assert!(v.voltage_v.iter().all(|&u| u == 0.0));
+            prop_assert!(v.summary.not_renderable.is_empty());
         }
     }
 

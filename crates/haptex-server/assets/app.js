@@ -1,7 +1,9 @@
 // haptex GUI: pick a friction profile (a surface template predicted from
 // the FE database, a texture-library material or your own CSV file), set
 // the device and finger constants, see the surface, friction and voltage
-// profiles (paper eqs. 8 and 9, computed by the server), feel the voltage
+// profiles (paper eqs. 8 and 9, computed by the server; optionally on the
+// profile relative to its flat-surface friction, as the paper's Fig. 2
+// does, with eq. 8 and eq. 9 side by side for templates), feel the voltage
 // along a strip, download CSV / JSON / WAV.
 //
 // Every number comes from the JSON API (docs/web.md); this script only
@@ -21,8 +23,10 @@
     profile: null,         // {x_mm, mu, fn_n, label, synthetic, download()}
     profiles: {},          // last profile of each source, kept when switching
     voltage: null,         // last /api/voltage answer
+    companion: null,       // the same profile by the other method (templates: eq. 8 and 9 side by side, Fig. 2b)
     drawn: null,           // the profile whose voltage is drawn
     method: 'physical',
+    relative: false,       // map the profile relative to its flat-surface friction (Fig. 2)
     device: {},            // parameter name -> number (only valid ones)
     velocity: 50,
     carrierHz: 1000,
@@ -71,7 +75,7 @@
     document.querySelectorAll('[aria-invalid="true"]').forEach((el) => el.removeAttribute('aria-invalid'));
     if (error instanceof ApiError) {
       const name = error.field ? error.field.replace(/^device\./, '') : null;
-      const input = name ? document.querySelector(`[data-param="${name}"]`) : null;
+      const input = name ? document.querySelector(`[data-param="${name}"], [data-field="${name}"]`) : null;
       if (input) input.setAttribute('aria-invalid', 'true');
       say(error.field ? `${error.field}: ${error.message}` : error.message, true);
     } else {
@@ -85,11 +89,15 @@
   const SOURCES = {
     template: {
       panel: 'template',
-      // FE profiles are skin-on-surface friction (mu_skin 0.5), below the
-      // display's own mu_HD: eq. (8) has nothing to add there, so virtual
-      // profiles are shown with their pattern, eq. (9), as in the paper's
-      // Fig. 2b (docs/database.md).
-      method: 'normalized',
+      // FE profiles are skin-on-surface friction around mu_skin (0.5),
+      // below the display's own mu_HD = 1: as they are, eq. (8) gives 0 V.
+      // The paper maps them relative to their flat-surface value, mu_skin,
+      // and shows eq. (8) and eq. (9) side by side (Fig. 2b;
+      // docs/database.md): so does the GUI.
+      method: 'physical',
+      relative: true,
+      flatMu: () => (state.templates ? String(state.templates.fe.mu_skin) : ''),
+      bothMethods: true,
       async load() {
         const body = templateBody();
         const answer = await (await postJson('/api/predict', body)).json();
@@ -127,6 +135,8 @@
     library: {
       panel: 'library',
       method: 'physical',
+      relative: false,
+      flatMu: () => '',
       async load(options = {}) {
         const name = $('material').value;
         if (!name) throw new ApiError('the library has no materials', 'material', 0);
@@ -159,6 +169,8 @@
     },
     upload: {
       panel: 'upload',
+      relative: false,
+      flatMu: () => '',
       async load() {
         const file = $('upload').files[0];
         if (!file) return null; // nothing to show until a file is chosen
@@ -207,6 +219,7 @@
     $('height-figure').hidden = id !== 'template';
     loadRequest += 1; // a profile still loading for the previous source is dropped
     if (SOURCES[id].method) setMethod(SOURCES[id].method);
+    setRelative(SOURCES[id].relative, SOURCES[id].flatMu());
     state.profile = state.profiles[id] || null;
     if (state.profile) {
       updateVoltage().catch(showError);
@@ -352,6 +365,14 @@
     if (input) input.checked = true;
   }
 
+  /** Sets the relative mapping (its checkbox too) and the flat-surface friction shown. */
+  function setRelative(on, flatMu) {
+    state.relative = on;
+    $('relative').checked = on;
+    $('flat-mu').value = flatMu;
+    $('flat-mu').disabled = !on;
+  }
+
   function buildControls(config) {
     const sourceBox = $('source-select');
     config.sources.filter((s) => SOURCES[s.id]).forEach((s, i) => {
@@ -374,6 +395,13 @@
       label.append(input, m.label);
       methodBox.append(label);
     });
+
+    $('relative').addEventListener('change', () => {
+      state.relative = $('relative').checked;
+      $('flat-mu').disabled = !state.relative;
+      scheduleVoltage();
+    });
+    $('flat-mu').addEventListener('input', scheduleVoltage);
 
     const params = $('device-params');
     config.device_params.forEach((p) => {
@@ -453,29 +481,66 @@
     voltageTimer = setTimeout(() => updateVoltage().catch(showError), 60);
   }
 
-  function voltageBody() {
+  /** The POST /api/voltage body for the profile shown (by `method`, default the one chosen). */
+  function voltageBody(method = state.method) {
     const p = state.profile;
     const profile = { x_mm: p.x_mm, mu: p.mu };
     if (p.fn_n) profile.fn_n = p.fn_n;
-    return { profile, method: state.method, device: state.device };
+    const body = { profile, method, device: state.device };
+    if (state.relative) {
+      body.relative = true;
+      const flat = $('flat-mu').value.trim();
+      if (flat !== '') body.flat_mu = Number(flat);
+    }
+    return body;
   }
+
+  const otherMethod = (method) => (method === 'physical' ? 'normalized' : 'physical');
 
   async function updateVoltage() {
     if (!state.profile) return;
     const id = ++voltageRequest;
-    const answer = await (await postJson('/api/voltage', voltageBody())).json();
+    const both = SOURCES[state.source].bothMethods;
+    const [answer, companion] = await Promise.all([
+      postJson('/api/voltage', voltageBody()).then((r) => r.json()),
+      both ? postJson('/api/voltage', voltageBody(otherMethod(state.method))).then((r) => r.json()) : null,
+    ]);
     if (id !== voltageRequest) return; // a newer request is on its way
     state.voltage = answer;
+    state.companion = companion;
     state.drawn = state.profile;
     document.querySelectorAll('[aria-invalid="true"]').forEach((el) => el.removeAttribute('aria-invalid'));
     draw();
     showSummary();
+    showRelative();
     showStroke();
     drawStrip();
     state.updates += 1;
     document.body.dataset.updates = String(state.updates);
     document.body.dataset.state = 'ready';
-    say(`${state.profile.label}: ${answer.summary.n_points} points, method ${answer.summary.method}.`);
+    say(`${state.profile.label}: ${answer.summary.n_points} points, method ${answer.summary.method}` +
+      `${answer.summary.relative ? ', relative to the flat-surface friction (Fig. 2)' : ''}.`);
+  }
+
+  /** "eq. (8)" or "eq. (9)": the method of a summary. */
+  function equation(summary) {
+    return summary.method === 'physical' ? 'eq. (8)' : 'eq. (9)';
+  }
+
+  /** The note under the relative checkbox: mu_flat and where it came from. */
+  function showRelative() {
+    const r = state.voltage && state.voltage.summary.relative;
+    const note = $('relative-info');
+    if (!r) {
+      note.textContent = state.relative ? '' : 'Off: the profile is mapped as it is.';
+      return;
+    }
+    const origin = r.flat_mu_source === 'median'
+      ? 'the median of the profile, an estimate: give it when it is known'
+      : state.source === 'template' && state.templates && r.flat_mu === state.templates.fe.mu_skin
+        ? 'the FE skin friction mu_skin: Ft/Fn on a flat surface'
+        : 'given';
+    note.textContent = `mu = mu_profile / ${fmt(r.flat_mu)} · ${fmt(r.mu_hd)} (mu_flat: ${origin}).`;
   }
 
   function showSummary() {
@@ -483,8 +548,8 @@
     const box = $('summary');
     box.textContent = '';
     const line = document.createElement('div');
-    line.textContent = `U ${fmt(s.voltage_min_v)} .. ${fmt(s.voltage_max_v)} V RMS (U_max ${fmt(s.u_max_v)} V) · ` +
-      `mu ${fmt(s.mu_min)} .. ${fmt(s.mu_max)}` +
+    line.textContent = `${equation(s)}: U ${fmt(s.voltage_min_v)} .. ${fmt(s.voltage_max_v)} V RMS ` +
+      `(U_max ${fmt(s.u_max_v)} V) · ${s.relative ? 'relative ' : ''}mu ${fmt(s.mu_min)} .. ${fmt(s.mu_max)}` +
       (s.fe_over_fn_per_v2 ? ` · Fe/Fn = ${s.fe_over_fn_per_v2.toExponential(4)} U²` : '');
     box.append(line);
     if (s.method === 'physical') {
@@ -492,6 +557,12 @@
       regions.textContent = `clipped at U_max: ${pct(s.clipped.fraction_of_length)} of the length · ` +
         `mu_RS < mu_HD (not renderable, 0 V): ${pct(s.not_renderable.fraction_of_length)}`;
       box.append(regions);
+    }
+    if (state.companion) {
+      const c = state.companion.summary;
+      const other = document.createElement('div');
+      other.textContent = `${equation(c)} beside it (dashed): U ${fmt(c.voltage_min_v)} .. ${fmt(c.voltage_max_v)} V RMS`;
+      box.append(other);
     }
     if (s.warnings.length) {
       const list = document.createElement('ul');
@@ -536,8 +607,9 @@
     const v = state.voltage;
     const s = v.summary;
     const x = v.x_mm;
+    const r = s.relative;
     const frictionData = [x, v.mu];
-    const frictionSeries = [{ label: 'mu_RS', stroke: '#1f5fa8', width: 1.5 }];
+    const frictionSeries = [{ label: r ? 'mu_RS / mu_flat · mu_HD' : 'mu_RS', stroke: '#1f5fa8', width: 1.5 }];
     if (s.method === 'physical') {
       frictionData.push(constant(x, s.mu_hd), constant(x, s.mu_at_u_max));
       frictionSeries.push(
@@ -546,14 +618,22 @@
     }
     const fe = currentFe();
     if (fe && fe.mu.length === x.length) {
-      frictionData.push(fe.mu);
+      // On the plotted scale: relative like the profile when it is.
+      frictionData.push(r ? fe.mu.map((m) => m / r.flat_mu * r.mu_hd) : fe.mu);
       frictionSeries.push({ label: 'mu FE model', stroke: '#2e7d32', dash: [5, 3], width: 1.5 });
     }
-    const voltageData = [x, v.voltage_v, constant(x, s.u_max_v)];
-    const voltageSeries = [
-      { label: 'U (V RMS)', stroke: '#b3261e', width: 1.5 },
-      { label: 'U_max', stroke: '#888', dash: [6, 4], width: 1 },
-    ];
+    const voltageData = [x, v.voltage_v];
+    const voltageSeries = [{ label: `U ${equation(s)}`, stroke: '#b3261e', width: 1.5 }];
+    const c = state.companion;
+    if (c && c.voltage_v.length === x.length) {
+      voltageData.push(c.voltage_v);
+      voltageSeries.push({ label: `U ${equation(c.summary)}`, stroke: '#6a3d9a', dash: [5, 3], width: 1.5 });
+    }
+    voltageData.push(constant(x, s.u_max_v));
+    voltageSeries.push({ label: 'U_max', stroke: '#888', dash: [6, 4], width: 1 });
+    $('voltage-caption').textContent = c
+      ? `: ${equation(s)} and ${equation(c.summary)} side by side, as in the paper's Fig. 2b`
+      : '';
     const h = state.drawn && state.drawn.h_mm;
     if (h && h.length === x.length) {
       plots.height = replot(plots.height, 'height-plot', [{ label: 'h (mm)', stroke: '#444', width: 1.5, fill: 'rgba(0,0,0,0.06)' }], [x, h]);
@@ -580,6 +660,7 @@
     ['height', 'friction', 'voltage'].forEach((k) => { if (plots[k]) { plots[k].destroy(); plots[k] = null; } });
     $('summary').textContent = '';
     state.voltage = null;
+    state.companion = null;
     drawStrip();
   }
 

@@ -21,6 +21,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use haptex_core::ranges;
 use haptex_server::params::DEVICE_PARAMS;
 use haptex_server::routes;
 use serde_json::{Value, json};
@@ -444,6 +445,41 @@ fn route_cases(valid: &Valid) -> Vec<Case> {
                 ));
                 let power_law = set(&body, "device", json!({ "area_exponent": 0.5 }));
                 cases.push(valid.json("a power law without fn_n", &power_law, 400, "device.fn_n"));
+                // The relative mapping (paper Fig. 2): flat_mu in its range
+                // and only with relative = true, relative a boolean.
+                let relative = set(&set(&body, "relative", json!(true)), "flat_mu", json!(0.5));
+                number_cases(valid, &relative, "flat_mu", ranges::FLAT_MU.min, ranges::FLAT_MU.max, &mut cases);
+                for value in [json!(0.0), json!(-0.5), json!(10.5)] {
+                    cases.push(valid.json(
+                        format!("flat_mu = {value}"),
+                        &set(&relative, "flat_mu", value),
+                        400,
+                        "flat_mu",
+                    ));
+                }
+                cases.push(valid.json("flat_mu without relative", &set(&body, "flat_mu", json!(0.5)), 400, "flat_mu"));
+                for value in [json!("true"), json!(1), json!(null), json!(hostile(100))] {
+                    cases.push(valid.json(
+                        format!("relative = {value}"),
+                        &set(&body, "relative", value),
+                        400,
+                        "relative",
+                    ));
+                }
+                for text in ["1e308", "5e-324", "1e999", "NaN", "inf", "abc", "", "%00", "0", "-1"] {
+                    let target = format!("/api/voltage?relative=true&flat_mu={text}");
+                    cases.push(csv(format!("CSV with flat_mu={text}"), target, 400, "flat_mu"));
+                }
+                cases.push(csv(
+                    "CSV flat_mu without relative".into(),
+                    "/api/voltage?flat_mu=0.5".into(),
+                    400,
+                    "flat_mu",
+                ));
+                for text in ["yes", "1", "TRUE", "", "%00"] {
+                    let target = format!("/api/voltage?relative={text}");
+                    cases.push(csv(format!("CSV with relative={text}"), target, 400, "relative"));
+                }
             }
         }
         "/api/play" => {

@@ -14,11 +14,12 @@ use axum::Router;
 use axum::body::Body;
 use axum::http::{Method, Request, StatusCode, header};
 use haptex_core::database::{Metadata, Template, TemplateModel};
-use haptex_core::electrovibration::{Device, Method as MapMethod, map_profile};
+use haptex_core::electrovibration::{Device, Method as MapMethod, map_profile, map_profile_relative};
 use haptex_core::io::Table;
 use haptex_core::library::Library;
 use haptex_core::profile::FrictionProfile;
 use haptex_core::ranges;
+use haptex_core::relative::FlatMu;
 use haptex_server::{AppState, Limits, app, params::DEVICE_PARAMS, routes};
 use serde_json::{Value, json};
 
@@ -167,6 +168,8 @@ async fn openapi_describes_every_route_and_the_parameter_ranges() {
         let schema = if path.ends_with("[]") { &schema["items"] } else { schema };
         assert_eq!(range(schema), expect(r), "/api/play {path}");
     }
+    let flat_mu = &doc["components"]["schemas"]["FlatMu"];
+    assert_eq!(range(flat_mu), expect(ranges::FLAT_MU), "FlatMu");
     let u_max = DEVICE_PARAMS.iter().find(|p| p.name == "u_max_v").unwrap();
     assert_eq!(range(&play["u_max_v"]), (Some(u_max.min), Some(u_max.max)));
     // Every route answers something other than 404 for its own path.
@@ -398,6 +401,114 @@ async fn voltage_bad_json_is_refused_naming_the_field() {
     let body = json!({ "profile": good, "device": { "area_exponent": 0.5, "fn_n": 0.4 } });
     let answer = post_json("/api/voltage", &body).await.ok().json();
     assert_eq!(answer["summary"]["fn_n"], 0.4);
+}
+
+/// Issue 15, the paper's Fig. 2: `relative` maps the profile over its
+/// flat-surface friction. An FE-like bump around mu_skin = 0.5 gives 0 V
+/// with mu_HD = 1 as it is; relative to flat_mu = 0.5 it is 1.0, 1.1,
+/// 1.15, 0.9 and eq. (8) by hand (U = sqrt(50217.6 (mu_rel - 1)) V,
+/// docs/physics.md) gives 0, 70.864, 86.791, 0 V (0.01 V). The JSON body,
+/// the CSV upload and the core (what `haptex voltage --relative` writes)
+/// agree bit for bit, with either source of flat_mu.
+#[tokio::test]
+async fn voltage_relative_is_eq8_over_the_flat_value_as_in_fig2() {
+    let (x, mu) = ([0.0, 1.0, 2.0, 3.0], [0.5, 0.55, 0.575, 0.45]);
+    let raw = post_json("/api/voltage", &json!({ "profile": profile_json(&x, &mu) })).await.ok().json();
+    assert_eq!(raw["summary"]["voltage_max_v"], 0.0);
+    assert!(raw["summary"].get("relative").is_none(), "{}", raw["summary"]);
+
+    let body = json!({ "profile": profile_json(&x, &mu), "relative": true, "flat_mu": 0.5 });
+    let answer = post_json("/api/voltage", &body).await.ok().json();
+    for (got, want) in numbers(&answer["voltage_v"]).iter().zip([0.0, 70.864, 86.791, 0.0]) {
+        assert!((got - want).abs() < 0.01, "{got} vs {want}");
+    }
+    assert_eq!(numbers(&answer["mu"]), [1.0, 1.1, 1.15, 0.9]);
+    assert_eq!(answer["summary"]["relative"], json!({ "flat_mu": 0.5, "flat_mu_source": "given", "mu_hd": 1.0 }));
+
+    let profile = FrictionProfile::new(x.to_vec(), mu.to_vec()).unwrap();
+    let csv = "x_mm,mu\n0,0.5\n1,0.55\n2,0.575\n3,0.45\n";
+    for (flat, query, extra) in [
+        (FlatMu::Given(0.5), "relative=true&flat_mu=0.5", json!({ "flat_mu": 0.5 })),
+        (FlatMu::Median, "relative=true", json!({})),
+    ] {
+        for method in [MapMethod::Physical, MapMethod::Normalized] {
+            let name = serde_json::to_value(method).unwrap();
+            let device = Device { mu_hd: 0.8, ..Device::PAPER };
+            let core = map_profile_relative(&profile, &device, method, None, flat).unwrap();
+            let mut body = json!({ "profile": profile_json(&x, &mu), "relative": true, "method": name,
+                                   "device": { "mu_hd": 0.8 } });
+            body.as_object_mut().unwrap().extend(extra.as_object().unwrap().clone());
+            let from_json = post_json("/api/voltage", &body).await.ok().json();
+            let uri = format!("/api/voltage?{query}&method={}&mu_hd=0.8", name.as_str().unwrap());
+            let upload = post_raw(&uri, "text/csv", csv).await.ok().json();
+            for answer in [&from_json, &upload] {
+                assert_eq!(numbers(&answer["voltage_v"]), core.voltage_v, "{uri}");
+                assert_eq!(numbers(&answer["mu"]), core.mu, "{uri}");
+                assert_eq!(answer["summary"], serde_json::to_value(&core.summary).unwrap(), "{uri}");
+            }
+        }
+    }
+    // The median of 0.5, 0.55, 0.575, 0.45 is 0.525, said to be an estimate.
+    let median = post_json("/api/voltage", &json!({ "profile": profile_json(&x, &mu), "relative": true })).await;
+    assert_eq!(median.ok().json()["summary"]["relative"]["flat_mu_source"], "median");
+
+    // The CSV answer says how the profile was made and the U_max its
+    // samples stay within.
+    let answer = post_raw("/api/voltage?format=csv&relative=true&flat_mu=0.5", "text/csv", csv).await;
+    let text = answer.ok().text();
+    assert!(
+        text.contains("mu_flat = 0.5 (given) and mu_HD = 1; the mu column is the relative friction; U_max = 100 V"),
+        "{text}"
+    );
+    let table = Table::read(text.as_bytes(), "answer").unwrap();
+    assert!(table.column("voltage_v").unwrap().iter().all(|&u| u <= 100.0));
+    assert_eq!(table.column("mu").unwrap(), [1.0, 1.1, 1.15, 0.9]);
+}
+
+#[tokio::test]
+async fn voltage_relative_bad_input_is_refused_naming_the_field() {
+    let good = profile_json(&[0.0, 1.0, 2.0], &[0.5, 0.6, 0.5]);
+    let cases: Vec<(Value, &str)> = vec![
+        // flat_mu alone would be ignored.
+        (json!({ "profile": good, "flat_mu": 0.5 }), "flat_mu"),
+        (json!({ "profile": good, "relative": false, "flat_mu": 0.5 }), "flat_mu"),
+        (json!({ "profile": good, "relative": true, "flat_mu": 0.0 }), "flat_mu"),
+        (json!({ "profile": good, "relative": true, "flat_mu": -0.5 }), "flat_mu"),
+        (json!({ "profile": good, "relative": true, "flat_mu": 11.0 }), "flat_mu"),
+        (json!({ "profile": good, "relative": true, "flat_mu": "0.5" }), "flat_mu"),
+        (json!({ "profile": good, "relative": "yes" }), "relative"),
+        (json!({ "profile": good, "relative": 1 }), "relative"),
+        // A median that is no friction coefficient.
+        (json!({ "profile": profile_json(&[0.0, 1.0, 2.0], &[-0.1, -0.1, 0.3]), "relative": true }), "flat_mu"),
+        // mu / flat_mu * mu_HD beyond the range of mu.
+        (json!({ "profile": profile_json(&[0.0, 1.0], &[0.5, 900.0]), "relative": true, "flat_mu": 0.001 }), "flat_mu"),
+        // The device is checked as without relative.
+        (json!({ "profile": good, "relative": true, "device": { "mu_hd": 0.0 } }), "device.mu_hd"),
+    ];
+    for (body, field) in cases {
+        let answer = post_json("/api/voltage", &body).await;
+        let error = answer.error(StatusCode::BAD_REQUEST, Some(field));
+        assert!(error["error"].as_str().unwrap().len() < 400, "{error}");
+    }
+    let csv = "x_mm,mu\n0,0.5\n1,0.6\n";
+    for (query, field) in [
+        ("flat_mu=0.5", "flat_mu"),
+        ("relative=false&flat_mu=0.5", "flat_mu"),
+        ("relative=true&flat_mu=0", "flat_mu"),
+        ("relative=true&flat_mu=NaN", "flat_mu"),
+        ("relative=true&flat_mu=abc", "flat_mu"),
+        ("relative=true&flat_mu=1e999", "flat_mu"),
+        ("relative=yes", "relative"),
+        ("relative=", "relative"),
+        ("relative=true&relative=true", "relative"),
+    ] {
+        post_raw(&format!("/api/voltage?{query}"), "text/csv", csv).await.error(StatusCode::BAD_REQUEST, Some(field));
+    }
+    // With a JSON body, relative goes in the body, not the query.
+    let body = json!({ "profile": good });
+    post_raw("/api/voltage?relative=true", "application/json", body.to_string())
+        .await
+        .error(StatusCode::BAD_REQUEST, Some("relative"));
 }
 
 #[tokio::test]
@@ -807,9 +918,17 @@ async fn predict_equals_the_core_estimate_with_the_surface_height() {
         let expected = 0.27 * (-((x - 5.0) / 0.65).powi(2)).exp();
         assert!((h - expected).abs() <= 1e-12 * expected.max(1e-300), "h({x}) = {h}, design.md's bump {expected}");
     }
-    // The profile feeds /api/voltage as is.
+    // The profile feeds /api/voltage as is, and relative to its flat
+    // value, the FE skin friction the answer gives, as in the paper's
+    // Fig. 2 (where eq. 8 then renders the bump).
+    let metadata = Metadata::read(&shipped_db()).unwrap();
+    assert_eq!(answer["flat_mu"].as_f64(), Some(metadata.fe.mu_skin));
     let voltage = post_json("/api/voltage", &json!({ "profile": profile_json(&x, &numbers(&answer["mu"])) })).await;
     voltage.ok();
+    let body = json!({ "profile": profile_json(&x, &numbers(&answer["mu"])), "relative": true,
+                       "flat_mu": answer["flat_mu"] });
+    let relative = post_json("/api/voltage", &body).await.ok().json();
+    assert!(relative["summary"]["voltage_max_v"].as_f64().unwrap() > 0.0);
 }
 
 /// At a database case the FE profile itself is returned (issue 5: "when
@@ -860,6 +979,10 @@ async fn predict_csv_reads_back_as_a_friction_profile() {
     assert!(answer.content_type().starts_with("text/csv"));
     let text = answer.text();
     assert!(text.starts_with("# haptex predict: sine x0=0 mm r_w=2 mm r_h=0.2 mm velocity=50 mm/s"), "{text}");
+    assert!(
+        text.contains("# flat-surface friction mu_flat = 0.5 (Ft/Fn on a flat surface: the FE skin friction"),
+        "{text}"
+    );
     let profile = FrictionProfile::from_table(&Table::read(text.as_bytes(), "answer").unwrap()).unwrap();
     assert_eq!(profile.x_mm(), numbers(&json_answer["x_mm"]));
     assert_eq!(profile.mu(), numbers(&json_answer["mu"]));

@@ -23,7 +23,9 @@ use crate::args::{Output, positive};
 ///
 /// Output: `x_mm,mu`, x the finger's position on the surface (the database
 /// grid xi = -5 .. 5 mm shifted to the feature at x0), a friction profile
-/// for `haptex voltage`.
+/// for `haptex voltage`. Its flat-surface friction is the FE skin friction
+/// (0.5 for the shipped database; a comment line says so): `haptex voltage
+/// --relative --flat-mu 0.5` maps it as the paper's Fig. 2 does.
 #[derive(Debug, Args)]
 #[command(
     allow_negative_numbers = true,
@@ -84,6 +86,7 @@ pub fn run(args: PredictArgs) -> anyhow::Result<()> {
     Output::new(args.output.clone()).write(|w| {
         writeln!(w, "# haptex predict: {}", template.describe_query(args.x0, &query))?;
         writeln!(w, "# {source}")?;
+        writeln!(w, "# {}", metadata.fe.flat_mu_comment())?;
         if let Some(warning) = &warning {
             writeln!(w, "# warning: {warning}")?;
         }

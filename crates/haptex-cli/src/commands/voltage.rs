@@ -4,8 +4,9 @@
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
-use haptex_core::electrovibration::{ContactArea, Device, LayerStack, Method, map_profile};
+use haptex_core::electrovibration::{ContactArea, Device, LayerStack, Method, map_profile, map_profile_relative};
 use haptex_core::ranges;
+use haptex_core::relative::FlatMu;
 
 use crate::args::{Output, in_range, read_profile};
 
@@ -17,10 +18,18 @@ use crate::args::{Output, in_range, read_profile};
 /// are the constants of the paper's Fig. 2. Where the display cannot follow
 /// the profile (U above U_max, or mu_RS below mu_HD) the summary on stderr
 /// says where.
+///
+/// With --relative the profile is first divided by its flat-surface friction
+/// mu_flat and scaled to the display's mu_HD, as the paper's Fig. 2 does
+/// (its "normalized output", with mu_HD = 1): the display's own friction then
+/// stands for the surface's flat friction, and eq. (8) renders what the
+/// features add to it. mu_flat is --flat-mu, else the profile's median.
 #[derive(Debug, Args)]
 #[command(
     allow_negative_numbers = true,
-    after_help = "Example:\n  haptex voltage --profile data/examples/bump_friction.csv -o voltage.csv"
+    after_help = "Examples:\n  haptex voltage --profile data/examples/bump_friction.csv -o voltage.csv\n  \
+                  haptex predict --surface bump --x0 5 --width 1.3 --height 0.27 | haptex voltage --profile - \
+                  --relative --flat-mu 0.5"
 )]
 pub struct VoltageArgs {
     /// Friction profile CSV (`x_mm,mu` or `x_mm,ft_n,fn_n`), or `-` for stdin.
@@ -33,6 +42,16 @@ pub struct VoltageArgs {
     /// Friction coefficient of the finger on the display with no voltage, mu_HD.
     #[arg(long, default_value_t = Device::PAPER.mu_hd, value_parser = in_range(ranges::MU_HD))]
     mu_hd: f64,
+    /// Map the profile relative to its flat-surface friction (paper Fig. 2):
+    /// mu / mu_flat * mu_HD. The written mu column is the relative friction.
+    #[arg(long)]
+    relative: bool,
+    /// The profile's flat-surface friction mu_flat for --relative: for FE
+    /// profiles (haptex simulate, predict) the skin friction mu_skin, 0.5 for
+    /// the shipped database; for a recording the friction on the flat
+    /// surface. Default: the profile's median, an estimate.
+    #[arg(long, requires = "relative", value_parser = in_range(ranges::FLAT_MU))]
+    flat_mu: Option<f64>,
     /// Relative permittivity of the stratum corneum, eps_sc.
     #[arg(long, default_value_t = LayerStack::PAPER.eps_sc, value_parser = in_range(ranges::EPS_SC))]
     eps_sc: f64,
@@ -94,7 +113,12 @@ pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
         MethodArg::Physical => Method::Physical,
         MethodArg::Normalized => Method::Normalized,
     };
-    let voltage = map_profile(&profile, &device, method, args.fn_n)?;
+    let voltage = if args.relative {
+        let flat = args.flat_mu.map_or(FlatMu::Median, FlatMu::Given);
+        map_profile_relative(&profile, &device, method, args.fn_n, flat)?
+    } else {
+        map_profile(&profile, &device, method, args.fn_n)?
+    };
 
     let output = Output::new(args.output);
     let format = args.format.unwrap_or(match output.path().and_then(|p| p.extension()) {

@@ -12,7 +12,9 @@
 //!
 //! The answer is the profile (as `POST /api/profile` gives it) plus the
 //! surface height `h_mm` at each x, where the profile comes from, the
-//! warnings and the template's typical error; `?format=csv` answers the
+//! warnings, the template's typical error and the profile's flat-surface
+//! friction `flat_mu` (the FE skin friction: what `relative` voltage
+//! mappings divide by, paper Fig. 2); `?format=csv` answers the
 //! `x_mm,mu` file `haptex predict` writes.
 
 use axum::Json;
@@ -54,7 +56,11 @@ pub async fn post(
             .map_err(|e| ApiError::internal(format!("the predicted profile is invalid: {e}")))?;
 
         if format == "csv" {
-            let mut comments = vec![format!("haptex predict: {}", template.describe_query(x0, &query)), source];
+            let mut comments = vec![
+                format!("haptex predict: {}", template.describe_query(x0, &query)),
+                source,
+                set.metadata().fe.flat_mu_comment(),
+            ];
             comments.extend(warning.map(|w| format!("warning: {w}")));
             let bytes = super::to_csv(|w| profile.write_csv_commented(w, &comments))?;
             return Ok(super::csv_response(
@@ -80,6 +86,9 @@ pub async fn post(
         answer["loo_rmse"] = json!(entry.loo_rmse);
         answer["loo_rmse_relative_to_range"] = json!(entry.loo_rmse_relative_to_range);
         answer["h_mm"] = json!(h_mm);
+        // The profile's flat-surface friction: the mu_flat of a relative
+        // voltage mapping (`POST /api/voltage` with relative and flat_mu).
+        answer["flat_mu"] = json!(set.metadata().fe.flat_mu());
         Ok(Json(answer).into_response())
     })
     .await

@@ -5,13 +5,20 @@
 //! Two bodies:
 //!
 //! - `application/json`: `{"profile": {"x_mm": [..], "mu": [..]},
-//!   "method": "physical", "device": {"u_max_v": 100, ...}}`;
+//!   "method": "physical", "device": {"u_max_v": 100, ...},
+//!   "relative": true, "flat_mu": 0.5}`;
 //! - `text/csv`: a profile file as is (`x_mm,mu` or `x_mm,ft_n,fn_n`), the
-//!   method and device parameters in the query string
-//!   (`?method=normalized&u_max_v=80`).
+//!   method, relative mapping and device parameters in the query string
+//!   (`?method=normalized&u_max_v=80&relative=true&flat_mu=0.5`).
 //!
 //! `?format=csv` answers `x_mm,mu,voltage_v` CSV (the file `haptex voltage`
 //! writes) instead of JSON.
+//!
+//! `relative: true` (`?relative=true` with a CSV body) maps the profile
+//! relative to its flat-surface friction, as the paper's Fig. 2 does
+//! (`haptex voltage --relative`, [`haptex_core::relative`]): mu / flat_mu *
+//! mu_HD, with `flat_mu` as given, else the profile's median. `flat_mu`
+//! without `relative: true` is refused rather than ignored.
 
 use std::collections::BTreeMap;
 
@@ -21,9 +28,11 @@ use axum::extract::rejection::BytesRejection;
 use axum::extract::{RawQuery, State};
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
-use haptex_core::electrovibration::{ElectroError, Method, VoltageProfile, map_profile};
+use haptex_core::electrovibration::{ElectroError, Method, VoltageProfile, map_profile, map_profile_relative};
 use haptex_core::num::Num;
 use haptex_core::profile::FrictionProfile;
+use haptex_core::ranges;
+use haptex_core::relative::{FlatMu, RelativeError};
 use serde::{Deserialize, Serialize};
 
 use crate::error::ApiError;
@@ -45,6 +54,40 @@ struct VoltageBody {
     /// the order given (a name given twice is refused, not overwritten).
     #[serde(default)]
     device: Pairs,
+    /// Map the profile relative to its flat-surface friction (paper Fig. 2).
+    #[serde(default)]
+    relative: bool,
+    /// The flat-surface friction mu_flat (with `relative` only; default:
+    /// the profile's median).
+    #[serde(default)]
+    flat_mu: Option<f64>,
+}
+
+/// Whether to map relative to the flat-surface friction, and how mu_flat
+/// is found: from `relative` and `flat_mu` (body fields or query
+/// parameters of these names, which errors name).
+fn relative_request(relative: bool, flat_mu: Option<f64>) -> Result<Option<FlatMu>, ApiError> {
+    match (relative, flat_mu) {
+        (false, None) => Ok(None),
+        (false, Some(_)) => Err(ApiError::bad_request(
+            "flat_mu is the flat-surface friction of a relative mapping: give relative = true with it",
+            Some("flat_mu"),
+        )),
+        (true, None) => Ok(Some(FlatMu::Median)),
+        (true, Some(value)) => Ok(Some(FlatMu::Given(crate::fields::check(ranges::FLAT_MU, value, "flat_mu")?))),
+    }
+}
+
+/// Parses the `relative` query parameter: `true` or `false`.
+fn parse_bool(text: &str, field: &str) -> Result<bool, ApiError> {
+    match text {
+        "true" => Ok(true),
+        "false" => Ok(false),
+        other => Err(ApiError::bad_request(
+            format!("{field} must be true or false, got {}", crate::error::quote(other)),
+            Some(field),
+        )),
+    }
 }
 
 /// The JSON answer: the parameters used (defaults filled in), the summary
@@ -68,22 +111,26 @@ pub async fn post(
     let kind = body_kind(&headers, &[BodyKind::Json, BodyKind::Csv])?;
     let bytes = body_bytes(body, limits.max_body_bytes)?;
     work::cpu(&state, bytes.len(), move || {
-        let (profile, method, request, prefix) = match kind {
+        let (profile, method, request, relative, prefix) = match kind {
             BodyKind::Json => {
                 query.finish()?;
                 let body: VoltageBody = parse_json(&bytes)?;
                 let request = DeviceRequest::from_pairs(body.device.iter(), "device.")?;
+                let relative = relative_request(body.relative, body.flat_mu)?;
                 let profile = body.profile.into_profile("profile.", limits.max_points)?;
-                (profile, body.method.unwrap_or(Method::Physical), request, "device.")
+                (profile, body.method.unwrap_or(Method::Physical), request, relative, "device.")
             }
             BodyKind::Csv => {
                 let method = query.take("method").map(|m| parse_method(&m, "method")).transpose()?;
+                let relative = query.take("relative").map(|t| parse_bool(&t, "relative")).transpose()?;
+                let flat_mu = query.take("flat_mu").map(|t| parse_number(&t, "flat_mu")).transpose()?;
+                let relative = relative_request(relative.unwrap_or(false), flat_mu)?;
                 let mut pairs = Vec::new();
                 for (name, text) in query.take_all() {
                     if !DEVICE_PARAMS.iter().any(|p| p.name == name) {
                         return Err(ApiError::bad_request(
-                            "unknown query parameter (with a CSV body the query takes format, method and the \
-                             device parameters)",
+                            "unknown query parameter (with a CSV body the query takes format, method, relative, \
+                             flat_mu and the device parameters)",
                             Some(&name),
                         ));
                     }
@@ -92,10 +139,10 @@ pub async fn post(
                 }
                 let request = DeviceRequest::from_pairs(pairs.iter().map(|(k, v)| (k.as_str(), *v)), "")?;
                 let profile = profile_from_csv(&bytes, limits.max_points)?;
-                (profile, method.unwrap_or(Method::Physical), request, "")
+                (profile, method.unwrap_or(Method::Physical), request, relative, "")
             }
         };
-        let voltage = compute(&profile, method, &request, prefix)?;
+        let voltage = compute(&profile, method, &request, relative, prefix)?;
         Ok(match format {
             "csv" => super::csv_response(super::to_csv(|w| voltage.write_csv(w))?, "voltage.csv"),
             _ => Json(VoltageAnswer { parameters: request.values(), voltage: &voltage }).into_response(),
@@ -104,17 +151,24 @@ pub async fn post(
     .await
 }
 
-/// Maps the profile. The ranges of the device parameters and of the
-/// profile keep every result finite (`params`, `fields`); a non-finite
-/// number would be a bug, answered 500 rather than as NaN or null.
-/// `prefix` starts the field names of errors (`device.` for a JSON body).
+/// Maps the profile (relative to its flat-surface friction when `relative`
+/// says how to find it). The ranges of the device parameters, of flat_mu
+/// and of the profile keep every result finite (`params`, `fields`); a
+/// non-finite number would be a bug, answered 500 rather than as NaN or
+/// null. `prefix` starts the field names of device errors (`device.` for
+/// a JSON body).
 pub(crate) fn compute(
     profile: &FrictionProfile,
     method: Method,
     request: &DeviceRequest,
+    relative: Option<FlatMu>,
     prefix: &str,
 ) -> Result<VoltageProfile, ApiError> {
-    let voltage = map_profile(profile, &request.device, method, request.fn_n).map_err(|e| match e {
+    let mapped = match relative {
+        None => map_profile(profile, &request.device, method, request.fn_n),
+        Some(flat) => map_profile_relative(profile, &request.device, method, request.fn_n, flat),
+    };
+    let voltage = mapped.map_err(|e| match e {
         ElectroError::NormalForceRequired { exponent } => ApiError::bad_request(
             format!(
                 "the contact-area law A = k Fn^n with n = {} makes the voltage depend on the normal force: give \
@@ -123,6 +177,13 @@ pub(crate) fn compute(
             ),
             Some(&format!("{prefix}fn_n")),
         ),
+        // mu_flat: out of range (checked before, so only mu_hd can be here,
+        // and it was checked too), a median that is not a friction
+        // coefficient, or a relative profile beyond the range of mu.
+        ElectroError::Relative(RelativeError::OutOfRange(ref r)) if r.name == "mu_hd" => {
+            ApiError::bad_request(e.to_string(), Some(&format!("{prefix}mu_hd")))
+        }
+        ElectroError::Relative(_) => ApiError::bad_request(e.to_string(), Some("flat_mu")),
         // Unreachable with the ranges of `params` and `fields`; named all
         // the same: a profile sample, or the device as a whole.
         ElectroError::NonFiniteVoltage { index, .. } => {
