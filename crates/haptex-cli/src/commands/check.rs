@@ -308,6 +308,7 @@ fn voltage_profile(check: &Check, device: &Device) -> VoltageProfile {
             mu_at_u_max: None,
             clipped: Default::default(),
             not_renderable: Default::default(),
+            relative: None,
             warnings: Vec::new(),
         },
         x_mm: x.to_vec(),
