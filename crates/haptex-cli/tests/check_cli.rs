@@ -110,3 +110,24 @@ fn bad_display_and_check_input_is_refused_clearly() {
         assert!(!err.contains("panicked"), "{err}");
     }
 }
+
+#[test]
+fn voltage_compensate_writes_the_compensated_voltage_with_its_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let mut target = String::from("x_mm,mu\n");
+    for i in 0..=30 {
+        let x = 0.1 * i as f64;
+        target += &format!("{x},{}\n", 0.5 + 0.05 * (x * 2.0).sin().abs());
+    }
+    std::fs::write(p("target.csv"), target).unwrap();
+    let out = haptex(&["voltage", "--profile", &p("target.csv"), "--mu-hd", "0.5", "--compensate", "-o", &p("u.csv")]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(p("u.csv")).unwrap();
+    let first = text.lines().next().unwrap();
+    assert!(first.starts_with("# compensated on the FE finger") && first.contains("RMS error"), "{first}");
+    let (_, rows) = table(&text);
+    assert!(rows.iter().all(|r| (0.0..=100.0).contains(&r[2])));
+    let out = haptex(&["voltage", "--profile", &p("target.csv"), "--compensate", "--method", "normalized"]);
+    assert!(!out.status.success() && stderr(&out).contains("--method physical"));
+}

@@ -5,8 +5,11 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use haptex_core::electrovibration::{ContactArea, Device, LayerStack, Method, map_profile, map_profile_relative};
+use haptex_core::num::Num;
+use haptex_core::profile::FrictionProfile;
 use haptex_core::ranges;
 use haptex_core::relative::FlatMu;
+use haptex_fem::render::{self, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping};
 
 use crate::args::{Output, in_range, read_profile};
 
@@ -84,6 +87,18 @@ pub struct VoltageArgs {
     /// Output file (default: stdout). Written atomically.
     #[arg(short, long, value_name = "OUT")]
     output: Option<PathBuf>,
+    /// Compensate the voltage on the FE finger model (physical method):
+    /// eq. (8)'s voltage corrected run by run until the friction the
+    /// finger feels on the display matches the profile (see `haptex
+    /// check`); the file's first comment states the achieved error.
+    #[arg(long)]
+    compensate: bool,
+    /// With --compensate: the finger's normal load, N per mm of width.
+    #[arg(long, value_parser = crate::args::positive, requires = "compensate")]
+    load: Option<f64>,
+    /// With --compensate: most FE runs, eq. (8)'s included.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=100), requires = "compensate")]
+    max_runs: u32,
     /// Do not print the summary to stderr.
     #[arg(short, long)]
     quiet: bool,
@@ -113,26 +128,58 @@ pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
         MethodArg::Physical => Method::Physical,
         MethodArg::Normalized => Method::Normalized,
     };
-    let voltage = if args.relative {
+    let mut voltage = if args.relative {
         let flat = args.flat_mu.map_or(FlatMu::Median, FlatMu::Given);
         map_profile_relative(&profile, &device, method, args.fn_n, flat)?
     } else {
         map_profile(&profile, &device, method, args.fn_n)?
     };
 
+    let mut comment = None;
+    if args.compensate {
+        if method != Method::Physical || !device.contact.is_linear() {
+            anyhow::bail!("--compensate needs --method physical and the linear contact-area law (--area-exponent 1)");
+        }
+        let target = FrictionProfile::new(voltage.x_mm.clone(), voltage.mu.clone())?;
+        let mut settings = RenderSettings::new(device.mu_hd, args.load.unwrap_or(DEFAULT_LOAD_N_PER_MM));
+        settings.device = device;
+        settings.scenario.step_mm = 0.05;
+        let stopping = Stopping { max_runs: args.max_runs as usize, ..Stopping::default() };
+        let c = render::compensate(&target, &settings, stopping, &mut |_, _| {})?;
+        let (eq8, best) = (&c.trials[0].metrics, c.best());
+        comment = Some(format!(
+            "# compensated on the FE finger (load {} N/mm, visco-elastic, default mesh): felt-friction RMS error {:.3e} \
+             over the renderable region after {} FE runs (eq. 8: {:.3e})",
+            Num(args.load.unwrap_or(DEFAULT_LOAD_N_PER_MM)),
+            best.metrics.rms_error,
+            c.trials.len(),
+            eq8.rms_error
+        ));
+        voltage.voltage_v = best.voltage_v.clone();
+        (voltage.summary.voltage_min_v, voltage.summary.voltage_max_v) =
+            voltage.voltage_v.iter().fold((f64::INFINITY, 0.0f64), |(a, b), &u| (a.min(u), b.max(u)));
+    }
     let output = Output::new(args.output);
     let format = args.format.unwrap_or(match output.path().and_then(|p| p.extension()) {
         Some(ext) if ext.eq_ignore_ascii_case("json") => Format::Json,
         _ => Format::Csv,
     });
     output.write(|w| match format {
-        Format::Csv => voltage.write_csv(w),
+        Format::Csv => {
+            if let Some(c) = &comment {
+                writeln!(w, "{c}")?;
+            }
+            voltage.write_csv(w)
+        }
         Format::Json => {
             serde_json::to_writer(&mut *w, &voltage).map_err(std::io::Error::from).and_then(|()| w.write_all(b"\n"))
         }
     })?;
     if !args.quiet {
         eprint!("{}", voltage.summary);
+        if let Some(c) = &comment {
+            eprintln!("{}", c.trim_start_matches("# "));
+        }
         if let Some(path) = output.path() {
             eprintln!("wrote {}", path.display());
         }
