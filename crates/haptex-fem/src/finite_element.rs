@@ -32,7 +32,11 @@
 //! ([`crate::hyperelastic`]), D = shear_ratio dS0_iso/dE.
 
 use crate::element::Q4;
-use crate::hyperelastic::{NeoHookean, push_forward};
+use crate::hyperelastic::{
+    NeoHookean, in_cbrt_range, inverse_cbrt_squared_in_range, isochoric_parts, push_forward, volumetric,
+};
+use crate::lanes::{LANES, Lanes, Real};
+use pulp::Simd;
 
 /// The deformed element is inverted or degenerate.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
@@ -45,19 +49,52 @@ pub struct Inverted {
 /// The in-plane deformation gradient F = I + grad_X u at Gauss point `gp`
 /// (`f[i][k]` = dx_i / dX_k).
 pub fn deformation_gradient(q: &Q4, gp: usize, u: &[f64; 8]) -> [[f64; 2]; 2] {
-    let mut f = [[1.0, 0.0], [0.0, 1.0]];
+    gradient_at(&q.grad[gp], u)
+}
+
+/// F = I + sum_a u_a (x) grad N_a, with the shape function gradients `n`
+/// of one point.
+#[inline(always)]
+fn gradient_at<T: Real>(n: &[[T; 2]; 4], u: &[T; 8]) -> [[T; 2]; 2] {
+    let (one, zero) = (n[0][0].constant(1.0), n[0][0].constant(0.0));
+    let mut f = [[one, zero], [zero, one]];
     for a in 0..4 {
         for i in 0..2 {
             for k in 0..2 {
-                f[i][k] += u[2 * a + i] * q.grad[gp][a][k];
+                f[i][k] += u[2 * a + i] * n[a][k];
             }
         }
     }
     f
 }
 
-fn det(f: &[[f64; 2]; 2]) -> f64 {
+#[inline(always)]
+fn det<T: Real>(f: &[[T; 2]; 2]) -> T {
     f[0][0] * f[1][1] - f[0][1] * f[1][0]
+}
+
+/// The isochoric stress of a step's trial state, shear_ratio S0_iso +
+/// frozen (11, 22, 33, 12).
+#[inline(always)]
+fn trial_stress<T: Real>(shear_ratio: T, s0: &[T; 4], frozen: &[T; 4]) -> [T; 4] {
+    std::array::from_fn(|k| shear_ratio * s0[k] + frozen[k])
+}
+
+/// Adds one Gauss point's share (weight `w`, shape function gradients `n`,
+/// deformation gradient `f`, isochoric stress `s`) of the nodal forces,
+/// w (F S)_iK N_a,K, and of the area derivative, w cof(F)_iK N_a,K.
+#[inline(always)]
+fn add_point_forces<T: Real>(w: T, n: &[[T; 2]; 4], f: &[[T; 2]; 2], s: &[T; 4], force: &mut [T; 8], g: &mut [T; 8]) {
+    let sm = [[s[0], s[3]], [s[3], s[1]]];
+    // P = F S (in plane).
+    let p: [[T; 2]; 2] = std::array::from_fn(|i| std::array::from_fn(|k| f[i][0] * sm[0][k] + f[i][1] * sm[1][k]));
+    let cof = [[f[1][1], -f[1][0]], [-f[0][1], f[0][0]]];
+    for a in 0..4 {
+        for i in 0..2 {
+            force[2 * a + i] += w * (p[i][0] * n[a][0] + p[i][1] * n[a][1]);
+            g[2 * a + i] += w * (cof[i][0] * n[a][0] + cof[i][1] * n[a][1]);
+        }
+    }
 }
 
 /// The mean dilatation Jbar = v / V of the element (current over
@@ -106,22 +143,9 @@ pub fn internal_force(
             }
             None => (law.isochoric_stress(&f), [[0.0; 3]; 3]),
         };
-        let s: [f64; 4] = std::array::from_fn(|k| shear_ratio * s0[k] + frozen[gp][k]);
+        let s = trial_stress(shear_ratio, &s0, &frozen[gp]);
         let sm = [[s[0], s[3]], [s[3], s[1]]];
-        // P = F S (in plane).
-        let mut p = [[0.0; 2]; 2];
-        for i in 0..2 {
-            for k in 0..2 {
-                p[i][k] = f[i][0] * sm[0][k] + f[i][1] * sm[1][k];
-            }
-        }
-        let cof = [[f[1][1], -f[1][0]], [-f[0][1], f[0][0]]];
-        for a in 0..4 {
-            for i in 0..2 {
-                force[2 * a + i] += w * (p[i][0] * n[a][0] + p[i][1] * n[a][1]);
-                g[2 * a + i] += w * (cof[i][0] * n[a][0] + cof[i][1] * n[a][1]);
-            }
-        }
+        add_point_forces(w, n, &f, &s, &mut force, &mut g);
         if let Some(k) = tangent.as_deref_mut() {
             // B: dE (Voigt 11, 22, 2 12) / du.
             let mut b = [[0.0; 8]; 3];
@@ -190,4 +214,135 @@ pub fn cauchy_stress(q: &Q4, gp: usize, u: &[f64; 8], law: &NeoHookean, s_iso: &
     let (p, _) = law.volumetric(mean_dilatation(q, u));
     let sigma = push_forward(&f, s_iso);
     [sigma[0] + p, sigma[1] + p, sigma[2] + p, sigma[3]]
+}
+
+/// [`LANES`] elements side by side (a structure of arrays): reference
+/// geometry, law and the step's visco-elastic stress parts, so that the
+/// internal-force loop over Gauss points runs on all of them at once, one
+/// element per SIMD lane ([`Lanes`]). The arithmetic of each lane is that
+/// of [`internal_force`], operation for operation (the same generic
+/// helpers): the forces are the same to the bit.
+#[derive(Debug, Clone)]
+pub struct ElementBlock {
+    /// The elements, in lane order; a last block that is not full repeats
+    /// its last element in the lanes beyond `len`.
+    pub elements: [usize; LANES],
+    pub len: usize,
+    /// Global DOFs (u_a, v_a interleaved) of each lane's element.
+    dofs: [[u32; LANES]; 8],
+    /// `grad[gp][a][k]`, as [`Q4::grad`].
+    grad: [[[[f64; LANES]; 2]; 4]; 4],
+    weight: [[f64; LANES]; 4],
+    area: [f64; LANES],
+    mu: [f64; LANES],
+    kappa: [f64; LANES],
+    /// The step's shear ratio and frozen isochoric stress `frozen[gp][k]`
+    /// (see [`internal_force`]), set with [`ElementBlock::set_stress_parts`].
+    shear_ratio: [f64; LANES],
+    frozen: [[[f64; LANES]; 4]; 4],
+}
+
+impl ElementBlock {
+    /// The block of `elements` (1 to [`LANES`]) with their geometry, global
+    /// DOFs and laws.
+    pub fn new(
+        elements: &[usize],
+        geometry: &[Q4],
+        dofs: impl Fn(usize) -> [usize; 8],
+        law: impl Fn(usize) -> NeoHookean,
+    ) -> Self {
+        assert!(!elements.is_empty() && elements.len() <= LANES, "1 to {LANES} elements in a block");
+        let lane = |l: usize| elements[l.min(elements.len() - 1)];
+        let element_dofs: [[usize; 8]; LANES] = std::array::from_fn(|l| dofs(lane(l)));
+        let laws: [NeoHookean; LANES] = std::array::from_fn(|l| law(lane(l)));
+        let lanes = |value: &dyn Fn(&Q4) -> f64| std::array::from_fn(|l| value(&geometry[lane(l)]));
+        Self {
+            elements: std::array::from_fn(lane),
+            len: elements.len(),
+            dofs: std::array::from_fn(|i| {
+                std::array::from_fn(|l| u32::try_from(element_dofs[l][i]).expect("DOF index fits in 32 bits"))
+            }),
+            grad: std::array::from_fn(|gp| {
+                std::array::from_fn(|a| std::array::from_fn(|k| lanes(&|q| q.grad[gp][a][k])))
+            }),
+            weight: std::array::from_fn(|gp| lanes(&|q| q.weight[gp])),
+            area: lanes(&|q| q.area),
+            mu: laws.map(|m| m.mu),
+            kappa: laws.map(|m| m.kappa),
+            shear_ratio: [0.0; LANES],
+            frozen: [[[0.0; LANES]; 4]; 4],
+        }
+    }
+
+    /// Sets lane `l`'s shear ratio and frozen stress of the step (see
+    /// [`internal_force`]).
+    pub fn set_stress_parts(&mut self, l: usize, shear_ratio: f64, frozen: &[[f64; 4]; 4]) {
+        self.shear_ratio[l] = shear_ratio;
+        for gp in 0..4 {
+            for k in 0..4 {
+                self.frozen[gp][k][l] = frozen[gp][k];
+            }
+        }
+    }
+
+    /// Adds the internal forces of the block's elements at the global
+    /// displacement `u` to `f` (element by element in lane order, as a loop
+    /// over the elements with [`internal_force`] would), in the SIMD lanes
+    /// of `simd`. Where some point has J outside the range of the J^(-2/3)
+    /// iteration (an inverted element, or an absurd one), or `simd` has
+    /// fewer than [`LANES`] lanes, the block is computed by
+    /// [`internal_force`] itself, which reports an inverted element.
+    #[inline(always)]
+    pub fn add_internal_forces<S: Simd>(
+        &self,
+        simd: S,
+        geometry: &[Q4],
+        u: &[f64],
+        f: &mut [f64],
+    ) -> Result<(), Inverted> {
+        let ue: [[f64; LANES]; 8] = std::array::from_fn(|i| std::array::from_fn(|l| u[self.dofs[i][l] as usize]));
+        if Lanes::<S>::fits() {
+            let load = |x: &[f64; LANES]| Lanes::load(simd, x);
+            let zero = Lanes::splat(simd, 0.0);
+            let (mut force, mut g, mut area) = ([zero; 8], [zero; 8], zero);
+            let mut in_range = true;
+            for gp in 0..4 {
+                let n = self.grad[gp].map(|grad_a| grad_a.map(|grad_ak| load(&grad_ak)));
+                let f = gradient_at(&n, &ue.map(|u| load(&u)));
+                let j = det(&f);
+                for j in j.to_array() {
+                    in_range &= in_cbrt_range(j);
+                }
+                let w = load(&self.weight[gp]);
+                area += w * j;
+                let (s0, ..) = isochoric_parts(load(&self.mu), &f, inverse_cbrt_squared_in_range(j));
+                let s = trial_stress(load(&self.shear_ratio), &s0, &self.frozen[gp].map(|k| load(&k)));
+                add_point_forces(w, &n, &f, &s, &mut force, &mut g);
+            }
+            let j_bar = area / load(&self.area);
+            for j in j_bar.to_array() {
+                in_range &= j > 0.0;
+            }
+            if in_range {
+                let (pressure, _) = volumetric(load(&self.kappa), j_bar);
+                let fe: [[f64; LANES]; 8] = std::array::from_fn(|i| (force[i] + pressure * g[i]).to_array());
+                for l in 0..self.len {
+                    for i in 0..8 {
+                        f[self.dofs[i][l] as usize] += fe[i][l];
+                    }
+                }
+                return Ok(());
+            }
+        }
+        for l in 0..self.len {
+            let law = NeoHookean { mu: self.mu[l], kappa: self.kappa[l] };
+            let frozen = std::array::from_fn(|gp| std::array::from_fn(|k| self.frozen[gp][k][l]));
+            let ue_l = std::array::from_fn(|i| ue[i][l]);
+            let fe = internal_force(&geometry[self.elements[l]], &ue_l, &law, self.shear_ratio[l], &frozen, None)?;
+            for i in 0..8 {
+                f[self.dofs[i][l] as usize] += fe[i];
+            }
+        }
+        Ok(())
+    }
 }

@@ -61,8 +61,10 @@ use std::time::Instant;
 use crate::assembly::{DofMap, PRESCRIBED};
 use crate::body::{Body, SubdomainModel};
 use crate::contact::ContactTotals;
-use crate::finite_element::{Inverted, cauchy_stress, internal_force, isochoric_stresses};
+use crate::element::Q4;
+use crate::finite_element::{ElementBlock, Inverted, cauchy_stress, internal_force, isochoric_stresses};
 use crate::hyperelastic::NeoHookean;
+use crate::lanes::LANES;
 use crate::linalg::{SparseCholesky, lower_transpose_solve, lower_transpose_times, schur_operators};
 use crate::material::{StepCoefficients, advance_history, frozen_deviator, history_deviator};
 use crate::solver::{
@@ -82,6 +84,12 @@ pub struct FiniteBody {
     history_h: Vec<[f64; 4]>,
     history_start: Vec<usize>,
     terms: Vec<usize>,
+    /// The deformable elements in blocks of [`LANES`] for the trial
+    /// internal forces, with the stress parts of the step they were last
+    /// set for ([`FiniteBody::set_trial`]).
+    blocks: Vec<ElementBlock>,
+    /// The CPU's SIMD level (AVX2 where it has it).
+    arch: pulp::Arch,
 }
 
 impl FiniteBody {
@@ -112,6 +120,18 @@ impl FiniteBody {
             terms.push(n_terms[sd as usize]);
             total += 4 * n_terms[sd as usize];
         }
+        let blocks = body
+            .deformable_elements()
+            .chunks(LANES)
+            .map(|elements| {
+                ElementBlock::new(
+                    elements,
+                    &body.geometry,
+                    |e| DofMap::element_dofs(&body.mesh.elements[e]),
+                    |e| laws[body.mesh.subdomain[e] as usize].expect("deformable element"),
+                )
+            })
+            .collect();
         Self {
             laws,
             g_inf,
@@ -119,6 +139,8 @@ impl FiniteBody {
             history_h: vec![[0.0; 4]; total],
             history_start,
             terms,
+            blocks,
+            arch: pulp::Arch::new(),
         }
     }
 
@@ -183,6 +205,29 @@ impl FiniteBody {
         Ok(())
     }
 
+    /// Sets the stress parts of a step's trial state with coefficients `c`
+    /// (constant over the step: its shear ratio and the frozen history
+    /// stress) for [`FiniteBody::add_trial_internal_forces`].
+    pub fn set_trial(&mut self, body: &Body, c: &[Option<StepCoefficients>]) {
+        let mut blocks = std::mem::take(&mut self.blocks);
+        for block in &mut blocks {
+            for l in 0..block.len {
+                let (ratio, frozen) = self.stress_parts(body, block.elements[l], Some(c));
+                block.set_stress_parts(l, ratio, &frozen);
+            }
+        }
+        self.blocks = blocks;
+    }
+
+    /// Adds the internal forces of all deformable elements at the global
+    /// displacement `u` to `f`, of the trial state last set by
+    /// [`FiniteBody::set_trial`]: [`FiniteBody::add_internal_forces`] of
+    /// every deformable element with those coefficients, to the bit, in
+    /// SIMD lanes of [`LANES`] elements.
+    pub fn add_trial_internal_forces(&self, body: &Body, u: &[f64], f: &mut [f64]) -> Result<(), Inverted> {
+        self.arch.dispatch(TrialForces { blocks: &self.blocks, geometry: &body.geometry, u, f })
+    }
+
     /// Advances the history of every point to the displacement `u` at the
     /// end of a step with coefficients `c`.
     pub fn commit(&mut self, body: &Body, c: &[Option<StepCoefficients>], u: &[f64]) {
@@ -212,6 +257,27 @@ impl FiniteBody {
             }
         }
         avg
+    }
+}
+
+/// The loop of [`FiniteBody::add_trial_internal_forces`], compiled for
+/// each SIMD level [`pulp::Arch`] dispatches to.
+struct TrialForces<'a> {
+    blocks: &'a [ElementBlock],
+    geometry: &'a [Q4],
+    u: &'a [f64],
+    f: &'a mut [f64],
+}
+
+impl pulp::WithSimd for TrialForces<'_> {
+    type Output = Result<(), Inverted>;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) -> Self::Output {
+        for block in self.blocks {
+            block.add_internal_forces(simd, self.geometry, self.u, self.f)?;
+        }
+        Ok(())
     }
 }
 
@@ -622,6 +688,7 @@ impl FiniteSolver {
             }
             self.iterate[n] = y_target;
         }
+        self.body_state.set_trial(&inner.problem.body, &ops.coefficients);
         self.anderson.reset();
         if !resume {
             self.stopped = None;
@@ -656,15 +723,8 @@ impl FiniteSolver {
             } else {
                 let timer = Instant::now();
                 self.f_int.fill(0.0);
-                let ops = &*ops_k;
                 let body = &inner.problem.body;
-                if let Err(e) = self.body_state.add_internal_forces(
-                    body,
-                    Some(&ops.coefficients),
-                    body.deformable_elements(),
-                    &self.x,
-                    &mut self.f_int,
-                ) {
+                if let Err(e) = self.body_state.add_trial_internal_forces(body, &self.x, &mut self.f_int) {
                     if debug {
                         eprintln!("finite: outer {outer}: {e}");
                     }
