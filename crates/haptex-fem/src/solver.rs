@@ -668,13 +668,19 @@ pub(crate) struct Condensed<'a> {
 }
 
 impl Condensed<'_> {
-    /// out = S x (m2 x m2 dense; once per step, not per iteration).
+    /// out = S x (m2 x m2 dense; a few times per step, and per outer
+    /// iteration of the finite-strain solver). Column by column (axpy, in
+    /// SIMD lanes): each out_r still sums S_rc x_c over c in order, the
+    /// sum of a row-by-row dot product to the bit.
     fn stiffness_times(&self, x: &[f64], out: &mut [f64]) {
         let m2 = self.m2;
-        for r in 0..m2 {
-            // S is symmetric: row r is column r.
-            let row = &self.stiffness[r * m2..(r + 1) * m2];
-            out[r] = row.iter().zip(x).map(|(a, b)| a * b).sum();
+        let out = &mut out[..m2];
+        out.fill(0.0);
+        for (c, &xc) in x[..m2].iter().enumerate() {
+            let column = &self.stiffness[c * m2..(c + 1) * m2];
+            for (o, a) in out.iter_mut().zip(column) {
+                *o += a * xc;
+            }
         }
     }
 
