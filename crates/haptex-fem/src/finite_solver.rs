@@ -520,6 +520,9 @@ pub struct FiniteSolver {
     /// A solve's forward half (factor order) and its trailing part.
     sweep: Vec<f64>,
     sweep_trailing: Vec<f64>,
+    /// Whether the drive responses of `tangent_ops` are solved (see
+    /// [`FiniteSolver::solve_tangent_drive_responses`]).
+    tangent_psi_solved: bool,
     /// Contact Newton iterations and the drive's x of an attempt that
     /// stopped unconverged (to resume it).
     last_newton_iterations: usize,
@@ -568,6 +571,7 @@ impl FiniteSolver {
             tangent_ops: None,
             tangent_values: vec![0.0; inner.pattern.nnz()],
             tangent_base: None,
+            tangent_psi_solved: false,
             trailing_factor: vec![0.0; m2 * m2],
             trailing_scratch: vec![0.0; m2 * m2],
             sweep: vec![0.0; n_free],
@@ -653,6 +657,16 @@ impl FiniteSolver {
         let debug = std::env::var_os("HAPTEX_DEBUG").is_some();
         let placement = self.inner.placement(slide_mm);
         let settings = self.finite_settings;
+        // The drive responses psi enter the predictor of a step that moves
+        // the drive, and every iteration under load control.
+        let moves_drive = match drive {
+            Drive::Displacement(target) => target != self.inner.drive_mm,
+            Drive::Load { x_mm, .. } => x_mm != self.inner.drive_mm[0],
+        };
+        let load_control = matches!(drive, Drive::Load { .. });
+        if load_control || (moves_drive && !resume) {
+            self.solve_tangent_drive_responses();
+        }
         let inner = &mut self.inner;
         // The tangent operators come with the pad block L_tt of their
         // pad-last factor (`self.trailing_factor`): G(x) then costs one
@@ -683,7 +697,8 @@ impl FiniteSolver {
         if !resume {
             for (g, &d) in inner.dofs.free.iter().enumerate() {
                 if d != PRESCRIBED {
-                    self.iterate[d] = inner.u[g] + change[0] * ops.psi[0][d] + change[1] * ops.psi[1][d];
+                    self.iterate[d] =
+                        if moves_drive { inner.u[g] + change[0] * ops.psi[0][d] + change[1] * ops.psi[1][d] } else { inner.u[g] };
                 }
             }
             self.iterate[n] = y_target;
@@ -823,7 +838,7 @@ impl FiniteSolver {
             self.profile.solve_s += timer.elapsed().as_secs_f64();
             let ops = &*ops_k;
             for (c, &row) in inner.candidate_free.iter().enumerate() {
-                s.psi_y_s[c] = ops.psi[1][row];
+                s.psi_y_s[c] = if load.is_some() { ops.psi[1][row] } else { 0.0 };
             }
             let condensed = Condensed {
                 m2,
@@ -1035,9 +1050,11 @@ impl FiniteSolver {
         }
         cholesky.trailing_factor(&mut self.trailing_factor);
         schur_operators(&self.trailing_factor, m2, &mut self.trailing_scratch, &mut compliance, &mut stiffness);
-        for response in psi.iter_mut() {
-            cholesky.solve_vec(response);
-        }
+        // psi holds the loads of unit drive translations; they are solved
+        // for the responses only when an attempt needs them
+        // ([`FiniteSolver::solve_tangent_drive_responses`]): not in a slide
+        // under a fixed drive, where most rebuilds are.
+        self.tangent_psi_solved = false;
         // Phi, the response to unit pad forces, is not needed here: G(x)
         // puts the pad at v by one sparse solve.
         let phi = Vec::new();
@@ -1047,6 +1064,21 @@ impl FiniteSolver {
             eprintln!("finite: tangent operators for dt {dt_s}: {:.1} ms", timer.elapsed().as_secs_f64() * 1e3);
         }
         Ok(())
+    }
+
+    /// Solves the tangent operators' drive responses psi from the loads
+    /// [`FiniteSolver::build_tangent_operators`] left there, once.
+    fn solve_tangent_drive_responses(&mut self) {
+        if let Some(ops) = self.tangent_ops.as_mut()
+            && !self.tangent_psi_solved
+        {
+            let timer = Instant::now();
+            for response in ops.psi.iter_mut() {
+                ops.cholesky.solve_vec(response);
+            }
+            self.tangent_psi_solved = true;
+            self.profile.condensation_s += timer.elapsed().as_secs_f64();
+        }
     }
 
     /// The reaction on the driven set (N per mm of width) from the

@@ -759,7 +759,12 @@ pub(crate) fn newton(
     let debug = std::env::var_os("HAPTEX_DEBUG").is_some();
     // The step's constant products, and S v exactly.
     cond.stiffness_times(&s.u0_s, &mut s.su0);
-    cond.stiffness_times(&s.psi_y_s, &mut s.spsi);
+    if cond.load.is_some() {
+        cond.stiffness_times(&s.psi_y_s, &mut s.spsi);
+    } else {
+        // dy stays 0 under displacement control: S psi_s is never used.
+        s.spsi[..m2].fill(0.0);
+    }
     cond.stiffness_times(&s.v, &mut s.sv);
     // Stick predictor: one Newton step with every contact point sticking,
     // taken when some point stuck at the last step (the pad's shear is still
