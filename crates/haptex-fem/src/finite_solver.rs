@@ -733,6 +733,7 @@ impl FiniteSolver {
             // (`self.f_free`, the contact forces and trial states are then
             // those of this iterate).
             let reuse = if outer == 0 && resume { self.stopped.take() } else { None };
+            let evaluated_here = reuse.is_none();
             let (norm, scale, totals) = if let Some(stopped) = reuse {
                 stopped
             } else {
@@ -852,6 +853,11 @@ impl FiniteSolver {
             let mut inner_settings = inner.settings;
             inner_settings.relative_tolerance =
                 inner_settings.relative_tolerance.max(settings.inner_forcing * norm / scale.max(floor));
+            // The contact was evaluated at the pad's iterate for the
+            // residual: the contact Newton starts from that evaluation.
+            if evaluated_here {
+                s.forces.copy_from_slice(&self.contact_forces);
+            }
             let (its, _) = newton(
                 &condensed,
                 &mut inner.problem.contact,
@@ -861,6 +867,7 @@ impl FiniteSolver {
                 &inner_settings,
                 s,
                 &mut dy,
+                evaluated_here.then_some(totals),
             )?;
             newton_iterations += its;
             self.profile.contact_newton_s += timer.elapsed().as_secs_f64();

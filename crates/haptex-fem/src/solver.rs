@@ -487,6 +487,7 @@ impl Solver {
             &self.settings,
             s,
             &mut dy,
+            None,
         )?;
         // Converged: recover the full field u_f = u0 + dy psi_y + Phi F.
         let s = &mut self.scratch;
@@ -738,7 +739,10 @@ const MIN_DAMPING: f64 = 1e-12;
 
 /// Semi-smooth Newton with backtracking on the condensed contact problem.
 /// On entry `s.v` holds the predictor; on success `s.v`/`s.forces` hold the
-/// solution and `dy` the change of the driven y (load control).
+/// solution and `dy` the change of the driven y (load control). With
+/// `evaluated`, the contact is already evaluated at the predictor with
+/// `law` (forces in `s.forces`, tangent blocks in `s.blocks`, trial
+/// states set; these are its totals) and is not evaluated there again.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn newton(
     cond: &Condensed<'_>,
@@ -749,6 +753,7 @@ pub(crate) fn newton(
     settings: &SolverSettings,
     s: &mut Scratch,
     dy: &mut f64,
+    evaluated: Option<ContactTotals>,
 ) -> Result<(usize, ContactTotals), StepFailure> {
     // The contact tangent starts with its geometric term (the exact
     // derivative: quadratic convergence where the surface is curved) and
@@ -772,7 +777,8 @@ pub(crate) fn newton(
     // instead, the linearised slip drags the whole pad past the surface and
     // the iterates flip every point's slip direction back and forth. In
     // steady sliding the last state is the better start.
-    if contact.committed.iter().any(|p| p.active && !p.slipping) {
+    let stick_predictor = contact.committed.iter().any(|p| p.active && !p.slipping);
+    if stick_predictor {
         contact.evaluate_with(&s.v, surface, placement, law, true, &mut s.forces, &mut s.blocks);
         cond.residual(s, false, *dy);
         if newton_direction(cond, s, 0.0).is_some() {
@@ -783,7 +789,10 @@ pub(crate) fn newton(
             *dy += s.last_ddy;
         }
     }
-    let mut totals = contact.evaluate(&s.v, surface, placement, law, &mut s.forces, &mut s.blocks);
+    let mut totals = match evaluated {
+        Some(totals) if !stick_predictor => totals,
+        _ => contact.evaluate(&s.v, surface, placement, law, &mut s.forces, &mut s.blocks),
+    };
     let (mut norm, mut merit, mut scale) = cond.residual(s, false, *dy);
     let tolerance_of = |scale: f64| settings.relative_tolerance * scale.max(cond.force_floor_n);
     // The part of the last Newton correction not taken (mm): none at the
