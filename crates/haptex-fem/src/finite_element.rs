@@ -33,7 +33,8 @@
 
 use crate::element::Q4;
 use crate::hyperelastic::{
-    NeoHookean, in_cbrt_range, inverse_cbrt_squared_in_range, isochoric_parts, push_forward, volumetric,
+    NeoHookean, in_cbrt_range, inverse_cbrt_squared, inverse_cbrt_squared_in_range, isochoric_parts, isochoric_tangent,
+    push_forward, volumetric,
 };
 use crate::lanes::{LANES, Lanes, Real};
 use pulp::Simd;
@@ -119,36 +120,100 @@ pub fn internal_force(
     law: &NeoHookean,
     shear_ratio: f64,
     frozen: &[[f64; 4]; 4],
-    mut tangent: Option<&mut [[f64; 8]; 8]>,
+    tangent: Option<&mut [[f64; 8]; 8]>,
 ) -> Result<[f64; 8], Inverted> {
-    let mut force = [0.0; 8];
-    let mut g = [0.0; 8];
-    let mut area = 0.0;
+    let element = OneElement { q, law, shear_ratio, frozen };
+    let (force, j, j_bar) = element_response(&element, u, true, tangent);
+    if let Some(gp) = (0..4).find(|&gp| j[gp].is_nan() || j[gp] <= 0.0) {
+        return Err(Inverted { gauss_point: gp, det_f: j[gp] });
+    }
+    if j_bar.is_nan() || j_bar <= 0.0 {
+        return Err(Inverted { gauss_point: 4, det_f: j_bar });
+    }
+    Ok(force)
+}
+
+/// What [`element_response`] reads of an element, or of [`LANES`] of them
+/// side by side: reference geometry (as [`Q4`]'s), law and the step's
+/// visco-elastic stress parts (see [`internal_force`]).
+trait ElementInput<T: Real> {
+    fn grad(&self, gp: usize) -> [[T; 2]; 4];
+    fn weight(&self, gp: usize) -> T;
+    fn reference_area(&self) -> T;
+    /// mu and kappa of the neo-Hookean law.
+    fn law(&self) -> (T, T);
+    fn shear_ratio(&self) -> T;
+    fn frozen(&self, gp: usize) -> [T; 4];
+}
+
+/// One element's input to [`element_response`].
+struct OneElement<'a> {
+    q: &'a Q4,
+    law: &'a NeoHookean,
+    shear_ratio: f64,
+    frozen: &'a [[f64; 4]; 4],
+}
+
+impl ElementInput<f64> for OneElement<'_> {
+    fn grad(&self, gp: usize) -> [[f64; 2]; 4] {
+        self.q.grad[gp]
+    }
+    fn weight(&self, gp: usize) -> f64 {
+        self.q.weight[gp]
+    }
+    fn reference_area(&self) -> f64 {
+        self.q.area
+    }
+    fn law(&self) -> (f64, f64) {
+        (self.law.mu, self.law.kappa)
+    }
+    fn shear_ratio(&self) -> f64 {
+        self.shear_ratio
+    }
+    fn frozen(&self, gp: usize) -> [f64; 4] {
+        self.frozen[gp]
+    }
+}
+
+/// The element's nodal forces and, with `tangent`, their consistent
+/// derivative ([`internal_force`]), on f64 or on [`Lanes`] (one element
+/// per lane); J^(-2/3) by [`inverse_cbrt_squared`] if `checked`, else by
+/// its iteration alone (the caller checks the range). Also returns J at
+/// the points and Jbar for the caller to check: where one is not positive
+/// the element is inverted and the forces are meaningless.
+#[inline(always)]
+fn element_response<T: Real>(
+    element: &impl ElementInput<T>,
+    u: &[T; 8],
+    checked: bool,
+    mut tangent: Option<&mut [[T; 8]; 8]>,
+) -> ([T; 8], [T; 4], T) {
+    let (mu, kappa) = element.law();
+    let shear_ratio = element.shear_ratio();
+    let zero = shear_ratio.constant(0.0);
+    let mut force = [zero; 8];
+    let mut g = [zero; 8];
+    let mut area = zero;
+    let mut j_points = [zero; 4];
     if let Some(k) = tangent.as_deref_mut() {
-        *k = [[0.0; 8]; 8];
+        *k = [[zero; 8]; 8];
     }
     for gp in 0..4 {
-        let f = deformation_gradient(q, gp, u);
+        let n = &element.grad(gp);
+        let f = gradient_at(n, u);
         let j = det(&f);
-        if j.is_nan() || j <= 0.0 {
-            return Err(Inverted { gauss_point: gp, det_f: j });
-        }
-        let w = q.weight[gp];
-        let n = &q.grad[gp];
+        j_points[gp] = j;
+        let w = element.weight(gp);
         area += w * j;
-        let (s0, d) = match tangent {
-            Some(_) => {
-                let response = law.isochoric(&f);
-                (response.stress, response.tangent)
-            }
-            None => (law.isochoric_stress(&f), [[0.0; 3]; 3]),
-        };
-        let s = trial_stress(shear_ratio, &s0, &frozen[gp]);
+        let j_23 = if checked { j.map(inverse_cbrt_squared) } else { inverse_cbrt_squared_in_range(j) };
+        let (s0, ci, i1, a) = isochoric_parts(mu, &f, j_23);
+        let s = trial_stress(shear_ratio, &s0, &element.frozen(gp));
         let sm = [[s[0], s[3]], [s[3], s[1]]];
         add_point_forces(w, n, &f, &s, &mut force, &mut g);
         if let Some(k) = tangent.as_deref_mut() {
+            let d = isochoric_tangent(&ci, i1, a);
             // B: dE (Voigt 11, 22, 2 12) / du.
-            let mut b = [[0.0; 8]; 3];
+            let mut b = [[zero; 8]; 3];
             for a in 0..4 {
                 for i in 0..2 {
                     b[0][2 * a + i] = f[i][0] * n[a][0];
@@ -156,7 +221,7 @@ pub fn internal_force(
                     b[2][2 * a + i] = f[i][0] * n[a][1] + f[i][1] * n[a][0];
                 }
             }
-            let mut db = [[0.0; 8]; 3];
+            let mut db = [[zero; 8]; 3];
             for r in 0..3 {
                 for c in 0..8 {
                     db[r][c] = shear_ratio * (d[r][0] * b[0][c] + d[r][1] * b[1][c] + d[r][2] * b[2][c]);
@@ -178,32 +243,30 @@ pub fn internal_force(
             }
         }
     }
-    let j_bar = area / q.area;
-    if j_bar.is_nan() || j_bar <= 0.0 {
-        return Err(Inverted { gauss_point: 4, det_f: j_bar });
-    }
-    let (pressure, stiffness) = law.volumetric(j_bar);
+    let reference_area = element.reference_area();
+    let j_bar = area / reference_area;
+    let (pressure, stiffness) = volumetric(kappa, j_bar);
     for r in 0..8 {
         force[r] += pressure * g[r];
     }
     if let Some(k) = tangent {
         for r in 0..8 {
             for c in 0..8 {
-                k[r][c] += stiffness / q.area * g[r] * g[c];
+                k[r][c] += stiffness / reference_area * g[r] * g[c];
             }
         }
         for gp in 0..4 {
-            let (w, n) = (q.weight[gp], &q.grad[gp]);
+            let (w, n) = (element.weight(gp), &element.grad(gp));
             for a in 0..4 {
                 for bb in 0..4 {
                     let h = pressure * w * (n[a][0] * n[bb][1] - n[a][1] * n[bb][0]);
                     k[2 * a][2 * bb + 1] += h;
-                    k[2 * a + 1][2 * bb] -= h;
+                    k[2 * a + 1][2 * bb] = k[2 * a + 1][2 * bb] - h;
                 }
             }
         }
     }
-    Ok(force)
+    (force, j_points, j_bar)
 }
 
 /// The Cauchy stress (xx, yy, zz, xy; MPa) at Gauss point `gp` for the
@@ -285,6 +348,50 @@ impl ElementBlock {
         }
     }
 
+    /// The block's elements' displacements from the global `u`.
+    fn displacements(&self, u: &[f64]) -> [[f64; LANES]; 8] {
+        std::array::from_fn(|i| std::array::from_fn(|l| u[self.dofs[i][l] as usize]))
+    }
+
+    /// [`element_response`] of the block in the SIMD lanes of `simd`, with
+    /// whether J and Jbar are in range at every point of every lane (the
+    /// J^(-2/3) iteration's range; else some element is inverted, or
+    /// absurd, and the block is computed element by element).
+    #[inline(always)]
+    fn lanes_response<S: Simd>(
+        &self,
+        simd: S,
+        ue: &[[f64; LANES]; 8],
+        tangent: Option<&mut [[Lanes<S>; 8]; 8]>,
+    ) -> ([Lanes<S>; 8], bool) {
+        let u = ue.map(|u| Lanes::load(simd, &u));
+        let (force, j, j_bar) = element_response(&BlockLanes { block: self, simd }, &u, false, tangent);
+        let mut in_range = true;
+        for j in j {
+            for j in j.to_array() {
+                in_range &= in_cbrt_range(j);
+            }
+        }
+        for j_bar in j_bar.to_array() {
+            in_range &= j_bar > 0.0;
+        }
+        (force, in_range)
+    }
+
+    /// Lane `l`'s element by [`internal_force`] itself.
+    fn element_internal_force(
+        &self,
+        l: usize,
+        geometry: &[Q4],
+        ue: &[[f64; LANES]; 8],
+        tangent: Option<&mut [[f64; 8]; 8]>,
+    ) -> Result<[f64; 8], Inverted> {
+        let law = NeoHookean { mu: self.mu[l], kappa: self.kappa[l] };
+        let frozen = std::array::from_fn(|gp| std::array::from_fn(|k| self.frozen[gp][k][l]));
+        let ue_l = std::array::from_fn(|i| ue[i][l]);
+        internal_force(&geometry[self.elements[l]], &ue_l, &law, self.shear_ratio[l], &frozen, tangent)
+    }
+
     /// Adds the internal forces of the block's elements at the global
     /// displacement `u` to `f` (element by element in lane order, as a loop
     /// over the elements with [`internal_force`] would), in the SIMD lanes
@@ -300,32 +407,11 @@ impl ElementBlock {
         u: &[f64],
         f: &mut [f64],
     ) -> Result<(), Inverted> {
-        let ue: [[f64; LANES]; 8] = std::array::from_fn(|i| std::array::from_fn(|l| u[self.dofs[i][l] as usize]));
+        let ue = self.displacements(u);
         if Lanes::<S>::fits() {
-            let load = |x: &[f64; LANES]| Lanes::load(simd, x);
-            let zero = Lanes::splat(simd, 0.0);
-            let (mut force, mut g, mut area) = ([zero; 8], [zero; 8], zero);
-            let mut in_range = true;
-            for gp in 0..4 {
-                let n = self.grad[gp].map(|grad_a| grad_a.map(|grad_ak| load(&grad_ak)));
-                let f = gradient_at(&n, &ue.map(|u| load(&u)));
-                let j = det(&f);
-                for j in j.to_array() {
-                    in_range &= in_cbrt_range(j);
-                }
-                let w = load(&self.weight[gp]);
-                area += w * j;
-                let (s0, ..) = isochoric_parts(load(&self.mu), &f, inverse_cbrt_squared_in_range(j));
-                let s = trial_stress(load(&self.shear_ratio), &s0, &self.frozen[gp].map(|k| load(&k)));
-                add_point_forces(w, &n, &f, &s, &mut force, &mut g);
-            }
-            let j_bar = area / load(&self.area);
-            for j in j_bar.to_array() {
-                in_range &= j > 0.0;
-            }
+            let (force, in_range) = self.lanes_response(simd, &ue, None);
             if in_range {
-                let (pressure, _) = volumetric(load(&self.kappa), j_bar);
-                let fe: [[f64; LANES]; 8] = std::array::from_fn(|i| (force[i] + pressure * g[i]).to_array());
+                let fe = force.map(Lanes::to_array);
                 for l in 0..self.len {
                     for i in 0..8 {
                         f[self.dofs[i][l] as usize] += fe[i][l];
@@ -335,14 +421,79 @@ impl ElementBlock {
             }
         }
         for l in 0..self.len {
-            let law = NeoHookean { mu: self.mu[l], kappa: self.kappa[l] };
-            let frozen = std::array::from_fn(|gp| std::array::from_fn(|k| self.frozen[gp][k][l]));
-            let ue_l = std::array::from_fn(|i| ue[i][l]);
-            let fe = internal_force(&geometry[self.elements[l]], &ue_l, &law, self.shear_ratio[l], &frozen, None)?;
+            let fe = self.element_internal_force(l, geometry, &ue, None)?;
             for i in 0..8 {
                 f[self.dofs[i][l] as usize] += fe[i];
             }
         }
         Ok(())
+    }
+
+    /// Calls `visit(element, tangent)` with the consistent tangent of
+    /// [`internal_force`] of each of the block's elements at the global
+    /// displacement `u`, in lane order, computed in the SIMD lanes of
+    /// `simd` (the same to the bit), or element by element as
+    /// [`ElementBlock::add_internal_forces`] is. Stops at an inverted
+    /// element.
+    #[inline(always)]
+    pub fn visit_tangents<S: Simd>(
+        &self,
+        simd: S,
+        geometry: &[Q4],
+        u: &[f64],
+        visit: &mut impl FnMut(usize, &[[f64; 8]; 8]),
+    ) -> Result<(), Inverted> {
+        let ue = self.displacements(u);
+        if Lanes::<S>::fits() {
+            let mut k = [[Lanes::splat(simd, 0.0); 8]; 8];
+            let (_, in_range) = self.lanes_response(simd, &ue, Some(&mut k));
+            if in_range {
+                let k = k.map(|row| row.map(Lanes::to_array));
+                for l in 0..self.len {
+                    visit(self.elements[l], &std::array::from_fn(|r| std::array::from_fn(|c| k[r][c][l])));
+                }
+                return Ok(());
+            }
+        }
+        for l in 0..self.len {
+            let mut k = [[0.0; 8]; 8];
+            self.element_internal_force(l, geometry, &ue, Some(&mut k))?;
+            visit(self.elements[l], &k);
+        }
+        Ok(())
+    }
+}
+
+/// An [`ElementBlock`]'s input to [`element_response`], loaded into the
+/// SIMD lanes of `S` where it is used.
+struct BlockLanes<'a, S: Simd> {
+    block: &'a ElementBlock,
+    simd: S,
+}
+
+impl<S: Simd> ElementInput<Lanes<S>> for BlockLanes<'_, S> {
+    #[inline(always)]
+    fn grad(&self, gp: usize) -> [[Lanes<S>; 2]; 4] {
+        self.block.grad[gp].map(|n_a| n_a.map(|n_ak| Lanes::load(self.simd, &n_ak)))
+    }
+    #[inline(always)]
+    fn weight(&self, gp: usize) -> Lanes<S> {
+        Lanes::load(self.simd, &self.block.weight[gp])
+    }
+    #[inline(always)]
+    fn reference_area(&self) -> Lanes<S> {
+        Lanes::load(self.simd, &self.block.area)
+    }
+    #[inline(always)]
+    fn law(&self) -> (Lanes<S>, Lanes<S>) {
+        (Lanes::load(self.simd, &self.block.mu), Lanes::load(self.simd, &self.block.kappa))
+    }
+    #[inline(always)]
+    fn shear_ratio(&self) -> Lanes<S> {
+        Lanes::load(self.simd, &self.block.shear_ratio)
+    }
+    #[inline(always)]
+    fn frozen(&self, gp: usize) -> [Lanes<S>; 4] {
+        self.block.frozen[gp].map(|s_k| Lanes::load(self.simd, &s_k))
     }
 }

@@ -157,7 +157,7 @@ impl FiniteBody {
     /// The shear ratio and the frozen isochoric stress of element `e`'s
     /// points for a step with coefficients `c` (the trial state), or of
     /// the committed state with `c` = None.
-    fn stress_parts(&self, body: &Body, e: usize, c: Option<&[Option<StepCoefficients>]>) -> (f64, [[f64; 4]; 4]) {
+    pub fn stress_parts(&self, body: &Body, e: usize, c: Option<&[Option<StepCoefficients>]>) -> (f64, [[f64; 4]; 4]) {
         let sd = body.mesh.subdomain[e] as usize;
         match c {
             Some(c) => {
@@ -228,6 +228,20 @@ impl FiniteBody {
         self.arch.dispatch(TrialForces { blocks: &self.blocks, geometry: &body.geometry, u, f })
     }
 
+    /// Calls `visit(element, tangent)` for every deformable element, in
+    /// order, with the consistent tangent of its internal force at the
+    /// global displacement `u` in the trial state last set by
+    /// [`FiniteBody::set_trial`] (that of [`internal_force`], to the bit,
+    /// in SIMD lanes of [`LANES`] elements). Stops at an inverted element.
+    pub fn visit_trial_tangents(
+        &self,
+        body: &Body,
+        u: &[f64],
+        visit: &mut impl FnMut(usize, &[[f64; 8]; 8]),
+    ) -> Result<(), Inverted> {
+        self.arch.dispatch(TrialTangents { blocks: &self.blocks, geometry: &body.geometry, u, visit })
+    }
+
     /// Advances the history of every point to the displacement `u` at the
     /// end of a step with coefficients `c`.
     pub fn commit(&mut self, body: &Body, c: &[Option<StepCoefficients>], u: &[f64]) {
@@ -276,6 +290,27 @@ impl pulp::WithSimd for TrialForces<'_> {
     fn with_simd<S: pulp::Simd>(self, simd: S) -> Self::Output {
         for block in self.blocks {
             block.add_internal_forces(simd, self.geometry, self.u, self.f)?;
+        }
+        Ok(())
+    }
+}
+
+/// The loop of [`FiniteBody::visit_trial_tangents`], compiled for each
+/// SIMD level [`pulp::Arch`] dispatches to.
+struct TrialTangents<'a, F> {
+    blocks: &'a [ElementBlock],
+    geometry: &'a [Q4],
+    u: &'a [f64],
+    visit: &'a mut F,
+}
+
+impl<F: FnMut(usize, &[[f64; 8]; 8])> pulp::WithSimd for TrialTangents<'_, F> {
+    type Output = Result<(), Inverted>;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) -> Self::Output {
+        for block in self.blocks {
+            block.visit_tangents(simd, self.geometry, self.u, self.visit)?;
         }
         Ok(())
     }
@@ -697,8 +732,11 @@ impl FiniteSolver {
         if !resume {
             for (g, &d) in inner.dofs.free.iter().enumerate() {
                 if d != PRESCRIBED {
-                    self.iterate[d] =
-                        if moves_drive { inner.u[g] + change[0] * ops.psi[0][d] + change[1] * ops.psi[1][d] } else { inner.u[g] };
+                    self.iterate[d] = if moves_drive {
+                        inner.u[g] + change[0] * ops.psi[0][d] + change[1] * ops.psi[1][d]
+                    } else {
+                        inner.u[g]
+                    };
                 }
             }
             self.iterate[n] = y_target;
@@ -1006,18 +1044,10 @@ impl FiniteSolver {
         for &node in &inner.problem.driven_nodes {
             driven[node] = true;
         }
-        for &e in body.deformable_elements() {
-            let ue = body.element_displacement(e, if at_iterate { &self.x } else { &inner.u });
-            let (ratio, frozen) = self.body_state.stress_parts(body, e, Some(&coefficients));
-            let mut ke = [[0.0; 8]; 8];
-            if internal_force(&body.geometry[e], &ue, self.body_state.law(body, e), ratio, &frozen, Some(&mut ke))
-                .is_err()
-            {
-                // An inverted element: keep the operators there are; the
-                // attempt itself fails there and the step is cut.
-                return Ok(());
-            }
-            inner.pattern.add_element(e, &ke, values);
+        self.body_state.set_trial(body, &coefficients);
+        let u = if at_iterate { &self.x } else { &inner.u };
+        let assembled = self.body_state.visit_trial_tangents(body, u, &mut |e, ke| {
+            inner.pattern.add_element(e, ke, values);
             // -K_fp e_axis: the loads of a unit translation of the driven set.
             let nodes = &body.mesh.elements[e];
             if nodes.iter().any(|&a| driven[a]) {
@@ -1036,6 +1066,11 @@ impl FiniteSolver {
                     }
                 }
             }
+        });
+        if assembled.is_err() {
+            // An inverted element: keep the operators there are; the
+            // attempt itself fails there and the step is cut.
+            return Ok(());
         }
         self.profile.assembly_s += phase.elapsed().as_secs_f64();
         let phase = Instant::now();

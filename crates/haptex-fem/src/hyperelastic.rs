@@ -91,16 +91,7 @@ impl NeoHookean {
     ///         + 2/3 mu J^(-2/3) I1 (C^-1 (.) C^-1)    (Holzapfel 2000, eq. 6.168).
     pub fn isochoric(&self, f: &[[f64; 2]; 2]) -> IsochoricResponse {
         let (stress, ci, i1, a) = self.isochoric_parts(f);
-        let delta = |p: usize, q: usize| if p == q { 1.0 } else { 0.0 };
-        let mut tangent = [[0.0; 3]; 3];
-        for (r, &(i, jj)) in VOIGT.iter().enumerate() {
-            for (s, &(k, l)) in VOIGT.iter().enumerate() {
-                tangent[r][s] = -2.0 / 3.0 * a * (delta(i, jj) * ci[k][l] + ci[i][jj] * delta(k, l))
-                    + 2.0 / 9.0 * a * i1 * ci[i][jj] * ci[k][l]
-                    + 2.0 / 3.0 * a * i1 * 0.5 * (ci[i][k] * ci[jj][l] + ci[i][l] * ci[jj][k]);
-            }
-        }
-        IsochoricResponse { stress, tangent }
+        IsochoricResponse { stress, tangent: isochoric_tangent(&ci, i1, a) }
     }
 
     /// The isochoric second Piola-Kirchhoff stress alone (see
@@ -163,6 +154,24 @@ pub(crate) fn isochoric_parts<T: Real>(mu: T, f: &[[T; 2]; 2], j_23: T) -> ([T; 
         -a * i1 / three * ci[0][1],
     ];
     (stress, ci, i1, a)
+}
+
+/// dS/dE of [`NeoHookean::isochoric`] (Voigt 11, 22, 12) from the parts
+/// C^-1, I1 and a = mu J^(-2/3) of [`isochoric_parts`], on f64 or on
+/// [`Lanes`](crate::lanes::Lanes).
+#[inline(always)]
+pub(crate) fn isochoric_tangent<T: Real>(ci: &[[T; 2]; 2], i1: T, a: T) -> [[T; 3]; 3] {
+    let delta = |p: usize, q: usize| a.constant(if p == q { 1.0 } else { 0.0 });
+    let (c1, c2, c3, half) = (a.constant(-2.0 / 3.0), a.constant(2.0 / 9.0), a.constant(2.0 / 3.0), a.constant(0.5));
+    let mut tangent = [[a.constant(0.0); 3]; 3];
+    for (r, &(i, jj)) in VOIGT.iter().enumerate() {
+        for (s, &(k, l)) in VOIGT.iter().enumerate() {
+            tangent[r][s] = c1 * a * (delta(i, jj) * ci[k][l] + ci[i][jj] * delta(k, l))
+                + c2 * a * i1 * ci[i][jj] * ci[k][l]
+                + c3 * a * i1 * half * (ci[i][k] * ci[jj][l] + ci[i][l] * ci[jj][k]);
+        }
+    }
+    tangent
 }
 
 /// The Cauchy stress (xx, yy, zz, xy) of a second Piola-Kirchhoff stress

@@ -374,12 +374,13 @@ fn prony_relaxation_of_a_stretched_block() {
     }
 }
 
-/// The packed element loop (`FiniteBody::add_trial_internal_forces`, four
-/// elements side by side in SIMD lanes) is the element-by-element loop of
-/// `internal_force` to the bit: on the distorted patch (9 elements: two
-/// full blocks and one of a single element) with a visco-elastic history,
-/// at random deformations of up to 30%. An inverted element is reported as
-/// the element loop reports it.
+/// The packed element loops (`FiniteBody::add_trial_internal_forces` and
+/// `visit_trial_tangents`, four elements side by side in SIMD lanes) are
+/// the element-by-element loop of `internal_force` to the bit, forces and
+/// tangents: on the distorted patch (9 elements: two full blocks and one of
+/// a single element) with a visco-elastic history, at random deformations
+/// of up to 30%. An inverted element is reported as the element loop
+/// reports it.
 #[test]
 fn packed_internal_forces_are_the_element_loop_to_the_bit() {
     let (mesh, _) = common::distorted_patch();
@@ -389,6 +390,7 @@ fn packed_internal_forces_are_the_element_loop_to_the_bit() {
         prony: vec![PronyTerm { g: 0.3, tau_s: 0.01 }, PronyTerm { g: 0.3, tau_s: 1.0 }],
     };
     let n = 2 * mesh.nodes.len();
+    let law = NeoHookean::from_material(&material);
     let body = Body::new(mesh, vec![SubdomainModel::Deformable(material)], Formulation::BBar).unwrap();
     let mut state = FiniteBody::new(&body);
     let mut seed = 11;
@@ -410,6 +412,21 @@ fn packed_internal_forces_are_the_element_loop_to_the_bit() {
         }
         for d in 0..n {
             assert_eq!(packed[d].to_bits(), looped[d].to_bits(), "DOF {d}: {} vs {}", packed[d], looped[d]);
+        }
+        let mut visited = Vec::new();
+        state.visit_trial_tangents(&body, &u, &mut |e, k| visited.push((e, *k))).unwrap();
+        assert_eq!(visited.iter().map(|(e, _)| *e).collect::<Vec<_>>(), all);
+        for (e, k) in visited {
+            let nodes = body.mesh.elements[e];
+            let ue: [f64; 8] = std::array::from_fn(|i| u[2 * nodes[i / 2] + i % 2]);
+            let (ratio, frozen) = state.stress_parts(&body, e, Some(&c));
+            let mut expected = [[0.0; 8]; 8];
+            internal_force(&body.geometry[e], &ue, &law, ratio, &frozen, Some(&mut expected)).unwrap();
+            for i in 0..8 {
+                for j in 0..8 {
+                    assert_eq!(k[i][j].to_bits(), expected[i][j].to_bits(), "element {e}: K[{i}][{j}]");
+                }
+            }
         }
         compared += 1;
     }
