@@ -68,7 +68,8 @@ use crate::lanes::LANES;
 use crate::linalg::{SparseCholesky, lower_transpose_solve, lower_transpose_times, schur_operators};
 use crate::material::{StepCoefficients, advance_history, frozen_deviator, history_deviator};
 use crate::solver::{
-    Condensed, Drive, SolveError, Solver, StepFailure, StepOperators, StepReport, Stepping, advance_halving, newton,
+    Condensed, Drive, NewtonStart, SolveError, Solver, StepFailure, StepOperators, StepReport, Stepping,
+    advance_halving, newton,
 };
 
 /// The finite-strain state of the body: the neo-Hookean law of every
@@ -905,7 +906,7 @@ impl FiniteSolver {
                 &inner_settings,
                 s,
                 &mut dy,
-                evaluated_here.then_some(totals),
+                NewtonStart { evaluated: evaluated_here.then_some(totals), stick_predictor: outer == 0 && !resume },
             )?;
             newton_iterations += its;
             self.profile.contact_newton_s += timer.elapsed().as_secs_f64();

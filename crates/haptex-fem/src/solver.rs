@@ -487,7 +487,7 @@ impl Solver {
             &self.settings,
             s,
             &mut dy,
-            None,
+            NewtonStart::STEP,
         )?;
         // Converged: recover the full field u_f = u0 + dy psi_y + Phi F.
         let s = &mut self.scratch;
@@ -737,12 +737,28 @@ impl Condensed<'_> {
 const CONTINUATION_DAMPING: f64 = 10.0;
 const MIN_DAMPING: f64 = 1e-12;
 
+/// How the contact Newton ([`newton`]) starts from the predictor in `s.v`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct NewtonStart {
+    /// The contact is already evaluated at the predictor with the law
+    /// (forces in `s.forces`, tangent blocks in `s.blocks`, trial states
+    /// set), with these totals: it is not evaluated there again.
+    pub(crate) evaluated: Option<ContactTotals>,
+    /// Take the stick predictor step when some point stuck at the last
+    /// step (see [`newton`]): at a step's first contact solve. The
+    /// finite-strain solver's later outer iterations start from the last
+    /// one's contact solution, whose stick and slip are this step's.
+    pub(crate) stick_predictor: bool,
+}
+
+impl NewtonStart {
+    /// A step's first contact solve, from the last converged state.
+    pub(crate) const STEP: NewtonStart = NewtonStart { evaluated: None, stick_predictor: true };
+}
+
 /// Semi-smooth Newton with backtracking on the condensed contact problem.
 /// On entry `s.v` holds the predictor; on success `s.v`/`s.forces` hold the
-/// solution and `dy` the change of the driven y (load control). With
-/// `evaluated`, the contact is already evaluated at the predictor with
-/// `law` (forces in `s.forces`, tangent blocks in `s.blocks`, trial
-/// states set; these are its totals) and is not evaluated there again.
+/// solution and `dy` the change of the driven y (load control).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn newton(
     cond: &Condensed<'_>,
@@ -753,7 +769,7 @@ pub(crate) fn newton(
     settings: &SolverSettings,
     s: &mut Scratch,
     dy: &mut f64,
-    evaluated: Option<ContactTotals>,
+    start: NewtonStart,
 ) -> Result<(usize, ContactTotals), StepFailure> {
     // The contact tangent starts with its geometric term (the exact
     // derivative: quadratic convergence where the surface is curved) and
@@ -777,7 +793,7 @@ pub(crate) fn newton(
     // instead, the linearised slip drags the whole pad past the surface and
     // the iterates flip every point's slip direction back and forth. In
     // steady sliding the last state is the better start.
-    let stick_predictor = contact.committed.iter().any(|p| p.active && !p.slipping);
+    let stick_predictor = start.stick_predictor && contact.committed.iter().any(|p| p.active && !p.slipping);
     if stick_predictor {
         contact.evaluate_with(&s.v, surface, placement, law, true, &mut s.forces, &mut s.blocks);
         cond.residual(s, false, *dy);
@@ -789,7 +805,7 @@ pub(crate) fn newton(
             *dy += s.last_ddy;
         }
     }
-    let mut totals = match evaluated {
+    let mut totals = match start.evaluated {
         Some(totals) if !stick_predictor => totals,
         _ => contact.evaluate(&s.v, surface, placement, law, &mut s.forces, &mut s.blocks),
     };
