@@ -464,6 +464,49 @@ impl ElementBlock {
     }
 }
 
+impl ElementBlock {
+    /// Calls `visit(element, s0)` with the instantaneous isochoric stress
+    /// S0_iso of each of the block's elements at the global displacement
+    /// `u` ([`isochoric_stresses`], to the bit), in lane order, computed in
+    /// the SIMD lanes of `simd`, or element by element where some J is out
+    /// of the range of the J^(-2/3) iteration.
+    #[inline(always)]
+    pub fn visit_isochoric_stresses<S: Simd>(
+        &self,
+        simd: S,
+        geometry: &[Q4],
+        u: &[f64],
+        visit: &mut impl FnMut(usize, &[[f64; 4]; 4]),
+    ) {
+        let ue = self.displacements(u);
+        if Lanes::<S>::fits() {
+            let lanes = BlockLanes { block: self, simd };
+            let (mu, _) = lanes.law();
+            let u = ue.map(|u| Lanes::load(simd, &u));
+            let mut in_range = true;
+            let s0: [[[f64; LANES]; 4]; 4] = std::array::from_fn(|gp| {
+                let f = gradient_at(&lanes.grad(gp), &u);
+                let j = det(&f);
+                for j in j.to_array() {
+                    in_range &= in_cbrt_range(j);
+                }
+                isochoric_parts(mu, &f, inverse_cbrt_squared_in_range(j)).0.map(Lanes::to_array)
+            });
+            if in_range {
+                for l in 0..self.len {
+                    visit(self.elements[l], &std::array::from_fn(|gp| std::array::from_fn(|k| s0[gp][k][l])));
+                }
+                return;
+            }
+        }
+        for l in 0..self.len {
+            let law = NeoHookean { mu: self.mu[l], kappa: self.kappa[l] };
+            let ue_l = std::array::from_fn(|i| ue[i][l]);
+            visit(self.elements[l], &isochoric_stresses(&geometry[self.elements[l]], &ue_l, &law));
+        }
+    }
+}
+
 /// An [`ElementBlock`]'s input to [`element_response`], loaded into the
 /// SIMD lanes of `S` where it is used.
 struct BlockLanes<'a, S: Simd> {

@@ -62,7 +62,7 @@ use crate::assembly::{DofMap, PRESCRIBED};
 use crate::body::{Body, SubdomainModel};
 use crate::contact::ContactTotals;
 use crate::element::Q4;
-use crate::finite_element::{ElementBlock, Inverted, cauchy_stress, internal_force, isochoric_stresses};
+use crate::finite_element::{ElementBlock, Inverted, cauchy_stress, internal_force};
 use crate::hyperelastic::NeoHookean;
 use crate::lanes::LANES;
 use crate::linalg::{SparseCholesky, lower_transpose_solve, lower_transpose_times, schur_operators};
@@ -246,16 +246,19 @@ impl FiniteBody {
     /// Advances the history of every point to the displacement `u` at the
     /// end of a step with coefficients `c`.
     pub fn commit(&mut self, body: &Body, c: &[Option<StepCoefficients>], u: &[f64]) {
-        for &e in body.deformable_elements() {
+        let (history_s0, history_h) = (&mut self.history_s0, &mut self.history_h);
+        let (history_start, terms) = (&self.history_start, &self.terms);
+        // S0_iso of every point (that of `isochoric_stresses`, in SIMD lanes).
+        let mut advance = |e: usize, s0: &[[f64; 4]; 4]| {
             let coefficients = c[body.mesh.subdomain[e] as usize].as_ref().expect("deformable element");
-            let s0 = isochoric_stresses(&body.geometry[e], &body.element_displacement(e, u), self.law(body, e));
-            let n = self.terms[e];
+            let n = terms[e];
             for gp in 0..4 {
-                let start = self.history_start[e] + gp * n;
-                let h = &mut self.history_h[start..start + n];
-                advance_history(&mut self.history_s0[4 * e + gp], h, coefficients, &s0[gp]);
+                let start = history_start[e] + gp * n;
+                let h = &mut history_h[start..start + n];
+                advance_history(&mut history_s0[4 * e + gp], h, coefficients, &s0[gp]);
             }
-        }
+        };
+        self.arch.dispatch(BlockStresses { blocks: &self.blocks, geometry: &body.geometry, u, visit: &mut advance });
     }
 
     /// Committed Cauchy stress (xx, yy, zz, xy; MPa) averaged over element
@@ -314,6 +317,26 @@ impl<F: FnMut(usize, &[[f64; 8]; 8])> pulp::WithSimd for TrialTangents<'_, F> {
             block.visit_tangents(simd, self.geometry, self.u, self.visit)?;
         }
         Ok(())
+    }
+}
+
+/// The loop of [`FiniteBody::commit`] over the blocks' isochoric
+/// stresses, compiled for each SIMD level [`pulp::Arch`] dispatches to.
+struct BlockStresses<'a, F> {
+    blocks: &'a [ElementBlock],
+    geometry: &'a [Q4],
+    u: &'a [f64],
+    visit: &'a mut F,
+}
+
+impl<F: FnMut(usize, &[[f64; 4]; 4])> pulp::WithSimd for BlockStresses<'_, F> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) {
+        for block in self.blocks {
+            block.visit_isochoric_stresses(simd, self.geometry, self.u, self.visit);
+        }
     }
 }
 
