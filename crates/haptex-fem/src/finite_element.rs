@@ -484,14 +484,18 @@ impl ElementBlock {
             let (mu, _) = lanes.law();
             let u = ue.map(|u| Lanes::load(simd, &u));
             let mut in_range = true;
-            let s0: [[[f64; LANES]; 4]; 4] = std::array::from_fn(|gp| {
+            let mut s0 = [[[0.0; LANES]; 4]; 4];
+            for gp in 0..4 {
                 let f = gradient_at(&lanes.grad(gp), &u);
                 let j = det(&f);
                 for j in j.to_array() {
                     in_range &= in_cbrt_range(j);
                 }
-                isochoric_parts(mu, &f, inverse_cbrt_squared_in_range(j)).0.map(Lanes::to_array)
-            });
+                let (s0_gp, ..) = isochoric_parts(mu, &f, inverse_cbrt_squared_in_range(j));
+                for k in 0..4 {
+                    s0[gp][k] = s0_gp[k].to_array();
+                }
+            }
             if in_range {
                 for l in 0..self.len {
                     visit(self.elements[l], &std::array::from_fn(|gp| std::array::from_fn(|k| s0[gp][k][l])));

@@ -161,12 +161,13 @@ pub(crate) fn isochoric_parts<T: Real>(mu: T, f: &[[T; 2]; 2], j_23: T) -> ([T; 
 /// [`Lanes`](crate::lanes::Lanes).
 #[inline(always)]
 pub(crate) fn isochoric_tangent<T: Real>(ci: &[[T; 2]; 2], i1: T, a: T) -> [[T; 3]; 3] {
-    let delta = |p: usize, q: usize| a.constant(if p == q { 1.0 } else { 0.0 });
+    let (zero, one) = (a.constant(0.0), a.constant(1.0));
     let (c1, c2, c3, half) = (a.constant(-2.0 / 3.0), a.constant(2.0 / 9.0), a.constant(2.0 / 3.0), a.constant(0.5));
-    let mut tangent = [[a.constant(0.0); 3]; 3];
+    let mut tangent = [[zero; 3]; 3];
     for (r, &(i, jj)) in VOIGT.iter().enumerate() {
         for (s, &(k, l)) in VOIGT.iter().enumerate() {
-            tangent[r][s] = c1 * a * (delta(i, jj) * ci[k][l] + ci[i][jj] * delta(k, l))
+            let (delta_ij, delta_kl) = (if i == jj { one } else { zero }, if k == l { one } else { zero });
+            tangent[r][s] = c1 * a * (delta_ij * ci[k][l] + ci[i][jj] * delta_kl)
                 + c2 * a * i1 * ci[i][jj] * ci[k][l]
                 + c3 * a * i1 * half * (ci[i][k] * ci[jj][l] + ci[i][l] * ci[jj][k]);
         }
