@@ -61,12 +61,15 @@ use std::time::Instant;
 use crate::assembly::{DofMap, PRESCRIBED};
 use crate::body::{Body, SubdomainModel};
 use crate::contact::ContactTotals;
-use crate::finite_element::{Inverted, cauchy_stress, internal_force, isochoric_stresses};
+use crate::element::Q4;
+use crate::finite_element::{ElementBlock, Inverted, cauchy_stress, internal_force};
 use crate::hyperelastic::NeoHookean;
+use crate::lanes::LANES;
 use crate::linalg::{SparseCholesky, lower_transpose_solve, lower_transpose_times, schur_operators};
 use crate::material::{StepCoefficients, advance_history, frozen_deviator, history_deviator};
 use crate::solver::{
-    Condensed, Drive, SolveError, Solver, StepFailure, StepOperators, StepReport, Stepping, advance_halving, newton,
+    Condensed, Drive, NewtonStart, SolveError, Solver, StepFailure, StepOperators, StepReport, Stepping,
+    advance_halving, newton,
 };
 
 /// The finite-strain state of the body: the neo-Hookean law of every
@@ -82,6 +85,12 @@ pub struct FiniteBody {
     history_h: Vec<[f64; 4]>,
     history_start: Vec<usize>,
     terms: Vec<usize>,
+    /// The deformable elements in blocks of [`LANES`] for the trial
+    /// internal forces, with the stress parts of the step they were last
+    /// set for ([`FiniteBody::set_trial`]).
+    blocks: Vec<ElementBlock>,
+    /// The CPU's SIMD level (AVX2 where it has it).
+    arch: pulp::Arch,
 }
 
 impl FiniteBody {
@@ -112,6 +121,18 @@ impl FiniteBody {
             terms.push(n_terms[sd as usize]);
             total += 4 * n_terms[sd as usize];
         }
+        let blocks = body
+            .deformable_elements()
+            .chunks(LANES)
+            .map(|elements| {
+                ElementBlock::new(
+                    elements,
+                    &body.geometry,
+                    |e| DofMap::element_dofs(&body.mesh.elements[e]),
+                    |e| laws[body.mesh.subdomain[e] as usize].expect("deformable element"),
+                )
+            })
+            .collect();
         Self {
             laws,
             g_inf,
@@ -119,6 +140,8 @@ impl FiniteBody {
             history_h: vec![[0.0; 4]; total],
             history_start,
             terms,
+            blocks,
+            arch: pulp::Arch::new(),
         }
     }
 
@@ -135,7 +158,7 @@ impl FiniteBody {
     /// The shear ratio and the frozen isochoric stress of element `e`'s
     /// points for a step with coefficients `c` (the trial state), or of
     /// the committed state with `c` = None.
-    fn stress_parts(&self, body: &Body, e: usize, c: Option<&[Option<StepCoefficients>]>) -> (f64, [[f64; 4]; 4]) {
+    pub fn stress_parts(&self, body: &Body, e: usize, c: Option<&[Option<StepCoefficients>]>) -> (f64, [[f64; 4]; 4]) {
         let sd = body.mesh.subdomain[e] as usize;
         match c {
             Some(c) => {
@@ -183,19 +206,59 @@ impl FiniteBody {
         Ok(())
     }
 
+    /// Sets the stress parts of a step's trial state with coefficients `c`
+    /// (constant over the step: its shear ratio and the frozen history
+    /// stress) for [`FiniteBody::add_trial_internal_forces`].
+    pub fn set_trial(&mut self, body: &Body, c: &[Option<StepCoefficients>]) {
+        let mut blocks = std::mem::take(&mut self.blocks);
+        for block in &mut blocks {
+            for l in 0..block.len {
+                let (ratio, frozen) = self.stress_parts(body, block.elements[l], Some(c));
+                block.set_stress_parts(l, ratio, &frozen);
+            }
+        }
+        self.blocks = blocks;
+    }
+
+    /// Adds the internal forces of all deformable elements at the global
+    /// displacement `u` to `f`, of the trial state last set by
+    /// [`FiniteBody::set_trial`]: [`FiniteBody::add_internal_forces`] of
+    /// every deformable element with those coefficients, to the bit, in
+    /// SIMD lanes of [`LANES`] elements.
+    pub fn add_trial_internal_forces(&self, body: &Body, u: &[f64], f: &mut [f64]) -> Result<(), Inverted> {
+        self.arch.dispatch(TrialForces { blocks: &self.blocks, geometry: &body.geometry, u, f })
+    }
+
+    /// Calls `visit(element, tangent)` for every deformable element, in
+    /// order, with the consistent tangent of its internal force at the
+    /// global displacement `u` in the trial state last set by
+    /// [`FiniteBody::set_trial`] (that of [`internal_force`], to the bit,
+    /// in SIMD lanes of [`LANES`] elements). Stops at an inverted element.
+    pub fn visit_trial_tangents(
+        &self,
+        body: &Body,
+        u: &[f64],
+        visit: &mut impl FnMut(usize, &[[f64; 8]; 8]),
+    ) -> Result<(), Inverted> {
+        self.arch.dispatch(TrialTangents { blocks: &self.blocks, geometry: &body.geometry, u, visit })
+    }
+
     /// Advances the history of every point to the displacement `u` at the
     /// end of a step with coefficients `c`.
     pub fn commit(&mut self, body: &Body, c: &[Option<StepCoefficients>], u: &[f64]) {
-        for &e in body.deformable_elements() {
+        let (history_s0, history_h) = (&mut self.history_s0, &mut self.history_h);
+        let (history_start, terms) = (&self.history_start, &self.terms);
+        // S0_iso of every point (that of `isochoric_stresses`, in SIMD lanes).
+        let mut advance = |e: usize, s0: &[[f64; 4]; 4]| {
             let coefficients = c[body.mesh.subdomain[e] as usize].as_ref().expect("deformable element");
-            let s0 = isochoric_stresses(&body.geometry[e], &body.element_displacement(e, u), self.law(body, e));
-            let n = self.terms[e];
+            let n = terms[e];
             for gp in 0..4 {
-                let start = self.history_start[e] + gp * n;
-                let h = &mut self.history_h[start..start + n];
-                advance_history(&mut self.history_s0[4 * e + gp], h, coefficients, &s0[gp]);
+                let start = history_start[e] + gp * n;
+                let h = &mut history_h[start..start + n];
+                advance_history(&mut history_s0[4 * e + gp], h, coefficients, &s0[gp]);
             }
-        }
+        };
+        self.arch.dispatch(BlockStresses { blocks: &self.blocks, geometry: &body.geometry, u, visit: &mut advance });
     }
 
     /// Committed Cauchy stress (xx, yy, zz, xy; MPa) averaged over element
@@ -212,6 +275,68 @@ impl FiniteBody {
             }
         }
         avg
+    }
+}
+
+/// The loop of [`FiniteBody::add_trial_internal_forces`], compiled for
+/// each SIMD level [`pulp::Arch`] dispatches to.
+struct TrialForces<'a> {
+    blocks: &'a [ElementBlock],
+    geometry: &'a [Q4],
+    u: &'a [f64],
+    f: &'a mut [f64],
+}
+
+impl pulp::WithSimd for TrialForces<'_> {
+    type Output = Result<(), Inverted>;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) -> Self::Output {
+        for block in self.blocks {
+            block.add_internal_forces(simd, self.geometry, self.u, self.f)?;
+        }
+        Ok(())
+    }
+}
+
+/// The loop of [`FiniteBody::visit_trial_tangents`], compiled for each
+/// SIMD level [`pulp::Arch`] dispatches to.
+struct TrialTangents<'a, F> {
+    blocks: &'a [ElementBlock],
+    geometry: &'a [Q4],
+    u: &'a [f64],
+    visit: &'a mut F,
+}
+
+impl<F: FnMut(usize, &[[f64; 8]; 8])> pulp::WithSimd for TrialTangents<'_, F> {
+    type Output = Result<(), Inverted>;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) -> Self::Output {
+        for block in self.blocks {
+            block.visit_tangents(simd, self.geometry, self.u, self.visit)?;
+        }
+        Ok(())
+    }
+}
+
+/// The loop of [`FiniteBody::commit`] over the blocks' isochoric
+/// stresses, compiled for each SIMD level [`pulp::Arch`] dispatches to.
+struct BlockStresses<'a, F> {
+    blocks: &'a [ElementBlock],
+    geometry: &'a [Q4],
+    u: &'a [f64],
+    visit: &'a mut F,
+}
+
+impl<F: FnMut(usize, &[[f64; 4]; 4])> pulp::WithSimd for BlockStresses<'_, F> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) {
+        for block in self.blocks {
+            block.visit_isochoric_stresses(simd, self.geometry, self.u, self.visit);
+        }
     }
 }
 
@@ -454,6 +579,9 @@ pub struct FiniteSolver {
     /// A solve's forward half (factor order) and its trailing part.
     sweep: Vec<f64>,
     sweep_trailing: Vec<f64>,
+    /// Whether the drive responses of `tangent_ops` are solved (see
+    /// [`FiniteSolver::solve_tangent_drive_responses`]).
+    tangent_psi_solved: bool,
     /// Contact Newton iterations and the drive's x of an attempt that
     /// stopped unconverged (to resume it).
     last_newton_iterations: usize,
@@ -502,6 +630,7 @@ impl FiniteSolver {
             tangent_ops: None,
             tangent_values: vec![0.0; inner.pattern.nnz()],
             tangent_base: None,
+            tangent_psi_solved: false,
             trailing_factor: vec![0.0; m2 * m2],
             trailing_scratch: vec![0.0; m2 * m2],
             sweep: vec![0.0; n_free],
@@ -587,6 +716,16 @@ impl FiniteSolver {
         let debug = std::env::var_os("HAPTEX_DEBUG").is_some();
         let placement = self.inner.placement(slide_mm);
         let settings = self.finite_settings;
+        // The drive responses psi enter the predictor of a step that moves
+        // the drive, and every iteration under load control.
+        let moves_drive = match drive {
+            Drive::Displacement(target) => target != self.inner.drive_mm,
+            Drive::Load { x_mm, .. } => x_mm != self.inner.drive_mm[0],
+        };
+        let load_control = matches!(drive, Drive::Load { .. });
+        if load_control || (moves_drive && !resume) {
+            self.solve_tangent_drive_responses();
+        }
         let inner = &mut self.inner;
         // The tangent operators come with the pad block L_tt of their
         // pad-last factor (`self.trailing_factor`): G(x) then costs one
@@ -617,11 +756,16 @@ impl FiniteSolver {
         if !resume {
             for (g, &d) in inner.dofs.free.iter().enumerate() {
                 if d != PRESCRIBED {
-                    self.iterate[d] = inner.u[g] + change[0] * ops.psi[0][d] + change[1] * ops.psi[1][d];
+                    self.iterate[d] = if moves_drive {
+                        inner.u[g] + change[0] * ops.psi[0][d] + change[1] * ops.psi[1][d]
+                    } else {
+                        inner.u[g]
+                    };
                 }
             }
             self.iterate[n] = y_target;
         }
+        self.body_state.set_trial(&inner.problem.body, &ops.coefficients);
         self.anderson.reset();
         if !resume {
             self.stopped = None;
@@ -651,20 +795,14 @@ impl FiniteSolver {
             // (`self.f_free`, the contact forces and trial states are then
             // those of this iterate).
             let reuse = if outer == 0 && resume { self.stopped.take() } else { None };
+            let evaluated_here = reuse.is_none();
             let (norm, scale, totals) = if let Some(stopped) = reuse {
                 stopped
             } else {
                 let timer = Instant::now();
                 self.f_int.fill(0.0);
-                let ops = &*ops_k;
                 let body = &inner.problem.body;
-                if let Err(e) = self.body_state.add_internal_forces(
-                    body,
-                    Some(&ops.coefficients),
-                    body.deformable_elements(),
-                    &self.x,
-                    &mut self.f_int,
-                ) {
+                if let Err(e) = self.body_state.add_trial_internal_forces(body, &self.x, &mut self.f_int) {
                     if debug {
                         eprintln!("finite: outer {outer}: {e}");
                     }
@@ -763,7 +901,7 @@ impl FiniteSolver {
             self.profile.solve_s += timer.elapsed().as_secs_f64();
             let ops = &*ops_k;
             for (c, &row) in inner.candidate_free.iter().enumerate() {
-                s.psi_y_s[c] = ops.psi[1][row];
+                s.psi_y_s[c] = if load.is_some() { ops.psi[1][row] } else { 0.0 };
             }
             let condensed = Condensed {
                 m2,
@@ -777,6 +915,11 @@ impl FiniteSolver {
             let mut inner_settings = inner.settings;
             inner_settings.relative_tolerance =
                 inner_settings.relative_tolerance.max(settings.inner_forcing * norm / scale.max(floor));
+            // The contact was evaluated at the pad's iterate for the
+            // residual: the contact Newton starts from that evaluation.
+            if evaluated_here {
+                s.forces.copy_from_slice(&self.contact_forces);
+            }
             let (its, _) = newton(
                 &condensed,
                 &mut inner.problem.contact,
@@ -786,6 +929,7 @@ impl FiniteSolver {
                 &inner_settings,
                 s,
                 &mut dy,
+                NewtonStart { evaluated: evaluated_here.then_some(totals), stick_predictor: outer == 0 && !resume },
             )?;
             newton_iterations += its;
             self.profile.contact_newton_s += timer.elapsed().as_secs_f64();
@@ -924,18 +1068,10 @@ impl FiniteSolver {
         for &node in &inner.problem.driven_nodes {
             driven[node] = true;
         }
-        for &e in body.deformable_elements() {
-            let ue = body.element_displacement(e, if at_iterate { &self.x } else { &inner.u });
-            let (ratio, frozen) = self.body_state.stress_parts(body, e, Some(&coefficients));
-            let mut ke = [[0.0; 8]; 8];
-            if internal_force(&body.geometry[e], &ue, self.body_state.law(body, e), ratio, &frozen, Some(&mut ke))
-                .is_err()
-            {
-                // An inverted element: keep the operators there are; the
-                // attempt itself fails there and the step is cut.
-                return Ok(());
-            }
-            inner.pattern.add_element(e, &ke, values);
+        self.body_state.set_trial(body, &coefficients);
+        let u = if at_iterate { &self.x } else { &inner.u };
+        let assembled = self.body_state.visit_trial_tangents(body, u, &mut |e, ke| {
+            inner.pattern.add_element(e, ke, values);
             // -K_fp e_axis: the loads of a unit translation of the driven set.
             let nodes = &body.mesh.elements[e];
             if nodes.iter().any(|&a| driven[a]) {
@@ -954,6 +1090,11 @@ impl FiniteSolver {
                     }
                 }
             }
+        });
+        if assembled.is_err() {
+            // An inverted element: keep the operators there are; the
+            // attempt itself fails there and the step is cut.
+            return Ok(());
         }
         self.profile.assembly_s += phase.elapsed().as_secs_f64();
         let phase = Instant::now();
@@ -975,9 +1116,11 @@ impl FiniteSolver {
         }
         cholesky.trailing_factor(&mut self.trailing_factor);
         schur_operators(&self.trailing_factor, m2, &mut self.trailing_scratch, &mut compliance, &mut stiffness);
-        for response in psi.iter_mut() {
-            cholesky.solve_vec(response);
-        }
+        // psi holds the loads of unit drive translations; they are solved
+        // for the responses only when an attempt needs them
+        // ([`FiniteSolver::solve_tangent_drive_responses`]): not in a slide
+        // under a fixed drive, where most rebuilds are.
+        self.tangent_psi_solved = false;
         // Phi, the response to unit pad forces, is not needed here: G(x)
         // puts the pad at v by one sparse solve.
         let phi = Vec::new();
@@ -987,6 +1130,21 @@ impl FiniteSolver {
             eprintln!("finite: tangent operators for dt {dt_s}: {:.1} ms", timer.elapsed().as_secs_f64() * 1e3);
         }
         Ok(())
+    }
+
+    /// Solves the tangent operators' drive responses psi from the loads
+    /// [`FiniteSolver::build_tangent_operators`] left there, once.
+    fn solve_tangent_drive_responses(&mut self) {
+        if let Some(ops) = self.tangent_ops.as_mut()
+            && !self.tangent_psi_solved
+        {
+            let timer = Instant::now();
+            for response in ops.psi.iter_mut() {
+                ops.cholesky.solve_vec(response);
+            }
+            self.tangent_psi_solved = true;
+            self.profile.condensation_s += timer.elapsed().as_secs_f64();
+        }
     }
 
     /// The reaction on the driven set (N per mm of width) from the

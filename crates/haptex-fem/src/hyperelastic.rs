@@ -35,6 +35,7 @@
 //! Components are stored as (11, 22, 33, 12); in-plane tangents in Voigt
 //! order (11, 22, 12) with engineering shear 2 E12.
 
+use crate::lanes::Real;
 use crate::material::Material;
 
 /// The neo-Hookean constants of a tissue.
@@ -71,7 +72,7 @@ impl NeoHookean {
 
     /// U'(J) (the pressure, Cauchy, positive in tension) and U''(J).
     pub fn volumetric(&self, j: f64) -> (f64, f64) {
-        (0.5 * self.kappa * (j - 1.0 / j), 0.5 * self.kappa * (1.0 + 1.0 / (j * j)))
+        volumetric(self.kappa, j)
     }
 
     /// The isochoric energy mu/2 (I1bar - 3) for the in-plane deformation
@@ -90,16 +91,7 @@ impl NeoHookean {
     ///         + 2/3 mu J^(-2/3) I1 (C^-1 (.) C^-1)    (Holzapfel 2000, eq. 6.168).
     pub fn isochoric(&self, f: &[[f64; 2]; 2]) -> IsochoricResponse {
         let (stress, ci, i1, a) = self.isochoric_parts(f);
-        let delta = |p: usize, q: usize| if p == q { 1.0 } else { 0.0 };
-        let mut tangent = [[0.0; 3]; 3];
-        for (r, &(i, jj)) in VOIGT.iter().enumerate() {
-            for (s, &(k, l)) in VOIGT.iter().enumerate() {
-                tangent[r][s] = -2.0 / 3.0 * a * (delta(i, jj) * ci[k][l] + ci[i][jj] * delta(k, l))
-                    + 2.0 / 9.0 * a * i1 * ci[i][jj] * ci[k][l]
-                    + 2.0 / 3.0 * a * i1 * 0.5 * (ci[i][k] * ci[jj][l] + ci[i][l] * ci[jj][k]);
-            }
-        }
-        IsochoricResponse { stress, tangent }
+        IsochoricResponse { stress, tangent: isochoric_tangent(&ci, i1, a) }
     }
 
     /// The isochoric second Piola-Kirchhoff stress alone (see
@@ -110,22 +102,8 @@ impl NeoHookean {
 
     /// S0_iso, the in-plane C^-1, I1 and mu J^(-2/3).
     fn isochoric_parts(&self, f: &[[f64; 2]; 2]) -> ([f64; 4], [[f64; 2]; 2], f64, f64) {
-        // C = F^T F (in plane), C33 = 1.
-        let c11 = f[0][0] * f[0][0] + f[1][0] * f[1][0];
-        let c22 = f[0][1] * f[0][1] + f[1][1] * f[1][1];
-        let c12 = f[0][0] * f[0][1] + f[1][0] * f[1][1];
         let j = f[0][0] * f[1][1] - f[0][1] * f[1][0];
-        let det_c = j * j;
-        let ci = [[c22 / det_c, -c12 / det_c], [-c12 / det_c, c11 / det_c]];
-        let i1 = c11 + c22 + 1.0;
-        let a = self.mu * inverse_cbrt_squared(j);
-        let stress = [
-            a * (1.0 - i1 / 3.0 * ci[0][0]),
-            a * (1.0 - i1 / 3.0 * ci[1][1]),
-            a * (1.0 - i1 / 3.0),
-            -a * i1 / 3.0 * ci[0][1],
-        ];
-        (stress, ci, i1, a)
+        isochoric_parts(self.mu, f, inverse_cbrt_squared(j))
     }
 
     /// The Cauchy stress (xx, yy, zz, xy) of a homogeneous deformation `f`
@@ -143,6 +121,58 @@ impl NeoHookean {
         let g = self.mu / j;
         [g * (s * b11 - trace / 3.0) + p, g * (s * b22 - trace / 3.0) + p, g * (s - trace / 3.0) + p, g * s * b12]
     }
+}
+
+/// U'(J) and U''(J) of the bulk modulus `kappa` (see
+/// [`NeoHookean::volumetric`]), on f64 or on [`Lanes`](crate::lanes::Lanes).
+#[inline(always)]
+pub(crate) fn volumetric<T: Real>(kappa: T, j: T) -> (T, T) {
+    let (half, one) = (kappa.constant(0.5), kappa.constant(1.0));
+    (half * kappa * (j - one / j), half * kappa * (one + one / (j * j)))
+}
+
+/// S0_iso, the in-plane C^-1, I1 and mu J^(-2/3) of the shear modulus
+/// `mu` at the in-plane deformation gradient `f`, given `j_23` = J^(-2/3)
+/// (see [`NeoHookean::isochoric`]), on f64 or on
+/// [`Lanes`](crate::lanes::Lanes).
+#[inline(always)]
+pub(crate) fn isochoric_parts<T: Real>(mu: T, f: &[[T; 2]; 2], j_23: T) -> ([T; 4], [[T; 2]; 2], T, T) {
+    let (one, three) = (mu.constant(1.0), mu.constant(3.0));
+    // C = F^T F (in plane), C33 = 1.
+    let c11 = f[0][0] * f[0][0] + f[1][0] * f[1][0];
+    let c22 = f[0][1] * f[0][1] + f[1][1] * f[1][1];
+    let c12 = f[0][0] * f[0][1] + f[1][0] * f[1][1];
+    let j = f[0][0] * f[1][1] - f[0][1] * f[1][0];
+    let det_c = j * j;
+    let ci = [[c22 / det_c, -c12 / det_c], [-c12 / det_c, c11 / det_c]];
+    let i1 = c11 + c22 + one;
+    let a = mu * j_23;
+    let stress = [
+        a * (one - i1 / three * ci[0][0]),
+        a * (one - i1 / three * ci[1][1]),
+        a * (one - i1 / three),
+        -a * i1 / three * ci[0][1],
+    ];
+    (stress, ci, i1, a)
+}
+
+/// dS/dE of [`NeoHookean::isochoric`] (Voigt 11, 22, 12) from the parts
+/// C^-1, I1 and a = mu J^(-2/3) of [`isochoric_parts`], on f64 or on
+/// [`Lanes`](crate::lanes::Lanes).
+#[inline(always)]
+pub(crate) fn isochoric_tangent<T: Real>(ci: &[[T; 2]; 2], i1: T, a: T) -> [[T; 3]; 3] {
+    let (zero, one) = (a.constant(0.0), a.constant(1.0));
+    let (c1, c2, c3, half) = (a.constant(-2.0 / 3.0), a.constant(2.0 / 9.0), a.constant(2.0 / 3.0), a.constant(0.5));
+    let mut tangent = [[zero; 3]; 3];
+    for (r, &(i, jj)) in VOIGT.iter().enumerate() {
+        for (s, &(k, l)) in VOIGT.iter().enumerate() {
+            let (delta_ij, delta_kl) = (if i == jj { one } else { zero }, if k == l { one } else { zero });
+            tangent[r][s] = c1 * a * (delta_ij * ci[k][l] + ci[i][jj] * delta_kl)
+                + c2 * a * i1 * ci[i][jj] * ci[k][l]
+                + c3 * a * i1 * half * (ci[i][k] * ci[jj][l] + ci[i][l] * ci[jj][k]);
+        }
+    }
+    tangent
 }
 
 /// The Cauchy stress (xx, yy, zz, xy) of a second Piola-Kirchhoff stress
@@ -173,12 +203,26 @@ pub fn push_forward(f: &[[f64; 2]; 2], s: &[f64; 4]) -> [f64; 4] {
 /// `powf` or Rust's correctly rounded `cbrt`, and this is the hottest line
 /// of the finite-strain residual. Falls back to `powf` far from 1.
 pub fn inverse_cbrt_squared(x: f64) -> f64 {
-    if !(x > 1e-100 && x < 1e100) {
+    if !in_cbrt_range(x) {
         return x.powf(-2.0 / 3.0);
     }
-    let mut y = f64::from_bits(0x553e_f0ff_289d_d796 - x.to_bits() / 3);
+    inverse_cbrt_squared_in_range(x)
+}
+
+/// Whether [`inverse_cbrt_squared_in_range`] holds for x (false for NaN).
+#[inline(always)]
+pub(crate) fn in_cbrt_range(x: f64) -> bool {
+    x > 1e-100 && x < 1e100
+}
+
+/// [`inverse_cbrt_squared`] without the check of its range (for x where
+/// [`in_cbrt_range`] holds), on f64 or on [`Lanes`](crate::lanes::Lanes).
+#[inline(always)]
+pub(crate) fn inverse_cbrt_squared_in_range<T: Real>(x: T) -> T {
+    let (four, third) = (x.constant(4.0), x.constant(1.0 / 3.0));
+    let mut y = x.map(|x| f64::from_bits(0x553e_f0ff_289d_d796 - x.to_bits() / 3));
     for _ in 0..4 {
-        y *= (4.0 - x * y * y * y) * (1.0 / 3.0);
+        y = y * ((four - x * y * y * y) * third);
     }
     y * y
 }

@@ -492,6 +492,7 @@ impl Solver {
             &self.settings,
             s,
             &mut dy,
+            NewtonStart::STEP,
         )?;
         // Converged: recover the full field u_f = u0 + dy psi_y + Phi F.
         let s = &mut self.scratch;
@@ -679,13 +680,19 @@ pub(crate) struct Condensed<'a> {
 }
 
 impl Condensed<'_> {
-    /// out = S x (m2 x m2 dense; once per step, not per iteration).
+    /// out = S x (m2 x m2 dense; a few times per step, and per outer
+    /// iteration of the finite-strain solver). Column by column (axpy, in
+    /// SIMD lanes): each out_r still sums S_rc x_c over c in order, the
+    /// sum of a row-by-row dot product to the bit.
     fn stiffness_times(&self, x: &[f64], out: &mut [f64]) {
         let m2 = self.m2;
-        for r in 0..m2 {
-            // S is symmetric: row r is column r.
-            let row = &self.stiffness[r * m2..(r + 1) * m2];
-            out[r] = row.iter().zip(x).map(|(a, b)| a * b).sum();
+        let out = &mut out[..m2];
+        out.fill(0.0);
+        for (c, &xc) in x[..m2].iter().enumerate() {
+            let column = &self.stiffness[c * m2..(c + 1) * m2];
+            for (o, a) in out.iter_mut().zip(column) {
+                *o += a * xc;
+            }
         }
     }
 
@@ -741,6 +748,25 @@ impl Condensed<'_> {
 const CONTINUATION_DAMPING: f64 = 10.0;
 const MIN_DAMPING: f64 = 1e-12;
 
+/// How the contact Newton ([`newton`]) starts from the predictor in `s.v`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct NewtonStart {
+    /// The contact is already evaluated at the predictor with the law
+    /// (forces in `s.forces`, tangent blocks in `s.blocks`, trial states
+    /// set), with these totals: it is not evaluated there again.
+    pub(crate) evaluated: Option<ContactTotals>,
+    /// Take the stick predictor step when some point stuck at the last
+    /// step (see [`newton`]): at a step's first contact solve. The
+    /// finite-strain solver's later outer iterations start from the last
+    /// one's contact solution, whose stick and slip are this step's.
+    pub(crate) stick_predictor: bool,
+}
+
+impl NewtonStart {
+    /// A step's first contact solve, from the last converged state.
+    pub(crate) const STEP: NewtonStart = NewtonStart { evaluated: None, stick_predictor: true };
+}
+
 /// Semi-smooth Newton with backtracking on the condensed contact problem.
 /// On entry `s.v` holds the predictor; on success `s.v`/`s.forces` hold the
 /// solution and `dy` the change of the driven y (load control).
@@ -754,6 +780,7 @@ pub(crate) fn newton(
     settings: &SolverSettings,
     s: &mut Scratch,
     dy: &mut f64,
+    start: NewtonStart,
 ) -> Result<(usize, ContactTotals), StepFailure> {
     // The contact tangent starts with its geometric term (the exact
     // derivative: quadratic convergence where the surface is curved) and
@@ -764,7 +791,12 @@ pub(crate) fn newton(
     let debug = std::env::var_os("HAPTEX_DEBUG").is_some();
     // The step's constant products, and S v exactly.
     cond.stiffness_times(&s.u0_s, &mut s.su0);
-    cond.stiffness_times(&s.psi_y_s, &mut s.spsi);
+    if cond.load.is_some() {
+        cond.stiffness_times(&s.psi_y_s, &mut s.spsi);
+    } else {
+        // dy stays 0 under displacement control: S psi_s is never used.
+        s.spsi[..m2].fill(0.0);
+    }
     cond.stiffness_times(&s.v, &mut s.sv);
     // Stick predictor: one Newton step with every contact point sticking,
     // taken when some point stuck at the last step (the pad's shear is still
@@ -772,7 +804,8 @@ pub(crate) fn newton(
     // instead, the linearised slip drags the whole pad past the surface and
     // the iterates flip every point's slip direction back and forth. In
     // steady sliding the last state is the better start.
-    if contact.committed.iter().any(|p| p.active && !p.slipping) {
+    let stick_predictor = start.stick_predictor && contact.committed.iter().any(|p| p.active && !p.slipping);
+    if stick_predictor {
         contact.evaluate_with(&s.v, surface, placement, law, true, &mut s.forces, &mut s.blocks);
         cond.residual(s, false, *dy);
         if newton_direction(cond, s, 0.0).is_some() {
@@ -783,7 +816,10 @@ pub(crate) fn newton(
             *dy += s.last_ddy;
         }
     }
-    let mut totals = contact.evaluate(&s.v, surface, placement, law, &mut s.forces, &mut s.blocks);
+    let mut totals = match start.evaluated {
+        Some(totals) if !stick_predictor => totals,
+        _ => contact.evaluate(&s.v, surface, placement, law, &mut s.forces, &mut s.blocks),
+    };
     let (mut norm, mut merit, mut scale) = cond.residual(s, false, *dy);
     let tolerance_of = |scale: f64| settings.relative_tolerance * scale.max(cond.force_floor_n);
     // The part of the last Newton correction not taken (mm): none at the
