@@ -89,6 +89,9 @@ pub struct FiniteBody {
     /// internal forces, with the stress parts of the step they were last
     /// set for ([`FiniteBody::set_trial`]).
     blocks: Vec<ElementBlock>,
+    /// The coefficients the blocks' stress parts were set for (None: not
+    /// set, or the history changed since).
+    trial_coefficients: Option<Vec<Option<StepCoefficients>>>,
     /// The CPU's SIMD level (AVX2 where it has it).
     arch: pulp::Arch,
 }
@@ -141,6 +144,7 @@ impl FiniteBody {
             history_start,
             terms,
             blocks,
+            trial_coefficients: None,
             arch: pulp::Arch::new(),
         }
     }
@@ -210,6 +214,10 @@ impl FiniteBody {
     /// (constant over the step: its shear ratio and the frozen history
     /// stress) for [`FiniteBody::add_trial_internal_forces`].
     pub fn set_trial(&mut self, body: &Body, c: &[Option<StepCoefficients>]) {
+        // Set already for these coefficients, and nothing committed since.
+        if self.trial_coefficients.as_deref() == Some(c) {
+            return;
+        }
         let mut blocks = std::mem::take(&mut self.blocks);
         for block in &mut blocks {
             for l in 0..block.len {
@@ -218,6 +226,7 @@ impl FiniteBody {
             }
         }
         self.blocks = blocks;
+        self.trial_coefficients = Some(c.to_vec());
     }
 
     /// Adds the internal forces of all deformable elements at the global
@@ -246,6 +255,7 @@ impl FiniteBody {
     /// Advances the history of every point to the displacement `u` at the
     /// end of a step with coefficients `c`.
     pub fn commit(&mut self, body: &Body, c: &[Option<StepCoefficients>], u: &[f64]) {
+        self.trial_coefficients = None;
         let (history_s0, history_h) = (&mut self.history_s0, &mut self.history_h);
         let (history_start, terms) = (&self.history_start, &self.terms);
         // S0_iso of every point (that of `isochoric_stresses`, in SIMD lanes).
