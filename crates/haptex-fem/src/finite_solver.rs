@@ -65,7 +65,7 @@ use crate::element::Q4;
 use crate::finite_element::{ElementBlock, Inverted, cauchy_stress, internal_force};
 use crate::hyperelastic::NeoHookean;
 use crate::lanes::LANES;
-use crate::linalg::{SparseCholesky, lower_transpose_solve, lower_transpose_times, schur_operators};
+use crate::linalg::{SparseCholesky, lower_transpose_solve, schur_operators, transpose, upper_times};
 use crate::material::{StepCoefficients, advance_history, frozen_deviator, history_deviator};
 use crate::solver::{
     Condensed, Drive, NewtonStart, SolveError, Solver, StepFailure, StepOperators, StepReport, Stepping,
@@ -585,6 +585,8 @@ pub struct FiniteSolver {
     /// (made on the first rebuild), and the pad block of its factor.
     tangent_base: Option<SparseCholesky>,
     trailing_factor: Vec<f64>,
+    /// L_tt^T (column-major: L_tt by rows), for L_tt^T w column by column.
+    trailing_upper: Vec<f64>,
     trailing_scratch: Vec<f64>,
     /// A solve's forward half (factor order) and its trailing part.
     sweep: Vec<f64>,
@@ -642,6 +644,7 @@ impl FiniteSolver {
             tangent_base: None,
             tangent_psi_solved: false,
             trailing_factor: vec![0.0; m2 * m2],
+            trailing_upper: vec![0.0; m2 * m2],
             trailing_scratch: vec![0.0; m2 * m2],
             sweep: vec![0.0; n_free],
             sweep_trailing: vec![0.0; m2],
@@ -961,7 +964,7 @@ impl FiniteSolver {
                 for value in &mut self.sweep[..n - m2] {
                     *value = -*value;
                 }
-                lower_transpose_times(&self.trailing_factor, m2, &self.pad_gap, &mut self.sweep_trailing);
+                upper_times(&self.trailing_upper, m2, &self.pad_gap, &mut self.sweep_trailing);
                 for (value, add) in self.sweep[n - m2..].iter_mut().zip(&self.sweep_trailing) {
                     *value = add - *value;
                 }
@@ -1125,6 +1128,7 @@ impl FiniteSolver {
             return Ok(());
         }
         cholesky.trailing_factor(&mut self.trailing_factor);
+        transpose(&self.trailing_factor, m2, &mut self.trailing_upper);
         schur_operators(&self.trailing_factor, m2, &mut self.trailing_scratch, &mut compliance, &mut stiffness);
         // psi holds the loads of unit drive translations; they are solved
         // for the responses only when an attempt needs them

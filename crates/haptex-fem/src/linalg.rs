@@ -395,11 +395,55 @@ pub fn lower_transpose_solve(l: &[f64], m: usize, x: &mut [f64]) {
     }
 }
 
-/// out = L^T x for a dense lower-triangular `l` (m x m, column-major).
-pub fn lower_transpose_times(l: &[f64], m: usize, x: &[f64], out: &mut [f64]) {
-    for (i, o) in out.iter_mut().enumerate().take(m) {
-        let column = &l[i * m..(i + 1) * m];
-        *o = column[i..].iter().zip(&x[i..]).map(|(a, b)| a * b).sum();
+/// out = A x for a dense symmetric `a` (m x m, column-major), column by
+/// column in SIMD lanes: each out_r sums A_rc x_c over c in order, as the
+/// row-by-row dot product would, to the bit.
+pub fn symmetric_times(a: &[f64], m: usize, x: &[f64], out: &mut [f64]) {
+    pulp::Arch::new().dispatch(ColumnsTimes { a, m, x, out, upper: false })
+}
+
+/// out = U x for a dense upper-triangular `u` (m x m, column-major; with U
+/// = L^T, out = L^T x), column by column in SIMD lanes, each out_i summed
+/// over k = i, i + 1, ... in order as a dot product with L's column i
+/// would.
+pub fn upper_times(u: &[f64], m: usize, x: &[f64], out: &mut [f64]) {
+    pulp::Arch::new().dispatch(ColumnsTimes { a: u, m, x, out, upper: true })
+}
+
+/// The loop of [`symmetric_times`] and [`upper_times`].
+struct ColumnsTimes<'a> {
+    a: &'a [f64],
+    m: usize,
+    x: &'a [f64],
+    out: &'a mut [f64],
+    /// Column c has its entries in rows 0..=c only.
+    upper: bool,
+}
+
+impl pulp::WithSimd for ColumnsTimes<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let m = self.m;
+        let out = &mut self.out[..m];
+        out.fill(0.0);
+        for (c, &xc) in self.x[..m].iter().enumerate() {
+            let rows = if self.upper { c + 1 } else { m };
+            let column = &self.a[c * m..c * m + rows];
+            for (o, a) in out[..rows].iter_mut().zip(column) {
+                *o += a * xc;
+            }
+        }
+    }
+}
+
+/// The transpose of the dense m x m `l` (column-major) into `t`.
+pub fn transpose(l: &[f64], m: usize, t: &mut [f64]) {
+    for c in 0..m {
+        for r in 0..m {
+            t[r * m + c] = l[c * m + r];
+        }
     }
 }
 
@@ -562,7 +606,9 @@ mod trailing_tests {
         // and L_tt^-1 S w = L_tt^T w.
         let w: Vec<f64> = (0..m).map(|i| (i % 3) as f64 - 1.0).collect();
         let mut y = vec![0.0; n];
-        lower_transpose_times(&l, m, &w, &mut y[n - m..]);
+        let mut u = vec![0.0; m * m];
+        transpose(&l, m, &mut u);
+        upper_times(&u, m, &w, &mut y[n - m..]);
         last.backward(&mut y, &mut x);
         for (c, &row) in trailing.iter().enumerate() {
             assert!((x[row] - w[c]).abs() < 1e-10, "pad displacement {c}");

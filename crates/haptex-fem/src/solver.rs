@@ -41,7 +41,7 @@ use faer::linalg::solvers::DenseSolveCore;
 use crate::assembly::{DofMap, Pattern};
 use crate::body::Body;
 use crate::contact::{Block, ContactLaw, ContactSet, ContactTotals, SurfacePlacement};
-use crate::linalg::{DenseLu, FactorError, SparseCholesky};
+use crate::linalg::{DenseLu, FactorError, SparseCholesky, symmetric_times};
 use crate::material::StepCoefficients;
 use crate::surface::RigidSurface;
 
@@ -674,15 +674,7 @@ impl Condensed<'_> {
     /// SIMD lanes): each out_r still sums S_rc x_c over c in order, the
     /// sum of a row-by-row dot product to the bit.
     fn stiffness_times(&self, x: &[f64], out: &mut [f64]) {
-        let m2 = self.m2;
-        let out = &mut out[..m2];
-        out.fill(0.0);
-        for (c, &xc) in x[..m2].iter().enumerate() {
-            let column = &self.stiffness[c * m2..(c + 1) * m2];
-            for (o, a) in out.iter_mut().zip(column) {
-                *o += a * xc;
-            }
-        }
+        symmetric_times(self.stiffness, self.m2, x, out);
     }
 
     /// The residual R = v - u0_s - dy psi_s - C F into `s.residual` and the
