@@ -65,7 +65,7 @@ use crate::element::Q4;
 use crate::finite_element::{ElementBlock, Inverted, cauchy_stress, internal_force};
 use crate::hyperelastic::NeoHookean;
 use crate::lanes::LANES;
-use crate::linalg::{SparseCholesky, lower_transpose_solve, schur_operators, transpose, upper_times};
+use crate::linalg::{SparseCholesky, schur_operators, transpose, upper_solve, upper_times};
 use crate::material::{StepCoefficients, advance_history, frozen_deviator, history_deviator};
 use crate::solver::{
     Condensed, Drive, NewtonStart, SolveError, Solver, StepFailure, StepOperators, StepReport, Stepping,
@@ -585,7 +585,8 @@ pub struct FiniteSolver {
     /// (made on the first rebuild), and the pad block of its factor.
     tangent_base: Option<SparseCholesky>,
     trailing_factor: Vec<f64>,
-    /// L_tt^T (column-major: L_tt by rows), for L_tt^T w column by column.
+    /// L_tt^T (column-major: L_tt by rows), for L_tt^T w and L_tt^-T y
+    /// column by column.
     trailing_upper: Vec<f64>,
     trailing_scratch: Vec<f64>,
     /// A solve's forward half (factor order) and its trailing part.
@@ -897,7 +898,7 @@ impl FiniteSolver {
             if pad_last {
                 ops_k.cholesky.forward(&self.f_free, &mut self.sweep);
                 self.sweep_trailing.copy_from_slice(&self.sweep[n - m2..]);
-                lower_transpose_solve(&self.trailing_factor, m2, &mut self.sweep_trailing);
+                upper_solve(&self.trailing_upper, m2, &mut self.sweep_trailing);
                 for (c, &row) in inner.candidate_free.iter().enumerate() {
                     s.u0_s[c] = self.iterate[row] - self.sweep_trailing[c];
                 }

@@ -385,14 +385,27 @@ pub fn schur_operators(l: &[f64], m: usize, inverse: &mut [f64], compliance: &mu
     }
 }
 
-/// Solves L^T x = b in place for a dense lower-triangular `l` (m x m,
-/// column-major).
-pub fn lower_transpose_solve(l: &[f64], m: usize, x: &mut [f64]) {
-    for i in (0..m).rev() {
-        let column = &l[i * m..(i + 1) * m];
-        let below: f64 = column[i + 1..].iter().zip(&x[i + 1..]).map(|(a, b)| a * b).sum();
-        x[i] = (x[i] - below) / column[i];
+/// Solves U x = b in place for a dense upper-triangular `u` (m x m,
+/// column-major; with U = L^T, L^T x = b), by columns from the last (each
+/// solved unknown's column subtracted at once, in SIMD lanes).
+pub fn upper_solve(u: &[f64], m: usize, x: &mut [f64]) {
+    struct Solve<'a>(&'a [f64], usize, &'a mut [f64]);
+    impl pulp::WithSimd for Solve<'_> {
+        type Output = ();
+        #[inline(always)]
+        fn with_simd<S: pulp::Simd>(self, _simd: S) {
+            let Solve(u, m, x) = self;
+            for k in (0..m).rev() {
+                let column = &u[k * m..k * m + k + 1];
+                let xk = x[k] / column[k];
+                x[k] = xk;
+                for (xi, uik) in x[..k].iter_mut().zip(column) {
+                    *xi -= uik * xk;
+                }
+            }
+        }
     }
+    pulp::Arch::new().dispatch(Solve(u, m, x))
 }
 
 /// out = A x for a dense symmetric `a` (m x m, column-major), column by
@@ -596,7 +609,9 @@ mod trailing_tests {
         // The trailing part of the solution from the forward half alone:
         // x_t = L_tt^-T y_t.
         let mut x_t = y[n - m..].to_vec();
-        lower_transpose_solve(&l, m, &mut x_t);
+        let mut u = vec![0.0; m * m];
+        transpose(&l, m, &mut u);
+        upper_solve(&u, m, &mut x_t);
         for (c, &row) in trailing.iter().enumerate() {
             assert!((x_t[c] - b[row]).abs() < 1e-12 * scale, "x_t[{c}]");
         }
@@ -606,8 +621,6 @@ mod trailing_tests {
         // and L_tt^-1 S w = L_tt^T w.
         let w: Vec<f64> = (0..m).map(|i| (i % 3) as f64 - 1.0).collect();
         let mut y = vec![0.0; n];
-        let mut u = vec![0.0; m * m];
-        transpose(&l, m, &mut u);
         upper_times(&u, m, &w, &mut y[n - m..]);
         last.backward(&mut y, &mut x);
         for (c, &row) in trailing.iter().enumerate() {
