@@ -33,7 +33,7 @@
 
 use crate::element::Q4;
 use crate::hyperelastic::{
-    NeoHookean, in_cbrt_range, inverse_cbrt_squared, inverse_cbrt_squared_in_range, isochoric_parts, isochoric_tangent,
+    NeoHookean, inverse_cbrt_squared, inverse_cbrt_squared_near_one, isochoric_parts, isochoric_tangent, near_one,
     push_forward, volumetric,
 };
 use crate::lanes::{LANES, Lanes, Real};
@@ -178,7 +178,8 @@ impl ElementInput<f64> for OneElement<'_> {
 /// The element's nodal forces and, with `tangent`, their consistent
 /// derivative ([`internal_force`]), on f64 or on [`Lanes`] (one element
 /// per lane); J^(-2/3) by [`inverse_cbrt_squared`] if `checked`, else by
-/// its iteration alone (the caller checks the range). Also returns J at
+/// [`inverse_cbrt_squared_near_one`] (the caller checks the range, which
+/// is where the two agree to the bit). Also returns J at
 /// the points and Jbar for the caller to check: where one is not positive
 /// the element is inverted and the forces are meaningless.
 #[inline(always)]
@@ -205,7 +206,7 @@ fn element_response<T: Real>(
         j_points[gp] = j;
         let w = element.weight(gp);
         area += w * j;
-        let j_23 = if checked { j.map(inverse_cbrt_squared) } else { inverse_cbrt_squared_in_range(j) };
+        let j_23 = if checked { j.map(inverse_cbrt_squared) } else { inverse_cbrt_squared_near_one(j) };
         let (s0, ci, i1, a) = isochoric_parts(mu, &f, j_23);
         let s = trial_stress(shear_ratio, &s0, &element.frozen(gp));
         let sm = [[s[0], s[3]], [s[3], s[1]]];
@@ -354,9 +355,10 @@ impl ElementBlock {
     }
 
     /// [`element_response`] of the block in the SIMD lanes of `simd`, with
-    /// whether J and Jbar are in range at every point of every lane (the
-    /// J^(-2/3) iteration's range; else some element is inverted, or
-    /// absurd, and the block is computed element by element).
+    /// whether J is in the lanes' range at every point of every lane
+    /// ([`near_one`]: 0.7 < J < 1.4) and Jbar positive; else the block is
+    /// computed element by element (an element is inverted or strained
+    /// beyond that range).
     #[inline(always)]
     fn lanes_response<S: Simd>(
         &self,
@@ -369,7 +371,7 @@ impl ElementBlock {
         let mut in_range = true;
         for j in j {
             for j in j.to_array() {
-                in_range &= in_cbrt_range(j);
+                in_range &= near_one(j);
             }
         }
         for j_bar in j_bar.to_array() {
@@ -395,10 +397,10 @@ impl ElementBlock {
     /// Adds the internal forces of the block's elements at the global
     /// displacement `u` to `f` (element by element in lane order, as a loop
     /// over the elements with [`internal_force`] would), in the SIMD lanes
-    /// of `simd`. Where some point has J outside the range of the J^(-2/3)
-    /// iteration (an inverted element, or an absurd one), or `simd` has
-    /// fewer than [`LANES`] lanes, the block is computed by
-    /// [`internal_force`] itself, which reports an inverted element.
+    /// of `simd`. Where some point has J outside 0.7..1.4 ([`near_one`]:
+    /// an element inverted or strained beyond), or `simd` has fewer than
+    /// [`LANES`] lanes, the block is computed by [`internal_force`] itself,
+    /// which reports an inverted element.
     #[inline(always)]
     pub fn add_internal_forces<S: Simd>(
         &self,
@@ -468,8 +470,8 @@ impl ElementBlock {
     /// Calls `visit(element, s0)` with the instantaneous isochoric stress
     /// S0_iso of each of the block's elements at the global displacement
     /// `u` ([`isochoric_stresses`], to the bit), in lane order, computed in
-    /// the SIMD lanes of `simd`, or element by element where some J is out
-    /// of the range of the J^(-2/3) iteration.
+    /// the SIMD lanes of `simd`, or element by element where some J is
+    /// outside 0.7..1.4 ([`near_one`]).
     #[inline(always)]
     pub fn visit_isochoric_stresses<S: Simd>(
         &self,
@@ -489,9 +491,9 @@ impl ElementBlock {
                 let f = gradient_at(&lanes.grad(gp), &u);
                 let j = det(&f);
                 for j in j.to_array() {
-                    in_range &= in_cbrt_range(j);
+                    in_range &= near_one(j);
                 }
-                let (s0_gp, ..) = isochoric_parts(mu, &f, inverse_cbrt_squared_in_range(j));
+                let (s0_gp, ..) = isochoric_parts(mu, &f, inverse_cbrt_squared_near_one(j));
                 for k in 0..4 {
                     s0[gp][k] = s0_gp[k].to_array();
                 }
