@@ -78,7 +78,14 @@ fn det<T: Real>(f: &[[T; 2]; 2]) -> T {
 /// frozen (11, 22, 33, 12).
 #[inline(always)]
 fn trial_stress<T: Real>(shear_ratio: T, s0: &[T; 4], frozen: &[T; 4]) -> [T; 4] {
-    std::array::from_fn(|k| shear_ratio * s0[k] + frozen[k])
+    // Loops rather than closures here and in the lanes' path below: a
+    // closure LLVM does not inline is compiled without the SIMD level of
+    // the loop that calls it (its lane arithmetic then runs as calls).
+    let mut s = *s0;
+    for k in 0..4 {
+        s[k] = shear_ratio * s0[k] + frozen[k];
+    }
+    s
 }
 
 /// Adds one Gauss point's share (weight `w`, shape function gradients `n`,
@@ -88,7 +95,12 @@ fn trial_stress<T: Real>(shear_ratio: T, s0: &[T; 4], frozen: &[T; 4]) -> [T; 4]
 fn add_point_forces<T: Real>(w: T, n: &[[T; 2]; 4], f: &[[T; 2]; 2], s: &[T; 4], force: &mut [T; 8], g: &mut [T; 8]) {
     let sm = [[s[0], s[3]], [s[3], s[1]]];
     // P = F S (in plane).
-    let p: [[T; 2]; 2] = std::array::from_fn(|i| std::array::from_fn(|k| f[i][0] * sm[0][k] + f[i][1] * sm[1][k]));
+    let mut p = *f;
+    for i in 0..2 {
+        for k in 0..2 {
+            p[i][k] = f[i][0] * sm[0][k] + f[i][1] * sm[1][k];
+        }
+    }
     let cof = [[f[1][1], -f[1][0]], [-f[0][1], f[0][0]]];
     for a in 0..4 {
         for i in 0..2 {
@@ -366,7 +378,10 @@ impl ElementBlock {
         ue: &[[f64; LANES]; 8],
         tangent: Option<&mut [[Lanes<S>; 8]; 8]>,
     ) -> ([Lanes<S>; 8], bool) {
-        let u = ue.map(|u| Lanes::load(simd, &u));
+        let mut u = [Lanes::splat(simd, 0.0); 8];
+        for i in 0..8 {
+            u[i] = Lanes::load(simd, &ue[i]);
+        }
         let (force, j, j_bar) = element_response(&BlockLanes { block: self, simd }, &u, false, tangent);
         let mut in_range = true;
         for j in j {
@@ -413,7 +428,10 @@ impl ElementBlock {
         if Lanes::<S>::fits() {
             let (force, in_range) = self.lanes_response(simd, &ue, None);
             if in_range {
-                let fe = force.map(Lanes::to_array);
+                let mut fe = [[0.0; LANES]; 8];
+                for i in 0..8 {
+                    fe[i] = force[i].to_array();
+                }
                 for l in 0..self.len {
                     for i in 0..8 {
                         f[self.dofs[i][l] as usize] += fe[i][l];
@@ -450,7 +468,13 @@ impl ElementBlock {
             let mut k = [[Lanes::splat(simd, 0.0); 8]; 8];
             let (_, in_range) = self.lanes_response(simd, &ue, Some(&mut k));
             if in_range {
-                let k = k.map(|row| row.map(Lanes::to_array));
+                let mut k_lanes = [[[0.0; LANES]; 8]; 8];
+                for r in 0..8 {
+                    for c in 0..8 {
+                        k_lanes[r][c] = k[r][c].to_array();
+                    }
+                }
+                let k = k_lanes;
                 for l in 0..self.len {
                     visit(self.elements[l], &std::array::from_fn(|r| std::array::from_fn(|c| k[r][c][l])));
                 }
@@ -484,7 +508,10 @@ impl ElementBlock {
         if Lanes::<S>::fits() {
             let lanes = BlockLanes { block: self, simd };
             let (mu, _) = lanes.law();
-            let u = ue.map(|u| Lanes::load(simd, &u));
+            let mut u = [Lanes::splat(simd, 0.0); 8];
+            for i in 0..8 {
+                u[i] = Lanes::load(simd, &ue[i]);
+            }
             let mut in_range = true;
             let mut s0 = [[[0.0; LANES]; 4]; 4];
             for gp in 0..4 {
@@ -523,7 +550,13 @@ struct BlockLanes<'a, S: Simd> {
 impl<S: Simd> ElementInput<Lanes<S>> for BlockLanes<'_, S> {
     #[inline(always)]
     fn grad(&self, gp: usize) -> [[Lanes<S>; 2]; 4] {
-        self.block.grad[gp].map(|n_a| n_a.map(|n_ak| Lanes::load(self.simd, &n_ak)))
+        let mut n = [[Lanes::splat(self.simd, 0.0); 2]; 4];
+        for a in 0..4 {
+            for k in 0..2 {
+                n[a][k] = Lanes::load(self.simd, &self.block.grad[gp][a][k]);
+            }
+        }
+        n
     }
     #[inline(always)]
     fn weight(&self, gp: usize) -> Lanes<S> {
@@ -543,6 +576,10 @@ impl<S: Simd> ElementInput<Lanes<S>> for BlockLanes<'_, S> {
     }
     #[inline(always)]
     fn frozen(&self, gp: usize) -> [Lanes<S>; 4] {
-        self.block.frozen[gp].map(|s_k| Lanes::load(self.simd, &s_k))
+        let mut s = [Lanes::splat(self.simd, 0.0); 4];
+        for k in 0..4 {
+            s[k] = Lanes::load(self.simd, &self.block.frozen[gp][k]);
+        }
+        s
     }
 }

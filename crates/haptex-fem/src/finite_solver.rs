@@ -65,7 +65,7 @@ use crate::element::Q4;
 use crate::finite_element::{ElementBlock, Inverted, cauchy_stress, internal_force};
 use crate::hyperelastic::NeoHookean;
 use crate::lanes::LANES;
-use crate::linalg::{SparseCholesky, schur_operators, transpose, upper_solve, upper_times};
+use crate::linalg::{SparseCholesky, dot, schur_operators, transpose, upper_solve, upper_times};
 use crate::material::{StepCoefficients, advance_history, frozen_deviator, history_deviator};
 use crate::solver::{
     Condensed, Drive, NewtonStart, SolveError, Solver, StepFailure, StepOperators, StepReport, Stepping,
@@ -512,11 +512,11 @@ impl Anderson {
         // small Tikhonov term (the columns can be nearly dependent).
         for a in 0..m {
             for b in 0..=a {
-                let v: f64 = self.df[a].iter().zip(&self.df[b]).map(|(p, q)| p * q).sum();
+                let v = dot(&self.df[a], &self.df[b]);
                 self.normal[a * m + b] = v;
                 self.normal[b * m + a] = v;
             }
-            self.rhs[a] = self.df[a].iter().zip(&self.f_prev).map(|(p, q)| p * q).sum();
+            self.rhs[a] = dot(&self.df[a], &self.f_prev);
         }
         let trace: f64 = (0..m).map(|a| self.normal[a * m + a]).sum();
         if !(trace > 0.0 && trace.is_finite()) {

@@ -451,6 +451,25 @@ impl pulp::WithSimd for ColumnsTimes<'_> {
     }
 }
 
+/// a . b of two long vectors, in four interleaved sums (so that it runs in
+/// SIMD lanes).
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let mut sums = [0.0; 4];
+    let (a4, b4) = (a[..n].chunks_exact(4), b[..n].chunks_exact(4));
+    let (a_rest, b_rest) = (a4.remainder(), b4.remainder());
+    for (a, b) in a4.zip(b4) {
+        for k in 0..4 {
+            sums[k] += a[k] * b[k];
+        }
+    }
+    let mut sum = (sums[0] + sums[1]) + (sums[2] + sums[3]);
+    for (a, b) in a_rest.iter().zip(b_rest) {
+        sum += a * b;
+    }
+    sum
+}
+
 /// The transpose of the dense m x m `l` (column-major) into `t`.
 pub fn transpose(l: &[f64], m: usize, t: &mut [f64]) {
     for c in 0..m {
