@@ -65,10 +65,10 @@ use crate::element::Q4;
 use crate::finite_element::{ElementBlock, Inverted, cauchy_stress, internal_force};
 use crate::hyperelastic::NeoHookean;
 use crate::lanes::LANES;
-use crate::linalg::{SparseCholesky, dot, schur_operators, transpose, upper_solve, upper_times};
+use crate::linalg::{SparseCholesky, dot, schur_compliance, transpose, upper_solve, upper_times};
 use crate::material::{StepCoefficients, advance_history, frozen_deviator, history_deviator};
 use crate::solver::{
-    Condensed, Drive, NewtonStart, SolveError, Solver, StepFailure, StepOperators, StepReport, Stepping,
+    Condensed, Drive, NewtonStart, PadStiffness, SolveError, Solver, StepFailure, StepOperators, StepReport, Stepping,
     advance_halving, newton,
 };
 
@@ -917,13 +917,13 @@ impl FiniteSolver {
             for (c, &row) in inner.candidate_free.iter().enumerate() {
                 s.psi_y_s[c] = if load.is_some() { ops.psi[1][row] } else { 0.0 };
             }
-            let condensed = Condensed {
-                m2,
-                compliance: &ops.compliance,
-                stiffness: &ops.stiffness,
-                load,
-                force_floor_n: inner.force_floor_n,
+            let stiffness = if pad_last {
+                PadStiffness::Factor { lower: &self.trailing_factor, upper: &self.trailing_upper }
+            } else {
+                PadStiffness::Dense(&ops.stiffness)
             };
+            let condensed =
+                Condensed { m2, compliance: &ops.compliance, stiffness, load, force_floor_n: inner.force_floor_n };
             let mut dy = 0.0;
             let timer = Instant::now();
             let mut inner_settings = inner.settings;
@@ -1117,9 +1117,10 @@ impl FiniteSolver {
         if self.tangent_base.is_none() {
             self.tangent_base = Some(SparseCholesky::with_trailing(&inner.pattern, &inner.candidate_free, 1)?);
         }
-        let (mut cholesky, mut compliance, mut stiffness) = match (self.tangent_ops.take(), &self.tangent_base) {
+        // No dense stiffness: it is L_tt (`self.trailing_factor`).
+        let (mut cholesky, mut compliance, stiffness) = match (self.tangent_ops.take(), &self.tangent_base) {
             (Some(ops), _) => (ops.cholesky, ops.compliance, ops.stiffness),
-            (None, Some(base)) => (base.share(1), vec![0.0; m2 * m2], vec![0.0; m2 * m2]),
+            (None, Some(base)) => (base.share(1), vec![0.0; m2 * m2], Vec::new()),
             (None, None) => unreachable!("the pad-last analysis was just made"),
         };
         let factorized = cholesky.factorize(values);
@@ -1130,7 +1131,9 @@ impl FiniteSolver {
         }
         cholesky.trailing_factor(&mut self.trailing_factor);
         transpose(&self.trailing_factor, m2, &mut self.trailing_upper);
-        schur_operators(&self.trailing_factor, m2, &mut self.trailing_scratch, &mut compliance, &mut stiffness);
+        // The condensed stiffness is L_tt itself (S = L_tt L_tt^T, see
+        // `PadStiffness::Factor`): only the compliance is formed.
+        schur_compliance(&self.trailing_factor, m2, &mut self.trailing_scratch, &mut compliance);
         // psi holds the loads of unit drive translations; they are solved
         // for the responses only when an attempt needs them
         // ([`FiniteSolver::solve_tangent_drive_responses`]): not in a slide

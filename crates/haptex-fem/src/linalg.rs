@@ -336,28 +336,16 @@ impl SparseCholesky {
     }
 }
 
-/// The condensed operators of the trailing unknowns from the trailing
-/// factor `l` (m x m, column-major lower, see
-/// [`SparseCholesky::trailing_factor`]): the stiffness S = L L^T and the
-/// compliance C = S^-1 = L^-T L^-1, both column-major and exactly
-/// symmetric. `inverse` (m x m) is scratch (it ends with L^-1 in its lower
-/// triangle).
-pub fn schur_operators(l: &[f64], m: usize, inverse: &mut [f64], compliance: &mut [f64], stiffness: &mut [f64]) {
+/// The compliance of the trailing unknowns from the trailing factor `l`
+/// (m x m, column-major lower, see [`SparseCholesky::trailing_factor`]):
+/// C = S^-1 = L^-T L^-1, with S = L L^T their condensed stiffness (kept as
+/// L: S x = L (L^T x), [`lower_times`] and [`upper_times`]), column-major
+/// and exactly symmetric. `inverse` (m x m) is scratch (it ends with L^-1
+/// in its lower triangle).
+pub fn schur_compliance(l: &[f64], m: usize, inverse: &mut [f64], compliance: &mut [f64]) {
     use faer::linalg::matmul::triangular::{BlockStructure, matmul};
     use faer::{Accum, MatRef};
     let factor = MatRef::from_column_major_slice(l, m, m);
-    // Lower halves only (half the work of full products), then mirrored.
-    matmul(
-        MatMut::from_column_major_slice_mut(stiffness, m, m),
-        BlockStructure::TriangularLower,
-        Accum::Replace,
-        factor,
-        BlockStructure::TriangularLower,
-        factor.transpose(),
-        BlockStructure::TriangularUpper,
-        1.0,
-        Par::Seq,
-    );
     inverse.fill(0.0);
     faer::linalg::triangular_inverse::invert_lower_triangular(
         MatMut::from_column_major_slice_mut(inverse, m, m),
@@ -365,6 +353,7 @@ pub fn schur_operators(l: &[f64], m: usize, inverse: &mut [f64], compliance: &mu
         Par::Seq,
     );
     let inverse = MatRef::from_column_major_slice(inverse, m, m);
+    // The lower half only (half the work of the full product), mirrored.
     matmul(
         MatMut::from_column_major_slice_mut(compliance, m, m),
         BlockStructure::TriangularLower,
@@ -376,11 +365,9 @@ pub fn schur_operators(l: &[f64], m: usize, inverse: &mut [f64], compliance: &mu
         1.0,
         Par::Seq,
     );
-    for matrix in [compliance, stiffness] {
-        for c in 0..m {
-            for r in c + 1..m {
-                matrix[r * m + c] = matrix[c * m + r];
-            }
+    for c in 0..m {
+        for r in c + 1..m {
+            compliance[r * m + c] = compliance[c * m + r];
         }
     }
 }
@@ -412,7 +399,13 @@ pub fn upper_solve(u: &[f64], m: usize, x: &mut [f64]) {
 /// column in SIMD lanes: each out_r sums A_rc x_c over c in order, as the
 /// row-by-row dot product would, to the bit.
 pub fn symmetric_times(a: &[f64], m: usize, x: &[f64], out: &mut [f64]) {
-    pulp::Arch::new().dispatch(ColumnsTimes { a, m, x, out, upper: false })
+    pulp::Arch::new().dispatch(ColumnsTimes { a, m, x, out, shape: Shape::Full })
+}
+
+/// out = L x for a dense lower-triangular `l` (m x m, column-major), column
+/// by column in SIMD lanes.
+pub fn lower_times(l: &[f64], m: usize, x: &[f64], out: &mut [f64]) {
+    pulp::Arch::new().dispatch(ColumnsTimes { a: l, m, x, out, shape: Shape::Lower })
 }
 
 /// out = U x for a dense upper-triangular `u` (m x m, column-major; with U
@@ -420,7 +413,17 @@ pub fn symmetric_times(a: &[f64], m: usize, x: &[f64], out: &mut [f64]) {
 /// over k = i, i + 1, ... in order as a dot product with L's column i
 /// would.
 pub fn upper_times(u: &[f64], m: usize, x: &[f64], out: &mut [f64]) {
-    pulp::Arch::new().dispatch(ColumnsTimes { a: u, m, x, out, upper: true })
+    pulp::Arch::new().dispatch(ColumnsTimes { a: u, m, x, out, shape: Shape::Upper })
+}
+
+/// Which entries of a dense matrix's columns are stored.
+#[derive(Clone, Copy, PartialEq)]
+enum Shape {
+    Full,
+    /// Column c in rows 0..=c.
+    Upper,
+    /// Column c in rows c..m.
+    Lower,
 }
 
 /// The loop of [`symmetric_times`] and [`upper_times`].
@@ -429,8 +432,7 @@ struct ColumnsTimes<'a> {
     m: usize,
     x: &'a [f64],
     out: &'a mut [f64],
-    /// Column c has its entries in rows 0..=c only.
-    upper: bool,
+    shape: Shape,
 }
 
 impl pulp::WithSimd for ColumnsTimes<'_> {
@@ -442,9 +444,13 @@ impl pulp::WithSimd for ColumnsTimes<'_> {
         let out = &mut self.out[..m];
         out.fill(0.0);
         for (c, &xc) in self.x[..m].iter().enumerate() {
-            let rows = if self.upper { c + 1 } else { m };
-            let column = &self.a[c * m..c * m + rows];
-            for (o, a) in out[..rows].iter_mut().zip(column) {
+            let rows = match self.shape {
+                Shape::Full => 0..m,
+                Shape::Upper => 0..c + 1,
+                Shape::Lower => c..m,
+            };
+            let column = &self.a[c * m + rows.start..c * m + rows.end];
+            for (o, a) in out[rows].iter_mut().zip(column) {
                 *o += a * xc;
             }
         }
@@ -598,8 +604,20 @@ mod trailing_tests {
         assert_eq!(last.trailing(), m);
         let mut l = vec![0.0; m * m];
         last.trailing_factor(&mut l);
-        let (mut inverse, mut compliance, mut stiffness) = (vec![0.0; m * m], vec![0.0; m * m], vec![0.0; m * m]);
-        schur_operators(&l, m, &mut inverse, &mut compliance, &mut stiffness);
+        let (mut inverse, mut compliance) = (vec![0.0; m * m], vec![0.0; m * m]);
+        schur_compliance(&l, m, &mut inverse, &mut compliance);
+        // S = L L^T column by column (unit vectors through lower_times and
+        // upper_times).
+        let mut u = vec![0.0; m * m];
+        transpose(&l, m, &mut u);
+        let mut stiffness = vec![0.0; m * m];
+        for c in 0..m {
+            let mut e = vec![0.0; m];
+            e[c] = 1.0;
+            let mut half = vec![0.0; m];
+            upper_times(&u, m, &e, &mut half);
+            lower_times(&l, m, &half, &mut stiffness[c * m..(c + 1) * m]);
+        }
         let scale = compliance.iter().fold(0.0f64, |a, b| a.max(b.abs()));
         for c in 0..m {
             for (r, &row) in trailing.iter().enumerate() {
@@ -628,8 +646,6 @@ mod trailing_tests {
         // The trailing part of the solution from the forward half alone:
         // x_t = L_tt^-T y_t.
         let mut x_t = y[n - m..].to_vec();
-        let mut u = vec![0.0; m * m];
-        transpose(&l, m, &mut u);
         upper_solve(&u, m, &mut x_t);
         for (c, &row) in trailing.iter().enumerate() {
             assert!((x_t[c] - b[row]).abs() < 1e-12 * scale, "x_t[{c}]");
