@@ -480,12 +480,16 @@ impl Anderson {
     }
 
     /// Given the iterate `x` and its image `g` = G(x), writes the next
-    /// iterate into `x`.
-    fn step(&mut self, x: &mut [f64], g: &[f64]) {
+    /// iterate into `x`. Returns the largest |G(x) - x|.
+    fn step(&mut self, x: &mut [f64], g: &[f64]) -> f64 {
         let n = x.len();
+        let mut largest: f64 = 0.0;
         if self.depth == 0 {
+            for (xi, gi) in x.iter().zip(g) {
+                largest = largest.max((gi - xi).abs());
+            }
             x.copy_from_slice(g);
-            return;
+            return largest;
         }
         // f = g - x into x's place after the differences are recorded.
         if self.has_prev {
@@ -501,12 +505,13 @@ impl Anderson {
         for i in 0..n {
             self.f_prev[i] = g[i] - x[i];
             self.g_prev[i] = g[i];
+            largest = largest.max(self.f_prev[i].abs());
         }
         self.has_prev = true;
         let m = self.stored;
         x.copy_from_slice(g);
         if m == 0 {
-            return;
+            return largest;
         }
         // Least squares min |f - dF gamma| by the normal equations, with a
         // small Tikhonov term (the columns can be nearly dependent).
@@ -520,7 +525,7 @@ impl Anderson {
         }
         let trace: f64 = (0..m).map(|a| self.normal[a * m + a]).sum();
         if !(trace > 0.0 && trace.is_finite()) {
-            return;
+            return largest;
         }
         for a in 0..m {
             self.normal[a * m + a] += 1e-10 * trace;
@@ -549,6 +554,7 @@ impl Anderson {
                 x[i] -= gamma * self.dg[a][i];
             }
         }
+        largest
     }
 }
 
@@ -994,9 +1000,8 @@ impl FiniteSolver {
                 }
             }
             self.image[n] = y + dy;
-            change = (0..=n).map(|i| (self.image[i] - self.iterate[i]).abs()).fold(0.0, f64::max);
             let timer = Instant::now();
-            self.anderson.step(&mut self.iterate, &self.image);
+            change = self.anderson.step(&mut self.iterate, &self.image);
             self.profile.anderson_s += timer.elapsed().as_secs_f64();
         }
         self.outer_iterations += performed;
