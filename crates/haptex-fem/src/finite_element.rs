@@ -412,7 +412,7 @@ impl ElementBlock {
     /// Adds the internal forces of the block's elements at the global
     /// displacement `u` to `f` (element by element in lane order, as a loop
     /// over the elements with [`internal_force`] would), in the SIMD lanes
-    /// of `simd`. Where some point has J outside 0.7..1.4 ([`near_one`]:
+    /// of `simd`. Where some point has J outside 0.7..1.4 (`near_one`:
     /// an element inverted or strained beyond), or `simd` has fewer than
     /// [`LANES`] lanes, the block is computed by [`internal_force`] itself,
     /// which reports an inverted element.
@@ -495,7 +495,7 @@ impl ElementBlock {
     /// S0_iso of each of the block's elements at the global displacement
     /// `u` ([`isochoric_stresses`], to the bit), in lane order, computed in
     /// the SIMD lanes of `simd`, or element by element where some J is
-    /// outside 0.7..1.4 ([`near_one`]).
+    /// outside 0.7..1.4 (`near_one`).
     #[inline(always)]
     pub fn visit_isochoric_stresses<S: Simd>(
         &self,

@@ -198,7 +198,7 @@ pub fn push_forward(f: &[[f64; 2]; 2], s: &[f64; 4]) -> [f64; 4] {
 
 /// x^(-2/3) for x > 0, to round-off (a few ulp): Newton's iteration
 /// y <- y (4 - x y^3) / 3 for x^(-1/3), squared. Near 1 (J of a tissue
-/// point) from a rational estimate ([`inverse_cbrt_squared_near_one`]);
+/// point) from a rational estimate (`inverse_cbrt_squared_near_one`);
 /// elsewhere from the exponent-halving bit estimate (3.4% off at worst;
 /// four iterations: 2.4e-3, 1.1e-5, 2.6e-10, round-off). Multiplications
 /// and one division: several times faster than `powf` or Rust's correctly

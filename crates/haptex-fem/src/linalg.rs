@@ -8,7 +8,7 @@
 //! S = K_tt - K_ti K_ii^-1 K_it, the condensed stiffness of the trailing
 //! unknowns, is L_tt L_tt^T: it comes with the factorization, without one
 //! solve per trailing unknown ([`SparseCholesky::trailing_factor`],
-//! [`schur_operators`]).
+//! [`schur_compliance`]).
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
