@@ -58,10 +58,10 @@
 //! [`internal_force`] to the bit). The contact Newton of an outer
 //! iteration starts from the contact evaluation of the residual at the
 //! same iterate, and takes the stick predictor only at a step's first
-//! contact solve. On the default bump a rebuild costs about 2.5 ms
-//! (element tangents 0.6, factorization 1.5, condensation 0.3) and an outer
-//! iteration about 0.65 ms (residual, body and contact, 0.15; sweeps 0.21;
-//! contact Newton 0.27); `haptex simulate` prints the breakdown
+//! contact solve. On the default bump a rebuild costs about 2.7 ms
+//! (element tangents 0.7, factorization 1.7, condensation 0.4) and an outer
+//! iteration about 0.7 ms (residual, body and contact, 0.16; sweeps 0.23;
+//! contact Newton 0.29); `haptex simulate` prints the breakdown
 //! ([`FiniteProfile`]) when `HAPTEX_PROFILE` is set.
 //! A step that does not converge, or in which an element
 //! inverts, is retried in halves exactly like the small-strain solver's; if
