@@ -33,7 +33,7 @@
 
 use crate::element::Q4;
 use crate::hyperelastic::{
-    NeoHookean, in_cbrt_range, inverse_cbrt_squared, inverse_cbrt_squared_in_range, isochoric_parts, isochoric_tangent,
+    NeoHookean, inverse_cbrt_squared, inverse_cbrt_squared_near_one, isochoric_parts, isochoric_tangent, near_one,
     push_forward, volumetric,
 };
 use crate::lanes::{LANES, Lanes, Real};
@@ -78,7 +78,14 @@ fn det<T: Real>(f: &[[T; 2]; 2]) -> T {
 /// frozen (11, 22, 33, 12).
 #[inline(always)]
 fn trial_stress<T: Real>(shear_ratio: T, s0: &[T; 4], frozen: &[T; 4]) -> [T; 4] {
-    std::array::from_fn(|k| shear_ratio * s0[k] + frozen[k])
+    // Loops rather than closures here and in the lanes' path below: a
+    // closure LLVM does not inline is compiled without the SIMD level of
+    // the loop that calls it (its lane arithmetic then runs as calls).
+    let mut s = *s0;
+    for k in 0..4 {
+        s[k] = shear_ratio * s0[k] + frozen[k];
+    }
+    s
 }
 
 /// Adds one Gauss point's share (weight `w`, shape function gradients `n`,
@@ -88,7 +95,12 @@ fn trial_stress<T: Real>(shear_ratio: T, s0: &[T; 4], frozen: &[T; 4]) -> [T; 4]
 fn add_point_forces<T: Real>(w: T, n: &[[T; 2]; 4], f: &[[T; 2]; 2], s: &[T; 4], force: &mut [T; 8], g: &mut [T; 8]) {
     let sm = [[s[0], s[3]], [s[3], s[1]]];
     // P = F S (in plane).
-    let p: [[T; 2]; 2] = std::array::from_fn(|i| std::array::from_fn(|k| f[i][0] * sm[0][k] + f[i][1] * sm[1][k]));
+    let mut p = *f;
+    for i in 0..2 {
+        for k in 0..2 {
+            p[i][k] = f[i][0] * sm[0][k] + f[i][1] * sm[1][k];
+        }
+    }
     let cof = [[f[1][1], -f[1][0]], [-f[0][1], f[0][0]]];
     for a in 0..4 {
         for i in 0..2 {
@@ -178,7 +190,8 @@ impl ElementInput<f64> for OneElement<'_> {
 /// The element's nodal forces and, with `tangent`, their consistent
 /// derivative ([`internal_force`]), on f64 or on [`Lanes`] (one element
 /// per lane); J^(-2/3) by [`inverse_cbrt_squared`] if `checked`, else by
-/// its iteration alone (the caller checks the range). Also returns J at
+/// [`inverse_cbrt_squared_near_one`] (the caller checks the range, which
+/// is where the two agree to the bit). Also returns J at
 /// the points and Jbar for the caller to check: where one is not positive
 /// the element is inverted and the forces are meaningless.
 #[inline(always)]
@@ -205,7 +218,7 @@ fn element_response<T: Real>(
         j_points[gp] = j;
         let w = element.weight(gp);
         area += w * j;
-        let j_23 = if checked { j.map(inverse_cbrt_squared) } else { inverse_cbrt_squared_in_range(j) };
+        let j_23 = if checked { j.map(inverse_cbrt_squared) } else { inverse_cbrt_squared_near_one(j) };
         let (s0, ci, i1, a) = isochoric_parts(mu, &f, j_23);
         let s = trial_stress(shear_ratio, &s0, &element.frozen(gp));
         let sm = [[s[0], s[3]], [s[3], s[1]]];
@@ -354,9 +367,10 @@ impl ElementBlock {
     }
 
     /// [`element_response`] of the block in the SIMD lanes of `simd`, with
-    /// whether J and Jbar are in range at every point of every lane (the
-    /// J^(-2/3) iteration's range; else some element is inverted, or
-    /// absurd, and the block is computed element by element).
+    /// whether J is in the lanes' range at every point of every lane
+    /// ([`near_one`]: 0.7 < J < 1.4) and Jbar positive; else the block is
+    /// computed element by element (an element is inverted or strained
+    /// beyond that range).
     #[inline(always)]
     fn lanes_response<S: Simd>(
         &self,
@@ -364,12 +378,15 @@ impl ElementBlock {
         ue: &[[f64; LANES]; 8],
         tangent: Option<&mut [[Lanes<S>; 8]; 8]>,
     ) -> ([Lanes<S>; 8], bool) {
-        let u = ue.map(|u| Lanes::load(simd, &u));
+        let mut u = [Lanes::splat(simd, 0.0); 8];
+        for i in 0..8 {
+            u[i] = Lanes::load(simd, &ue[i]);
+        }
         let (force, j, j_bar) = element_response(&BlockLanes { block: self, simd }, &u, false, tangent);
         let mut in_range = true;
         for j in j {
             for j in j.to_array() {
-                in_range &= in_cbrt_range(j);
+                in_range &= near_one(j);
             }
         }
         for j_bar in j_bar.to_array() {
@@ -395,10 +412,10 @@ impl ElementBlock {
     /// Adds the internal forces of the block's elements at the global
     /// displacement `u` to `f` (element by element in lane order, as a loop
     /// over the elements with [`internal_force`] would), in the SIMD lanes
-    /// of `simd`. Where some point has J outside the range of the J^(-2/3)
-    /// iteration (an inverted element, or an absurd one), or `simd` has
-    /// fewer than [`LANES`] lanes, the block is computed by
-    /// [`internal_force`] itself, which reports an inverted element.
+    /// of `simd`. Where some point has J outside 0.7..1.4 (`near_one`:
+    /// an element inverted or strained beyond), or `simd` has fewer than
+    /// [`LANES`] lanes, the block is computed by [`internal_force`] itself,
+    /// which reports an inverted element.
     #[inline(always)]
     pub fn add_internal_forces<S: Simd>(
         &self,
@@ -411,7 +428,10 @@ impl ElementBlock {
         if Lanes::<S>::fits() {
             let (force, in_range) = self.lanes_response(simd, &ue, None);
             if in_range {
-                let fe = force.map(Lanes::to_array);
+                let mut fe = [[0.0; LANES]; 8];
+                for i in 0..8 {
+                    fe[i] = force[i].to_array();
+                }
                 for l in 0..self.len {
                     for i in 0..8 {
                         f[self.dofs[i][l] as usize] += fe[i][l];
@@ -448,7 +468,13 @@ impl ElementBlock {
             let mut k = [[Lanes::splat(simd, 0.0); 8]; 8];
             let (_, in_range) = self.lanes_response(simd, &ue, Some(&mut k));
             if in_range {
-                let k = k.map(|row| row.map(Lanes::to_array));
+                let mut k_lanes = [[[0.0; LANES]; 8]; 8];
+                for r in 0..8 {
+                    for c in 0..8 {
+                        k_lanes[r][c] = k[r][c].to_array();
+                    }
+                }
+                let k = k_lanes;
                 for l in 0..self.len {
                     visit(self.elements[l], &std::array::from_fn(|r| std::array::from_fn(|c| k[r][c][l])));
                 }
@@ -468,8 +494,8 @@ impl ElementBlock {
     /// Calls `visit(element, s0)` with the instantaneous isochoric stress
     /// S0_iso of each of the block's elements at the global displacement
     /// `u` ([`isochoric_stresses`], to the bit), in lane order, computed in
-    /// the SIMD lanes of `simd`, or element by element where some J is out
-    /// of the range of the J^(-2/3) iteration.
+    /// the SIMD lanes of `simd`, or element by element where some J is
+    /// outside 0.7..1.4 (`near_one`).
     #[inline(always)]
     pub fn visit_isochoric_stresses<S: Simd>(
         &self,
@@ -482,16 +508,19 @@ impl ElementBlock {
         if Lanes::<S>::fits() {
             let lanes = BlockLanes { block: self, simd };
             let (mu, _) = lanes.law();
-            let u = ue.map(|u| Lanes::load(simd, &u));
+            let mut u = [Lanes::splat(simd, 0.0); 8];
+            for i in 0..8 {
+                u[i] = Lanes::load(simd, &ue[i]);
+            }
             let mut in_range = true;
             let mut s0 = [[[0.0; LANES]; 4]; 4];
             for gp in 0..4 {
                 let f = gradient_at(&lanes.grad(gp), &u);
                 let j = det(&f);
                 for j in j.to_array() {
-                    in_range &= in_cbrt_range(j);
+                    in_range &= near_one(j);
                 }
-                let (s0_gp, ..) = isochoric_parts(mu, &f, inverse_cbrt_squared_in_range(j));
+                let (s0_gp, ..) = isochoric_parts(mu, &f, inverse_cbrt_squared_near_one(j));
                 for k in 0..4 {
                     s0[gp][k] = s0_gp[k].to_array();
                 }
@@ -521,7 +550,13 @@ struct BlockLanes<'a, S: Simd> {
 impl<S: Simd> ElementInput<Lanes<S>> for BlockLanes<'_, S> {
     #[inline(always)]
     fn grad(&self, gp: usize) -> [[Lanes<S>; 2]; 4] {
-        self.block.grad[gp].map(|n_a| n_a.map(|n_ak| Lanes::load(self.simd, &n_ak)))
+        let mut n = [[Lanes::splat(self.simd, 0.0); 2]; 4];
+        for a in 0..4 {
+            for k in 0..2 {
+                n[a][k] = Lanes::load(self.simd, &self.block.grad[gp][a][k]);
+            }
+        }
+        n
     }
     #[inline(always)]
     fn weight(&self, gp: usize) -> Lanes<S> {
@@ -541,6 +576,10 @@ impl<S: Simd> ElementInput<Lanes<S>> for BlockLanes<'_, S> {
     }
     #[inline(always)]
     fn frozen(&self, gp: usize) -> [Lanes<S>; 4] {
-        self.block.frozen[gp].map(|s_k| Lanes::load(self.simd, &s_k))
+        let mut s = [Lanes::splat(self.simd, 0.0); 4];
+        for k in 0..4 {
+            s[k] = Lanes::load(self.simd, &self.block.frozen[gp][k]);
+        }
+        s
     }
 }

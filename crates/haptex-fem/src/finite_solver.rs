@@ -46,12 +46,23 @@
 //! at the committed state, which at rest is the small-strain stiffness; the
 //! small-strain operators are the fallback where a tangent is not positive
 //! definite. The condensation comes from the factorization itself: the
-//! pad block L_tt of the pad-last factor gives S = L_tt L_tt^T and C =
-//! L_tt^-T L_tt^-1 (two dense triangular products), not one solve per pad
-//! DOF. On the default bump a rebuild costs about 4 ms (element tangents
-//! 1.4, factorization 1.6, condensation 0.9) and an outer iteration about
-//! 1.2 ms (residual 0.4, sweeps 0.2, contact Newton 0.4); `haptex simulate`
-//! prints the breakdown ([`FiniteProfile`]) when `HAPTEX_PROFILE` is set.
+//! pad block L_tt of the pad-last factor is the condensed stiffness, S =
+//! L_tt L_tt^T (kept as L_tt: S x = L_tt (L_tt^T x)), and gives C =
+//! L_tt^-T L_tt^-1 (a triangular inverse and product), not one solve per
+//! pad DOF. The drive responses psi are solved only for an attempt that
+//! uses them (a step that moves the drive, or load control).
+//!
+//! The body's internal forces, the element tangents of a rebuild and the
+//! isochoric stresses of a commit run four elements at a time in SIMD lanes
+//! ([`crate::finite_element::ElementBlock`], the same arithmetic as
+//! [`internal_force`] to the bit). The contact Newton of an outer
+//! iteration starts from the contact evaluation of the residual at the
+//! same iterate, and takes the stick predictor only at a step's first
+//! contact solve. On the default bump a rebuild costs about 2.7 ms
+//! (element tangents 0.7, factorization 1.7, condensation 0.4) and an outer
+//! iteration about 0.7 ms (residual, body and contact, 0.16; sweeps 0.23;
+//! contact Newton 0.29); `haptex simulate` prints the breakdown
+//! ([`FiniteProfile`]) when `HAPTEX_PROFILE` is set.
 //! A step that does not converge, or in which an element
 //! inverts, is retried in halves exactly like the small-strain solver's; if
 //! that fails the solver's error names the time, the step and the residual.
@@ -65,10 +76,10 @@ use crate::element::Q4;
 use crate::finite_element::{ElementBlock, Inverted, cauchy_stress, internal_force};
 use crate::hyperelastic::NeoHookean;
 use crate::lanes::LANES;
-use crate::linalg::{SparseCholesky, lower_transpose_solve, lower_transpose_times, schur_operators};
+use crate::linalg::{SparseCholesky, dot, schur_compliance, transpose, upper_solve, upper_times};
 use crate::material::{StepCoefficients, advance_history, frozen_deviator, history_deviator};
 use crate::solver::{
-    Condensed, Drive, NewtonStart, SolveError, Solver, StepFailure, StepOperators, StepReport, Stepping,
+    Condensed, Drive, NewtonStart, PadStiffness, SolveError, Solver, StepFailure, StepOperators, StepReport, Stepping,
     advance_halving, newton,
 };
 
@@ -89,6 +100,9 @@ pub struct FiniteBody {
     /// internal forces, with the stress parts of the step they were last
     /// set for ([`FiniteBody::set_trial`]).
     blocks: Vec<ElementBlock>,
+    /// The coefficients the blocks' stress parts were set for (None: not
+    /// set, or the history changed since).
+    trial_coefficients: Option<Vec<Option<StepCoefficients>>>,
     /// The CPU's SIMD level (AVX2 where it has it).
     arch: pulp::Arch,
 }
@@ -141,6 +155,7 @@ impl FiniteBody {
             history_start,
             terms,
             blocks,
+            trial_coefficients: None,
             arch: pulp::Arch::new(),
         }
     }
@@ -210,6 +225,10 @@ impl FiniteBody {
     /// (constant over the step: its shear ratio and the frozen history
     /// stress) for [`FiniteBody::add_trial_internal_forces`].
     pub fn set_trial(&mut self, body: &Body, c: &[Option<StepCoefficients>]) {
+        // Set already for these coefficients, and nothing committed since.
+        if self.trial_coefficients.as_deref() == Some(c) {
+            return;
+        }
         let mut blocks = std::mem::take(&mut self.blocks);
         for block in &mut blocks {
             for l in 0..block.len {
@@ -218,6 +237,7 @@ impl FiniteBody {
             }
         }
         self.blocks = blocks;
+        self.trial_coefficients = Some(c.to_vec());
     }
 
     /// Adds the internal forces of all deformable elements at the global
@@ -246,6 +266,7 @@ impl FiniteBody {
     /// Advances the history of every point to the displacement `u` at the
     /// end of a step with coefficients `c`.
     pub fn commit(&mut self, body: &Body, c: &[Option<StepCoefficients>], u: &[f64]) {
+        self.trial_coefficients = None;
         let (history_s0, history_h) = (&mut self.history_s0, &mut self.history_h);
         let (history_start, terms) = (&self.history_start, &self.terms);
         // S0_iso of every point (that of `isochoric_stresses`, in SIMD lanes).
@@ -470,12 +491,16 @@ impl Anderson {
     }
 
     /// Given the iterate `x` and its image `g` = G(x), writes the next
-    /// iterate into `x`.
-    fn step(&mut self, x: &mut [f64], g: &[f64]) {
+    /// iterate into `x`. Returns the largest |G(x) - x|.
+    fn step(&mut self, x: &mut [f64], g: &[f64]) -> f64 {
         let n = x.len();
+        let mut largest: f64 = 0.0;
         if self.depth == 0 {
+            for (xi, gi) in x.iter().zip(g) {
+                largest = largest.max((gi - xi).abs());
+            }
             x.copy_from_slice(g);
-            return;
+            return largest;
         }
         // f = g - x into x's place after the differences are recorded.
         if self.has_prev {
@@ -491,26 +516,27 @@ impl Anderson {
         for i in 0..n {
             self.f_prev[i] = g[i] - x[i];
             self.g_prev[i] = g[i];
+            largest = largest.max(self.f_prev[i].abs());
         }
         self.has_prev = true;
         let m = self.stored;
         x.copy_from_slice(g);
         if m == 0 {
-            return;
+            return largest;
         }
         // Least squares min |f - dF gamma| by the normal equations, with a
         // small Tikhonov term (the columns can be nearly dependent).
         for a in 0..m {
             for b in 0..=a {
-                let v: f64 = self.df[a].iter().zip(&self.df[b]).map(|(p, q)| p * q).sum();
+                let v = dot(&self.df[a], &self.df[b]);
                 self.normal[a * m + b] = v;
                 self.normal[b * m + a] = v;
             }
-            self.rhs[a] = self.df[a].iter().zip(&self.f_prev).map(|(p, q)| p * q).sum();
+            self.rhs[a] = dot(&self.df[a], &self.f_prev);
         }
         let trace: f64 = (0..m).map(|a| self.normal[a * m + a]).sum();
         if !(trace > 0.0 && trace.is_finite()) {
-            return;
+            return largest;
         }
         for a in 0..m {
             self.normal[a * m + a] += 1e-10 * trace;
@@ -539,6 +565,7 @@ impl Anderson {
                 x[i] -= gamma * self.dg[a][i];
             }
         }
+        largest
     }
 }
 
@@ -575,6 +602,9 @@ pub struct FiniteSolver {
     /// (made on the first rebuild), and the pad block of its factor.
     tangent_base: Option<SparseCholesky>,
     trailing_factor: Vec<f64>,
+    /// L_tt^T (column-major: L_tt by rows), for L_tt^T w and L_tt^-T y
+    /// column by column.
+    trailing_upper: Vec<f64>,
     trailing_scratch: Vec<f64>,
     /// A solve's forward half (factor order) and its trailing part.
     sweep: Vec<f64>,
@@ -632,6 +662,7 @@ impl FiniteSolver {
             tangent_base: None,
             tangent_psi_solved: false,
             trailing_factor: vec![0.0; m2 * m2],
+            trailing_upper: vec![0.0; m2 * m2],
             trailing_scratch: vec![0.0; m2 * m2],
             sweep: vec![0.0; n_free],
             sweep_trailing: vec![0.0; m2],
@@ -884,7 +915,7 @@ impl FiniteSolver {
             if pad_last {
                 ops_k.cholesky.forward(&self.f_free, &mut self.sweep);
                 self.sweep_trailing.copy_from_slice(&self.sweep[n - m2..]);
-                lower_transpose_solve(&self.trailing_factor, m2, &mut self.sweep_trailing);
+                upper_solve(&self.trailing_upper, m2, &mut self.sweep_trailing);
                 for (c, &row) in inner.candidate_free.iter().enumerate() {
                     s.u0_s[c] = self.iterate[row] - self.sweep_trailing[c];
                 }
@@ -903,13 +934,13 @@ impl FiniteSolver {
             for (c, &row) in inner.candidate_free.iter().enumerate() {
                 s.psi_y_s[c] = if load.is_some() { ops.psi[1][row] } else { 0.0 };
             }
-            let condensed = Condensed {
-                m2,
-                compliance: &ops.compliance,
-                stiffness: &ops.stiffness,
-                load,
-                force_floor_n: inner.force_floor_n,
+            let stiffness = if pad_last {
+                PadStiffness::Factor { lower: &self.trailing_factor, upper: &self.trailing_upper }
+            } else {
+                PadStiffness::Dense(&ops.stiffness)
             };
+            let condensed =
+                Condensed { m2, compliance: &ops.compliance, stiffness, load, force_floor_n: inner.force_floor_n };
             let mut dy = 0.0;
             let timer = Instant::now();
             let mut inner_settings = inner.settings;
@@ -951,7 +982,7 @@ impl FiniteSolver {
                 for value in &mut self.sweep[..n - m2] {
                     *value = -*value;
                 }
-                lower_transpose_times(&self.trailing_factor, m2, &self.pad_gap, &mut self.sweep_trailing);
+                upper_times(&self.trailing_upper, m2, &self.pad_gap, &mut self.sweep_trailing);
                 for (value, add) in self.sweep[n - m2..].iter_mut().zip(&self.sweep_trailing) {
                     *value = add - *value;
                 }
@@ -980,9 +1011,8 @@ impl FiniteSolver {
                 }
             }
             self.image[n] = y + dy;
-            change = (0..=n).map(|i| (self.image[i] - self.iterate[i]).abs()).fold(0.0, f64::max);
             let timer = Instant::now();
-            self.anderson.step(&mut self.iterate, &self.image);
+            change = self.anderson.step(&mut self.iterate, &self.image);
             self.profile.anderson_s += timer.elapsed().as_secs_f64();
         }
         self.outer_iterations += performed;
@@ -1103,9 +1133,10 @@ impl FiniteSolver {
         if self.tangent_base.is_none() {
             self.tangent_base = Some(SparseCholesky::with_trailing(&inner.pattern, &inner.candidate_free, 1)?);
         }
-        let (mut cholesky, mut compliance, mut stiffness) = match (self.tangent_ops.take(), &self.tangent_base) {
+        // No dense stiffness: it is L_tt (`self.trailing_factor`).
+        let (mut cholesky, mut compliance, stiffness) = match (self.tangent_ops.take(), &self.tangent_base) {
             (Some(ops), _) => (ops.cholesky, ops.compliance, ops.stiffness),
-            (None, Some(base)) => (base.share(1), vec![0.0; m2 * m2], vec![0.0; m2 * m2]),
+            (None, Some(base)) => (base.share(1), vec![0.0; m2 * m2], Vec::new()),
             (None, None) => unreachable!("the pad-last analysis was just made"),
         };
         let factorized = cholesky.factorize(values);
@@ -1115,7 +1146,10 @@ impl FiniteSolver {
             return Ok(());
         }
         cholesky.trailing_factor(&mut self.trailing_factor);
-        schur_operators(&self.trailing_factor, m2, &mut self.trailing_scratch, &mut compliance, &mut stiffness);
+        transpose(&self.trailing_factor, m2, &mut self.trailing_upper);
+        // The condensed stiffness is L_tt itself (S = L_tt L_tt^T, see
+        // `PadStiffness::Factor`): only the compliance is formed.
+        schur_compliance(&self.trailing_factor, m2, &mut self.trailing_scratch, &mut compliance);
         // psi holds the loads of unit drive translations; they are solved
         // for the responses only when an attempt needs them
         // ([`FiniteSolver::solve_tangent_drive_responses`]): not in a slide

@@ -8,7 +8,7 @@
 //! S = K_tt - K_ti K_ii^-1 K_it, the condensed stiffness of the trailing
 //! unknowns, is L_tt L_tt^T: it comes with the factorization, without one
 //! solve per trailing unknown ([`SparseCholesky::trailing_factor`],
-//! [`schur_operators`]).
+//! [`schur_compliance`]).
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -336,28 +336,16 @@ impl SparseCholesky {
     }
 }
 
-/// The condensed operators of the trailing unknowns from the trailing
-/// factor `l` (m x m, column-major lower, see
-/// [`SparseCholesky::trailing_factor`]): the stiffness S = L L^T and the
-/// compliance C = S^-1 = L^-T L^-1, both column-major and exactly
-/// symmetric. `inverse` (m x m) is scratch (it ends with L^-1 in its lower
-/// triangle).
-pub fn schur_operators(l: &[f64], m: usize, inverse: &mut [f64], compliance: &mut [f64], stiffness: &mut [f64]) {
+/// The compliance of the trailing unknowns from the trailing factor `l`
+/// (m x m, column-major lower, see [`SparseCholesky::trailing_factor`]):
+/// C = S^-1 = L^-T L^-1, with S = L L^T their condensed stiffness (kept as
+/// L: S x = L (L^T x), [`lower_times`] and [`upper_times`]), column-major
+/// and exactly symmetric. `inverse` (m x m) is scratch (it ends with L^-1
+/// in its lower triangle).
+pub fn schur_compliance(l: &[f64], m: usize, inverse: &mut [f64], compliance: &mut [f64]) {
     use faer::linalg::matmul::triangular::{BlockStructure, matmul};
     use faer::{Accum, MatRef};
     let factor = MatRef::from_column_major_slice(l, m, m);
-    // Lower halves only (half the work of full products), then mirrored.
-    matmul(
-        MatMut::from_column_major_slice_mut(stiffness, m, m),
-        BlockStructure::TriangularLower,
-        Accum::Replace,
-        factor,
-        BlockStructure::TriangularLower,
-        factor.transpose(),
-        BlockStructure::TriangularUpper,
-        1.0,
-        Par::Seq,
-    );
     inverse.fill(0.0);
     faer::linalg::triangular_inverse::invert_lower_triangular(
         MatMut::from_column_major_slice_mut(inverse, m, m),
@@ -365,6 +353,7 @@ pub fn schur_operators(l: &[f64], m: usize, inverse: &mut [f64], compliance: &mu
         Par::Seq,
     );
     let inverse = MatRef::from_column_major_slice(inverse, m, m);
+    // The lower half only (half the work of the full product), mirrored.
     matmul(
         MatMut::from_column_major_slice_mut(compliance, m, m),
         BlockStructure::TriangularLower,
@@ -376,30 +365,123 @@ pub fn schur_operators(l: &[f64], m: usize, inverse: &mut [f64], compliance: &mu
         1.0,
         Par::Seq,
     );
-    for matrix in [compliance, stiffness] {
-        for c in 0..m {
-            for r in c + 1..m {
-                matrix[r * m + c] = matrix[c * m + r];
+    for c in 0..m {
+        for r in c + 1..m {
+            compliance[r * m + c] = compliance[c * m + r];
+        }
+    }
+}
+
+/// Solves U x = b in place for a dense upper-triangular `u` (m x m,
+/// column-major; with U = L^T, L^T x = b), by columns from the last (each
+/// solved unknown's column subtracted at once, in SIMD lanes).
+pub fn upper_solve(u: &[f64], m: usize, x: &mut [f64]) {
+    struct Solve<'a>(&'a [f64], usize, &'a mut [f64]);
+    impl pulp::WithSimd for Solve<'_> {
+        type Output = ();
+        #[inline(always)]
+        fn with_simd<S: pulp::Simd>(self, _simd: S) {
+            let Solve(u, m, x) = self;
+            for k in (0..m).rev() {
+                let column = &u[k * m..k * m + k + 1];
+                let xk = x[k] / column[k];
+                x[k] = xk;
+                for (xi, uik) in x[..k].iter_mut().zip(column) {
+                    *xi -= uik * xk;
+                }
+            }
+        }
+    }
+    pulp::Arch::new().dispatch(Solve(u, m, x))
+}
+
+/// out = A x for a dense symmetric `a` (m x m, column-major), column by
+/// column in SIMD lanes: each out_r sums A_rc x_c over c in order, as the
+/// row-by-row dot product would, to the bit.
+pub fn symmetric_times(a: &[f64], m: usize, x: &[f64], out: &mut [f64]) {
+    pulp::Arch::new().dispatch(ColumnsTimes { a, m, x, out, shape: Shape::Full })
+}
+
+/// out = L x for a dense lower-triangular `l` (m x m, column-major), column
+/// by column in SIMD lanes.
+pub fn lower_times(l: &[f64], m: usize, x: &[f64], out: &mut [f64]) {
+    pulp::Arch::new().dispatch(ColumnsTimes { a: l, m, x, out, shape: Shape::Lower })
+}
+
+/// out = U x for a dense upper-triangular `u` (m x m, column-major; with U
+/// = L^T, out = L^T x), column by column in SIMD lanes, each out_i summed
+/// over k = i, i + 1, ... in order as a dot product with L's column i
+/// would.
+pub fn upper_times(u: &[f64], m: usize, x: &[f64], out: &mut [f64]) {
+    pulp::Arch::new().dispatch(ColumnsTimes { a: u, m, x, out, shape: Shape::Upper })
+}
+
+/// Which entries of a dense matrix's columns are stored.
+#[derive(Clone, Copy, PartialEq)]
+enum Shape {
+    Full,
+    /// Column c in rows 0..=c.
+    Upper,
+    /// Column c in rows c..m.
+    Lower,
+}
+
+/// The loop of [`symmetric_times`] and [`upper_times`].
+struct ColumnsTimes<'a> {
+    a: &'a [f64],
+    m: usize,
+    x: &'a [f64],
+    out: &'a mut [f64],
+    shape: Shape,
+}
+
+impl pulp::WithSimd for ColumnsTimes<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let m = self.m;
+        let out = &mut self.out[..m];
+        out.fill(0.0);
+        for (c, &xc) in self.x[..m].iter().enumerate() {
+            let rows = match self.shape {
+                Shape::Full => 0..m,
+                Shape::Upper => 0..c + 1,
+                Shape::Lower => c..m,
+            };
+            let column = &self.a[c * m + rows.start..c * m + rows.end];
+            for (o, a) in out[rows].iter_mut().zip(column) {
+                *o += a * xc;
             }
         }
     }
 }
 
-/// Solves L^T x = b in place for a dense lower-triangular `l` (m x m,
-/// column-major).
-pub fn lower_transpose_solve(l: &[f64], m: usize, x: &mut [f64]) {
-    for i in (0..m).rev() {
-        let column = &l[i * m..(i + 1) * m];
-        let below: f64 = column[i + 1..].iter().zip(&x[i + 1..]).map(|(a, b)| a * b).sum();
-        x[i] = (x[i] - below) / column[i];
+/// a . b of two long vectors, in four interleaved sums (so that it runs in
+/// SIMD lanes).
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let mut sums = [0.0; 4];
+    let (a4, b4) = (a[..n].chunks_exact(4), b[..n].chunks_exact(4));
+    let (a_rest, b_rest) = (a4.remainder(), b4.remainder());
+    for (a, b) in a4.zip(b4) {
+        for k in 0..4 {
+            sums[k] += a[k] * b[k];
+        }
     }
+    let mut sum = (sums[0] + sums[1]) + (sums[2] + sums[3]);
+    for (a, b) in a_rest.iter().zip(b_rest) {
+        sum += a * b;
+    }
+    sum
 }
 
-/// out = L^T x for a dense lower-triangular `l` (m x m, column-major).
-pub fn lower_transpose_times(l: &[f64], m: usize, x: &[f64], out: &mut [f64]) {
-    for (i, o) in out.iter_mut().enumerate().take(m) {
-        let column = &l[i * m..(i + 1) * m];
-        *o = column[i..].iter().zip(&x[i..]).map(|(a, b)| a * b).sum();
+/// The transpose of the dense m x m `l` (column-major) into `t`.
+pub fn transpose(l: &[f64], m: usize, t: &mut [f64]) {
+    for c in 0..m {
+        for r in 0..m {
+            t[r * m + c] = l[c * m + r];
+        }
     }
 }
 
@@ -522,8 +604,20 @@ mod trailing_tests {
         assert_eq!(last.trailing(), m);
         let mut l = vec![0.0; m * m];
         last.trailing_factor(&mut l);
-        let (mut inverse, mut compliance, mut stiffness) = (vec![0.0; m * m], vec![0.0; m * m], vec![0.0; m * m]);
-        schur_operators(&l, m, &mut inverse, &mut compliance, &mut stiffness);
+        let (mut inverse, mut compliance) = (vec![0.0; m * m], vec![0.0; m * m]);
+        schur_compliance(&l, m, &mut inverse, &mut compliance);
+        // S = L L^T column by column (unit vectors through lower_times and
+        // upper_times).
+        let mut u = vec![0.0; m * m];
+        transpose(&l, m, &mut u);
+        let mut stiffness = vec![0.0; m * m];
+        for c in 0..m {
+            let mut e = vec![0.0; m];
+            e[c] = 1.0;
+            let mut half = vec![0.0; m];
+            upper_times(&u, m, &e, &mut half);
+            lower_times(&l, m, &half, &mut stiffness[c * m..(c + 1) * m]);
+        }
         let scale = compliance.iter().fold(0.0f64, |a, b| a.max(b.abs()));
         for c in 0..m {
             for (r, &row) in trailing.iter().enumerate() {
@@ -552,7 +646,7 @@ mod trailing_tests {
         // The trailing part of the solution from the forward half alone:
         // x_t = L_tt^-T y_t.
         let mut x_t = y[n - m..].to_vec();
-        lower_transpose_solve(&l, m, &mut x_t);
+        upper_solve(&u, m, &mut x_t);
         for (c, &row) in trailing.iter().enumerate() {
             assert!((x_t[c] - b[row]).abs() < 1e-12 * scale, "x_t[{c}]");
         }
@@ -562,7 +656,7 @@ mod trailing_tests {
         // and L_tt^-1 S w = L_tt^T w.
         let w: Vec<f64> = (0..m).map(|i| (i % 3) as f64 - 1.0).collect();
         let mut y = vec![0.0; n];
-        lower_transpose_times(&l, m, &w, &mut y[n - m..]);
+        upper_times(&u, m, &w, &mut y[n - m..]);
         last.backward(&mut y, &mut x);
         for (c, &row) in trailing.iter().enumerate() {
             assert!((x[row] - w[c]).abs() < 1e-10, "pad displacement {c}");

@@ -42,7 +42,7 @@ use crate::assembly::{DofMap, Pattern};
 use crate::body::Body;
 use crate::contact::{Block, ContactLaw, ContactSet, ContactTotals, SurfacePlacement};
 use crate::display::Display;
-use crate::linalg::{DenseLu, FactorError, SparseCholesky};
+use crate::linalg::{DenseLu, FactorError, SparseCholesky, lower_times, symmetric_times, upper_times};
 use crate::material::StepCoefficients;
 use crate::surface::RigidSurface;
 
@@ -213,6 +213,8 @@ pub(crate) struct Scratch {
     pub(crate) last_ddy: f64,
     /// S v, S v_trial, S u0_s, S psi_s, S dv.
     pub(crate) sv: Vec<f64>,
+    /// L^T x of S x = L (L^T x) (see [`PadStiffness`]).
+    pub(crate) stiffness_half: Vec<f64>,
     pub(crate) sv_trial: Vec<f64>,
     pub(crate) su0: Vec<f64>,
     pub(crate) spsi: Vec<f64>,
@@ -302,6 +304,7 @@ impl Solver {
         let scratch = Scratch {
             last_ddy: 0.0,
             sv: vec![0.0; m2],
+            stiffness_half: vec![0.0; m2],
             sv_trial: vec![0.0; m2],
             su0: vec![0.0; m2],
             spsi: vec![0.0; m2],
@@ -470,7 +473,7 @@ impl Solver {
         let condensed = Condensed {
             m2,
             compliance: &ops.compliance,
-            stiffness: &ops.stiffness,
+            stiffness: PadStiffness::Dense(&ops.stiffness),
             load,
             force_floor_n: self.force_floor_n,
         };
@@ -668,11 +671,19 @@ pub(crate) enum StepFailure {
     Fatal(SolveError),
 }
 
+/// The condensed stiffness S of a step: dense, or as the trailing factor
+/// L of a pad-last factorization (S = L L^T; with L^T kept column-major).
+#[derive(Clone, Copy)]
+pub(crate) enum PadStiffness<'a> {
+    Dense(&'a [f64]),
+    Factor { lower: &'a [f64], upper: &'a [f64] },
+}
+
 /// The condensed operators of one step.
 pub(crate) struct Condensed<'a> {
     pub(crate) m2: usize,
     pub(crate) compliance: &'a [f64],
-    pub(crate) stiffness: &'a [f64],
+    pub(crate) stiffness: PadStiffness<'a>,
     /// Vertical load on the driven set (load control), N per mm of width.
     pub(crate) load: Option<f64>,
     /// The convergence test's force floor, N per mm of width.
@@ -681,17 +692,16 @@ pub(crate) struct Condensed<'a> {
 
 impl Condensed<'_> {
     /// out = S x (m2 x m2 dense; a few times per step, and per outer
-    /// iteration of the finite-strain solver). Column by column (axpy, in
-    /// SIMD lanes): each out_r still sums S_rc x_c over c in order, the
-    /// sum of a row-by-row dot product to the bit.
-    fn stiffness_times(&self, x: &[f64], out: &mut [f64]) {
-        let m2 = self.m2;
-        let out = &mut out[..m2];
-        out.fill(0.0);
-        for (c, &xc) in x[..m2].iter().enumerate() {
-            let column = &self.stiffness[c * m2..(c + 1) * m2];
-            for (o, a) in out.iter_mut().zip(column) {
-                *o += a * xc;
+    /// iteration of the finite-strain solver), column by column in SIMD
+    /// lanes (dense: each out_r sums S_rc x_c over c in order, the sum of a
+    /// row-by-row dot product to the bit); as a factor, L (L^T x) through
+    /// `half`.
+    fn stiffness_times(&self, x: &[f64], out: &mut [f64], half: &mut [f64]) {
+        match self.stiffness {
+            PadStiffness::Dense(s) => symmetric_times(s, self.m2, x, out),
+            PadStiffness::Factor { lower, upper } => {
+                upper_times(upper, self.m2, x, half);
+                lower_times(lower, self.m2, half, out);
             }
         }
     }
@@ -790,14 +800,14 @@ pub(crate) fn newton(
     let m2 = cond.m2;
     let debug = std::env::var_os("HAPTEX_DEBUG").is_some();
     // The step's constant products, and S v exactly.
-    cond.stiffness_times(&s.u0_s, &mut s.su0);
+    cond.stiffness_times(&s.u0_s, &mut s.su0, &mut s.stiffness_half);
     if cond.load.is_some() {
-        cond.stiffness_times(&s.psi_y_s, &mut s.spsi);
+        cond.stiffness_times(&s.psi_y_s, &mut s.spsi, &mut s.stiffness_half);
     } else {
         // dy stays 0 under displacement control: S psi_s is never used.
         s.spsi[..m2].fill(0.0);
     }
-    cond.stiffness_times(&s.v, &mut s.sv);
+    cond.stiffness_times(&s.v, &mut s.sv, &mut s.stiffness_half);
     // Stick predictor: one Newton step with every contact point sticking,
     // taken when some point stuck at the last step (the pad's shear is still
     // building up, as at the start of a slide). Starting from the last state
@@ -850,7 +860,7 @@ pub(crate) fn newton(
         }
         if converged(norm, scale, correction) {
             // Confirm with S v computed afresh (no drift of the updates).
-            cond.stiffness_times(&s.v, &mut s.sv);
+            cond.stiffness_times(&s.v, &mut s.sv, &mut s.stiffness_half);
             (norm, merit, scale) = cond.residual(s, false, *dy);
             if converged(norm, scale, correction) {
                 return Ok((iteration, totals));
@@ -976,7 +986,7 @@ pub(crate) fn newton(
     // (else a converged step were cut, or reported as failed with a residual
     // below its tolerance).
     if norm.is_finite() && converged(norm, scale, correction) {
-        cond.stiffness_times(&s.v, &mut s.sv);
+        cond.stiffness_times(&s.v, &mut s.sv, &mut s.stiffness_half);
         (norm, _, scale) = cond.residual(s, false, *dy);
         if converged(norm, scale, correction) {
             return Ok((iterations, totals));

@@ -89,7 +89,7 @@ pub struct SimulateArgs {
     material: MaterialArg,
     /// Kinematics: small strain (the paper's model) or finite strain
     /// (total Lagrangian, neo-Hookean tissue with the same moduli and Prony
-    /// series; about 5x slower).
+    /// series; about 3x slower).
     #[arg(long, value_enum, default_value_t = KinematicsArg::Small)]
     kinematics: KinematicsArg,
     /// Mesh resolution (pad node spacing 0.2, 0.1, 0.05 mm).
