@@ -116,14 +116,54 @@ pub struct LayerStackArgs {
     pub eps_i: f64,
     /// Stratum corneum thickness d_sc in mm.
     #[arg(long, default_value_t = LayerStack::PAPER.d_sc_mm, value_parser = in_range(ranges::D_SC_MM))]
-    pub d_sc: f64,
+    pub d_sc_mm: f64,
     /// Insulator thickness d_i in mm.
     #[arg(long, default_value_t = LayerStack::PAPER.d_i_mm, value_parser = in_range(ranges::D_I_MM))]
-    pub d_i: f64,
+    pub d_i_mm: f64,
 }
 
 impl LayerStackArgs {
     pub fn stack(&self) -> LayerStack {
-        LayerStack { d_sc_mm: self.d_sc, eps_sc: self.eps_sc, d_i_mm: self.d_i, eps_i: self.eps_i }
+        LayerStack { d_sc_mm: self.d_sc_mm, eps_sc: self.eps_sc, d_i_mm: self.d_i_mm, eps_i: self.eps_i }
     }
+}
+
+/// The FE mesh resolution flag (`--mesh`).
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum MeshArg {
+    Coarse,
+    Default,
+    Fine,
+}
+
+impl MeshArg {
+    pub fn resolution(self) -> haptex_fem::finger::Resolution {
+        use haptex_fem::finger::Resolution;
+        match self {
+            MeshArg::Coarse => Resolution::Coarse,
+            MeshArg::Default => Resolution::Default,
+            MeshArg::Fine => Resolution::Fine,
+        }
+    }
+}
+
+/// The FE tissue model flag (`--material`).
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum MaterialArg {
+    Elastic,
+    Viscoelastic,
+}
+
+impl MaterialArg {
+    pub fn viscoelastic(self) -> bool {
+        matches!(self, MaterialArg::Viscoelastic)
+    }
+}
+
+/// The finger model of `--finger FILE`, or the shipped one.
+pub fn finger_model(path: Option<&Path>) -> anyhow::Result<haptex_fem::finger::FingerModel> {
+    Ok(match path {
+        Some(path) => haptex_fem::finger::FingerModel::read(path)?,
+        None => haptex_fem::finger::FingerModel::default_model(),
+    })
 }

@@ -4,17 +4,16 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, ValueEnum};
+use clap::Args;
 use haptex_core::electrovibration::{ContactArea, Device, Method, VoltageProfile, VoltageSummary};
 use haptex_core::num::Num;
 use haptex_core::plot::{Figure, Panel};
 use haptex_core::ranges;
-use haptex_fem::finger::{FingerModel, Resolution};
 use haptex_fem::render::{self, Check, CheckMetrics, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping};
 use haptex_fem::scenario::Loading;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::args::{LayerStackArgs, in_range, non_negative, positive, read_profile};
+use crate::args::{LayerStackArgs, MaterialArg, MeshArg, finger_model, in_range, non_negative, positive, read_profile};
 
 /// Check a friction profile on the finger model: slide the FE finger on the
 /// display under eq. (8)'s voltage and compare the friction it feels with
@@ -48,9 +47,9 @@ pub struct CheckArgs {
     u_max: f64,
     /// Contact-area coefficient k of eq. (8) in mm^2/N (A = k Fn).
     #[arg(long, default_value_t = ContactArea::PAPER.k_mm2_per_n, value_parser = in_range(ranges::K_MM2_PER_N))]
-    k: f64,
+    k_mm2_per_n: f64,
     /// Use eq. (8) with the FE finger's own k (its contact length per unit
-    /// normal force, measured on a first run) instead of --k.
+    /// normal force, measured on a first run) instead of --k-mm2-per-n.
     #[arg(long)]
     fe_k: bool,
     #[command(flatten)]
@@ -109,42 +108,22 @@ pub struct CheckArgs {
     quiet: bool,
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum MaterialArg {
-    Elastic,
-    Viscoelastic,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum MeshArg {
-    Coarse,
-    Default,
-    Fine,
-}
-
 pub fn run(args: CheckArgs) -> anyhow::Result<()> {
     let target = read_profile(&args.profile)?;
-    let model = match &args.finger {
-        Some(path) => FingerModel::read(path)?,
-        None => FingerModel::default_model(),
-    };
+    let model = finger_model(args.finger.as_deref())?;
     let mu_hd = args.mu_hd.unwrap_or(model.contact.mu_skin);
     let mut settings = RenderSettings::new(mu_hd, args.load.unwrap_or(DEFAULT_LOAD_N_PER_MM));
     settings.device = Device {
         stack: args.stack.stack(),
-        contact: ContactArea { k_mm2_per_n: args.k, exponent: 1.0 },
+        contact: ContactArea { k_mm2_per_n: args.k_mm2_per_n, exponent: 1.0 },
         mu_hd,
         u_max_v: args.u_max,
     };
     settings.device.validate()?;
     let scenario = &mut settings.scenario;
     scenario.model = model;
-    scenario.resolution = match args.mesh {
-        MeshArg::Coarse => Resolution::Coarse,
-        MeshArg::Default => Resolution::Default,
-        MeshArg::Fine => Resolution::Fine,
-    };
-    scenario.viscoelastic = matches!(args.material, MaterialArg::Viscoelastic);
+    scenario.resolution = args.mesh.resolution();
+    scenario.viscoelastic = args.material.viscoelastic();
     if let Some(indent) = args.indent {
         scenario.loading = Loading::Indent(indent);
     }
@@ -174,7 +153,7 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
         let k = first.metrics.k_fe_mm2_per_n;
         lines.push(format!(
             "eq. (8) with k = {} mm^2/N: RMS error {:.3e}; the FE finger's k is {k:.1} mm^2/N",
-            Num(args.k),
+            Num(args.k_mm2_per_n),
             first.metrics.rms_error,
         ));
         settings.device.contact.k_mm2_per_n = ranges::K_MM2_PER_N.check(k)?;

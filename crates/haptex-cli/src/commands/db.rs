@@ -9,11 +9,11 @@ use clap::{Args, Subcommand, ValueEnum};
 use haptex_core::cae::{Cae, ModelMatrix};
 use haptex_core::database::{INPUTS, Metadata, Template, TemplateModel};
 use haptex_core::plot::{Figure, Panel};
-use haptex_fem::finger::{FingerModel, Resolution};
+use haptex_fem::finger::FingerModel;
 use haptex_fem::sweep::{self, DatabaseSpec, Run};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::args::{Output, positive, shipped_data};
+use crate::args::{MeshArg, Output, positive, shipped_data};
 
 /// The shipped database, relative to the source tree.
 pub const SHIPPED_DB: &str = "data/db";
@@ -166,13 +166,6 @@ impl From<TemplateArg> for Template {
     }
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum MeshArg {
-    Coarse,
-    Default,
-    Fine,
-}
-
 pub fn run(args: DbArgs) -> anyhow::Result<()> {
     match args.command {
         DbCommand::Build(a) => build(a),
@@ -236,11 +229,7 @@ fn build(args: BuildArgs) -> anyhow::Result<()> {
     if let Some(v) = args.velocities.clone() {
         spec.sweep.velocities_mm_s = sorted(v);
     }
-    spec.resolution = match args.mesh {
-        MeshArg::Coarse => Resolution::Coarse,
-        MeshArg::Default => Resolution::Default,
-        MeshArg::Fine => Resolution::Fine,
-    };
+    spec.resolution = args.mesh.resolution();
     spec.grid.points = args.grid_points as usize;
     // The model is the shipped one; its provenance goes into the metadata.
     spec.model = FingerModel::default_model();

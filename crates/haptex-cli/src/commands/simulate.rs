@@ -6,7 +6,6 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use haptex_core::num::Num;
-use haptex_fem::finger::{FingerModel, Resolution};
 use haptex_fem::output;
 use haptex_fem::scenario::{self, Kinematics, Loading, Scenario, default_step_mm};
 use haptex_fem::surface::SurfaceShape;
@@ -16,7 +15,7 @@ use haptex_core::ranges;
 use haptex_core::signal::{Extend, VoltageCurve};
 use haptex_fem::display::Display;
 
-use crate::args::{LayerStackArgs, Output, in_range, non_negative, positive};
+use crate::args::{LayerStackArgs, MaterialArg, MeshArg, Output, finger_model, in_range, non_negative, positive};
 
 /// Simulate a finger pad sliding over a surface (2D plane-strain FE) and
 /// write its friction profile.
@@ -122,22 +121,9 @@ pub struct SimulateArgs {
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-enum MaterialArg {
-    Elastic,
-    Viscoelastic,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
 enum KinematicsArg {
     Small,
     Finite,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum MeshArg {
-    Coarse,
-    Default,
-    Fine,
 }
 
 fn parse_surface(args: &SimulateArgs) -> anyhow::Result<SurfaceShape> {
@@ -184,18 +170,11 @@ fn parse_display(args: &SimulateArgs) -> anyhow::Result<Option<Display>> {
 pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     let surface = parse_surface(&args)?;
     let display = parse_display(&args)?;
-    let model = match &args.finger {
-        Some(path) => FingerModel::read(path)?,
-        None => FingerModel::default_model(),
-    };
+    let model = finger_model(args.finger.as_deref())?;
     let mut scenario = Scenario::paper(surface.clone());
     scenario.model = model;
-    scenario.resolution = match args.mesh {
-        MeshArg::Coarse => Resolution::Coarse,
-        MeshArg::Default => Resolution::Default,
-        MeshArg::Fine => Resolution::Fine,
-    };
-    scenario.viscoelastic = matches!(args.material, MaterialArg::Viscoelastic);
+    scenario.resolution = args.mesh.resolution();
+    scenario.viscoelastic = args.material.viscoelastic();
     scenario.kinematics = match args.kinematics {
         KinematicsArg::Small => Kinematics::Small,
         KinematicsArg::Finite => Kinematics::Finite,

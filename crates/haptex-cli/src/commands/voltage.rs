@@ -4,14 +4,14 @@
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
-use haptex_core::electrovibration::{ContactArea, Device, LayerStack, Method, map_profile, map_profile_relative};
+use haptex_core::electrovibration::{ContactArea, Device, Method, map_profile, map_profile_relative};
 use haptex_core::num::Num;
 use haptex_core::profile::FrictionProfile;
 use haptex_core::ranges;
 use haptex_core::relative::FlatMu;
 use haptex_fem::render::{self, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping};
 
-use crate::args::{Output, in_range, read_profile};
+use crate::args::{LayerStackArgs, Output, in_range, read_profile};
 
 /// Compute the voltage an electrovibration display must apply to reproduce a
 /// friction profile.
@@ -55,18 +55,8 @@ pub struct VoltageArgs {
     /// surface. Default: the profile's median, an estimate.
     #[arg(long, requires = "relative", value_parser = in_range(ranges::FLAT_MU))]
     flat_mu: Option<f64>,
-    /// Relative permittivity of the stratum corneum, eps_sc.
-    #[arg(long, default_value_t = LayerStack::PAPER.eps_sc, value_parser = in_range(ranges::EPS_SC))]
-    eps_sc: f64,
-    /// Relative permittivity of the display insulator, eps_i.
-    #[arg(long, default_value_t = LayerStack::PAPER.eps_i, value_parser = in_range(ranges::EPS_I))]
-    eps_i: f64,
-    /// Stratum corneum thickness d_sc in mm.
-    #[arg(long, default_value_t = LayerStack::PAPER.d_sc_mm, value_parser = in_range(ranges::D_SC_MM))]
-    d_sc_mm: f64,
-    /// Insulator thickness d_i in mm.
-    #[arg(long, default_value_t = LayerStack::PAPER.d_i_mm, value_parser = in_range(ranges::D_I_MM))]
-    d_i_mm: f64,
+    #[command(flatten)]
+    stack: LayerStackArgs,
     /// Contact-area coefficient k in mm^2/N (A = k Fn^n; mm^2/N^n when n != 1).
     #[arg(long, default_value_t = ContactArea::PAPER.k_mm2_per_n, value_parser = in_range(ranges::K_MM2_PER_N))]
     k_mm2_per_n: f64,
@@ -119,7 +109,7 @@ enum Format {
 pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
     let profile = read_profile(&args.profile)?;
     let device = Device {
-        stack: LayerStack { d_sc_mm: args.d_sc_mm, eps_sc: args.eps_sc, d_i_mm: args.d_i_mm, eps_i: args.eps_i },
+        stack: args.stack.stack(),
         contact: ContactArea { k_mm2_per_n: args.k_mm2_per_n, exponent: args.area_exponent },
         mu_hd: args.mu_hd,
         u_max_v: args.u_max,
