@@ -41,7 +41,7 @@
 //! mu at U_max, nor with detail finer than the pad's pre-sliding length
 //! (about 0.03 mm on the shipped finger).
 
-use haptex_core::electrovibration::{Device, ElectroError, Method, map_profile};
+use haptex_core::electrovibration::{Device, ElectroError, Method, PhysicalMapping, map_profile};
 use haptex_core::num::Num;
 use haptex_core::profile::{FrictionProfile, ProfileError};
 use haptex_core::signal::{Extend, VoltageCurve};
@@ -108,6 +108,8 @@ pub struct Felt {
     pub mu: Vec<f64>,
     /// Contact length over net normal force at the target's positions, mm^2/N.
     pub k_mm2_per_n: Vec<f64>,
+    /// Mean contact length over the slide, mm.
+    pub contact_mm: f64,
 }
 
 /// How well the felt friction follows the target.
@@ -147,10 +149,11 @@ pub struct Check {
     pub metrics: CheckMetrics,
 }
 
-/// Where the target is renderable: mu_HD <= mu <= mu at U_max.
-fn renderable(device: &Device, mu: f64) -> bool {
-    let mu_clip = device.mu_hd * (1.0 + device.u_max_v * device.u_max_v * device.force_ratio_per_v2(1.0));
-    mu >= device.mu_hd && mu <= mu_clip
+/// The renderable range of mu_RS, mu_HD ..= mu at U_max (eq. 8's clip
+/// level, as `map_profile` computes it).
+fn renderable_range(device: &Device) -> std::ops::RangeInclusive<f64> {
+    let mapping = PhysicalMapping::new(device.mu_hd, device.force_ratio_per_v2(1.0), device.u_max_v);
+    device.mu_hd..=mapping.mu_clip
 }
 
 /// Eq. (8)'s voltage for `target` (clipped at U_max).
@@ -198,14 +201,15 @@ pub fn feel(
     scenario.slide_mm = x[x.len() - 1] - start;
     scenario.display = Some(Display { voltage, extend: Extend::Hold, stack: settings.device.stack });
     let result = scenario::run(&scenario, progress)?;
-    let slide: Vec<f64> = result.history.iter().filter(|r| r.slide_mm > 0.0).map(|r| r.slide_mm).collect();
     let rows: Vec<_> = result.history.iter().filter(|r| r.slide_mm > 0.0).collect();
+    let slide: Vec<f64> = rows.iter().map(|r| r.slide_mm).collect();
+    let contact_mm = mean(&rows.iter().map(|r| r.contact_mm).collect::<Vec<_>>());
     let mu_run: Vec<f64> = rows.iter().map(|r| r.ft_n / r.fn_n).collect();
     let k_run: Vec<f64> = rows.iter().map(|r| r.contact_mm / r.fn_n).collect();
     let at = |values: &[f64], x: f64| haptex_core::profile::interpolate(&slide, values, x - start);
     let mu = x.iter().map(|&x| at(&mu_run, x)).collect();
     let k_mm2_per_n = x.iter().map(|&x| at(&k_run, x)).collect();
-    Ok(Felt { result, mu, k_mm2_per_n })
+    Ok(Felt { result, mu, k_mm2_per_n, contact_mm })
 }
 
 /// The metrics of a felt profile against its target.
@@ -214,7 +218,8 @@ pub fn metrics(target: &FrictionProfile, felt: &Felt, device: &Device) -> CheckM
     let n = x.len();
     // Trapezoid weights: the length each sample stands for.
     let weight: Vec<f64> = (0..n).map(|i| 0.5 * (x[(i + 1).min(n - 1)] - x[i.saturating_sub(1)])).collect();
-    let inside: Vec<bool> = mu.iter().map(|&m| renderable(device, m)).collect();
+    let range = renderable_range(device);
+    let inside: Vec<bool> = mu.iter().map(|m| range.contains(m)).collect();
     let span = target.span_mm().max(f64::MIN_POSITIVE);
     let fraction = |f: &dyn Fn(usize) -> bool| (0..n).filter(|&i| f(i)).map(|i| weight[i]).sum::<f64>() / span;
     let not_renderable_fraction = fraction(&|i| mu[i] < device.mu_hd).max(0.0);
@@ -243,8 +248,7 @@ pub fn metrics(target: &FrictionProfile, felt: &Felt, device: &Device) -> CheckM
         }
     }
     let k_fe_mm2_per_n = mean(&felt.k_mm2_per_n);
-    let contact_mm =
-        mean(&felt.result.history.iter().filter(|r| r.slide_mm > 0.0).map(|r| r.contact_mm).collect::<Vec<_>>());
+    let contact_mm = felt.contact_mm;
     // Detail finer than the contact: the profile less its Gaussian average
     // with a standard deviation of half the contact length.
     let sigma = 0.5 * contact_mm;
@@ -397,6 +401,7 @@ pub fn compensate(
     let u_max2 = device.u_max_v * device.u_max_v;
     let (x, mu) = (target.x_mm(), target.mu());
     let mut trials: Vec<Check> = Vec::new();
+    let range = renderable_range(&device);
     let mut w: Vec<f64> = eq8_voltage(target, &device)?.iter().map(|u| u * u).collect();
     let mut best = 0;
     for run in 0..max_runs {
@@ -415,7 +420,7 @@ pub fn compensate(
         let last = &trials[trials.len() - 1];
         let (mut num, mut den) = (0.0, 0.0);
         for i in 0..x.len() {
-            if renderable(&device, mu[i]) && w[i] > 0.0 {
+            if range.contains(&mu[i]) && w[i] > 0.0 {
                 num += (last.felt.mu[i] / device.mu_hd - 1.0) * w[i];
                 den += w[i] * w[i];
             }
