@@ -41,6 +41,9 @@ pub enum ElectroError {
         Num(*mu)
     )]
     NonFiniteVoltage { index: usize, x_mm: f64, mu: f64 },
+    /// Voltages put in place of a profile's do not fit it.
+    #[error("replacement voltages: {0}")]
+    Replacement(String),
     #[error(
         "the contact-area law A = k Fn^n with n = {exponent} makes the voltage depend on the \
          normal force: give Fn (--fn-n), or a profile with an fn_n column"
@@ -386,6 +389,31 @@ pub struct VoltageProfile {
 }
 
 impl VoltageProfile {
+    /// The same profile with other voltages (V RMS, one per position, each
+    /// within 0 ..= the summary's U_max), e.g. a voltage compensated on the
+    /// finger model; the summary's voltage range follows them.
+    pub fn with_voltages(mut self, voltage_v: Vec<f64>) -> Result<Self, ElectroError> {
+        if voltage_v.len() != self.x_mm.len() {
+            return Err(ElectroError::Replacement(format!(
+                "{} voltages for {} positions",
+                voltage_v.len(),
+                self.x_mm.len()
+            )));
+        }
+        let u_max = self.summary.u_max_v;
+        if let Some(i) = voltage_v.iter().position(|u| !(0.0..=u_max).contains(u)) {
+            return Err(ElectroError::Replacement(format!(
+                "{} V at x = {} mm is outside 0 .. U_max = {} V",
+                Num(voltage_v[i]),
+                Num(self.x_mm[i]),
+                Num(u_max)
+            )));
+        }
+        (self.summary.voltage_min_v, self.summary.voltage_max_v) = min_max(&voltage_v);
+        self.voltage_v = voltage_v;
+        Ok(self)
+    }
+
     /// Writes `x_mm,mu,voltage_v` CSV, after a comment line stating the
     /// RMS convention and, for a relative profile, one saying how it was
     /// made (the `mu` column is then the relative friction).

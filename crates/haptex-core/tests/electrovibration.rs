@@ -346,3 +346,19 @@ proptest! {
         prop_assert!((back - u).abs() <= 1e-12 * u.max(1.0), "{u} -> {fe} N -> {back}");
     }
 }
+
+#[test]
+fn replacement_voltages_keep_the_profile_and_its_limit() {
+    // Voltages put in place of eq. (8)'s (a compensated voltage) must fit
+    // the profile and stay within its U_max; the summary follows them.
+
+    let profile = FrictionProfile::new(vec![0.0, 1.0, 2.0], vec![1.0, 1.1, 1.05]).unwrap();
+    let mapped = map_profile(&profile, &Device::PAPER, Method::Physical, None).unwrap();
+    let replaced = mapped.clone().with_voltages(vec![0.0, 80.0, 100.0]).unwrap();
+    assert_eq!(replaced.voltage_v, [0.0, 80.0, 100.0]);
+    assert_eq!((replaced.summary.voltage_min_v, replaced.summary.voltage_max_v), (0.0, 100.0));
+    assert_eq!(replaced.mu, mapped.mu);
+    for bad in [vec![0.0, 100.5, 0.0], vec![0.0, -1.0, 0.0], vec![0.0, f64::NAN, 0.0], vec![1.0, 2.0]] {
+        assert!(mapped.clone().with_voltages(bad.clone()).is_err(), "{bad:?}");
+    }
+}

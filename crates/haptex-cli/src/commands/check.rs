@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use haptex_core::electrovibration::{ContactArea, Device, Method, VoltageProfile, VoltageSummary};
+use haptex_core::electrovibration::{ContactArea, Device, Method, map_profile};
 use haptex_core::num::Num;
 use haptex_core::plot::{Figure, Panel};
 use haptex_core::ranges;
@@ -210,7 +210,8 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
         })?;
     }
     if let Some(path) = &args.voltage_out {
-        let profile = voltage_profile(&check, &settings.device);
+        let profile = map_profile(&check.target, &settings.device, Method::Physical, None)?
+            .with_voltages(check.voltage_v.clone())?;
         haptex_core::io::write_atomic(path, |w| {
             writeln!(w, "# {header}; felt-friction RMS error {} over the renderable region", Num(m.rms_error))?;
             profile.write_csv(w)
@@ -262,38 +263,6 @@ fn describe(m: &CheckMetrics, settings: &RenderSettings) -> Vec<String> {
             m.k_fe_mm2_per_n
         ),
     ]
-}
-
-/// The applied voltage as a voltage profile (`haptex voltage`'s format).
-fn voltage_profile(check: &Check, device: &Device) -> VoltageProfile {
-    let (lo, hi) = check.voltage_v.iter().fold((f64::INFINITY, 0.0f64), |(a, b), &u| (a.min(u), b.max(u)));
-    let mu = check.target.mu();
-    let (mu_min, mu_max) = mu.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &m| (a.min(m), b.max(m)));
-    let x = check.target.x_mm();
-    VoltageProfile {
-        summary: VoltageSummary {
-            method: Method::Physical,
-            n_points: x.len(),
-            x_min_mm: x[0],
-            x_max_mm: x[x.len() - 1],
-            mu_min,
-            mu_max,
-            u_max_v: device.u_max_v,
-            voltage_min_v: lo,
-            voltage_max_v: hi,
-            mu_hd: Some(device.mu_hd),
-            fn_n: None,
-            fe_over_fn_per_v2: Some(device.force_ratio_per_v2(1.0)),
-            mu_at_u_max: None,
-            clipped: Default::default(),
-            not_renderable: Default::default(),
-            relative: None,
-            warnings: Vec::new(),
-        },
-        x_mm: x.to_vec(),
-        mu: mu.to_vec(),
-        voltage_v: check.voltage_v.clone(),
-    }
 }
 
 fn figure(check: &Check, title: &str, settings: &RenderSettings) -> Figure {

@@ -145,9 +145,7 @@ pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
             c.trials.len(),
             eq8.rms_error
         ));
-        voltage.voltage_v = best.voltage_v.clone();
-        (voltage.summary.voltage_min_v, voltage.summary.voltage_max_v) =
-            voltage.voltage_v.iter().fold((f64::INFINITY, 0.0f64), |(a, b), &u| (a.min(u), b.max(u)));
+        voltage = voltage.with_voltages(best.voltage_v.clone())?;
     }
     let output = Output::new(args.output);
     let format = args.format.unwrap_or(match output.path().and_then(|p| p.extension()) {
