@@ -130,8 +130,21 @@ pub struct Grid {
 
 impl Grid {
     pub fn positions(&self) -> Vec<f64> {
+        self.positions_from(0.0)
+    }
+
+    /// The positions shifted by `x0_mm`, x = x0 + xi (mm). Each is one
+    /// weighted mean of the two ends, a single rounding: a grid from 0 to
+    /// 10 mm in 0.02 mm reads 0.02, 0.04, ... as written, not the
+    /// 0.019999999999999574 of accumulated or offset sums.
+    pub fn positions_from(&self, x0_mm: f64) -> Vec<f64> {
         let n = self.points;
-        (0..n).map(|i| self.xi_min_mm + (self.xi_max_mm - self.xi_min_mm) * i as f64 / (n - 1) as f64).collect()
+        if n < 2 {
+            return vec![x0_mm + self.xi_min_mm; n];
+        }
+        let (lo, hi) = (x0_mm + self.xi_min_mm, x0_mm + self.xi_max_mm);
+        let last = (n - 1) as f64;
+        (0..n).map(|i| (lo * (last - i as f64) + hi * i as f64) / last).collect()
     }
 
     /// The output column names, `mu@<xi>` with two decimals.
@@ -385,7 +398,7 @@ impl TemplateModel {
         let mut scratch = self.cae.scratch();
         let mut mu = vec![0.0; self.grid.points];
         let (fe_row, diagnostics) = self.predict_into(&[width_mm, height_mm, velocity_mm_s], &mut scratch, &mut mu)?;
-        let x_mm = self.positions.iter().map(|xi| x0_mm + xi).collect();
+        let x_mm = self.grid.positions_from(x0_mm);
         Ok(Prediction { x_mm, mu, fe_row, diagnostics })
     }
 
@@ -503,6 +516,14 @@ mod tests {
         assert_eq!((p[0], p[250], p[500]), (-5.0, 0.0, 5.0));
         assert!((p[1] + 4.98).abs() < 1e-12);
         assert_eq!(g.column_names()[1], "mu@-4.98");
+        // Every position the double nearest its decimal value, shifted or
+        // not (the positions are printed in CSV files and JSON answers).
+        for x0 in [0.0, 5.0, 2.5] {
+            for (i, x) in g.positions_from(x0).iter().enumerate() {
+                let decimal: f64 = format!("{:.2}", x0 - 5.0 + 0.02 * i as f64).parse().unwrap();
+                assert_eq!(*x, decimal, "position {i} from {x0}");
+            }
+        }
     }
 
     /// The derivatives agree with central differences of height_mm (step

@@ -1069,8 +1069,10 @@ async fn simulate_reproduces_a_database_run_bit_for_bit() {
     let model = TemplateModel::load(&shipped_db(), Template::Bump).unwrap();
     let row = model.exact_row(&[1.5, 0.3, 20.0]).unwrap();
     assert_eq!(numbers(&answer["mu"]), model.cae.matrix().output_row(row));
-    let expected_x: Vec<f64> = model.positions().iter().map(|xi| 5.0 + xi).collect();
+    let expected_x: Vec<f64> = model.grid.positions_from(5.0);
     assert_eq!(numbers(&answer["x_mm"]), expected_x);
+    // The positions as written (0.02 mm apart from 0), not 0.019999999999999574.
+    assert_eq!(&expected_x[..3], &[0.0, 0.02, 0.04]);
     assert_eq!(answer["cae_rms_difference"], 0.0);
     assert!(answer["fe_seconds"].as_f64().unwrap() > 0.0);
     assert_eq!(numbers(&answer["h_mm"]).len(), expected_x.len());

@@ -94,7 +94,7 @@ fn answer(call: super::TemplateCall, spec: &DatabaseSpec) -> Result<Response, Ap
         .map_err(|e| ApiError::new(StatusCode::UNPROCESSABLE_ENTITY, format!("the FE simulation failed: {e}"), None))?;
     let seconds = started.elapsed().as_secs_f64();
 
-    let x_mm: Vec<f64> = model.positions().iter().map(|xi| x0_mm + xi).collect();
+    let x_mm: Vec<f64> = model.grid.positions_from(x0_mm);
     let profile = FrictionProfile::new(x_mm, fe)
         .map_err(|e| ApiError::internal(format!("the simulated profile is invalid: {e}")))?;
     let prediction = model
