@@ -60,6 +60,25 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    // 256 queries at once (four blocks), per call; divide by 256 for the
+    // time per query.
+    let batch: Vec<f64> = (0..256)
+        .flat_map(|q| {
+            let t = q as f64 / 255.0;
+            [0.5 + 2.0 * t, 0.1 + 0.4 * (1.0 - t), 10.0 + 40.0 * (t * 7.0).fract(), 0.4 + 0.2 * (t * 3.0).fract()]
+        })
+        .collect();
+    let cae = Cae::new(x.clone(), Widths::constant(0.13).unwrap()).unwrap();
+    let mut batch_scratch = cae.batch_scratch();
+    let mut batch_out = vec![0.0; 256 * M];
+    let mut diagnostics = Vec::with_capacity(256);
+    group.bench_function("predict_batch256_one_thread_w0.13", |b| {
+        b.iter(|| {
+            cae.predict_batch_into(black_box(&batch), &mut batch_scratch, &mut batch_out, &mut diagnostics).unwrap();
+            black_box(&batch_out);
+        })
+    });
+    group.bench_function("predict_batch256_rayon_w0.13", |b| b.iter(|| cae.predict_batch(black_box(&batch)).unwrap()));
     let mut loo = Loo::new(&x).unwrap();
     group.bench_function("loo_rmse_one_width", |b| b.iter(|| loo.rmse(black_box(Widths::constant(0.13).unwrap()))));
     group.sample_size(10);

@@ -1,10 +1,17 @@
-//! Times `Cae::predict_into` over a file of queries, for the side-by-side
-//! comparison with statsmodels (`scripts/compare_cae_statsmodels.py`).
+//! Times `Cae::predict_into` (one query at a time),
+//! `Cae::predict_batch_into` (all queries at once, one thread) and
+//! `Cae::predict_batch` (the same on rayon's threads) over a file of queries,
+//! for the side-by-side comparisons with statsmodels and NumPy
+//! (`scripts/compare_cae_statsmodels.py`, `scripts/compare_cae_numpy.py`).
 //!
 //! Usage: cae_timing MODEL.csv INPUTS(a,b,c) QUERIES.csv WIDTH REPEATS OUT.csv
-//! Writes the predictions (one row per query) to OUT.csv and prints JSON:
-//! {"n", "d", "m", "queries", "seconds_per_query"} (the fastest of REPEATS
-//! passes over all queries, divided by the number of queries).
+//! Writes the predictions (one row per query, one query at a time) to
+//! OUT.csv and prints JSON: {"n", "d", "m", "queries", "seconds_per_query",
+//! "seconds_per_query_batch", "seconds_per_query_batch_parallel",
+//! "threads", "batch_max_relative_difference"} (each the
+//! fastest of REPEATS passes over all queries, divided by the number of
+//! queries; the difference is the batch's largest from the one-at-a-time
+//! predictions, relative to the output's magnitude).
 
 use std::path::Path;
 use std::time::Instant;
@@ -37,6 +44,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         best = best.min(start.elapsed().as_secs_f64());
     }
+    let flat: Vec<f64> = queries.iter().flatten().copied().collect();
+    let mut batch_scratch = cae.batch_scratch();
+    let mut batch_out = vec![0.0; queries.len() * m];
+    let mut diagnostics = Vec::with_capacity(queries.len());
+    let mut best_batch = f64::INFINITY;
+    for _ in 0..repeats.max(1) {
+        let start = Instant::now();
+        cae.predict_batch_into(&flat, &mut batch_scratch, &mut batch_out, &mut diagnostics)?;
+        best_batch = best_batch.min(start.elapsed().as_secs_f64());
+    }
+    // The same on rayon's threads (RAYON_NUM_THREADS sets how many).
+    let mut best_parallel = f64::INFINITY;
+    for _ in 0..repeats.max(1) {
+        let start = Instant::now();
+        let (parallel, _) = cae.predict_batch(&flat)?;
+        best_parallel = best_parallel.min(start.elapsed().as_secs_f64());
+        if parallel != batch_out {
+            return Err("the parallel batch differs from the sequential one".into());
+        }
+    }
+    let difference = out.iter().zip(&batch_out).map(|(a, b)| (a - b).abs() / a.abs().max(1e-300)).fold(0.0, f64::max);
     write_atomic(Path::new(&args[6]), |w| {
         writeln!(w, "{}", cae.matrix().outputs().join(","))?;
         for row in out.chunks_exact(m) {
@@ -45,11 +73,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok(())
     })?;
     println!(
-        "{{\"n\": {}, \"d\": {}, \"m\": {m}, \"queries\": {}, \"seconds_per_query\": {:e}}}",
+        "{{\"n\": {}, \"d\": {}, \"m\": {m}, \"queries\": {}, \"seconds_per_query\": {:e}, \
+         \"seconds_per_query_batch\": {:e}, \"seconds_per_query_batch_parallel\": {:e}, \"threads\": {}, \
+         \"batch_max_relative_difference\": {:e}}}",
         cae.matrix().n(),
         cae.matrix().d(),
         queries.len(),
-        best / queries.len() as f64
+        best / queries.len() as f64,
+        best_batch / queries.len() as f64,
+        best_parallel / queries.len() as f64,
+        rayon::current_num_threads(),
+        difference
     );
     Ok(())
 }

@@ -559,3 +559,57 @@ proptest! {
         }
     }
 }
+
+/// Issue 20: the batched prediction is eqs. (11)-(12) for every query: equal
+/// to the brute-force sum to 1e-12 relative (the same bound as one query),
+/// with constant and non-constant widths, wide (a dense product per
+/// block) and narrow (each query summed over its few rows), over 150
+/// queries (two whole blocks of BATCH_BLOCK and a partial one) inside and
+/// up to 20% outside the database's box; its diagnostics are those of one
+/// query at a time.
+#[test]
+fn batched_prediction_equals_brute_force_and_single_queries() {
+    let x = random_matrix(11, 90, 3, 7);
+    for widths in [Widths::constant(0.13).unwrap(), Widths::range(0.06, 0.25).unwrap(), Widths::constant(0.02).unwrap()]
+    {
+        let cae = Cae::new(x.clone(), widths).unwrap();
+        let qs = queries(&x, 12, 150);
+        assert!(qs.len() > 2 * haptex_core::cae::BATCH_BLOCK);
+        let flat: Vec<f64> = qs.iter().flatten().copied().collect();
+        let (out, diagnostics) = cae.predict_batch(&flat).unwrap();
+        assert_eq!((out.len(), diagnostics.len()), (150 * 7, 150));
+        for (i, q) in qs.iter().enumerate() {
+            let got = &out[i * 7..(i + 1) * 7];
+            assert_relative(got, &brute_force(&x, cae.kernel_widths(), q), 1e-12, &format!("batch query {i}"));
+            let (one, one_diagnostics) = cae.predict(q).unwrap();
+            assert_relative(got, &one, 1e-13, &format!("batch against one query, {i}"));
+            assert_eq!(diagnostics[i], one_diagnostics, "query {i}");
+        }
+        // Which path the blocks took: the narrow width leaves most rows out.
+        let mean_used = diagnostics.iter().map(|d| d.weights_used).sum::<usize>() as f64 / 150.0;
+        if widths.w_max == 0.02 {
+            assert!(mean_used < 90.0 / 4.0, "mean rows used {mean_used}");
+        } else {
+            assert!(mean_used > 90.0 / 4.0, "mean rows used {mean_used}");
+        }
+    }
+}
+
+/// A batch with a malformed query is refused, naming the query (1-based);
+/// a length that is not a whole number of queries and a wrong output
+/// buffer are refused too.
+#[test]
+fn batched_prediction_names_the_bad_query() {
+    let x = random_matrix(13, 30, 2, 3);
+    let cae = Cae::new(x, Widths::constant(0.2).unwrap()).unwrap();
+    let mut flat = vec![0.5; 2 * 100];
+    flat[2 * 70 + 1] = f64::NAN;
+    let e = cae.predict_batch(&flat).unwrap_err().to_string();
+    assert!(e.starts_with("query 71: input 'b1' is not finite"), "{e}");
+    let e = cae.predict_batch(&[0.5; 5]).unwrap_err().to_string();
+    assert!(e.contains("not a whole number of queries of 2 inputs"), "{e}");
+    let mut scratch = cae.batch_scratch();
+    let e = cae.predict_batch_into(&[0.5; 4], &mut scratch, &mut [0.0; 5], &mut Vec::new()).unwrap_err();
+    assert!(e.to_string().contains("a buffer of 5 outputs for 2 queries"), "{e}");
+    assert!(cae.predict_batch(&[]).unwrap().0.is_empty());
+}

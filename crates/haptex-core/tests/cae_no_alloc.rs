@@ -35,3 +35,26 @@ fn predict_into_allocates_nothing_per_query() {
         assert!(far > 0 && out.iter().all(|v| v.is_finite()));
     }
 }
+
+/// The batched prediction over caller-provided buffers allocates only the
+/// matrix product's packing buffer, once per block of BATCH_BLOCK queries
+/// (matrixmultiply allocates it per call): 300 queries, 5 blocks, 5
+/// allocations, whatever the number of model vectors.
+#[test]
+fn predict_batch_into_allocations() {
+    let (n, m) = (200, 50);
+    let b: Vec<f64> = (0..n).flat_map(|i| [i as f64 * 0.01, (i * 7 % 13) as f64]).collect();
+    let c: Vec<f64> = (0..n * m).map(|i| (i as f64 * 0.001).sin()).collect();
+    let names = |p: &str, k: usize| (0..k).map(|i| format!("{p}{i}")).collect::<Vec<_>>();
+    let x = ModelMatrix::new(names("b", 2), names("c", m), b, c).unwrap();
+    let cae = Cae::new(x, Widths::constant(0.1).unwrap()).unwrap();
+    let queries: Vec<f64> = (0..300).flat_map(|q| [q as f64 * 0.003 - 0.5, (q % 17) as f64]).collect();
+    let mut scratch = cae.batch_scratch();
+    let mut out = vec![0.0; 300 * m];
+    let mut diagnostics = Vec::with_capacity(300);
+    let allocations =
+        allocations_in(|| cae.predict_batch_into(&queries, &mut scratch, &mut out, &mut diagnostics).unwrap());
+    assert_eq!(300usize.div_ceil(haptex_core::cae::BATCH_BLOCK), 5);
+    assert_eq!(allocations, 5);
+    assert_eq!(diagnostics.len(), 300);
+}

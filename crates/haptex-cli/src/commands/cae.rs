@@ -187,12 +187,15 @@ fn predict(args: PredictArgs) -> anyhow::Result<()> {
     };
     let cae = Cae::new(matrix, widths)?;
     let matrix = cae.matrix();
-    let mut scratch = cae.scratch();
-    let mut predictions = vec![0.0; queries.len() * matrix.m()];
+    // All the queries in one batch: eq. (11) as blocked matrix products.
+    let flat: Vec<f64> = queries.iter().flat_map(|(_, q)| q.iter().copied()).collect();
+    let (predictions, diagnostics) = cae.predict_batch(&flat).map_err(|e| match e {
+        CaeError::BatchQuery { index, message } => anyhow::anyhow!("query {}: {message}", queries[index].0),
+        other => other.into(),
+    })?;
     let mut extrapolations = 0;
-    for ((label, query), out) in queries.iter().zip(predictions.chunks_exact_mut(matrix.m())) {
-        let diagnostics = cae.predict_into(query, &mut scratch, out).with_context(|| format!("query {label}"))?;
-        if let Some(warning) = cae.warning(query, &diagnostics) {
+    for ((label, query), diagnostics) in queries.iter().zip(&diagnostics) {
+        if let Some(warning) = cae.warning(query, diagnostics) {
             extrapolations += 1;
             if !args.quiet {
                 eprintln!("warning: query {label}: {warning}");

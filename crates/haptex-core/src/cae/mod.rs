@@ -35,7 +35,9 @@ pub use loo::{
 };
 pub use matrix::ModelMatrix;
 pub use normalize::Normalization;
-pub use predict::{Cae, Diagnostics, EXTRAPOLATION_KERNEL_DISTANCE, LOG_WEIGHT_CUTOFF, Scratch};
+pub use predict::{
+    BATCH_BLOCK, BatchScratch, Cae, Diagnostics, EXTRAPOLATION_KERNEL_DISTANCE, LOG_WEIGHT_CUTOFF, Scratch,
+};
 pub use prune::PRUNE_RELATIVE;
 pub use widths::{Density, Kernel, Widths};
 
@@ -59,6 +61,10 @@ pub enum CaeError {
     /// A query has the wrong number of inputs or a non-finite value.
     #[error("{0}")]
     Query(String),
+    /// Query `index` (0-based) of a batch has the wrong number of inputs
+    /// or a non-finite value.
+    #[error("query {}: {message}", index + 1)]
+    BatchQuery { index: usize, message: String },
     /// The work asked for needs more memory than its budget.
     #[error("{0}")]
     TooLarge(String),

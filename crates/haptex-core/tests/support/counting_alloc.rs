@@ -4,24 +4,23 @@
 //! the calling thread inside [`allocations_in`]. Only that thread counts:
 //! the test harness's own thread may allocate at any time (e.g. when it
 //! first waits for a test's result), which made a process-wide count fail
-//! under load.
+//! under load; and the count itself is the thread's own, so two tests of
+//! one binary counting at the same time do not add to each other's.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 struct Counting;
 
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
 thread_local! {
-    // Const-initialised, so reading it never allocates.
+    // Const-initialised, so reading them never allocates.
     static COUNTING: Cell<bool> = const { Cell::new(false) };
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
 }
 
 fn count() {
     if COUNTING.with(Cell::get) {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        ALLOCATIONS.with(|a| a.set(a.get() + 1));
     }
 }
 
@@ -54,9 +53,9 @@ static GLOBAL: Counting = Counting;
 
 /// Allocations made by `f` on this thread.
 pub fn allocations_in(f: impl FnOnce()) -> usize {
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let before = ALLOCATIONS.with(Cell::get);
     COUNTING.with(|c| c.set(true));
     f();
     COUNTING.with(|c| c.set(false));
-    ALLOCATIONS.load(Ordering::Relaxed) - before
+    ALLOCATIONS.with(Cell::get) - before
 }
