@@ -60,6 +60,23 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    // The streaming floor of one prediction: one read of the same bytes it
+    // must read (the N x M outputs, 1.62 MB), summed in 8 independent
+    // accumulators (AVX2 lanes), nothing else. A prediction cannot be
+    // faster than this on the machine it runs on; BENCHMARKS.md reports
+    // the ratio predict_constant / stream_floor.
+    let outputs = x.outputs_flat().to_vec();
+    group.bench_function("stream_floor_outputs_1.62MB", |b| {
+        b.iter(|| {
+            let mut acc = [0.0f64; 8];
+            for chunk in black_box(&outputs).chunks_exact(8) {
+                for (a, v) in acc.iter_mut().zip(chunk) {
+                    *a += v;
+                }
+            }
+            black_box(acc)
+        })
+    });
     // 256 queries at once (four blocks), per call; divide by 256 for the
     // time per query.
     let batch: Vec<f64> = (0..256)
