@@ -267,6 +267,43 @@ fn lerp(xs: &[f64], ys: &[f64], i: usize, x: f64) -> f64 {
     ys[i] + t * (ys[i + 1] - ys[i])
 }
 
+/// Interpolation along a path that moves a little between queries (a
+/// finger's positions, sample by sample): walks from the last interval up
+/// or down instead of a binary search, with the same convention and
+/// therefore the same results, bit for bit, as [`interpolate`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct WalkingCursor {
+    /// The interval [xs[i], xs[i + 1]) of the last query.
+    i: usize,
+}
+
+impl WalkingCursor {
+    /// [`interpolate`]`(xs, ys, x)`; `xs` increasing with at least two
+    /// values, the same table at every call.
+    #[inline]
+    pub fn interpolate(&mut self, xs: &[f64], ys: &[f64], x: f64) -> f64 {
+        let last = xs.len() - 1;
+        // x below the first knot (or NaN) and at or beyond the last: the
+        // end values, as the binary search gives them.
+        if x < xs[0] || x.is_nan() {
+            return ys[0];
+        }
+        if x >= xs[last] {
+            return ys[last];
+        }
+        // Now xs[0] <= x < xs[last]: find xs[i] <= x < xs[i + 1].
+        let mut i = self.i.min(last - 1);
+        while xs[i + 1] <= x {
+            i += 1;
+        }
+        while xs[i] > x {
+            i -= 1;
+        }
+        self.i = i;
+        lerp(xs, ys, i, x)
+    }
+}
+
 /// Interpolation for increasing query positions: walks the table once.
 #[derive(Default)]
 pub(crate) struct Cursor {
@@ -274,6 +311,7 @@ pub(crate) struct Cursor {
 }
 
 impl Cursor {
+    #[inline]
     pub(crate) fn interpolate(&mut self, xs: &[f64], ys: &[f64], x: f64) -> f64 {
         let last = xs.len() - 1;
         if x <= xs[0] {

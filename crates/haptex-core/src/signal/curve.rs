@@ -106,6 +106,24 @@ impl VoltageCurve {
         crate::profile::interpolate(&self.x_mm, &self.voltage_v, x)
     }
 
+    /// [`VoltageCurve::voltage_at`] at every position of a path (a
+    /// finger's positions, sample by sample) into `out`: the same values,
+    /// found by walking the table from the last position's interval
+    /// instead of a binary search per position.
+    pub fn voltages_along(&self, x_mm: &[f64], extend: Extend, out: &mut [f64]) {
+        let (x0, x1) = self.span_mm();
+        let mut cursor = crate::profile::WalkingCursor::default();
+        let (xs, ys) = (&self.x_mm[..], &self.voltage_v[..]);
+        for (u, &x) in out.iter_mut().zip(x_mm) {
+            *u = match extend {
+                Extend::Hold => cursor.interpolate(xs, ys, x),
+                Extend::Zero if x < x0 || x > x1 => 0.0,
+                Extend::Zero => cursor.interpolate(xs, ys, x),
+                Extend::Repeat => cursor.interpolate(xs, ys, x0 + (x - x0).rem_euclid(x1 - x0)),
+            };
+        }
+    }
+
     /// Whether `x_mm` is inside the span [x_first, x_last].
     pub fn contains(&self, x_mm: f64) -> bool {
         let (x0, x1) = self.span_mm();
@@ -136,6 +154,31 @@ mod tests {
         let c = VoltageCurve::new(vec![0.0, 1.0], vec![3.0, 4.0]).unwrap();
         assert_eq!(c.voltage_at(5.0, Extend::Hold), 4.0);
         assert_eq!(c.voltage_at(5.0, Extend::Zero), 0.0);
+    }
+
+    /// The walking lookup gives voltage_at's values bit for bit, along a
+    /// back-and-forth path that crosses every knot, lands on knots and
+    /// leaves the span on both sides, in every extension mode.
+    #[test]
+    fn voltages_along_equals_voltage_at() {
+        let xs: Vec<f64> = (0..41).map(|i| i as f64 * 0.25 + if i % 3 == 0 { 0.01 } else { 0.0 }).collect();
+        let ys: Vec<f64> = xs.iter().map(|x| 50.0 + 40.0 * (1.3 * x).sin()).collect();
+        let c = VoltageCurve::new(xs.clone(), ys).unwrap();
+        let mut path: Vec<f64> = (0..4000).map(|i| 5.0 + 7.0 * (i as f64 * 0.003).sin()).collect();
+        path.extend(&xs);
+        path.extend(xs.iter().rev());
+        path.extend([f64::NAN, -1.0, 0.0, 10.01, 10.0, 3.0]);
+        for extend in [Extend::Hold, Extend::Zero, Extend::Repeat] {
+            let mut out = vec![0.0; path.len()];
+            c.voltages_along(&path, extend, &mut out);
+            for (x, u) in path.iter().zip(&out) {
+                let want = c.voltage_at(*x, extend);
+                assert!(
+                    u.to_bits() == want.to_bits() || (u.is_nan() && want.is_nan()),
+                    "{extend:?} at {x}: {u} vs {want}"
+                );
+            }
+        }
     }
 
     #[test]

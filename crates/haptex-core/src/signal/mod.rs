@@ -263,34 +263,46 @@ pub fn render(
         });
     }
     let n = n_float as usize;
-    let mut x_mm = vec![0.0; n];
+    let mut x_mm = crate::buffer::zeroed_f64(n);
     trajectory.positions_into(trajectory.start_s(), 1.0 / fs, &mut x_mm);
 
     let carrier = settings.carrier;
     let cycles_per_sample = carrier.frequency_hz / fs;
+    // In passes over the samples, each a simple loop: the requested
+    // envelope U(x(t)) (walking the profile with the finger), the safety
+    // limits in place (a serial chain only with a slew limit), the drive
+    // (vectorized: a polynomial sine), the sums.
+    let mut envelope_v = crate::buffer::zeroed_f64(n);
+    curve.voltages_along(&x_mm, settings.extend, &mut envelope_v);
+    let (x0, x1) = curve.span_mm();
+    let outside = x_mm.iter().map(|&x| usize::from(!(x0..=x1).contains(&x))).sum::<usize>();
     let mut limiter = EnvelopeLimiter::new(&settings.limits, fs);
-    let mut envelope_v = Vec::with_capacity(n);
-    let mut signal_v = Vec::with_capacity(n);
     let mut clip = ClipReport::default();
-    let mut outside = 0usize;
-    let mut sum_sq = 0.0;
-    for (i, &x) in x_mm.iter().enumerate() {
-        let requested = curve.voltage_at(x, settings.extend);
-        outside += usize::from(!curve.contains(x));
+    let u_max = settings.limits.u_max_v;
+    for u in envelope_v.iter_mut() {
+        let requested = *u;
         clip.requested_max_v = clip.requested_max_v.max(requested);
-        let clamped = requested.min(settings.limits.u_max_v);
-        clip.clamped_samples += usize::from(requested > settings.limits.u_max_v);
-        let u = limiter.apply(requested);
-        if u != clamped {
+        let clamped = requested.min(u_max);
+        clip.clamped_samples += usize::from(requested > u_max);
+        let limited = limiter.apply(requested);
+        if limited != clamped {
             clip.slew_limited_samples += 1;
-            clip.slew_max_deviation_v = clip.slew_max_deviation_v.max((u - clamped).abs());
+            clip.slew_max_deviation_v = clip.slew_max_deviation_v.max((limited - clamped).abs());
         }
-        // + 0.0 turns -0.0 (0 V times a negative carrier value) into 0.0.
-        let s = u * carrier.unit_rms(i as f64 * cycles_per_sample) + 0.0;
-        sum_sq += s * s;
-        envelope_v.push(u);
-        signal_v.push(s);
+        *u = limited;
     }
+    let mut signal_v = crate::buffer::zeroed_f64(n);
+    // + 0.0 turns -0.0 (0 V times a negative carrier value) into 0.0. The
+    // same values as `carrier.unit_rms`, one loop per shape.
+    match carrier.shape {
+        CarrierShape::Sine => sine_drive(&envelope_v, cycles_per_sample, &mut signal_v),
+        _ => {
+            for (i, (s, &u)) in signal_v.iter_mut().zip(&envelope_v).enumerate() {
+                *s = u * carrier.unit_rms(i as f64 * cycles_per_sample) + 0.0;
+            }
+        }
+    }
+    let sum_sq = signal_v.iter().map(|s| s * s).sum::<f64>();
     clip.clamped_fraction = clip.clamped_samples as f64 / n as f64;
     clip.slew_limited_fraction = clip.slew_limited_samples as f64 / n as f64;
 
@@ -348,6 +360,29 @@ pub fn render(
         warnings,
     };
     Ok(DriveSignal { x_mm, envelope_v, signal_v, report })
+}
+
+/// signal = envelope x sqrt(2) sin(2 pi i f / fs) (+ 0.0: no -0.0), in
+/// AVX2 lanes where the CPU has them (without FMA: the same operations, so
+/// the same bits, as the portable build).
+fn sine_drive(envelope_v: &[f64], cycles_per_sample: f64, signal_v: &mut [f64]) {
+    #[inline(always)]
+    fn lanes(envelope_v: &[f64], cycles_per_sample: f64, signal_v: &mut [f64]) {
+        for (i, (s, &u)) in signal_v.iter_mut().zip(envelope_v).enumerate() {
+            *s = u * (std::f64::consts::SQRT_2 * carrier::sin_turns(i as f64 * cycles_per_sample)) + 0.0;
+        }
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn avx2(envelope_v: &[f64], cycles_per_sample: f64, signal_v: &mut [f64]) {
+        lanes(envelope_v, cycles_per_sample, signal_v)
+    }
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2, checked just above.
+        return unsafe { avx2(envelope_v, cycles_per_sample, signal_v) };
+    }
+    lanes(envelope_v, cycles_per_sample, signal_v)
 }
 
 #[cfg(test)]
