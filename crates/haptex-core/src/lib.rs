@@ -1,5 +1,6 @@
 //! haptex core: friction profiles, the electrovibration mapping of the
-//! paper (eqs. 3-9) and the file formats every haptex command shares.
+//! paper (eqs. 3-9), ultrasonic friction reduction,
+//! and the file formats every haptex command shares.
 //!
 //! Units follow `docs/file-formats.md`: positions in mm, forces in N,
 //! voltages in V (RMS), and every field that carries a unit names it.
@@ -22,3 +23,4 @@ pub mod realtime;
 pub mod signal;
 pub mod text;
 pub mod trajectory;
+pub mod ultrasonic;
