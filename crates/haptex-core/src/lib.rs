@@ -1,11 +1,12 @@
 //! haptex core: friction profiles, the electrovibration mapping of the
-//! paper (eqs. 3-9), ultrasonic friction reduction,
-//! and the file formats every haptex command shares.
+//! paper (eqs. 3-9), ultrasonic friction reduction and the combined
+//! display, and the file formats every haptex command shares.
 //!
 //! Units follow `docs/file-formats.md`: positions in mm, forces in N,
 //! voltages in V (RMS), and every field that carries a unit names it.
 
 pub mod cae;
+pub mod combined;
 pub mod database;
 pub mod electrovibration;
 pub mod io;
