@@ -47,10 +47,26 @@ impl VoltageCurve {
 
     /// Reads a voltage profile table: `x_mm` and `voltage_v` are required,
     /// other columns (`mu`, ...) are ignored. Errors name file, line, column.
+    ///
+    /// A profile designed for a combined display (an `amplitude_um`
+    /// column, `haptex voltage --display combined`) is refused: its
+    /// voltages assume the plate vibrates with those amplitudes, and the
+    /// drive signal carries the voltage alone, which would render another
+    /// friction than the one designed.
     pub fn from_table(table: &Table) -> Result<Self, ProfileError> {
         let at = |(row, field, message): (Option<usize>, &'static str, String)| {
             ProfileError::Table(table.error_at(row, Some(field), message))
         };
+        if table.column("amplitude_um").is_some() {
+            return Err(at((
+                None,
+                "amplitude_um",
+                "this profile was designed for a combined display: its voltages assume the ultrasonic amplitudes \
+                 beside them, and a drive signal carries the electrovibration voltage alone; design it with \
+                 --display electrovibration to play it"
+                    .to_string(),
+            )));
+        }
         let x_mm = table.require("x_mm")?.to_vec();
         let voltage_v = table.require("voltage_v")?.to_vec();
         validate(&x_mm, &[("voltage_v", &voltage_v)]).map_err(at)?;
@@ -150,5 +166,18 @@ mod tests {
         assert!(e.to_string().starts_with("u.csv, line 1, column 'voltage_v': required column is missing"), "{e}");
         let e = VoltageCurve::read_csv("x_mm,voltage_v\n0,1\n0,2\n".as_bytes(), "u.csv").unwrap_err();
         assert!(e.to_string().starts_with("u.csv, line 3, column 'x_mm'"), "{e}");
+    }
+
+    /// A combined display's profile is not played as if the voltage were
+    /// all of it.
+    #[test]
+    fn combined_display_profiles_are_refused() {
+        let text = "# c\nx_mm,mu,voltage_v,amplitude_um\n0,0.9,0,0.3\n1,1.1,70,0\n";
+        let e = VoltageCurve::read_csv(text.as_bytes(), "d.csv").unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("d.csv, line 2, column 'amplitude_um': this profile was designed for a combined display"),
+            "{e}"
+        );
     }
 }
