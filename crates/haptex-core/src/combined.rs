@@ -408,11 +408,12 @@ impl fmt::Display for DisplaySummary {
         if let Some(us) = &self.ultrasonic {
             writeln!(f, "ultrasonic: {}", us.model.description)?;
         }
-        writeln!(
-            f,
-            "renderable band: mu {:.4} .. {:.4} (mu_HD rho_min .. mu_HD (1 + Fe(U_max)/Fn))",
-            self.band_mu[0], self.band_mu[1]
-        )?;
+        let ends = match self.display {
+            DisplayKind::Electrovibration => "mu_HD .. mu_HD (1 + Fe(U_max)/Fn)",
+            DisplayKind::Ultrasonic => "mu_HD rho_min .. mu_HD",
+            DisplayKind::Combined => "mu_HD rho_min .. mu_HD (1 + Fe(U_max)/Fn)",
+        };
+        writeln!(f, "renderable band: mu {:.4} .. {:.4} ({ends})", self.band_mu[0], self.band_mu[1])?;
         if let Some(ev) = &self.electrovibration {
             writeln!(
                 f,
@@ -496,7 +497,12 @@ impl DisplayProfile {
                 write!(w, " (weight {})", Num(weight))?;
             }
         }
-        writeln!(w, "; felt friction mu_HD rho(a) (1 + Fe(U)/Fn) with mu_HD = {} (docs/physics.md)", Num(s.mu_hd))?;
+        let model = match s.display {
+            DisplayKind::Electrovibration => "mu_HD (1 + Fe(U)/Fn)",
+            DisplayKind::Ultrasonic => "mu_HD rho(a)",
+            DisplayKind::Combined => "mu_HD rho(a) (1 + Fe(U)/Fn)",
+        };
+        writeln!(w, "; felt friction {model} with mu_HD = {} (docs/physics.md)", Num(s.mu_hd))?;
         let mut header = String::from("x_mm,mu");
         let mut units = Vec::new();
         if let Some(ev) = &s.electrovibration {
