@@ -46,10 +46,11 @@ pub enum Strategy {
     /// U_max.
     Bias,
     /// Per point, the pair minimizing
-    /// J = (U/U_max)^2 + weight ((rho(a) - rho_bias) / (1 - rho_min))^2:
-    /// the voltage's share of its range against the ultrasonic level's
-    /// distance from the bias level. weight = 0 is `Split`; a large weight
-    /// approaches `Bias`.
+    /// J = (U/U_max)^2 + weight ((rho(a) - rho_bias) / (1 - rho_bias))^2:
+    /// the voltage's share of its range against how far the vibration has
+    /// left the bias level towards rest, both 0 to 1 (weight 1 weighs full
+    /// voltage against the vibration fully off). weight = 0 is `Split`; a
+    /// large weight approaches `Bias`.
     Weighted { weight: f64 },
 }
 
@@ -145,7 +146,8 @@ enum Rule {
     Bias {
         rho_bias: f64,
     },
-    /// `k` = 2 weight / (1 - rho_min)^2, the curvature of the ultrasonic term.
+    /// `k` = 2 weight / (1 - rho_bias)^2, the curvature of the ultrasonic
+    /// term (0 when rho_bias = 1: no bias level, the split pair).
     Weighted {
         rho_bias: f64,
         k: f64,
@@ -189,7 +191,8 @@ impl<'a> Allocator<'a> {
             (false, _) | (true, Strategy::Split) => Rule::Split,
             (true, Strategy::Bias) => Rule::Bias { rho_bias },
             (true, Strategy::Weighted { weight }) => {
-                Rule::Weighted { rho_bias, k: 2.0 * weight / ((1.0 - rho_min) * (1.0 - rho_min)) }
+                let span = 1.0 - rho_bias;
+                Rule::Weighted { rho_bias, k: if span > 0.0 { 2.0 * weight / (span * span) } else { 0.0 } }
             }
         };
         Self {

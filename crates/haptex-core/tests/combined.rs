@@ -77,11 +77,12 @@ fn any_strategy() -> impl proptest::strategy::Strategy<Value = Allocation> {
 }
 
 /// Targets spread over the band and beyond it: t in [-0.3, 1.3] maps to
-/// lo (hi/lo)^t, plus the band's ends and mu_HD exactly.
+/// lo (hi/lo)^t, plus the band's ends and mu_HD exactly (at most 999).
 fn targets(ts: &[f64], band: [f64; 2], mu_hd: f64) -> Vec<f64> {
     let [lo, hi] = band;
-    let mut mu: Vec<f64> = ts.iter().map(|t| lo * (hi / lo).powf(*t)).collect();
-    mu.extend([lo, hi, mu_hd]);
+    // Within the accepted range of mu (|mu| <= 1000).
+    let mut mu: Vec<f64> = ts.iter().map(|t| (lo * (hi / lo).powf(*t)).min(999.0)).collect();
+    mu.extend([lo, hi.min(999.0), mu_hd]);
     mu
 }
 

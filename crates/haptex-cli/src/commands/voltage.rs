@@ -97,11 +97,12 @@ pub struct VoltageArgs {
     /// mu_HD, the voltage above (least drive); bias: a constant amplitude
     /// lowering the baseline to the profile's minimum, the voltage renders
     /// the rest; weighted: per point, the least (U/U_max)^2 + weight
-    /// ((rho(a) - rho_bias)/(1 - rho_min))^2 (docs/physics.md). Default split.
+    /// ((rho(a) - rho_bias)/(1 - rho_bias))^2 (docs/physics.md). Default split.
     #[arg(long, value_enum)]
     strategy: Option<StrategyArg>,
     /// With --strategy weighted: the weight of the ultrasonic term (0 is
-    /// split, large approaches bias). Default 1.
+    /// split, large approaches bias; 1 weighs full voltage against the
+    /// vibration fully off). Default 1.
     #[arg(long, value_parser = in_range(ranges::STRATEGY_WEIGHT))]
     weight: Option<f64>,
     /// Ultrasonic display: the plate's calibration, CSV
