@@ -135,10 +135,6 @@ pub enum DisplayError {
     Limit { index: usize, x_mm: f64, mu: f64, quantity: &'static str, value: f64, limit: f64 },
 }
 
-/// Relative excess friction below which a vibrating plate's rho(a) is taken
-/// to meet the target alone: 64 ulps of 1, the rounding of rho(a(rho)).
-const ROUNDING: f64 = 64.0 * f64::EPSILON;
-
 /// The allocation rule, with its constants folded.
 #[derive(Debug, Clone, Copy)]
 enum Rule {
@@ -284,23 +280,24 @@ impl<'a> Allocator<'a> {
     #[inline]
     pub fn allocate(&self, mu: f64) -> (f64, f64) {
         let m = mu * self.inv_mu_hd;
+        let rho = self.rho_for(m);
         let (a_um, rho_a) = match self.ultrasonic {
             Some(device) => {
-                let a = device.amplitude_um(self.rho_for(m));
+                let a = device.amplitude_um(rho);
                 (a, device.relative_friction(a))
             }
             None => (0.0, 1.0),
         };
+        if rho >= m {
+            // The plate renders the target by itself (or the target is below
+            // the band): no voltage. rho(a) differs from rho by the
+            // inverse's rounding, which U = sqrt(excess/ratio) would amplify
+            // into microvolts.
+            return (0.0, a_um);
+        }
         // Eq. (8) over the reduced baseline mu_HD rho(a); with rho(a) = 1
         // it is PhysicalMapping::voltage_v to the bit.
-        let mut excess = (m / rho_a - 1.0).max(0.0);
-        if a_um > 0.0 && excess < ROUNDING {
-            // The plate renders the target alone: rho(a) differs from m/1 by
-            // the inverse's rounding, which U = sqrt(excess/ratio) would
-            // amplify into microvolts.
-            excess = 0.0;
-        }
-        let u_v = (excess * self.inv_ratio).sqrt().min(self.u_max_v);
+        let u_v = ((m / rho_a - 1.0).max(0.0) * self.inv_ratio).sqrt().min(self.u_max_v);
         (u_v, a_um)
     }
 }
