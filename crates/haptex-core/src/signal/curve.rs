@@ -24,6 +24,21 @@ pub enum Extend {
     Repeat,
 }
 
+impl Extend {
+    /// Where a curve spanning [x0, x1] is read at `x_mm`: the position to
+    /// interpolate it at (`Hold` relies on the interpolation holding its
+    /// end values), or `None` where the curve is zero (`Zero`, outside the
+    /// span).
+    pub fn position(self, x_mm: f64, x0: f64, x1: f64) -> Option<f64> {
+        match self {
+            Extend::Hold => Some(x_mm),
+            Extend::Zero if x_mm < x0 || x_mm > x1 => None,
+            Extend::Zero => Some(x_mm),
+            Extend::Repeat => Some(x0 + (x_mm - x0).rem_euclid(x1 - x0)),
+        }
+    }
+}
+
 /// A voltage curve U(x): positions in mm (strictly increasing, at least
 /// two) and the RMS voltage in V (finite, >= 0) at each. Linear between
 /// samples; outside the span as [`Extend`] says.
@@ -113,13 +128,10 @@ impl VoltageCurve {
     /// `extend` outside it.
     pub fn voltage_at(&self, x_mm: f64, extend: Extend) -> f64 {
         let (x0, x1) = self.span_mm();
-        let x = match extend {
-            Extend::Hold => x_mm,
-            Extend::Zero if x_mm < x0 || x_mm > x1 => return 0.0,
-            Extend::Zero => x_mm,
-            Extend::Repeat => x0 + (x_mm - x0).rem_euclid(x1 - x0),
-        };
-        crate::profile::interpolate(&self.x_mm, &self.voltage_v, x)
+        match extend.position(x_mm, x0, x1) {
+            Some(x) => crate::profile::interpolate(&self.x_mm, &self.voltage_v, x),
+            None => 0.0,
+        }
     }
 
     /// Whether `x_mm` is inside the span [x_first, x_last].
