@@ -366,7 +366,7 @@ impl fmt::Display for VoltageSummary {
     }
 }
 
-fn format_ranges(regions: &Regions) -> String {
+pub(crate) fn format_ranges(regions: &Regions) -> String {
     const SHOWN: usize = 5;
     if regions.is_empty() {
         return String::new();
@@ -516,16 +516,7 @@ fn map_validated(
             }
         }
         Method::Physical => {
-            let fn_used = if device.contact.is_linear() {
-                None
-            } else {
-                let f = fn_n
-                    .or(profile.mean_fn_n())
-                    .ok_or(ElectroError::NormalForceRequired { exponent: device.contact.exponent })?;
-                Some(ranges::FN_N.check(f)?)
-            };
-            // With the linear law Fe/Fn does not depend on Fn; evaluate at 1 N.
-            let ratio = device.force_ratio_per_v2(fn_used.unwrap_or(1.0));
+            let (fn_used, ratio) = force_ratio_for(profile, device, fn_n)?;
             let mapping = PhysicalMapping::new(device.mu_hd, ratio, device.u_max_v);
             mapping.fill(mu, &mut voltage_v);
             summary.mu_hd = Some(device.mu_hd);
@@ -542,6 +533,26 @@ fn map_validated(
     }
     (summary.voltage_min_v, summary.voltage_max_v) = min_max(&voltage_v);
     Ok(VoltageProfile { summary, x_mm: x.to_vec(), mu: mu.to_vec(), voltage_v })
+}
+
+/// Fe/Fn per V^2 (eq. 3 with A = k Fn^n) for mapping `profile`, and the
+/// normal force it was evaluated at: `None` with the linear law, where Fn
+/// cancels; else `fn_n`, or the profile's mean `fn_n` (paper section 2.4).
+pub(crate) fn force_ratio_for(
+    profile: &FrictionProfile,
+    device: &Device,
+    fn_n: Option<f64>,
+) -> Result<(Option<f64>, f64), ElectroError> {
+    let fn_used = if device.contact.is_linear() {
+        None
+    } else {
+        let f = fn_n
+            .or(profile.mean_fn_n())
+            .ok_or(ElectroError::NormalForceRequired { exponent: device.contact.exponent })?;
+        Some(ranges::FN_N.check(f)?)
+    };
+    // With the linear law Fe/Fn does not depend on Fn; evaluate at 1 N.
+    Ok((fn_used, device.force_ratio_per_v2(fn_used.unwrap_or(1.0))))
 }
 
 fn physical_warnings(s: &VoltageSummary) -> Vec<String> {
@@ -628,6 +639,6 @@ pub fn normalized_voltages(mu: &[f64], u_max_v: f64, out: &mut [f64]) -> bool {
     true
 }
 
-fn min_max(values: &[f64]) -> (f64, f64) {
+pub(crate) fn min_max(values: &[f64]) -> (f64, f64) {
     values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)))
 }

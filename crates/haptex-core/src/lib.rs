@@ -1,11 +1,13 @@
 //! haptex core: friction profiles, the electrovibration mapping of the
-//! paper (eqs. 3-9) and the file formats every haptex command shares.
+//! paper (eqs. 3-9), ultrasonic friction reduction and the combined
+//! display, and the file formats every haptex command shares.
 //!
 //! Units follow `docs/file-formats.md`: positions in mm, forces in N,
 //! voltages in V (RMS), and every field that carries a unit names it.
 
 pub mod buffer;
 pub mod cae;
+pub mod combined;
 pub mod database;
 pub mod electrovibration;
 pub mod io;
@@ -23,3 +25,4 @@ pub mod realtime;
 pub mod signal;
 pub mod text;
 pub mod trajectory;
+pub mod ultrasonic;

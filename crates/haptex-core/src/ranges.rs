@@ -110,6 +110,20 @@ pub const AREA_EXPONENT: Range = range("area_exponent", 1e-3, 2.0, "");
 /// friction coefficient of finger on a surface, the range of mu_HD.
 pub const FLAT_MU: Range = range("flat_mu", 1e-3, 10.0, "");
 
+// Ultrasonic friction reduction and the combined display
+// ([`crate::ultrasonic`], [`crate::combined`]).
+
+/// Peak vibration amplitude of an ultrasonic plate (calibration tables):
+/// plates vibrate a few um; 100 um is far beyond any of them.
+pub const AMPLITUDE_UM: Range = range("amplitude_um", 0.0, 100.0, "um");
+/// Highest vibration amplitude the plate and its driver can reach, a_max.
+pub const A_MAX_UM: Range = range("a_max_um", 1e-3, 100.0, "um");
+/// Relative friction rho = mu(a) / mu_HD of an ultrasonic calibration:
+/// in (0, 1], with a floor of 1e-6 so that 1/rho stays finite.
+pub const RELATIVE_FRICTION: Range = range("relative_friction", 1e-6, 1.0, "");
+/// Weight of the `weighted` allocation's ultrasonic term.
+pub const STRATEGY_WEIGHT: Range = range("weight", 0.0, 1e6, "");
+
 // Drive signal.
 
 /// Envelope slew limit.
@@ -140,6 +154,10 @@ pub const ALL: &[Range] = &[
     K_MM2_PER_N,
     AREA_EXPONENT,
     FLAT_MU,
+    AMPLITUDE_UM,
+    A_MAX_UM,
+    RELATIVE_FRICTION,
+    STRATEGY_WEIGHT,
     SLEW_V_PER_S,
     AMPLIFIER_RANGE_V,
     VOLTS_PER_FULL_SCALE,

@@ -8,22 +8,95 @@
 //! modulation due to electrostatic attraction directly from applied
 //! voltage signal ... without changing the friction properties of the
 //! surface", section 2.4).
+//!
+//! A combined display also vibrates ([`Vibration`]): the plate's amplitude
+//! follows the finger too, a(x_f(t)), and lowers the skin-display friction
+//! coefficient to mu_HD rho(a) ([`haptex_core::ultrasonic`]). The
+//! electrostatic attraction acts on top of it, so the finger feels
+//! mu_HD rho(a) (1 + Fe/Fn) (docs/physics.md, "The combined display").
 
 use haptex_core::electrovibration::LayerStack;
 use haptex_core::num::Num;
+use haptex_core::profile::interpolate;
 use haptex_core::signal::{Extend, VoltageCurve};
+use haptex_core::ultrasonic::UltrasonicDevice;
 
 use crate::contact::Electrostatic;
 
-/// The display's electrode and dielectric layers.
+/// The display's electrode and dielectric layers, and its vibration if it
+/// is a combined display.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Display {
     /// U(x) in V RMS against the finger's position on the display (mm).
     pub voltage: VoltageCurve,
-    /// The voltage where the finger is outside the curve's span.
+    /// The voltage (and amplitude) where the finger is outside the curve's span.
     pub extend: Extend,
     /// The dielectric layers of eq. (3).
     pub stack: LayerStack,
+    /// The ultrasonic vibration, if any.
+    pub vibration: Option<Vibration>,
+}
+
+/// An ultrasonic plate's vibration that follows the finger: amplitude
+/// a(x) in um (peak) against the finger's position on the display, and the
+/// plate's relative friction rho(a). The skin-display friction is then
+/// mu_HD rho(a(x_f)).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Vibration {
+    x_mm: Vec<f64>,
+    amplitude_um: Vec<f64>,
+    device: UltrasonicDevice,
+    mu_hd: f64,
+}
+
+impl Vibration {
+    /// The vibration a(x) (positions in mm strictly increasing, amplitudes
+    /// within 0 ..= the device's a_max) of a plate whose friction at rest
+    /// is `mu_hd` (the scenario's skin-display friction).
+    pub fn new(
+        x_mm: Vec<f64>,
+        amplitude_um: Vec<f64>,
+        device: UltrasonicDevice,
+        mu_hd: f64,
+    ) -> Result<Self, DisplayError> {
+        let invalid = |message: String| Err(DisplayError::Vibration(message));
+        if x_mm.len() < 2 || amplitude_um.len() != x_mm.len() {
+            return invalid(format!("{} amplitudes for {} positions (at least 2)", amplitude_um.len(), x_mm.len()));
+        }
+        if let Some(i) = x_mm.windows(2).position(|w| !(w[0].is_finite() && w[1].is_finite() && w[1] > w[0])) {
+            return invalid(format!(
+                "positions must be finite and increasing: {} follows {}",
+                Num(x_mm[i + 1]),
+                Num(x_mm[i])
+            ));
+        }
+        if let Some(i) = amplitude_um.iter().position(|a| !(0.0..=device.a_max_um()).contains(a)) {
+            return invalid(format!(
+                "{} um at x = {} mm is outside 0 .. a_max = {} um",
+                Num(amplitude_um[i]),
+                Num(x_mm[i]),
+                Num(device.a_max_um())
+            ));
+        }
+        Ok(Self { x_mm, amplitude_um, device, mu_hd })
+    }
+
+    /// The amplitude in um with the finger at `x_mm`.
+    pub fn amplitude_at(&self, x_mm: f64, extend: Extend) -> f64 {
+        let (x0, x1) = (self.x_mm[0], self.x_mm[self.x_mm.len() - 1]);
+        extend.position(x_mm, x0, x1).map_or(0.0, |x| interpolate(&self.x_mm, &self.amplitude_um, x))
+    }
+
+    /// The skin-display friction coefficient mu_HD rho(a) with the finger
+    /// at `x_mm`.
+    pub fn friction_at(&self, x_mm: f64, extend: Extend) -> f64 {
+        self.mu_hd * self.device.relative_friction(self.amplitude_at(x_mm, extend))
+    }
+
+    /// The plate's friction at rest, mu_HD.
+    pub fn mu_hd(&self) -> f64 {
+        self.mu_hd
+    }
 }
 
 /// The display is invalid.
@@ -37,6 +110,8 @@ pub enum DisplayError {
         Num(*voltage_v), Num(*x_mm), Num(*pressure_mpa), Num(MAX_PRESSURE_MPA)
     )]
     TooStrong { voltage_v: f64, x_mm: f64, pressure_mpa: f64 },
+    #[error("display vibration: {0}")]
+    Vibration(String),
 }
 
 /// Largest electrostatic traction at contact accepted (MPa): ten times the
@@ -65,5 +140,11 @@ impl Display {
     /// The electrostatic law with the finger at `x_mm`.
     pub fn electrostatic_at(&self, x_mm: f64) -> Electrostatic {
         Electrostatic::new(&self.stack, self.voltage_at(x_mm))
+    }
+
+    /// The skin-display friction coefficient with the finger at `x_mm`:
+    /// mu_HD rho(a(x)) with a vibration, else `None` (the scenario's).
+    pub fn friction_at(&self, x_mm: f64) -> Option<f64> {
+        self.vibration.as_ref().map(|v| v.friction_at(x_mm, self.extend))
     }
 }

@@ -41,13 +41,15 @@
 //! mu at U_max, nor with detail finer than the pad's pre-sliding length
 //! (about 0.03 mm on the shipped finger).
 
+use haptex_core::combined::{Channels, DisplayError as MappingError, Strategy, map_display};
 use haptex_core::electrovibration::{Device, ElectroError, Method, PhysicalMapping, map_profile};
 use haptex_core::num::Num;
 use haptex_core::profile::{FrictionProfile, ProfileError};
 use haptex_core::signal::{Extend, VoltageCurve};
+use haptex_core::ultrasonic::UltrasonicDevice;
 use serde::Serialize;
 
-use crate::display::Display;
+use crate::display::{Display, Vibration};
 use crate::scenario::{self, Progress, Scenario, SimulationError, SimulationResult};
 use crate::surface::SurfaceShape;
 
@@ -58,6 +60,8 @@ pub enum RenderError {
     Electro(#[from] ElectroError),
     #[error(transparent)]
     Profile(#[from] ProfileError),
+    #[error(transparent)]
+    Mapping(#[from] MappingError),
     #[error("the finger model on the display: {0}")]
     Simulation(#[from] SimulationError),
     #[error("{0}")]
@@ -145,6 +149,8 @@ pub struct Check {
     pub target: FrictionProfile,
     /// U(x) in V RMS at the target's positions.
     pub voltage_v: Vec<f64>,
+    /// a(x) in um (peak) at the target's positions, on a combined display.
+    pub amplitude_um: Option<Vec<f64>>,
     pub felt: Felt,
     pub metrics: CheckMetrics,
 }
@@ -189,17 +195,35 @@ pub fn feel(
     settings: &RenderSettings,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Felt, RenderError> {
+    feel_display(target, voltage_v, None, settings, progress)
+}
+
+/// [`feel`] on a display that may also vibrate: `vibration` is the
+/// amplitude in um at the target's positions and the plate, whose
+/// friction at rest is the device's mu_HD; the skin-display friction is
+/// then mu_HD rho(a(x_f)) at the finger's position.
+pub fn feel_display(
+    target: &FrictionProfile,
+    voltage_v: &[f64],
+    vibration: Option<(&[f64], &UltrasonicDevice)>,
+    settings: &RenderSettings,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Felt, RenderError> {
     validate(target, settings)?;
     let x = target.x_mm();
     let start = x[0] - settings.run_up_mm;
     // The FE's position is the slide s from 0; the target's x = start + s.
     let shifted: Vec<f64> = x.iter().map(|&x| x - start).collect();
+    let vibration = vibration
+        .map(|(a, device)| Vibration::new(shifted.clone(), a.to_vec(), device.clone(), settings.device.mu_hd))
+        .transpose()
+        .map_err(|e| RenderError::Invalid(e.to_string()))?;
     let voltage = VoltageCurve::new(shifted, voltage_v.to_vec())?;
     let mut scenario = settings.scenario.clone();
     scenario.surface = SurfaceShape::Flat;
     scenario.mu_skin = Some(settings.device.mu_hd);
     scenario.slide_mm = x[x.len() - 1] - start;
-    scenario.display = Some(Display { voltage, extend: Extend::Hold, stack: settings.device.stack });
+    scenario.display = Some(Display { voltage, extend: Extend::Hold, stack: settings.device.stack, vibration });
     let result = scenario::run(&scenario, progress)?;
     let rows: Vec<_> = result.history.iter().filter(|r| r.slide_mm > 0.0).collect();
     let slide: Vec<f64> = rows.iter().map(|r| r.slide_mm).collect();
@@ -212,18 +236,27 @@ pub fn feel(
     Ok(Felt { result, mu, k_mm2_per_n, contact_mm })
 }
 
-/// The metrics of a felt profile against its target.
+/// The metrics of a felt profile against its target, on the
+/// electrovibration display of `device` (renderable: mu_HD ..= mu at U_max).
 pub fn metrics(target: &FrictionProfile, felt: &Felt, device: &Device) -> CheckMetrics {
+    let range = renderable_range(device);
+    metrics_in_band(target, felt, [*range.start(), *range.end()])
+}
+
+/// The metrics of a felt profile against its target over a display's
+/// renderable band [low, high]: below it counts as not renderable, above
+/// it as clipped.
+pub fn metrics_in_band(target: &FrictionProfile, felt: &Felt, band: [f64; 2]) -> CheckMetrics {
     let (x, mu) = (target.x_mm(), target.mu());
     let n = x.len();
     // Trapezoid weights: the length each sample stands for.
     let weight: Vec<f64> = (0..n).map(|i| 0.5 * (x[(i + 1).min(n - 1)] - x[i.saturating_sub(1)])).collect();
-    let range = renderable_range(device);
+    let range = band[0]..=band[1];
     let inside: Vec<bool> = mu.iter().map(|m| range.contains(m)).collect();
     let span = target.span_mm().max(f64::MIN_POSITIVE);
     let fraction = |f: &dyn Fn(usize) -> bool| (0..n).filter(|&i| f(i)).map(|i| weight[i]).sum::<f64>() / span;
-    let not_renderable_fraction = fraction(&|i| mu[i] < device.mu_hd).max(0.0);
-    let clipped_fraction = fraction(&|i| mu[i] >= device.mu_hd && !inside[i]).max(0.0);
+    let not_renderable_fraction = fraction(&|i| mu[i] < band[0]).max(0.0);
+    let clipped_fraction = fraction(&|i| mu[i] > band[1]).max(0.0);
     let rms_of = |shift: f64| {
         let (mut sum, mut length) = (0.0, 0.0);
         for i in (0..n).filter(|&i| inside[i]) {
@@ -337,7 +370,28 @@ pub fn check_voltage(
     }
     let felt = feel(target, &voltage_v, settings, progress)?;
     let metrics = metrics(target, &felt, &settings.device);
-    Ok(Check { target: target.clone(), voltage_v, felt, metrics })
+    Ok(Check { target: target.clone(), voltage_v, amplitude_um: None, felt, metrics })
+}
+
+/// The check of a combined display (docs/physics.md, "The combined
+/// display"): the target allocated to (U(x), a(x)) by `strategy` on the
+/// settings' device and the plate `ultrasonic` (whose friction at rest is
+/// the device's mu_HD), the finger slid on the display vibrating and under
+/// voltage, and the metrics over the combined display's band.
+pub fn check_combined(
+    target: &FrictionProfile,
+    settings: &RenderSettings,
+    ultrasonic: &UltrasonicDevice,
+    strategy: Strategy,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Check, RenderError> {
+    let design = map_display(target, &settings.device, Channels::Combined(ultrasonic, strategy), None, None)?;
+    let (Some(voltage_v), Some(amplitude_um)) = (design.voltage_v, design.amplitude_um) else {
+        return Err(RenderError::Invalid("the combined display's design lacks a channel".into()));
+    };
+    let felt = feel_display(target, &voltage_v, Some((&amplitude_um, ultrasonic)), settings, progress)?;
+    let metrics = metrics_in_band(target, &felt, design.summary.band_mu);
+    Ok(Check { target: target.clone(), voltage_v, amplitude_um: Some(amplitude_um), felt, metrics })
 }
 
 /// The trials of a compensation.

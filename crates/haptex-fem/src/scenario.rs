@@ -185,6 +185,17 @@ impl Scenario {
                 return invalid("a display is flat: the surface must be flat when a voltage is applied".into());
             }
             display.validate().map_err(|e| SimulationError::Invalid(e.to_string()))?;
+            let mu = self.mu_skin.unwrap_or(self.model.contact.mu_skin);
+            if let Some(vibration) = &display.vibration
+                && vibration.mu_hd() != mu
+            {
+                return invalid(format!(
+                    "the vibrating display's friction at rest, mu_HD = {}, must be the skin-display friction of the \
+                     scenario, {}",
+                    Num(vibration.mu_hd()),
+                    Num(mu)
+                ));
+            }
         }
         let (x_min, x_max) = self.surface_range_mm();
         RigidSurface::template_segments(&self.surface, x_min, x_max)

@@ -618,6 +618,11 @@ pub(crate) fn advance_halving<S: Stepping>(
         let problem = &mut solver.committed().problem;
         if let Some(display) = &problem.display {
             problem.law.electrostatic = Some(display.electrostatic_at(target_slide));
+            // A vibrating plate: the friction coefficient at the finger's
+            // position, mu_HD rho(a(x_f)), like the voltage.
+            if let Some(mu) = display.friction_at(target_slide) {
+                problem.law.mu = mu;
+            }
         }
         match solver.try_step(fraction * dt_s, target_slide, target_drive) {
             Ok((its, totals)) => {

@@ -10,7 +10,12 @@ use haptex_fem::scenario::{self, HistoryRow, Loading, Scenario, SimulationResult
 use haptex_fem::surface::SurfaceShape;
 
 fn display(x_mm: Vec<f64>, voltage_v: Vec<f64>) -> Display {
-    Display { voltage: VoltageCurve::new(x_mm, voltage_v).unwrap(), extend: Extend::Hold, stack: LayerStack::PAPER }
+    Display {
+        voltage: VoltageCurve::new(x_mm, voltage_v).unwrap(),
+        extend: Extend::Hold,
+        stack: LayerStack::PAPER,
+        vibration: None,
+    }
 }
 
 fn constant(u_v: f64) -> Display {
@@ -166,4 +171,35 @@ fn a_display_must_be_flat_and_its_voltage_bounded() {
     s.display = Some(constant(5000.0));
     let e = s.validate().unwrap_err().to_string();
     assert!(e.contains("5000 V") && e.contains("MPa"), "{e}");
+}
+
+/// A combined display (issue 16): a constant vibration amplitude lowers
+/// the skin-display coefficient to mu_HD rho(a), and with a voltage the
+/// finger feels mu_HD rho(a) (1 + Fe/Fn) (Vezzoli et al. 2015), both to
+/// the solver's tolerance in steady sliding; a scenario whose friction is
+/// not the plate's mu_HD is refused.
+#[test]
+fn vibrating_display_feels_the_reduced_coefficient() {
+    use haptex_core::ultrasonic::UltrasonicDevice;
+    use haptex_fem::display::Vibration;
+    let plate = UltrasonicDevice::literature_default(None).unwrap();
+    let rho = plate.relative_friction(1.0);
+    let vibrating = |u_v: f64, mu_hd: f64| Display {
+        vibration: Some(Vibration::new(vec![0.0, 1.0], vec![1.0, 1.0], plate.clone(), mu_hd).unwrap()),
+        ..constant(u_v)
+    };
+    for u_v in [0.0, 100.0] {
+        let r = run(vibrating(u_v, 0.8), true, Loading::Load(0.0133), 0.8);
+        for row in sliding(&r) {
+            let expected = 0.8 * rho * (1.0 + row.fe_n / row.fn_n);
+            assert!((row.ft_n / row.fn_n - expected).abs() < 1e-8, "U = {u_v}: {row:?}, expected {expected}");
+        }
+    }
+    let mut s = Scenario::paper(SurfaceShape::Flat);
+    s.mu_skin = Some(0.5);
+    s.display = Some(vibrating(0.0, 0.8));
+    let e = scenario::run(&s, &mut |_| {}).unwrap_err();
+    assert!(e.to_string().contains("must be the skin-display friction"), "{e}");
+    let e = Vibration::new(vec![0.0, 1.0], vec![0.0, 3.0], plate, 0.5).unwrap_err();
+    assert!(e.to_string().contains("outside 0 .. a_max = 2.3 um"), "{e}");
 }

@@ -93,3 +93,46 @@ fn bad_settings_are_refused_before_any_run() {
     let e = render::check_voltage(&target, vec![150.0; x.len()], &s, &mut |_| {}).unwrap_err();
     assert!(e.to_string().contains("U_max"), "{e}");
 }
+
+#[test]
+fn combined_display_renders_the_whole_bump_within_the_electrovibration_tolerance() {
+    // Issue 16: the FE bump (the database's central case, around its flat
+    // value mu_skin = 0.5 = mu_HD, the paper's normalized bump) climbs to
+    // 0.65 and descends to 0.38. Electrovibration alone renders the climb
+    // (U_max raised to 200 V so that its top is inside the band) and
+    // leaves the descent at U = 0. The combined display (split, the
+    // literature ultrasonic default as the plate) renders both: nothing
+    // is outside its band, and the felt friction's RMS error over the
+    // whole bump is within the error electrovibration reaches over the
+    // climb alone (eq. 8, the same device and finger). Over the descent
+    // the felt friction is the target to rounding: the plate's part is a
+    // Coulomb coefficient on the whole contact, mu_HD rho(a(x_f)), and the
+    // pad slips throughout, so Ft/Fn is that coefficient at every step (a
+    // check of the FE's use of the model, not of the model).
+    use haptex_core::combined::Strategy;
+    use haptex_core::ultrasonic::UltrasonicDevice;
+    let target = fe_profile(SurfaceShape::Bump { x0: 5.0, width: 1.5, height: 0.3 });
+    let mut settings = settings();
+    settings.device.u_max_v = 200.0;
+    let electro = render::check(&target, &settings, &mut |_| {}).unwrap();
+    assert!(electro.metrics.not_renderable_fraction > 0.2, "{:?}", electro.metrics);
+    let plate = UltrasonicDevice::literature_default(None).unwrap();
+    let combined = render::check_combined(&target, &settings, &plate, Strategy::Split, &mut |_| {}).unwrap();
+    let m = combined.metrics;
+    assert_eq!((m.not_renderable_fraction, m.clipped_fraction), (0.0, 0.0), "{m:?}");
+    let amplitude = combined.amplitude_um.as_ref().unwrap();
+    assert!(amplitude.iter().any(|&a| a > 0.0) && amplitude.iter().all(|&a| a <= plate.a_max_um()));
+    assert!(combined.voltage_v.iter().all(|&u| (0.0..=200.0).contains(&u)));
+    // Over the descent alone (target below mu_HD: the plate's part).
+    let (mut sum, mut count) = (0.0, 0);
+    for (i, &mu) in target.mu().iter().enumerate() {
+        if mu < settings.device.mu_hd {
+            sum += (combined.felt.mu[i] - mu).powi(2);
+            count += 1;
+        }
+    }
+    let descent_rms = (sum / count as f64).sqrt();
+    eprintln!("electrovibration alone: {:?}\ncombined: {m:?}\ndescent RMS {descent_rms:.3e}", electro.metrics);
+    assert!(descent_rms < 1e-9, "descent RMS {descent_rms:e}");
+    assert!(m.rms_error <= electro.metrics.rms_error, "combined {m:?} vs electrovibration {:?}", electro.metrics);
+}

@@ -1,14 +1,17 @@
 //! `haptex voltage`: friction profile -> electrovibration voltage profile
-//! (paper eqs. 3-9).
+//! (paper eqs. 3-9), or the drive of an ultrasonic or combined display
+//! (`--display`, docs/physics.md).
 
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
+use haptex_core::combined::{Channels, Strategy, map_display};
 use haptex_core::electrovibration::{ContactArea, Device, Method, map_profile, map_profile_relative};
 use haptex_core::num::Num;
 use haptex_core::profile::FrictionProfile;
 use haptex_core::ranges;
 use haptex_core::relative::FlatMu;
+use haptex_core::ultrasonic::{Calibration, UltrasonicDevice};
 use haptex_fem::render::{self, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping};
 
 use crate::args::{LayerStackArgs, Output, in_range, read_profile};
@@ -27,12 +30,20 @@ use crate::args::{LayerStackArgs, Output, in_range, read_profile};
 /// (its "normalized output", with mu_HD = 1): the display's own friction then
 /// stands for the surface's flat friction, and eq. (8) renders what the
 /// features add to it. mu_flat is --flat-mu, else the profile's median.
+///
+/// --display ultrasonic designs the vibration amplitude of an ultrasonic
+/// friction-reduction plate instead (it renders friction below mu_HD), and
+/// --display combined both channels, the felt friction being
+/// mu_HD rho(a) (1 + Fe(U)/Fn): the output then has a column per channel
+/// in use (`voltage_v`, `amplitude_um`).
 #[derive(Debug, Args)]
 #[command(
     allow_negative_numbers = true,
     after_help = "Examples:\n  haptex voltage --profile data/examples/bump_friction.csv -o voltage.csv\n  \
                   haptex predict --surface bump --x0 5 --width 1.3 --height 0.27 | haptex voltage --profile - \
-                  --relative --flat-mu 0.5"
+                  --relative --flat-mu 0.5\n  \
+                  haptex voltage --profile data/examples/bump_friction.csv --display combined --strategy split \
+                  --ultrasonic-calibration data/examples/ultrasonic_calibration.csv -o drive.csv"
 )]
 pub struct VoltageArgs {
     /// Friction profile CSV (`x_mm,mu` or `x_mm,ft_n,fn_n`), or `-` for stdin.
@@ -77,6 +88,34 @@ pub struct VoltageArgs {
     /// Output file (default: stdout). Written atomically.
     #[arg(short, long, value_name = "OUT")]
     output: Option<PathBuf>,
+    /// The friction display: electrovibration (eq. 8, raises friction
+    /// above mu_HD), ultrasonic (vibration amplitude, lowers it below
+    /// mu_HD) or combined (both, shared by --strategy).
+    #[arg(long, value_enum, default_value_t = DisplayArg::Electrovibration)]
+    display: DisplayArg,
+    /// Combined display: how the target is shared. split: the plate below
+    /// mu_HD, the voltage above (least drive); bias: a constant amplitude
+    /// lowering the baseline to the profile's minimum, the voltage renders
+    /// the rest; weighted: per point, the least (U/U_max)^2 + weight
+    /// ((rho(a) - rho_bias)/(1 - rho_bias))^2 (docs/physics.md). Default split.
+    #[arg(long, value_enum)]
+    strategy: Option<StrategyArg>,
+    /// With --strategy weighted: the weight of the ultrasonic term (0 is
+    /// split, large approaches bias; 1 weighs full voltage against the
+    /// vibration fully off). Default 1.
+    #[arg(long, value_parser = in_range(ranges::STRATEGY_WEIGHT))]
+    weight: Option<f64>,
+    /// Ultrasonic display: the plate's calibration, CSV
+    /// `amplitude_um,relative_friction` (docs/file-formats.md). Without
+    /// it, a literature default stands in (a placeholder, said in every
+    /// output).
+    #[arg(long, value_name = "FILE")]
+    ultrasonic_calibration: Option<PathBuf>,
+    /// Ultrasonic display: the highest vibration amplitude a_max in um
+    /// (peak). Default: the calibration's last amplitude, or 2.3 um for
+    /// the literature default; never beyond either.
+    #[arg(long, value_parser = in_range(ranges::A_MAX_UM))]
+    a_max_um: Option<f64>,
     /// Compensate the voltage on the FE finger model (physical method):
     /// eq. (8)'s voltage corrected run by run until the friction the
     /// finger feels on the display matches the profile (see `haptex
@@ -101,6 +140,20 @@ enum MethodArg {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, ValueEnum)]
+enum DisplayArg {
+    Electrovibration,
+    Ultrasonic,
+    Combined,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, ValueEnum)]
+enum StrategyArg {
+    Split,
+    Bias,
+    Weighted,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, ValueEnum)]
 enum Format {
     Csv,
     Json,
@@ -118,6 +171,19 @@ pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
         MethodArg::Physical => Method::Physical,
         MethodArg::Normalized => Method::Normalized,
     };
+    if args.display != DisplayArg::Electrovibration {
+        return run_display(args, &profile, &device, method);
+    }
+    for (given, flag) in [
+        (args.strategy.is_some(), "--strategy"),
+        (args.weight.is_some(), "--weight"),
+        (args.ultrasonic_calibration.is_some(), "--ultrasonic-calibration"),
+        (args.a_max_um.is_some(), "--a-max-um"),
+    ] {
+        if given {
+            anyhow::bail!("{flag} is for an ultrasonic or combined display: give --display ultrasonic or combined");
+        }
+    }
     let mut voltage = if args.relative {
         let flat = args.flat_mu.map_or(FlatMu::Median, FlatMu::Given);
         map_profile_relative(&profile, &device, method, args.fn_n, flat)?
@@ -148,20 +214,11 @@ pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
         voltage = voltage.with_voltages(best.voltage_v.clone())?;
     }
     let output = Output::new(args.output);
-    let format = args.format.unwrap_or(match output.path().and_then(|p| p.extension()) {
-        Some(ext) if ext.eq_ignore_ascii_case("json") => Format::Json,
-        _ => Format::Csv,
-    });
-    output.write(|w| match format {
-        Format::Csv => {
-            if let Some(c) = &comment {
-                writeln!(w, "{c}")?;
-            }
-            voltage.write_csv(w)
+    write_output(&output, args.format, &voltage, |w| {
+        if let Some(c) = &comment {
+            writeln!(w, "{c}")?;
         }
-        Format::Json => {
-            serde_json::to_writer(&mut *w, &voltage).map_err(std::io::Error::from).and_then(|()| w.write_all(b"\n"))
-        }
+        voltage.write_csv(w)
     })?;
     if !args.quiet {
         eprint!("{}", voltage.summary);
@@ -173,4 +230,66 @@ pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// `--display ultrasonic` or `combined`: the drive of each channel in use.
+fn run_display(args: VoltageArgs, profile: &FrictionProfile, device: &Device, method: Method) -> anyhow::Result<()> {
+    let combined = args.display == DisplayArg::Combined;
+    if method != Method::Physical {
+        anyhow::bail!("--method normalized (eq. 9) is for the electrovibration display: drop it with --display");
+    }
+    if args.compensate {
+        anyhow::bail!("--compensate is for the electrovibration display: drop it with --display");
+    }
+    if !combined && (args.strategy.is_some() || args.weight.is_some()) {
+        anyhow::bail!("--strategy and --weight share a target between two channels: give --display combined");
+    }
+    if args.weight.is_some() && args.strategy != Some(StrategyArg::Weighted) {
+        anyhow::bail!("--weight is the weighted strategy's: give --strategy weighted");
+    }
+    let ultrasonic = match &args.ultrasonic_calibration {
+        Some(path) => UltrasonicDevice::calibrated(Calibration::read_csv_file(path)?, args.a_max_um)?,
+        None => UltrasonicDevice::literature_default(args.a_max_um)?,
+    };
+    let channels = if combined {
+        let strategy = match args.strategy.unwrap_or(StrategyArg::Split) {
+            StrategyArg::Split => Strategy::Split,
+            StrategyArg::Bias => Strategy::Bias,
+            StrategyArg::Weighted => Strategy::Weighted { weight: args.weight.unwrap_or(1.0) },
+        };
+        Channels::Combined(&ultrasonic, strategy)
+    } else {
+        Channels::Ultrasonic(&ultrasonic)
+    };
+    let flat = args.relative.then(|| args.flat_mu.map_or(FlatMu::Median, FlatMu::Given));
+    let design = map_display(profile, device, channels, args.fn_n, flat)?;
+    let output = Output::new(args.output);
+    write_output(&output, args.format, &design, |w| design.write_csv(w))?;
+    if !args.quiet {
+        eprint!("{}", design.summary);
+        if let Some(path) = output.path() {
+            eprintln!("wrote {}", path.display());
+        }
+    }
+    Ok(())
+}
+
+/// Writes `value` as CSV (by `csv`) or JSON, as --format or the output's
+/// extension says (default CSV).
+fn write_output<T: serde::Serialize>(
+    output: &Output,
+    format: Option<Format>,
+    value: &T,
+    csv: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
+) -> anyhow::Result<()> {
+    let format = format.unwrap_or(match output.path().and_then(|p| p.extension()) {
+        Some(ext) if ext.eq_ignore_ascii_case("json") => Format::Json,
+        _ => Format::Csv,
+    });
+    output.write(|w| match format {
+        Format::Csv => csv(w),
+        Format::Json => {
+            serde_json::to_writer(&mut *w, value).map_err(std::io::Error::from).and_then(|()| w.write_all(b"\n"))
+        }
+    })
 }

@@ -24,6 +24,21 @@ pub enum Extend {
     Repeat,
 }
 
+impl Extend {
+    /// Where a curve spanning [x0, x1] is read at `x_mm`: the position to
+    /// interpolate it at (`Hold` relies on the interpolation holding its
+    /// end values), or `None` where the curve is zero (`Zero`, outside the
+    /// span).
+    pub fn position(self, x_mm: f64, x0: f64, x1: f64) -> Option<f64> {
+        match self {
+            Extend::Hold => Some(x_mm),
+            Extend::Zero if x_mm < x0 || x_mm > x1 => None,
+            Extend::Zero => Some(x_mm),
+            Extend::Repeat => Some(x0 + (x_mm - x0).rem_euclid(x1 - x0)),
+        }
+    }
+}
+
 /// A voltage curve U(x): positions in mm (strictly increasing, at least
 /// two) and the RMS voltage in V (finite, >= 0) at each. Linear between
 /// samples; outside the span as [`Extend`] says.
@@ -47,10 +62,26 @@ impl VoltageCurve {
 
     /// Reads a voltage profile table: `x_mm` and `voltage_v` are required,
     /// other columns (`mu`, ...) are ignored. Errors name file, line, column.
+    ///
+    /// A profile designed for a combined display (an `amplitude_um`
+    /// column, `haptex voltage --display combined`) is refused: its
+    /// voltages assume the plate vibrates with those amplitudes, and the
+    /// drive signal carries the voltage alone, which would render another
+    /// friction than the one designed.
     pub fn from_table(table: &Table) -> Result<Self, ProfileError> {
         let at = |(row, field, message): (Option<usize>, &'static str, String)| {
             ProfileError::Table(table.error_at(row, Some(field), message))
         };
+        if table.column("amplitude_um").is_some() {
+            return Err(at((
+                None,
+                "amplitude_um",
+                "this profile was designed for a combined display: its voltages assume the ultrasonic amplitudes \
+                 beside them, and a drive signal carries the electrovibration voltage alone; design it with \
+                 --display electrovibration to play it"
+                    .to_string(),
+            )));
+        }
         let x_mm = table.require("x_mm")?.to_vec();
         let voltage_v = table.require("voltage_v")?.to_vec();
         validate(&x_mm, &[("voltage_v", &voltage_v)]).map_err(at)?;
@@ -97,13 +128,10 @@ impl VoltageCurve {
     /// `extend` outside it.
     pub fn voltage_at(&self, x_mm: f64, extend: Extend) -> f64 {
         let (x0, x1) = self.span_mm();
-        let x = match extend {
-            Extend::Hold => x_mm,
-            Extend::Zero if x_mm < x0 || x_mm > x1 => return 0.0,
-            Extend::Zero => x_mm,
-            Extend::Repeat => x0 + (x_mm - x0).rem_euclid(x1 - x0),
-        };
-        crate::profile::interpolate(&self.x_mm, &self.voltage_v, x)
+        match extend.position(x_mm, x0, x1) {
+            Some(x) => crate::profile::interpolate(&self.x_mm, &self.voltage_v, x),
+            None => 0.0,
+        }
     }
 
     /// [`VoltageCurve::voltage_at`] at every position of a path (a
@@ -193,5 +221,18 @@ mod tests {
         assert!(e.to_string().starts_with("u.csv, line 1, column 'voltage_v': required column is missing"), "{e}");
         let e = VoltageCurve::read_csv("x_mm,voltage_v\n0,1\n0,2\n".as_bytes(), "u.csv").unwrap_err();
         assert!(e.to_string().starts_with("u.csv, line 3, column 'x_mm'"), "{e}");
+    }
+
+    /// A combined display's profile is not played as if the voltage were
+    /// all of it.
+    #[test]
+    fn combined_display_profiles_are_refused() {
+        let text = "# c\nx_mm,mu,voltage_v,amplitude_um\n0,0.9,0,0.3\n1,1.1,70,0\n";
+        let e = VoltageCurve::read_csv(text.as_bytes(), "d.csv").unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("d.csv, line 2, column 'amplitude_um': this profile was designed for a combined display"),
+            "{e}"
+        );
     }
 }
