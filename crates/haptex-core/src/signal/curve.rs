@@ -143,12 +143,7 @@ impl VoltageCurve {
         let mut cursor = crate::profile::WalkingCursor::default();
         let (xs, ys) = (&self.x_mm[..], &self.voltage_v[..]);
         for (u, &x) in out.iter_mut().zip(x_mm) {
-            *u = match extend {
-                Extend::Hold => cursor.interpolate(xs, ys, x),
-                Extend::Zero if x < x0 || x > x1 => 0.0,
-                Extend::Zero => cursor.interpolate(xs, ys, x),
-                Extend::Repeat => cursor.interpolate(xs, ys, x0 + (x - x0).rem_euclid(x1 - x0)),
-            };
+            *u = extend.position(x, x0, x1).map_or(0.0, |x| cursor.interpolate(xs, ys, x));
         }
     }
 
