@@ -97,6 +97,10 @@ use crate::work;
 
 /// The default step, mm (`haptex check`'s).
 pub const DEFAULT_STEP_MM: f64 = 0.05;
+/// The default sliding velocity, mm/s (the paper's FE runs').
+pub const DEFAULT_VELOCITY_MM_S: f64 = 20.0;
+/// The compensation's default tolerance, in mu ([`Stopping::default`]'s).
+pub const DEFAULT_TOLERANCE: f64 = 1e-4;
 /// The grid of automatic steps, mm.
 const STEP_GRID_MM: f64 = 0.005;
 /// Slide before the profile's first position, mm.
@@ -233,7 +237,8 @@ impl Job {
         }
         let relative = super::voltage::relative_request(body.relative, body.flat_mu)?;
         let load = fields::check(LOAD_N_PER_MM, body.load_n_per_mm.unwrap_or(DEFAULT_LOAD_N_PER_MM), "load_n_per_mm")?;
-        let velocity = fields::check(CHECK_VELOCITY_MM_S, body.velocity_mm_s.unwrap_or(20.0), "velocity_mm_s")?;
+        let velocity =
+            fields::check(CHECK_VELOCITY_MM_S, body.velocity_mm_s.unwrap_or(DEFAULT_VELOCITY_MM_S), "velocity_mm_s")?;
         let step = body.step_mm.map(|s| fields::check(STEP_MM, s, "step_mm")).transpose()?;
         let stopping = match mode {
             Mode::Check => {
@@ -255,7 +260,7 @@ impl Job {
                         Some("max_runs"),
                     ));
                 }
-                let tolerance = fields::check(TOLERANCE, body.tolerance.unwrap_or(1e-4), "tolerance")?;
+                let tolerance = fields::check(TOLERANCE, body.tolerance.unwrap_or(DEFAULT_TOLERANCE), "tolerance")?;
                 Stopping { max_runs: max_runs as usize, tolerance, ..Stopping::default() }
             }
         };
@@ -450,6 +455,12 @@ fn slide_step(span_mm: f64, runs: usize, given: Option<f64>, budget: usize) -> R
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn defaults_are_the_libraries() {
+        assert_eq!(DEFAULT_TOLERANCE, Stopping::default().tolerance);
+        assert_eq!(MAX_RUNS as usize, Stopping::default().max_runs);
+    }
 
     /// The step: the default where it fits, else the finest grid step that
     /// fits, the given one when it fits; 413 naming the step or the profile.
