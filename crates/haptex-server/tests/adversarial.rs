@@ -531,7 +531,8 @@ fn route_cases(valid: &Valid) -> Vec<Case> {
                 ("relative", json!("true"), 400, "relative"),
                 ("profile", json!({ "x_mm": (0..4001).collect::<Vec<_>>(), "mu": vec![1; 4001] }), 413, "profile.x_mm"),
                 ("profile", json!({ "x_mm": vec![0; 100_001], "mu": vec![1; 100_001] }), 413, "profile.x_mm"),
-                ("profile", json!({ "x_mm": [0.0, 1e6], "mu": [1.1, 1.1] }), 413, "step_mm"),
+                ("profile", json!({ "x_mm": [0.0, 1e6], "mu": [1.1, 1.1] }), 413, "profile.x_mm"),
+                ("profile", json!({ "x_mm": [0.0, 900.0], "mu": [1.1, 1.1] }), 413, "step_mm"),
                 ("profile", json!({ "x_mm": [1.0, 0.0], "mu": [1.1, 1.1] }), 400, "profile.x_mm[1]"),
                 ("profile", json!({ "x_mm": [0.0, 1.0] }), 400, "profile.mu"),
             ] {

@@ -226,10 +226,10 @@ impl Job {
         if pressure_mpa.is_nan() || pressure_mpa > MAX_PRESSURE_MPA {
             return Err(ApiError::bad_request(
                 format!(
-                    "U_max = {} V attracts the skin with {} MPa at contact through these layers (eq. 3): more than \
-                     the {} MPa the finger model is for (ten times its stiffest tissue's modulus)",
+                    "U_max = {} V attracts the skin with {:.3} MPa at contact through these layers (eq. 3): more \
+                     than the {} MPa the finger model is for (ten times its stiffest tissue's modulus)",
                     Num(device.u_max_v),
-                    Num(pressure_mpa),
+                    pressure_mpa,
                     Num(MAX_PRESSURE_MPA)
                 ),
                 Some("device.u_max_v"),
@@ -418,27 +418,7 @@ fn fe_error(error: RenderError) -> ApiError {
 fn slide_step(span_mm: f64, runs: usize, given: Option<f64>, budget: usize) -> Result<f64, ApiError> {
     let slide = span_mm + RUN_UP_MM;
     let steps = |step: f64| runs as f64 * (slide / step).ceil();
-    if let Some(step) = given {
-        if steps(step) > budget as f64 {
-            return Err(ApiError::too_large(
-                format!(
-                    "{runs} FE run(s) over {} mm (the profile and a {} mm run-up) in steps of {} mm take {} slide \
-                     steps, more than the {budget} a request may take: give a step of at least {} mm, fewer runs or \
-                     a shorter profile",
-                    Num(slide),
-                    Num(RUN_UP_MM),
-                    Num(step),
-                    Num(steps(step)),
-                    Num(runs as f64 * slide / budget as f64)
-                ),
-                Some("step_mm"),
-            ));
-        }
-        return Ok(step);
-    }
-    let first = (DEFAULT_STEP_MM / STEP_GRID_MM).round() as u32;
-    let last = (STEP_MM.max / STEP_GRID_MM).round() as u32;
-    (first..=last).map(|k| f64::from(k) * STEP_GRID_MM).find(|&step| steps(step) <= budget as f64).ok_or_else(|| {
+    let too_long = || {
         ApiError::too_large(
             format!(
                 "a profile {} mm long: {runs} FE run(s) over it take more than the {budget} slide steps a request may \
@@ -449,7 +429,31 @@ fn slide_step(span_mm: f64, runs: usize, given: Option<f64>, budget: usize) -> R
             ),
             Some("profile.x_mm"),
         )
-    })
+    };
+    if steps(STEP_MM.max) > budget as f64 {
+        return Err(too_long());
+    }
+    if let Some(step) = given {
+        if steps(step) > budget as f64 {
+            return Err(ApiError::too_large(
+                format!(
+                    "{runs} FE run(s) over {} mm (the profile and a {} mm run-up) in steps of {} mm take {} slide \
+                     steps, more than the {budget} a request may take: give a step_mm of at least {} mm, or fewer \
+                     runs",
+                    Num(slide),
+                    Num(RUN_UP_MM),
+                    Num(step),
+                    Num(steps(step)),
+                    Num((runs as f64 * slide / budget as f64 / STEP_GRID_MM).ceil() * STEP_GRID_MM)
+                ),
+                Some("step_mm"),
+            ));
+        }
+        return Ok(step);
+    }
+    let first = (DEFAULT_STEP_MM / STEP_GRID_MM).round() as u32;
+    let last = (STEP_MM.max / STEP_GRID_MM).round() as u32;
+    (first..=last).map(|k| f64::from(k) * STEP_GRID_MM).find(|&step| steps(step) <= budget as f64).ok_or_else(too_long)
 }
 
 #[cfg(test)]
@@ -475,6 +479,9 @@ mod tests {
         assert_eq!(slide_step(10.0, 1, Some(0.01), 4000).unwrap(), 0.01);
         let e = slide_step(50.0, 8, Some(0.05), 4000).unwrap_err();
         assert_eq!((e.status, e.field.as_deref()), (StatusCode::PAYLOAD_TOO_LARGE, Some("step_mm")), "{e}");
+        assert!(e.message.contains("at least 0.105 mm"), "{e}");
+        let e = slide_step(300.0, 8, Some(0.1), 4000).unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("profile.x_mm"), "{e}");
         let e = slide_step(300.0, 8, None, 4000).unwrap_err();
         assert_eq!((e.status, e.field.as_deref()), (StatusCode::PAYLOAD_TOO_LARGE, Some("profile.x_mm")), "{e}");
         assert!(e.message.contains("at most 249 mm"), "{e}");
