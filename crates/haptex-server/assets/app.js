@@ -3,8 +3,10 @@
 // the device and finger constants, see the surface, friction and voltage
 // profiles (paper eqs. 8 and 9, computed by the server; optionally on the
 // profile relative to its flat-surface friction, as the paper's Fig. 2
-// does, with eq. 8 and eq. 9 side by side for templates), feel the voltage
-// along a strip, download CSV / JSON / WAV.
+// does, with eq. 8 and eq. 9 side by side for templates), check eq. 8's
+// voltage on the finger model and compensate it (the FE finger sliding on
+// the display, POST /api/check and /api/compensate, streamed with their
+// progress), feel the voltage along a strip, download CSV / JSON / WAV.
 //
 // Every number comes from the JSON API (docs/web.md); this script only
 // gathers inputs, draws and offers downloads. Sources are a registry
@@ -19,6 +21,8 @@
     templates: null,       // GET /api/templates answer, when the server has the FE database
     template: {},          // surface, x0_mm and the slider values of the template source
     fe: null,              // last POST /api/simulate answer and the template request it was for
+    check: null,           // last check or compensation: {key, mode, result} (key: the request it was for)
+    checkProgress: null,   // progress lines of the check running or last run: {lines, maxRun}
     source: null,          // id of the active source
     profile: null,         // {x_mm, mu, fn_n, label, synthetic, download()}
     profiles: {},          // last profile of each source, kept when switching
@@ -32,7 +36,7 @@
     carrierHz: 1000,
     updates: 0,
   };
-  const plots = { height: null, friction: null, voltage: null };
+  const plots = { height: null, friction: null, voltage: null, check: null, checkVoltage: null };
   window.haptex = { state, plots };
 
   // ---------------------------------------------------------------- API
@@ -62,6 +66,34 @@
 
   const postJson = (path, body) =>
     api(path, { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body) });
+
+  /**
+   * POSTs `body` and reads the answer's JSON lines (application/x-ndjson):
+   * each {progress} goes to onProgress, the {result} line is returned, an
+   * {error} line is thrown as an ApiError (a 4xx or 503 before the stream
+   * is thrown by api() as usual).
+   */
+  async function postStream(path, body, onProgress) {
+    const response = await postJson(path, body);
+    const reader = response.body.getReader();
+    const decoder = new TextDecoder();
+    let buffer = '';
+    for (;;) {
+      const { value, done } = await reader.read();
+      buffer += decoder.decode(value || new Uint8Array(), { stream: !done });
+      let end;
+      while ((end = buffer.indexOf('\n')) >= 0) {
+        const line = buffer.slice(0, end).trim();
+        buffer = buffer.slice(end + 1);
+        if (!line) continue;
+        const message = JSON.parse(line);
+        if (message.progress) onProgress(message.progress);
+        else if (message.result) return message.result;
+        else if (message.error) throw new ApiError(message.error, message.field, message.status);
+      }
+      if (done) throw new ApiError(`${path}: the answer ended without a result`, null, 0);
+    }
+  }
 
   // ------------------------------------------------------------ messages
 
@@ -356,6 +388,173 @@
       : '';
   }
 
+  // ------------------------------------- check on the finger model
+
+  /**
+   * The POST /api/check body for the profile shown: the voltage request
+   * (eq. 8: the check has a force to compare only for the physical method)
+   * and the finger's load; a template's sliding velocity, the velocity its
+   * profile was computed at.
+   */
+  function checkBody() {
+    const body = voltageBody('physical');
+    delete body.method;
+    const load = $('check-load').value.trim();
+    if (load !== '') body.load_n_per_mm = Number(load);
+    if (state.source === 'template' && state.template.velocity_mm_s) body.velocity_mm_s = state.template.velocity_mm_s;
+    return body;
+  }
+
+  /** The last check, when it is for the profile, device and load shown. */
+  function currentCheck() {
+    const c = state.check;
+    return c && state.profile && state.drawn === state.profile && c.key === JSON.stringify(checkBody()) ? c : null;
+  }
+
+  /** The compensated voltage (as POST /api/voltage answers it), when it is current. */
+  function currentCompensated() {
+    const c = currentCheck();
+    return c && c.mode === 'compensate' ? c.result.voltage : null;
+  }
+
+  /** Runs the check (`mode` check) or the compensation, showing its progress. */
+  async function runCheck(mode) {
+    if (!state.profile) throw new ApiError('no profile to check yet', null, 0);
+    const body = checkBody();
+    const key = JSON.stringify(body);
+    if (mode === 'compensate') {
+      const runs = $('check-runs').value.trim();
+      if (runs !== '') body.max_runs = Number(runs);
+    }
+    const buttons = [$('run-check'), $('run-compensate')];
+    buttons.forEach((b) => { b.disabled = true; });
+    const bar = $('check-progress');
+    bar.hidden = false;
+    bar.value = 0;
+    const progress = { lines: 0, maxRun: 0 };
+    state.checkProgress = progress;
+    const what = mode === 'compensate' ? 'Compensating' : 'Checking';
+    $('check-info').textContent = `${what} on the finger model: waiting for the FE model…`;
+    const started = performance.now();
+    try {
+      const result = await postStream(`/api/${mode}`, body, (p) => {
+        progress.lines += 1;
+        progress.maxRun = Math.max(progress.maxRun, p.run);
+        const runs = mode === 'compensate' ? p.max_runs : 1;
+        bar.value = Math.min(1, ((p.run - 1) + p.step / p.steps) / runs);
+        $('check-info').textContent = (mode === 'compensate' ? `${what}: FE run ${p.run} of at most ${p.max_runs}` : what) +
+          `, step ${p.step} of ${p.steps} (x = ${p.x_mm.toFixed(2)} mm)…`;
+      });
+      state.check = { key, mode, result };
+      const seconds = (performance.now() - started) / 1000;
+      $('check-info').textContent = `${mode === 'compensate' ? 'Compensated' : 'Checked'} in ${seconds.toFixed(2)} s ` +
+        `(${result.fe_runs} FE run${result.fe_runs > 1 ? 's' : ''}, ${result.fe_seconds.toFixed(2)} s; ` +
+        `steps of ${fmt(result.settings.step_mm)} mm).`;
+      if (mode === 'compensate') $('play-compensated').checked = true;
+      showCheck();
+      drawStrip();
+      say(`${state.profile.label}: ${mode === 'compensate' ? 'compensated' : 'checked'} on the finger model.`);
+    } catch (error) {
+      $('check-info').textContent = '';
+      throw error;
+    } finally {
+      bar.hidden = true;
+      buttons.forEach((b) => { b.disabled = false; });
+    }
+  }
+
+  /** Shows the current check (plots, metrics, playback), or hides a stale one. */
+  function showCheck() {
+    const c = currentCheck();
+    const box = $('check-results');
+    const compensated = currentCompensated();
+    $('play-compensated').disabled = !compensated;
+    if (!compensated) $('play-compensated').checked = false;
+    document.querySelector('[data-download="compensated-csv"]').disabled = !compensated;
+    $('feel-source').textContent = played() === state.voltage ? '' : ' (compensated voltage)';
+    if (!c) {
+      box.hidden = true;
+      return;
+    }
+    box.hidden = false;
+    const r = c.result;
+    const x = r.x_mm;
+    const comp = r.compensated;
+    const frictionSeries = [
+      { label: 'target', stroke: '#1f5fa8', width: 1.5 },
+      { label: 'felt, eq. (8)', stroke: '#b3261e', dash: [5, 3], width: 1.5 },
+    ];
+    const frictionData = [x, r.target_mu, r.eq8.felt_mu];
+    const voltageSeries = [{ label: 'U eq. (8)', stroke: '#b3261e', width: 1.5 }];
+    const voltageData = [x, r.eq8.voltage_v];
+    if (comp) {
+      frictionSeries.push({ label: 'felt, compensated', stroke: '#2e7d32', width: 1.5 });
+      frictionData.push(comp.felt_mu);
+      voltageSeries.push({ label: 'U compensated', stroke: '#2e7d32', width: 1.5 });
+      voltageData.push(comp.voltage_v);
+    }
+    frictionSeries.push({ label: 'mu_HD', stroke: '#888', dash: [6, 4], width: 1 });
+    frictionData.push(constant(x, r.settings.mu_hd));
+    voltageSeries.push({ label: 'U_max', stroke: '#888', dash: [6, 4], width: 1 });
+    voltageData.push(constant(x, r.voltage.summary.u_max_v));
+    plots.check = replot(plots.check, 'check-plot', frictionSeries, frictionData);
+    plots.checkVoltage = replot(plots.checkVoltage, 'check-voltage-plot', voltageSeries, voltageData);
+    showCheckMetrics(r);
+  }
+
+  /** The error figures of eq. (8) and the compensated voltage, side by side. */
+  function showCheckMetrics(r) {
+    const box = $('check-summary');
+    box.textContent = '';
+    const columns = [['eq. (8)', r.eq8.metrics]];
+    if (r.compensated) columns.push([`compensated (run ${r.compensated.trial})`, r.compensated.metrics]);
+    const rows = [
+      ['RMS error', (m) => fmt(m.rms_error)],
+      ['max error', (m) => fmt(m.max_error)],
+      ['lag', (m) => `${fmt(m.lag_mm)} mm`],
+      ['detail kept', (m) => (m.detail_retained === null ? '–' : pct(m.detail_retained))],
+      ['k_FE', (m) => `${fmt(m.k_fe_mm2_per_n)} mm²/N`],
+    ];
+    const table = document.createElement('table');
+    table.className = 'metrics';
+    table.id = 'check-metrics';
+    const head = table.insertRow();
+    ['', ...columns.map((c) => c[0])].forEach((text) => {
+      const th = document.createElement('th');
+      th.textContent = text;
+      head.append(th);
+    });
+    rows.forEach(([label, value]) => {
+      const row = table.insertRow();
+      const th = document.createElement('th');
+      th.textContent = label;
+      row.append(th);
+      columns.forEach(([, m]) => { row.insertCell().textContent = value(m); });
+    });
+    const m = r.eq8.metrics;
+    const title = document.createElement('div');
+    title.textContent = 'Felt against the target over the renderable region (mu_HD ≤ target ≤ mu at U_max):';
+    const regions = document.createElement('div');
+    regions.textContent = `not renderable (target < mu_HD = ${fmt(r.settings.mu_hd)}): ${pct(m.not_renderable_fraction)} ` +
+      `of the length · above mu at U_max: ${pct(m.clipped_fraction)} · load ${fmt(r.settings.load_n_per_mm)} N/mm, ` +
+      `${fmt(r.settings.velocity_mm_s)} mm/s`;
+    const k = document.createElement('div');
+    k.textContent = `eq. (8) used k = ${fmt(r.parameters.k_mm2_per_n)} mm²/N; the FE finger's contact length per ` +
+      `normal force is k_FE = ${fmt(m.k_fe_mm2_per_n)} mm²/N (per mm of width, docs/display.md) `;
+    const useK = document.createElement('button');
+    useK.type = 'button';
+    useK.className = 'small';
+    useK.id = 'use-fe-k';
+    useK.textContent = 'use k_FE in eq. (8)';
+    useK.addEventListener('click', () => {
+      $('param-k_mm2_per_n').value = String(Number(m.k_fe_mm2_per_n.toPrecision(4)));
+      readDevice();
+      scheduleVoltage();
+    });
+    k.append(useK);
+    box.append(title, table, regions, k);
+  }
+
   // ------------------------------------------------------------ controls
 
   /** Selects a mapping method (its radio button too). */
@@ -448,6 +647,13 @@
     $('upload').addEventListener('change', () => loadSource().catch(showError));
     $('controls').addEventListener('submit', (e) => e.preventDefault());
 
+    $('check-load').value = String(config.check.load_n_per_mm);
+    $('check-runs').value = String(config.check.max_runs);
+    $('check-load').addEventListener('input', () => { showCheck(); drawStrip(); });
+    $('run-check').addEventListener('click', () => runCheck('check').catch(showError));
+    $('run-compensate').addEventListener('click', () => runCheck('compensate').catch(showError));
+    $('play-compensated').addEventListener('change', () => { showCheck(); drawStrip(); });
+
     document.querySelectorAll('[data-download]').forEach((b) =>
       b.addEventListener('click', () => download(b.dataset.download).catch(showError)));
   }
@@ -514,6 +720,7 @@
     showSummary();
     showRelative();
     showStroke();
+    showCheck();
     drawStrip();
     state.updates += 1;
     document.body.dataset.updates = String(state.updates);
@@ -657,6 +864,7 @@
   }
 
   function clearPlots() {
+    $('check-results').hidden = true;
     ['height', 'friction', 'voltage'].forEach((k) => { if (plots[k]) { plots[k].destroy(); plots[k] = null; } });
     $('summary').textContent = '';
     state.voltage = null;
@@ -665,19 +873,32 @@
   }
 
   function resizePlots() {
-    ['height', 'friction', 'voltage'].forEach((k) => {
+    const ids = { height: 'height-plot', friction: 'friction-plot', voltage: 'voltage-plot', check: 'check-plot',
+      checkVoltage: 'check-voltage-plot' };
+    Object.entries(ids).forEach(([k, id]) => {
       const plot = plots[k];
-      if (plot) plot.setSize({ width: plotWidth(`${k}-plot`), height: plotHeight() });
+      if (plot) plot.setSize({ width: plotWidth(id), height: plotHeight() });
     });
     drawStrip();
   }
 
   // ---------------------------------------------------------- feel strip
 
-  /** U at x by linear interpolation in the voltage profile (held at the ends). */
+  /**
+   * The voltage the feel strip, the audio and the stroke WAV play: the
+   * compensated one when it is current and chosen, else the one plotted.
+   * Its samples always come with their own summary (U_max, the scale).
+   */
+  function played() {
+    const compensated = currentCompensated();
+    return compensated && $('play-compensated').checked ? compensated : state.voltage;
+  }
+
+  /** U at x by linear interpolation in the played voltage profile (held at the ends). */
   function voltageAt(x) {
-    const xs = state.voltage.x_mm;
-    const us = state.voltage.voltage_v;
+    const v = played();
+    const xs = v.x_mm;
+    const us = v.voltage_v;
     if (x <= xs[0]) return us[0];
     if (x >= xs[xs.length - 1]) return us[us.length - 1];
     let lo = 0;
@@ -704,10 +925,11 @@
     ctx.fillStyle = '#111';
     ctx.fillRect(0, 0, width, height);
     if (!state.voltage) return;
-    const xs = state.voltage.x_mm;
+    const v = played();
+    const xs = v.x_mm;
     const x0 = xs[0];
     const span = xs[xs.length - 1] - x0;
-    const uMax = state.voltage.summary.u_max_v;
+    const uMax = v.summary.u_max_v;
     for (let px = 0; px < width; px += 1) {
       const u = voltageAt(x0 + (px + 0.5) / width * span);
       const level = Math.round(30 + 225 * Math.min(1, u / uMax));
@@ -725,7 +947,8 @@
     const canvas = $('feel-strip');
     const rect = canvas.getBoundingClientRect();
     const px = Math.min(Math.max(event.clientX - rect.left, 0), rect.width);
-    const xs = state.voltage.x_mm;
+    const v = played();
+    const xs = v.x_mm;
     const x = xs[0] + px / rect.width * (xs[xs.length - 1] - xs[0]);
     const u = voltageAt(x);
     const readout = $('feel-readout');
@@ -734,7 +957,7 @@
     readout.dataset.voltageV = String(u);
     strip.marker = px;
     drawStrip();
-    audio.set(u / state.voltage.summary.u_max_v);
+    audio.set(u / v.summary.u_max_v);
   }
 
   function setupStrip() {
@@ -800,15 +1023,20 @@
         blob: new Blob([JSON.stringify(state.voltage, null, 1)], { type: 'application/json' }),
         name: 'voltage.json',
       };
+    } else if (kind === 'compensated-csv') {
+      const c = currentCheck();
+      if (!c || c.mode !== 'compensate') throw new ApiError('compensate first', null, 0);
+      file = { blob: new Blob([c.result.voltage_csv], { type: 'text/csv' }), name: 'voltage-compensated.csv' };
     } else if (kind === 'stroke-wav') {
-      const v = state.voltage;
+      const v = played();
       const body = {
         voltage: { x_mm: v.x_mm, voltage_v: v.voltage_v },
         stroke: { velocity_mm_s: state.velocity },
         carrier: { shape: 'sine', frequency_hz: state.carrierHz },
         u_max_v: v.summary.u_max_v,
       };
-      file = { blob: await (await postJson('/api/play', body)).blob(), name: `stroke-${state.velocity}mm_s.wav` };
+      const which = v === state.voltage ? '' : '-compensated';
+      file = { blob: await (await postJson('/api/play', body)).blob(), name: `stroke-${state.velocity}mm_s${which}.wav` };
     } else {
       throw new Error(`unknown download ${kind}`);
     }

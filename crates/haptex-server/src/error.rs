@@ -183,6 +183,18 @@ pub async fn json_client_errors(request: Request, next: Next) -> Response {
     rebuilt
 }
 
+/// The error for work that panicked (a bug): 500, the panic's message
+/// logged, not sent.
+pub(crate) fn panicked(panic: &(dyn Any + Send)) -> ApiError {
+    let what = panic
+        .downcast_ref::<String>()
+        .map(String::as_str)
+        .or_else(|| panic.downcast_ref::<&str>().copied())
+        .unwrap_or("unknown panic");
+    tracing::error!("handler panicked: {what}");
+    ApiError::internal("internal error (a bug: the server's log has the details)")
+}
+
 /// Fallback for unknown routes: 404 JSON naming the path.
 pub async fn not_found(uri: Uri) -> ApiError {
     ApiError::not_found(format!("no such route: {}", quote(uri.path())), Some("path"))
@@ -190,13 +202,7 @@ pub async fn not_found(uri: Uri) -> ApiError {
 
 /// Response for a handler that panicked (a bug): 500 JSON; the panic is logged.
 pub fn panic_response(panic: Box<dyn Any + Send + 'static>) -> Response {
-    let what = panic
-        .downcast_ref::<String>()
-        .map(String::as_str)
-        .or_else(|| panic.downcast_ref::<&str>().copied())
-        .unwrap_or("unknown panic");
-    tracing::error!("handler panicked: {what}");
-    let mut response = ApiError::internal("internal error (a bug: the server's log has the details)").into_response();
+    let mut response = panicked(&*panic).into_response();
     response.headers_mut().insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
     response
 }

@@ -15,6 +15,25 @@ use haptex_core::ranges::Range;
 
 use crate::error::ApiError;
 
+// The finger's settings of the check on the finger model (`POST
+// /api/check`, `POST /api/compensate`), the server's own: `haptex check`
+// leaves them to the FE model's wider limits.
+
+/// Normal load of the finger, N per mm of finger width: 0.015 to 0.75 N
+/// over a 15 mm wide pad. The FE finger's contact is then 0.4 to 6.3 mm
+/// long (measured), inside its 12 mm contact region; at 0.2 N/mm the skin
+/// reaches the region's end.
+pub const LOAD_N_PER_MM: Range = Range { name: "load_n_per_mm", min: 0.001, max: 0.05, unit: "N/mm" };
+/// Sliding velocity of the finger on the display.
+pub const CHECK_VELOCITY_MM_S: Range = Range { name: "velocity_mm_s", min: 1.0, max: 500.0, unit: "mm/s" };
+/// Slide per FE step (the voltage is sampled once per step).
+pub const STEP_MM: Range = Range { name: "step_mm", min: 0.005, max: 0.5, unit: "mm" };
+/// The compensation's stopping tolerance on the RMS error, in units of mu.
+pub const TOLERANCE: Range = Range { name: "tolerance", min: 0.0, max: 1.0, unit: "" };
+/// Most FE runs of a compensation, eq. (8)'s included (issue 15's budget;
+/// on the templates the compensation converges in 2 to 4).
+pub const MAX_RUNS: u32 = 8;
+
 /// Checks a request value against its range; the error names `field`
 /// (a JSON path such as `stroke.velocity_mm_s`) and quotes the value.
 pub fn check(range: Range, value: f64, field: &str) -> Result<f64, ApiError> {

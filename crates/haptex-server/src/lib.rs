@@ -12,7 +12,7 @@
 //! - [`routes`]: the route table (method, path, handler), the one list the
 //!   router is built from and the OpenAPI test checks;
 //! - `api/*`: one module per resource (health, config, templates, predict,
-//!   simulate, voltage, materials, play, profile, openapi);
+//!   simulate, check, voltage, materials, play, profile, openapi);
 //! - [`error`]: [`ApiError`] and the middleware that turns every 4xx into
 //!   the JSON error `{"error": message, "field": name}`;
 //! - [`params`]: device parameters with the paper's defaults and their
@@ -27,7 +27,9 @@
 //! - hardening: [`guard`] (head sizes, allowed hosts), `work` (CPU work
 //!   off the async workers, heavy requests in bounded slots), [`answers`]
 //!   (the memory of unread answers), `connection` (write timeout, hyper's
-//!   own answers made like ours), `access_log`.
+//!   own answers made like ours), `access_log`;
+//! - `lines`: answers streamed as JSON lines (the progress of the check on
+//!   the finger model, then its result).
 
 mod access_log;
 pub mod answers;
@@ -38,6 +40,7 @@ pub mod error;
 pub mod fields;
 pub mod guard;
 pub mod input;
+mod lines;
 pub mod params;
 pub mod routes;
 pub mod state;

@@ -42,6 +42,8 @@ pub fn table() -> Vec<Endpoint> {
         endpoint(Method::GET, "/api/templates", api::templates::get),
         endpoint(Method::POST, "/api/predict", api::predict::post),
         endpoint(Method::POST, "/api/simulate", api::simulate::post),
+        endpoint(Method::POST, "/api/check", api::check::check),
+        endpoint(Method::POST, "/api/compensate", api::check::compensate),
         endpoint(Method::POST, "/api/voltage", api::voltage::post),
         endpoint(Method::POST, "/api/profile", api::profile::post),
         endpoint(Method::GET, "/api/materials", api::materials::list),

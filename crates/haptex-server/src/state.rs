@@ -74,6 +74,15 @@ pub struct Limits {
     /// answers 503.
     #[serde(serialize_with = "seconds")]
     pub simulation_wait: Duration,
+    /// Most points of a profile checked on the finger model (`POST
+    /// /api/check`, `/api/compensate`): the check's metrics average each
+    /// point over the points within three contact lengths of it, up to n^2
+    /// work per FE run.
+    pub max_check_points: usize,
+    /// Most FE slide steps a check or compensation may take, all its runs
+    /// together (about 1.5 ms of one core each with the default mesh): the
+    /// bound on the time it holds an FE slot.
+    pub max_check_steps: usize,
 }
 
 impl Limits {
@@ -82,7 +91,8 @@ impl Limits {
     /// 100 header fields, 10 s per request, 10 s for headers, 10 s without
     /// write progress, bodies over 64 KiB two at a time, 64 MiB of unsent
     /// answers, 2 renders at once, 1 FE simulation at once (the other core
-    /// serves everything else) with a wait of up to 5 s for it.
+    /// serves everything else) with a wait of up to 5 s for it; checks on
+    /// the finger model of up to 4000 points and 4000 FE steps (about 6 s).
     pub const DEFAULT: Self = Self {
         max_body_bytes: 1 << 20,
         max_points: 100_000,
@@ -101,6 +111,8 @@ impl Limits {
         concurrent_renders: 2,
         concurrent_simulations: 1,
         simulation_wait: Duration::from_secs(5),
+        max_check_points: 4000,
+        max_check_steps: 4000,
     };
 
     /// The read buffer hyper may fill with one request head: room for the

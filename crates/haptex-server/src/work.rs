@@ -38,6 +38,26 @@ where
     blocking(permit, work).await
 }
 
+/// Waits up to [`Limits::simulation_wait`] for one of the
+/// [`Limits::concurrent_simulations`] FE slots (the FE model on demand,
+/// the check on the finger model and the compensation share them: each
+/// holds a core for its run); 503 when none frees up in time.
+///
+/// [`Limits::simulation_wait`]: crate::Limits::simulation_wait
+/// [`Limits::concurrent_simulations`]: crate::Limits::concurrent_simulations
+pub(crate) async fn fe_slot(state: &AppState) -> Result<OwnedSemaphorePermit, ApiError> {
+    let limits = state.limits();
+    tokio::time::timeout(limits.simulation_wait, Arc::clone(state.simulations()).acquire_owned())
+        .await
+        .map_err(|_| {
+            ApiError::unavailable(format!(
+                "the server is busy with other FE simulations (at most {} at once); try again in a few seconds",
+                limits.concurrent_simulations
+            ))
+        })?
+        .map_err(|_| ApiError::unavailable("the server is shutting down"))
+}
+
 /// Waits for a slot of `slots`.
 pub(crate) async fn slot(slots: &Arc<Semaphore>) -> Result<OwnedSemaphorePermit, ApiError> {
     Arc::clone(slots).acquire_owned().await.map_err(|_| ApiError::unavailable("the server is shutting down"))

@@ -152,6 +152,8 @@ fn hostile(n: usize) -> String {
 fn valid_requests() -> Vec<Valid> {
     let json_ct = Some("application/json");
     let profile = json!({ "x_mm": [0.0, 1.0, 2.0], "mu": [1.0, 1.2, 1.1] });
+    // A check of 3 mm of slide in 0.1 mm steps: 30 FE steps a run.
+    let check_profile = json!({ "x_mm": [0.0, 1.0, 2.0], "mu": [1.05, 1.1, 1.05] });
     vec![
         Valid { route: ("GET", "/"), target: "/", content_type: None, body: vec![] },
         Valid { route: ("GET", "/static/{*path}"), target: "/static/app.js", content_type: None, body: vec![] },
@@ -172,6 +174,20 @@ fn valid_requests() -> Vec<Valid> {
             target: "/api/simulate",
             content_type: json_ct,
             body: json!({ "surface": "bump", "width_mm": 1.5, "height_mm": 0.3, "velocity_mm_s": 20 })
+                .to_string()
+                .into_bytes(),
+        },
+        Valid {
+            route: ("POST", "/api/check"),
+            target: "/api/check",
+            content_type: json_ct,
+            body: json!({ "profile": check_profile, "load_n_per_mm": 0.0133, "step_mm": 0.1 }).to_string().into_bytes(),
+        },
+        Valid {
+            route: ("POST", "/api/compensate"),
+            target: "/api/compensate",
+            content_type: json_ct,
+            body: json!({ "profile": check_profile, "load_n_per_mm": 0.0133, "step_mm": 0.1, "max_runs": 2 })
                 .to_string()
                 .into_bytes(),
         },
@@ -481,6 +497,55 @@ fn route_cases(valid: &Valid) -> Vec<Case> {
                     cases.push(csv(format!("CSV with relative={text}"), target, 400, "relative"));
                 }
             }
+        }
+        "/api/check" | "/api/compensate" => {
+            let compensate = valid.route.1 == "/api/compensate";
+            let mut numbers = vec![
+                ("load_n_per_mm", 0.001, 0.05),
+                ("velocity_mm_s", 1.0, 500.0),
+                ("step_mm", 0.005, 0.5),
+                ("profile.x_mm[1]", -1e6, 1e6),
+                ("profile.mu[1]", -1e3, 1e3),
+            ];
+            if compensate {
+                numbers.push(("tolerance", 0.0, 1.0));
+            }
+            for (path, min, max) in numbers {
+                number_cases(valid, &body, path, min, max, &mut cases);
+            }
+            for spec in DEVICE_PARAMS {
+                let field = format!("device.{}", spec.name);
+                let body = set(&body, "device", json!({}));
+                number_cases(valid, &body, &field, spec.min, spec.max, &mut cases);
+            }
+            for (path, value, status, field) in [
+                ("load_n_per_mm", json!(0.0), 400, "load_n_per_mm"),
+                ("load_n_per_mm", json!(0.06), 400, "load_n_per_mm"),
+                ("step_mm", json!(0.001), 400, "step_mm"),
+                ("velocity_mm_s", json!(1e4), 400, "velocity_mm_s"),
+                ("method", json!("normalized"), 400, "method"),
+                ("method", json!(hostile(1000)), 400, "method"),
+                ("device", json!({ "area_exponent": 0.5 }), 400, "device.area_exponent"),
+                ("device", json!({ "u_max_v": 5000 }), 400, "device.u_max_v"),
+                ("flat_mu", json!(0.5), 400, "flat_mu"),
+                ("relative", json!("true"), 400, "relative"),
+                ("profile", json!({ "x_mm": (0..4001).collect::<Vec<_>>(), "mu": vec![1; 4001] }), 413, "profile.x_mm"),
+                ("profile", json!({ "x_mm": vec![0; 100_001], "mu": vec![1; 100_001] }), 413, "profile.x_mm"),
+                ("profile", json!({ "x_mm": [0.0, 1e6], "mu": [1.1, 1.1] }), 413, "profile.x_mm"),
+                ("profile", json!({ "x_mm": [0.0, 900.0], "mu": [1.1, 1.1] }), 413, "step_mm"),
+                ("profile", json!({ "x_mm": [1.0, 0.0], "mu": [1.1, 1.1] }), 400, "profile.x_mm[1]"),
+                ("profile", json!({ "x_mm": [0.0, 1.0] }), 400, "profile.mu"),
+            ] {
+                cases.push(valid.json(format!("{path} = {value:.40}"), &set(&body, path, value), status, field));
+            }
+            // Out of 1 ..= 8 on a compensation; given at all on a check.
+            for value in [json!(0), json!(9), json!(1.5), json!(1e308), json!(-1), json!("2")] {
+                cases.push(valid.json(format!("max_runs = {value}"), &set(&body, "max_runs", value), 400, "max_runs"));
+            }
+            if !compensate {
+                cases.push(valid.json("tolerance on a check", &set(&body, "tolerance", json!(1e-3)), 400, "tolerance"));
+            }
+            cases.push(valid.target("format=csv", format!("{}?format=csv", valid.target), 400, "format"));
         }
         "/api/play" => {
             for (path, min, max) in [

@@ -20,7 +20,7 @@ use haptex_core::library::Library;
 use haptex_core::profile::FrictionProfile;
 use haptex_core::ranges;
 use haptex_core::relative::FlatMu;
-use haptex_server::{AppState, Limits, app, params::DEVICE_PARAMS, routes};
+use haptex_server::{AppState, Limits, app, fields, params::DEVICE_PARAMS, routes};
 use serde_json::{Value, json};
 
 mod common;
@@ -168,6 +168,11 @@ async fn openapi_describes_every_route_and_the_parameter_ranges() {
         let schema = if path.ends_with("[]") { &schema["items"] } else { schema };
         assert_eq!(range(schema), expect(r), "/api/play {path}");
     }
+    let check = &doc["components"]["schemas"]["CheckRequest"]["properties"];
+    for r in [fields::LOAD_N_PER_MM, fields::CHECK_VELOCITY_MM_S, fields::STEP_MM, fields::TOLERANCE] {
+        assert_eq!(range(&check[r.name]), expect(r), "CheckRequest.{}", r.name);
+    }
+    assert_eq!(check["max_runs"]["maximum"].as_u64(), Some(u64::from(fields::MAX_RUNS)));
     let flat_mu = &doc["components"]["schemas"]["FlatMu"];
     assert_eq!(range(flat_mu), expect(ranges::FLAT_MU), "FlatMu");
     let u_max = DEVICE_PARAMS.iter().find(|p| p.name == "u_max_v").unwrap();
@@ -1157,4 +1162,360 @@ async fn simulate_with_another_finger_models_database_is_unavailable() {
     send_to(router.clone(), request("/api/predict")).await.ok();
     let refused = send_to(router, request("/api/simulate")).await.error(StatusCode::NOT_FOUND, None);
     assert!(refused["error"].as_str().unwrap().contains("another finger model"), "{refused}");
+}
+
+// ------------------------------------------- check on the finger model
+
+/// The lines of a streamed (NDJSON) answer.
+fn json_lines(answer: &Answer) -> Vec<Value> {
+    assert!(answer.content_type().starts_with("application/x-ndjson"), "{}", answer.content_type());
+    let text = answer.text();
+    assert!(text.ends_with('\n'), "a stream ends with a complete line: {text:.300}");
+    text.lines().map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("line not JSON ({e}): {l:.300}"))).collect()
+}
+
+/// The result of a streamed answer (its last line), after checking that
+/// every line before it is progress of runs 1 ..= `runs`, in order.
+#[track_caller]
+fn stream_result(answer: &Answer, runs: usize) -> Value {
+    answer.ok();
+    let mut lines = json_lines(answer);
+    let last = lines.pop().unwrap();
+    assert!(last["result"].is_object(), "the last line is the result: {last:.500}");
+    assert!(!lines.is_empty(), "progress before the result");
+    let seen: Vec<u64> = lines.iter().map(|l| l["progress"]["run"].as_u64().unwrap()).collect();
+    assert!(seen.windows(2).all(|w| w[0] <= w[1]), "runs in order: {seen:?}");
+    assert_eq!((seen[0], *seen.last().unwrap()), (1, runs as u64), "{seen:?}");
+    for line in &lines {
+        let p = &line["progress"];
+        assert!(p["step"].as_u64().unwrap() <= p["steps"].as_u64().unwrap(), "{p}");
+    }
+    last["result"].clone()
+}
+
+/// The FE database's bump at its central case (r_w 1.5, r_h 0.3 mm,
+/// 20 mm/s) at x0 = 5 mm: an FE profile around mu_skin = 0.5.
+fn fe_bump() -> FrictionProfile {
+    let model = TemplateModel::load(&shipped_db(), Template::Bump).unwrap();
+    let row = model.exact_row(&[1.5, 0.3, 20.0]).unwrap();
+    let x: Vec<f64> = model.positions().iter().map(|xi| 5.0 + xi).collect();
+    FrictionProfile::new(x, model.cae.matrix().output_row(row).to_vec()).unwrap()
+}
+
+/// The library's settings for a check with `device` (the server's
+/// defaults: load 0.0133 N/mm, 20 mm/s, 0.05 mm steps, 1 mm run-up).
+fn render_settings(device: Device) -> haptex_fem::render::RenderSettings {
+    let mut settings = haptex_fem::render::RenderSettings::new(device.mu_hd, 0.0133);
+    settings.device = device;
+    settings.scenario.step_mm = 0.05;
+    settings
+}
+
+fn assert_trial_equals(answer: &Value, check: &haptex_fem::render::Check, what: &str) {
+    assert_eq!(numbers(&answer["voltage_v"]), check.voltage_v, "{what}: voltage");
+    assert_eq!(numbers(&answer["felt_mu"]), check.felt.mu, "{what}: felt friction");
+    assert_eq!(answer["metrics"], serde_json::to_value(check.metrics).unwrap(), "{what}: metrics");
+}
+
+/// The check of the database bump, relative to its flat value 0.5 with
+/// the paper's display (mu_HD = 1, the GUI's template case), is the
+/// library's check of the same relative target bit for bit (the FE model
+/// is deterministic): eq. (8)'s voltage, the felt friction and every
+/// error figure. The voltage offered is eq. (8)'s, within U_max, and its
+/// CSV reads back as the same numbers.
+#[tokio::test]
+async fn check_reproduces_the_libraries_fe_check_of_the_same_target() {
+    let bump = fe_bump();
+    let body = json!({ "profile": profile_json(bump.x_mm(), bump.mu()), "relative": true, "flat_mu": 0.5 });
+    let result = stream_result(&post_json("/api/check", &body).await, 1);
+    let target_mu: Vec<f64> = bump.mu().iter().map(|m| m / 0.5 * 1.0).collect();
+    assert_eq!(numbers(&result["target_mu"]), target_mu);
+    let target = FrictionProfile::new(bump.x_mm().to_vec(), target_mu).unwrap();
+    let check = haptex_fem::render::check(&target, &render_settings(Device::PAPER), &mut |_| {}).unwrap();
+    assert_trial_equals(&result["eq8"], &check, "eq. (8)");
+    // Numbers that could be wrong in other ways too: the profile reaches
+    // U_max (the bump is clipped there), and the finger feels eq. (8)'s
+    // voltage within a few percent of the target's relief.
+    let m = &check.metrics;
+    eprintln!("check of the relative bump: {m:?}");
+    assert!(m.clipped_fraction > 0.0 && m.rms_error > 1e-3 && m.rms_error < 0.05, "{m:?}");
+    assert_eq!(result["compensated"], Value::Null);
+    assert_eq!((result["fe_runs"].as_u64(), result["settings"]["step_mm"].as_f64()), (Some(1), Some(0.05)));
+    let voltage = &result["voltage"];
+    assert_eq!(numbers(&voltage["voltage_v"]), check.voltage_v);
+    assert_eq!(voltage["summary"]["u_max_v"], 100.0);
+    assert!(check.voltage_v.iter().all(|u| (0.0..=100.0).contains(u)));
+    let csv = result["voltage_csv"].as_str().unwrap();
+    assert!(csv.starts_with("# haptex check on the finger model:") && csv.contains("voltage eq. (8);"), "{csv:.400}");
+    let table = Table::read(csv.as_bytes(), "voltage_csv").unwrap();
+    assert_eq!(table.column("voltage_v").unwrap(), check.voltage_v.as_slice());
+    assert_eq!(table.column("mu").unwrap(), target.mu());
+}
+
+/// A target below mu_HD everywhere: eq. (8) gives 0 V, the finger on the
+/// display feels mu_HD (Coulomb, no attraction: docs/display.md's U = 0
+/// case, 1e-8), the whole length is reported not renderable and there is
+/// nothing to compare (RMS error 0).
+#[tokio::test]
+async fn check_of_a_target_below_mu_hd_feels_mu_hd_at_zero_volts() {
+    let x: Vec<f64> = (0..=40).map(|i| 0.1 * f64::from(i)).collect();
+    let body = json!({ "profile": profile_json(&x, &vec![0.4; x.len()]), "device": { "mu_hd": 0.6 } });
+    let result = stream_result(&post_json("/api/check", &body).await, 1);
+    let eq8 = &result["eq8"];
+    assert!(numbers(&eq8["voltage_v"]).iter().all(|&u| u == 0.0));
+    for felt in numbers(&eq8["felt_mu"]) {
+        assert!((felt - 0.6).abs() < 1e-8, "felt {felt}");
+    }
+    let not_renderable = eq8["metrics"]["not_renderable_fraction"].as_f64().unwrap();
+    assert!((not_renderable - 1.0).abs() < 1e-12, "{not_renderable}");
+    assert_eq!(eq8["metrics"]["rms_error"], 0.0);
+}
+
+/// The compensation of the database bump with mu_HD = 0.5 (the FE
+/// profile as it is, `haptex check --compensate`'s default) is the
+/// library's compensation bit for bit, cuts eq. (8)'s error by at least 3
+/// (issue 15's acceptance; docs/display.md measures 200), reports its
+/// runs as it goes, and offers the best trial's voltage, within U_max, as
+/// JSON and as a CSV stating the achieved error.
+#[tokio::test]
+async fn compensate_is_the_libraries_compensation_and_offers_its_voltage() {
+    let bump = fe_bump();
+    let body = json!({ "profile": profile_json(bump.x_mm(), bump.mu()), "device": { "mu_hd": 0.5 } });
+    let device = Device { mu_hd: 0.5, ..Device::PAPER };
+    let expected = haptex_fem::render::compensate(
+        &bump,
+        &render_settings(device),
+        haptex_fem::render::Stopping::default(),
+        &mut |_, _| {},
+    )
+    .unwrap();
+    let answer = post_json("/api/compensate", &body).await;
+    let result = stream_result(&answer, expected.trials.len());
+    assert_eq!(result["fe_runs"].as_u64(), Some(expected.trials.len() as u64));
+    for (i, (trial, check)) in result["trials"].as_array().unwrap().iter().zip(&expected.trials).enumerate() {
+        assert_eq!(trial["metrics"], serde_json::to_value(check.metrics).unwrap(), "trial {}", i + 1);
+    }
+    assert_trial_equals(&result["eq8"], &expected.trials[0], "eq. (8)");
+    let compensated = &result["compensated"];
+    assert_trial_equals(compensated, expected.best(), "compensated");
+    assert_eq!(compensated["trial"].as_u64(), Some(expected.best as u64 + 1));
+    let (eq8, best) = (expected.trials[0].metrics.rms_error, expected.best().metrics.rms_error);
+    eprintln!("compensation of the bump: RMS error {eq8:.3e} -> {best:.3e} in {} runs", expected.trials.len());
+    assert!(best <= eq8 / 3.0, "eq. (8) {eq8:.3e}, compensated {best:.3e}");
+    let offered = numbers(&result["voltage"]["voltage_v"]);
+    assert_eq!(offered, expected.best().voltage_v);
+    assert!(offered.iter().all(|u| (0.0..=100.0).contains(u)));
+    assert_eq!(result["voltage"]["summary"]["voltage_max_v"].as_f64(), offered.iter().copied().reduce(f64::max));
+    let csv = result["voltage_csv"].as_str().unwrap();
+    let first = csv.lines().next().unwrap();
+    assert!(
+        first.contains(&format!("compensated (trial {} of {} FE runs)", expected.best + 1, expected.trials.len()))
+            && first.contains(&format!("RMS error {best:.3e}")),
+        "{first}"
+    );
+    let table = Table::read(csv.as_bytes(), "voltage_csv").unwrap();
+    assert_eq!(table.column("voltage_v").unwrap(), offered.as_slice());
+}
+
+/// Every voltage of a compensation stays within the U_max asked for,
+/// where the correction pushes against it (a target above mu at U_max,
+/// 0.581 at 90 V, over a third of its length), and the file states that
+/// U_max.
+#[tokio::test]
+async fn compensated_voltages_stay_within_a_low_u_max() {
+    let x: Vec<f64> = (0..=30).map(|i| 0.1 * f64::from(i)).collect();
+    let mu: Vec<f64> = x.iter().map(|x| if (1.0..2.0).contains(x) { 0.8 } else { 0.55 }).collect();
+    let body = json!({ "profile": profile_json(&x, &mu), "device": { "mu_hd": 0.5, "u_max_v": 90 }, "max_runs": 3 });
+    let result = stream_result(&post_json("/api/compensate", &body).await, 3);
+    for trial in [&result["eq8"], &result["compensated"]] {
+        let u = numbers(&trial["voltage_v"]);
+        assert!(u.iter().all(|u| (0.0..=90.0).contains(u)), "{u:?}");
+        assert!(u.contains(&90.0), "clipped at U_max somewhere: {u:?}");
+    }
+    assert!(result["eq8"]["metrics"]["clipped_fraction"].as_f64().unwrap() > 0.3);
+    assert_eq!(result["voltage"]["summary"]["u_max_v"], 90.0);
+    let csv = result["voltage_csv"].as_str().unwrap();
+    let table = Table::read(csv.as_bytes(), "voltage_csv").unwrap();
+    assert!(table.column("voltage_v").unwrap().iter().all(|u| (0.0..=90.0).contains(u)));
+}
+
+/// Each bad field is refused with its 4xx naming it, before the FE slot
+/// is asked for: the server here has no FE slot at all (a request that
+/// got that far would be 503).
+#[tokio::test]
+async fn check_bad_input_is_refused_naming_the_field_before_any_fe_run() {
+    let limits = Limits { concurrent_simulations: 0, simulation_wait: Duration::ZERO, ..Limits::DEFAULT };
+    let router = app(AppState::new(None, limits).unwrap());
+    let x: Vec<f64> = (0..=20).map(|i| 0.1 * f64::from(i)).collect();
+    let ok = json!({ "profile": profile_json(&x, &vec![1.1; x.len()]) });
+    let with = |path: &str, value: Value| {
+        let mut body = ok.clone();
+        match path.split_once('.') {
+            Some((outer, inner)) => body[outer] = json!({ inner: value }),
+            None => body[path] = value,
+        }
+        body
+    };
+    let long = |span: f64| {
+        let x: Vec<f64> = (0..=100).map(|i| span * f64::from(i) / 100.0).collect();
+        json!({ "profile": profile_json(&x, &vec![1.1; x.len()]) })
+    };
+    let many: Vec<f64> = (0..4001).map(f64::from).collect();
+    let mut cases = vec![];
+    for route in ["/api/check", "/api/compensate"] {
+        for (body, status, field) in [
+            (with("load_n_per_mm", json!(0)), 400, "load_n_per_mm"),
+            (with("load_n_per_mm", json!(0.0009)), 400, "load_n_per_mm"),
+            (with("load_n_per_mm", json!(0.06)), 400, "load_n_per_mm"),
+            (with("load_n_per_mm", json!(-1)), 400, "load_n_per_mm"),
+            (with("load_n_per_mm", json!("0.01")), 400, "load_n_per_mm"),
+            (with("velocity_mm_s", json!(0.5)), 400, "velocity_mm_s"),
+            (with("velocity_mm_s", json!(600)), 400, "velocity_mm_s"),
+            (with("step_mm", json!(0.001)), 400, "step_mm"),
+            (with("step_mm", json!(1)), 400, "step_mm"),
+            (with("method", json!("normalized")), 400, "method"),
+            (with("method", json!("eq10")), 400, "method"),
+            (with("device.area_exponent", json!(0.5)), 400, "device.area_exponent"),
+            // An attraction above the finger model's 1 MPa at contact: 5 kV
+            // with the paper's layers, 100 V across 2 nm of layers.
+            (with("device.u_max_v", json!(5000)), 400, "device.u_max_v"),
+            (with("device", json!({ "d_sc_mm": 1e-6, "d_i_mm": 1e-6, "eps_i": 1 })), 400, "device.u_max_v"),
+            (with("device.u_max_v", json!(1e308)), 400, "device.u_max_v"),
+            (with("flat_mu", json!(0.5)), 400, "flat_mu"),
+            (with("zz_unknown", json!(1)), 400, "zz_unknown"),
+            (json!({ "profile": profile_json(&many, &vec![1.1; many.len()]) }), 413, "profile.x_mm"),
+            (json!({ "profile": profile_json(&[0.0, 1.0], &[1.1, 1e308]) }), 400, "profile.mu[1]"),
+            // 101 mm in 0.01 mm steps: 10 100 steps a run, over the budget.
+            (set_field(long(100.0), "step_mm", json!(0.01)), 413, "step_mm"),
+            // 3000 mm: over the budget even at the coarsest step.
+            (long(3000.0), 413, "profile.x_mm"),
+        ] {
+            cases.push((route, body, status, field));
+        }
+    }
+    for (body, field) in [(with("max_runs", json!(2)), "max_runs"), (with("tolerance", json!(1e-3)), "tolerance")] {
+        cases.push(("/api/check", body, 400, field));
+    }
+    for (body, field) in [
+        (with("max_runs", json!(0)), "max_runs"),
+        (with("max_runs", json!(9)), "max_runs"),
+        (with("max_runs", json!(1.5)), "max_runs"),
+        (with("max_runs", json!(-1)), "max_runs"),
+        (with("tolerance", json!(-0.1)), "tolerance"),
+        (with("tolerance", json!(2)), "tolerance"),
+        // 101 mm in 0.05 mm steps: 2020 steps, within the budget for one
+        // run, not for 8.
+        (set_field(long(100.0), "step_mm", json!(0.05)), "step_mm"),
+    ] {
+        let status = if field == "step_mm" { 413 } else { 400 };
+        cases.push(("/api/compensate", body, status, field));
+    }
+    for (route, body, status, field) in cases {
+        let request = Request::post(route)
+            .header(header::CONTENT_TYPE, "application/json")
+            .body(Body::from(body.to_string()))
+            .unwrap();
+        let status = StatusCode::from_u16(status).unwrap();
+        let answer = send_to(router.clone(), request).await;
+        assert_eq!(answer.status, status, "{route} {body:.200}: {}", answer.text());
+        answer.error(status, Some(field));
+    }
+    for route in ["/api/check", "/api/compensate"] {
+        let csv = Request::post(route).header(header::CONTENT_TYPE, "text/csv").body(Body::from("x_mm,mu\n0,1\n1,1\n"));
+        send_to(router.clone(), csv.unwrap()).await.error(StatusCode::UNSUPPORTED_MEDIA_TYPE, Some("content-type"));
+        let query = Request::post(format!("{route}?format=csv"))
+            .header(header::CONTENT_TYPE, "application/json")
+            .body(Body::from(ok.to_string()));
+        send_to(router.clone(), query.unwrap()).await.error(StatusCode::BAD_REQUEST, Some("format"));
+        // A valid request gets as far as the FE slot: none here.
+        let valid =
+            Request::post(route).header(header::CONTENT_TYPE, "application/json").body(Body::from(ok.to_string()));
+        send_to(router.clone(), valid.unwrap()).await.error(StatusCode::SERVICE_UNAVAILABLE, None);
+    }
+}
+
+fn set_field(mut body: Value, name: &str, value: Value) -> Value {
+    body[name] = value;
+    body
+}
+
+/// The next line of a streamed answer's body (None at its end).
+async fn next_line(body: &mut Body, pending: &mut Vec<u8>) -> Option<Value> {
+    use hyper::body::Body as _;
+    loop {
+        if let Some(end) = pending.iter().position(|&b| b == b'\n') {
+            let line: Vec<u8> = pending.drain(..=end).collect();
+            return Some(serde_json::from_slice(&line).unwrap());
+        }
+        let frame = std::future::poll_fn(|cx| std::pin::Pin::new(&mut *body).poll_frame(cx)).await?;
+        if let Ok(data) = frame.unwrap().into_data() {
+            pending.extend_from_slice(&data);
+        }
+    }
+}
+
+/// The FE slot is one: while a compensation runs (its first progress line
+/// has arrived), a check and an FE simulation on demand are answered 503
+/// at once (no wait here); once its result is out, the next check runs.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_running_compensation_holds_the_one_fe_slot() {
+    let limits = Limits { simulation_wait: Duration::ZERO, ..Limits::DEFAULT };
+    assert_eq!(limits.concurrent_simulations, 1);
+    let router = app(AppState::new(None, limits).unwrap().with_database(&shipped_db()).unwrap());
+    let bump = fe_bump();
+    let body = json!({ "profile": profile_json(bump.x_mm(), bump.mu()), "device": { "mu_hd": 0.5 } });
+    let request = |route: &str, body: &Value| {
+        let mut r = Request::post(route)
+            .header(header::CONTENT_TYPE, "application/json")
+            .body(Body::from(body.to_string()))
+            .unwrap();
+        r.headers_mut().insert(header::HOST, "localhost".parse().unwrap());
+        r
+    };
+    let response = tower::ServiceExt::oneshot(router.clone(), request("/api/compensate", &body)).await.unwrap();
+    assert_eq!(response.status(), StatusCode::OK);
+    let mut stream = response.into_body();
+    let mut pending = Vec::new();
+    let first = next_line(&mut stream, &mut pending).await.unwrap();
+    assert_eq!(first["progress"]["run"], 1, "{first}");
+    send_to(router.clone(), request("/api/check", &body)).await.error(StatusCode::SERVICE_UNAVAILABLE, None);
+    let simulate = json!({ "surface": "bump", "width_mm": 1.5, "height_mm": 0.3 });
+    send_to(router.clone(), request("/api/simulate", &simulate)).await.error(StatusCode::SERVICE_UNAVAILABLE, None);
+    let mut last = first;
+    while let Some(line) = next_line(&mut stream, &mut pending).await {
+        last = line;
+    }
+    assert!(last["result"]["compensated"].is_object(), "{last:.300}");
+    // The slot is free again (it is let go before the stream ends).
+    let answer = send_to(router, request("/api/check", &body)).await;
+    stream_result(&answer, 1);
+}
+
+/// Two checks sent together both run, one after the other: the second
+/// waits for the slot (within the wait), so the two take at least the sum
+/// of their FE times (on two cores they would overlap), and give the same
+/// result.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn two_checks_at_once_run_one_after_the_other() {
+    let limits = Limits { simulation_wait: Duration::from_secs(30), ..Limits::DEFAULT };
+    let router = app(AppState::new(None, limits).unwrap());
+    let bump = fe_bump();
+    let body = json!({ "profile": profile_json(bump.x_mm(), bump.mu()), "device": { "mu_hd": 0.5 } });
+    let post = || {
+        let router = router.clone();
+        let request = Request::post("/api/check")
+            .header(header::CONTENT_TYPE, "application/json")
+            .body(Body::from(body.to_string()))
+            .unwrap();
+        tokio::spawn(send_to(router, request))
+    };
+    let started = std::time::Instant::now();
+    let (a, b) = (post(), post());
+    let (a, b) = (a.await.unwrap(), b.await.unwrap());
+    let elapsed = started.elapsed().as_secs_f64();
+    let (a, b) = (stream_result(&a, 1), stream_result(&b, 1));
+    let fe = a["fe_seconds"].as_f64().unwrap() + b["fe_seconds"].as_f64().unwrap();
+    eprintln!("two checks: {elapsed:.3} s in all, FE runs {fe:.3} s together");
+    assert!(elapsed >= fe, "two checks took {elapsed:.3} s, their FE runs {fe:.3} s: they overlapped");
+    assert_eq!(a["eq8"], b["eq8"]);
 }

@@ -32,7 +32,13 @@
 //!    uploaded points; the stroke WAV starts with a RIFF/WAVE header;
 //! 7. the feel strip: a pointer moved over it shows U(x) of the plotted
 //!    profile at the pointer's x (1e-9 relative);
-//! 8. a phone-sized window (390 x 844) has no horizontal scrolling.
+//! 8. a phone-sized window (390 x 844) has no horizontal scrolling;
+//! 9. the check on the finger model of the default template: the friction
+//!    the FE finger felt drawn beside the target, the error figures, the
+//!    progress of the run; *compensate* reports every FE run while it runs,
+//!    draws the felt friction of the compensated voltage (at least 3 times
+//!    closer to the target than eq. (8)'s), offers it as a CSV download
+//!    (within U_max) and the feel strip plays it.
 //!
 //! It saves screenshots (desktop and phone) in the target directory;
 //! with HAPTEX_UPDATE_SCREENSHOTS=1 also to docs/img/ (what docs/web.md
@@ -628,6 +634,10 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     let desktop = screenshot(client).await?;
     save_screenshot("web.png", &desktop);
     save_screenshot("web-phone.png", &phone);
+    // 9. The check on the finger model and the compensation, on the
+    // default template.
+    finger_on_the_display(client).await?;
+    save_screenshot("web-check.png", &screenshot_of(client, "check-results").await?);
     show_library(client, "latex").await?;
     save_screenshot("web-library.png", &screenshot(client).await?);
 
@@ -661,6 +671,124 @@ async fn show_template(client: &Client) -> Check<()> {
     // With the FE model's profile beside the estimate.
     wd!(wd!(client.find(Locator::Id("run-fe"))).click());
     wait_for(client, FE_DRAWN, "the FE profile drawn").await
+}
+
+/// The check on the finger model and the compensation of the template
+/// shown (relative to its flat value, the paper's device): clicking
+/// *check on the finger model* shows the progress and then draws the
+/// friction the FE finger felt beside the target, with eq. (8)'s voltage
+/// applied being the one the voltage plot shows; the error figures are
+/// shown; *compensate* reports each FE run as it runs, draws the felt
+/// friction of the compensated voltage, which is closer to the target than
+/// eq. (8)'s (the server's figures), offers it as a CSV (read back with
+/// haptex's reader: the compensated voltage, within U_max), and the feel
+/// strip then plays it.
+async fn finger_on_the_display(client: &Client) -> Check<()> {
+    let state = "window.haptex.state";
+    wd!(wd!(client.find(Locator::Id("run-check"))).click());
+    wait_for(client, &format!("{state}.check && {state}.check.mode === 'check'"), "the check's result").await?;
+    wait_for(client, "!document.getElementById('check-results').hidden", "the check's plots").await?;
+    let result = script(client, &format!("return {state}.check.result;")).await?;
+    let progress = script(client, &format!("return {state}.checkProgress;")).await?;
+    if progress["lines"].as_u64().unwrap_or(0) < 1 {
+        return fail(format!("no progress shown while the check ran: {progress}"));
+    }
+    let voltage = plotted(client, "voltage").await?;
+    let friction = plotted(client, "friction").await?;
+    let check = plotted(client, "check").await?;
+    let felt = numbers(&result["eq8"]["felt_mu"])?;
+    if check[0] != voltage[0] || check[1] != friction[1] || check[2] != felt {
+        return fail("the check plot is not the target plotted above and the friction the finger felt");
+    }
+    if numbers(&result["eq8"]["voltage_v"])? != voltage[1] {
+        return fail("the check applied another voltage than the eq. (8) voltage plotted");
+    }
+    let table = wd!(wd!(client.find(Locator::Id("check-metrics"))).text());
+    let rms = result["eq8"]["metrics"]["rms_error"].as_f64().ok_or("rms_error")?;
+    let shown = script(client, "return document.getElementById('check-metrics').rows[1].cells[1].textContent;").await?;
+    let shown: f64 = shown.as_str().unwrap_or_default().parse().map_err(|_| format!("RMS shown as {shown}"))?;
+    if !table.contains("RMS error") || !table.contains("k_FE") || (shown - rms).abs() > 1e-3 * rms {
+        return fail(format!("the metrics table shows {table:?}, the server's RMS error is {rms}"));
+    }
+
+    wd!(wd!(client.find(Locator::Id("run-compensate"))).click());
+    wait_for(client, &format!("{state}.check.mode === 'compensate'"), "the compensation's result").await?;
+    let result = script(client, &format!("return {state}.check.result;")).await?;
+    let progress = script(client, &format!("return {state}.checkProgress;")).await?;
+    let runs = result["fe_runs"].as_u64().ok_or("fe_runs")?;
+    if progress["maxRun"].as_u64() != Some(runs) || runs < 2 {
+        return fail(format!("the progress reached run {} of the {runs} FE runs", progress["maxRun"]));
+    }
+    let check = plotted(client, "check").await?;
+    let compensated = &result["compensated"];
+    if labels(client, "check").await?.iter().all(|l| l != "felt, compensated")
+        || check[3] != numbers(&compensated["felt_mu"])?
+    {
+        return fail("the felt friction of the compensated voltage is not drawn");
+    }
+    let (eq8, best) = (rms, compensated["metrics"]["rms_error"].as_f64().ok_or("compensated RMS")?);
+    if best >= eq8 / 3.0 {
+        return fail(format!("compensated RMS error {best} against eq. (8)'s {eq8}"));
+    }
+    let u_comp = numbers(&compensated["voltage_v"])?;
+    let bytes = download(client, "compensated-csv").await?;
+    let text = String::from_utf8(bytes.clone()).map_err(|e| e.to_string())?;
+    let table = Table::read(bytes.as_slice(), "downloaded voltage-compensated.csv").map_err(|e| e.to_string())?;
+    if table.column("voltage_v") != Some(u_comp.as_slice())
+        || !text.starts_with("# haptex check on the finger model")
+        || u_comp.iter().any(|&u| !(0.0..=100.0).contains(&u))
+    {
+        return fail(format!("the compensated voltage CSV: {:.300}", text));
+    }
+    // The feel strip plays the compensated voltage: U at the pointer.
+    let playing = script(client, "return document.getElementById('play-compensated').checked;").await?;
+    if playing != Value::Bool(true) {
+        return fail("the compensated voltage is not chosen for playback after compensating");
+    }
+    let strip = wd!(client.find(Locator::Id("feel-strip")));
+    let moves = MouseActions::new("mouse".into()).then(PointerAction::MoveToElement {
+        element: strip,
+        duration: Some(Duration::from_millis(50)),
+        x: -0.1
+            * script(client, "return document.getElementById('feel-strip').getBoundingClientRect().width;")
+                .await?
+                .as_f64()
+                .ok_or("strip width")?,
+        y: 0.0,
+    });
+    wd!(client.perform_actions(moves));
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    let read = script(
+        client,
+        "const d = document.getElementById('feel-readout').dataset; return [Number(d.xMm), Number(d.voltageV)];",
+    )
+    .await?;
+    let read = numbers(&read)?;
+    let x = numbers(&result["x_mm"])?;
+    let expected = haptex_core::profile::interpolate(&x, &u_comp, read[0]);
+    if (read[1] - expected).abs() > 1e-9 * expected.max(1.0) {
+        return fail(format!(
+            "feel strip at x = {} mm plays {} V, the compensated voltage is {expected} V",
+            read[0], read[1]
+        ));
+    }
+    // The results fit a phone's width too.
+    wd!(client.set_window_size(390, 844));
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    let overflow = script(client, "return document.documentElement.scrollWidth - window.innerWidth;").await?;
+    wd!(client.set_window_size(1280, 1280));
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    if overflow.as_f64().unwrap_or(1.0) > 0.0 {
+        return fail(format!("with the check's results, a phone-sized window scrolls sideways by {overflow} px"));
+    }
+    Ok(())
+}
+
+/// A screenshot with the element `id` scrolled to the top of the window.
+async fn screenshot_of(client: &Client, id: &str) -> Check<Vec<u8>> {
+    script(client, &format!("document.getElementById('{id}').scrollIntoView(); return true;")).await?;
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    Ok(wd!(client.screenshot()))
 }
 
 /// Shows `material` of the library with the physical method and the

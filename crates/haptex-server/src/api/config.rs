@@ -1,7 +1,7 @@
 //! `GET /api/config`: what the GUI needs to build its controls: the
 //! profile sources this server offers, the device parameters with the
-//! paper's defaults and ranges, the mapping methods, the playback defaults
-//! and the limits.
+//! paper's defaults and ranges, the mapping methods, the playback defaults,
+//! the defaults of the check on the finger model and the limits.
 
 use axum::Json;
 use axum::extract::{RawQuery, State};
@@ -28,6 +28,13 @@ pub async fn get(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -
             "sample_rate_hz": play.sample_rate_hz,
             "carrier": Carrier::DEFAULT,
             "velocity_mm_s": crate::api::play::DEFAULT_VELOCITY_MM_S,
+        },
+        "check": {
+            "load_n_per_mm": haptex_fem::render::DEFAULT_LOAD_N_PER_MM,
+            "velocity_mm_s": crate::api::check::DEFAULT_VELOCITY_MM_S,
+            "step_mm": crate::api::check::DEFAULT_STEP_MM,
+            "max_runs": crate::fields::MAX_RUNS,
+            "tolerance": crate::api::check::DEFAULT_TOLERANCE,
         },
         "limits": state.limits(),
         "voltage_convention": "every voltage is RMS: a sine carrier of peak sqrt(2) U gives the same mean electrostatic force",

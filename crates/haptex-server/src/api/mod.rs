@@ -1,5 +1,6 @@
 //! Handlers, one module per resource.
 
+pub mod check;
 pub mod config;
 pub mod health;
 pub mod materials;

@@ -67,17 +67,7 @@ pub async fn post(
         call.set.fe().map_err(|why| ApiError::not_found(format!("FE simulation is not available: {why}"), None))?,
     );
 
-    let limits = state.limits();
-    let permit =
-        tokio::time::timeout(limits.simulation_wait, std::sync::Arc::clone(state.simulations()).acquire_owned())
-            .await
-            .map_err(|_| {
-                ApiError::unavailable(format!(
-                    "the server is busy with other FE simulations (at most {} at once); try again in a few seconds",
-                    limits.concurrent_simulations
-                ))
-            })?
-            .map_err(|_| ApiError::unavailable("the server is shutting down"))?;
+    let permit = work::fe_slot(&state).await?;
     work::blocking(Some(permit), move || answer(call, &spec)).await
 }
 

@@ -66,7 +66,7 @@ struct VoltageBody {
 /// Whether to map relative to the flat-surface friction, and how mu_flat
 /// is found: from `relative` and `flat_mu` (body fields or query
 /// parameters of these names, which errors name).
-fn relative_request(relative: bool, flat_mu: Option<f64>) -> Result<Option<FlatMu>, ApiError> {
+pub(crate) fn relative_request(relative: bool, flat_mu: Option<f64>) -> Result<Option<FlatMu>, ApiError> {
     match (relative, flat_mu) {
         (false, None) => Ok(None),
         (false, Some(_)) => Err(ApiError::bad_request(
@@ -93,10 +93,10 @@ fn parse_bool(text: &str, field: &str) -> Result<bool, ApiError> {
 /// The JSON answer: the parameters used (defaults filled in), the summary
 /// and the profile.
 #[derive(Debug, Serialize)]
-struct VoltageAnswer<'a> {
-    parameters: BTreeMap<&'static str, f64>,
+pub(crate) struct VoltageAnswer<'a> {
+    pub parameters: BTreeMap<&'static str, f64>,
     #[serde(flatten)]
-    voltage: &'a VoltageProfile,
+    pub voltage: &'a VoltageProfile,
 }
 
 pub async fn post(
