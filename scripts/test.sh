@@ -19,16 +19,52 @@ fi
 # Nothing here reads standard input: the suite never inherits one.
 exec </dev/null
 
+# Debian packages the tests need, installed as root when missing: one
+# `apt-get update` for all of them, and no service started by the packages'
+# scripts (the tests start their own daemons; in a container without
+# policy-rc.d, slurmctld's would fail the install for want of a slurm.conf).
+APT_UPDATED=
+apt_install() {
+    local policy=/usr/sbin/policy-rc.d added= status=0
+    if [ ! -e "$policy" ]; then
+        printf '#!/bin/sh\n# scripts/test.sh: no service starts during its apt-get install\nexit 101\n' >"$policy"
+        chmod 755 "$policy"
+        added=1
+    fi
+    if [ -z "$APT_UPDATED" ]; then
+        apt-get update -qq >/dev/null || status=$?
+        APT_UPDATED=1
+    fi
+    [ "$status" = 0 ] && { DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "$@" >/dev/null || status=$?; }
+    [ -z "$added" ] || rm -f "$policy"
+    return "$status"
+}
+can_apt() { [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; }
+
 # The web GUI's browser test (crates/haptex-server/tests/browser.rs) drives
 # Debian's headless Chromium through chromedriver: install them if missing.
 if ! command -v chromium >/dev/null 2>&1 || ! command -v chromedriver >/dev/null 2>&1; then
-    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    if can_apt; then
         echo "scripts/test.sh: installing chromium and chromium-driver for the browser test" >&2
-        apt-get update -qq >/dev/null
-        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver >/dev/null
+        apt_install chromium chromium-driver
     else
         echo "scripts/test.sh: the browser test needs Debian's chromium and chromium-driver (as root:" \
             "apt-get install chromium chromium-driver); HAPTEX_BROWSER_TEST=skip skips it" >&2
+    fi
+fi
+
+# The Slurm test (crates/haptex-cli/tests/slurm_cli.rs) builds a database as
+# an sbatch job array on a single-node cluster of Debian's munge, slurmctld
+# and slurmd that it starts itself (scripts/slurm-cluster.sh, as root).
+# Without them, or not as root, the test says why and is skipped.
+if ! command -v slurmctld >/dev/null 2>&1 || ! command -v slurmd >/dev/null 2>&1 \
+    || ! command -v sbatch >/dev/null 2>&1 || ! command -v munged >/dev/null 2>&1; then
+    if can_apt; then
+        echo "scripts/test.sh: installing munge, slurmctld, slurmd and slurm-client for the Slurm test" >&2
+        apt_install --no-install-recommends munge slurmctld slurmd slurm-client
+    else
+        echo "scripts/test.sh: the Slurm test needs root and Debian's munge, slurmctld, slurmd and" \
+            "slurm-client (apt-get install munge slurmctld slurmd slurm-client); it is skipped without them" >&2
     fi
 fi
 
