@@ -93,23 +93,34 @@ fn output_through_a_symlink_replaces_the_target_and_keeps_the_link() {
 
 /// Temporary files of processes that no longer run (killed writes) are
 /// removed by the next write into their directory; a live process's are
-/// kept.
+/// kept, and so are those of a process table this process cannot see (the
+/// same PID on another node or in another PID namespace sharing the
+/// directory: Slurm tasks on a shared scratch directory) and an older
+/// haptex's names without one.
 #[cfg(target_os = "linux")]
 #[test]
 fn killed_runs_temporaries_are_cleaned_by_the_next_run() {
+    use haptex_core::io::temporary_prefix_of;
     let dir = tempfile::tempdir().unwrap();
     // PIDs above the kernel's largest (4194304) never run.
-    let dead = dir.path().join(".haptex-999999999-Ab12Cd.tmp");
+    let dead = dir.path().join(format!("{}Ab12Cd.tmp", temporary_prefix_of(999_999_999)));
     std::fs::write(&dead, "half").unwrap();
-    let dead_dir = dir.path().join(".haptex-999999998-Xy34Zw.tmp");
+    let dead_dir = dir.path().join(format!("{}Xy34Zw.tmp", temporary_prefix_of(999_999_998)));
     std::fs::create_dir(&dead_dir).unwrap();
     std::fs::write(dead_dir.join("bump.csv"), "half").unwrap();
-    let live = dir.path().join(format!(".haptex-{}-Ef56Gh.tmp", std::process::id()));
+    let live = dir.path().join(format!("{}Ef56Gh.tmp", temporary_prefix_of(std::process::id())));
     std::fs::write(&live, "mine").unwrap();
+    let other_node = dir.path().join(".haptex-999999997-0000beef-Ij78Kl.tmp");
+    std::fs::write(&other_node, "another node's write in progress").unwrap();
+    let older_haptex = dir.path().join(".haptex-999999996-Mn90Op.tmp");
+    std::fs::write(&older_haptex, "kept").unwrap();
     let unrelated = dir.path().join(".haptex-notes.tmp");
     std::fs::write(&unrelated, "a user's file").unwrap();
+    assert!(!temporary_prefix_of(1).contains("-0000beef-"), "the test's foreign space is this one");
 
     write_atomic(&dir.path().join("out.csv"), |w| w.write_all(b"x\n1\n")).unwrap();
     assert!(!dead.exists() && !dead_dir.exists(), "a dead run's temporaries are left");
     assert!(live.exists() && unrelated.exists());
+    assert!(other_node.exists(), "another process table's temporary was removed");
+    assert!(older_haptex.exists());
 }

@@ -4,7 +4,7 @@
 //! What an output path names decides how it is written ([`OutputTarget`]):
 //!
 //! - a regular file, or a path that does not exist yet: written to a
-//!   temporary file beside it (`.haptex-PID-XXXXXX.tmp`), synced and renamed
+//!   temporary file beside it (`.haptex-PID-SPACE-XXXXXX.tmp`), synced and renamed
 //!   over it, so that a reader never sees a half-written file and a failed
 //!   or killed write leaves the previous file untouched. A symbolic link to
 //!   a regular file keeps the link: its target is replaced;
@@ -18,6 +18,13 @@
 //!
 //! A killed run leaves its temporary file behind; the next write into the
 //! same directory removes those of processes that are no longer running.
+//! A PID means something only to processes that see the same process
+//! table: SPACE names it (a hash of the host's boot id and the PID
+//! namespace), and only temporaries of the remover's own SPACE are ever
+//! removed. Without it, Slurm tasks on several nodes sharing one scratch
+//! directory deleted each other's files in progress (a task on node B saw
+//! no process A's PID on B), which a test with tasks in separate PID
+//! namespaces reproduced (17 of 80 tasks failed).
 
 use std::collections::HashSet;
 use std::fs::OpenOptions;
@@ -189,14 +196,46 @@ where
 const TEMPORARY_PREFIX: &str = ".haptex-";
 const TEMPORARY_SUFFIX: &str = ".tmp";
 
-/// `.haptex-PID-`: the writing process is part of a temporary's name, so
-/// that a later run can tell a dead run's leftovers from a live run's file.
+/// `.haptex-PID-SPACE-`: the writing process and the process table its
+/// PID belongs to are part of a temporary's name, so that a later run can
+/// tell a dead run's leftovers from a live run's file, and leaves alone
+/// those of processes it cannot see.
 pub(crate) fn temporary_prefix() -> String {
-    format!("{TEMPORARY_PREFIX}{}-", std::process::id())
+    temporary_prefix_of(std::process::id())
 }
 
-/// Removes the `.haptex-PID-*.tmp` files (and directories) in `dir` whose
-/// process is no longer running: what killed runs left behind. Each
+/// The temporary-file prefix of process `pid` of this process's own
+/// process table (`.haptex-PID-SPACE-`); public for tests that plant a
+/// dead run's leftovers.
+pub fn temporary_prefix_of(pid: u32) -> String {
+    format!("{TEMPORARY_PREFIX}{pid}-{}-", process_space())
+}
+
+/// SPACE: 8 hex digits of a hash (FNV-1a) of the host's boot id and this
+/// process's PID namespace (Linux: /proc/sys/kernel/random/boot_id and the
+/// /proc/self/ns/pid link). "x" elsewhere, where nothing is ever removed.
+fn process_space() -> &'static str {
+    static SPACE: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    SPACE.get_or_init(|| {
+        let boot = std::fs::read_to_string("/proc/sys/kernel/random/boot_id");
+        let namespace = std::fs::read_link("/proc/self/ns/pid");
+        match (boot, namespace) {
+            (Ok(boot), Ok(namespace)) => {
+                let mut hash: u32 = 0x811c_9dc5;
+                for byte in boot.trim().bytes().chain(namespace.to_string_lossy().bytes()) {
+                    hash = (hash ^ u32::from(byte)).wrapping_mul(0x0100_0193);
+                }
+                format!("{hash:08x}")
+            }
+            _ => "x".to_string(),
+        }
+    })
+}
+
+/// Removes the `.haptex-PID-SPACE-*.tmp` files (and directories) in `dir`
+/// of this process table (SPACE) whose process is no longer running: what
+/// killed runs left behind. Others (another node's, another container's,
+/// an older haptex's without SPACE) are never touched. Each
 /// directory is swept once per process; errors are ignored (a leftover is
 /// harmless, and another process may be sweeping too).
 pub fn remove_stale_temporaries(dir: &Path) {
@@ -213,8 +252,8 @@ pub fn remove_stale_temporaries(dir: &Path) {
     let Ok(entries) = std::fs::read_dir(dir) else { return };
     for entry in entries.flatten() {
         let name = entry.file_name();
-        let Some(pid) = name.to_str().and_then(temporary_pid) else { continue };
-        if pid == std::process::id() || process_is_running(pid) {
+        let Some((pid, space)) = name.to_str().and_then(temporary_owner) else { continue };
+        if space != process_space() || space == "x" || pid == std::process::id() || process_is_running(pid) {
             continue;
         }
         let path = entry.path();
@@ -226,11 +265,15 @@ pub fn remove_stale_temporaries(dir: &Path) {
     }
 }
 
-/// The PID in a temporary's name `.haptex-PID-XXXX.tmp`, if it is one.
-fn temporary_pid(name: &str) -> Option<u32> {
+/// The PID and SPACE in a temporary's name `.haptex-PID-SPACE-XXXX.tmp`,
+/// if it is one.
+fn temporary_owner(name: &str) -> Option<(u32, &str)> {
     let rest = name.strip_prefix(TEMPORARY_PREFIX)?.strip_suffix(TEMPORARY_SUFFIX)?;
-    let (pid, _) = rest.split_once('-')?;
-    pid.parse().ok()
+    let mut parts = rest.splitn(3, '-');
+    let pid = parts.next()?.parse().ok()?;
+    let space = parts.next()?;
+    parts.next()?;
+    Some((pid, space))
 }
 
 /// Whether process `pid` is running. Linux: `/proc/PID` exists. Elsewhere
@@ -278,10 +321,14 @@ mod tests {
 
     #[test]
     fn temporary_names_carry_the_pid() {
-        assert_eq!(temporary_pid(".haptex-1234-aBc123.tmp"), Some(1234));
-        assert_eq!(temporary_pid(".haptex-aBc123.tmp"), None);
-        assert_eq!(temporary_pid("haptex-1-x.tmp"), None);
-        assert!(temporary_prefix().starts_with(".haptex-"));
+        assert_eq!(temporary_owner(".haptex-1234-0a1b2c3d-aBc123.tmp"), Some((1234, "0a1b2c3d")));
+        // An older haptex's name (no SPACE) is nobody's to remove.
+        assert_eq!(temporary_owner(".haptex-1234-aBc123.tmp"), None);
+        assert_eq!(temporary_owner(".haptex-aBc123.tmp"), None);
+        assert_eq!(temporary_owner("haptex-1-x-y.tmp"), None);
+        let prefix = temporary_prefix();
+        assert!(prefix.starts_with(&format!(".haptex-{}-", std::process::id())) && prefix.ends_with('-'));
+        assert_eq!(temporary_owner(&format!("{prefix}Zz9.tmp")), Some((std::process::id(), process_space())));
     }
 
     #[test]

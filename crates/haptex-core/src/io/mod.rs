@@ -6,7 +6,7 @@ mod atomic;
 mod fileset;
 mod table;
 
-pub use atomic::{OutputTarget, WriteError, fault_point, remove_stale_temporaries, write_atomic};
+pub use atomic::{OutputTarget, WriteError, fault_point, remove_stale_temporaries, temporary_prefix_of, write_atomic};
 pub use fileset::{FileSet, MemberError, MemberHashes, sha256_file, sha256_hex, verify_members};
 pub use table::{MAX_LINE_BYTES, Table, TableError, TableErrorKind};
 
