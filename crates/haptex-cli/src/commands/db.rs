@@ -190,7 +190,7 @@ fn parse_shard(text: &str) -> Result<(usize, usize), String> {
 }
 
 /// The shard from Slurm's job-array variables, if set: task ids run from
-/// SLURM_ARRAY_TASK_MIN (default 0 or 1, whichever the ids imply).
+/// SLURM_ARRAY_TASK_MIN (which Slurm always sets; 0 when it is absent).
 fn slurm_shard() -> anyhow::Result<Option<(usize, usize)>> {
     let var = |name: &str| -> anyhow::Result<Option<usize>> {
         match std::env::var(name) {
