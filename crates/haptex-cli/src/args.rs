@@ -160,6 +160,101 @@ impl MaterialArg {
     }
 }
 
+/// The friction display and its ultrasonic plate, shared by `haptex
+/// voltage` and `haptex check`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct DisplayArgs {
+    /// The friction display: electrovibration (eq. 8, raises friction
+    /// above mu_HD), ultrasonic (vibration amplitude, lowers it below
+    /// mu_HD) or combined (both, shared by --strategy).
+    #[arg(long, value_enum, default_value_t = DisplayArg::Electrovibration)]
+    pub display: DisplayArg,
+    /// Combined display: how the target is shared. split: the plate below
+    /// mu_HD, the voltage above (least drive); bias: a constant amplitude
+    /// lowering the baseline to the profile's minimum, the voltage renders
+    /// the rest; weighted: per point, the least (U/U_max)^2 + weight
+    /// ((rho(a) - rho_bias)/(1 - rho_bias))^2 (docs/physics.md). Default split.
+    #[arg(long, value_enum)]
+    pub strategy: Option<StrategyArg>,
+    /// With --strategy weighted: the weight of the ultrasonic term (0 is
+    /// split, large approaches bias; 1 weighs full voltage against the
+    /// vibration fully off). Default 1.
+    #[arg(long, value_parser = in_range(ranges::STRATEGY_WEIGHT))]
+    pub weight: Option<f64>,
+    /// Ultrasonic display: the plate's calibration, CSV
+    /// `amplitude_um,relative_friction` (docs/file-formats.md). Without
+    /// it, a literature default stands in (a placeholder, said in every
+    /// output).
+    #[arg(long, value_name = "FILE")]
+    pub ultrasonic_calibration: Option<PathBuf>,
+    /// Ultrasonic display: the highest vibration amplitude a_max in um
+    /// (peak). Default: the calibration's last amplitude, or 2.3 um for
+    /// the literature default; never beyond either.
+    #[arg(long, value_parser = in_range(ranges::A_MAX_UM))]
+    pub a_max_um: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, clap::ValueEnum)]
+pub enum DisplayArg {
+    Electrovibration,
+    Ultrasonic,
+    Combined,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, clap::ValueEnum)]
+pub enum StrategyArg {
+    Split,
+    Bias,
+    Weighted,
+}
+
+impl DisplayArgs {
+    /// Refuses the ultrasonic flags on the electrovibration display.
+    pub fn refuse_display_flags(&self) -> anyhow::Result<()> {
+        for (given, flag) in [
+            (self.strategy.is_some(), "--strategy"),
+            (self.weight.is_some(), "--weight"),
+            (self.ultrasonic_calibration.is_some(), "--ultrasonic-calibration"),
+            (self.a_max_um.is_some(), "--a-max-um"),
+        ] {
+            if given {
+                anyhow::bail!("{flag} is for an ultrasonic or combined display: give --display ultrasonic or combined");
+            }
+        }
+        Ok(())
+    }
+
+    /// The ultrasonic plate: the calibration given, or the literature
+    /// default (a placeholder).
+    pub fn ultrasonic(&self) -> anyhow::Result<haptex_core::ultrasonic::UltrasonicDevice> {
+        use haptex_core::ultrasonic::{Calibration, UltrasonicDevice};
+        Ok(match &self.ultrasonic_calibration {
+            Some(path) => UltrasonicDevice::calibrated(Calibration::read_csv_file(path)?, self.a_max_um)?,
+            None => UltrasonicDevice::literature_default(self.a_max_um)?,
+        })
+    }
+
+    /// The combined display's strategy (None for the other displays),
+    /// refusing --strategy and --weight where they do not apply.
+    pub fn strategy(&self) -> anyhow::Result<Option<haptex_core::combined::Strategy>> {
+        use haptex_core::combined::Strategy;
+        if self.display != DisplayArg::Combined && (self.strategy.is_some() || self.weight.is_some()) {
+            anyhow::bail!("--strategy and --weight share a target between two channels: give --display combined");
+        }
+        if self.weight.is_some() && self.strategy != Some(StrategyArg::Weighted) {
+            anyhow::bail!("--weight is the weighted strategy's: give --strategy weighted");
+        }
+        if self.display != DisplayArg::Combined {
+            return Ok(None);
+        }
+        Ok(Some(match self.strategy.unwrap_or(StrategyArg::Split) {
+            StrategyArg::Split => Strategy::Split,
+            StrategyArg::Bias => Strategy::Bias,
+            StrategyArg::Weighted => Strategy::Weighted { weight: self.weight.unwrap_or(1.0) },
+        }))
+    }
+}
+
 /// The finger model of `--finger FILE`, or the shipped one.
 pub fn finger_model(path: Option<&Path>) -> anyhow::Result<haptex_fem::finger::FingerModel> {
     Ok(match path {

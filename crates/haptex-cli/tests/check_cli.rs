@@ -131,3 +131,70 @@ fn voltage_compensate_writes_the_compensated_voltage_with_its_error() {
     let out = haptex(&["voltage", "--profile", &p("target.csv"), "--compensate", "--method", "normalized"]);
     assert!(!out.status.success() && stderr(&out).contains("--method physical"));
 }
+
+/// `haptex check --display combined`: a dip below mu_HD and a rise above it
+/// are both inside the combined display's band, so nothing is outside it;
+/// the plate carries the dip and the voltage the rise (split strategy),
+/// each within its limit (U_max, the literature default's a_max = 2.3
+/// um); the drive file is the design the check applied, with both limits
+/// in its comments; flags that do not apply are refused by name.
+#[test]
+fn combined_display_check_renders_below_and_above_mu_hd() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let mut target = String::from("x_mm,mu\n");
+    for i in 0..=40 {
+        let x = 0.1 * i as f64;
+        let mu = if (0.8..1.6).contains(&x) {
+            0.4
+        } else if (2.4..3.2).contains(&x) {
+            0.56
+        } else {
+            0.5
+        };
+        target += &format!("{x},{mu}\n");
+    }
+    std::fs::write(p("target.csv"), target).unwrap();
+    let args = ["check", "--profile", &p("target.csv"), "--mesh", "coarse", "--step", "0.1", "--display", "combined"];
+    let mut run = args.to_vec();
+    let (c, u, png) = (p("c.csv"), p("u.csv"), p("c.png"));
+    run.extend(["-o", &c, "--voltage-out", &u, "--png", &png]);
+    let out = haptex(&run);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.contains("outside the band: 0.0% of the length below it, 0.0% above it"), "{err}");
+    assert!(err.contains("literature default, not a calibration"), "{err}");
+    let (header, rows) = table(&std::fs::read_to_string(&c).unwrap());
+    assert_eq!(header, ["x_mm", "target_mu", "voltage_v", "amplitude_um", "felt_mu"]);
+    assert_eq!(rows.len(), 41);
+    for r in &rows {
+        let (mu, voltage, amplitude) = (r[1], r[2], r[3]);
+        assert!((0.0..=100.0).contains(&voltage) && (0.0..=2.3).contains(&amplitude), "{r:?}");
+        // Split: the plate only below mu_HD, the voltage only above.
+        if mu < 0.5 {
+            assert!(amplitude > 0.0 && voltage == 0.0, "{r:?}");
+        } else if mu > 0.5 {
+            assert!(voltage > 0.0 && amplitude == 0.0, "{r:?}");
+        }
+    }
+    let text = std::fs::read_to_string(&u).unwrap();
+    assert!(text.contains("at most U_max = 100 V") && text.contains("at most a_max = 2.3 um"), "{text}");
+    let (header, drive) = table(&text);
+    assert_eq!(header, ["x_mm", "mu", "voltage_v", "amplitude_um"]);
+    for (d, r) in drive.iter().zip(&rows) {
+        assert_eq!((d[2], d[3]), (r[2], r[3]), "the drive file is the design the check applied");
+    }
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
+    for (extra, expect) in [
+        (vec!["--compensate"], "--compensate is for the electrovibration display"),
+        (vec!["--fe-k"], "--fe-k is for the electrovibration display"),
+        (vec!["--weight", "2"], "--weight is the weighted strategy's"),
+    ] {
+        let mut run = args.to_vec();
+        run.extend(extra);
+        let out = haptex(&run);
+        assert!(!out.status.success() && stderr(&out).contains(expect), "{}", stderr(&out));
+    }
+    let out = haptex(&["check", "--profile", &p("target.csv"), "--strategy", "bias"]);
+    assert!(!out.status.success() && stderr(&out).contains("--strategy is for an ultrasonic or combined display"));
+}

@@ -13,7 +13,10 @@ use haptex_fem::render::{self, Check, CheckMetrics, DEFAULT_LOAD_N_PER_MM, Rende
 use haptex_fem::scenario::Loading;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::args::{LayerStackArgs, MaterialArg, MeshArg, finger_model, in_range, non_negative, positive, read_profile};
+use crate::args::{
+    DisplayArg, DisplayArgs, LayerStackArgs, MaterialArg, MeshArg, finger_model, in_range, non_negative, positive,
+    read_profile,
+};
 
 /// Check a friction profile on the finger model: slide the FE finger on the
 /// display under eq. (8)'s voltage and compare the friction it feels with
@@ -106,6 +109,12 @@ pub struct CheckArgs {
     /// No progress bar or summary.
     #[arg(short, long)]
     quiet: bool,
+    /// The display checked: electrovibration (eq. 8, the default) or
+    /// combined (voltage and ultrasonic vibration, the target shared by
+    /// --strategy; the finger slides on the vibrating plate with the
+    /// reduced coefficient mu_HD rho(a(x_f)), docs/display.md).
+    #[command(flatten)]
+    display: DisplayArgs,
 }
 
 pub fn run(args: CheckArgs) -> anyhow::Result<()> {
@@ -148,6 +157,10 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
         bar.set_message(format!("FE run {}, x = {:.2} mm", run + 1, p.slide_mm));
     };
     let mut lines = Vec::new();
+    if args.display.display != DisplayArg::Electrovibration {
+        return run_display(&args, &target, &settings, &mut report, &bar);
+    }
+    args.display.refuse_display_flags()?;
     if args.fe_k {
         let first = render::check(&target, &settings, &mut |p| report(0, p))?;
         let k = first.metrics.k_fe_mm2_per_n;
@@ -226,6 +239,110 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
             eprintln!("{line}");
         }
         for (label, path) in [("check", &args.output), ("voltage", &args.voltage_out), ("PNG", &args.png)] {
+            if let Some(p) = path {
+                eprintln!("wrote {label}: {}", p.display());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `--display combined`: the check of the combined display.
+fn run_display(
+    args: &CheckArgs,
+    target: &haptex_core::profile::FrictionProfile,
+    settings: &RenderSettings,
+    report: &mut dyn FnMut(usize, haptex_fem::scenario::Progress),
+    bar: &ProgressBar,
+) -> anyhow::Result<()> {
+    use haptex_core::combined::{Channels, map_display};
+    if args.display.display == DisplayArg::Ultrasonic {
+        anyhow::bail!(
+            "the check runs an electrovibration or a combined display; for the plate alone give --display combined \
+             (a target below mu_HD is then rendered by the plate only)"
+        );
+    }
+    for (given, flag) in [(args.compensate, "--compensate"), (args.fe_k, "--fe-k")] {
+        if given {
+            anyhow::bail!("{flag} is for the electrovibration display; it is not done for --display combined yet");
+        }
+    }
+    let ultrasonic = args.display.ultrasonic()?;
+    let strategy = args.display.strategy()?.expect("a combined display has a strategy");
+    let check = render::check_combined(target, settings, &ultrasonic, strategy, &mut |p| report(0, p))?;
+    bar.finish_and_clear();
+    let m = check.metrics;
+    let amplitude = check.amplitude_um.as_deref().expect("a combined check has amplitudes");
+    let header = format!(
+        "haptex check: {} on the FE finger, combined display ({} strategy{}; plate: {}), load {}",
+        args.profile.display(),
+        strategy.kind(),
+        match strategy {
+            haptex_core::combined::Strategy::Weighted { weight } => format!(", weight {}", Num(weight)),
+            _ => String::new(),
+        },
+        ultrasonic.describe(),
+        match settings.scenario.loading {
+            Loading::Load(f) => format!("{} N/mm", Num(f)),
+            Loading::Indent(d) => format!("indent {} mm", Num(d)),
+        }
+    );
+    let lines = [
+        format!(
+            "felt friction against the target over the combined display's band: RMS error {:.3e}, max {:.3e}, lag {:.3} mm",
+            m.rms_error, m.max_error, m.lag_mm
+        ),
+        format!(
+            "outside the band: {:.1}% of the length below it, {:.1}% above it",
+            100.0 * m.not_renderable_fraction,
+            100.0 * m.clipped_fraction
+        ),
+    ];
+    if let Some(path) = &args.output {
+        haptex_core::io::write_atomic(path, |w| {
+            writeln!(w, "# {header}")?;
+            for line in &lines {
+                writeln!(w, "# {line}")?;
+            }
+            writeln!(w, "x_mm,target_mu,voltage_v,amplitude_um,felt_mu")?;
+            for (i, &a) in amplitude.iter().enumerate() {
+                haptex_core::io::write_csv_row(
+                    w,
+                    &[check.target.x_mm()[i], check.target.mu()[i], check.voltage_v[i], a, check.felt.mu[i]],
+                )?;
+            }
+            Ok(())
+        })?;
+    }
+    if let Some(path) = &args.voltage_out {
+        // The same design the check applied (map_display is deterministic),
+        // written as `haptex voltage --display combined` writes it.
+        let design = map_display(target, &settings.device, Channels::Combined(&ultrasonic, strategy), None, None)?;
+        if design.voltage_v.as_deref() != Some(&check.voltage_v[..])
+            || design.amplitude_um.as_deref() != Some(amplitude)
+        {
+            anyhow::bail!("internal: the design written differs from the one checked");
+        }
+        haptex_core::io::write_atomic(path, |w| design.write_csv(w))?;
+    }
+    if let Some(path) = &args.png {
+        let x = check.target.x_mm();
+        Figure::new(&header)
+            .panel(Panel::new("x (mm)", "Ft/Fn").line("target mu_RS", x, check.target.mu()).line(
+                "felt on the FE finger",
+                x,
+                &check.felt.mu,
+            ))
+            .panel(Panel::new("x (mm)", "U (V RMS)").line("applied voltage", x, &check.voltage_v))
+            .panel(Panel::new("x (mm)", "a (um peak)").line("plate amplitude", x, amplitude))
+            .write_png(path)?;
+    }
+    if !args.quiet {
+        eprintln!("{header}");
+        for line in &lines {
+            eprintln!("{line}");
+        }
+        for (label, path) in [("check", &args.output), ("drive", &args.voltage_out), ("PNG", &args.png)] {
             if let Some(p) = path {
                 eprintln!("wrote {label}: {}", p.display());
             }

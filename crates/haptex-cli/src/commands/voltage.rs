@@ -5,16 +5,15 @@
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
-use haptex_core::combined::{Channels, Strategy, map_display};
+use haptex_core::combined::{Channels, map_display};
 use haptex_core::electrovibration::{ContactArea, Device, Method, map_profile, map_profile_relative};
 use haptex_core::num::Num;
 use haptex_core::profile::FrictionProfile;
 use haptex_core::ranges;
 use haptex_core::relative::FlatMu;
-use haptex_core::ultrasonic::{Calibration, UltrasonicDevice};
 use haptex_fem::render::{self, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping};
 
-use crate::args::{LayerStackArgs, Output, in_range, read_profile};
+use crate::args::{DisplayArg, DisplayArgs, LayerStackArgs, Output, in_range, read_profile};
 
 /// Compute the voltage an electrovibration display must apply to reproduce a
 /// friction profile.
@@ -88,34 +87,8 @@ pub struct VoltageArgs {
     /// Output file (default: stdout). Written atomically.
     #[arg(short, long, value_name = "OUT")]
     output: Option<PathBuf>,
-    /// The friction display: electrovibration (eq. 8, raises friction
-    /// above mu_HD), ultrasonic (vibration amplitude, lowers it below
-    /// mu_HD) or combined (both, shared by --strategy).
-    #[arg(long, value_enum, default_value_t = DisplayArg::Electrovibration)]
-    display: DisplayArg,
-    /// Combined display: how the target is shared. split: the plate below
-    /// mu_HD, the voltage above (least drive); bias: a constant amplitude
-    /// lowering the baseline to the profile's minimum, the voltage renders
-    /// the rest; weighted: per point, the least (U/U_max)^2 + weight
-    /// ((rho(a) - rho_bias)/(1 - rho_bias))^2 (docs/physics.md). Default split.
-    #[arg(long, value_enum)]
-    strategy: Option<StrategyArg>,
-    /// With --strategy weighted: the weight of the ultrasonic term (0 is
-    /// split, large approaches bias; 1 weighs full voltage against the
-    /// vibration fully off). Default 1.
-    #[arg(long, value_parser = in_range(ranges::STRATEGY_WEIGHT))]
-    weight: Option<f64>,
-    /// Ultrasonic display: the plate's calibration, CSV
-    /// `amplitude_um,relative_friction` (docs/file-formats.md). Without
-    /// it, a literature default stands in (a placeholder, said in every
-    /// output).
-    #[arg(long, value_name = "FILE")]
-    ultrasonic_calibration: Option<PathBuf>,
-    /// Ultrasonic display: the highest vibration amplitude a_max in um
-    /// (peak). Default: the calibration's last amplitude, or 2.3 um for
-    /// the literature default; never beyond either.
-    #[arg(long, value_parser = in_range(ranges::A_MAX_UM))]
-    a_max_um: Option<f64>,
+    #[command(flatten)]
+    display: DisplayArgs,
     /// Compensate the voltage on the FE finger model (physical method):
     /// eq. (8)'s voltage corrected run by run until the friction the
     /// finger feels on the display matches the profile (see `haptex
@@ -140,20 +113,6 @@ enum MethodArg {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, ValueEnum)]
-enum DisplayArg {
-    Electrovibration,
-    Ultrasonic,
-    Combined,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, ValueEnum)]
-enum StrategyArg {
-    Split,
-    Bias,
-    Weighted,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, ValueEnum)]
 enum Format {
     Csv,
     Json,
@@ -171,19 +130,10 @@ pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
         MethodArg::Physical => Method::Physical,
         MethodArg::Normalized => Method::Normalized,
     };
-    if args.display != DisplayArg::Electrovibration {
+    if args.display.display != DisplayArg::Electrovibration {
         return run_display(args, &profile, &device, method);
     }
-    for (given, flag) in [
-        (args.strategy.is_some(), "--strategy"),
-        (args.weight.is_some(), "--weight"),
-        (args.ultrasonic_calibration.is_some(), "--ultrasonic-calibration"),
-        (args.a_max_um.is_some(), "--a-max-um"),
-    ] {
-        if given {
-            anyhow::bail!("{flag} is for an ultrasonic or combined display: give --display ultrasonic or combined");
-        }
-    }
+    args.display.refuse_display_flags()?;
     let mut voltage = if args.relative {
         let flat = args.flat_mu.map_or(FlatMu::Median, FlatMu::Given);
         map_profile_relative(&profile, &device, method, args.fn_n, flat)?
@@ -234,32 +184,16 @@ pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
 
 /// `--display ultrasonic` or `combined`: the drive of each channel in use.
 fn run_display(args: VoltageArgs, profile: &FrictionProfile, device: &Device, method: Method) -> anyhow::Result<()> {
-    let combined = args.display == DisplayArg::Combined;
     if method != Method::Physical {
         anyhow::bail!("--method normalized (eq. 9) is for the electrovibration display: drop it with --display");
     }
     if args.compensate {
         anyhow::bail!("--compensate is for the electrovibration display: drop it with --display");
     }
-    if !combined && (args.strategy.is_some() || args.weight.is_some()) {
-        anyhow::bail!("--strategy and --weight share a target between two channels: give --display combined");
-    }
-    if args.weight.is_some() && args.strategy != Some(StrategyArg::Weighted) {
-        anyhow::bail!("--weight is the weighted strategy's: give --strategy weighted");
-    }
-    let ultrasonic = match &args.ultrasonic_calibration {
-        Some(path) => UltrasonicDevice::calibrated(Calibration::read_csv_file(path)?, args.a_max_um)?,
-        None => UltrasonicDevice::literature_default(args.a_max_um)?,
-    };
-    let channels = if combined {
-        let strategy = match args.strategy.unwrap_or(StrategyArg::Split) {
-            StrategyArg::Split => Strategy::Split,
-            StrategyArg::Bias => Strategy::Bias,
-            StrategyArg::Weighted => Strategy::Weighted { weight: args.weight.unwrap_or(1.0) },
-        };
-        Channels::Combined(&ultrasonic, strategy)
-    } else {
-        Channels::Ultrasonic(&ultrasonic)
+    let ultrasonic = args.display.ultrasonic()?;
+    let channels = match args.display.strategy()? {
+        Some(strategy) => Channels::Combined(&ultrasonic, strategy),
+        None => Channels::Ultrasonic(&ultrasonic),
     };
     let flat = args.relative.then(|| args.flat_mu.map_or(FlatMu::Median, FlatMu::Given));
     let design = map_display(profile, device, channels, args.fn_n, flat)?;
