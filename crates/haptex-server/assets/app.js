@@ -570,6 +570,7 @@
     $('relative').checked = on;
     $('flat-mu').value = flatMu;
     $('flat-mu').disabled = !on;
+    $('flat-mu').dispatchEvent(new Event('explain'));
   }
 
   function buildControls(config) {
@@ -607,8 +608,9 @@
       const wrap = document.createElement('div');
       const label = document.createElement('label');
       label.htmlFor = `param-${p.name}`;
-      label.title = p.description;
-      label.textContent = p.name + ' ';
+      label.title = `${p.description} (API field ${p.name})`;
+      const explained = (config.explanations || []).find((e) => e.field === p.name);
+      label.textContent = (explained ? explained.symbol : p.name) + ' ';
       const unit = document.createElement('span');
       unit.className = 'unit';
       unit.textContent = p.unit ? `(${p.unit})` : '';
@@ -627,6 +629,7 @@
     $('reset-device').addEventListener('click', () => {
       config.device_params.forEach((p) => { $(`param-${p.name}`).value = p.default === null ? '' : String(p.default); });
       readDevice();
+      document.querySelectorAll('[data-explained]').forEach((input) => input.dispatchEvent(new Event('explain')));
       scheduleVoltage();
     });
 
@@ -656,6 +659,49 @@
 
     document.querySelectorAll('[data-download]').forEach((b) =>
       b.addEventListener('click', () => download(b.dataset.download).catch(showError)));
+
+    (config.explanations || []).forEach(explain);
+  }
+
+  /**
+   * Puts the server's explanation of a parameter (GET /api/config,
+   * `explanations`) under its control: symbol, unit, meaning, typical range
+   * and source; the control and the note turn to the warning style while the
+   * value is outside the typical range (as the template sliders do outside
+   * the FE database).
+   */
+  function explain(e) {
+    const input = document.querySelector(`[data-param="${e.field}"], [data-field="${e.field}"]`);
+    if (!input) return;
+    const unit = e.unit ? ` ${e.unit}` : '';
+    const note = document.createElement('p');
+    note.className = 'explain';
+    note.id = `explain-${e.field}`;
+    const head = document.createElement('span');
+    const range = document.createElement('span');
+    range.className = 'typical';
+    const source = document.createElement('span');
+    source.className = 'source';
+    source.textContent = ` Source: ${e.source}.`;
+    note.append(head, range, source);
+    input.dataset.explained = e.field;
+    input.setAttribute('aria-describedby', note.id);
+    input.insertAdjacentElement('afterend', note);
+    const show = () => {
+      const text = input.value.trim();
+      const v = text === '' ? NaN : Number(text);
+      const outside = e.typical !== null && Number.isFinite(v) && (v < e.typical.min || v > e.typical.max);
+      head.textContent = `${e.symbol}${e.unit ? ` (${e.unit})` : ' (no unit)'}: ${e.meaning}. `;
+      range.textContent = e.typical === null
+        ? 'No typical range sourced.'
+        : `${outside ? 'Outside the typical range' : 'Typical'} ${fmt(e.typical.min)} .. ${fmt(e.typical.max)}${unit}` +
+          `${outside ? ` (accepted ${fmt(e.accepted.min)} .. ${fmt(e.accepted.max)}${unit})` : ''}.`;
+      note.classList.toggle('outside', outside);
+      input.classList.toggle('outside', outside);
+    };
+    input.addEventListener('input', show);
+    input.addEventListener('explain', show);
+    show();
   }
 
   /** The device parameters typed in; empty fields take the server's default. */
@@ -771,9 +817,11 @@
       other.textContent = `${equation(c)} beside it (dashed): U ${fmt(c.voltage_min_v)} .. ${fmt(c.voltage_max_v)} V RMS`;
       box.append(other);
     }
-    if (s.warnings.length) {
+    // The server's warnings with the page's controls named, not the command line's flags.
+    const warnings = state.voltage.page_warnings || s.warnings;
+    if (warnings.length) {
       const list = document.createElement('ul');
-      s.warnings.forEach((w) => {
+      warnings.forEach((w) => {
         const item = document.createElement('li');
         item.className = 'warning';
         item.textContent = w;

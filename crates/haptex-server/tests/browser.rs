@@ -535,6 +535,55 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
         }
     }
 
+    // 4b. Every parameter explained where it is set (GET /api/config,
+    // explanations): d_sc shows its symbol, unit, typical range and source,
+    // and turns to the warning style outside 0.2 .. 0.3 mm; the page's
+    // messages name its controls, not command-line flags.
+    let explained = script(client, "return document.querySelectorAll('p.explain').length;").await?;
+    if explained != 13 {
+        return fail(format!("{explained} parameters explained in the page, expected 13"));
+    }
+    let label = wd!(wd!(client.find(Locator::Css("label[for='param-mu_hd']"))).text());
+    if !label.starts_with("mu_HD") {
+        return fail(format!("the friction of the display is labelled {label:?}, not with the paper's mu_HD"));
+    }
+    let d_sc = "document.getElementById('explain-d_sc_mm')";
+    let note = wd!(wd!(client.find(Locator::Id("explain-d_sc_mm"))).text());
+    let outside = format!(
+        "{d_sc}.classList.contains('outside') && document.getElementById('param-d_sc_mm').classList.contains('outside')"
+    );
+    if !note.contains("d_sc (mm)") || !note.contains("Typical 0.2 .. 0.3 mm") || !note.contains("physics.md") {
+        return fail(format!("d_sc's explanation: {note:?}"));
+    }
+    if script(client, &format!("return {outside};")).await? != Value::Bool(false) {
+        return fail("d_sc = 0.2 mm (the paper's) is flagged outside its typical range");
+    }
+    let n = updates(client).await?;
+    type_into(client, "param-d_sc_mm", "0.5").await?;
+    wait_for(client, &outside, "d_sc = 0.5 mm in the warning style").await?;
+    wait_update(client, n, "the voltage after typing d_sc").await?;
+    let note = wd!(wd!(client.find(Locator::Id("explain-d_sc_mm"))).text());
+    if !note.contains("Outside the typical range 0.2 .. 0.3 mm") {
+        return fail(format!("d_sc = 0.5 mm: the explanation says {note:?}"));
+    }
+    let n = updates(client).await?;
+    type_into(client, "param-d_sc_mm", "0.2").await?;
+    wait_for(client, &format!("!({outside})"), "d_sc = 0.2 mm back in the plain style").await?;
+    wait_update(client, n, "the voltage after restoring d_sc").await?;
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css("input[name='method'][value='physical']"))).click());
+    wait_update(client, n, "the voltage after choosing the physical method").await?;
+    let summary = wd!(wd!(client.find(Locator::Id("summary"))).text());
+    // The library's materials lie below mu_HD = 1 (physical, not relative):
+    // the "lower --mu-hd or use --method normalized", now in the
+    // page's words.
+    if summary.contains("--") || !summary.contains("lower mu_HD (Device and finger)") {
+        return fail(format!("the summary does not name the page's controls: {summary:?}"));
+    }
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css("input[name='method'][value='normalized']"))).click());
+    wait_update(client, n, "the voltage after choosing the normalized method again").await?;
+
     // 5. Upload a profile file: its points are plotted.
     let x: Vec<f64> = (0..9).map(|i| 0.5 * i as f64).collect();
     let mu = [1.0, 1.05, 1.2, 1.4, 1.3, 1.1, 1.0, 1.02, 1.0];
