@@ -176,6 +176,35 @@ async fn config_explains_every_gui_parameter_with_ranges_the_server_accepts() {
     assert!(find("d_sc_mm").unwrap()["source"].as_str().unwrap().contains("Fig. 2"));
 }
 
+/// The model section's data: eqs. (3), (8), (9); eq. (8)'s constant with
+/// the Fig. 2 device as physics.md quotes it (U = sqrt(50217.6 (mu_RS/mu_HD
+/// - 1)) V); the shipped finger model as the FE code reads it, its file
+/// (with the sources in its comments) as on disk, and the one the database
+/// was built with.
+#[tokio::test]
+async fn model_serves_the_equations_and_the_finger_the_server_uses() {
+    let model = get("/api/model").await.ok().json();
+    let ids: Vec<&str> = model["equations"].as_array().unwrap().iter().map(|e| e["id"].as_str().unwrap()).collect();
+    assert_eq!(ids, ["3", "8", "9"]);
+    let u2 = model["paper_device"]["eq8_u2_per_unit_excess_v2"].as_f64().unwrap();
+    assert!((u2 - 50217.6).abs() < 0.1, "{u2}");
+    assert_eq!(model["paper_device"]["eps_sc"], 1650.0);
+    let finger = haptex_fem::finger::FingerModel::default_model();
+    let materials = model["finger"]["materials"].as_array().unwrap();
+    assert_eq!(materials.len(), 6);
+    let dermis = materials.iter().find(|m| m["name"] == "dermis").unwrap();
+    assert_eq!(dermis["e_mpa"].as_f64(), Some(finger.materials.dermis.e_mpa));
+    assert_eq!(model["finger"]["layers"]["stratum_corneum_mm"].as_f64(), Some(finger.layers.stratum_corneum_mm));
+    assert_eq!(model["finger"]["geometry"]["half_width_mm"].as_f64(), Some(finger.geometry.half_width_mm));
+    let file = model["finger"]["file"].as_str().unwrap();
+    let on_disk = std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(file)).unwrap();
+    assert_eq!(model["finger"]["file_text"].as_str(), Some(on_disk.as_str()));
+    assert!(on_disk.contains("Provenance"));
+    let templates = get("/api/templates").await.ok().json();
+    assert_eq!(templates["fe"]["finger_model"].as_str(), Some(file));
+    assert_eq!(get("/api/model?x=1").await.status, StatusCode::BAD_REQUEST);
+}
+
 /// The warnings the page shows name the page's controls: the library's,
 /// written for the command line ("lower --mu-hd ... --method normalized"),
 /// come with `page_warnings` where each flag is the control it stands for.

@@ -421,6 +421,32 @@ async fn relative_fig2(client: &Client, x: &[f64], predicted: &[f64]) -> Check<(
     Ok(())
 }
 
+/// The model section, opened: eq. (8) with the Fig. 2 constant physics.md
+/// quotes, the shipped finger's dermis modulus, the finger file with its
+/// sources and the database's leave-one-out errors.
+async fn model_section(client: &Client) -> Check<()> {
+    wait_for(client, "document.querySelectorAll('#model-body table').length >= 6", "the model section's tables")
+        .await?;
+    wd!(wd!(client.find(Locator::Css("#model-box > summary"))).click());
+    let text = wd!(wd!(client.find(Locator::Id("model-body"))).text());
+    let dermis = haptex_fem::finger::FingerModel::default_model().materials.dermis.e_mpa;
+    for expected in [
+        "U = sqrt(50217.6 (mu_RS/mu_HD - 1)) V".to_string(),
+        "U(x) = U_max sqrt((mu_RS(x) - min mu_RS) / (max mu_RS - min mu_RS))".to_string(),
+        format!("dermis {dermis} 0.48"),
+        "LOO RMSE".to_string(),
+    ] {
+        if !text.contains(&expected) {
+            return fail(format!("the model section does not show {expected:?}: {text}"));
+        }
+    }
+    let file = script(client, "return document.getElementById('model-finger-file').textContent;").await?;
+    if !file.as_str().is_some_and(|f| f.contains("Provenance") && f.contains("Pawluk")) {
+        return fail("the model section does not show the finger file with its sources");
+    }
+    Ok(())
+}
+
 async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     // 1. Load: the first source is the template, the default bump drawn.
     wd!(client.goto(base));
@@ -443,6 +469,7 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
         );
     }
     relative_fig2(client, &friction[0], &predicted).await?;
+    model_section(client).await?;
 
     // 2. The width slider, moved with the mouse, changes the plotted voltage.
     let before = plotted(client, "voltage").await?;
