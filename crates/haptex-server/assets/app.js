@@ -829,6 +829,24 @@
       });
       box.append(list);
     }
+    // A flat 0 V line is not a signal: say why, and offer the one-click ways out.
+    if (s.method === 'physical' && s.not_renderable.fraction_of_length >= 1) {
+      const way = document.createElement('div');
+      way.className = 'way-out';
+      way.append('U = 0 V everywhere (the profile never rises above mu_HD). One click: ');
+      const button = (id, text, action) => {
+        const b = document.createElement('button');
+        Object.assign(b, { type: 'button', id, textContent: text, className: 'small' });
+        b.addEventListener('click', () => { action(); scheduleVoltage(); });
+        return b;
+      };
+      way.append(button('way-out-normalized', 'the pattern: normalized (eq. 9)', () => setMethod('normalized')));
+      if (!state.relative) {
+        way.append(' ', button('way-out-relative', 'relative to its flat-surface friction (Fig. 2)',
+          () => setRelative(true, '')));
+      }
+      box.append(way);
+    }
   }
 
   // --------------------------------------------------------------- plots

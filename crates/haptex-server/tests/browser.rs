@@ -607,6 +607,19 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     if summary.contains("--") || !summary.contains("lower mu_HD (Device and finger)") {
         return fail(format!("the summary does not name the page's controls: {summary:?}"));
     }
+    // ... and a 0 V line comes with its one-click way out: relative to the
+    // profile's flat-surface friction (its median), which gives a signal.
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Id("way-out-relative"))).click());
+    wait_update(client, n, "the voltage after the one-click relative mapping").await?;
+    wait_for(client, "window.haptex.state.voltage.summary.relative !== undefined", "the relative mapping").await?;
+    let voltage = plotted(client, "voltage").await?;
+    if !voltage[1].iter().any(|u| *u > 0.0) || !wd!(wd!(client.find(Locator::Id("relative"))).is_selected()) {
+        return fail("the one-click relative mapping did not tick relative and give a voltage above 0 V");
+    }
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Id("relative"))).click());
+    wait_update(client, n, "the voltage after unticking relative").await?;
     let n = updates(client).await?;
     wd!(wd!(client.find(Locator::Css("input[name='method'][value='normalized']"))).click());
     wait_update(client, n, "the voltage after choosing the normalized method again").await?;
