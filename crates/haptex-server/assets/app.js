@@ -570,6 +570,7 @@
     $('relative').checked = on;
     $('flat-mu').value = flatMu;
     $('flat-mu').disabled = !on;
+    $('flat-mu').dispatchEvent(new Event('explain'));
   }
 
   function buildControls(config) {
@@ -607,8 +608,9 @@
       const wrap = document.createElement('div');
       const label = document.createElement('label');
       label.htmlFor = `param-${p.name}`;
-      label.title = p.description;
-      label.textContent = p.name + ' ';
+      label.title = `${p.description} (API field ${p.name})`;
+      const explained = (config.explanations || []).find((e) => e.field === p.name);
+      label.textContent = (explained ? explained.symbol : p.name) + ' ';
       const unit = document.createElement('span');
       unit.className = 'unit';
       unit.textContent = p.unit ? `(${p.unit})` : '';
@@ -627,6 +629,7 @@
     $('reset-device').addEventListener('click', () => {
       config.device_params.forEach((p) => { $(`param-${p.name}`).value = p.default === null ? '' : String(p.default); });
       readDevice();
+      document.querySelectorAll('[data-explained]').forEach((input) => input.dispatchEvent(new Event('explain')));
       scheduleVoltage();
     });
 
@@ -656,6 +659,49 @@
 
     document.querySelectorAll('[data-download]').forEach((b) =>
       b.addEventListener('click', () => download(b.dataset.download).catch(showError)));
+
+    (config.explanations || []).forEach(explain);
+  }
+
+  /**
+   * Puts the server's explanation of a parameter (GET /api/config,
+   * `explanations`) under its control: symbol, unit, meaning, typical range
+   * and source; the control and the note turn to the warning style while the
+   * value is outside the typical range (as the template sliders do outside
+   * the FE database).
+   */
+  function explain(e) {
+    const input = document.querySelector(`[data-param="${e.field}"], [data-field="${e.field}"]`);
+    if (!input) return;
+    const unit = e.unit ? ` ${e.unit}` : '';
+    const note = document.createElement('p');
+    note.className = 'explain';
+    note.id = `explain-${e.field}`;
+    const head = document.createElement('span');
+    const range = document.createElement('span');
+    range.className = 'typical';
+    const source = document.createElement('span');
+    source.className = 'source';
+    source.textContent = ` Source: ${e.source}.`;
+    note.append(head, range, source);
+    input.dataset.explained = e.field;
+    input.setAttribute('aria-describedby', note.id);
+    input.insertAdjacentElement('afterend', note);
+    const show = () => {
+      const text = input.value.trim();
+      const v = text === '' ? NaN : Number(text);
+      const outside = e.typical !== null && Number.isFinite(v) && (v < e.typical.min || v > e.typical.max);
+      head.textContent = `${e.symbol}${e.unit ? ` (${e.unit})` : ' (no unit)'}: ${e.meaning}. `;
+      range.textContent = e.typical === null
+        ? 'No typical range sourced.'
+        : `${outside ? 'Outside the typical range' : 'Typical'} ${fmt(e.typical.min)} .. ${fmt(e.typical.max)}${unit}` +
+          `${outside ? ` (accepted ${fmt(e.accepted.min)} .. ${fmt(e.accepted.max)}${unit})` : ''}.`;
+      note.classList.toggle('outside', outside);
+      input.classList.toggle('outside', outside);
+    };
+    input.addEventListener('input', show);
+    input.addEventListener('explain', show);
+    show();
   }
 
   /** The device parameters typed in; empty fields take the server's default. */
@@ -771,15 +817,35 @@
       other.textContent = `${equation(c)} beside it (dashed): U ${fmt(c.voltage_min_v)} .. ${fmt(c.voltage_max_v)} V RMS`;
       box.append(other);
     }
-    if (s.warnings.length) {
+    // The server's warnings with the page's controls named, not the command line's flags.
+    const warnings = state.voltage.page_warnings || s.warnings;
+    if (warnings.length) {
       const list = document.createElement('ul');
-      s.warnings.forEach((w) => {
+      warnings.forEach((w) => {
         const item = document.createElement('li');
         item.className = 'warning';
         item.textContent = w;
         list.append(item);
       });
       box.append(list);
+    }
+    // A flat 0 V line is not a signal: say why, and offer the one-click ways out.
+    if (s.method === 'physical' && s.not_renderable.fraction_of_length >= 1) {
+      const way = document.createElement('div');
+      way.className = 'way-out';
+      way.append('U = 0 V everywhere (the profile never rises above mu_HD). One click: ');
+      const button = (id, text, action) => {
+        const b = document.createElement('button');
+        Object.assign(b, { type: 'button', id, textContent: text, className: 'small' });
+        b.addEventListener('click', () => { action(); scheduleVoltage(); });
+        return b;
+      };
+      way.append(button('way-out-normalized', 'the pattern: normalized (eq. 9)', () => setMethod('normalized')));
+      if (!state.relative) {
+        way.append(' ', button('way-out-relative', 'relative to its flat-surface friction (Fig. 2)',
+          () => setRelative(true, '')));
+      }
+      box.append(way);
     }
   }
 
@@ -1063,6 +1129,97 @@
     return `${(100 * fraction).toFixed(2)}%`;
   }
 
+  // --------------------------------------------------------------- model
+
+  /** A table of [label, value] rows (values as text). */
+  function table(caption, head, rows) {
+    const t = document.createElement('table');
+    t.className = 'model-table';
+    const c = document.createElement('caption');
+    c.textContent = caption;
+    t.append(c);
+    [head, ...rows].forEach((row, i) => {
+      const tr = document.createElement('tr');
+      row.forEach((cell) => {
+        const td = document.createElement(i === 0 ? 'th' : 'td');
+        td.textContent = typeof cell === 'number' ? fmt(cell) : String(cell);
+        tr.append(td);
+      });
+      t.append(tr);
+    });
+    return t;
+  }
+
+  /**
+   * The model section: equations and the FE finger (GET /api/model), the
+   * database's grid and leave-one-out errors (GET /api/templates), as the
+   * server uses them.
+   */
+  function buildModel(model, templates) {
+    const body = $('model-body');
+    body.textContent = '';
+    body.append(table('Equations (paper numbering)', ['eq.', 'formula', 'meaning'],
+      model.equations.map((e) => [`(${e.id})`, e.text, e.meaning])));
+    const d = model.paper_device;
+    const fig2 = document.createElement('p');
+    fig2.className = 'note';
+    fig2.textContent = `With ${d.source} (eps_sc = ${fmt(d.eps_sc)}, eps_i = ${fmt(d.eps_i)}, d_sc = ${fmt(d.d_sc_mm)} mm, ` +
+      `d_i = ${fmt(d.d_i_mm)} mm, k = ${fmt(d.k_mm2_per_n)} mm^2/N, mu_HD = ${fmt(d.mu_hd)}, U_max = ${fmt(d.u_max_v)} V): ` +
+      `Fe/Fn = ${d.fe_over_fn_per_v2.toExponential(4)} U^2, and eq. (8) reads ` +
+      `U = sqrt(${d.eq8_u2_per_unit_excess_v2.toFixed(1)} (mu_RS/mu_HD - 1)) V.`;
+    body.append(fig2);
+    const f = model.finger;
+    const g = f.geometry;
+    body.append(table(`FE finger model: geometry (${f.file}, 2D plane strain)`, ['quantity', 'value'], [
+      ['cross-section half-width', `${fmt(g.half_width_mm)} mm`],
+      ['cross-section half-height', `${fmt(g.half_height_mm)} mm`],
+      ['bone half-width x half-height', `${fmt(g.bone_half_width_mm)} x ${fmt(g.bone_half_height_mm)} mm`],
+      ['bone centre above the pad', `${fmt(g.bone_center_height_mm)} mm`],
+      ['nail thickness, half-angle', `${fmt(g.nail_thickness_mm)} mm, ${fmt(g.nail_half_angle_deg)}°`],
+      ['stratum corneum', `${fmt(f.layers.stratum_corneum_mm)} mm`],
+      ['viable epidermis', `${fmt(f.layers.viable_epidermis_mm)} mm`],
+      ['dermis', `${fmt(f.layers.dermis_mm)} mm`],
+      ['hypodermis', 'fills to the bone'],
+      ['skin friction mu_skin', fmt(f.contact.mu_skin)],
+      ['contact region half-arc', `${fmt(f.contact.contact_half_arc_mm)} mm`],
+    ]));
+    body.append(table('FE finger model: materials', ['subdomain', 'E (MPa)', 'nu'],
+      f.materials.map((m) => [m.name.replace('_', ' '), m.e_mpa, m.nu])));
+    body.append(table('Visco-elasticity of the soft tissues (Prony series on the deviatoric stress)', ['g', 'tau (s)'],
+      f.viscoelasticity.prony.map((p) => [p.g, p.tau_s])));
+    const file = document.createElement('details');
+    const fileSummary = document.createElement('summary');
+    fileSummary.textContent = `Sources: ${f.file} as shipped (its comments cite each value)`;
+    const pre = document.createElement('pre');
+    pre.id = 'model-finger-file';
+    pre.textContent = f.file_text;
+    file.append(fileSummary, pre);
+    body.append(file);
+    if (!templates) {
+      const none = document.createElement('p');
+      none.className = 'note';
+      none.textContent = 'This server has no FE database of surface templates.';
+      body.append(none);
+      return;
+    }
+    const fe = templates.fe;
+    body.append(table('FE database: the runs', ['setting', 'value'], [
+      ['finger model', fe.finger_model], ['mesh', fe.mesh], ['material', fe.material],
+      ['indentation', `${fmt(fe.indent_mm)} mm`], ['mu_skin', fmt(fe.mu_skin)],
+      ['profile grid', `${fmt(templates.grid.points)} points, ${fmt(templates.grid.xi_min_mm)} .. ${fmt(templates.grid.xi_max_mm)} mm about x0`],
+    ]));
+    body.append(table('FE database: templates and the leave-one-out error of their estimates',
+      ['template', 'FE runs', 'parameters (database range)', 'LOO RMSE (mu)', '% of a profile\'s range'],
+      templates.templates.map((t) => [t.name, t.rows,
+        t.parameters.map((p) => `${p.name} ${fmt(p.database[0])} .. ${fmt(p.database[1])} ${p.unit}`).join('; '),
+        t.loo_rmse, `${(100 * t.loo_rmse_relative_to_range).toFixed(1)}%`])));
+  }
+
+  async function loadModel() {
+    const model = await (await api('/api/model')).json();
+    buildModel(model, state.templates);
+  }
+
   async function start() {
     try {
       state.config = await (await api('/api/config')).json();
@@ -1084,6 +1241,7 @@
           select.append(option);
         });
       }
+      loadModel().catch((error) => { $('model-body').textContent = `The model could not be loaded: ${error.message}`; });
       selectSource(sources[0].id);
       if (!state.profile && state.source === 'upload') document.body.dataset.state = 'ready';
     } catch (error) {

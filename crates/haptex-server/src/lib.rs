@@ -37,6 +37,7 @@ mod api;
 pub mod assets;
 mod connection;
 pub mod error;
+pub mod explain;
 pub mod fields;
 pub mod guard;
 pub mod input;

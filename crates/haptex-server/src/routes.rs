@@ -39,6 +39,7 @@ pub fn table() -> Vec<Endpoint> {
         endpoint(Method::GET, "/api/health", api::health::get),
         endpoint(Method::GET, "/api/config", api::config::get),
         endpoint(Method::GET, "/api/openapi.json", api::openapi::get),
+        endpoint(Method::GET, "/api/model", api::model::get),
         endpoint(Method::GET, "/api/templates", api::templates::get),
         endpoint(Method::POST, "/api/predict", api::predict::post),
         endpoint(Method::POST, "/api/simulate", api::simulate::post),

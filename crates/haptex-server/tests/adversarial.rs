@@ -160,6 +160,7 @@ fn valid_requests() -> Vec<Valid> {
         Valid { route: ("GET", "/api/health"), target: "/api/health", content_type: None, body: vec![] },
         Valid { route: ("GET", "/api/config"), target: "/api/config", content_type: None, body: vec![] },
         Valid { route: ("GET", "/api/openapi.json"), target: "/api/openapi.json", content_type: None, body: vec![] },
+        Valid { route: ("GET", "/api/model"), target: "/api/model", content_type: None, body: vec![] },
         Valid { route: ("GET", "/api/templates"), target: "/api/templates", content_type: None, body: vec![] },
         Valid {
             route: ("POST", "/api/predict"),

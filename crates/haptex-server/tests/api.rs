@@ -110,6 +110,121 @@ async fn config_offers_template_library_and_upload_with_the_papers_defaults() {
     assert_eq!(config["limits"]["max_body_bytes"], 1 << 20);
 }
 
+/// Every parameter the GUI sets is explained in /api/config: symbol, unit,
+/// meaning, source, and a typical range (where one is sourced) inside the
+/// range the server accepts, which is the very range it checks the field
+/// against; a value at either end of a typical range is accepted by the
+/// route that takes the field.
+#[tokio::test]
+async fn config_explains_every_gui_parameter_with_ranges_the_server_accepts() {
+    let config = get("/api/config").await.ok().json();
+    let explanations = config["explanations"].as_array().unwrap();
+    let find = |field: &str| explanations.iter().find(|e| e["field"] == field);
+    // The server's own check of each field.
+    let mut checked: Vec<(&str, ranges::Range)> = DEVICE_PARAMS.iter().map(|p| (p.name, p.range())).collect();
+    checked.extend([
+        ("flat_mu", ranges::FLAT_MU),
+        ("load_n_per_mm", fields::LOAD_N_PER_MM),
+        ("velocity_mm_s", ranges::VELOCITY_MM_S),
+        ("carrier_hz", ranges::CARRIER_HZ),
+    ]);
+    assert_eq!(explanations.len(), checked.len());
+    let mut sourced = 0;
+    for (field, range) in checked {
+        let e = find(field).unwrap_or_else(|| panic!("{field} is not explained"));
+        for key in ["label", "symbol", "meaning", "source"] {
+            assert!(!e[key].as_str().unwrap().trim().is_empty(), "{field}.{key}");
+        }
+        assert_eq!(e["unit"].as_str(), Some(range.unit), "{field}");
+        assert_eq!((e["accepted"]["min"].as_f64(), e["accepted"]["max"].as_f64()), (Some(range.min), Some(range.max)));
+        if e["typical"].is_null() {
+            assert!(e["source"].as_str().unwrap().contains("no typical range sourced"), "{field}: {e}");
+            continue;
+        }
+        sourced += 1;
+        let (lo, hi) = (e["typical"]["min"].as_f64().unwrap(), e["typical"]["max"].as_f64().unwrap());
+        assert!(lo < hi && range.contains(lo) && range.contains(hi), "{field}: {lo} .. {hi} vs {range:?}");
+        for value in [lo, hi] {
+            let profile = profile_json(&[0.0, 1.0, 2.0], &[1.0, 1.2, 1.5]);
+            let status = if DEVICE_PARAMS.iter().any(|p| p.name == field) {
+                // n != 1 needs the normal force (the page's Fn field).
+                let mut device = json!({ field: value });
+                if field == "area_exponent" {
+                    device["fn_n"] = json!(0.5);
+                }
+                post_json("/api/voltage", &json!({ "profile": profile, "device": device })).await.status
+            } else if field == "flat_mu" {
+                post_json("/api/voltage", &json!({ "profile": profile, "relative": true, "flat_mu": value }))
+                    .await
+                    .status
+            } else if field == "velocity_mm_s" {
+                let voltage = json!({ "x_mm": [0.0, 1.0], "voltage_v": [50.0, 50.0] });
+                post_json("/api/play", &json!({ "voltage": voltage, "stroke": { "velocity_mm_s": value } }))
+                    .await
+                    .status
+            } else {
+                continue; // load_n_per_mm: the range is the check's own constant (above), checked before an FE run
+            };
+            assert_eq!(status, StatusCode::OK, "{field} = {value}");
+        }
+    }
+    // The sourced ranges: mu_HD, d_sc, n, Fn, mu_flat, the load, the velocity.
+    assert_eq!(sourced, 7);
+    let mu_hd = find("mu_hd").unwrap();
+    assert_eq!(mu_hd["symbol"], "mu_HD");
+    assert!(mu_hd["source"].as_str().unwrap().contains("Derler"));
+    assert!(find("d_sc_mm").unwrap()["source"].as_str().unwrap().contains("Fig. 2"));
+}
+
+/// The model section's data: eqs. (3), (8), (9); eq. (8)'s constant with
+/// the Fig. 2 device as physics.md quotes it (U = sqrt(50217.6 (mu_RS/mu_HD
+/// - 1)) V); the shipped finger model as the FE code reads it, its file
+/// (with the sources in its comments) as on disk, and the one the database
+/// was built with.
+#[tokio::test]
+async fn model_serves_the_equations_and_the_finger_the_server_uses() {
+    let model = get("/api/model").await.ok().json();
+    let ids: Vec<&str> = model["equations"].as_array().unwrap().iter().map(|e| e["id"].as_str().unwrap()).collect();
+    assert_eq!(ids, ["3", "8", "9"]);
+    let u2 = model["paper_device"]["eq8_u2_per_unit_excess_v2"].as_f64().unwrap();
+    assert!((u2 - 50217.6).abs() < 0.1, "{u2}");
+    assert_eq!(model["paper_device"]["eps_sc"], 1650.0);
+    let finger = haptex_fem::finger::FingerModel::default_model();
+    let materials = model["finger"]["materials"].as_array().unwrap();
+    assert_eq!(materials.len(), 6);
+    let dermis = materials.iter().find(|m| m["name"] == "dermis").unwrap();
+    assert_eq!(dermis["e_mpa"].as_f64(), Some(finger.materials.dermis.e_mpa));
+    assert_eq!(model["finger"]["layers"]["stratum_corneum_mm"].as_f64(), Some(finger.layers.stratum_corneum_mm));
+    assert_eq!(model["finger"]["geometry"]["half_width_mm"].as_f64(), Some(finger.geometry.half_width_mm));
+    let file = model["finger"]["file"].as_str().unwrap();
+    let on_disk = std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(file)).unwrap();
+    assert_eq!(model["finger"]["file_text"].as_str(), Some(on_disk.as_str()));
+    assert!(on_disk.contains("Provenance"));
+    let templates = get("/api/templates").await.ok().json();
+    assert_eq!(templates["fe"]["finger_model"].as_str(), Some(file));
+    assert_eq!(get("/api/model?x=1").await.status, StatusCode::BAD_REQUEST);
+}
+
+/// The warnings the page shows name the page's controls: the library's,
+/// written for the command line ("lower --mu-hd ... --method normalized"),
+/// come with `page_warnings` where each flag is the control it stands for.
+#[tokio::test]
+async fn voltage_page_warnings_name_the_pages_controls_not_cli_flags() {
+    let profile = profile_json(&[0.0, 1.0, 2.0], &[0.3, 0.35, 0.4]);
+    let answer = post_json("/api/voltage", &json!({ "profile": profile })).await.ok().json();
+    let cli = answer["summary"]["warnings"].as_array().unwrap();
+    let page = answer["page_warnings"].as_array().unwrap();
+    assert_eq!(cli.len(), page.len());
+    assert!(cli[0].as_str().unwrap().contains("--mu-hd"), "{cli:?}");
+    let text = page[0].as_str().unwrap();
+    assert!(!text.contains("--"), "{text}");
+    assert!(text.contains("mu_HD (Device and finger)") && text.contains("the method normalized (eq. 9)"), "{text}");
+    let relative = json!({ "profile": profile, "relative": true, "flat_mu": 0.5 });
+    let answer = post_json("/api/voltage", &relative).await.ok().json();
+    let text = answer["page_warnings"][0].as_str().unwrap();
+    assert!(text.contains("U = 0 V") && !text.contains("--"), "{text}");
+}
+
 /// The OpenAPI description lists exactly the routes the router serves
 /// (method and path), and its device-parameter schema has the defaults and
 /// ranges the server enforces.

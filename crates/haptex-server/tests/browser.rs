@@ -421,6 +421,32 @@ async fn relative_fig2(client: &Client, x: &[f64], predicted: &[f64]) -> Check<(
     Ok(())
 }
 
+/// The model section, opened: eq. (8) with the Fig. 2 constant physics.md
+/// quotes, the shipped finger's dermis modulus, the finger file with its
+/// sources and the database's leave-one-out errors.
+async fn model_section(client: &Client) -> Check<()> {
+    wait_for(client, "document.querySelectorAll('#model-body table').length >= 6", "the model section's tables")
+        .await?;
+    wd!(wd!(client.find(Locator::Css("#model-box > summary"))).click());
+    let text = wd!(wd!(client.find(Locator::Id("model-body"))).text());
+    let dermis = haptex_fem::finger::FingerModel::default_model().materials.dermis.e_mpa;
+    for expected in [
+        "U = sqrt(50217.6 (mu_RS/mu_HD - 1)) V".to_string(),
+        "U(x) = U_max sqrt((mu_RS(x) - min mu_RS) / (max mu_RS - min mu_RS))".to_string(),
+        format!("dermis {dermis} 0.48"),
+        "LOO RMSE".to_string(),
+    ] {
+        if !text.contains(&expected) {
+            return fail(format!("the model section does not show {expected:?}: {text}"));
+        }
+    }
+    let file = script(client, "return document.getElementById('model-finger-file').textContent;").await?;
+    if !file.as_str().is_some_and(|f| f.contains("Provenance") && f.contains("Pawluk")) {
+        return fail("the model section does not show the finger file with its sources");
+    }
+    Ok(())
+}
+
 async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     // 1. Load: the first source is the template, the default bump drawn.
     wd!(client.goto(base));
@@ -443,6 +469,7 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
         );
     }
     relative_fig2(client, &friction[0], &predicted).await?;
+    model_section(client).await?;
 
     // 2. The width slider, moved with the mouse, changes the plotted voltage.
     let before = plotted(client, "voltage").await?;
@@ -534,6 +561,68 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
             return fail(format!("U_max 100 -> 60 V should scale every voltage by 0.6: {u100} -> {u60}"));
         }
     }
+
+    // 4b. Every parameter explained where it is set (GET /api/config,
+    // explanations): d_sc shows its symbol, unit, typical range and source,
+    // and turns to the warning style outside 0.2 .. 0.3 mm; the page's
+    // messages name its controls, not command-line flags.
+    let explained = script(client, "return document.querySelectorAll('p.explain').length;").await?;
+    if explained != 13 {
+        return fail(format!("{explained} parameters explained in the page, expected 13"));
+    }
+    let label = wd!(wd!(client.find(Locator::Css("label[for='param-mu_hd']"))).text());
+    if !label.starts_with("mu_HD") {
+        return fail(format!("the friction of the display is labelled {label:?}, not with the paper's mu_HD"));
+    }
+    let d_sc = "document.getElementById('explain-d_sc_mm')";
+    let note = wd!(wd!(client.find(Locator::Id("explain-d_sc_mm"))).text());
+    let outside = format!(
+        "{d_sc}.classList.contains('outside') && document.getElementById('param-d_sc_mm').classList.contains('outside')"
+    );
+    if !note.contains("d_sc (mm)") || !note.contains("Typical 0.2 .. 0.3 mm") || !note.contains("physics.md") {
+        return fail(format!("d_sc's explanation: {note:?}"));
+    }
+    if script(client, &format!("return {outside};")).await? != Value::Bool(false) {
+        return fail("d_sc = 0.2 mm (the paper's) is flagged outside its typical range");
+    }
+    let n = updates(client).await?;
+    type_into(client, "param-d_sc_mm", "0.5").await?;
+    wait_for(client, &outside, "d_sc = 0.5 mm in the warning style").await?;
+    wait_update(client, n, "the voltage after typing d_sc").await?;
+    let note = wd!(wd!(client.find(Locator::Id("explain-d_sc_mm"))).text());
+    if !note.contains("Outside the typical range 0.2 .. 0.3 mm") {
+        return fail(format!("d_sc = 0.5 mm: the explanation says {note:?}"));
+    }
+    let n = updates(client).await?;
+    type_into(client, "param-d_sc_mm", "0.2").await?;
+    wait_for(client, &format!("!({outside})"), "d_sc = 0.2 mm back in the plain style").await?;
+    wait_update(client, n, "the voltage after restoring d_sc").await?;
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css("input[name='method'][value='physical']"))).click());
+    wait_update(client, n, "the voltage after choosing the physical method").await?;
+    let summary = wd!(wd!(client.find(Locator::Id("summary"))).text());
+    // The library's materials lie below mu_HD = 1 (physical, not relative):
+    // the "lower --mu-hd or use --method normalized", now in the
+    // page's words.
+    if summary.contains("--") || !summary.contains("lower mu_HD (Device and finger)") {
+        return fail(format!("the summary does not name the page's controls: {summary:?}"));
+    }
+    // ... and a 0 V line comes with its one-click way out: relative to the
+    // profile's flat-surface friction (its median), which gives a signal.
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Id("way-out-relative"))).click());
+    wait_update(client, n, "the voltage after the one-click relative mapping").await?;
+    wait_for(client, "window.haptex.state.voltage.summary.relative !== undefined", "the relative mapping").await?;
+    let voltage = plotted(client, "voltage").await?;
+    if !voltage[1].iter().any(|u| *u > 0.0) || !wd!(wd!(client.find(Locator::Id("relative"))).is_selected()) {
+        return fail("the one-click relative mapping did not tick relative and give a voltage above 0 V");
+    }
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Id("relative"))).click());
+    wait_update(client, n, "the voltage after unticking relative").await?;
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css("input[name='method'][value='normalized']"))).click());
+    wait_update(client, n, "the voltage after choosing the normalized method again").await?;
 
     // 5. Upload a profile file: its points are plotted.
     let x: Vec<f64> = (0..9).map(|i| 0.5 * i as f64).collect();

@@ -371,11 +371,8 @@ impl Job {
             settings["max_runs"] = json!(self.stopping.max_runs);
             settings["tolerance"] = json!(self.stopping.tolerance);
         }
-        let voltage_json = serde_json::to_value(super::voltage::VoltageAnswer {
-            parameters: self.request.values(),
-            voltage: &voltage,
-        })
-        .map_err(|e| ApiError::internal(format!("cannot serialize the voltage: {e}")))?;
+        let voltage_json = serde_json::to_value(super::voltage::VoltageAnswer::new(self.request.values(), &voltage))
+            .map_err(|e| ApiError::internal(format!("cannot serialize the voltage: {e}")))?;
         Ok(json!({
             "settings": settings,
             "parameters": self.request.values(),

@@ -20,6 +20,7 @@ pub async fn get(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -
         "version": env!("CARGO_PKG_VERSION"),
         "sources": state.sources(),
         "device_params": DEVICE_PARAMS,
+        "explanations": crate::explain::EXPLANATIONS,
         "methods": [
             { "id": "physical", "label": "physical (eq. 8)", "description": "the voltage that reproduces the reference friction force; clipped at U_max, 0 V where mu_RS < mu_HD" },
             { "id": "normalized", "label": "normalized (eq. 9)", "description": "the pattern only: min mu -> 0 V, max mu -> U_max" },

@@ -4,6 +4,7 @@ pub mod check;
 pub mod config;
 pub mod health;
 pub mod materials;
+pub mod model;
 pub mod openapi;
 pub mod play;
 pub mod predict;

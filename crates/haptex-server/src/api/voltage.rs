@@ -97,6 +97,17 @@ pub(crate) struct VoltageAnswer<'a> {
     pub parameters: BTreeMap<&'static str, f64>,
     #[serde(flatten)]
     pub voltage: &'a VoltageProfile,
+    /// `summary.warnings` as the page shows them: the library writes them
+    /// for the command line (`lower --mu-hd`); here each flag is the
+    /// page's control ([`crate::explain::for_page`]).
+    pub page_warnings: Vec<String>,
+}
+
+impl<'a> VoltageAnswer<'a> {
+    pub fn new(parameters: BTreeMap<&'static str, f64>, voltage: &'a VoltageProfile) -> Self {
+        let page_warnings = voltage.summary.warnings.iter().map(|w| crate::explain::for_page(w)).collect();
+        VoltageAnswer { parameters, voltage, page_warnings }
+    }
 }
 
 pub async fn post(
@@ -145,7 +156,7 @@ pub async fn post(
         let voltage = compute(&profile, method, &request, relative, prefix)?;
         Ok(match format {
             "csv" => super::csv_response(super::to_csv(|w| voltage.write_csv(w))?, "voltage.csv"),
-            _ => Json(VoltageAnswer { parameters: request.values(), voltage: &voltage }).into_response(),
+            _ => Json(VoltageAnswer::new(request.values(), &voltage)).into_response(),
         })
     })
     .await
