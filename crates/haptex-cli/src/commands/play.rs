@@ -10,8 +10,8 @@ use haptex_core::io::Table;
 use haptex_core::num::Num;
 use haptex_core::ranges;
 use haptex_core::signal::{
-    Carrier, CarrierShape, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions, read_drive_wav, render,
-    sidecar_path, write_wav,
+    AmplitudeCurve, Carrier, CarrierShape, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions,
+    read_drive_wav, render, render_two_channel, sidecar_path, write_wav,
 };
 use haptex_core::trajectory::Trajectory;
 use serde_json::json;
@@ -89,6 +89,12 @@ pub struct PlayArgs {
     /// Output sample rate in Hz.
     #[arg(long, value_name = "HZ", default_value_t = 48_000, value_parser = clap::value_parser!(u32).range(1000..=768_000))]
     sample_rate: u32,
+    /// Highest ultrasonic amplitude in um (peak) of channel 2: higher
+    /// requests are clamped (and reported). Required for a profile with an
+    /// `amplitude_um` column: give the a_max its header comment states
+    /// (`at most a_max = ... um`); it is also channel 2's full scale.
+    #[arg(long, value_name = "UM", value_parser = in_range(ranges::A_MAX_UM))]
+    a_max_um: Option<f64>,
     /// Highest envelope in V RMS: higher requests are clamped (and reported).
     #[arg(long, value_name = "V", default_value_t = Limits::DEFAULT.u_max_v, value_parser = in_range(ranges::U_MAX_V))]
     u_max: f64,
@@ -188,7 +194,17 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
     // Refuse a directory or special file before any work.
     haptex_core::io::OutputTarget::of(output_path)?;
 
-    let curve = read_curve(profile)?;
+    let (curve, amplitude) = read_curve(profile)?;
+    if amplitude.is_some() && args.a_max_um.is_none() {
+        bail!(
+            "{} has an amplitude_um column (a combined or ultrasonic display's profile): give --a-max-um, the a_max \
+             its header comment states, to drive channel 2 (the ultrasonic amplitude) with it as limit and full scale",
+            profile.display()
+        );
+    }
+    if amplitude.is_none() && args.a_max_um.is_some() {
+        bail!("--a-max-um is for a profile with an amplitude_um column; {} has none", profile.display());
+    }
     let (trajectory, trajectory_source) = trajectory(&args, &curve)?;
     let settings = RenderSettings {
         sample_rate_hz: args.sample_rate,
@@ -207,7 +223,10 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
             ExtendArg::Repeat => Extend::Repeat,
         },
     };
-    let signal = render(&curve, &trajectory, &settings)?;
+    let signal = match (&amplitude, args.a_max_um) {
+        (Some(amplitude), Some(a_max)) => render_two_channel(&curve, amplitude, a_max, &trajectory, &settings)?,
+        _ => render(&curve, &trajectory, &settings)?,
+    };
 
     let mut written = Vec::new();
     match format {
@@ -228,10 +247,15 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
                 "haptex_version": env!("CARGO_PKG_VERSION"),
             });
             let sidecar = write_wav(path, &signal, &options, source)?;
+            let channel_2 = match &sidecar.channel_2 {
+                Some(c) => format!("; channel 2: {} um per full scale", Num(c.um_per_full_scale)),
+                None => String::new(),
+            };
             written.push(format!(
-                "{} ({}, {} V per full scale, in the WAV's hptx chunk; samples SHA-256 {})",
+                "{} ({}, {}{} V per full scale{channel_2}, in the WAV's hptx chunk; samples SHA-256 {})",
                 path.display(),
                 format!("{:?}", options.format).to_lowercase(),
+                if channel_2.is_empty() { "" } else { "2 channels; channel 1: " },
                 Num(options.volts_per_full_scale),
                 sidecar.samples_sha256
             ));
@@ -281,11 +305,23 @@ fn check(path: &Path, quiet: bool) -> anyhow::Result<()> {
             format!("{:?}", s.sample_format).to_lowercase()
         );
         eprintln!(
-            "scale: {} V at the amplifier output per full-scale sample ({}); peak {:.4} V",
+            "{}scale: {} V at the amplifier output per full-scale sample ({}); peak {:.4} V",
+            if s.channel_2.is_some() { "channel 1 " } else { "" },
             Num(s.volts_per_full_scale),
             s.conversion,
             wav.peak_v()
         );
+        if let (Some(c2), Some(a)) = (&s.channel_2, &wav.amplitude_um) {
+            let peak = a.iter().fold(0.0f64, |m, &v| m.max(v.abs()));
+            eprintln!(
+                "channel 2: {} um of ultrasonic amplitude per full-scale sample ({}); peak {:.4} um, within a_max = {} \
+                 um",
+                Num(c2.um_per_full_scale),
+                c2.conversion,
+                peak,
+                Num(c2.a_max_um)
+            );
+        }
         eprintln!("samples: SHA-256 {} matches the scale chunk", s.samples_sha256);
         match &wav.sidecar {
             Some(_) => eprintln!("sidecar {}: belongs to this WAV (same hash and scale)", sidecar_path(path).display()),
@@ -296,13 +332,15 @@ fn check(path: &Path, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Reads the voltage curve from a file, or stdin for `-`.
-fn read_curve(path: &Path) -> anyhow::Result<VoltageCurve> {
-    Ok(if path.as_os_str() == "-" {
-        VoltageCurve::from_table(&Table::read(std::io::stdin().lock(), "<stdin>")?)?
+/// Reads the voltage curve, and the amplitude curve of a profile with an
+/// `amplitude_um` column, from a file, or stdin for `-`.
+fn read_curve(path: &Path) -> anyhow::Result<(VoltageCurve, Option<AmplitudeCurve>)> {
+    let table = if path.as_os_str() == "-" {
+        Table::read(std::io::stdin().lock(), "<stdin>")?
     } else {
-        VoltageCurve::read_csv_file(path)?
-    })
+        Table::read_file(path)?
+    };
+    Ok(VoltageCurve::from_display_table(&table)?)
 }
 
 /// The trajectory (read or generated) and a JSON description of where it

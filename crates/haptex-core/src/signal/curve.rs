@@ -88,6 +88,36 @@ impl VoltageCurve {
         Ok(Self { x_mm, voltage_v })
     }
 
+    /// Reads a display profile for a two-channel drive: the voltage curve
+    /// and, when the table has an `amplitude_um` column (`haptex voltage
+    /// --display combined|ultrasonic`), the ultrasonic amplitude curve over
+    /// the same positions. A profile without `voltage_v` but with
+    /// `amplitude_um` (the ultrasonic display) plays 0 V on channel 1.
+    /// Without `amplitude_um` this is [`VoltageCurve::from_table`].
+    pub fn from_display_table(table: &Table) -> Result<(Self, Option<AmplitudeCurve>), ProfileError> {
+        let Some(amplitude) = table.column("amplitude_um") else {
+            return Ok((Self::from_table(table)?, None));
+        };
+        let at = |(row, field, message): (Option<usize>, &'static str, String)| {
+            ProfileError::Table(table.error_at(row, Some(field), message))
+        };
+        let x_mm = table.require("x_mm")?.to_vec();
+        let amplitude_um = amplitude.to_vec();
+        let voltage_v = match table.column("voltage_v") {
+            Some(v) => v.to_vec(),
+            None => vec![0.0; x_mm.len()],
+        };
+        validate(&x_mm, &[("voltage_v", &voltage_v), ("amplitude_um", &amplitude_um)]).map_err(at)?;
+        if let Some(i) = crate::ranges::AMPLITUDE_UM.first_outside(&amplitude_um) {
+            return Err(at((
+                Some(i),
+                "amplitude_um",
+                crate::ranges::AMPLITUDE_UM.refusal(amplitude_um[i]).to_string(),
+            )));
+        }
+        Ok((Self { x_mm: x_mm.clone(), voltage_v }, Some(AmplitudeCurve(Self { x_mm, voltage_v: amplitude_um }))))
+    }
+
     /// Reads a voltage profile CSV from any reader; `source_name` labels errors.
     pub fn read_csv<R: std::io::Read>(reader: R, source_name: &str) -> Result<Self, ProfileError> {
         Self::from_table(&Table::read(reader, source_name)?)
@@ -151,6 +181,31 @@ impl VoltageCurve {
     pub fn contains(&self, x_mm: f64) -> bool {
         let (x0, x1) = self.span_mm();
         (x0..=x1).contains(&x_mm)
+    }
+}
+
+/// An ultrasonic amplitude curve a(x): positions in mm and the plate's
+/// vibration amplitude in um (peak, finite, >= 0), linear between samples
+/// and extended outside the span as the voltage curve is. A distinct type
+/// from [`VoltageCurve`] so that an amplitude is never played as a voltage.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AmplitudeCurve(VoltageCurve);
+
+impl AmplitudeCurve {
+    /// A curve from positions (mm) and amplitudes (um).
+    pub fn new(x_mm: Vec<f64>, amplitude_um: Vec<f64>) -> Result<Self, ProfileError> {
+        VoltageCurve::new(x_mm, amplitude_um).map(Self)
+    }
+
+    /// Largest amplitude of the curve in um.
+    pub fn max_um(&self) -> f64 {
+        self.0.max_v()
+    }
+
+    /// a in um at every position of a path into `out` (as
+    /// [`VoltageCurve::voltages_along`]).
+    pub fn amplitudes_along(&self, x_mm: &[f64], extend: Extend, out: &mut [f64]) {
+        self.0.voltages_along(x_mm, extend, out)
     }
 }
 
