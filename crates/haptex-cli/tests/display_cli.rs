@@ -240,6 +240,9 @@ fn electrovibration_stays_the_default() {
 /// drive signal would carry the voltage without the plate's vibration.
 #[test]
 fn play_refuses_a_combined_design() {
+    // Without --a-max-um: play needs channel 2's limit to drive both
+    // channels (the two-channel path is tested in play_cli.rs), and never
+    // plays the voltage alone.
     let dir = tempfile::tempdir().unwrap();
     let design = dir.path().join("d.csv");
     let out = haptex(&["voltage", "--profile", EXAMPLE, "--display", "combined", "-q", "-o", design.to_str().unwrap()]);
@@ -248,7 +251,7 @@ fn play_refuses_a_combined_design() {
     let out = haptex(&["play", "--profile", design.to_str().unwrap(), "--velocity", "50", "-o", wav.to_str().unwrap()]);
     assert!(!out.status.success());
     assert!(
-        stderr(&out).contains("column 'amplitude_um': this profile was designed for a combined display"),
+        stderr(&out).contains("has an amplitude_um column") && stderr(&out).contains("give --a-max-um"),
         "{}",
         stderr(&out)
     );

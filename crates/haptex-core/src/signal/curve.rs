@@ -65,9 +65,9 @@ impl VoltageCurve {
     ///
     /// A profile designed for a combined display (an `amplitude_um`
     /// column, `haptex voltage --display combined`) is refused: its
-    /// voltages assume the plate vibrates with those amplitudes, and the
-    /// drive signal carries the voltage alone, which would render another
-    /// friction than the one designed.
+    /// voltages assume the plate vibrates with those amplitudes, and a
+    /// reader of the voltage alone would render another friction than the
+    /// one designed. [`VoltageCurve::from_display_table`] reads both.
     pub fn from_table(table: &Table) -> Result<Self, ProfileError> {
         let at = |(row, field, message): (Option<usize>, &'static str, String)| {
             ProfileError::Table(table.error_at(row, Some(field), message))
@@ -77,8 +77,9 @@ impl VoltageCurve {
                 None,
                 "amplitude_um",
                 "this profile was designed for a combined display: its voltages assume the ultrasonic amplitudes \
-                 beside them, and a drive signal carries the electrovibration voltage alone; design it with \
-                 --display electrovibration to play it"
+                 beside them, which a voltage-only reader cannot apply; play it on two channels with haptex play \
+                 --a-max-um, check it with haptex check --display combined, or design it with --display \
+                 electrovibration"
                     .to_string(),
             )));
         }

@@ -272,8 +272,8 @@ impl DriveSignal {
             "# amplitude_um is channel 2, the ultrasonic vibration amplitude envelope (um, peak; no carrier: the envelope is the channel's signal), at most a_max = {a_max} um"
         )?;
         w.write_all(b"t_s,x_mm,envelope_v,signal_v,amplitude_um\n")?;
-        for i in 0..self.len() {
-            write_csv_row(w, &[self.t_s(i), self.x_mm[i], self.envelope_v[i], self.signal_v[i], amplitude_um[i]])?;
+        for (i, &a) in amplitude_um.iter().enumerate() {
+            write_csv_row(w, &[self.t_s(i), self.x_mm[i], self.envelope_v[i], self.signal_v[i], a])?;
         }
         Ok(())
     }

@@ -117,7 +117,9 @@ pub struct AmplitudeScale {
     pub unit: String,
     /// The sample value that stands for `um_per_full_scale` (as channel 1's).
     pub full_scale_value: f64,
-    /// Micrometres of vibration amplitude for a full-scale sample.
+    /// Micrometres of vibration amplitude for a full-scale sample. haptex
+    /// writes channel 2 at full scale = a_max, and its reader refuses a
+    /// chunk where the two differ.
     pub um_per_full_scale: f64,
     /// The clamp of the render: no sample stands for more than this, um.
     pub a_max_um: f64,
@@ -206,7 +208,7 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
         (Some(a), Some(us)) if a.len() == signal.len() => {
             let upfs = crate::ranges::A_MAX_UM.check(us.a_max_um).map_err(|e| SignalError::Settings(e.to_string()))?;
             let peak = a.iter().fold(0.0f64, |m, &v| m.max(v.abs()));
-            if !(peak <= upfs) {
+            if peak.is_nan() || peak > upfs {
                 return Err(SignalError::Settings(format!(
                     "refused: channel 2's amplitude {peak} um exceeds its full scale a_max = {upfs} um"
                 )));
@@ -613,7 +615,7 @@ pub fn decode_drive_wav_channels(bytes: &[u8]) -> Result<(ScaleChunk, Vec<f64>, 
             || c2.full_scale_value.to_bits() != expected_full_scale.to_bits()
             || crate::ranges::A_MAX_UM.check(c2.um_per_full_scale).is_err()
             || crate::ranges::A_MAX_UM.check(c2.a_max_um).is_err()
-            || c2.a_max_um > c2.um_per_full_scale)
+            || c2.a_max_um.to_bits() != c2.um_per_full_scale.to_bits())
     {
         return Err(format!(
             "the haptex scale chunk's channel 2 is not consistent (quantity {:?}, unit {:?}, full scale {}, {} um \
