@@ -1,5 +1,13 @@
-//! WAV output of a drive signal (mono, through `hound`) and its sidecar
-//! JSON, which records how the signal was made.
+//! WAV output of a drive signal (mono, or two channels for a combined or
+//! ultrasonic display, through `hound`) and its sidecar JSON, which
+//! records how the signal was made.
+//!
+//! A two-channel WAV interleaves channel 1 (the electrovibration drive,
+//! in volts, scaled by the chunk's top-level `volts_per_full_scale`) and
+//! channel 2 (the ultrasonic amplitude envelope in um, scaled by the
+//! chunk's `channel_2` [`AmplitudeScale`], full scale = a_max). A
+//! one-channel WAV has no `channel_2` and is byte-identical to the format
+//! before two channels existed.
 //!
 //! Scale: a sample value v (an integer code, or a float) stands for
 //! v / full_scale * volts_per_full_scale volts at the amplifier output,
@@ -187,7 +195,8 @@ pub fn check_volts_per_full_scale(vpfs: f64) -> Result<f64, SignalError> {
     crate::ranges::VOLTS_PER_FULL_SCALE.check(vpfs).map_err(|e| SignalError::Settings(e.to_string()))
 }
 
-/// Encodes `signal` as a mono WAV file in memory, with its scale chunk
+/// Encodes `signal` as a WAV file in memory (mono, or two channels when
+/// the signal has an ultrasonic channel), with its scale chunk
 /// (what [`write_wav`] writes; a server sends these bytes). Refuses a
 /// signal whose peak exceeds `volts_per_full_scale`. `label` names the
 /// output in errors.
@@ -356,7 +365,8 @@ fn append_chunk(bytes: &mut Vec<u8>, id: [u8; 4], content: &[u8]) -> Result<(), 
     Ok(())
 }
 
-/// Writes `signal` as a mono WAV at `path` (with its scale chunk) and,
+/// Writes `signal` as a WAV at `path` (mono, or two channels when the
+/// signal has an ultrasonic channel; with its scale chunk) and,
 /// when `path` is a file, its sidecar JSON at [`sidecar_path`], each
 /// atomically: the WAV first, then the sidecar, which carries the WAV's
 /// sample hash. A WAV written to a stream (`-`, a FIFO, a device) gets no
