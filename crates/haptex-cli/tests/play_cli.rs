@@ -415,13 +415,20 @@ fn combined_profile_plays_on_two_channels() {
     let a_max = text.split("at most a_max = ").nth(1).unwrap().split(' ').next().unwrap().to_string();
 
     let wav = path(d, "d.wav");
-    let out = haptex(&["play", "--profile", &design, "--velocity", "20", "-o", &wav]);
+    // Above the a_max the profile states: refused.
+    let above = format!("{}", a_max.parse::<f64>().unwrap() + 0.5);
+    let out = haptex(&["play", "--profile", &design, "--velocity", "20", "--a-max-um", &above, "-o", &wav]);
     assert!(!out.status.success());
-    assert!(stderr(&out).contains("give --a-max-um"), "{}", stderr(&out));
+    assert!(stderr(&out).contains("is above the a_max"), "{}", stderr(&out));
     assert!(!Path::new(&wav).exists());
 
+    // Without --a-max-um: the stated a_max (the same file as giving it).
+    let out = haptex(&["play", "--profile", &design, "--velocity", "20", "-o", &wav, "--png", &path(d, "d.png")]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let stated = std::fs::read(&wav).unwrap();
     let out = haptex(&["play", "--profile", &design, "--velocity", "20", "--a-max-um", &a_max, "-o", &wav]);
     assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(std::fs::read(&wav).unwrap(), stated);
     assert!(stderr(&out).contains("channel 2 (ultrasonic amplitude envelope, um"), "{}", stderr(&out));
     let read = haptex_core::signal::read_drive_wav(Path::new(&wav)).unwrap();
     let c2 = read.scale.channel_2.as_ref().unwrap();

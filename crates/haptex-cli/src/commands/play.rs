@@ -100,9 +100,10 @@ pub struct PlayArgs {
     #[arg(long, value_name = "HZ", default_value_t = 48_000, value_parser = clap::value_parser!(u32).range(1000..=768_000))]
     sample_rate: u32,
     /// Highest ultrasonic amplitude in um (peak) of channel 2: higher
-    /// requests are clamped (and reported). Required for a profile with an
-    /// `amplitude_um` column: give the a_max its header comment states
-    /// (`at most a_max = ... um`); it is also channel 2's full scale.
+    /// requests are clamped (and reported); also channel 2's full scale.
+    /// For a profile with an `amplitude_um` column only. Default: the a_max
+    /// its header comment states (`at most a_max = ... um`); a value above
+    /// that is refused, and without such a comment it is required.
     #[arg(long, value_name = "UM", value_parser = in_range(ranges::A_MAX_UM))]
     a_max_um: Option<f64>,
     /// Highest envelope in V RMS: higher requests are clamped (and reported).
@@ -204,17 +205,27 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
     // Refuse a directory or special file before any work.
     haptex_core::io::OutputTarget::of(output_path)?;
 
-    let (curve, amplitude) = read_curve(profile)?;
-    if amplitude.is_some() && args.a_max_um.is_none() {
-        bail!(
-            "{} has an amplitude_um column (a combined or ultrasonic display's profile): give --a-max-um, the a_max \
-             its header comment states, to drive channel 2 (the ultrasonic amplitude) with it as limit and full scale",
+    let (curve, amplitude, stated_a_max) = read_curve(profile)?;
+    let a_max_um = match (&amplitude, args.a_max_um, stated_a_max) {
+        (None, Some(_), _) => {
+            bail!("--a-max-um is for a profile with an amplitude_um column; {} has none", profile.display())
+        }
+        (None, None, _) => None,
+        (Some(_), Some(given), Some(stated)) if given > stated => bail!(
+            "--a-max-um {} is above the a_max = {} um {} states it was designed for: give at most that",
+            Num(given),
+            Num(stated),
             profile.display()
-        );
-    }
-    if amplitude.is_none() && args.a_max_um.is_some() {
-        bail!("--a-max-um is for a profile with an amplitude_um column; {} has none", profile.display());
-    }
+        ),
+        (Some(_), Some(given), _) => Some(given),
+        (Some(_), None, Some(stated)) => Some(stated),
+        (Some(_), None, None) => bail!(
+            "{} has an amplitude_um column (a combined or ultrasonic display's profile) but no header comment \
+             stating its a_max: give --a-max-um, the largest amplitude of the plate, to drive channel 2 (the \
+             ultrasonic amplitude) with it as limit and full scale",
+            profile.display()
+        ),
+    };
     let (trajectory, trajectory_source) = trajectory(&args, &curve)?;
     let settings = RenderSettings {
         sample_rate_hz: args.sample_rate,
@@ -233,7 +244,7 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
             ExtendArg::Repeat => Extend::Repeat,
         },
     };
-    let signal = match (&amplitude, args.a_max_um) {
+    let signal = match (&amplitude, a_max_um) {
         (Some(amplitude), Some(a_max)) => render_two_channel(&curve, amplitude, a_max, &trajectory, &settings)?,
         _ => render(&curve, &trajectory, &settings)?,
     };
@@ -343,14 +354,37 @@ fn check(path: &Path, quiet: bool) -> anyhow::Result<()> {
 }
 
 /// Reads the voltage curve, and the amplitude curve of a profile with an
-/// `amplitude_um` column, from a file, or stdin for `-`.
-fn read_curve(path: &Path) -> anyhow::Result<(VoltageCurve, Option<AmplitudeCurve>)> {
-    let table = if path.as_os_str() == "-" {
-        Table::read(std::io::stdin().lock(), "<stdin>")?
-    } else {
-        Table::read_file(path)?
+/// `amplitude_um` column, from a file, or stdin for `-`; with the a_max
+/// its `#` header states (`at most a_max = A um`, as `haptex voltage
+/// --display combined|ultrasonic` writes), if it states one.
+fn read_curve(path: &Path) -> anyhow::Result<(VoltageCurve, Option<AmplitudeCurve>, Option<f64>)> {
+    if path.as_os_str() == "-" {
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(&mut std::io::stdin().lock(), &mut bytes)
+            .context("reading the profile from stdin")?;
+        let (curve, amplitude) = VoltageCurve::from_display_table(&Table::read(bytes.as_slice(), "<stdin>")?)?;
+        let stated = if amplitude.is_some() { stated_a_max(bytes.as_slice()) } else { None };
+        return Ok((curve, amplitude, stated));
+    }
+    let (curve, amplitude) = VoltageCurve::from_display_table(&Table::read_file(path)?)?;
+    let stated = match amplitude {
+        Some(_) => std::fs::File::open(path).ok().and_then(|f| stated_a_max(std::io::BufReader::new(f))),
+        None => None,
     };
-    Ok(VoltageCurve::from_display_table(&table)?)
+    Ok((curve, amplitude, stated))
+}
+
+/// The a_max a display profile's header comment states: the smallest
+/// `at most a_max = A um` among the `#` lines before the header row.
+fn stated_a_max(reader: impl std::io::BufRead) -> Option<f64> {
+    reader
+        .lines()
+        .map_while(Result::ok)
+        .take_while(|l| l.trim_start().starts_with('#') || l.trim().is_empty())
+        .flat_map(|l| l.split("at most a_max = ").skip(1).map(str::to_owned).collect::<Vec<_>>())
+        .filter_map(|rest| rest.split_whitespace().next().and_then(|v| v.parse::<f64>().ok()))
+        .filter(|a| ranges::A_MAX_UM.contains(*a))
+        .reduce(f64::min)
 }
 
 /// The trajectory (read or generated) and a JSON description of where it

@@ -278,12 +278,13 @@ impl DriveSignal {
         Ok(())
     }
 
-    /// A three-panel figure: finger position, envelope (with U_max) and drive.
+    /// A three-panel figure: finger position, envelope (with U_max) and
+    /// drive; a fourth with channel 2's amplitude (and a_max) when there is one.
     pub fn figure(&self, title: &str) -> Figure {
         let t = self.times_s();
         let u_max = self.report.limits.u_max_v;
         let ends = [t[0], t[t.len() - 1]];
-        Figure::new(title)
+        let figure = Figure::new(title)
             .panel(Panel::new("t (s)", "x (mm)").title("finger trajectory").line("x(t)", &t, &self.x_mm))
             .panel(
                 Panel::new("t (s)", "U (V RMS)")
@@ -291,7 +292,18 @@ impl DriveSignal {
                     .line("U(t)", &t, &self.envelope_v)
                     .series(crate::plot::Series::line("U_max", &ends, &[u_max, u_max]).color((150, 150, 150))),
             )
-            .panel(Panel::new("t (s)", "s (V)").title("drive signal").line("s(t)", &t, &self.signal_v))
+            .panel(Panel::new("t (s)", "s (V)").title("drive signal").line("s(t)", &t, &self.signal_v));
+        match (&self.amplitude_um, &self.report.ultrasonic) {
+            (Some(a), Some(us)) => figure.panel(
+                Panel::new("t (s)", "a (um)")
+                    .title("channel 2: ultrasonic amplitude a(x(t)) after the a_max clamp")
+                    .line("a(t)", &t, a)
+                    .series(
+                        crate::plot::Series::line("a_max", &ends, &[us.a_max_um, us.a_max_um]).color((150, 150, 150)),
+                    ),
+            ),
+            _ => figure,
+        }
     }
 }
 
