@@ -43,8 +43,8 @@ const GENERATED_RATE_HZ: f64 = 1000.0;
 /// and its sidecar belong together before an amplifier is set by them.
 ///
 /// A display profile with an `amplitude_um` column (`haptex voltage
-/// --display combined|ultrasonic`) is played on two channels, with
-/// --a-max-um: channel 1 the drive above, channel 2 the ultrasonic
+/// --display combined|ultrasonic`) is played on two channels, a_max from
+/// its header (or a lower --a-max-um): channel 1 the drive above, channel 2 the ultrasonic
 /// amplitude envelope a(x(t)) in um (no carrier; clamped at a_max, which
 /// is also its full scale). The WAV then has 2 channels and its scale
 /// chunk and sidecar a `channel_2` scale in um; the CSV an `amplitude_um`
@@ -60,7 +60,7 @@ const GENERATED_RATE_HZ: f64 = 1000.0;
         haptex play --profile bump_u.csv --velocity 80 --strokes 6 --slew-v-per-s 20000 -o strokes.wav\n  \
         haptex play --check bump.wav\n  \
         haptex voltage --profile data/examples/bump_friction.csv --display combined -o bump_ua.csv\n  \
-        haptex play --profile bump_ua.csv --velocity 40 --a-max-um 2.3 -o bump2.wav"
+        haptex play --profile bump_ua.csv --velocity 40 -o bump2.wav"
 )]
 pub struct PlayArgs {
     /// Check a drive-signal WAV written by haptex instead of rendering one:
