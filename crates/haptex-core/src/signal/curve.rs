@@ -108,14 +108,8 @@ impl VoltageCurve {
             Some(v) => v.to_vec(),
             None => vec![0.0; x_mm.len()],
         };
+        // validate checks amplitude_um against its range (0 .. 100 um).
         validate(&x_mm, &[("voltage_v", &voltage_v), ("amplitude_um", &amplitude_um)]).map_err(at)?;
-        if let Some(i) = crate::ranges::AMPLITUDE_UM.first_outside(&amplitude_um) {
-            return Err(at((
-                Some(i),
-                "amplitude_um",
-                crate::ranges::AMPLITUDE_UM.refusal(amplitude_um[i]).to_string(),
-            )));
-        }
         Ok((Self { x_mm: x_mm.clone(), voltage_v }, Some(AmplitudeCurve(Self { x_mm, voltage_v: amplitude_um }))))
     }
 
@@ -195,7 +189,9 @@ pub struct AmplitudeCurve(VoltageCurve);
 impl AmplitudeCurve {
     /// A curve from positions (mm) and amplitudes (um).
     pub fn new(x_mm: Vec<f64>, amplitude_um: Vec<f64>) -> Result<Self, ProfileError> {
-        VoltageCurve::new(x_mm, amplitude_um).map(Self)
+        validate(&x_mm, &[("amplitude_um", &amplitude_um)])
+            .map_err(|(index, field, message)| ProfileError::Invalid { index: index.unwrap_or(0), field, message })?;
+        Ok(Self(VoltageCurve { x_mm, voltage_v: amplitude_um }))
     }
 
     /// Largest amplitude of the curve in um.
@@ -285,5 +281,28 @@ mod tests {
                 .starts_with("d.csv, line 2, column 'amplitude_um': this profile was designed for a combined display"),
             "{e}"
         );
+    }
+
+    /// A display profile reads as voltage and amplitude over the same
+    /// positions; bad amplitudes are refused at their line and column.
+    #[test]
+    fn display_profiles_read_both_channels() {
+        let text = "# c\nx_mm,mu,voltage_v,amplitude_um\n0,0.9,0,0.3\n1,1.1,70,0\n";
+        let table = Table::read(text.as_bytes(), "d.csv").unwrap();
+        let (u, a) = VoltageCurve::from_display_table(&table).unwrap();
+        assert_eq!(u.voltage_v(), &[0.0, 70.0]);
+        let mut out = [0.0; 2];
+        a.unwrap().amplitudes_along(&[0.5, 2.0], Extend::Hold, &mut out);
+        assert_eq!(out, [0.15, 0.0]);
+        // An ultrasonic display's profile: 0 V on channel 1.
+        let table = Table::read("x_mm,mu,amplitude_um\n0,0.5,1\n1,0.6,0.8\n".as_bytes(), "a.csv").unwrap();
+        let (u, a) = VoltageCurve::from_display_table(&table).unwrap();
+        assert_eq!((u.max_v(), a.unwrap().max_um()), (0.0, 1.0));
+        let table = Table::read("x_mm,voltage_v,amplitude_um\n0,1,0.3\n1,2,-0.1\n".as_bytes(), "b.csv").unwrap();
+        let e = VoltageCurve::from_display_table(&table).unwrap_err().to_string();
+        assert!(e.starts_with("b.csv, line 3, column 'amplitude_um'"), "{e}");
+        // Without amplitude_um: the voltage profile, as from_table.
+        let table = Table::read("x_mm,voltage_v\n0,1\n1,2\n".as_bytes(), "v.csv").unwrap();
+        assert!(VoltageCurve::from_display_table(&table).unwrap().1.is_none());
     }
 }
