@@ -455,3 +455,20 @@ proptest::proptest! {
         proptest::prop_assert!(a.iter().all(|&v| v >= 0.0));
     }
 }
+
+/// The encoder refuses a channel-2 sample outside 0 .. a_max (a signal
+/// changed after its render), never writing it clipped.
+#[test]
+fn encoder_refuses_channel_2_outside_its_limit() {
+    let options = WavOptions { format: WavFormat::Pcm16, volts_per_full_scale: 150.0 };
+    for bad in [2.0 * (1.0 + 1e-12), -1e-9, f64::NAN] {
+        let (mut signal, _, _) = two_channel_signal();
+        signal.amplitude_um.as_mut().unwrap()[100] = bad;
+        let e = encode_wav(&signal, &options, "x").unwrap_err().to_string();
+        assert!(e.contains("outside 0 .. a_max = 2 um"), "{bad}: {e}");
+    }
+    // A signal whose channel and report disagree.
+    let (mut signal, _, _) = two_channel_signal();
+    signal.report.ultrasonic = None;
+    assert!(encode_wav(&signal, &options, "x").unwrap_err().to_string().contains("do not agree"));
+}

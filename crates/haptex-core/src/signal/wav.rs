@@ -216,10 +216,10 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
         (None, None) => None,
         (Some(a), Some(us)) if a.len() == signal.len() => {
             let upfs = crate::ranges::A_MAX_UM.check(us.a_max_um).map_err(|e| SignalError::Settings(e.to_string()))?;
-            let peak = a.iter().fold(0.0f64, |m, &v| m.max(v.abs()));
-            if peak.is_nan() || peak > upfs {
+            // Every amplitude within 0 ..= a_max (a NaN fails both).
+            if let Some(&bad) = a.iter().find(|&&v| !(0.0..=upfs).contains(&v)) {
                 return Err(SignalError::Settings(format!(
-                    "refused: channel 2's amplitude {peak} um exceeds its full scale a_max = {upfs} um"
+                    "refused: channel 2's amplitude {bad} um is outside 0 .. a_max = {upfs} um, its full scale"
                 )));
             }
             Some((
