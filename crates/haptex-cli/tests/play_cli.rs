@@ -332,3 +332,148 @@ fn release(fifo: &Path, out: &Output) {
         let _ = std::fs::OpenOptions::new().write(true).open(fifo);
     }
 }
+
+/// One-channel output is byte-identical to haptex before the two-channel
+/// drive: the SHA-256 of each file as the previous release wrote it
+/// (measured with its binary on the same commands; the sidecar with its
+/// `command` line, which names the test's paths, blanked).
+#[test]
+fn one_channel_output_is_unchanged() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let u = path(d, "u.csv");
+    let out = haptex(&["voltage", "--profile", "../../data/examples/bump_friction.csv", "-o", &u, "-q"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let sha = |p: &str| haptex_core::io::sha256_hex(&std::fs::read(p).unwrap());
+    let blanked_sidecar = |p: &str| {
+        let text = std::fs::read_to_string(p).unwrap();
+        let text: String = text
+            .lines()
+            .map(|l| if l.contains("\"command\":") { "    \"command\": \"X\"," } else { l })
+            .fold(String::new(), |mut s, l| {
+                s.push_str(l);
+                s.push('\n');
+                s
+            });
+        haptex_core::io::sha256_hex(text.as_bytes())
+    };
+    for (format, wav_hash, sidecar_hash) in [
+        (
+            "pcm16",
+            "536dfbe6bdc706555eb4885a265a16674f86eaa78b59f437b74103b143985be5",
+            "33130a2308b66311c2c1ed58f51e09913a0fccc67b7a557ad89c30296bf761ee",
+        ),
+        (
+            "pcm24",
+            "c1b1f8949df3b959123d1889b1e17a22ee806166bcbd2072c95e62b4fce824ad",
+            "089bdc7f36e0dd136f097754a575190f52390579bb757e42e67249ef0515e871",
+        ),
+        (
+            "float32",
+            "fdbd35c650de60701d93f7d18c26490102f51df5244f9ec9cd4975df05b315f9",
+            "99cfefb9157beb91793695d6cbeae0b384ab8422e19a16999c6cb344a3d118d1",
+        ),
+    ] {
+        let name = format!("b_{format}.wav");
+        let out = Command::new(env!("CARGO_BIN_EXE_haptex"))
+            .current_dir(d)
+            .args(["play", "--profile", "u.csv", "--velocity", "40", "--strokes", "2", "--u-max", "90"])
+            .args(["--slew-v-per-s", "20000", "--wav-format", format, "-o", &name, "-q"])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", stderr(&out));
+        assert_eq!(sha(&path(d, &name)), wav_hash, "{format} WAV");
+        assert_eq!(blanked_sidecar(&path(d, &format!("{name}.json"))), sidecar_hash, "{format} sidecar");
+    }
+    let csv = path(d, "b.csv");
+    let out = haptex(&["play", "--profile", &u, "--velocity", "40", "--carrier", "square", "-o", &csv, "-q"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(sha(&csv), "8af350284c5055a59623b428b3aee6f80f2975d8aec297fb3ed26f0024233531");
+}
+
+/// A combined display's profile plays on two channels: a 2-channel WAV
+/// whose channel 2 is the amplitude in um (checked by --check, scale in
+/// chunk and sidecar), a CSV with amplitude_um, --a-max-um required, and
+/// a sidecar with a tampered channel-2 scale caught by --check.
+#[test]
+fn combined_profile_plays_on_two_channels() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let design = path(d, "d.csv");
+    let out = haptex(&[
+        "voltage",
+        "--profile",
+        "../../data/examples/bump_friction.csv",
+        "--display",
+        "combined",
+        "-q",
+        "-o",
+        &design,
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(&design).unwrap();
+    let a_max = text.split("at most a_max = ").nth(1).unwrap().split(' ').next().unwrap().to_string();
+
+    let wav = path(d, "d.wav");
+    // Above the a_max the profile states: refused.
+    let above = format!("{}", a_max.parse::<f64>().unwrap() + 0.5);
+    let out = haptex(&["play", "--profile", &design, "--velocity", "20", "--a-max-um", &above, "-o", &wav]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("is above the a_max"), "{}", stderr(&out));
+    assert!(!Path::new(&wav).exists());
+
+    // Without --a-max-um: the stated a_max (the same file as giving it).
+    let out = haptex(&["play", "--profile", &design, "--velocity", "20", "-o", &wav, "--png", &path(d, "d.png")]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let stated = std::fs::read(&wav).unwrap();
+    let out = haptex(&["play", "--profile", &design, "--velocity", "20", "--a-max-um", &a_max, "-o", &wav]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(std::fs::read(&wav).unwrap(), stated);
+    assert!(stderr(&out).contains("channel 2 (ultrasonic amplitude envelope, um"), "{}", stderr(&out));
+    let read = haptex_core::signal::read_drive_wav(Path::new(&wav)).unwrap();
+    let c2 = read.scale.channel_2.as_ref().unwrap();
+    assert_eq!(c2.um_per_full_scale, a_max.parse::<f64>().unwrap());
+    let amplitude = read.amplitude_um.as_ref().unwrap();
+    assert!(amplitude.iter().all(|&a| a >= 0.0 && a <= c2.a_max_um));
+    assert!(amplitude.iter().any(|&a| a > 0.0), "the descent needs the plate");
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{wav}.json")).unwrap()).unwrap();
+    assert_eq!(sidecar["channels"], 2);
+    assert_eq!(sidecar["channel_2"]["unit"], "um");
+    let out = haptex(&["play", "--check", &wav]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("channel 2: ")
+            && stderr(&out).contains("um of ultrasonic amplitude per full-scale sample"),
+        "{}",
+        stderr(&out)
+    );
+
+    // CSV: the amplitude as a fifth column, within a_max.
+    let csv = path(d, "d_signal.csv");
+    let out = haptex(&["play", "--profile", &design, "--velocity", "20", "--a-max-um", &a_max, "-o", &csv, "-q"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    assert_eq!(lines.next(), Some("t_s,x_mm,envelope_v,signal_v,amplitude_um"));
+    let a_max_f: f64 = a_max.parse().unwrap();
+    for line in lines {
+        let a: f64 = line.rsplit(',').next().unwrap().parse().unwrap();
+        assert!((0.0..=a_max_f).contains(&a), "{line}");
+    }
+
+    // A tampered channel-2 scale in the sidecar.
+    let sidecar_file = format!("{wav}.json");
+    let text = std::fs::read_to_string(&sidecar_file).unwrap();
+    let tampered = text.replacen(&format!("\"um_per_full_scale\": {a_max}"), "\"um_per_full_scale\": 9.0", 1);
+    assert_ne!(tampered, text);
+    std::fs::write(&sidecar_file, tampered).unwrap();
+    let out = haptex(&["play", "--check", &wav]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("does not belong to it"), "{}", stderr(&out));
+
+    // simulate still refuses such a profile (its voltage alone is not the design).
+    let out = haptex(&["simulate", "--surface", "display", "--voltage", &design, "-o", &path(d, "s.csv")]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("designed for a combined display"), "{}", stderr(&out));
+}

@@ -7,8 +7,9 @@ use std::process::Command;
 use haptex_core::electrovibration::{Device, Method, map_profile};
 use haptex_core::profile::FrictionProfile;
 use haptex_core::signal::{
-    Carrier, CarrierShape, Extend, Limits, RenderSettings, SignalError, VoltageCurve, WavFormat, WavOptions,
-    read_drive_wav, render, sidecar_path, write_wav,
+    AmplitudeCurve, Carrier, CarrierShape, Extend, Limits, RenderSettings, SignalError, VoltageCurve, WavFormat,
+    WavOptions, decode_drive_wav_channels, encode_wav, read_drive_wav, render, render_two_channel, sidecar_path,
+    write_wav,
 };
 use haptex_core::trajectory::Trajectory;
 use rustfft::FftPlanner;
@@ -270,4 +271,204 @@ fn python_read(path: &Path) -> (u32, usize, u32, f64) {
     let text = String::from_utf8(out.stdout).unwrap();
     let fields: Vec<&str> = text.split_whitespace().collect();
     (fields[0].parse().unwrap(), fields[1].parse().unwrap(), fields[2].parse().unwrap(), fields[3].parse().unwrap())
+}
+
+/// A two-channel test signal: the voltage of [`test_signal`] and an
+/// amplitude curve that asks for more than a_max = 2 um in its middle.
+fn two_channel_signal() -> (haptex_core::signal::DriveSignal, VoltageCurve, f64) {
+    let curve = VoltageCurve::new(vec![0.0, 2.0, 4.0], vec![10.0, 120.0, 30.0]).unwrap();
+    let (x, a) = (vec![0.0, 1.0, 2.5, 4.0], vec![0.0, 1.2, 2.6, 0.4]);
+    let amplitude = AmplitudeCurve::new(x.clone(), a.clone()).unwrap();
+    let trajectory = Trajectory::strokes(0.0, 4.0, 32.0, 2, 1000.0).unwrap();
+    let settings = RenderSettings {
+        sample_rate_hz: 44_100,
+        carrier: Carrier { shape: CarrierShape::Sine, frequency_hz: 700.0 },
+        limits: Limits { u_max_v: 100.0, slew_v_per_s: Some(5000.0), amplifier_range_v: Some(150.0) },
+        extend: Extend::Hold,
+    };
+    let a_max = 2.0;
+    let signal = render_two_channel(&curve, &amplitude, a_max, &trajectory, &settings).unwrap();
+    (signal, VoltageCurve::new(x, a).unwrap(), a_max)
+}
+
+/// Round trip of a two-channel drive: render -> WAV -> decode. Channel 1
+/// is the same samples as the one-channel WAV of the same voltage
+/// (identical volts), channel 2 maps back to min(a(x(t)), a_max) within
+/// half a quantization step, a_max is never exceeded, and the clamp is
+/// reported.
+#[test]
+fn two_channel_round_trip_keeps_each_channel_with_its_own_scale() {
+    let one = test_signal();
+    let (two, a_of_x, a_max) = two_channel_signal();
+    assert_eq!((&two.signal_v, &two.envelope_v, &two.x_mm), (&one.signal_v, &one.envelope_v, &one.x_mm));
+    let us = two.report.ultrasonic.as_ref().unwrap();
+    assert!(us.clamped_samples > 0 && us.requested_max_um > a_max && us.amplitude_max_um == a_max);
+    let a = two.amplitude_um.as_ref().unwrap();
+    for (i, &x) in two.x_mm.iter().enumerate() {
+        let expected = a_of_x.voltage_at(x, Extend::Hold).min(a_max);
+        assert!((a[i] - expected).abs() <= 1e-12, "sample {i}: {} vs {expected}", a[i]);
+    }
+    for format in [WavFormat::Pcm16, WavFormat::Pcm24, WavFormat::Float32] {
+        let options = WavOptions { format, volts_per_full_scale: 150.0 };
+        let mono = encode_wav(&one, &options, "one").unwrap();
+        let stereo = encode_wav(&two, &options, "two").unwrap();
+        let (scale_1, volts_1, none) = decode_drive_wav_channels(&mono.bytes).unwrap();
+        assert!(none.is_none() && scale_1.channel_2.is_none());
+        let (scale_2, volts_2, amplitude) = decode_drive_wav_channels(&stereo.bytes).unwrap();
+        assert_eq!(volts_2, volts_1, "{format:?}: channel 1 as the one-channel render");
+        assert_eq!(scale_2.volts_per_full_scale, 150.0);
+        let c2 = scale_2.channel_2.as_ref().unwrap();
+        assert_eq!((c2.unit.as_str(), c2.um_per_full_scale, c2.a_max_um), ("um", a_max, a_max));
+        let amplitude = amplitude.unwrap();
+        assert_eq!(amplitude.len(), two.len());
+        let tolerance = match format {
+            WavFormat::Float32 => a_max * 2f64.powi(-24),
+            _ => 0.5 * a_max / format.full_scale() * (1.0 + 1e-9),
+        };
+        for (i, (&got, &want)) in amplitude.iter().zip(a).enumerate() {
+            assert!((got - want).abs() <= tolerance, "{format:?} sample {i}: {got} vs {want}");
+            assert!(got <= a_max && got >= 0.0, "{format:?} sample {i}: {got} outside 0..a_max");
+        }
+        // The one-channel decoder gives channel 1 only, never interleaved.
+        assert_eq!(haptex_core::signal::decode_drive_wav(&stereo.bytes).unwrap().1, volts_1);
+        // hound sees two channels, channel 1 first.
+        let reader = hound::WavReader::new(std::io::Cursor::new(&stereo.bytes)).unwrap();
+        assert_eq!(reader.spec().channels, 2);
+        assert_eq!(reader.len() as usize, 2 * two.len());
+    }
+}
+
+/// A tampered channel-2 scale is caught: in the sidecar (it no longer
+/// belongs to the WAV), in the chunk without a sidecar (um per full scale
+/// and a_max must agree; and raising both makes the samples stand for
+/// more than a_max), and a chunk whose channel count disagrees with fmt.
+#[test]
+fn tampered_channel_2_scale_is_refused() {
+    let (signal, _, _) = two_channel_signal();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("two.wav");
+    let options = WavOptions { format: WavFormat::Pcm16, volts_per_full_scale: 150.0 };
+    write_wav(&path, &signal, &options, serde_json::Value::Null).unwrap();
+    let read = read_drive_wav(&path).unwrap();
+    assert_eq!(read.sidecar.as_ref().unwrap().channels, 2);
+    assert!(read.amplitude_um.is_some());
+
+    // Sidecar: channel 2's scale doubled.
+    let sidecar = sidecar_path(&path);
+    let text = std::fs::read_to_string(&sidecar).unwrap();
+    let tampered = text.replace("\"um_per_full_scale\": 2.0", "\"um_per_full_scale\": 4.0");
+    assert_ne!(tampered, text);
+    std::fs::write(&sidecar, &tampered).unwrap();
+    let e = read_drive_wav(&path).unwrap_err().to_string();
+    assert!(e.contains("does not belong to it") && e.contains("channel 2 at 4 um per full scale"), "{e}");
+    std::fs::remove_file(&sidecar).unwrap();
+    assert!(read_drive_wav(&path).is_ok());
+
+    // Chunk: the scale alone changed (same length), then scale and a_max.
+    let bytes = std::fs::read(&path).unwrap();
+    let edit = |from: &str, to: &str| {
+        let text = replace_once(&bytes, from, to);
+        std::fs::write(&path, text).unwrap();
+        read_drive_wav(&path).unwrap_err().to_string()
+    };
+    let e = edit("\"um_per_full_scale\":2.0", "\"um_per_full_scale\":8.0");
+    assert!(e.contains("channel 2 is not consistent"), "{e}");
+    let twice = replace_once(
+        &replace_once(&bytes, "\"um_per_full_scale\":2.0", "\"um_per_full_scale\":8.0"),
+        "\"a_max_um\":2.0",
+        "\"a_max_um\":8.0",
+    );
+    let (scale, _, a) = decode_drive_wav_channels(&twice).unwrap();
+    // Raised consistently, the samples read 4x larger but within the new
+    // a_max: the chunk alone cannot tell; the sidecar (above) does.
+    assert_eq!(scale.channel_2.unwrap().a_max_um, 8.0);
+    assert!(a.unwrap().iter().any(|&v| v > 2.0));
+    // Channel count: a one-channel chunk over two-channel samples.
+    let start = find(&bytes, b",\"channel_2\":{").unwrap();
+    let end = start + find(&bytes[start..], b"}").unwrap() + 1;
+    let mut mono_chunk = bytes[..start].to_vec();
+    mono_chunk.extend_from_slice(&bytes[end..]);
+    // Fix the chunk and RIFF sizes for the removed bytes.
+    let removed = (end - start) as u32;
+    let chunk_at = find(&bytes, b"hptx").unwrap();
+    let size = u32::from_le_bytes(bytes[chunk_at + 4..chunk_at + 8].try_into().unwrap()) - removed;
+    mono_chunk[chunk_at + 4..chunk_at + 8].copy_from_slice(&size.to_le_bytes());
+    let riff = (mono_chunk.len() - 8) as u32;
+    mono_chunk[4..8].copy_from_slice(&riff.to_le_bytes());
+    let e = decode_drive_wav_channels(&mono_chunk).unwrap_err();
+    assert!(e.contains("2 channels") && e.contains("1 channel(s)"), "{e}");
+}
+
+fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
+    haystack.windows(needle.len()).position(|w| w == needle)
+}
+
+/// `bytes` with the one occurrence of `from` replaced by `to` (same length).
+fn replace_once(bytes: &[u8], from: &str, to: &str) -> Vec<u8> {
+    assert_eq!(from.len(), to.len());
+    let at = find(bytes, from.as_bytes()).unwrap_or_else(|| panic!("{from} not in the file"));
+    let mut out = bytes.to_vec();
+    out[at..at + to.len()].copy_from_slice(to.as_bytes());
+    out
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+    /// Over random profiles, trajectories and limits: no sample of either
+    /// channel exceeds its limit, rendered or read back from the WAV.
+    #[test]
+    fn limits_are_never_exceeded_on_either_channel(
+        points in proptest::collection::vec((0.01f64..3.0, 0.0f64..250.0, 0.0f64..6.0), 2..12),
+        u_max in 1.0f64..200.0,
+        a_max in 0.01f64..5.0,
+        speed in 5.0f64..200.0,
+        strokes in 1usize..4,
+        format in proptest::sample::select(vec![WavFormat::Pcm16, WavFormat::Pcm24, WavFormat::Float32]),
+    ) {
+        let mut x = Vec::new();
+        let mut at = 0.0;
+        for (dx, _, _) in &points { x.push(at); at += dx; }
+        let curve = VoltageCurve::new(x.clone(), points.iter().map(|p| p.1).collect()).unwrap();
+        let amplitude = AmplitudeCurve::new(x.clone(), points.iter().map(|p| p.2).collect()).unwrap();
+        let trajectory = Trajectory::strokes(x[0] - 0.5, at + 0.5, speed, strokes, 1000.0).unwrap();
+        let settings = RenderSettings {
+            sample_rate_hz: 8000,
+            carrier: Carrier { shape: CarrierShape::Sine, frequency_hz: 300.0 },
+            limits: Limits { u_max_v: u_max, slew_v_per_s: None, amplifier_range_v: None },
+            extend: Extend::Hold,
+        };
+        let signal = render_two_channel(&curve, &amplitude, a_max, &trajectory, &settings).unwrap();
+        let peak = std::f64::consts::SQRT_2 * u_max;
+        proptest::prop_assert!(signal.envelope_v.iter().all(|&u| (0.0..=u_max).contains(&u)));
+        proptest::prop_assert!(signal.signal_v.iter().all(|&s| s.abs() <= peak));
+        proptest::prop_assert!(signal.amplitude_um.as_ref().unwrap().iter().all(|&a| (0.0..=a_max).contains(&a)));
+        let encoded = encode_wav(&signal, &WavOptions { format, volts_per_full_scale: peak }, "p").unwrap();
+        let (_, volts, a) = decode_drive_wav_channels(&encoded.bytes).unwrap();
+        // Read back, a scale can be 1 ulp off: the chunk's JSON number is
+        // parsed by serde_json, which does not round-trip every f64 exactly.
+        let ulps = 1.0 + 1e-15;
+        let worst = volts.iter().fold(0.0f64, |m, &v| m.max(v.abs()));
+        proptest::prop_assert!(worst <= peak * ulps, "{} > {}", worst, peak);
+        let a = a.unwrap();
+        let worst = a.iter().fold(0.0f64, |m, &v| m.max(v));
+        proptest::prop_assert!(worst <= a_max * ulps, "{} > {}", worst, a_max);
+        proptest::prop_assert!(a.iter().all(|&v| v >= 0.0));
+    }
+}
+
+/// The encoder refuses a channel-2 sample outside 0 .. a_max (a signal
+/// changed after its render), never writing it clipped.
+#[test]
+fn encoder_refuses_channel_2_outside_its_limit() {
+    let options = WavOptions { format: WavFormat::Pcm16, volts_per_full_scale: 150.0 };
+    for bad in [2.0 * (1.0 + 1e-12), -1e-9, f64::NAN] {
+        let (mut signal, _, _) = two_channel_signal();
+        signal.amplitude_um.as_mut().unwrap()[100] = bad;
+        let e = encode_wav(&signal, &options, "x").unwrap_err().to_string();
+        assert!(e.contains("outside 0 .. a_max = 2 um"), "{bad}: {e}");
+    }
+    // A signal whose channel and report disagree.
+    let (mut signal, _, _) = two_channel_signal();
+    signal.report.ultrasonic = None;
+    assert!(encode_wav(&signal, &options, "x").unwrap_err().to_string().contains("do not agree"));
 }

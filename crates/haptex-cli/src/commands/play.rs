@@ -10,8 +10,8 @@ use haptex_core::io::Table;
 use haptex_core::num::Num;
 use haptex_core::ranges;
 use haptex_core::signal::{
-    Carrier, CarrierShape, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions, read_drive_wav, render,
-    sidecar_path, write_wav,
+    AmplitudeCurve, Carrier, CarrierShape, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions,
+    read_drive_wav, render, render_two_channel, sidecar_path, write_wav,
 };
 use haptex_core::trajectory::Trajectory;
 use serde_json::json;
@@ -41,6 +41,14 @@ const GENERATED_RATE_HZ: f64 = 1000.0;
 /// The WAV carries its own scale (volts per full scale) and the hash of its
 /// samples in a `hptx` chunk; `haptex play --check OUT.wav` verifies a WAV
 /// and its sidecar belong together before an amplifier is set by them.
+///
+/// A display profile with an `amplitude_um` column (`haptex voltage
+/// --display combined|ultrasonic`) is played on two channels, a_max from
+/// its header (or a lower --a-max-um): channel 1 the drive above, channel 2 the ultrasonic
+/// amplitude envelope a(x(t)) in um (no carrier; clamped at a_max, which
+/// is also its full scale). The WAV then has 2 channels and its scale
+/// chunk and sidecar a `channel_2` scale in um; the CSV an `amplitude_um`
+/// column.
 #[derive(Debug, Args)]
 #[command(
     group = clap::ArgGroup::new("finger").args(["trajectory", "velocity"]),
@@ -50,7 +58,9 @@ const GENERATED_RATE_HZ: f64 = 1000.0;
         haptex play --profile bump_u.csv --velocity 50 -o bump.wav --png bump.png\n  \
         haptex play --profile bump_u.csv --trajectory finger.csv --carrier square --carrier-hz 400 -o drive.csv\n  \
         haptex play --profile bump_u.csv --velocity 80 --strokes 6 --slew-v-per-s 20000 -o strokes.wav\n  \
-        haptex play --check bump.wav"
+        haptex play --check bump.wav\n  \
+        haptex voltage --profile data/examples/bump_friction.csv --display combined -o bump_ua.csv\n  \
+        haptex play --profile bump_ua.csv --velocity 40 -o bump2.wav"
 )]
 pub struct PlayArgs {
     /// Check a drive-signal WAV written by haptex instead of rendering one:
@@ -89,6 +99,13 @@ pub struct PlayArgs {
     /// Output sample rate in Hz.
     #[arg(long, value_name = "HZ", default_value_t = 48_000, value_parser = clap::value_parser!(u32).range(1000..=768_000))]
     sample_rate: u32,
+    /// Highest ultrasonic amplitude in um (peak) of channel 2: higher
+    /// requests are clamped (and reported); also channel 2's full scale.
+    /// For a profile with an `amplitude_um` column only. Default: the a_max
+    /// its header comment states (`at most a_max = ... um`); a value above
+    /// that is refused, and without such a comment it is required.
+    #[arg(long, value_name = "UM", value_parser = in_range(ranges::A_MAX_UM))]
+    a_max_um: Option<f64>,
     /// Highest envelope in V RMS: higher requests are clamped (and reported).
     #[arg(long, value_name = "V", default_value_t = Limits::DEFAULT.u_max_v, value_parser = in_range(ranges::U_MAX_V))]
     u_max: f64,
@@ -188,7 +205,27 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
     // Refuse a directory or special file before any work.
     haptex_core::io::OutputTarget::of(output_path)?;
 
-    let curve = read_curve(profile)?;
+    let (curve, amplitude, stated_a_max) = read_curve(profile)?;
+    let a_max_um = match (&amplitude, args.a_max_um, stated_a_max) {
+        (None, Some(_), _) => {
+            bail!("--a-max-um is for a profile with an amplitude_um column; {} has none", profile.display())
+        }
+        (None, None, _) => None,
+        (Some(_), Some(given), Some(stated)) if given > stated => bail!(
+            "--a-max-um {} is above the a_max = {} um {} states it was designed for: give at most that",
+            Num(given),
+            Num(stated),
+            profile.display()
+        ),
+        (Some(_), Some(given), _) => Some(given),
+        (Some(_), None, Some(stated)) => Some(stated),
+        (Some(_), None, None) => bail!(
+            "{} has an amplitude_um column (a combined or ultrasonic display's profile) but no header comment \
+             stating its a_max: give --a-max-um, the largest amplitude of the plate, to drive channel 2 (the \
+             ultrasonic amplitude) with it as limit and full scale",
+            profile.display()
+        ),
+    };
     let (trajectory, trajectory_source) = trajectory(&args, &curve)?;
     let settings = RenderSettings {
         sample_rate_hz: args.sample_rate,
@@ -207,7 +244,10 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
             ExtendArg::Repeat => Extend::Repeat,
         },
     };
-    let signal = render(&curve, &trajectory, &settings)?;
+    let signal = match (&amplitude, a_max_um) {
+        (Some(amplitude), Some(a_max)) => render_two_channel(&curve, amplitude, a_max, &trajectory, &settings)?,
+        _ => render(&curve, &trajectory, &settings)?,
+    };
 
     let mut written = Vec::new();
     match format {
@@ -228,10 +268,15 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
                 "haptex_version": env!("CARGO_PKG_VERSION"),
             });
             let sidecar = write_wav(path, &signal, &options, source)?;
+            let channel_2 = match &sidecar.channel_2 {
+                Some(c) => format!("; channel 2: {} um per full scale", Num(c.um_per_full_scale)),
+                None => String::new(),
+            };
             written.push(format!(
-                "{} ({}, {} V per full scale, in the WAV's hptx chunk; samples SHA-256 {})",
+                "{} ({}, {}{} V per full scale{channel_2}, in the WAV's hptx chunk; samples SHA-256 {})",
                 path.display(),
                 format!("{:?}", options.format).to_lowercase(),
+                if channel_2.is_empty() { "" } else { "2 channels; channel 1: " },
                 Num(options.volts_per_full_scale),
                 sidecar.samples_sha256
             ));
@@ -281,11 +326,23 @@ fn check(path: &Path, quiet: bool) -> anyhow::Result<()> {
             format!("{:?}", s.sample_format).to_lowercase()
         );
         eprintln!(
-            "scale: {} V at the amplifier output per full-scale sample ({}); peak {:.4} V",
+            "{}scale: {} V at the amplifier output per full-scale sample ({}); peak {:.4} V",
+            if s.channel_2.is_some() { "channel 1 " } else { "" },
             Num(s.volts_per_full_scale),
             s.conversion,
             wav.peak_v()
         );
+        if let (Some(c2), Some(a)) = (&s.channel_2, &wav.amplitude_um) {
+            let peak = a.iter().fold(0.0f64, |m, &v| m.max(v.abs()));
+            eprintln!(
+                "channel 2: {} um of ultrasonic amplitude per full-scale sample ({}); peak {:.4} um, within a_max = {} \
+                 um",
+                Num(c2.um_per_full_scale),
+                c2.conversion,
+                peak,
+                Num(c2.a_max_um)
+            );
+        }
         eprintln!("samples: SHA-256 {} matches the scale chunk", s.samples_sha256);
         match &wav.sidecar {
             Some(_) => eprintln!("sidecar {}: belongs to this WAV (same hash and scale)", sidecar_path(path).display()),
@@ -296,13 +353,38 @@ fn check(path: &Path, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Reads the voltage curve from a file, or stdin for `-`.
-fn read_curve(path: &Path) -> anyhow::Result<VoltageCurve> {
-    Ok(if path.as_os_str() == "-" {
-        VoltageCurve::from_table(&Table::read(std::io::stdin().lock(), "<stdin>")?)?
-    } else {
-        VoltageCurve::read_csv_file(path)?
-    })
+/// Reads the voltage curve, and the amplitude curve of a profile with an
+/// `amplitude_um` column, from a file, or stdin for `-`; with the a_max
+/// its `#` header states (`at most a_max = A um`, as `haptex voltage
+/// --display combined|ultrasonic` writes), if it states one.
+fn read_curve(path: &Path) -> anyhow::Result<(VoltageCurve, Option<AmplitudeCurve>, Option<f64>)> {
+    if path.as_os_str() == "-" {
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(&mut std::io::stdin().lock(), &mut bytes)
+            .context("reading the profile from stdin")?;
+        let (curve, amplitude) = VoltageCurve::from_display_table(&Table::read(bytes.as_slice(), "<stdin>")?)?;
+        let stated = if amplitude.is_some() { stated_a_max(bytes.as_slice()) } else { None };
+        return Ok((curve, amplitude, stated));
+    }
+    let (curve, amplitude) = VoltageCurve::from_display_table(&Table::read_file(path)?)?;
+    let stated = match amplitude {
+        Some(_) => std::fs::File::open(path).ok().and_then(|f| stated_a_max(std::io::BufReader::new(f))),
+        None => None,
+    };
+    Ok((curve, amplitude, stated))
+}
+
+/// The a_max a display profile's header comment states: the smallest
+/// `at most a_max = A um` among the `#` lines before the header row.
+fn stated_a_max(reader: impl std::io::BufRead) -> Option<f64> {
+    reader
+        .lines()
+        .map_while(Result::ok)
+        .take_while(|l| l.trim_start().starts_with('#') || l.trim().is_empty())
+        .flat_map(|l| l.split("at most a_max = ").skip(1).map(str::to_owned).collect::<Vec<_>>())
+        .filter_map(|rest| rest.split_whitespace().next().and_then(|v| v.parse::<f64>().ok()))
+        .filter(|a| ranges::A_MAX_UM.contains(*a))
+        .reduce(f64::min)
 }
 
 /// The trajectory (read or generated) and a JSON description of where it

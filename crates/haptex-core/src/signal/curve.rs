@@ -65,9 +65,9 @@ impl VoltageCurve {
     ///
     /// A profile designed for a combined display (an `amplitude_um`
     /// column, `haptex voltage --display combined`) is refused: its
-    /// voltages assume the plate vibrates with those amplitudes, and the
-    /// drive signal carries the voltage alone, which would render another
-    /// friction than the one designed.
+    /// voltages assume the plate vibrates with those amplitudes, and a
+    /// reader of the voltage alone would render another friction than the
+    /// one designed. [`VoltageCurve::from_display_table`] reads both.
     pub fn from_table(table: &Table) -> Result<Self, ProfileError> {
         let at = |(row, field, message): (Option<usize>, &'static str, String)| {
             ProfileError::Table(table.error_at(row, Some(field), message))
@@ -77,8 +77,9 @@ impl VoltageCurve {
                 None,
                 "amplitude_um",
                 "this profile was designed for a combined display: its voltages assume the ultrasonic amplitudes \
-                 beside them, and a drive signal carries the electrovibration voltage alone; design it with \
-                 --display electrovibration to play it"
+                 beside them, which a voltage-only reader cannot apply; play it on two channels with haptex play \
+                 --a-max-um, check it with haptex check --display combined, or design it with --display \
+                 electrovibration"
                     .to_string(),
             )));
         }
@@ -86,6 +87,30 @@ impl VoltageCurve {
         let voltage_v = table.require("voltage_v")?.to_vec();
         validate(&x_mm, &[("voltage_v", &voltage_v)]).map_err(at)?;
         Ok(Self { x_mm, voltage_v })
+    }
+
+    /// Reads a display profile for a two-channel drive: the voltage curve
+    /// and, when the table has an `amplitude_um` column (`haptex voltage
+    /// --display combined|ultrasonic`), the ultrasonic amplitude curve over
+    /// the same positions. A profile without `voltage_v` but with
+    /// `amplitude_um` (the ultrasonic display) plays 0 V on channel 1.
+    /// Without `amplitude_um` this is [`VoltageCurve::from_table`].
+    pub fn from_display_table(table: &Table) -> Result<(Self, Option<AmplitudeCurve>), ProfileError> {
+        let Some(amplitude) = table.column("amplitude_um") else {
+            return Ok((Self::from_table(table)?, None));
+        };
+        let at = |(row, field, message): (Option<usize>, &'static str, String)| {
+            ProfileError::Table(table.error_at(row, Some(field), message))
+        };
+        let x_mm = table.require("x_mm")?.to_vec();
+        let amplitude_um = amplitude.to_vec();
+        let voltage_v = match table.column("voltage_v") {
+            Some(v) => v.to_vec(),
+            None => vec![0.0; x_mm.len()],
+        };
+        // validate checks amplitude_um against its range (0 .. 100 um).
+        validate(&x_mm, &[("voltage_v", &voltage_v), ("amplitude_um", &amplitude_um)]).map_err(at)?;
+        Ok((Self { x_mm: x_mm.clone(), voltage_v }, Some(AmplitudeCurve(Self { x_mm, voltage_v: amplitude_um }))))
     }
 
     /// Reads a voltage profile CSV from any reader; `source_name` labels errors.
@@ -151,6 +176,33 @@ impl VoltageCurve {
     pub fn contains(&self, x_mm: f64) -> bool {
         let (x0, x1) = self.span_mm();
         (x0..=x1).contains(&x_mm)
+    }
+}
+
+/// An ultrasonic amplitude curve a(x): positions in mm and the plate's
+/// vibration amplitude in um (peak, finite, >= 0), linear between samples
+/// and extended outside the span as the voltage curve is. A distinct type
+/// from [`VoltageCurve`] so that an amplitude is never played as a voltage.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AmplitudeCurve(VoltageCurve);
+
+impl AmplitudeCurve {
+    /// A curve from positions (mm) and amplitudes (um).
+    pub fn new(x_mm: Vec<f64>, amplitude_um: Vec<f64>) -> Result<Self, ProfileError> {
+        validate(&x_mm, &[("amplitude_um", &amplitude_um)])
+            .map_err(|(index, field, message)| ProfileError::Invalid { index: index.unwrap_or(0), field, message })?;
+        Ok(Self(VoltageCurve { x_mm, voltage_v: amplitude_um }))
+    }
+
+    /// Largest amplitude of the curve in um.
+    pub fn max_um(&self) -> f64 {
+        self.0.max_v()
+    }
+
+    /// a in um at every position of a path into `out` (as
+    /// [`VoltageCurve::voltages_along`]).
+    pub fn amplitudes_along(&self, x_mm: &[f64], extend: Extend, out: &mut [f64]) {
+        self.0.voltages_along(x_mm, extend, out)
     }
 }
 
@@ -229,5 +281,28 @@ mod tests {
                 .starts_with("d.csv, line 2, column 'amplitude_um': this profile was designed for a combined display"),
             "{e}"
         );
+    }
+
+    /// A display profile reads as voltage and amplitude over the same
+    /// positions; bad amplitudes are refused at their line and column.
+    #[test]
+    fn display_profiles_read_both_channels() {
+        let text = "# c\nx_mm,mu,voltage_v,amplitude_um\n0,0.9,0,0.3\n1,1.1,70,0\n";
+        let table = Table::read(text.as_bytes(), "d.csv").unwrap();
+        let (u, a) = VoltageCurve::from_display_table(&table).unwrap();
+        assert_eq!(u.voltage_v(), &[0.0, 70.0]);
+        let mut out = [0.0; 2];
+        a.unwrap().amplitudes_along(&[0.5, 2.0], Extend::Hold, &mut out);
+        assert_eq!(out, [0.15, 0.0]);
+        // An ultrasonic display's profile: 0 V on channel 1.
+        let table = Table::read("x_mm,mu,amplitude_um\n0,0.5,1\n1,0.6,0.8\n".as_bytes(), "a.csv").unwrap();
+        let (u, a) = VoltageCurve::from_display_table(&table).unwrap();
+        assert_eq!((u.max_v(), a.unwrap().max_um()), (0.0, 1.0));
+        let table = Table::read("x_mm,voltage_v,amplitude_um\n0,1,0.3\n1,2,-0.1\n".as_bytes(), "b.csv").unwrap();
+        let e = VoltageCurve::from_display_table(&table).unwrap_err().to_string();
+        assert!(e.starts_with("b.csv, line 3, column 'amplitude_um'"), "{e}");
+        // Without amplitude_um: the voltage profile, as from_table.
+        let table = Table::read("x_mm,voltage_v\n0,1\n1,2\n".as_bytes(), "v.csv").unwrap();
+        assert!(VoltageCurve::from_display_table(&table).unwrap().1.is_none());
     }
 }

@@ -27,11 +27,12 @@ use std::io::Write;
 use serde::{Deserialize, Serialize};
 
 pub use carrier::{Carrier, CarrierShape};
-pub use curve::{Extend, VoltageCurve};
+pub use curve::{AmplitudeCurve, Extend, VoltageCurve};
 pub use safety::{ClipReport, EnvelopeLimiter, Limits};
 pub use wav::{
-    DriveWav, EncodedWav, SCALE_CHUNK_ID, ScaleChunk, WavFormat, WavOptions, WavSidecar, check_volts_per_full_scale,
-    decode_drive_wav, encode_wav, read_drive_wav, sidecar_path, write_wav,
+    AmplitudeScale, DriveWav, EncodedWav, SCALE_CHUNK_ID, ScaleChunk, WavFormat, WavOptions, WavSidecar,
+    check_volts_per_full_scale, decode_drive_wav, decode_drive_wav_channels, encode_wav, read_drive_wav, sidecar_path,
+    write_wav,
 };
 
 use crate::io::{WriteError, write_csv_row};
@@ -125,6 +126,29 @@ pub struct SignalReport {
     pub outside_fraction: f64,
     pub clip: ClipReport,
     pub warnings: Vec<String>,
+    /// Channel 2, the ultrasonic amplitude envelope, when the signal has
+    /// one (absent from a one-channel signal's JSON).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ultrasonic: Option<UltrasonicReport>,
+}
+
+/// What the ultrasonic channel (channel 2) holds and what its limit did.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UltrasonicReport {
+    /// The clamp: no sample of channel 2 exceeds it, um (peak vibration
+    /// amplitude).
+    pub a_max_um: f64,
+    /// Largest amplitude after the clamp, um.
+    pub amplitude_max_um: f64,
+    /// Largest amplitude the profile asked for, um.
+    pub requested_max_um: f64,
+    /// Samples clamped at a_max, and their fraction.
+    pub clamped_samples: usize,
+    pub clamped_fraction: f64,
+    /// What channel 2 is: the amplitude envelope itself (no carrier), a
+    /// control signal for the resonant driver.
+    pub convention: String,
 }
 
 impl fmt::Display for SignalReport {
@@ -167,6 +191,18 @@ impl fmt::Display for SignalReport {
                 c.slew_max_deviation_v
             )?;
         }
+        if let Some(us) = &self.ultrasonic {
+            writeln!(
+                f,
+                "channel 2 (ultrasonic amplitude envelope, um, no carrier): max {:.4} um; clamped at a_max = {} um: \
+                 {} samples ({:.2}%), largest request {:.4} um",
+                us.amplitude_max_um,
+                us.a_max_um,
+                us.clamped_samples,
+                100.0 * us.clamped_fraction,
+                us.requested_max_um
+            )?;
+        }
         for warning in &self.warnings {
             writeln!(f, "warning: {warning}")?;
         }
@@ -183,6 +219,10 @@ pub struct DriveSignal {
     pub envelope_v: Vec<f64>,
     /// Instantaneous drive voltage in V.
     pub signal_v: Vec<f64>,
+    /// Channel 2: the ultrasonic vibration amplitude in um (peak) at each
+    /// sample, after the a_max clamp; `None` for an electrovibration-only
+    /// signal.
+    pub amplitude_um: Option<Vec<f64>>,
     pub report: SignalReport,
 }
 
@@ -219,19 +259,32 @@ impl DriveSignal {
             r.carrier.frequency_hz,
             r.carrier.peak_per_rms()
         )?;
-        w.write_all(b"t_s,x_mm,envelope_v,signal_v\n")?;
-        for i in 0..self.len() {
-            write_csv_row(w, &[self.t_s(i), self.x_mm[i], self.envelope_v[i], self.signal_v[i]])?;
+        let Some(amplitude_um) = &self.amplitude_um else {
+            w.write_all(b"t_s,x_mm,envelope_v,signal_v\n")?;
+            for i in 0..self.len() {
+                write_csv_row(w, &[self.t_s(i), self.x_mm[i], self.envelope_v[i], self.signal_v[i]])?;
+            }
+            return Ok(());
+        };
+        let a_max = self.report.ultrasonic.as_ref().map_or(f64::NAN, |u| u.a_max_um);
+        writeln!(
+            w,
+            "# amplitude_um is channel 2, the ultrasonic vibration amplitude envelope (um, peak; no carrier: the envelope is the channel's signal), at most a_max = {a_max} um"
+        )?;
+        w.write_all(b"t_s,x_mm,envelope_v,signal_v,amplitude_um\n")?;
+        for (i, &a) in amplitude_um.iter().enumerate() {
+            write_csv_row(w, &[self.t_s(i), self.x_mm[i], self.envelope_v[i], self.signal_v[i], a])?;
         }
         Ok(())
     }
 
-    /// A three-panel figure: finger position, envelope (with U_max) and drive.
+    /// A three-panel figure: finger position, envelope (with U_max) and
+    /// drive; a fourth with channel 2's amplitude (and a_max) when there is one.
     pub fn figure(&self, title: &str) -> Figure {
         let t = self.times_s();
         let u_max = self.report.limits.u_max_v;
         let ends = [t[0], t[t.len() - 1]];
-        Figure::new(title)
+        let figure = Figure::new(title)
             .panel(Panel::new("t (s)", "x (mm)").title("finger trajectory").line("x(t)", &t, &self.x_mm))
             .panel(
                 Panel::new("t (s)", "U (V RMS)")
@@ -239,7 +292,18 @@ impl DriveSignal {
                     .line("U(t)", &t, &self.envelope_v)
                     .series(crate::plot::Series::line("U_max", &ends, &[u_max, u_max]).color((150, 150, 150))),
             )
-            .panel(Panel::new("t (s)", "s (V)").title("drive signal").line("s(t)", &t, &self.signal_v))
+            .panel(Panel::new("t (s)", "s (V)").title("drive signal").line("s(t)", &t, &self.signal_v));
+        match (&self.amplitude_um, &self.report.ultrasonic) {
+            (Some(a), Some(us)) => figure.panel(
+                Panel::new("t (s)", "a (um)")
+                    .title("channel 2: ultrasonic amplitude a(x(t)) after the a_max clamp")
+                    .line("a(t)", &t, a)
+                    .series(
+                        crate::plot::Series::line("a_max", &ends, &[us.a_max_um, us.a_max_um]).color((150, 150, 150)),
+                    ),
+            ),
+            _ => figure,
+        }
     }
 }
 
@@ -358,8 +422,58 @@ pub fn render(
         outside_fraction,
         clip,
         warnings,
+        ultrasonic: None,
     };
-    Ok(DriveSignal { x_mm, envelope_v, signal_v, report })
+    Ok(DriveSignal { x_mm, envelope_v, signal_v, amplitude_um: None, report })
+}
+
+/// Renders a two-channel drive: channel 1 is [`render`] of `curve`
+/// (identical samples and report), channel 2 the ultrasonic amplitude
+/// a(x(t)) of `amplitude` along the same finger positions, in um, with
+/// the same [`Extend`] outside the span, clamped at `a_max_um` (reported,
+/// with a warning) and without carrier: a control signal for the plate's
+/// resonant driver. `a_max_um` must be within [`crate::ranges::A_MAX_UM`].
+pub fn render_two_channel(
+    curve: &VoltageCurve,
+    amplitude: &AmplitudeCurve,
+    a_max_um: f64,
+    trajectory: &Trajectory,
+    settings: &RenderSettings,
+) -> Result<DriveSignal, SignalError> {
+    crate::ranges::A_MAX_UM.check(a_max_um).map_err(|e| SignalError::Settings(e.to_string()))?;
+    let mut signal = render(curve, trajectory, settings)?;
+    let n = signal.len();
+    let mut a_um = crate::buffer::zeroed_f64(n);
+    amplitude.amplitudes_along(&signal.x_mm, settings.extend, &mut a_um);
+    let mut requested_max_um = 0.0f64;
+    let mut clamped_samples = 0usize;
+    for a in a_um.iter_mut() {
+        requested_max_um = requested_max_um.max(*a);
+        clamped_samples += usize::from(*a > a_max_um);
+        // max(0.0): the curve is >= 0, and + 0.0 keeps -0.0 out.
+        *a = a.min(a_max_um).max(0.0) + 0.0;
+    }
+    let amplitude_max_um = a_um.iter().fold(0.0f64, |m, &a| m.max(a));
+    let clamped_fraction = clamped_samples as f64 / n as f64;
+    if clamped_samples > 0 {
+        signal.report.warnings.push(format!(
+            "the profile asks for up to {requested_max_um:.4} um: channel 2 clamped at a_max = {a_max_um} um for \
+             {:.2}% of the time",
+            100.0 * clamped_fraction
+        ));
+    }
+    signal.report.ultrasonic = Some(UltrasonicReport {
+        a_max_um,
+        amplitude_max_um,
+        requested_max_um,
+        clamped_samples,
+        clamped_fraction,
+        convention: "channel 2 is the ultrasonic vibration amplitude envelope a(x(t)) in um (peak), without \
+                     carrier: a control signal for the plate's resonant driver"
+            .into(),
+    });
+    signal.amplitude_um = Some(a_um);
+    Ok(signal)
 }
 
 /// signal = envelope x sqrt(2) sin(2 pi i f / fs) (+ 0.0: no -0.0), in

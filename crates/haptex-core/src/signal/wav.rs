@@ -1,5 +1,13 @@
-//! WAV output of a drive signal (mono, through `hound`) and its sidecar
-//! JSON, which records how the signal was made.
+//! WAV output of a drive signal (mono, or two channels for a combined or
+//! ultrasonic display, through `hound`) and its sidecar JSON, which
+//! records how the signal was made.
+//!
+//! A two-channel WAV interleaves channel 1 (the electrovibration drive,
+//! in volts, scaled by the chunk's top-level `volts_per_full_scale`) and
+//! channel 2 (the ultrasonic amplitude envelope in um, scaled by the
+//! chunk's `channel_2` [`AmplitudeScale`], full scale = a_max). A
+//! one-channel WAV has no `channel_2` and is byte-identical to the format
+//! before two channels existed.
 //!
 //! Scale: a sample value v (an integer code, or a float) stands for
 //! v / full_scale * volts_per_full_scale volts at the amplifier output,
@@ -55,9 +63,9 @@ impl WavFormat {
         }
     }
 
-    fn spec(self, sample_rate_hz: u32) -> hound::WavSpec {
+    fn spec(self, sample_rate_hz: u32, channels: u16) -> hound::WavSpec {
         hound::WavSpec {
-            channels: 1,
+            channels,
             sample_rate: sample_rate_hz,
             bits_per_sample: self.bits(),
             sample_format: match self {
@@ -98,7 +106,37 @@ pub struct ScaleChunk {
     pub samples_sha256: String,
     /// volts = sample / full_scale_value * volts_per_full_scale.
     pub conversion: String,
+    /// A two-channel WAV's second channel (the ultrasonic amplitude, in
+    /// um): its own scale. Absent from a one-channel WAV's chunk. The
+    /// fields above are channel 1's (volts); `n_samples` counts frames.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub channel_2: Option<AmplitudeScale>,
 }
+
+/// The scale of a drive WAV's channel 2, the ultrasonic vibration
+/// amplitude envelope: named in um, never in volts, so that it cannot be
+/// read as channel 1's scale.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AmplitudeScale {
+    /// Always "ultrasonic vibration amplitude, peak".
+    pub quantity: String,
+    /// Always "um".
+    pub unit: String,
+    /// The sample value that stands for `um_per_full_scale` (as channel 1's).
+    pub full_scale_value: f64,
+    /// Micrometres of vibration amplitude for a full-scale sample. haptex
+    /// writes channel 2 at full scale = a_max, and its reader refuses a
+    /// chunk where the two differ.
+    pub um_per_full_scale: f64,
+    /// The clamp of the render: no sample stands for more than this, um.
+    pub a_max_um: f64,
+    /// um = sample / full_scale_value * um_per_full_scale.
+    pub conversion: String,
+}
+
+const AMPLITUDE_QUANTITY: &str = "ultrasonic vibration amplitude, peak";
+const AMPLITUDE_CONVERSION: &str = "um = sample / full_scale_value * um_per_full_scale";
 
 const KIND: &str = "haptex drive signal";
 const CONVERSION: &str = "volts = sample / full_scale_value * volts_per_full_scale";
@@ -127,6 +165,10 @@ pub struct WavSidecar {
     pub voltage_convention: String,
     /// Render settings, safety report and peak of the signal.
     pub report: SignalReport,
+    /// Channel 2's scale (ultrasonic amplitude, um), as in the `hptx`
+    /// chunk; absent for a one-channel WAV.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub channel_2: Option<AmplitudeScale>,
     /// Where the signal came from (profile, trajectory, command), free form.
     pub source: serde_json::Value,
 }
@@ -153,7 +195,8 @@ pub fn check_volts_per_full_scale(vpfs: f64) -> Result<f64, SignalError> {
     crate::ranges::VOLTS_PER_FULL_SCALE.check(vpfs).map_err(|e| SignalError::Settings(e.to_string()))
 }
 
-/// Encodes `signal` as a mono WAV file in memory, with its scale chunk
+/// Encodes `signal` as a WAV file in memory (mono, or two channels when
+/// the signal has an ultrasonic channel), with its scale chunk
 /// (what [`write_wav`] writes; a server sends these bytes). Refuses a
 /// signal whose peak exceeds `volts_per_full_scale`. `label` names the
 /// output in errors.
@@ -167,13 +210,47 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
     let format = options.format;
     let full_scale = format.full_scale();
     let scale = full_scale / vpfs;
-    let mut bytes = crate::buffer::bytes_with_capacity(64 + signal.len() * usize::from(format.bits() / 8));
+    // Channel 2 (two-channel signals): the ultrasonic amplitude in um, full
+    // scale = a_max, so that no sample can stand for more than the clamp.
+    let channel_2 = match (&signal.amplitude_um, &report.ultrasonic) {
+        (None, None) => None,
+        (Some(a), Some(us)) if a.len() == signal.len() => {
+            let upfs = crate::ranges::A_MAX_UM.check(us.a_max_um).map_err(|e| SignalError::Settings(e.to_string()))?;
+            // Every amplitude within 0 ..= a_max (a NaN fails both).
+            if let Some(&bad) = a.iter().find(|&&v| !(0.0..=upfs).contains(&v)) {
+                return Err(SignalError::Settings(format!(
+                    "refused: channel 2's amplitude {bad} um is outside 0 .. a_max = {upfs} um, its full scale"
+                )));
+            }
+            Some((
+                a,
+                AmplitudeScale {
+                    quantity: AMPLITUDE_QUANTITY.into(),
+                    unit: "um".into(),
+                    full_scale_value: full_scale,
+                    um_per_full_scale: upfs,
+                    a_max_um: us.a_max_um,
+                    conversion: AMPLITUDE_CONVERSION.into(),
+                },
+            ))
+        }
+        _ => {
+            return Err(SignalError::Settings(
+                "the signal's ultrasonic channel and its report do not agree; render it again".into(),
+            ));
+        }
+    };
+    let channels: u16 = if channel_2.is_some() { 2 } else { 1 };
+    let scale_2 = channel_2.as_ref().map_or(0.0, |(_, c)| full_scale / c.um_per_full_scale);
+    let mut bytes =
+        crate::buffer::bytes_with_capacity(64 + signal.len() * usize::from(channels) * usize::from(format.bits() / 8));
     {
-        let mut writer =
-            hound::WavWriter::new(Cursor::new(&mut bytes), format.spec(report.sample_rate_hz)).map_err(wav_error)?;
+        let mut writer = hound::WavWriter::new(Cursor::new(&mut bytes), format.spec(report.sample_rate_hz, channels))
+            .map_err(wav_error)?;
         let value = |v: f64| (v * scale).clamp(-full_scale, full_scale);
-        match format {
-            WavFormat::Pcm16 => {
+        let value_2 = |a: f64| (a * scale_2).clamp(-full_scale, full_scale);
+        match (format, &channel_2) {
+            (WavFormat::Pcm16, None) => {
                 // hound's 16-bit fast path: one capacity check, no error per
                 // sample. The values are clamped to +-full scale just above,
                 // so the rounding stays within i16.
@@ -187,14 +264,40 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
                 }
                 samples_writer.flush().map_err(wav_error)?;
             }
-            WavFormat::Pcm24 => {
+            (WavFormat::Pcm16, Some((a, _))) => {
+                let samples = signal.len().checked_mul(2).and_then(|n| u32::try_from(n).ok()).ok_or_else(|| {
+                    SignalError::Wav {
+                        path: label.to_string(),
+                        message: format!("2 x {} samples do not fit a WAV file", signal.len()),
+                    }
+                })?;
+                let mut samples_writer = writer.get_i16_writer(samples);
+                for (&v, &a) in signal.signal_v.iter().zip(a.iter()) {
+                    samples_writer.write_sample(round_to_integer(value(v)) as i16);
+                    samples_writer.write_sample(round_to_integer(value_2(a)) as i16);
+                }
+                samples_writer.flush().map_err(wav_error)?;
+            }
+            (WavFormat::Pcm24, None) => {
                 for &v in &signal.signal_v {
                     writer.write_sample(round_to_integer(value(v)) as i32).map_err(wav_error)?;
                 }
             }
-            WavFormat::Float32 => {
+            (WavFormat::Pcm24, Some((a, _))) => {
+                for (&v, &a) in signal.signal_v.iter().zip(a.iter()) {
+                    writer.write_sample(round_to_integer(value(v)) as i32).map_err(wav_error)?;
+                    writer.write_sample(round_to_integer(value_2(a)) as i32).map_err(wav_error)?;
+                }
+            }
+            (WavFormat::Float32, None) => {
                 for &v in &signal.signal_v {
                     writer.write_sample(value(v) as f32).map_err(wav_error)?;
+                }
+            }
+            (WavFormat::Float32, Some((a, _))) => {
+                for (&v, &a) in signal.signal_v.iter().zip(a.iter()) {
+                    writer.write_sample(value(v) as f32).map_err(wav_error)?;
+                    writer.write_sample(value_2(a) as f32).map_err(wav_error)?;
                 }
             }
         }
@@ -213,6 +316,7 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
         n_samples: signal.len(),
         samples_sha256: sha256_hex(&bytes[data]),
         conversion: CONVERSION.into(),
+        channel_2: channel_2.map(|(_, c)| c),
     };
     append_chunk(&mut bytes, SCALE_CHUNK_ID, &serde_json::to_vec(&scale).expect("the scale chunk serializes"))
         .map_err(|message| SignalError::Wav { path: label.to_string(), message })?;
@@ -261,7 +365,8 @@ fn append_chunk(bytes: &mut Vec<u8>, id: [u8; 4], content: &[u8]) -> Result<(), 
     Ok(())
 }
 
-/// Writes `signal` as a mono WAV at `path` (with its scale chunk) and,
+/// Writes `signal` as a WAV at `path` (mono, or two channels when the
+/// signal has an ultrasonic channel; with its scale chunk) and,
 /// when `path` is a file, its sidecar JSON at [`sidecar_path`], each
 /// atomically: the WAV first, then the sidecar, which carries the WAV's
 /// sample hash. A WAV written to a stream (`-`, a FIFO, a device) gets no
@@ -281,7 +386,7 @@ pub fn write_wav(
         kind: KIND.into(),
         wav_file: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
         sample_rate_hz: report.sample_rate_hz,
-        channels: 1,
+        channels: if scale.channel_2.is_some() { 2 } else { 1 },
         n_samples: signal.len(),
         sample_format: scale.sample_format,
         bits_per_sample: scale.sample_format.bits(),
@@ -290,10 +395,16 @@ pub fn write_wav(
         conversion: CONVERSION.into(),
         samples_sha256: scale.samples_sha256.clone(),
         voltage_convention: format!(
-            "the envelope U is the RMS voltage of eq. (8); the drive is U times a unit-RMS carrier, peak = {} x U",
-            report.carrier.peak_per_rms()
+            "the envelope U is the RMS voltage of eq. (8); the drive is U times a unit-RMS carrier, peak = {} x U{}",
+            report.carrier.peak_per_rms(),
+            if scale.channel_2.is_some() {
+                " (channel 1; channel 2 is the ultrasonic amplitude in um, scaled by channel_2.um_per_full_scale)"
+            } else {
+                ""
+            }
         ),
         report: report.clone(),
+        channel_2: scale.channel_2.clone(),
         source,
     };
     write_atomic(path, |w| w.write_all(&encoded.bytes))?;
@@ -312,8 +423,11 @@ pub fn write_wav(
 pub struct DriveWav {
     /// The scale chunk (checked against the samples).
     pub scale: ScaleChunk,
-    /// The samples in V at the amplifier output.
+    /// Channel 1's samples in V at the amplifier output.
     pub volts: Vec<f64>,
+    /// Channel 2's samples in um (ultrasonic amplitude), for a
+    /// two-channel WAV (scale in `scale.channel_2`).
+    pub amplitude_um: Option<Vec<f64>>,
     /// The sidecar, when one was found beside the WAV (checked to belong
     /// to it).
     pub sidecar: Option<WavSidecar>,
@@ -345,7 +459,7 @@ pub fn read_drive_wav(path: &Path) -> Result<DriveWav, SignalError> {
     std::fs::File::open(path)
         .and_then(|f| f.take(metadata.len()).read_to_end(&mut bytes))
         .map_err(|e| bad(e.to_string()))?;
-    let (scale, volts) = decode_drive_wav(&bytes).map_err(bad)?;
+    let (scale, volts, amplitude_um) = decode_drive_wav_channels(&bytes).map_err(bad)?;
     let sidecar_file = sidecar_path(path);
     let sidecar = match std::fs::read(&sidecar_file) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
@@ -363,7 +477,7 @@ pub fn read_drive_wav(path: &Path) -> Result<DriveWav, SignalError> {
             Some(sidecar)
         }
     };
-    Ok(DriveWav { scale, volts, sidecar })
+    Ok(DriveWav { scale, volts, amplitude_um, sidecar })
 }
 
 /// Whether a sidecar describes the WAV whose scale chunk is `scale`.
@@ -386,6 +500,25 @@ fn check_sidecar(sidecar: &WavSidecar, scale: &ScaleChunk) -> Result<(), String>
             scale.sample_format
         ));
     }
+    let bits = |c: &AmplitudeScale| {
+        (c.full_scale_value.to_bits(), c.um_per_full_scale.to_bits(), c.a_max_um.to_bits(), c.unit.clone())
+    };
+    if sidecar.channel_2.as_ref().map(bits) != scale.channel_2.as_ref().map(bits)
+        || sidecar.channels != if scale.channel_2.is_some() { 2 } else { 1 }
+    {
+        let describe = |c: &Option<AmplitudeScale>| match c {
+            Some(c) => {
+                format!("channel 2 at {} um per full scale (a_max {} um)", Num(c.um_per_full_scale), Num(c.a_max_um))
+            }
+            None => "no channel 2".to_string(),
+        };
+        return Err(format!(
+            "it says {} channel(s), {}; the WAV says {}",
+            sidecar.channels,
+            describe(&sidecar.channel_2),
+            describe(&scale.channel_2)
+        ));
+    }
     if sidecar.n_samples != scale.n_samples || sidecar.sample_rate_hz != scale.sample_rate_hz {
         return Err(format!(
             "it says {} samples at {} Hz, the WAV has {} at {} Hz",
@@ -396,10 +529,22 @@ fn check_sidecar(sidecar: &WavSidecar, scale: &ScaleChunk) -> Result<(), String>
 }
 
 /// Decodes a haptex drive-signal WAV from its bytes: the scale chunk,
-/// checked against the fmt and data chunks, and the samples in volts.
-/// Linear in the input; chunk sizes are checked against the bytes present
-/// before anything is allocated from them.
+/// checked against the fmt and data chunks, and channel 1's samples in
+/// volts (of a two-channel WAV too: channel 2 is
+/// [`decode_drive_wav_channels`]'s). Linear in the input; chunk sizes are
+/// checked against the bytes present before anything is allocated from
+/// them.
 pub fn decode_drive_wav(bytes: &[u8]) -> Result<(ScaleChunk, Vec<f64>), String> {
+    decode_drive_wav_channels(bytes).map(|(scale, volts, _)| (scale, volts))
+}
+
+/// Decodes a haptex drive-signal WAV as [`decode_drive_wav`], with
+/// channel 2 (the ultrasonic amplitude in um, by the chunk's `channel_2`
+/// scale) when the WAV has two channels. A WAV whose channel count does
+/// not match the chunk, or whose channel 2 stands for more than its
+/// a_max, is refused.
+#[allow(clippy::type_complexity)]
+pub fn decode_drive_wav_channels(bytes: &[u8]) -> Result<(ScaleChunk, Vec<f64>, Option<Vec<f64>>), String> {
     if bytes.len() < 12 || &bytes[0..4] != b"RIFF" || &bytes[8..12] != b"WAVE" {
         return Err("not a WAV file (no RIFF/WAVE header)".into());
     }
@@ -465,29 +610,71 @@ pub fn decode_drive_wav(bytes: &[u8]) -> Result<(ScaleChunk, Vec<f64>), String> 
     let u16_at = |i: usize| u16::from_le_bytes([fmt[i], fmt[i + 1]]);
     let (channels, rate, bits) = (u16_at(2), u32::from_le_bytes(fmt[4..8].try_into().expect("4 bytes")), u16_at(14));
     let format = scale.sample_format;
-    if channels != 1 || rate != scale.sample_rate_hz || bits != format.bits() {
+    let expected_channels: u16 = if scale.channel_2.is_some() { 2 } else { 1 };
+    if channels != expected_channels || rate != scale.sample_rate_hz || bits != format.bits() {
         return Err(format!(
-            "the fmt chunk ({channels} channels, {rate} Hz, {bits} bits) does not match the scale chunk (1 channel, \
-             {} Hz, {:?})",
+            "the fmt chunk ({channels} channels, {rate} Hz, {bits} bits) does not match the scale chunk \
+             ({expected_channels} channel(s), {} Hz, {:?})",
             scale.sample_rate_hz, format
         ));
     }
-    let width = usize::from(format.bits() / 8);
-    if data.len() != scale.n_samples * width {
-        return Err(format!("{} data bytes for {} samples of {width} bytes", data.len(), scale.n_samples));
+    if let Some(c2) = &scale.channel_2
+        && (c2.quantity != AMPLITUDE_QUANTITY
+            || c2.unit != "um"
+            || c2.conversion != AMPLITUDE_CONVERSION
+            || c2.full_scale_value.to_bits() != expected_full_scale.to_bits()
+            || crate::ranges::A_MAX_UM.check(c2.um_per_full_scale).is_err()
+            || crate::ranges::A_MAX_UM.check(c2.a_max_um).is_err()
+            || c2.a_max_um.to_bits() != c2.um_per_full_scale.to_bits())
+    {
+        return Err(format!(
+            "the haptex scale chunk's channel 2 is not consistent (quantity {:?}, unit {:?}, full scale {}, {} um \
+             per full scale, a_max {} um)",
+            c2.quantity,
+            c2.unit,
+            Num(c2.full_scale_value),
+            Num(c2.um_per_full_scale),
+            Num(c2.a_max_um)
+        ));
     }
-    // volts = sample / full_scale_value * volts_per_full_scale, as written.
+    let width = usize::from(format.bits() / 8);
+    let frame = width * usize::from(expected_channels);
+    if scale.n_samples.checked_mul(frame) != Some(data.len()) {
+        return Err(format!(
+            "{} data bytes for {} frames of {expected_channels} sample(s) of {width} bytes",
+            data.len(),
+            scale.n_samples
+        ));
+    }
+    // volts = sample / full_scale_value * volts_per_full_scale, as written;
+    // um = sample / full_scale_value * um_per_full_scale on channel 2.
     let vpfs = scale.volts_per_full_scale;
-    let volts = data
-        .chunks_exact(width)
-        .map(|s| {
-            let sample = match format {
-                WavFormat::Pcm16 => f64::from(i16::from_le_bytes([s[0], s[1]])),
-                WavFormat::Pcm24 => f64::from(i32::from_le_bytes([0, s[0], s[1], s[2]]) >> 8),
-                WavFormat::Float32 => f64::from(f32::from_le_bytes([s[0], s[1], s[2], s[3]])),
-            };
-            sample / expected_full_scale * vpfs
-        })
-        .collect();
-    Ok((scale, volts))
+    let sample = |s: &[u8]| match format {
+        WavFormat::Pcm16 => f64::from(i16::from_le_bytes([s[0], s[1]])),
+        WavFormat::Pcm24 => f64::from(i32::from_le_bytes([0, s[0], s[1], s[2]]) >> 8),
+        WavFormat::Float32 => f64::from(f32::from_le_bytes([s[0], s[1], s[2], s[3]])),
+    };
+    let Some(c2) = &scale.channel_2 else {
+        let volts = data.chunks_exact(width).map(|s| sample(s) / expected_full_scale * vpfs).collect();
+        return Ok((scale, volts, None));
+    };
+    let upfs = c2.um_per_full_scale;
+    let volts: Vec<f64> = data.chunks_exact(frame).map(|f| sample(&f[..width]) / expected_full_scale * vpfs).collect();
+    let amplitude: Vec<f64> =
+        data.chunks_exact(frame).map(|f| sample(&f[width..]) / expected_full_scale * upfs).collect();
+    // No sample may stand for more than a_max (half a code of rounding
+    // allowed), nor for a negative amplitude.
+    let tolerance = match format {
+        WavFormat::Float32 => upfs * 1e-6,
+        _ => 0.5 * upfs / expected_full_scale,
+    };
+    if let Some(i) = amplitude.iter().position(|&a| !(a <= c2.a_max_um + tolerance && a >= -tolerance)) {
+        return Err(format!(
+            "channel 2's sample {i} stands for {} um, outside 0 .. a_max = {} um: the scale chunk does not belong \
+             to these samples",
+            Num(amplitude[i]),
+            Num(c2.a_max_um)
+        ));
+    }
+    Ok((scale, volts, Some(amplitude)))
 }
