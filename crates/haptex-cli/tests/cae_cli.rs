@@ -1,22 +1,8 @@
 //! `haptex cae predict` and `haptex cae loo` end to end: the binary, its
 //! files, its JSON and its errors.
 
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn haptex(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_haptex")).args(args).output().expect("run haptex")
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> String {
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path.to_str().unwrap().to_string()
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+mod common;
+use common::{haptex, stderr, write};
 
 /// Data rows of a CSV (comments and header skipped).
 fn rows(text: &str) -> Vec<Vec<f64>> {

@@ -1,15 +1,8 @@
 //! `haptex simulate --surface display` and `haptex check` end to end:
 //! outputs, the voltage limit, and bad input.
 
-use std::process::{Command, Output};
-
-fn haptex(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_haptex")).args(args).output().expect("run haptex")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+mod common;
+use common::{haptex, stderr};
 
 /// Rows of a CSV after its `#` lines, as numbers, with the header.
 fn table(text: &str) -> (Vec<String>, Vec<Vec<f64>>) {

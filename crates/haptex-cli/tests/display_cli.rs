@@ -2,24 +2,10 @@
 //! of each display, the limits stated beside the samples, the summary, the
 //! calibration file's errors, and the flags that do not go together.
 
-use std::path::Path;
-use std::process::{Command, Output};
-
 use haptex_core::io::Table;
 
-fn haptex(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_haptex")).args(args).output().expect("run haptex")
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> String {
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path.to_str().unwrap().to_string()
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+mod common;
+use common::{haptex, stderr, write};
 
 const EXAMPLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/examples/bump_friction.csv");
 const CALIBRATION: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/examples/ultrasonic_calibration.csv");

@@ -11,13 +11,8 @@ use haptex_core::recording::rng::SplitMix64;
 use haptex_core::recording::synth::{PressProfile, StrokeModel, Trajectory};
 use haptex_core::recording::{Recording, RecordingMeta, StreamFormat, StreamMeta, Units};
 
-fn haptex(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_haptex")).args(args).output().expect("run haptex")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+mod common;
+use common::{haptex, stderr};
 
 fn stdout(out: &Output) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()

@@ -5,19 +5,8 @@ use std::process::{Command, Output};
 
 use haptex_core::signal::WavFormat;
 
-fn haptex(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_haptex")).args(args).output().expect("run haptex")
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> String {
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path.to_str().unwrap().to_string()
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+mod common;
+use common::{haptex, stderr, write};
 
 fn path(dir: &Path, name: &str) -> String {
     dir.join(name).to_str().unwrap().to_string()

@@ -1,14 +1,7 @@
 //! `haptex simulate` end to end: outputs and bad input.
 
-use std::process::{Command, Output};
-
-fn haptex(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_haptex")).args(args).output().expect("run haptex")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+mod common;
+use common::{haptex, stderr};
 
 #[test]
 fn simulate_writes_profile_history_vtk_and_png() {

@@ -1,21 +1,7 @@
 //! `haptex voltage` end to end: the binary, its files and its errors.
 
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn haptex(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_haptex")).args(args).output().expect("run haptex")
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> String {
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path.to_str().unwrap().to_string()
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+mod common;
+use common::{haptex, stderr, write};
 
 /// Issue 2 acceptance through the command line: the paper's constants with
 /// U_max = 1000 V give 112.05, 158.46, 224.09 V (within 0.01 V).

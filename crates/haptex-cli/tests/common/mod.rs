@@ -1,0 +1,23 @@
+//! What the CLI tests share: running the binary, writing an input file,
+//! reading stderr. Each test binary uses its own part of it.
+#![allow(dead_code)]
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+/// Runs the haptex binary built for the tests.
+pub fn haptex(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_haptex")).args(args).output().expect("run haptex")
+}
+
+/// Writes `text` to `dir/name` and returns the path as a string.
+pub fn write(dir: &Path, name: &str, text: &str) -> String {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+/// The process's standard error as text.
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
