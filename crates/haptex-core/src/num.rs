@@ -9,6 +9,29 @@
 
 use std::fmt;
 
+/// 1.5 * 2^52: added to a double below 2^51 in magnitude, the sum's last
+/// place is 1, so the addition rounds the double to an integer (ties to
+/// even) and the sum's low bits hold that integer (two's complement).
+const ROUND_SHIFTER: f64 = 6755399441055744.0;
+
+/// `v` rounded to the nearest integer (ties to even), and the bits of
+/// `v + 1.5 * 2^52`, whose low bits hold that integer; |v| < 2^51. Plain
+/// arithmetic, no libm `round` call, so a loop over it vectorizes. The
+/// polynomial exp of the CAE, the carrier's sine and the WAV encoder's
+/// rounding use it.
+#[inline(always)]
+pub(crate) fn round_shifted(v: f64) -> (f64, u64) {
+    let shifted = v + ROUND_SHIFTER;
+    (shifted - ROUND_SHIFTER, shifted.to_bits())
+}
+
+/// The integer in the low bits of `round_shifted(v).1`, as the bits of a
+/// two's complement integer (wrapping).
+#[inline(always)]
+pub(crate) fn shifted_integer_bits(bits: u64) -> u64 {
+    bits.wrapping_sub(ROUND_SHIFTER.to_bits())
+}
+
 /// Displays an `f64` as the shortest text that parses back to it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Num(pub f64);

@@ -541,11 +541,9 @@ fn evaluate_lanes(cae: &Cae, scratch: &mut Scratch) -> Pass {
 /// 2^k (k in -67..=0, always a normal number) put into the exponent bits.
 #[inline(always)]
 pub(crate) fn exp_near_zero(t: f64) -> f64 {
-    const SHIFTER: f64 = 6755399441055744.0; // 1.5 * 2^52
     const LN2_HI: f64 = 0.6931471803691238;
     const LN2_LO: f64 = 1.9082149292705877e-10;
-    let shifted = t * std::f64::consts::LOG2_E + SHIFTER;
-    let k = shifted - SHIFTER;
+    let (k, shifted_bits) = crate::num::round_shifted(t * std::f64::consts::LOG2_E);
     let r = (t - k * LN2_HI) - k * LN2_LO;
     // Horner, 1/13! .. 1/0!.
     let mut p = 1.0 / 6227020800.0;
@@ -566,7 +564,7 @@ pub(crate) fn exp_near_zero(t: f64) -> f64 {
     ] {
         p = p * r + coefficient;
     }
-    let k_bits = shifted.to_bits().wrapping_sub(SHIFTER.to_bits());
+    let k_bits = crate::num::shifted_integer_bits(shifted_bits);
     p * f64::from_bits(k_bits.wrapping_add(1023) << 52)
 }
 

@@ -96,12 +96,10 @@ impl Carrier {
 /// up to 2^50 turns (a render's sample limit keeps them below 1e8).
 #[inline(always)]
 pub(crate) fn sin_turns(p: f64) -> f64 {
-    // q = 2p rounded to an integer by the 1.5 * 2^52 shifter (ties to
-    // even; |2p| < 2^51), which also leaves q's parity in the lowest bit:
-    // no libm round/floor call, so the loop vectorizes.
-    const SHIFTER: f64 = 6755399441055744.0;
-    let shifted = 2.0 * p + SHIFTER;
-    let q = shifted - SHIFTER;
+    // q = 2p rounded to an integer (ties to even; |2p| < 2^51), with q's
+    // parity in the lowest bit of the shifted sum: no libm round/floor
+    // call, so the loop vectorizes.
+    let (q, shifted_bits) = crate::num::round_shifted(2.0 * p);
     let r = p - 0.5 * q;
     let x = std::f64::consts::TAU * r;
     let x2 = x * x;
@@ -123,7 +121,7 @@ pub(crate) fn sin_turns(p: f64) -> f64 {
         s = s * x2 + c;
     }
     // (-1)^q from the parity of q.
-    let sign = 1.0 - 2.0 * (shifted.to_bits() & 1) as f64;
+    let sign = 1.0 - 2.0 * (shifted_bits & 1) as f64;
     sign * (s * x)
 }
 

@@ -260,7 +260,7 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
                 })?;
                 let mut samples_writer = writer.get_i16_writer(samples);
                 for &v in &signal.signal_v {
-                    samples_writer.write_sample(round_to_integer(value(v)) as i16);
+                    samples_writer.write_sample(crate::num::round_shifted(value(v)).0 as i16);
                 }
                 samples_writer.flush().map_err(wav_error)?;
             }
@@ -273,20 +273,20 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
                 })?;
                 let mut samples_writer = writer.get_i16_writer(samples);
                 for (&v, &a) in signal.signal_v.iter().zip(a.iter()) {
-                    samples_writer.write_sample(round_to_integer(value(v)) as i16);
-                    samples_writer.write_sample(round_to_integer(value_2(a)) as i16);
+                    samples_writer.write_sample(crate::num::round_shifted(value(v)).0 as i16);
+                    samples_writer.write_sample(crate::num::round_shifted(value_2(a)).0 as i16);
                 }
                 samples_writer.flush().map_err(wav_error)?;
             }
             (WavFormat::Pcm24, None) => {
                 for &v in &signal.signal_v {
-                    writer.write_sample(round_to_integer(value(v)) as i32).map_err(wav_error)?;
+                    writer.write_sample(crate::num::round_shifted(value(v)).0 as i32).map_err(wav_error)?;
                 }
             }
             (WavFormat::Pcm24, Some((a, _))) => {
                 for (&v, &a) in signal.signal_v.iter().zip(a.iter()) {
-                    writer.write_sample(round_to_integer(value(v)) as i32).map_err(wav_error)?;
-                    writer.write_sample(round_to_integer(value_2(a)) as i32).map_err(wav_error)?;
+                    writer.write_sample(crate::num::round_shifted(value(v)).0 as i32).map_err(wav_error)?;
+                    writer.write_sample(crate::num::round_shifted(value_2(a)).0 as i32).map_err(wav_error)?;
                 }
             }
             (WavFormat::Float32, None) => {
@@ -321,15 +321,6 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
     append_chunk(&mut bytes, SCALE_CHUNK_ID, &serde_json::to_vec(&scale).expect("the scale chunk serializes"))
         .map_err(|message| SignalError::Wav { path: label.to_string(), message })?;
     Ok(EncodedWav { bytes, scale })
-}
-
-/// `v` rounded to the nearest integer, ties to even, for |v| < 2^51 (the
-/// samples here are within +-2^23): by the 1.5 * 2^52 shifter, in plain
-/// arithmetic instead of a libm `round` call per sample.
-#[inline(always)]
-fn round_to_integer(v: f64) -> f64 {
-    const SHIFTER: f64 = 6755399441055744.0;
-    (v + SHIFTER) - SHIFTER
 }
 
 /// The byte range of the `data` chunk's content in a RIFF/WAVE file.
