@@ -195,10 +195,7 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
         "haptex check: {} on the FE finger ({}, load {}), voltage {label}",
         args.profile.display(),
         if settings.scenario.viscoelastic { "visco-elastic" } else { "elastic" },
-        match settings.scenario.loading {
-            Loading::Load(f) => format!("{} N/mm", Num(f)),
-            Loading::Indent(d) => format!("indent {} mm", Num(d)),
-        }
+        loading_text(settings.scenario.loading)
     );
     if let Some(path) = &args.output {
         haptex_core::io::write_atomic(path, |w| {
@@ -282,10 +279,7 @@ fn run_display(
             _ => String::new(),
         },
         ultrasonic.describe(),
-        match settings.scenario.loading {
-            Loading::Load(f) => format!("{} N/mm", Num(f)),
-            Loading::Indent(d) => format!("indent {} mm", Num(d)),
-        }
+        loading_text(settings.scenario.loading)
     );
     let lines = [
         format!(
@@ -349,6 +343,14 @@ fn run_display(
         }
     }
     Ok(())
+}
+
+/// The finger's loading as the header says it.
+fn loading_text(loading: Loading) -> String {
+    match loading {
+        Loading::Load(f) => format!("{} N/mm", Num(f)),
+        Loading::Indent(d) => format!("indent {} mm", Num(d)),
+    }
 }
 
 fn describe(m: &CheckMetrics, settings: &RenderSettings) -> Vec<String> {

@@ -272,13 +272,7 @@ impl Cae {
         diagnostics: &mut Vec<Diagnostics>,
     ) -> Result<(), CaeError> {
         let (n, d, m) = (self.matrix.n(), self.matrix.d(), self.matrix.m());
-        if !queries.len().is_multiple_of(d) {
-            return Err(CaeError::Query(format!(
-                "{} query values are not a whole number of queries of {d} inputs",
-                queries.len()
-            )));
-        }
-        let q_total = queries.len() / d;
+        let q_total = self.query_count(queries)?;
         if out.len() != q_total * m {
             return Err(CaeError::Query(format!(
                 "a buffer of {} outputs for {q_total} queries of a model with {m} outputs",
@@ -351,6 +345,18 @@ impl Cae {
         Ok(())
     }
 
+    /// The number of queries in a batch of `queries` values (D per query).
+    fn query_count(&self, queries: &[f64]) -> Result<usize, CaeError> {
+        let d = self.matrix.d();
+        if !queries.len().is_multiple_of(d) {
+            return Err(CaeError::Query(format!(
+                "{} query values are not a whole number of queries of {d} inputs",
+                queries.len()
+            )));
+        }
+        Ok(queries.len() / d)
+    }
+
     /// [`Cae::predict_batch_into`] with freshly allocated buffers: Q x M
     /// outputs and one diagnostic per query. The blocks of
     /// [`BATCH_BLOCK`] queries run on rayon's threads (one scratch per
@@ -359,13 +365,7 @@ impl Cae {
     pub fn predict_batch(&self, queries: &[f64]) -> Result<(Vec<f64>, Vec<Diagnostics>), CaeError> {
         use rayon::prelude::*;
         let (d, m) = (self.matrix.d(), self.matrix.m());
-        if !queries.len().is_multiple_of(d) {
-            return Err(CaeError::Query(format!(
-                "{} query values are not a whole number of queries of {d} inputs",
-                queries.len()
-            )));
-        }
-        let q_total = queries.len() / d;
+        let q_total = self.query_count(queries)?;
         let mut out = vec![0.0; q_total * m];
         let blocks: Vec<Vec<Diagnostics>> = queries
             .par_chunks(BATCH_BLOCK * d)

@@ -338,8 +338,7 @@ pub fn render(
     // (vectorized: a polynomial sine), the sums.
     let mut envelope_v = crate::buffer::zeroed_f64(n);
     curve.voltages_along(&x_mm, settings.extend, &mut envelope_v);
-    let (x0, x1) = curve.span_mm();
-    let outside = x_mm.iter().map(|&x| usize::from(!(x0..=x1).contains(&x))).sum::<usize>();
+    let outside = x_mm.iter().map(|&x| usize::from(!curve.contains(x))).sum::<usize>();
     let mut limiter = EnvelopeLimiter::new(&settings.limits, fs);
     let mut clip = ClipReport::default();
     let u_max = settings.limits.u_max_v;
