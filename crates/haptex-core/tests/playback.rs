@@ -121,6 +121,12 @@ fn amplifier_range_is_refused_not_clipped() {
 /// A signal with clamping, a slew limit and both carriers' worth of
 /// structure, used by the WAV tests: 0.25 s at 44.1 kHz.
 fn test_signal() -> haptex_core::signal::DriveSignal {
+    let (curve, trajectory, settings) = test_inputs();
+    render(&curve, &trajectory, &settings).unwrap()
+}
+
+/// The voltage curve, trajectory and settings of [`test_signal`].
+fn test_inputs() -> (VoltageCurve, Trajectory, RenderSettings) {
     let curve = VoltageCurve::new(vec![0.0, 2.0, 4.0], vec![10.0, 120.0, 30.0]).unwrap();
     let trajectory = Trajectory::strokes(0.0, 4.0, 32.0, 2, 1000.0).unwrap();
     let settings = RenderSettings {
@@ -129,7 +135,7 @@ fn test_signal() -> haptex_core::signal::DriveSignal {
         limits: Limits { u_max_v: 100.0, slew_v_per_s: Some(5000.0), amplifier_range_v: Some(150.0) },
         extend: Extend::Hold,
     };
-    render(&curve, &trajectory, &settings).unwrap()
+    (curve, trajectory, settings)
 }
 
 /// WAV read-back with hound: rate, channels, bits, length, and every sample
@@ -276,16 +282,9 @@ fn python_read(path: &Path) -> (u32, usize, u32, f64) {
 /// A two-channel test signal: the voltage of [`test_signal`] and an
 /// amplitude curve that asks for more than a_max = 2 um in its middle.
 fn two_channel_signal() -> (haptex_core::signal::DriveSignal, VoltageCurve, f64) {
-    let curve = VoltageCurve::new(vec![0.0, 2.0, 4.0], vec![10.0, 120.0, 30.0]).unwrap();
+    let (curve, trajectory, settings) = test_inputs();
     let (x, a) = (vec![0.0, 1.0, 2.5, 4.0], vec![0.0, 1.2, 2.6, 0.4]);
     let amplitude = AmplitudeCurve::new(x.clone(), a.clone()).unwrap();
-    let trajectory = Trajectory::strokes(0.0, 4.0, 32.0, 2, 1000.0).unwrap();
-    let settings = RenderSettings {
-        sample_rate_hz: 44_100,
-        carrier: Carrier { shape: CarrierShape::Sine, frequency_hz: 700.0 },
-        limits: Limits { u_max_v: 100.0, slew_v_per_s: Some(5000.0), amplifier_range_v: Some(150.0) },
-        extend: Extend::Hold,
-    };
     let a_max = 2.0;
     let signal = render_two_channel(&curve, &amplitude, a_max, &trajectory, &settings).unwrap();
     (signal, VoltageCurve::new(x, a).unwrap(), a_max)
