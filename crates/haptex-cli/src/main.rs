@@ -30,6 +30,7 @@ enum Command {
     Db(commands::db::DbArgs),
     Predict(commands::predict::PredictArgs),
     Serve(commands::serve::ServeArgs),
+    ForceCurve(commands::force_curve::ForceCurveArgs),
 }
 
 fn main() -> ExitCode {
@@ -44,6 +45,7 @@ fn main() -> ExitCode {
         Command::Db(args) => commands::db::run(args),
         Command::Predict(args) => commands::predict::run(args),
         Command::Serve(args) => commands::serve::run(args),
+        Command::ForceCurve(args) => commands::force_curve::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

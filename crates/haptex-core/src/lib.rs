@@ -10,6 +10,7 @@ pub mod cae;
 pub mod combined;
 pub mod database;
 pub mod electrovibration;
+pub mod frequency;
 pub mod io;
 pub mod library;
 pub mod num;

@@ -3,6 +3,7 @@
 pub mod cae;
 pub mod check;
 pub mod db;
+pub mod force_curve;
 pub mod library;
 pub mod play;
 pub mod predict;

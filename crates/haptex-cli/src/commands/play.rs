@@ -10,13 +10,13 @@ use haptex_core::io::Table;
 use haptex_core::num::Num;
 use haptex_core::ranges;
 use haptex_core::signal::{
-    AmplitudeCurve, Carrier, CarrierShape, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions,
-    read_drive_wav, render, render_two_channel, sidecar_path, write_wav,
+    AmplitudeCurve, Carrier, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions, read_drive_wav,
+    render, render_two_channel, sidecar_path, write_wav,
 };
 use haptex_core::trajectory::Trajectory;
 use serde_json::json;
 
-use crate::args::{Output, in_range, positive};
+use crate::args::{CarrierArg, Output, in_range, positive};
 
 /// Rate at which generated trajectories are sampled (linear in between).
 const GENERATED_RATE_HZ: f64 = 1000.0;
@@ -150,13 +150,6 @@ pub struct PlayArgs {
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-enum CarrierArg {
-    Sine,
-    Square,
-    None,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
 enum WavFormatArg {
     Pcm16,
     Pcm24,
@@ -205,7 +198,8 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
     // Refuse a directory or special file before any work.
     haptex_core::io::OutputTarget::of(output_path)?;
 
-    let (curve, amplitude, stated_a_max) = read_curve(profile)?;
+    let (curve, amplitude, comments) = read_curve(profile)?;
+    let stated_a_max = if amplitude.is_some() { stated_a_max(&comments) } else { None };
     let a_max_um = match (&amplitude, args.a_max_um, stated_a_max) {
         (None, Some(_), _) => {
             bail!("--a-max-um is for a profile with an amplitude_um column; {} has none", profile.display())
@@ -229,14 +223,7 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
     let (trajectory, trajectory_source) = trajectory(&args, &curve)?;
     let settings = RenderSettings {
         sample_rate_hz: args.sample_rate,
-        carrier: Carrier {
-            shape: match args.carrier {
-                CarrierArg::Sine => CarrierShape::Sine,
-                CarrierArg::Square => CarrierShape::Square,
-                CarrierArg::None => CarrierShape::None,
-            },
-            frequency_hz: args.carrier_hz,
-        },
+        carrier: Carrier { shape: args.carrier.shape(), frequency_hz: args.carrier_hz },
         limits: Limits { u_max_v: args.u_max, slew_v_per_s: args.slew_v_per_s, amplifier_range_v: args.amp_range_v },
         extend: match args.outside {
             ExtendArg::Hold => Extend::Hold,
@@ -244,6 +231,7 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
             ExtendArg::Repeat => Extend::Repeat,
         },
     };
+    check_design_carrier(&comments, &settings.carrier, profile)?;
     let signal = match (&amplitude, a_max_um) {
         (Some(amplitude), Some(a_max)) => render_two_channel(&curve, amplitude, a_max, &trajectory, &settings)?,
         _ => render(&curve, &trajectory, &settings)?,
@@ -354,37 +342,94 @@ fn check(path: &Path, quiet: bool) -> anyhow::Result<()> {
 }
 
 /// Reads the voltage curve, and the amplitude curve of a profile with an
-/// `amplitude_um` column, from a file, or stdin for `-`; with the a_max
-/// its `#` header states (`at most a_max = A um`, as `haptex voltage
-/// --display combined|ultrasonic` writes), if it states one.
-fn read_curve(path: &Path) -> anyhow::Result<(VoltageCurve, Option<AmplitudeCurve>, Option<f64>)> {
+/// `amplitude_um` column, from a file, or stdin for `-`; with the `#`
+/// comment lines before its header row (where `haptex voltage` states an
+/// a_max and a design carrier).
+fn read_curve(path: &Path) -> anyhow::Result<(VoltageCurve, Option<AmplitudeCurve>, Vec<String>)> {
     if path.as_os_str() == "-" {
         let mut bytes = Vec::new();
         std::io::Read::read_to_end(&mut std::io::stdin().lock(), &mut bytes)
             .context("reading the profile from stdin")?;
         let (curve, amplitude) = VoltageCurve::from_display_table(&Table::read(bytes.as_slice(), "<stdin>")?)?;
-        let stated = if amplitude.is_some() { stated_a_max(bytes.as_slice()) } else { None };
-        return Ok((curve, amplitude, stated));
+        return Ok((curve, amplitude, header_comments(bytes.as_slice())));
     }
     let (curve, amplitude) = VoltageCurve::from_display_table(&Table::read_file(path)?)?;
-    let stated = match amplitude {
-        Some(_) => std::fs::File::open(path).ok().and_then(|f| stated_a_max(std::io::BufReader::new(f))),
-        None => None,
-    };
-    Ok((curve, amplitude, stated))
+    let comments = std::fs::File::open(path)
+        .map(|f| header_comments(std::io::BufReader::new(f)))
+        .with_context(|| format!("reading {}", path.display()))?;
+    Ok((curve, amplitude, comments))
 }
 
-/// The a_max a display profile's header comment states: the smallest
-/// `at most a_max = A um` among the `#` lines before the header row.
-fn stated_a_max(reader: impl std::io::BufRead) -> Option<f64> {
+/// The `#` lines before a CSV's header row (blank lines skipped).
+fn header_comments(reader: impl std::io::BufRead) -> Vec<String> {
     reader
         .lines()
         .map_while(Result::ok)
         .take_while(|l| l.trim_start().starts_with('#') || l.trim().is_empty())
+        .filter(|l| !l.trim().is_empty())
+        .collect()
+}
+
+/// The a_max a display profile's header comment states: the smallest
+/// `at most a_max = A um` among its comment lines.
+fn stated_a_max(comments: &[String]) -> Option<f64> {
+    comments
+        .iter()
         .flat_map(|l| l.split("at most a_max = ").skip(1).map(str::to_owned).collect::<Vec<_>>())
         .filter_map(|rest| rest.split_whitespace().next().and_then(|v| v.parse::<f64>().ok()))
         .filter(|a| ranges::A_MAX_UM.contains(*a))
         .reduce(f64::min)
+}
+
+/// The carrier a frequency-dependent design states it was designed for
+/// (`designed for the carrier: SHAPE F Hz`, as `haptex voltage
+/// --force-model circuit` writes): the shape word and the frequency, or
+/// the unreadable text itself as an error.
+fn stated_carrier(comments: &[String]) -> Option<Result<(String, f64), String>> {
+    let rest = comments.iter().find_map(|l| l.split_once("designed for the carrier: ").map(|(_, r)| r.to_owned()))?;
+    let mut words = rest.split_whitespace();
+    let parsed = match (words.next(), words.next().and_then(|f| f.parse::<f64>().ok()), words.next()) {
+        (Some(shape @ ("sine" | "square" | "none")), Some(f), Some("Hz")) if f.is_finite() && f > 0.0 => {
+            Some((shape.to_owned(), f))
+        }
+        _ => None,
+    };
+    Some(parsed.ok_or(rest))
+}
+
+/// Refuses to play a frequency-dependent design on another carrier than
+/// the one it was designed for: its voltages render the target only there.
+fn check_design_carrier(comments: &[String], carrier: &Carrier, profile: &Path) -> anyhow::Result<()> {
+    let Some(stated) = stated_carrier(comments) else {
+        return Ok(());
+    };
+    let (shape, f_hz) = stated.map_err(|text| {
+        anyhow::anyhow!(
+            "{}: cannot read the design carrier in its comment ('designed for the carrier: {text}'): expected \
+             SHAPE F Hz with SHAPE sine, square or none",
+            profile.display()
+        )
+    })?;
+    let played = match carrier.shape {
+        haptex_core::signal::CarrierShape::Sine => "sine",
+        haptex_core::signal::CarrierShape::Square => "square",
+        haptex_core::signal::CarrierShape::None => "none",
+    };
+    // A direct drive has no frequency; sine and square must match it to
+    // the digits written (the comment prints the frequency in full).
+    let same = played == shape && (shape == "none" || f_hz == carrier.frequency_hz);
+    if !same {
+        bail!(
+            "{} was designed with a frequency-dependent force model for a {shape} carrier at {} Hz, and renders its \
+             target only on that carrier: play it with --carrier {shape} --carrier-hz {} (or design it again for \
+             --carrier {played} --carrier-hz {})",
+            profile.display(),
+            Num(f_hz),
+            Num(f_hz),
+            Num(carrier.frequency_hz)
+        );
+    }
+    Ok(())
 }
 
 /// The trajectory (read or generated) and a JSON description of where it
