@@ -31,6 +31,7 @@ enum Command {
     Predict(commands::predict::PredictArgs),
     Serve(commands::serve::ServeArgs),
     ForceCurve(commands::force_curve::ForceCurveArgs),
+    Map(commands::map::MapArgs),
 }
 
 fn main() -> ExitCode {
@@ -46,6 +47,7 @@ fn main() -> ExitCode {
         Command::Predict(args) => commands::predict::run(args),
         Command::Serve(args) => commands::serve::run(args),
         Command::ForceCurve(args) => commands::force_curve::run(args),
+        Command::Map(args) => commands::map::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

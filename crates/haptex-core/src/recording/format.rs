@@ -555,7 +555,7 @@ fn read_npy_columns(bytes: &[u8], file: &str, names: &[&str]) -> Result<Vec<Vec<
 /// the NPY library parses it: its Python-literal parser takes exponential
 /// time on nested brackets (`'shape': [[[[...`, found by the fuzz
 /// campaign), which no numpy header has.
-fn check_npy_header(bytes: &[u8]) -> Result<(), String> {
+pub(crate) fn check_npy_header(bytes: &[u8]) -> Result<(), String> {
     if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
         return Err("no NPY magic".into());
     }

@@ -1,0 +1,342 @@
+//! `haptex map`: friction maps over (x, y) (docs/maps.md): from a
+//! grayscale image or a 1-D profile, to voltages per cell, and sampled
+//! along a finger path.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use clap::{Args, Subcommand, ValueEnum};
+use haptex_core::electrovibration::{ContactArea, Device, Method};
+use haptex_core::map::{FrictionMap, GrayMapping, MapGrid, VoltageMap, read_grid_csv, read_npy_pair, write_npy_pair};
+use haptex_core::num::Num;
+use haptex_core::planar::PlanarTrajectory;
+use haptex_core::ranges;
+
+use crate::args::{LayerStackArgs, in_range, positive, read_profile};
+
+/// Friction maps over (x, y): build one from an image or a profile, map
+/// it to voltages cell by cell, sample it along a finger path.
+///
+/// Maps are CSV (`x_mm,y_mm,mu` or `x_mm,y_mm,voltage_v`, rows running
+/// through x for each y in turn) or NPY (a (ny, nx) float64 array, row j
+/// at y0 + j dy) with a JSON sidecar `MAP.npy.json` holding the grid and
+/// the NPY's SHA-256; the format follows the file's extension.
+#[derive(Debug, Args)]
+pub struct MapArgs {
+    #[command(subcommand)]
+    command: MapCommand,
+}
+
+#[derive(Debug, Subcommand)]
+enum MapCommand {
+    FromImage(FromImageArgs),
+    FromProfile(FromProfileArgs),
+    Voltage(MapVoltageArgs),
+    SamplePath(SamplePathArgs),
+}
+
+/// A friction map from an 8- or 16-bit grayscale PNG: gray level g in
+/// [0, 1] (black 0) to mu = mu_black + (mu_white - mu_black) g^gamma, one
+/// cell per pixel, the top row at the largest y.
+#[derive(Debug, Args)]
+#[command(
+    after_help = "Example:\n  haptex map from-image texture.png --mu-black 0.4 --mu-white 1.2 --pixel-mm 0.1 -o map.csv"
+)]
+struct FromImageArgs {
+    /// The image (PNG, 8 or 16 bit grayscale).
+    image: PathBuf,
+    /// Friction of black (gray level 0).
+    #[arg(long, value_parser = in_range(ranges::MU))]
+    mu_black: f64,
+    /// Friction of white (full gray level).
+    #[arg(long, value_parser = in_range(ranges::MU))]
+    mu_white: f64,
+    /// Exponent on the gray level (1: linear).
+    #[arg(long, default_value_t = 1.0)]
+    gamma: f64,
+    /// Pixel size along x in mm.
+    #[arg(long, value_parser = positive)]
+    pixel_mm: f64,
+    /// Pixel size along y in mm (default: --pixel-mm).
+    #[arg(long, value_parser = positive)]
+    pixel_mm_y: Option<f64>,
+    /// x of the first column in mm.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    x0_mm: f64,
+    /// y of the bottom row in mm.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    y0_mm: f64,
+    /// Output map (.csv or .npy with its sidecar).
+    #[arg(short, long, value_name = "MAP")]
+    output: PathBuf,
+}
+
+/// A map whose every row is a 1-D friction profile: the profile sampled
+/// at x0 + i dx (linear interpolation, ends held) and repeated over ny
+/// rows (a line texture extended along y).
+#[derive(Debug, Args)]
+struct FromProfileArgs {
+    /// Friction profile CSV (`x_mm,mu`).
+    #[arg(long, value_name = "P.csv")]
+    profile: PathBuf,
+    /// Grid spacing along x in mm.
+    #[arg(long, value_parser = positive)]
+    dx_mm: f64,
+    /// Grid spacing along y in mm.
+    #[arg(long, value_parser = positive)]
+    dy_mm: f64,
+    /// Number of rows.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(2..=100_000))]
+    ny: u32,
+    /// y of the first row in mm.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    y0_mm: f64,
+    /// Output map (.csv or .npy with its sidecar).
+    #[arg(short, long, value_name = "MAP")]
+    output: PathBuf,
+}
+
+/// Eq. (8) (or eq. 9) applied to every cell of a friction map; the
+/// device limits reported as fractions of the area.
+#[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
+struct MapVoltageArgs {
+    /// The friction map (.csv or .npy).
+    #[arg(long, value_name = "MAP")]
+    map: PathBuf,
+    #[arg(long, value_enum, default_value_t = MethodArg::Physical)]
+    method: MethodArg,
+    /// Friction coefficient of the finger on the display with no voltage, mu_HD.
+    #[arg(long, default_value_t = Device::PAPER.mu_hd, value_parser = in_range(ranges::MU_HD))]
+    mu_hd: f64,
+    #[command(flatten)]
+    stack: LayerStackArgs,
+    /// Contact-area coefficient k in mm^2/N (A = k Fn).
+    #[arg(long, default_value_t = ContactArea::PAPER.k_mm2_per_n, value_parser = in_range(ranges::K_MM2_PER_N))]
+    k_mm2_per_n: f64,
+    /// Highest voltage the display can apply, U_max in V RMS.
+    #[arg(long, default_value_t = Device::PAPER.u_max_v, value_parser = in_range(ranges::U_MAX_V))]
+    u_max: f64,
+    /// Output voltage map (.csv or .npy with its sidecar).
+    #[arg(short, long, value_name = "OUT")]
+    output: PathBuf,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum MethodArg {
+    Physical,
+    Normalized,
+}
+
+/// The voltage along a finger path over a voltage map (bilinear, the
+/// map's edge held beyond it), at the path's own samples:
+/// `t_s,x_mm,y_mm,voltage_v`.
+#[derive(Debug, Args)]
+struct SamplePathArgs {
+    /// The voltage map (.csv `x_mm,y_mm,voltage_v` or .npy).
+    #[arg(long, value_name = "MAP")]
+    voltage_map: PathBuf,
+    /// The finger path, CSV `t_s,x_mm,y_mm`.
+    #[arg(long, value_name = "T.csv")]
+    trajectory: PathBuf,
+    /// Output CSV (default: stdout). Written atomically.
+    #[arg(short, long, value_name = "OUT")]
+    output: Option<PathBuf>,
+}
+
+pub fn run(args: MapArgs) -> anyhow::Result<()> {
+    match args.command {
+        MapCommand::FromImage(a) => from_image(a),
+        MapCommand::FromProfile(a) => from_profile(a),
+        MapCommand::Voltage(a) => voltage(a),
+        MapCommand::SamplePath(a) => sample_path(a),
+    }
+}
+
+fn from_image(a: FromImageArgs) -> anyhow::Result<()> {
+    let mapping = GrayMapping { mu_black: a.mu_black, mu_white: a.mu_white, gamma: a.gamma };
+    let format = MapFormat::of(&a.output)?;
+    let bytes = read_bounded(&a.image, 256 << 20)?;
+    let map = FrictionMap::read_gray_png(
+        &bytes,
+        &mapping,
+        (a.pixel_mm, a.pixel_mm_y.unwrap_or(a.pixel_mm)),
+        (a.x0_mm, a.y0_mm),
+        &a.image.display().to_string(),
+    )?;
+    write_friction_map(&map, &a.output, format)?;
+    report_map(&map);
+    eprintln!("wrote {}", a.output.display());
+    Ok(())
+}
+
+fn from_profile(a: FromProfileArgs) -> anyhow::Result<()> {
+    let format = MapFormat::of(&a.output)?;
+    let profile = read_profile(&a.profile)?;
+    let (x0, x1) = (profile.x_mm()[0], profile.x_mm()[profile.len() - 1]);
+    let nx_float = ((x1 - x0) / a.dx_mm).floor() + 1.0;
+    if nx_float > haptex_core::map::MAX_CELLS as f64 {
+        bail!("--dx-mm {} gives {} columns over the profile's {} mm: too many", Num(a.dx_mm), nx_float, Num(x1 - x0));
+    }
+    let grid =
+        MapGrid { nx: nx_float as usize, ny: a.ny as usize, x0_mm: x0, y0_mm: a.y0_mm, dx_mm: a.dx_mm, dy_mm: a.dy_mm };
+    let map = FrictionMap::extrude(&profile, grid)?;
+    write_friction_map(&map, &a.output, format)?;
+    report_map(&map);
+    eprintln!("wrote {}", a.output.display());
+    Ok(())
+}
+
+fn voltage(a: MapVoltageArgs) -> anyhow::Result<()> {
+    let format = MapFormat::of(&a.output)?;
+    let map = read_friction_map(&a.map)?;
+    let device = Device {
+        stack: a.stack.stack(),
+        contact: ContactArea { k_mm2_per_n: a.k_mm2_per_n, exponent: 1.0 },
+        mu_hd: a.mu_hd,
+        u_max_v: a.u_max,
+        force_gain: 1.0,
+    };
+    let method = match a.method {
+        MethodArg::Physical => Method::Physical,
+        MethodArg::Normalized => Method::Normalized,
+    };
+    let v = map.voltages(&device, method)?;
+    match format {
+        MapFormat::Csv => haptex_core::io::write_atomic(&a.output, |w| v.write_csv(w))?,
+        MapFormat::Npy => write_npy_pair(&a.output, &v.grid, &v.voltage_v, "voltage_v", Some(v.u_max_v))?,
+    }
+    let (lo, hi) = min_max(&v.voltage_v);
+    eprintln!("method: {method}");
+    eprintln!(
+        "voltage map: {} x {} cells, {:.3} .. {:.3} V RMS, U_max = {} V",
+        v.grid.nx,
+        v.grid.ny,
+        lo,
+        hi,
+        Num(v.u_max_v)
+    );
+    if method == Method::Physical {
+        eprintln!(
+            "area below mu_HD (not renderable, 0 V): {:.2}%; clipped at U_max: {:.2}%",
+            100.0 * v.not_renderable_fraction,
+            100.0 * v.clipped_fraction
+        );
+    }
+    eprintln!("wrote {}", a.output.display());
+    Ok(())
+}
+
+fn sample_path(a: SamplePathArgs) -> anyhow::Result<()> {
+    let v = read_voltage_map(&a.voltage_map)?;
+    let name = a.trajectory.display().to_string();
+    let file = std::fs::File::open(&a.trajectory).with_context(|| format!("cannot open {name}"))?;
+    let path = PlanarTrajectory::read_csv(std::io::BufReader::new(file), &name)?;
+    let u = path.sample(&v.grid, &v.voltage_v);
+    let output = crate::args::Output::new(a.output);
+    output.write(|w| {
+        writeln!(w, "# haptex map sample-path: voltage (V RMS) of {} along {}", a.voltage_map.display(), name)?;
+        path.write_csv_with(w, "voltage_v", &u)
+    })?;
+    let (lo, hi) = min_max(&u);
+    eprintln!(
+        "path: {} samples, {} s; voltage {:.3} .. {:.3} V RMS",
+        path.len(),
+        Num(path.t_s()[path.len() - 1] - path.t_s()[0]),
+        lo,
+        hi
+    );
+    if let Some(p) = output.path() {
+        eprintln!("wrote {}", p.display());
+    }
+    Ok(())
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum MapFormat {
+    Csv,
+    Npy,
+}
+
+impl MapFormat {
+    fn of(path: &Path) -> anyhow::Result<Self> {
+        match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+            Some("csv") => Ok(MapFormat::Csv),
+            Some("npy") => Ok(MapFormat::Npy),
+            _ => bail!("{}: a map file is .csv or .npy (with its .npy.json sidecar)", path.display()),
+        }
+    }
+}
+
+fn write_friction_map(map: &FrictionMap, path: &Path, format: MapFormat) -> anyhow::Result<()> {
+    match format {
+        MapFormat::Csv => haptex_core::io::write_atomic(path, |w| map.write_csv(w))?,
+        MapFormat::Npy => write_npy_pair(path, &map.grid, &map.mu, "mu", None)?,
+    }
+    Ok(())
+}
+
+fn read_friction_map(path: &Path) -> anyhow::Result<FrictionMap> {
+    Ok(match MapFormat::of(path)? {
+        MapFormat::Csv => {
+            let (grid, mu) = read_map_csv(path, &ranges::MU)?;
+            FrictionMap::new(grid, mu, &path.display().to_string())?
+        }
+        MapFormat::Npy => {
+            let (sidecar, mu) = read_npy_pair(path, "mu")?;
+            FrictionMap::new(sidecar.grid, mu, &path.display().to_string())?
+        }
+    })
+}
+
+fn read_voltage_map(path: &Path) -> anyhow::Result<VoltageMap> {
+    let (grid, voltage_v, u_max_v) = match MapFormat::of(path)? {
+        MapFormat::Csv => {
+            let (grid, v) = read_map_csv(path, &ranges::VOLTAGE_V)?;
+            (grid, v, f64::NAN)
+        }
+        MapFormat::Npy => {
+            let (sidecar, v) = read_npy_pair(path, "voltage_v")?;
+            (sidecar.grid, v, sidecar.u_max_v.unwrap_or(f64::NAN))
+        }
+    };
+    Ok(VoltageMap { grid, voltage_v, u_max_v, not_renderable_fraction: f64::NAN, clipped_fraction: f64::NAN })
+}
+
+fn read_map_csv(path: &Path, quantity: &ranges::Range) -> anyhow::Result<(MapGrid, Vec<f64>)> {
+    let name = path.display().to_string();
+    let file = std::fs::File::open(path).with_context(|| format!("cannot open {name}"))?;
+    Ok(read_grid_csv(std::io::BufReader::new(file), &name, quantity)?)
+}
+
+/// Reads a file of at most `limit` bytes.
+fn read_bounded(path: &Path, limit: u64) -> anyhow::Result<Vec<u8>> {
+    let file = std::fs::File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(&mut std::io::Read::take(file, limit + 1), &mut bytes)
+        .with_context(|| format!("cannot read {}", path.display()))?;
+    if bytes.len() as u64 > limit {
+        bail!("{}: larger than {} MiB", path.display(), limit >> 20);
+    }
+    Ok(bytes)
+}
+
+fn report_map(map: &FrictionMap) {
+    let g = &map.grid;
+    let (lo, hi) = min_max(&map.mu);
+    eprintln!(
+        "friction map: {} x {} cells, x {} .. {} mm, y {} .. {} mm, mu {:.4} .. {:.4}",
+        g.nx,
+        g.ny,
+        Num(g.x0_mm),
+        Num(g.x(g.nx - 1)),
+        Num(g.y0_mm),
+        Num(g.y(g.ny - 1)),
+        lo,
+        hi
+    );
+}
+
+fn min_max(v: &[f64]) -> (f64, f64) {
+    v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)))
+}

@@ -1,0 +1,183 @@
+//! `haptex map` end to end: a map from a profile and from an image, its
+//! voltages, a path sampled over them against the 1-D design, and the
+//! errors of mismatched or bad files.
+
+use haptex_core::io::Table;
+use haptex_core::profile::interpolate;
+
+mod common;
+use common::{haptex, stderr, write};
+
+const EXAMPLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/examples/bump_friction.csv");
+
+fn column(path: &std::path::Path, name: &str) -> Vec<f64> {
+    let t = Table::read(std::fs::read(path).unwrap().as_slice(), "t").unwrap();
+    t.column(name).unwrap().to_vec()
+}
+
+fn run_ok(args: &[&str]) -> String {
+    let out = haptex(args);
+    assert!(out.status.success(), "{args:?}: {}", stderr(&out));
+    stderr(&out)
+}
+
+/// The acceptance case through the CLI: the example bump extruded along y
+/// (on its own 0.01 mm grid), mapped by eq. (8) to an NPY voltage map,
+/// sampled along y = const: the `haptex voltage` design of the profile,
+/// linearly interpolated, at every sample (1e-12).
+#[test]
+fn path_along_y_reproduces_the_profile_voltage() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    run_ok(&["voltage", "--profile", EXAMPLE, "-q", "-o", &p("u1.csv")]);
+    run_ok(&[
+        "map",
+        "from-profile",
+        "--profile",
+        EXAMPLE,
+        "--dx-mm",
+        "0.01",
+        "--dy-mm",
+        "0.25",
+        "--ny",
+        "6",
+        "-o",
+        &p("m.npy"),
+    ]);
+    let e = run_ok(&["map", "voltage", "--map", &p("m.npy"), "-o", &p("v.npy")]);
+    assert!(e.contains("area below mu_HD"), "{e}");
+    let x1 = column(std::path::Path::new(&p("u1.csv")), "x_mm");
+    let u1 = column(std::path::Path::new(&p("u1.csv")), "voltage_v");
+    for y in ["0", "0.5", "0.6"] {
+        let mut csv = String::from("t_s,x_mm,y_mm\n");
+        for k in 0..=900 {
+            csv += &format!("{},{},{y}\n", k as f64 * 1e-3, -0.5 + k as f64 * 0.01237);
+        }
+        let path = write(dir.path(), "path.csv", &csv);
+        run_ok(&["map", "sample-path", "--voltage-map", &p("v.npy"), "--trajectory", &path, "-o", &p("u.csv")]);
+        let out = std::path::Path::new(&p("u.csv")).to_path_buf();
+        let (xs, us) = (column(&out, "x_mm"), column(&out, "voltage_v"));
+        assert_eq!(xs.len(), 901);
+        for (x, u) in xs.iter().zip(&us) {
+            let want = interpolate(&x1, &u1, *x);
+            assert!((u - want).abs() <= 1e-12 * want.max(1.0), "y {y}, x {x}: {u} vs {want}");
+        }
+    }
+}
+
+/// A 16-bit image to a CSV map: 3 x 2 pixels with known gray levels give
+/// their mapped friction at the right (x, y), the top row at y = dy.
+#[test]
+fn image_pixels_land_on_their_cells() {
+    let dir = tempfile::tempdir().unwrap();
+    let img = dir.path().join("i.png");
+    {
+        let file = std::fs::File::create(&img).unwrap();
+        let mut enc = png::Encoder::new(file, 3, 2);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::Sixteen);
+        let mut w = enc.write_header().unwrap();
+        let levels: [u16; 6] = [0, 65535, 32768, 100, 200, 300];
+        let data: Vec<u8> = levels.iter().flat_map(|v| v.to_be_bytes()).collect();
+        w.write_image_data(&data).unwrap();
+    }
+    let out = dir.path().join("m.csv");
+    run_ok(&[
+        "map",
+        "from-image",
+        img.to_str().unwrap(),
+        "--mu-black",
+        "0.5",
+        "--mu-white",
+        "1.5",
+        "--pixel-mm",
+        "0.2",
+        "--pixel-mm-y",
+        "0.4",
+        "--x0-mm",
+        "-1",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let (x, y, mu) = (column(&out, "x_mm"), column(&out, "y_mm"), column(&out, "mu"));
+    // Row-major from y = 0 (the image's bottom row: 100, 200, 300).
+    let want_mu = [100.0, 200.0, 300.0, 0.0, 65535.0, 32768.0].map(|g: f64| 0.5 + g / 65535.0);
+    for k in 0..6 {
+        assert!((x[k] - (-1.0 + 0.2 * (k % 3) as f64)).abs() < 1e-12);
+        assert!((y[k] - 0.4 * (k / 3) as f64).abs() < 1e-12);
+        assert!((mu[k] - want_mu[k]).abs() < 1e-12, "{k}: {} vs {}", mu[k], want_mu[k]);
+    }
+}
+
+/// An NPY map without its sidecar, with another run's sidecar, a wrong
+/// extension, a bad path line: each refused with the file and the reason.
+#[test]
+fn mismatched_and_bad_files_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    run_ok(&[
+        "map",
+        "from-profile",
+        "--profile",
+        EXAMPLE,
+        "--dx-mm",
+        "0.1",
+        "--dy-mm",
+        "1",
+        "--ny",
+        "3",
+        "-o",
+        &p("a.npy"),
+    ]);
+    run_ok(&[
+        "map",
+        "from-profile",
+        "--profile",
+        EXAMPLE,
+        "--dx-mm",
+        "0.1",
+        "--dy-mm",
+        "1",
+        "--ny",
+        "4",
+        "-o",
+        &p("b.npy"),
+    ]);
+    // b's sidecar next to a's data.
+    std::fs::copy(p("b.npy.json"), p("a.npy.json")).unwrap();
+    let out = haptex(&["map", "voltage", "--map", &p("a.npy"), "-o", &p("v.csv")]);
+    assert!(!out.status.success());
+    let e = stderr(&out);
+    assert!(e.contains("a.npy.json") && e.contains("npy_sha256") && e.contains("different runs"), "{e}");
+    std::fs::remove_file(p("a.npy.json")).unwrap();
+    let e = stderr(&haptex(&["map", "voltage", "--map", &p("a.npy"), "-o", &p("v.csv")]));
+    assert!(e.contains("a.npy.json") && e.contains("needs its JSON sidecar"), "{e}");
+    // A friction map is not a voltage map.
+    let e = stderr(&haptex(&["map", "sample-path", "--voltage-map", &p("b.npy"), "--trajectory", EXAMPLE]));
+    assert!(e.contains("quantity") && e.contains("holds 'mu', expected 'voltage_v'"), "{e}");
+    let e = stderr(&haptex(&["map", "voltage", "--map", &p("b.npy"), "-o", &p("v.txt")]));
+    assert!(e.contains("v.txt") && e.contains(".csv or .npy"), "{e}");
+    run_ok(&["map", "voltage", "--map", &p("b.npy"), "-o", &p("v.csv")]);
+    let path = write(dir.path(), "t.csv", "t_s,x_mm,y_mm\n0,0,0\n0.1,1,1\n0.1,2,2\n");
+    let e = stderr(&haptex(&["map", "sample-path", "--voltage-map", &p("v.csv"), "--trajectory", &path]));
+    assert!(
+        e.contains("t.csv") && e.contains("line 4") && e.contains("t_s") && e.contains("strictly increasing"),
+        "{e}"
+    );
+    let img = write(dir.path(), "x.png", "not an image");
+    let e = stderr(&haptex(&[
+        "map",
+        "from-image",
+        &img,
+        "--mu-black",
+        "0",
+        "--mu-white",
+        "1",
+        "--pixel-mm",
+        "0.1",
+        "-o",
+        &p("m.csv"),
+    ]));
+    assert!(e.contains("x.png") && e.contains("not a readable PNG"), "{e}");
+    assert!(!dir.path().join("m.csv").exists());
+}

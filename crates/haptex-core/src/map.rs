@@ -1,0 +1,635 @@
+//! Friction maps over (x, y): mu on a regular grid, read and written as
+//! CSV (long format), NPY (with a JSON sidecar for the grid) and 8/16-bit
+//! grayscale PNG (with an explicit gray-to-friction mapping); eq. (8) and
+//! eq. (9) per cell; bilinear sampling along a finger path.
+//!
+//! The grid: `nx` columns at x = x0 + i dx and `ny` rows at y = y0 + j dy,
+//! values stored row by row (index j nx + i), y growing upwards. An
+//! image's top row is the map's last row (largest y), so that the map
+//! plotted with y up looks like the image.
+
+use std::io::{BufRead, Write};
+
+use serde::{Deserialize, Serialize};
+
+use crate::electrovibration::{Device, Method, PhysicalMapping, normalized_voltages};
+use crate::io::write_csv_row;
+use crate::num::Num;
+use crate::ranges;
+
+/// Most cells of a map: 64 M (a 8000 x 8000 image), 512 MB as f64.
+pub const MAX_CELLS: usize = 64 << 20;
+
+/// A map that cannot be read or built, with where.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{source_name}{}: {message}", place.as_deref().map(|p| format!(", {p}")).unwrap_or_default())]
+pub struct MapError {
+    pub source_name: String,
+    /// Line, pixel or field, when the error has one.
+    pub place: Option<String>,
+    pub message: String,
+}
+
+impl MapError {
+    fn new(source_name: &str, place: Option<String>, message: impl Into<String>) -> Self {
+        Self { source_name: source_name.to_string(), place, message: message.into() }
+    }
+}
+
+/// The regular grid of a map (mm).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MapGrid {
+    pub nx: usize,
+    pub ny: usize,
+    pub x0_mm: f64,
+    pub y0_mm: f64,
+    pub dx_mm: f64,
+    pub dy_mm: f64,
+}
+
+impl MapGrid {
+    /// Checks the grid: at least 2 x 2 cells, at most [`MAX_CELLS`],
+    /// positive spacings, positions within the position range.
+    pub fn validate(&self, source_name: &str) -> Result<(), MapError> {
+        let err = |field: &str, m: String| MapError::new(source_name, Some(field.to_string()), m);
+        if self.nx < 2 || self.ny < 2 {
+            return Err(err("shape", format!("{} x {} cells: a map needs at least 2 x 2", self.nx, self.ny)));
+        }
+        if self.nx.checked_mul(self.ny).is_none_or(|n| n > MAX_CELLS) {
+            return Err(err("shape", format!("{} x {} cells: at most {MAX_CELLS} cells", self.nx, self.ny)));
+        }
+        for (name, d) in [("dx_mm", self.dx_mm), ("dy_mm", self.dy_mm)] {
+            if !(d.is_finite() && d > 0.0) {
+                return Err(err(name, format!("spacing must be a positive number of mm, got {}", Num(d))));
+            }
+        }
+        let x1 = self.x0_mm + self.dx_mm * (self.nx - 1) as f64;
+        let y1 = self.y0_mm + self.dy_mm * (self.ny - 1) as f64;
+        for (name, v) in [("x0_mm", self.x0_mm), ("y0_mm", self.y0_mm), ("x_mm", x1), ("y_mm", y1)] {
+            ranges::POSITION_MM.check(v).map_err(|e| err(name, e.to_string()))?;
+        }
+        Ok(())
+    }
+
+    /// Number of cells.
+    pub fn len(&self) -> usize {
+        self.nx * self.ny
+    }
+
+    /// True for a grid without cells (never for a validated grid).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// x of column `i`.
+    pub fn x(&self, i: usize) -> f64 {
+        self.x0_mm + self.dx_mm * i as f64
+    }
+
+    /// y of row `j`.
+    pub fn y(&self, j: usize) -> f64 {
+        self.y0_mm + self.dy_mm * j as f64
+    }
+
+    /// Bilinear interpolation of `values` (one per cell) at (x, y), the
+    /// edge values held beyond the grid. On a grid line the other axis'
+    /// weight is exactly 0, so a row is sampled as the 1-D linear
+    /// interpolation of its values.
+    pub fn sample(&self, values: &[f64], x_mm: f64, y_mm: f64) -> f64 {
+        let (i, tx) = axis(x_mm, self.x0_mm, self.dx_mm, self.nx);
+        let (j, ty) = axis(y_mm, self.y0_mm, self.dy_mm, self.ny);
+        let row = |j: usize| {
+            let a = values[j * self.nx + i];
+            if tx == 0.0 { a } else { a + tx * (values[j * self.nx + i + 1] - a) }
+        };
+        let r0 = row(j);
+        if ty == 0.0 { r0 } else { r0 + ty * (row(j + 1) - r0) }
+    }
+}
+
+/// The cell index and fraction along one axis: t in [0, 1), i + 1 < n
+/// whenever t > 0; positions beyond the ends are held at the end.
+fn axis(v: f64, v0: f64, d: f64, n: usize) -> (usize, f64) {
+    let s = (v - v0) / d;
+    if s.is_nan() || s <= 0.0 {
+        return (0, 0.0);
+    }
+    if s >= (n - 1) as f64 {
+        return (n - 1, 0.0);
+    }
+    let i = s.floor() as usize;
+    (i, s - i as f64)
+}
+
+/// Friction coefficient over a regular (x, y) grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrictionMap {
+    pub grid: MapGrid,
+    /// mu per cell, row by row (index j nx + i).
+    pub mu: Vec<f64>,
+}
+
+impl FrictionMap {
+    /// A map from its grid and values, checked (sizes, friction range).
+    pub fn new(grid: MapGrid, mu: Vec<f64>, source_name: &str) -> Result<Self, MapError> {
+        grid.validate(source_name)?;
+        if mu.len() != grid.len() {
+            return Err(MapError::new(
+                source_name,
+                None,
+                format!("{} values for {} x {} cells", mu.len(), grid.nx, grid.ny),
+            ));
+        }
+        if let Some(k) = ranges::MU.first_outside(&mu) {
+            return Err(MapError::new(
+                source_name,
+                Some(format!("cell x = {} mm, y = {} mm", Num(grid.x(k % grid.nx)), Num(grid.y(k / grid.nx)))),
+                ranges::MU.refusal(mu[k]).to_string(),
+            ));
+        }
+        Ok(Self { grid, mu })
+    }
+
+    /// The map whose every row is the same 1-D profile sampled on the grid
+    /// `x0 + i dx` (linear interpolation, ends held): a line texture
+    /// extended along y.
+    pub fn extrude(profile: &crate::profile::FrictionProfile, grid: MapGrid) -> Result<Self, MapError> {
+        grid.validate("profile")?;
+        let row: Vec<f64> = (0..grid.nx).map(|i| profile.mu_at(grid.x(i))).collect();
+        let mu = (0..grid.ny).flat_map(|_| row.iter().copied()).collect();
+        Self::new(grid, mu, "profile")
+    }
+
+    /// Reads the long CSV format `x_mm,y_mm,mu` (other columns ignored),
+    /// rows in row-major order as haptex writes them and as NumPy's
+    /// `meshgrid(x, y)` raveled gives them: y constant while x runs through
+    /// the grid, then the next y. The grid is the first row's x and y and
+    /// the first steps in x and y; every row must lie on it (to 1e-9 of a
+    /// step), in order.
+    pub fn read_csv<R: std::io::Read>(reader: R, source_name: &str) -> Result<Self, MapError> {
+        let (grid, mu) = read_grid_csv(reader, source_name, &ranges::MU)?;
+        Self::new(grid, mu, source_name)
+    }
+
+    /// Writes the long CSV format, row-major, after a comment line.
+    pub fn write_csv(&self, w: &mut dyn Write) -> std::io::Result<()> {
+        let g = &self.grid;
+        writeln!(
+            w,
+            "# haptex friction map: {} x {} cells, dx = {} mm, dy = {} mm",
+            g.nx,
+            g.ny,
+            Num(g.dx_mm),
+            Num(g.dy_mm)
+        )?;
+        writeln!(w, "x_mm,y_mm,mu")?;
+        for j in 0..g.ny {
+            for i in 0..g.nx {
+                write_csv_row(w, &[g.x(i), g.y(j), self.mu[j * g.nx + i]])?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the values as a 2-D float64 NPY array of shape (ny, nx),
+    /// row j at y0 + j dy (the grid goes in [`MapGrid`]'s JSON sidecar).
+    pub fn write_npy(&self, w: &mut dyn Write) -> std::io::Result<()> {
+        write_npy_f64(w, self.grid.ny, self.grid.nx, &self.mu)
+    }
+
+    /// Reads a (ny, nx) float32/float64 NPY array with its grid.
+    pub fn read_npy(bytes: &[u8], grid: MapGrid, source_name: &str) -> Result<Self, MapError> {
+        grid.validate(source_name)?;
+        let values = read_npy_2d(bytes, source_name, grid.ny, grid.nx)?;
+        Self::new(grid, values, source_name)
+    }
+
+    /// Reads an 8- or 16-bit grayscale PNG (row 0 the top, at the largest
+    /// y) with `mapping` from gray level to friction; the grid's nx and ny
+    /// are the image's width and height.
+    pub fn read_gray_png(
+        bytes: &[u8],
+        mapping: &GrayMapping,
+        spacing_mm: (f64, f64),
+        origin_mm: (f64, f64),
+        source_name: &str,
+    ) -> Result<Self, MapError> {
+        mapping.validate(source_name)?;
+        let err = |m: String| MapError::new(source_name, None, m);
+        let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+        // Bounded: the header's size is checked below before any buffer.
+        decoder.set_transformations(png::Transformations::IDENTITY);
+        let mut reader = decoder.read_info().map_err(|e| err(format!("not a readable PNG: {e}")))?;
+        let info = reader.info();
+        let (width, height) = (info.width as usize, info.height as usize);
+        let (color, depth) = (info.color_type, info.bit_depth);
+        if color != png::ColorType::Grayscale {
+            return Err(err(format!(
+                "color type {color:?}: a friction image must be grayscale (8 or 16 bit), convert it first"
+            )));
+        }
+        let bits = match depth {
+            png::BitDepth::Eight => 8,
+            png::BitDepth::Sixteen => 16,
+            other => return Err(err(format!("bit depth {other:?}: expected 8 or 16 bit grayscale"))),
+        };
+        let grid = MapGrid {
+            nx: width,
+            ny: height,
+            x0_mm: origin_mm.0,
+            y0_mm: origin_mm.1,
+            dx_mm: spacing_mm.0,
+            dy_mm: spacing_mm.1,
+        };
+        grid.validate(source_name)?;
+        let size = reader.output_buffer_size().ok_or_else(|| err("image too large".into()))?;
+        let mut buffer = vec![0u8; size];
+        let frame = reader.next_frame(&mut buffer).map_err(|e| err(format!("cannot decode the image: {e}")))?;
+        let stride = frame.line_size;
+        let full = if bits == 8 { 255.0 } else { 65535.0 };
+        let table: Vec<f64> =
+            if bits == 8 { (0..256).map(|g| mapping.mu(g as f64 / full)).collect() } else { Vec::new() };
+        let mut mu = vec![0.0; width * height];
+        for r in 0..height {
+            let line = &buffer[r * stride..r * stride + stride];
+            let j = height - 1 - r;
+            let out = &mut mu[j * width..(j + 1) * width];
+            if bits == 8 {
+                for (o, &g) in out.iter_mut().zip(line) {
+                    *o = table[g as usize];
+                }
+            } else {
+                for (o, g) in out.iter_mut().zip(line.chunks_exact(2)) {
+                    *o = mapping.mu(u16::from_be_bytes([g[0], g[1]]) as f64 / full);
+                }
+            }
+        }
+        Self::new(grid, mu, source_name)
+    }
+
+    /// Writes the map as a grayscale PNG of `bits` (8 or 16) with the
+    /// inverse of `mapping` (values outside its friction range are
+    /// clamped to black or white).
+    pub fn write_gray_png(&self, w: &mut dyn Write, mapping: &GrayMapping, bits: u8) -> std::io::Result<()> {
+        let g = &self.grid;
+        let mut encoder = png::Encoder::new(w, g.nx as u32, g.ny as u32);
+        encoder.set_color(png::ColorType::Grayscale);
+        let sixteen = bits == 16;
+        encoder.set_depth(if sixteen { png::BitDepth::Sixteen } else { png::BitDepth::Eight });
+        let mut writer = encoder.write_header().map_err(std::io::Error::other)?;
+        let full = if sixteen { 65535.0 } else { 255.0 };
+        let mut data = Vec::with_capacity(g.len() * if sixteen { 2 } else { 1 });
+        for r in 0..g.ny {
+            let j = g.ny - 1 - r;
+            for &m in &self.mu[j * g.nx..(j + 1) * g.nx] {
+                let level = (mapping.gray(m) * full).round();
+                if sixteen {
+                    data.extend_from_slice(&(level as u16).to_be_bytes());
+                } else {
+                    data.push(level as u8);
+                }
+            }
+        }
+        writer.write_image_data(&data).map_err(std::io::Error::other)?;
+        writer.finish().map_err(std::io::Error::other)
+    }
+
+    /// Eq. (8) or eq. (9) applied to every cell, with the device limits as
+    /// fractions of the area.
+    pub fn voltages(&self, device: &Device, method: Method) -> Result<VoltageMap, MapError> {
+        let device_error = |m: String| MapError::new("device", None, m);
+        device.validate().map_err(|e| device_error(e.to_string()))?;
+        if method == Method::Physical && !device.contact.is_linear() {
+            return Err(device_error(
+                "a friction map is mapped with the linear contact-area law (area exponent 1), as eq. (8)".into(),
+            ));
+        }
+        let mut voltage_v = vec![0.0; self.mu.len()];
+        let (mut below, mut clipped) = (0usize, 0usize);
+        match method {
+            Method::Physical => {
+                let m = PhysicalMapping::new(device.mu_hd, device.force_ratio_per_v2(1.0), device.u_max_v);
+                m.fill(&self.mu, &mut voltage_v);
+                for &mu in &self.mu {
+                    below += usize::from(mu < device.mu_hd);
+                    clipped += usize::from(mu > m.mu_clip);
+                }
+            }
+            Method::Normalized => {
+                normalized_voltages(&self.mu, device.u_max_v, &mut voltage_v);
+            }
+        }
+        let n = self.mu.len() as f64;
+        Ok(VoltageMap {
+            grid: self.grid,
+            voltage_v,
+            u_max_v: device.u_max_v,
+            not_renderable_fraction: below as f64 / n,
+            clipped_fraction: clipped as f64 / n,
+        })
+    }
+}
+
+/// Voltages (V RMS) over a map's grid, and the device limits as areas.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VoltageMap {
+    pub grid: MapGrid,
+    pub voltage_v: Vec<f64>,
+    pub u_max_v: f64,
+    /// Fraction of the cells below mu_HD (0 V, not renderable).
+    pub not_renderable_fraction: f64,
+    /// Fraction of the cells above what U_max reaches (clipped).
+    pub clipped_fraction: f64,
+}
+
+impl VoltageMap {
+    /// The voltage at (x, y), bilinear.
+    pub fn sample(&self, x_mm: f64, y_mm: f64) -> f64 {
+        self.grid.sample(&self.voltage_v, x_mm, y_mm)
+    }
+
+    /// Writes `x_mm,y_mm,voltage_v`, row-major.
+    pub fn write_csv(&self, w: &mut dyn Write) -> std::io::Result<()> {
+        let g = &self.grid;
+        writeln!(
+            w,
+            "# haptex voltage map: {} x {} cells; voltage_v is RMS, at most U_max = {} V; {:.2}% of the area below \
+             mu_HD (0 V), {:.2}% clipped at U_max",
+            g.nx,
+            g.ny,
+            Num(self.u_max_v),
+            100.0 * self.not_renderable_fraction,
+            100.0 * self.clipped_fraction
+        )?;
+        writeln!(w, "x_mm,y_mm,voltage_v")?;
+        for j in 0..g.ny {
+            for i in 0..g.nx {
+                write_csv_row(w, &[g.x(i), g.y(j), self.voltage_v[j * g.nx + i]])?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The voltages as a (ny, nx) float64 NPY array.
+    pub fn write_npy(&self, w: &mut dyn Write) -> std::io::Result<()> {
+        write_npy_f64(w, self.grid.ny, self.grid.nx, &self.voltage_v)
+    }
+}
+
+/// Reads a map in the long CSV format `x_mm,y_mm,QUANTITY` (other columns
+/// ignored), rows in row-major order: see [`FrictionMap::read_csv`].
+/// The values are checked against `quantity`'s range.
+pub fn read_grid_csv<R: std::io::Read>(
+    reader: R,
+    source_name: &str,
+    quantity: &ranges::Range,
+) -> Result<(MapGrid, Vec<f64>), MapError> {
+    let table = crate::io::Table::read(reader, source_name)
+        .map_err(|e| MapError::new(source_name, None, e.to_string().replacen(&format!("{source_name}: "), "", 1)))?;
+    let col = |name: &str| {
+        table.column(name).ok_or_else(|| {
+            MapError::new(
+                source_name,
+                None,
+                format!("no '{name}' column: this map CSV needs x_mm,y_mm,{}", quantity.name),
+            )
+        })
+    };
+    let (x, y, mu) = (col("x_mm")?, col("y_mm")?, col(quantity.name)?);
+    let n = x.len();
+    let line = |k: usize| Some(format!("line {}", table.line_of_row(k)));
+    // nx: the first row whose y differs from the first y.
+    let nx = y.iter().position(|&v| v != y[0]).unwrap_or(n);
+    if nx < 2 {
+        return Err(MapError::new(
+            source_name,
+            None,
+            format!("{nx} x value(s) for the first y: a map needs at least 2 x values per y"),
+        ));
+    }
+    if n % nx != 0 {
+        return Err(MapError::new(
+            source_name,
+            None,
+            format!("{n} rows are not a whole number of grid rows of {nx} x values"),
+        ));
+    }
+    if n < 2 * nx {
+        return Err(MapError::new(source_name, None, "one value of y: a map needs at least 2"));
+    }
+    let grid = MapGrid { nx, ny: n / nx, x0_mm: x[0], y0_mm: y[0], dx_mm: x[1] - x[0], dy_mm: y[nx] - y[0] };
+    grid.validate(source_name)?;
+    let tolerance = 1e-9;
+    for k in 0..n {
+        let (i, j) = (k % nx, k / nx);
+        let (ex, ey) = ((x[k] - grid.x(i)) / grid.dx_mm, (y[k] - grid.y(j)) / grid.dy_mm);
+        if ex.abs() > tolerance || ey.abs() > tolerance {
+            return Err(MapError::new(
+                source_name,
+                line(k),
+                format!(
+                    "x_mm = {}, y_mm = {} is not the grid point ({}, {}) expected here: rows must run through \
+                     x for each y in turn, on a regular grid (x0 {}, dx {}, y0 {}, dy {} mm)",
+                    Num(x[k]),
+                    Num(y[k]),
+                    Num(grid.x(i)),
+                    Num(grid.y(j)),
+                    Num(grid.x0_mm),
+                    Num(grid.dx_mm),
+                    Num(grid.y0_mm),
+                    Num(grid.dy_mm)
+                ),
+            ));
+        }
+    }
+    if let Some(k) = quantity.first_outside(mu) {
+        return Err(MapError::new(
+            source_name,
+            line(k),
+            format!("field {}: {}", quantity.name, quantity.refusal(mu[k])),
+        ));
+    }
+    Ok((grid, mu.to_vec()))
+}
+
+/// Gray level g in [0, 1] (black 0, white 1) to friction:
+/// mu = mu_black + (mu_white - mu_black) g^gamma.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GrayMapping {
+    pub mu_black: f64,
+    pub mu_white: f64,
+    pub gamma: f64,
+}
+
+impl GrayMapping {
+    pub fn validate(&self, source_name: &str) -> Result<(), MapError> {
+        for (name, v) in [("mu_black", self.mu_black), ("mu_white", self.mu_white)] {
+            ranges::MU.check(v).map_err(|e| MapError::new(source_name, Some(name.into()), e.to_string()))?;
+        }
+        if self.mu_black == self.mu_white {
+            return Err(MapError::new(source_name, Some("mu_white".into()), "must differ from mu_black"));
+        }
+        if !(self.gamma.is_finite() && (0.05..=20.0).contains(&self.gamma)) {
+            return Err(MapError::new(
+                source_name,
+                Some("gamma".into()),
+                format!("must be from 0.05 to 20, got {}", Num(self.gamma)),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Friction of gray level `g` in [0, 1].
+    pub fn mu(&self, g: f64) -> f64 {
+        let t = if self.gamma == 1.0 { g } else { g.powf(self.gamma) };
+        self.mu_black + (self.mu_white - self.mu_black) * t
+    }
+
+    /// The gray level in [0, 1] of friction `mu` (clamped).
+    pub fn gray(&self, mu: f64) -> f64 {
+        let t = ((mu - self.mu_black) / (self.mu_white - self.mu_black)).clamp(0.0, 1.0);
+        if self.gamma == 1.0 { t } else { t.powf(1.0 / self.gamma) }
+    }
+}
+
+fn write_npy_f64(w: &mut dyn Write, rows: usize, cols: usize, values: &[f64]) -> std::io::Result<()> {
+    use npyz::WriterBuilder;
+    let mut writer =
+        npyz::WriteOptions::<f64>::new().default_dtype().shape(&[rows as u64, cols as u64]).writer(w).begin_nd()?;
+    for v in values {
+        writer.push(v)?;
+    }
+    writer.finish()
+}
+
+/// Reads a (rows, cols) float32/float64 NPY array, C or Fortran order,
+/// row-major out.
+fn read_npy_2d(bytes: &[u8], source_name: &str, rows: usize, cols: usize) -> Result<Vec<f64>, MapError> {
+    let err = |m: String| MapError::new(source_name, None, m);
+    crate::recording::format::check_npy_header(bytes).map_err(|m| err(format!("not a valid NPY file: {m}")))?;
+    let npy = npyz::NpyFile::new(bytes).map_err(|e| err(format!("not a valid NPY file: {e}")))?;
+    let shape = npy.shape().to_vec();
+    if shape != [rows as u64, cols as u64] {
+        return Err(err(format!("array shape {shape:?}: the grid says ({rows}, {cols}) (ny, nx)")));
+    }
+    if (rows * cols).saturating_mul(4) > bytes.len() {
+        return Err(err(format!(
+            "array shape {shape:?} claims more values than the file's {} bytes hold",
+            bytes.len()
+        )));
+    }
+    let fortran = npy.order() == npyz::Order::Fortran;
+    let dtype = npy.dtype().descr();
+    let flat: Vec<f64> = match npy.try_data::<f64>() {
+        Ok(reader) => reader.collect::<std::io::Result<_>>(),
+        Err(npy) => match npy.try_data::<f32>() {
+            Ok(reader) => reader.map(|v| v.map(f64::from)).collect::<std::io::Result<_>>(),
+            Err(_) => return Err(err(format!("dtype {dtype}: expected float32 or float64"))),
+        },
+    }
+    .map_err(|e| err(format!("cannot read the array data: {e}")))?;
+    if flat.len() != rows * cols {
+        return Err(err(format!("{} values for shape {shape:?}", flat.len())));
+    }
+    Ok(if fortran { (0..rows * cols).map(|k| flat[(k % cols) * rows + k / cols]).collect() } else { flat })
+}
+
+/// Reads a map's grid sidecar (JSON with the [`MapGrid`] fields).
+pub fn read_grid_json(reader: impl BufRead, source_name: &str) -> Result<MapGrid, MapError> {
+    let grid: MapGrid = serde_json::from_reader(reader)
+        .map_err(|e| MapError::new(source_name, Some(format!("line {}", e.line())), e.to_string()))?;
+    grid.validate(source_name)?;
+    Ok(grid)
+}
+
+/// The JSON sidecar of a map saved as NPY: the grid, what the values are
+/// (and their unit), and the SHA-256 of the NPY file it belongs to, so
+/// that an NPY and a sidecar from different runs are never paired.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NpySidecar {
+    pub grid: MapGrid,
+    /// `mu` (friction coefficient) or `voltage_v` (V RMS).
+    pub quantity: String,
+    /// U_max of a voltage map.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_max_v: Option<f64>,
+    pub npy_sha256: String,
+}
+
+/// The sidecar path of an NPY map: `MAP.npy` -> `MAP.npy.json`.
+pub fn npy_sidecar_path(path: &std::path::Path) -> std::path::PathBuf {
+    let mut name = path.as_os_str().to_owned();
+    name.push(".json");
+    std::path::PathBuf::from(name)
+}
+
+/// Writes `values` over `grid` as `path` (NPY, (ny, nx) float64) and its
+/// sidecar. The old sidecar goes first and the new one last, both
+/// atomically, so an interrupted write leaves no pair that agrees.
+pub fn write_npy_pair(
+    path: &std::path::Path,
+    grid: &MapGrid,
+    values: &[f64],
+    quantity: &str,
+    u_max_v: Option<f64>,
+) -> Result<(), crate::io::WriteError> {
+    let sidecar_path = npy_sidecar_path(path);
+    match std::fs::remove_file(&sidecar_path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            return Err(crate::io::WriteError::new(&sidecar_path, e));
+        }
+        _ => {}
+    }
+    let mut bytes = Vec::new();
+    write_npy_f64(&mut bytes, grid.ny, grid.nx, values).map_err(|e| crate::io::WriteError::new(path, e))?;
+    crate::io::write_atomic(path, |w| w.write_all(&bytes))?;
+    let sidecar =
+        NpySidecar { grid: *grid, quantity: quantity.to_string(), u_max_v, npy_sha256: crate::io::sha256_hex(&bytes) };
+    crate::io::write_atomic(&sidecar_path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &sidecar).map_err(std::io::Error::from)?;
+        w.write_all(b"\n")
+    })
+}
+
+/// Reads an NPY map and its sidecar, checking they belong together and
+/// hold `quantity`; the NPY read is bounded by the size its grid needs.
+pub fn read_npy_pair(path: &std::path::Path, quantity: &str) -> Result<(NpySidecar, Vec<f64>), MapError> {
+    let name = path.display().to_string();
+    let sidecar_path = npy_sidecar_path(path);
+    let sidecar_name = sidecar_path.display().to_string();
+    let read = |p: &std::path::Path, n: &str, limit: u64| -> Result<Vec<u8>, MapError> {
+        let file = std::fs::File::open(p).map_err(|e| MapError::new(n, None, format!("cannot open: {e}")))?;
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(&mut std::io::Read::take(file, limit + 1), &mut bytes)
+            .map_err(|e| MapError::new(n, None, format!("cannot read: {e}")))?;
+        if bytes.len() as u64 > limit {
+            return Err(MapError::new(n, None, format!("larger than {limit} bytes")));
+        }
+        Ok(bytes)
+    };
+    let sidecar_bytes = read(&sidecar_path, &sidecar_name, 1 << 16).map_err(|e| {
+        MapError::new(&sidecar_name, None, format!("{} (an NPY map needs its JSON sidecar for the grid)", e.message))
+    })?;
+    let sidecar: NpySidecar = serde_json::from_slice(&sidecar_bytes)
+        .map_err(|e| MapError::new(&sidecar_name, Some(format!("line {}", e.line())), e.to_string()))?;
+    sidecar.grid.validate(&sidecar_name)?;
+    if sidecar.quantity != quantity {
+        return Err(MapError::new(
+            &sidecar_name,
+            Some("quantity".into()),
+            format!("holds '{}', expected '{quantity}'", sidecar.quantity),
+        ));
+    }
+    let bytes = read(path, &name, 128 + 8 * sidecar.grid.len() as u64)?;
+    let hash = crate::io::sha256_hex(&bytes);
+    if hash != sidecar.npy_sha256 {
+        return Err(MapError::new(
+            &sidecar_name,
+            Some("npy_sha256".into()),
+            format!("does not belong to {name} (its SHA-256 is {hash}): the two files are from different runs"),
+        ));
+    }
+    let values = read_npy_2d(&bytes, &name, sidecar.grid.ny, sidecar.grid.nx)?;
+    Ok((sidecar, values))
+}
