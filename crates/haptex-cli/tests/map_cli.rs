@@ -181,3 +181,56 @@ fn mismatched_and_bad_files_are_refused() {
     assert!(e.contains("x.png") && e.contains("not a readable PNG"), "{e}");
     assert!(!dir.path().join("m.csv").exists());
 }
+
+/// `haptex map grating`: ridges along the sliding direction are flat
+/// friction; across it, the CAE line's periodic part stays within the
+/// prediction's range; a line period outside the database is refused for
+/// the CAE with the way out (the FE).
+#[test]
+fn grating_maps_by_direction() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let grating = |angle: &str, source: &str, out: &str| {
+        haptex(&[
+            "map",
+            "grating",
+            "--period-mm",
+            "1.5",
+            "--amplitude-mm",
+            "0.2",
+            "--angle-deg",
+            angle,
+            "--nx",
+            "101",
+            "--ny",
+            "11",
+            "--dx-mm",
+            "0.1",
+            "--dy-mm",
+            "0.1",
+            "--source",
+            source,
+            "-o",
+            out,
+        ])
+    };
+    let out = grating("90", "cae", &p("g90.csv"));
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(column(std::path::Path::new(&p("g90.csv")), "mu").iter().all(|&m| m == 0.5));
+    let out = grating("0", "cae", &p("g0.csv"));
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("period 1.5000 mm"), "{}", stderr(&out));
+    let run = haptex(&["predict", "--surface", "sine", "--x0", "0", "--width", "1.5", "--height", "0.2", "-q"]);
+    let t = Table::read(run.stdout.as_slice(), "predict").unwrap();
+    let (px, pm) = (t.column("x_mm").unwrap(), t.column("mu").unwrap());
+    let steady: Vec<f64> = px.iter().zip(pm).filter(|(x, _)| **x > px[0] + 1.0).map(|(_, m)| *m).collect();
+    let (lo, hi) = steady.iter().fold((f64::MAX, f64::MIN), |(a, b), &m| (a.min(m), b.max(m)));
+    let mu = column(std::path::Path::new(&p("g0.csv")), "mu");
+    let (mlo, mhi) = mu.iter().fold((f64::MAX, f64::MIN), |(a, b), &m| (a.min(m), b.max(m)));
+    // The periodic part of a profile lies within its range (a fit may
+    // overshoot a sharp corner a little: 0.01).
+    assert!(mlo > lo - 0.01 && mhi < hi + 0.01 && mhi - mlo > 0.05, "{mlo}..{mhi} vs {lo}..{hi}");
+    let out = grating("60", "cae", &p("g60.csv"));
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("period 3.0000 mm") && stderr(&out).contains("--source fe"), "{}", stderr(&out));
+}

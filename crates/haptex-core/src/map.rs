@@ -633,3 +633,185 @@ pub fn read_npy_pair(path: &std::path::Path, quantity: &str) -> Result<(NpySidec
     let values = read_npy_2d(&bytes, &name, sidecar.grid.ny, sidecar.grid.nx)?;
     Ok((sidecar, values))
 }
+
+/// A sine grating at an angle to the sliding direction, as a friction map
+/// for a finger sliding along +x (docs/maps.md).
+///
+/// The height is h(x, y) = A sin(2 pi (x cos theta + y sin theta) / lambda):
+/// theta = 0 puts the ridges across the sliding direction (the 1-D sine
+/// of the database), theta = 90 degrees along it. The FE finger is plane
+/// strain in the sliding direction, so each line y = const is taken as the
+/// 1-D surface it cuts: a sine of period P = lambda / cos theta with phase
+/// shift y tan theta, whose friction is the steady periodic part of the
+/// friction profile of that sine (from the FE model, or the CAE where the
+/// database has the period). At theta = 90 degrees the height along each
+/// line is constant and the friction is the flat-surface friction. This
+/// is the plane-strain assumption: the map depends on the direction of
+/// sliding, and a real finger (finite width, ridges at an angle under it)
+/// is not resolved.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Grating {
+    pub period_mm: f64,
+    pub amplitude_mm: f64,
+    /// Angle between the grating's wave vector and the sliding direction x.
+    pub angle_deg: f64,
+    pub velocity_mm_s: f64,
+}
+
+impl Grating {
+    /// The period of the sine a line along x cuts: lambda / |cos theta|
+    /// (infinite at 90 degrees).
+    pub fn line_period_mm(&self) -> f64 {
+        let c = self.angle_deg.to_radians().cos().abs();
+        if c < 1e-12 { f64::INFINITY } else { self.period_mm / c }
+    }
+
+    /// Checks the grating's numbers.
+    pub fn validate(&self) -> Result<(), MapError> {
+        let err = |field: &str, m: String| MapError::new("grating", Some(field.to_string()), m);
+        for (name, v) in
+            [("period_mm", self.period_mm), ("amplitude_mm", self.amplitude_mm), ("velocity_mm_s", self.velocity_mm_s)]
+        {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(err(name, format!("must be a positive number, got {}", Num(v))));
+            }
+        }
+        if !(self.angle_deg.is_finite() && (-90.0..=90.0).contains(&self.angle_deg)) {
+            return Err(err("angle_deg", format!("must be from -90 to 90 degrees, got {}", Num(self.angle_deg))));
+        }
+        Ok(())
+    }
+
+    /// The friction map on `grid` from the friction of one line: `line`,
+    /// the friction profile (FE or CAE) of the 1-D sine
+    /// h = A sin(2 pi (x - `line_x0`) / P) with P = [`Self::line_period_mm`]
+    /// (unused where the period is infinite: the map is `flat_mu`). The
+    /// line's steady periodic part is used: its least-squares Fourier
+    /// series of period P after the first mm of slide; the RMS of the rest
+    /// is returned with the map.
+    pub fn friction_map(
+        &self,
+        line: Option<(&[f64], &[f64], f64)>,
+        flat_mu: f64,
+        grid: MapGrid,
+    ) -> Result<(FrictionMap, Option<f64>), MapError> {
+        self.validate()?;
+        grid.validate("grating")?;
+        let p = self.line_period_mm();
+        let Some((x, mu, x0)) = line.filter(|_| p.is_finite()) else {
+            return Ok((FrictionMap::new(grid, vec![flat_mu; grid.len()], "grating")?, None));
+        };
+        let shifted: Vec<f64> = x.iter().map(|v| v - x0).collect();
+        let series = PeriodicFit::fit(&shifted, mu, p, 1.0).ok_or_else(|| {
+            MapError::new(
+                "grating",
+                Some("period_mm".into()),
+                format!("the line's profile is shorter than 1 mm plus one period of {p:.4} mm"),
+            )
+        })?;
+        let shift = self.angle_deg.to_radians().tan();
+        let mut out = vec![0.0; grid.len()];
+        for j in 0..grid.ny {
+            let offset = grid.y(j) * shift;
+            for i in 0..grid.nx {
+                out[j * grid.nx + i] = series.eval(grid.x(i) + offset);
+            }
+        }
+        Ok((FrictionMap::new(grid, out, "grating")?, Some(series.rms)))
+    }
+}
+
+/// The least-squares Fourier series of period P (mean and the first K
+/// harmonics) through a profile's steady part: the friction of a periodic
+/// surface once the start of the slide is over. A CAE estimate between
+/// the database's periods blends neighbouring periods and is not exactly
+/// P-periodic; this is its P-periodic part.
+struct PeriodicFit {
+    period: f64,
+    /// a0, then (a_k, b_k) for k = 1..K.
+    coefficients: Vec<f64>,
+    /// RMS of the profile minus the series over the fitted samples.
+    rms: f64,
+}
+
+impl PeriodicFit {
+    /// Fits over the samples with x >= x_first + `skip_mm` (the start of
+    /// the slide left out), K = min(10, samples per period / 2 - 1). None
+    /// when fewer than one period or 5 samples per period remain.
+    fn fit(x: &[f64], mu: &[f64], period: f64, skip_mm: f64) -> Option<Self> {
+        let from = x.partition_point(|&v| v < x[0] + skip_mm);
+        let (xs, ys) = (&x[from..], &mu[from..]);
+        if xs.len() < 2 || xs[xs.len() - 1] - xs[0] < period {
+            return None;
+        }
+        let per_period = period / ((xs[xs.len() - 1] - xs[0]) / (xs.len() - 1) as f64);
+        if per_period < 5.0 {
+            return None;
+        }
+        let k = 10usize.min((per_period / 2.0) as usize - 1).max(1);
+        let m = 2 * k + 1;
+        let basis = |xv: f64, out: &mut [f64]| {
+            let w = 2.0 * std::f64::consts::PI * xv / period;
+            out[0] = 1.0;
+            for h in 1..=k {
+                let (sn, cs) = (h as f64 * w).sin_cos();
+                out[2 * h - 1] = cs;
+                out[2 * h] = sn;
+            }
+        };
+        // Normal equations, solved by Cholesky (the basis is nearly
+        // orthogonal over whole periods: well conditioned).
+        let mut a = vec![0.0; m * m];
+        let mut rhs = vec![0.0; m];
+        let mut phi = vec![0.0; m];
+        for (&xv, &yv) in xs.iter().zip(ys) {
+            basis(xv, &mut phi);
+            for r in 0..m {
+                rhs[r] += phi[r] * yv;
+                for c in 0..=r {
+                    a[r * m + c] += phi[r] * phi[c];
+                }
+            }
+        }
+        for r in 0..m {
+            for c in 0..=r {
+                let mut sum = a[r * m + c];
+                for q in 0..c {
+                    sum -= a[r * m + q] * a[c * m + q];
+                }
+                if r == c {
+                    if sum <= 0.0 {
+                        return None;
+                    }
+                    a[r * m + r] = sum.sqrt();
+                } else {
+                    a[r * m + c] = sum / a[c * m + c];
+                }
+            }
+        }
+        let mut z = rhs;
+        for r in 0..m {
+            let s: f64 = (0..r).map(|q| a[r * m + q] * z[q]).sum();
+            z[r] = (z[r] - s) / a[r * m + r];
+        }
+        for r in (0..m).rev() {
+            let s: f64 = (r + 1..m).map(|q| a[q * m + r] * z[q]).sum();
+            z[r] = (z[r] - s) / a[r * m + r];
+        }
+        let mut fit = Self { period, coefficients: z, rms: 0.0 };
+        let sq: f64 = xs.iter().zip(ys).map(|(&xv, &yv)| (fit.eval(xv) - yv).powi(2)).sum();
+        fit.rms = (sq / xs.len() as f64).sqrt();
+        Some(fit)
+    }
+
+    fn eval(&self, x: f64) -> f64 {
+        let w = 2.0 * std::f64::consts::PI * x / self.period;
+        let c = &self.coefficients;
+        let mut v = c[0];
+        for h in 1..=(c.len() - 1) / 2 {
+            let (sn, cs) = (h as f64 * w).sin_cos();
+            v += c[2 * h - 1] * cs + c[2 * h] * sn;
+        }
+        v
+    }
+}

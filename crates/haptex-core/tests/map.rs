@@ -195,3 +195,48 @@ fn crc32(bytes: &[u8]) -> u32 {
     }
     !c
 }
+
+/// A grating at an angle: each line y = const is the line profile's
+/// periodic part shifted by y tan(theta), with period lambda / cos(theta);
+/// a line profile that is exactly periodic is kept to round-off (its own
+/// Fourier series), at 90 degrees the map is the flat friction.
+#[test]
+fn grating_lines_are_the_shifted_periodic_line() {
+    use haptex_core::map::Grating;
+    let g = Grating { period_mm: 1.0, amplitude_mm: 0.2, angle_deg: 40.0, velocity_mm_s: 20.0 };
+    let p = g.line_period_mm();
+    assert!((p - 1.0 / 40f64.to_radians().cos()).abs() < 1e-12);
+    // A line profile of two harmonics of P with phase x0 = 5, on 0..10 mm,
+    // and a start transient in the first mm (left out by the fit).
+    let x0 = 5.0;
+    let f = |x: f64| {
+        let w = 2.0 * std::f64::consts::PI * (x - x0) / p;
+        0.5 + 0.03 * w.sin() + 0.01 * (2.0 * w).cos()
+    };
+    let xs: Vec<f64> = (0..=1000).map(|i| i as f64 * 0.01).collect();
+    let mu: Vec<f64> = xs.iter().map(|&x| if x < 0.8 { 0.3 } else { f(x) }).collect();
+    let grid = MapGrid { nx: 50, ny: 20, x0_mm: -3.0, y0_mm: -1.0, dx_mm: 0.13, dy_mm: 0.21 };
+    let (map, rms) = g.friction_map(Some((&xs, &mu, x0)), 0.5, grid).unwrap();
+    assert!(rms.unwrap() < 1e-12, "{rms:?}");
+    let t = 40f64.to_radians().tan();
+    for j in 0..grid.ny {
+        for i in 0..grid.nx {
+            let (x, y) = (grid.x(i), grid.y(j));
+            let want = f(x + y * t + x0);
+            let got = map.mu[j * grid.nx + i];
+            assert!((got - want).abs() < 1e-10, "({x}, {y}): {got} vs {want}");
+        }
+    }
+    let along = Grating { angle_deg: 90.0, ..g };
+    let (flat, none) = along.friction_map(Some((&xs, &mu, x0)), 0.47, grid).unwrap();
+    assert!(none.is_none() && flat.mu.iter().all(|&m| m == 0.47));
+    for bad in
+        [Grating { angle_deg: 91.0, ..g }, Grating { period_mm: 0.0, ..g }, Grating { amplitude_mm: f64::NAN, ..g }]
+    {
+        assert!(bad.friction_map(Some((&xs, &mu, x0)), 0.5, grid).is_err(), "{bad:?}");
+    }
+    // A line too short for the first mm plus one period.
+    let short: Vec<f64> = (0..=150).map(|i| i as f64 * 0.01).collect();
+    let e = g.friction_map(Some((&short, &vec![0.5; 151], 0.0)), 0.5, grid).unwrap_err().to_string();
+    assert!(e.contains("shorter"), "{e}");
+}

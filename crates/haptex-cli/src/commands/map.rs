@@ -33,6 +33,63 @@ enum MapCommand {
     FromProfile(FromProfileArgs),
     Voltage(MapVoltageArgs),
     SamplePath(SamplePathArgs),
+    Grating(GratingArgs),
+}
+
+/// A sine grating at an angle to the sliding direction (+x), its friction
+/// from the FE database: each line y = const cuts a sine of period
+/// lambda / cos(angle), whose steady friction the CAE predicts (plane
+/// strain along the sliding direction: the map depends on the direction).
+#[derive(Debug, Args)]
+#[command(
+    allow_negative_numbers = true,
+    after_help = "Example:\n  haptex map grating --period-mm 1.5 --amplitude-mm 0.2 --angle-deg 45 --nx 201 --ny 101 \
+                  --dx-mm 0.05 --dy-mm 0.05 -o grating45.csv --png grating45.png"
+)]
+struct GratingArgs {
+    /// Grating period lambda in mm (across the ridges).
+    #[arg(long, value_parser = positive)]
+    period_mm: f64,
+    /// Sine amplitude in mm.
+    #[arg(long, value_parser = positive)]
+    amplitude_mm: f64,
+    /// Angle between the grating's wave vector and the sliding direction x
+    /// in degrees (0: ridges across the sliding direction, 90: along it).
+    #[arg(long)]
+    angle_deg: f64,
+    /// Sliding velocity in mm/s.
+    #[arg(long, default_value_t = 20.0, value_parser = positive)]
+    velocity: f64,
+    /// Grid columns and rows.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(2..=100_000))]
+    nx: u32,
+    #[arg(long, value_parser = clap::value_parser!(u32).range(2..=100_000))]
+    ny: u32,
+    /// Grid spacings in mm.
+    #[arg(long, value_parser = positive)]
+    dx_mm: f64,
+    #[arg(long, value_parser = positive)]
+    dy_mm: f64,
+    #[arg(long, default_value_t = 0.0)]
+    x0_mm: f64,
+    #[arg(long, default_value_t = 0.0)]
+    y0_mm: f64,
+    /// Where a line's friction comes from: fe, one FE run of the sine the
+    /// line cuts (about 0.5 s; exact for any period); cae, the database's
+    /// estimate (milliseconds; between the database's periods it blends
+    /// neighbouring periods, docs/maps.md).
+    #[arg(long, value_enum, default_value_t = LineSource::Fe)]
+    source: LineSource,
+    /// Database directory for --source cae. Default: the shipped data/db, or $HAPTEX_DB.
+    #[arg(long, value_name = "DIR")]
+    db: Option<PathBuf>,
+    /// Output map (.csv or .npy with its sidecar).
+    #[arg(short, long, value_name = "MAP")]
+    output: PathBuf,
+    /// Also plot the friction along the first row (y = y0) to this PNG,
+    /// with the grating across the sliding direction (0 degrees) beside it.
+    #[arg(long, value_name = "FILE.png")]
+    png: Option<PathBuf>,
 }
 
 /// A friction map from an 8- or 16-bit grayscale PNG: gray level g in
@@ -150,6 +207,7 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         MapCommand::FromProfile(a) => from_profile(a),
         MapCommand::Voltage(a) => voltage(a),
         MapCommand::SamplePath(a) => sample_path(a),
+        MapCommand::Grating(a) => grating(a),
     }
 }
 
@@ -250,6 +308,146 @@ fn sample_path(a: SamplePathArgs) -> anyhow::Result<()> {
         eprintln!("wrote {}", p.display());
     }
     Ok(())
+}
+
+fn grating(a: GratingArgs) -> anyhow::Result<()> {
+    use haptex_core::database::Metadata;
+    use haptex_core::map::Grating;
+    let format = MapFormat::of(&a.output)?;
+    let grid = MapGrid {
+        nx: a.nx as usize,
+        ny: a.ny as usize,
+        x0_mm: a.x0_mm,
+        y0_mm: a.y0_mm,
+        dx_mm: a.dx_mm,
+        dy_mm: a.dy_mm,
+    };
+    let g = Grating {
+        period_mm: a.period_mm,
+        amplitude_mm: a.amplitude_mm,
+        angle_deg: a.angle_deg,
+        velocity_mm_s: a.velocity,
+    };
+    g.validate()?;
+    grid.validate("grating")?;
+    let dir = a.db.clone().unwrap_or_else(super::db::default_db);
+    let flat = match a.source {
+        // The FE model's own flat-surface friction: its skin friction.
+        LineSource::Fe => haptex_fem::finger::FingerModel::default_model().contact.mu_skin,
+        LineSource::Cae => {
+            Metadata::read(&dir).with_context(|| format!("no FE database in {}", dir.display()))?.fe.flat_mu()
+        }
+    };
+    let across = Grating { angle_deg: 0.0, ..g };
+    let mut maps = Vec::new();
+    for grating in [g, across] {
+        let line = line_friction(&grating, a.source, &dir)?;
+        let (map, rms) =
+            grating.friction_map(line.as_ref().map(|(x, mu, x0)| (x.as_slice(), mu.as_slice(), *x0)), flat, grid)?;
+        maps.push((map, rms));
+        if a.png.is_none() {
+            break;
+        }
+    }
+    let (map, rms) = &maps[0];
+    write_friction_map(map, &a.output, format)?;
+    report_map(map);
+    let row = &map.mu[..grid.nx];
+    let (lo, hi) = min_max(row);
+    let mean = row.iter().sum::<f64>() / row.len() as f64;
+    eprintln!(
+        "grating: lambda {} mm, amplitude {} mm, {} degrees to the sliding direction: each line cuts a sine of \
+         period {:.4} mm; along y = {} mm Ft/Fn {:.4} .. {:.4} (mean {:.4}, flat {})",
+        Num(a.period_mm),
+        Num(a.amplitude_mm),
+        Num(a.angle_deg),
+        g.line_period_mm(),
+        Num(grid.y0_mm),
+        lo,
+        hi,
+        mean,
+        Num(flat)
+    );
+    if let Some(rms) = rms {
+        eprintln!(
+            "the line's friction is the periodic part (mean and up to 10 harmonics) of its {} profile after the \
+             first mm: RMS {rms:.2e} from it",
+            match a.source {
+                LineSource::Fe => "FE",
+                LineSource::Cae => "CAE",
+            }
+        );
+    }
+    if let Some(png) = &a.png {
+        let x: Vec<f64> = (0..grid.nx).map(|i| grid.x(i)).collect();
+        haptex_core::plot::Figure::new(format!(
+            "sine grating lambda {} mm, amplitude {} mm: friction along y = {} mm",
+            Num(a.period_mm),
+            Num(a.amplitude_mm),
+            Num(grid.y0_mm)
+        ))
+        .panel(
+            haptex_core::plot::Panel::new("x (mm), the sliding direction", "Ft/Fn")
+                .line(format!("{} degrees", Num(a.angle_deg)), &x, row)
+                .line("0 degrees (ridges across the sliding)", &x, &maps[1].0.mu[..grid.nx])
+                .line("flat surface", &x, &vec![flat; grid.nx]),
+        )
+        .write_png(png)?;
+        eprintln!("wrote {}", png.display());
+    }
+    eprintln!("wrote {}", a.output.display());
+    Ok(())
+}
+
+/// The friction profile of the 1-D sine a line of the grating cuts, and
+/// its phase x0 (None where the line is flat): from an FE run (10 mm of
+/// slide, the paper's scenario) or the database's CAE.
+fn line_friction(g: &haptex_core::map::Grating, source: LineSource, db: &Path) -> anyhow::Result<Option<LineProfile>> {
+    let p = g.line_period_mm();
+    if !p.is_finite() {
+        return Ok(None);
+    }
+    match source {
+        LineSource::Fe => {
+            use haptex_fem::scenario::{self, Scenario};
+            use haptex_fem::surface::SurfaceShape;
+            let x0 = 5.0;
+            let mut scenario = Scenario::paper(SurfaceShape::Sine { x0, width: p, height: g.amplitude_mm });
+            scenario.velocity_mm_s = g.velocity_mm_s;
+            let result = scenario::run(&scenario, &mut |_| {})
+                .with_context(|| format!("the FE run of the line's sine (period {p:.4} mm) failed"))?;
+            let profile = result.profile.context("the FE run gave no profile")?;
+            Ok(Some((profile.x_mm().to_vec(), profile.mu().to_vec(), x0)))
+        }
+        LineSource::Cae => {
+            use haptex_core::database::{Metadata, Template, TemplateModel};
+            let metadata = Metadata::read(db).with_context(|| format!("no FE database in {}", db.display()))?;
+            let model = TemplateModel::load_with(db, &metadata, Template::Sine)?;
+            let [(w_lo, w_hi), (h_lo, h_hi), _] = model.input_ranges();
+            if p < w_lo || p > w_hi || g.amplitude_mm < h_lo || g.amplitude_mm > h_hi {
+                bail!(
+                    "the line's sine (period {p:.4} mm, amplitude {} mm) is outside the database's sine periods {} .. \
+                     {} mm and heights {} .. {} mm: use --source fe",
+                    Num(g.amplitude_mm),
+                    Num(w_lo),
+                    Num(w_hi),
+                    Num(h_lo),
+                    Num(h_hi)
+                );
+            }
+            let prediction = model.predict(0.0, p, g.amplitude_mm, g.velocity_mm_s)?;
+            Ok(Some((prediction.x_mm, prediction.mu, 0.0)))
+        }
+    }
+}
+
+/// A line's friction profile: positions, Ft/Fn, and the sine's phase x0.
+type LineProfile = (Vec<f64>, Vec<f64>, f64);
+
+#[derive(Debug, Clone, Copy, PartialEq, ValueEnum)]
+enum LineSource {
+    Fe,
+    Cae,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
