@@ -234,3 +234,48 @@ fn grating_maps_by_direction() {
     assert!(!out.status.success());
     assert!(stderr(&out).contains("period 3.0000 mm") && stderr(&out).contains("--source fe"), "{}", stderr(&out));
 }
+
+/// `haptex play --voltage-map` along y = const over a map extruded from a
+/// profile gives the envelope of `haptex play --profile` with the same x(t)
+/// (1e-9 V: the two interpolate in different but equivalent arithmetic),
+/// and the drive goes through the same limits (U_max clamp reported).
+#[test]
+fn play_over_a_map_along_a_row_is_the_profile_playback() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    run_ok(&["voltage", "--profile", EXAMPLE, "-q", "-o", &p("u1.csv")]);
+    run_ok(&[
+        "map",
+        "from-profile",
+        "--profile",
+        EXAMPLE,
+        "--dx-mm",
+        "0.01",
+        "--dy-mm",
+        "0.5",
+        "--ny",
+        "3",
+        "-o",
+        &p("m.csv"),
+    ]);
+    run_ok(&["map", "voltage", "--map", &p("m.csv"), "-o", &p("v.npy")]);
+    let (mut t1, mut t2) = (String::from("t_s,x_mm\n"), String::from("t_s,x_mm,y_mm\n"));
+    for k in 0..=400 {
+        let (t, x) = (k as f64 * 1e-3, 1.0 + 8.0 * (k as f64 / 400.0).powi(2));
+        t1 += &format!("{t},{x}\n");
+        t2 += &format!("{t},{x},0.5\n");
+    }
+    let (tr1, tr2) = (write(dir.path(), "t1.csv", &t1), write(dir.path(), "t2.csv", &t2));
+    run_ok(&["play", "--profile", &p("u1.csv"), "--trajectory", &tr1, "--u-max", "90", "-o", &p("s1.csv")]);
+    let e = run_ok(&["play", "--voltage-map", &p("v.npy"), "--trajectory", &tr2, "--u-max", "90", "-o", &p("s2.csv")]);
+    assert!(e.contains("clamped at U_max = 90"), "{e}");
+    let (a, b) = (std::path::Path::new(&p("s1.csv")).to_path_buf(), std::path::Path::new(&p("s2.csv")).to_path_buf());
+    let names = Table::read(std::fs::read(&a).unwrap().as_slice(), "s").unwrap().columns().to_vec();
+    let envelope = names.iter().find(|n| n.starts_with("envelope")).unwrap().clone();
+    let (e1, e2) = (column(&a, &envelope), column(&b, &envelope));
+    assert_eq!(e1.len(), e2.len());
+    assert!(e1.iter().zip(&e2).all(|(x, y)| (x - y).abs() < 1e-9 && *y <= 90.0));
+    // A 1-D trajectory is not a planar path.
+    let out = haptex(&["play", "--voltage-map", &p("v.npy"), "--trajectory", &tr1, "-o", &p("s3.csv")]);
+    assert!(!out.status.success() && stderr(&out).contains("y_mm"), "{}", stderr(&out));
+}

@@ -487,7 +487,7 @@ fn read_friction_map(path: &Path) -> anyhow::Result<FrictionMap> {
     })
 }
 
-fn read_voltage_map(path: &Path) -> anyhow::Result<VoltageMap> {
+pub(crate) fn read_voltage_map(path: &Path) -> anyhow::Result<VoltageMap> {
     let (grid, voltage_v, u_max_v) = match MapFormat::of(path)? {
         MapFormat::Csv => {
             let (grid, v) = read_map_csv(path, &ranges::VOLTAGE_V)?;

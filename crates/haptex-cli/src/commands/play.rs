@@ -70,8 +70,13 @@ pub struct PlayArgs {
     check: Option<PathBuf>,
     /// Voltage profile CSV (`x_mm,mu,voltage_v` from `haptex voltage`, or
     /// `x_mm,voltage_v`), or `-` for stdin. voltage_v is RMS volts.
-    #[arg(long, value_name = "U.csv", required_unless_present = "check")]
+    #[arg(long, value_name = "U.csv", required_unless_present_any = ["check", "voltage_map"])]
     profile: Option<PathBuf>,
+    /// A voltage map over (x, y) instead of a profile (`haptex map
+    /// voltage`: .csv or .npy with its sidecar), played along the finger
+    /// path of --trajectory, a CSV `t_s,x_mm,y_mm` (docs/maps.md).
+    #[arg(long, value_name = "MAP", conflicts_with_all = ["profile", "velocity", "strokes", "a_max_um"], requires = "trajectory")]
+    voltage_map: Option<PathBuf>,
     /// Finger trajectory CSV `t_s,x_mm` (times strictly increasing).
     #[arg(long, value_name = "T.csv", conflicts_with_all = ["velocity", "strokes"])]
     trajectory: Option<PathBuf>,
@@ -173,8 +178,8 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
     if let Some(wav) = &args.check {
         return check(wav, args.quiet);
     }
-    let (Some(profile), Some(output_path)) = (&args.profile, &args.output) else {
-        bail!("give --profile U.csv and -o OUT (or --check WAV)");
+    let (Some(profile), Some(output_path)) = (args.profile.as_ref().or(args.voltage_map.as_ref()), &args.output) else {
+        bail!("give --profile U.csv (or --voltage-map MAP) and -o OUT (or --check WAV)");
     };
     if args.trajectory.is_none() && args.velocity.is_none() {
         bail!("give --trajectory T.csv, or --velocity MM_PER_S to generate a trajectory");
@@ -198,6 +203,16 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
     // Refuse a directory or special file before any work.
     haptex_core::io::OutputTarget::of(output_path)?;
 
+    if args.voltage_map.is_some() {
+        let map = super::map::read_voltage_map(profile)?;
+        let path_file = args.trajectory.as_ref().context("--voltage-map needs --trajectory T.csv (t_s,x_mm,y_mm)")?;
+        let name = path_file.display().to_string();
+        let file = std::fs::File::open(path_file).with_context(|| format!("cannot open {name}"))?;
+        let path = haptex_core::planar::PlanarTrajectory::read_csv(std::io::BufReader::new(file), &name)?;
+        let settings = render_settings(&args);
+        let signal = haptex_core::signal::render_map(&map, &path, &settings)?;
+        return write_signal(&args, format, &output, output_path, profile, json!({ "file": name }), &signal);
+    }
     let (curve, amplitude, comments) = read_curve(profile)?;
     let stated_a_max = if amplitude.is_some() { stated_a_max(&comments) } else { None };
     let a_max_um = match (&amplitude, args.a_max_um, stated_a_max) {
@@ -221,7 +236,19 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
         ),
     };
     let (trajectory, trajectory_source) = trajectory(&args, &curve)?;
-    let settings = RenderSettings {
+    let settings = render_settings(&args);
+    check_design_carrier(&comments, &settings.carrier, profile)?;
+    let signal = match (&amplitude, a_max_um) {
+        (Some(amplitude), Some(a_max)) => render_two_channel(&curve, amplitude, a_max, &trajectory, &settings)?,
+        _ => render(&curve, &trajectory, &settings)?,
+    };
+
+    write_signal(&args, format, &output, output_path, profile, trajectory_source, &signal)
+}
+
+/// The render settings of the flags: rate, carrier, limits, extension.
+fn render_settings(args: &PlayArgs) -> RenderSettings {
+    RenderSettings {
         sample_rate_hz: args.sample_rate,
         carrier: Carrier { shape: args.carrier.shape(), frequency_hz: args.carrier_hz },
         limits: Limits { u_max_v: args.u_max, slew_v_per_s: args.slew_v_per_s, amplifier_range_v: args.amp_range_v },
@@ -230,13 +257,20 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
             ExtendArg::Zero => Extend::Zero,
             ExtendArg::Repeat => Extend::Repeat,
         },
-    };
-    check_design_carrier(&comments, &settings.carrier, profile)?;
-    let signal = match (&amplitude, a_max_um) {
-        (Some(amplitude), Some(a_max)) => render_two_channel(&curve, amplitude, a_max, &trajectory, &settings)?,
-        _ => render(&curve, &trajectory, &settings)?,
-    };
+    }
+}
 
+/// Writes the rendered signal (WAV with its scale and sidecar, or CSV;
+/// and the optional CSV and PNG) and reports what was written.
+fn write_signal(
+    args: &PlayArgs,
+    format: FormatArg,
+    output: &Output,
+    output_path: &Path,
+    profile: &Path,
+    trajectory_source: serde_json::Value,
+    signal: &haptex_core::signal::DriveSignal,
+) -> anyhow::Result<()> {
     let mut written = Vec::new();
     match format {
         FormatArg::Wav => {
@@ -255,7 +289,7 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
                 "command": std::env::args().collect::<Vec<_>>().join(" "),
                 "haptex_version": env!("CARGO_PKG_VERSION"),
             });
-            let sidecar = write_wav(path, &signal, &options, source)?;
+            let sidecar = write_wav(path, signal, &options, source)?;
             let channel_2 = match &sidecar.channel_2 {
                 Some(c) => format!("; channel 2: {} um per full scale", Num(c.um_per_full_scale)),
                 None => String::new(),
