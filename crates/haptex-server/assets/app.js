@@ -1011,6 +1011,8 @@
         return b;
       };
       way.append(button('way-out-normalized', 'the pattern: normalized (eq. 9)', () => setMethod('normalized')));
+      way.append(' ', button('way-out-combined', 'the combined display (ultrasonic below mu_HD)',
+        () => setDisplay('combined')));
       if (!state.relative) {
         way.append(' ', button('way-out-relative', 'relative to its flat-surface friction (Fig. 2)',
           () => setRelative(true, '')));
@@ -1325,7 +1327,7 @@
       const c = currentCheck();
       if (!c || c.mode !== 'compensate') throw new ApiError('compensate first', null, 0);
       file = { blob: new Blob([c.result.voltage_csv], { type: 'text/csv' }), name: 'voltage-compensated.csv' };
-    } else if (kind === 'stroke-wav') {
+    } else if (kind === 'stroke-wav' || kind === 'stroke-sidecar') {
       const v = played();
       const body = {
         voltage: { x_mm: v.x_mm, voltage_v: v.voltage_v || v.x_mm.map(() => 0) },
@@ -1341,7 +1343,16 @@
         body.a_max_um = v.summary.ultrasonic.a_max_um;
         which = `-${v.summary.display}-2ch`;
       }
-      file = { blob: await (await postJson('/api/play', body)).blob(), name: `stroke-${state.velocity}mm_s${which}.wav` };
+      if (kind === 'stroke-sidecar') {
+        // The WAV's sidecar (scales of both channels, sample hash), as haptex play writes it.
+        body.format = 'sidecar';
+        file = {
+          blob: await (await postJson('/api/play', body)).blob(),
+          name: `stroke-${state.velocity}mm_s${which}.wav.json`,
+        };
+      } else {
+        file = { blob: await (await postJson('/api/play', body)).blob(), name: `stroke-${state.velocity}mm_s${which}.wav` };
+      }
     } else {
       throw new Error(`unknown download ${kind}`);
     }

@@ -617,6 +617,10 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     if summary.contains("--") || !summary.contains("lower mu_HD (Device and finger)") {
         return fail(format!("the summary does not name the page's controls: {summary:?}"));
     }
+    // Among the ways out of the 0 V line, the combined display.
+    if wd!(client.find_all(Locator::Id("way-out-combined"))).len() != 1 {
+        return fail("the 0 V line offers no one-click way to the combined display");
+    }
     // ... and a 0 V line comes with its one-click way out: relative to the
     // profile's flat-surface friction (its median), which gives a signal.
     let n = updates(client).await?;
@@ -1063,6 +1067,13 @@ async fn display_selector(client: &Client, scratch: &Path) -> Check<()> {
     match (&scale.channel_2, channel_2) {
         (Some(c2), Some(a)) if c2.um_per_full_scale == 2.0 && a.len() == volts.len() && a.iter().any(|v| *v > 0.0) => {}
         _ => return fail("combined: the stroke WAV has no channel 2 at the calibration's a_max = 2 um"),
+    }
+    // Its sidecar, as haptex play writes it: the same samples and channel 2's scale.
+    let sidecar = download(client, "stroke-sidecar").await?;
+    let sidecar: haptex_core::signal::WavSidecar =
+        serde_json::from_slice(&sidecar).map_err(|e| format!("the stroke WAV's sidecar: {e}"))?;
+    if sidecar.samples_sha256 != scale.samples_sha256 || sidecar.channel_2 != scale.channel_2 || sidecar.channels != 2 {
+        return fail("combined: the sidecar download does not belong to the stroke WAV");
     }
 
     save_screenshot("web-combined.png", &screenshot(client).await?);

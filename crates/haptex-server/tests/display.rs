@@ -19,8 +19,8 @@ use haptex_core::electrovibration::Device;
 use haptex_core::io::sha256_hex;
 use haptex_core::profile::FrictionProfile;
 use haptex_core::signal::{
-    AmplitudeCurve, RenderSettings, VoltageCurve, WavFormat, WavOptions, decode_drive_wav_channels, encode_wav,
-    render_two_channel, write_wav,
+    AmplitudeCurve, RenderSettings, VoltageCurve, WavFormat, WavOptions, WavSidecar, decode_drive_wav_channels,
+    encode_wav, render_two_channel, write_wav,
 };
 use haptex_core::trajectory::Trajectory;
 use haptex_core::ultrasonic::{Calibration, UltrasonicDevice};
@@ -393,6 +393,7 @@ async fn play_two_channels_is_the_cores_wav_with_channel_2s_scale() {
     assert!(std::fs::read(&path).unwrap() == answer.body.as_ref());
     let (scale, volts, channel_2) = decode_drive_wav_channels(&answer.body).unwrap();
     assert_eq!(sidecar.channel_2, scale.channel_2);
+    assert_eq!(sidecar.samples_sha256, scale.samples_sha256);
     let c2 = scale.channel_2.unwrap();
     assert_eq!((c2.um_per_full_scale, c2.a_max_um, c2.unit.as_str()), (2.0, 2.0, "um"));
     let channel_2 = channel_2.unwrap();
@@ -404,6 +405,15 @@ async fn play_two_channels_is_the_cores_wav_with_channel_2s_scale() {
         assert!((got - want).abs() <= 0.5 * step + 1e-12, "{got} vs {want}");
     }
     assert!(expected.iter().any(|&v| v > 1.0), "the stroke crosses the region rendered by the plate");
+
+    // The sidecar format: what haptex play writes beside that WAV (its own file name and source aside).
+    let mut as_sidecar = play.clone();
+    as_sidecar["format"] = json!("sidecar");
+    let served: WavSidecar = serde_json::from_slice(&post_json("/api/play", &as_sidecar).await.ok().body).unwrap();
+    let mut cli = sidecar.clone();
+    (cli.wav_file, cli.source) = (served.wav_file.clone(), served.source.clone());
+    assert_eq!(served, cli);
+    assert_eq!((served.channels, served.wav_file.as_str()), (2, "haptex-drive.wav"));
 
     let mut as_json = play.clone();
     as_json["format"] = json!("json");

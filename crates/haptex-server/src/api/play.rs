@@ -7,7 +7,9 @@
 //! {"velocity_mm_s": 50}}` or with `"trajectory": {"t_s": [..], "x_mm":
 //! [..]}` instead of `stroke`; optional `carrier`, `sample_rate_hz`,
 //! `u_max_v`, `slew_v_per_s`, `amplifier_range_v`, `outside`, `format`
-//! (`wav` | `json`), `wav_format`, `volts_per_full_scale`.
+//! (`wav` | `json` | `sidecar`: the sidecar JSON of the WAV this request
+//! answers, as `haptex play` writes it beside its WAV), `wav_format`,
+//! `volts_per_full_scale`.
 //!
 //! A display profile of an ultrasonic or combined display (`POST
 //! /api/voltage` with `display`) plays on two channels, as `haptex play`
@@ -28,7 +30,7 @@ use haptex_core::num::Num;
 use haptex_core::profile::ProfileError;
 use haptex_core::signal::{
     AmplitudeCurve, Carrier, CarrierShape, DriveSignal, Extend, Limits, RenderSettings, SignalError, VoltageCurve,
-    WavFormat, WavOptions, encode_wav, render, render_two_channel,
+    WavFormat, WavOptions, WavSidecar, encode_wav, render, render_two_channel,
 };
 use haptex_core::trajectory::Trajectory;
 use serde::Deserialize;
@@ -42,6 +44,9 @@ use crate::state::AppState;
 use crate::work;
 use haptex_core::ranges;
 
+/// The file name the WAV answer suggests (its Content-Disposition), which
+/// its sidecar names.
+const WAV_FILE_NAME: &str = "haptex-drive.wav";
 /// Finger speed of a generated stroke when the GUI has no other, mm/s.
 pub const DEFAULT_VELOCITY_MM_S: f64 = 50.0;
 /// Rate at which generated strokes are sampled (linear in between), Hz.
@@ -114,6 +119,10 @@ struct StrokeJson {
 enum PlayFormat {
     Wav,
     Json,
+    /// The sidecar JSON of the WAV the same request answers (what `haptex
+    /// play` writes beside its WAV: scales of both channels, sample hash,
+    /// safety report).
+    Sidecar,
 }
 
 pub async fn post(
@@ -240,7 +249,7 @@ impl Job {
         };
         settings.check().map_err(|e| ApiError::bad_request(e.to_string(), Some("carrier")))?;
         let max_samples = match format {
-            PlayFormat::Wav => limits.max_wav_samples,
+            PlayFormat::Wav | PlayFormat::Sidecar => limits.max_wav_samples,
             PlayFormat::Json => limits.max_json_samples,
         };
         let (field, trajectory) =
@@ -252,7 +261,7 @@ impl Job {
                     "{} s at {sample_rate_hz} Hz is {} samples, more than the {max_samples} a {} answer may have",
                     Num(trajectory.duration_s()),
                     Num(samples.round()),
-                    if format == PlayFormat::Wav { "WAV" } else { "JSON" }
+                    if format == PlayFormat::Json { "JSON" } else { "WAV" }
                 ),
                 Some(field),
             ));
@@ -273,6 +282,13 @@ impl Job {
         match self.format {
             PlayFormat::Wav => wav_response(&signal, &self.wav),
             PlayFormat::Json => Ok(Json(json_answer(&signal)).into_response()),
+            PlayFormat::Sidecar => {
+                let encoded = encode_wav(&signal, &self.wav, "response").map_err(signal_error)?;
+                let source =
+                    json!({ "server": "haptex serve (POST /api/play)", "haptex_version": env!("CARGO_PKG_VERSION") });
+                let sidecar = WavSidecar::new(WAV_FILE_NAME.to_string(), &encoded, &signal.report, source);
+                Ok(Json(sidecar).into_response())
+            }
         }
     }
 }
