@@ -1077,6 +1077,15 @@ async fn display_selector(client: &Client, scratch: &Path) -> Check<()> {
     }
 
     save_screenshot("web-combined.png", &screenshot(client).await?);
+    // The display's controls fit a phone too.
+    wd!(client.set_window_size(390, 844));
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    let overflow = script(client, "return document.documentElement.scrollWidth - window.innerWidth;").await?;
+    wd!(client.set_window_size(1280, 1280));
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    if overflow.as_f64().unwrap_or(1.0) > 0.0 {
+        return fail(format!("combined display: the phone-sized window scrolls sideways by {overflow} px"));
+    }
 
     // The ultrasonic display alone: no voltage, the band's top at mu_HD.
     choose(client, "display", "ultrasonic").await?;
@@ -1090,7 +1099,6 @@ async fn display_selector(client: &Client, scratch: &Path) -> Check<()> {
     if hidden != Value::Bool(true) || !labels(client, "friction").await?.iter().any(|l| l == "band max (mu_HD)") {
         return fail("ultrasonic: a voltage plot or the strategy is still shown, or the band's top is not mu_HD");
     }
-    save_screenshot("web-ultrasonic.png", &screenshot(client).await?);
     // Back to electrovibration: the one-channel page.
     let n = updates(client).await?;
     wd!(wd!(client.find(Locator::Id("clear-calibration"))).click());
