@@ -446,3 +446,30 @@ async fn play_two_channels_is_the_cores_wav_with_channel_2s_scale() {
         post_json("/api/play", &body).await.error(StatusCode::BAD_REQUEST, Some(field));
     }
 }
+
+/// The relative mapping (paper Fig. 2) with the combined display: the
+/// profile over its flat-surface friction times mu_HD, then the core's
+/// `map_display` (what `haptex voltage --relative --flat-mu 0.5 --display
+/// combined` writes), the summary saying how it was made.
+#[tokio::test]
+async fn voltage_display_relative_is_the_cores() {
+    use haptex_core::relative::FlatMu;
+    let x: Vec<f64> = (0..41).map(|i| f64::from(i) * 0.25).collect();
+    let mu: Vec<f64> = x.iter().map(|x| 0.5 + 0.15 * (x - 5.0).sin()).collect();
+    let body = json!({
+        "profile": { "x_mm": x, "mu": mu },
+        "relative": true, "flat_mu": 0.5,
+        "display": "combined", "strategy": "bias",
+    });
+    let answer = post_json("/api/voltage", &body).await.ok().json();
+    let plate = UltrasonicDevice::literature_default(None).unwrap();
+    let profile = FrictionProfile::new(x.clone(), mu.clone()).unwrap();
+    let channels = Channels::Combined(&plate, Strategy::Bias);
+    let core = map_display(&profile, &Device::PAPER, channels, None, Some(FlatMu::Given(0.5))).unwrap();
+    assert_eq!(numbers(&answer["mu"]), core.mu);
+    assert_eq!(numbers(&answer["amplitude_um"]), core.amplitude_um.unwrap());
+    assert_eq!(numbers(&answer["voltage_v"]), core.voltage_v.unwrap());
+    assert_eq!(answer["summary"]["relative"]["flat_mu"].as_f64(), Some(0.5));
+    // The relative profile spans 0.7 .. 1.3: below mu_HD = 1 the plate, above it the voltage.
+    assert!(core.mu.iter().any(|m| *m < 0.75) && core.mu.iter().any(|m| *m > 1.25));
+}
