@@ -41,6 +41,8 @@
     device: {},            // parameter name -> number (only valid ones)
     velocity: 50,
     carrierHz: 1000,
+    both: false,           // eq. (8) and eq. (9) together (Fig. 2b): the companion drawn dashed
+    pins: [],              // pinned designs, overlaid on the plots (pinDesign)
     updates: 0,
   };
   const plots = { height: null, friction: null, voltage: null, amplitude: null, check: null, checkVoltage: null };
@@ -275,6 +277,7 @@
     loadRequest += 1; // a profile still loading for the previous source is dropped
     if (SOURCES[id].method) setMethod(SOURCES[id].method);
     setRelative(SOURCES[id].relative, SOURCES[id].flatMu());
+    setBoth(Boolean(SOURCES[id].bothMethods));
     state.profile = state.profiles[id] || null;
     if (state.profile) {
       updateVoltage().catch(showError);
@@ -524,7 +527,9 @@
     frictionData.push(constant(x, r.settings.mu_hd));
     voltageSeries.push({ label: 'U_max', stroke: '#888', dash: [6, 4], width: 1 });
     voltageData.push(constant(x, r.voltage.summary.u_max_v));
-    plots.check = replot(plots.check, 'check-plot', frictionSeries, frictionData);
+    const felt = withPins(frictionSeries, frictionData,
+      (p) => ({ x: p.felt ? p.felt.x_mm : null, lines: p.felt ? [{ label: p.felt.label, data: p.felt.mu }] : [] }));
+    plots.check = replot(plots.check, 'check-plot', felt.series, felt.data);
     plots.checkVoltage = replot(plots.checkVoltage, 'check-voltage-plot', voltageSeries, voltageData);
     showCheckMetrics(r);
   }
@@ -591,6 +596,12 @@
     if (input) input.checked = true;
   }
 
+  /** Draws eq. (8) and eq. (9) together (Fig. 2b) or only the method chosen (its checkbox too). */
+  function setBoth(on) {
+    state.both = on;
+    $('both-methods').checked = on;
+  }
+
   /** Sets the relative mapping (its checkbox too) and the flat-surface friction shown. */
   function setRelative(on, flatMu) {
     state.relative = on;
@@ -631,6 +642,9 @@
       scheduleVoltage();
     });
     $('flat-mu').addEventListener('input', scheduleVoltage);
+    $('both-methods').addEventListener('change', () => { state.both = $('both-methods').checked; scheduleVoltage(); });
+    $('pin-design').addEventListener('click', () => { try { pinDesign(); } catch (error) { showError(error); } });
+    $('unpin-all').addEventListener('click', () => { state.pins = []; showPins(); if (state.voltage) { draw(); showCheck(); } });
 
     const params = $('device-params');
     config.device_params.forEach((p) => {
@@ -749,6 +763,7 @@
     // eq. (9) and the check on the finger model are the electrovibration display's.
     document.querySelectorAll('input[name="method"]').forEach((input) => { input.disabled = !ev; });
     [$('run-check'), $('run-compensate')].forEach((b) => { b.disabled = !ev; });
+    $('both-methods').disabled = !ev;
     $('display-info').textContent = ev
       ? 'Electrovibration only raises friction above mu_HD.'
       : 'Method: physical (eq. 9 is the electrovibration display\'s pattern); the check on the finger model is ' +
@@ -879,7 +894,7 @@
   async function updateVoltage() {
     if (!state.profile) return;
     const id = ++voltageRequest;
-    const both = SOURCES[state.source].bothMethods && isElectrovibration();
+    const both = state.both && isElectrovibration();
     const [answer, companion] = await Promise.all([
       postJson('/api/voltage', voltageBody()).then((r) => r.json()),
       both ? postJson('/api/voltage', voltageBody(otherMethod(state.method))).then((r) => r.json()) : null,
@@ -1021,6 +1036,134 @@
     }
   }
 
+  // ------------------------------------------------------------- compare
+
+  /** At most this many pinned designs (the plots stay readable). */
+  const MAX_PINS = 6;
+  /** One colour per pin, apart from the current design's (blue, red, purple, grey, orange, green). */
+  const PIN_COLORS = ['#d81b60', '#00897b', '#8d6e63', '#f9a825', '#3949ab', '#7cb342'];
+  let pinCounter = 0;
+
+  /** What the design shown is, in the page's words: source, method or display, mapping, device changes. */
+  function designLabel() {
+    const s = state.voltage.summary;
+    const how = s.display
+      ? `${s.display} display${s.strategy ? ` (${s.strategy})` : ''}`
+      : `${equation(s)}${state.companion ? ` and ${equation(state.companion.summary)}` : ''}`;
+    const changed = state.config.device_params
+      .filter((p) => state.device[p.name] !== undefined && state.device[p.name] !== p.default)
+      .map((p) => {
+        const e = (state.config.explanations || []).find((x) => x.field === p.name);
+        return `${e ? e.symbol : p.name} ${fmt(state.device[p.name])}${p.unit ? ` ${p.unit}` : ''}`;
+      });
+    return `${state.drawn.label} · ${how}${s.relative ? `, relative (mu_flat ${fmt(s.relative.flat_mu)})` : ''}` +
+      (changed.length ? ` · ${changed.join(', ')}` : '');
+  }
+
+  /**
+   * Pins the design shown: its friction profile as plotted, its voltage(s)
+   * (eq. 8 and eq. 9 when both are drawn), its amplitude a(x) and the
+   * friction the finger model felt when a check is current; the next
+   * designs are drawn over it on the same axes.
+   */
+  function pinDesign() {
+    const v = state.voltage;
+    if (!v) throw new ApiError('nothing to pin yet', null, 0);
+    if (state.pins.length >= MAX_PINS) {
+      throw new ApiError(`at most ${MAX_PINS} pinned designs: remove one first`, null, 0);
+    }
+    pinCounter += 1;
+    const name = `P${pinCounter}`;
+    const s = v.summary;
+    const voltages = [];
+    if (v.voltage_v) voltages.push({ label: s.display ? 'U(x)' : `U ${equation(s)}`, data: v.voltage_v, dash: false });
+    const c = state.companion;
+    if (c && c.voltage_v.length === v.x_mm.length) {
+      voltages.push({ label: `U ${equation(c.summary)}`, data: c.voltage_v, dash: true });
+    }
+    const check = currentCheck();
+    let felt = null;
+    if (check) {
+      const r = check.result;
+      const comp = r.compensated;
+      felt = { x_mm: r.x_mm, mu: comp ? comp.felt_mu : r.eq8.felt_mu, label: comp ? 'felt, compensated' : 'felt, eq. (8)' };
+    }
+    state.pins.push({
+      name,
+      color: PIN_COLORS[(pinCounter - 1) % PIN_COLORS.length],
+      label: designLabel(),
+      x_mm: v.x_mm,
+      mu: v.mu,
+      voltages,
+      amplitude: v.amplitude_um || null,
+      felt,
+    });
+    showPins();
+    draw();
+    showCheck();
+    say(`Pinned ${name}: the next designs are drawn over it.`);
+  }
+
+  function unpin(name) {
+    state.pins = state.pins.filter((p) => p.name !== name);
+    showPins();
+    if (state.voltage) { draw(); showCheck(); }
+    say(`Removed ${name}.`);
+  }
+
+  /** The list of pinned designs: colour, name, what it is, and its remove button. */
+  function showPins() {
+    const list = $('pins');
+    list.textContent = '';
+    state.pins.forEach((p) => {
+      const item = document.createElement('li');
+      item.dataset.pin = p.name;
+      const swatch = document.createElement('span');
+      swatch.className = 'swatch';
+      swatch.style.background = p.color;
+      swatch.setAttribute('aria-hidden', 'true');
+      const text = document.createElement('span');
+      text.className = 'pin-label';
+      text.textContent = `${p.name}: ${p.label}`;
+      const remove = document.createElement('button');
+      Object.assign(remove, { type: 'button', className: 'small remove-pin', textContent: 'remove' });
+      remove.setAttribute('aria-label', `remove pinned design ${p.name}`);
+      remove.addEventListener('click', () => unpin(p.name));
+      item.append(swatch, text, remove);
+      list.append(item);
+    });
+    $('unpin-all').hidden = state.pins.length < 2;
+    $('pin-design').disabled = state.pins.length >= MAX_PINS;
+    $('pins-info').textContent = state.pins.length
+      ? `${state.pins.length} pinned (of at most ${MAX_PINS}); the legends name them P1, P2, …`
+      : `Pin a design to compare the next ones with it on the same axes (up to ${MAX_PINS}).`;
+  }
+
+  /**
+   * The pinned designs' series of one plot beside the current design's:
+   * `pick(pin)` gives a pin's [{label, data, dash}] on its own x_mm (or
+   * its x with them). Without pins the current data is drawn as it is;
+   * with them the tables are joined on one x axis (uPlot.join: null where
+   * a design has no sample, lines drawn across).
+   */
+  function withPins(series, data, pick) {
+    const tables = [];
+    const extra = [];
+    state.pins.forEach((p) => {
+      const picked = pick(p);
+      if (!picked || !picked.lines.length) return;
+      tables.push([picked.x, ...picked.lines.map((l) => l.data)]);
+      picked.lines.forEach((l) => extra.push({
+        label: `${p.name} ${l.label}`, stroke: p.color, width: 1.5, dash: l.dash ? [5, 3] : undefined,
+      }));
+    });
+    if (!tables.length) return { series, data };
+    return {
+      series: [...series, ...extra].map((s) => ({ ...s, spanGaps: true })),
+      data: data ? uPlot.join([data, ...tables]) : uPlot.join(tables),
+    };
+  }
+
   // --------------------------------------------------------------- plots
 
   function plotWidth(id) {
@@ -1094,24 +1237,32 @@
       plots.height.destroy();
       plots.height = null;
     }
-    plots.friction = replot(plots.friction, 'friction-plot', frictionSeries, frictionData);
-    // The ultrasonic display alone has no voltage.
-    const hasVoltage = Boolean(v.voltage_v);
+    const friction = withPins(frictionSeries, frictionData,
+      (p) => ({ x: p.x_mm, lines: [{ label: 'mu', data: p.mu }] }));
+    plots.friction = replot(plots.friction, 'friction-plot', friction.series, friction.data);
+    // The ultrasonic display alone has no voltage (a pinned design may have).
+    const voltage = v.voltage_v
+      ? withPins(voltageSeries, voltageData, (p) => ({ x: p.x_mm, lines: p.voltages }))
+      : withPins([], null, (p) => ({ x: p.x_mm, lines: p.voltages }));
+    const hasVoltage = Boolean(voltage.data);
     $('voltage-figure').hidden = !hasVoltage;
     if (hasVoltage) {
-      plots.voltage = replot(plots.voltage, 'voltage-plot', voltageSeries, voltageData);
+      plots.voltage = replot(plots.voltage, 'voltage-plot', voltage.series, voltage.data);
     } else if (plots.voltage) {
       plots.voltage.destroy();
       plots.voltage = null;
     }
     const a = v.amplitude_um;
-    $('amplitude-figure').hidden = !a;
-    if (a) {
-      const aMax = s.ultrasonic.a_max_um;
-      plots.amplitude = replot(plots.amplitude, 'amplitude-plot', [
+    const pinnedAmplitude = (p) => ({ x: p.x_mm, lines: p.amplitude ? [{ label: 'a(x)', data: p.amplitude }] : [] });
+    const amplitude = a
+      ? withPins([
         { label: 'a(x) (µm)', stroke: '#00838f', width: 1.5 },
         { label: 'a_max', stroke: '#888', dash: [6, 4], width: 1 },
-      ], [x, a, constant(x, aMax)]);
+      ], [x, a, constant(x, s.ultrasonic.a_max_um)], pinnedAmplitude)
+      : withPins([], null, pinnedAmplitude);
+    $('amplitude-figure').hidden = !amplitude.data;
+    if (amplitude.data) {
+      plots.amplitude = replot(plots.amplitude, 'amplitude-plot', amplitude.series, amplitude.data);
     } else if (plots.amplitude) {
       plots.amplitude.destroy();
       plots.amplitude = null;
@@ -1125,8 +1276,9 @@
     return s.electrovibration ? s.electrovibration.u_max_v : null;
   }
 
-  /** Updates a plot in place when its series are unchanged, else rebuilds it. */
+  /** Updates a plot in place when its series are unchanged, else rebuilds it; then its text summary. */
   function replot(plot, id, series, data) {
+    describePlot(id, series, data);
     if (plot && plot.series.length === series.length + 1 &&
         plot.series.every((s, i) => i === 0 || s.label === series[i - 1].label)) {
       plot.setData(data, true);
@@ -1134,6 +1286,43 @@
     }
     if (plot) plot.destroy();
     return makePlot(id, series, data);
+  }
+
+  /**
+   * The text a screen reader gives for a plot (the plot is an image named
+   * by its caption, described by this text): the x range and each series'
+   * extrema with where they are.
+   */
+  function describePlot(id, series, data) {
+    const box = $(id);
+    let note = $(`${id}-summary`);
+    if (!note) {
+      note = document.createElement('p');
+      note.id = `${id}-summary`;
+      note.className = 'sr-only plot-summary';
+      box.insertAdjacentElement('afterend', note);
+      box.setAttribute('role', 'img');
+      box.setAttribute('aria-describedby', note.id);
+    }
+    const caption = box.parentElement.querySelector('figcaption');
+    if (caption) box.setAttribute('aria-label', caption.textContent.trim());
+    const x = data[0];
+    const parts = [`x from ${fmt(x[0])} to ${fmt(x[x.length - 1])} mm`];
+    series.forEach((s, i) => {
+      const ys = data[i + 1];
+      let lo = -1;
+      let hi = -1;
+      ys.forEach((y, j) => {
+        if (y === null || y === undefined) return;
+        if (lo < 0 || y < ys[lo]) lo = j;
+        if (hi < 0 || y > ys[hi]) hi = j;
+      });
+      if (lo < 0) return;
+      parts.push(ys[lo] === ys[hi]
+        ? `${s.label}: ${fmt(ys[lo])} throughout`
+        : `${s.label}: min ${fmt(ys[lo])} at x = ${fmt(x[lo])} mm, max ${fmt(ys[hi])} at x = ${fmt(x[hi])} mm`);
+    });
+    note.textContent = `${parts.join('; ')}.`;
   }
 
   function clearPlots() {
@@ -1196,7 +1385,7 @@
     return us[lo] + t * (us[hi] - us[lo]);
   }
 
-  let strip = { marker: null };
+  let strip = { marker: null, fraction: null };
 
   function drawStrip() {
     const canvas = $('feel-strip');
@@ -1236,11 +1425,18 @@
     }
   }
 
-  function feelAt(event) {
+  /** Feels the strip at the viewport x `clientX` (a mouse, pen or finger); `input` says which. */
+  function feelAt(clientX, input) {
+    const rect = $('feel-strip').getBoundingClientRect();
+    feelAtFraction(Math.min(Math.max((clientX - rect.left) / rect.width, 0), 1), input);
+  }
+
+  /** Feels the strip at `fraction` of its length (0 = the profile's first x, 1 = its last). */
+  function feelAtFraction(fraction, input) {
     if (!state.voltage) return;
     const canvas = $('feel-strip');
     const rect = canvas.getBoundingClientRect();
-    const px = Math.min(Math.max(event.clientX - rect.left, 0), rect.width);
+    const px = fraction * rect.width;
     const v = played();
     const xs = v.x_mm;
     const x = xs[0] + px / rect.width * (xs[xs.length - 1] - xs[0]);
@@ -1250,6 +1446,10 @@
     readout.textContent = `x = ${x.toFixed(3)} mm, U = ${u.toFixed(1)} V RMS` +
       (a === null ? '' : `, a = ${a.toFixed(3)} µm`);
     readout.dataset.xMm = String(x);
+    readout.dataset.input = input;
+    strip.fraction = fraction;
+    canvas.setAttribute('aria-valuenow', String(Math.round(100 * fraction)));
+    canvas.setAttribute('aria-valuetext', readout.textContent);
     readout.dataset.voltageV = String(u);
     if (a === null) delete readout.dataset.amplitudeUm; else readout.dataset.amplitudeUm = String(a);
     strip.marker = px;
@@ -1259,17 +1459,45 @@
     audio.set(uMax ? u / uMax : 0);
   }
 
+  /**
+   * The strip follows a mouse or pen (pointer events), a finger (touch
+   * events: the drag feels the strip instead of scrolling the page) and
+   * the keyboard (arrow keys: 1% of the length, with Shift 10%; Home, End).
+   */
   function setupStrip() {
     const canvas = $('feel-strip');
+    const stop = () => audio.set(0);
+    const byPointer = (e) => {
+      // A finger is followed by the touch events below where the browser has them.
+      if (e.pointerType === 'touch' && 'ontouchstart' in window) return;
+      feelAt(e.clientX, e.pointerType || 'mouse');
+    };
     canvas.addEventListener('pointerdown', (e) => {
       if (canvas.setPointerCapture) canvas.setPointerCapture(e.pointerId);
-      feelAt(e);
+      byPointer(e);
     });
-    canvas.addEventListener('pointermove', feelAt);
-    const stop = () => audio.set(0);
+    canvas.addEventListener('pointermove', byPointer);
     canvas.addEventListener('pointerup', stop);
-    canvas.addEventListener('pointerleave', stop);
-    canvas.addEventListener('pointercancel', stop);
+    canvas.addEventListener('pointerleave', (e) => { if (e.pointerType !== 'touch') stop(); });
+    const byTouch = (e) => {
+      if (!e.touches.length) return;
+      e.preventDefault(); // no scrolling, no emulated mouse events
+      feelAt(e.touches[0].clientX, 'touch');
+    };
+    canvas.addEventListener('touchstart', byTouch, { passive: false });
+    canvas.addEventListener('touchmove', byTouch, { passive: false });
+    canvas.addEventListener('touchend', stop);
+    canvas.addEventListener('touchcancel', stop);
+    canvas.addEventListener('keydown', (e) => {
+      const step = e.shiftKey ? 0.1 : 0.01;
+      const at = strip.fraction ?? 0;
+      const to = { ArrowRight: at + step, ArrowUp: at + step, ArrowLeft: at - step, ArrowDown: at - step,
+        Home: 0, End: 1 }[e.key];
+      if (to === undefined) return;
+      e.preventDefault();
+      feelAtFraction(Math.min(Math.max(to, 0), 1), 'keyboard');
+    });
+    canvas.addEventListener('blur', stop);
     $('audio').addEventListener('change', () => ($('audio').checked ? audio.start() : audio.stop()));
   }
 

@@ -49,6 +49,23 @@
 //!     scale); *ultrasonic* alone has no voltage plot; *electrovibration*
 //!     restores the one-channel page.
 //!
+//! 11. compare (issue 17): designs pinned (at least four) are drawn on the
+//!     same axes as the current one, each series the core's numbers for
+//!     its design, named in the plot legends (P1, P2, ...) and listed with
+//!     a remove button that removes exactly its series; eq. (8) and eq. (9)
+//!     together (Fig. 2b) can be switched off and on; a pinned upload on
+//!     another x grid keeps its own points; a pin keeps the felt friction
+//!     of a current check and the amplitude a(x) of a combined design;
+//! 12. accessibility: every input, select, button and focusable element
+//!     shown has an accessible name (Chromium's computed label, with the
+//!     template, library and upload sources and the combined display);
+//!     each plot is an image described by a text summary (x range, each
+//!     series' extrema); the feel strip moves with the keyboard;
+//! 13. phone viewports 360 and 430 px wide: no horizontal overflow, every
+//!     plot inside the viewport at the column's width, controls at least
+//!     44 px tall, the feel strip follows a finger (WebDriver touch
+//!     actions, Chromium with the touch events API).
+//!
 //! It saves screenshots (desktop and phone) in the target directory;
 //! with HAPTEX_UPDATE_SCREENSHOTS=1 also to docs/img/ (what docs/web.md
 //! and the README show).
@@ -174,6 +191,8 @@ async fn connect(driver: &Driver, chromium: &Path, scratch: &Path) -> Client {
             "args": [
                 "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
                 "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-dev-shm-usage",
+                // The touch events API, as on a phone: the feel strip's touch handlers are tested.
+                "--touch-events=enabled",
                 format!("--user-data-dir={}", profile.display()), "--window-size=1280,1000",
             ],
             "prefs": { "download.default_directory": downloads, "download.prompt_for_download": false },
@@ -479,6 +498,11 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     }
     relative_fig2(client, &friction[0], &predicted).await?;
     model_section(client).await?;
+    let named = accessible_names(client, "the template source").await?;
+    if named < 30 {
+        return fail(format!("only {named} controls shown with the template source"));
+    }
+    compare_designs(client, &friction[0]).await?;
 
     // 2. The width slider, moved with the mouse, changes the plotted voltage.
     let before = plotted(client, "voltage").await?;
@@ -547,6 +571,7 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     if !material_info.contains("SYNTHETIC") {
         return fail(format!("a synthetic material is not labelled as such: {material_info:?}"));
     }
+    accessible_names(client, "the library source").await?;
 
     // 4. Controls change the plotted voltage.
     let before = plotted(client, "voltage").await?;
@@ -664,6 +689,7 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     if !info.contains("my-profile.csv") || !info.contains("9 points") {
         return fail(format!("upload info: {info:?}"));
     }
+    accessible_names(client, "the upload source").await?;
 
     // 6. Downloads: the blobs behind the download link.
     let bytes = download(client, "voltage-csv").await?;
@@ -721,7 +747,24 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
         return fail(format!("feel strip at x = {x_read} mm shows U = {u_read} V, the profile has {expected} V"));
     }
 
-    // 8. Phone-sized window: no horizontal scrolling, plots fit.
+    // 7b. ... and from the keyboard.
+    strip_keyboard(client).await?;
+
+    // 8. The uploaded profile pinned, compared with the template on other
+    // x samples: one x axis, each design's own points.
+    let upload_pin = pin(client).await?;
+    show_template(client).await?;
+    let pinned = series_of(client, "friction", &format!("{upload_pin} mu")).await?;
+    let template_x = numbers(&script(client, "return window.haptex.state.voltage.x_mm;").await?)?;
+    let current = series_of(client, "friction", "mu_RS / mu_flat · mu_HD").await?;
+    if pinned.0 != x || pinned.1 != mu || current.0 != template_x {
+        return fail(format!("the pinned upload over the template: {pinned:?} on the template's x"));
+    }
+    // Phone viewports, 360 and 430 px wide (with the pin's legends):
+    // no horizontal scrolling, plots fit, thumb-sized controls, touch.
+    phone_viewport(client, 360).await?;
+    phone_viewport(client, 430).await?;
+    unpin(client, &upload_pin).await?;
     wd!(client.set_window_size(390, 844));
     tokio::time::sleep(Duration::from_millis(400)).await;
     let overflow = script(client, "return document.documentElement.scrollWidth - window.innerWidth;").await?;
@@ -730,7 +773,6 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     }
     // Screenshots for the docs: the default bump template (phone and
     // desktop), and a library material with mu_RS above mu_HD, eq. 8.
-    show_template(client).await?;
     let phone = screenshot(client).await?;
     wd!(client.set_window_size(1280, 1280));
     tokio::time::sleep(Duration::from_millis(400)).await;
@@ -877,6 +919,15 @@ async fn finger_on_the_display(client: &Client) -> Check<()> {
             read[0], read[1]
         ));
     }
+    // Pinned with the check current: what the finger felt under the
+    // compensated voltage is drawn in the felt-friction plot of the next
+    // design (here the same one) and removed with its pin.
+    let felt_pin = pin(client).await?;
+    let felt = series_of(client, "check", &format!("{felt_pin} felt, compensated")).await?;
+    if felt.1 != numbers(&result["compensated"]["felt_mu"])? {
+        return fail("the pinned felt friction is not the compensated run's");
+    }
+    unpin(client, &felt_pin).await?;
     // The results fit a phone's width too.
     wd!(client.set_window_size(390, 844));
     tokio::time::sleep(Duration::from_millis(400)).await;
@@ -1001,6 +1052,7 @@ async fn display_selector(client: &Client, scratch: &Path) -> Check<()> {
     wd!(wd!(client.find(Locator::Css("#strategy option[value='weighted']"))).click());
     wait_update(client, n, "the weighted strategy").await?;
     wait_for(client, "!document.getElementById('weight-row').hidden", "the weight shown").await?;
+    accessible_names(client, "the combined display, weighted").await?;
     let n = updates(client).await?;
     type_into(client, "weight", "5").await?;
     wait_update(client, n, "the voltage with weight 5").await?;
@@ -1088,8 +1140,18 @@ async fn display_selector(client: &Client, scratch: &Path) -> Check<()> {
     }
 
     // The ultrasonic display alone: no voltage, the band's top at mu_HD.
+    let combined = (plotted(client, "amplitude").await?, plotted(client, "voltage").await?);
+    let combined_pin = pin(client).await?;
     choose(client, "display", "ultrasonic").await?;
     wait_for(client, "window.haptex.state.voltage.summary.display === 'ultrasonic'", "the ultrasonic display").await?;
+    // The pinned combined design beside the ultrasonic one: its a(x) on
+    // the amplitude plot, its U(x) alone on the voltage plot.
+    let pinned_a = series_of(client, "amplitude", &format!("{combined_pin} a(x)")).await?;
+    let pinned_u = series_of(client, "voltage", &format!("{combined_pin} U(x)")).await?;
+    if pinned_a.1 != combined.0[1] || pinned_u.1 != combined.1[1] || labels(client, "voltage").await?.len() != 1 {
+        return fail("the pinned combined design is not drawn beside the ultrasonic one");
+    }
+    unpin(client, &combined_pin).await?;
     let hidden = script(
         client,
         "return document.getElementById('voltage-figure').hidden && window.haptex.plots.voltage === null \
@@ -1175,4 +1237,319 @@ fn save_screenshot(name: &str, png: &[u8]) {
         std::fs::write(&docs, png).unwrap();
         eprintln!("screenshot: {}", docs.display());
     }
+}
+
+/// chromedriver's computed accessible name of an element (WebDriver "Get
+/// Computed Label": what a screen reader announces).
+#[derive(Debug)]
+struct ComputedLabel(String);
+
+impl WebDriverCompatibleCommand for ComputedLabel {
+    fn endpoint(&self, base_url: &url::Url, session_id: Option<&str>) -> Result<url::Url, url::ParseError> {
+        base_url.join(&format!("session/{}/element/{}/computedlabel", session_id.unwrap_or_default(), self.0))
+    }
+
+    fn method_and_body(&self, _: &url::Url) -> (Method, Option<String>) {
+        (Method::GET, None)
+    }
+}
+
+/// Every input, select, button and focusable element shown has an
+/// accessible name (Chromium's own computation, through chromedriver);
+/// returns how many were checked.
+async fn accessible_names(client: &Client, when: &str) -> Check<usize> {
+    let mut checked = 0;
+    for element in wd!(client.find_all(Locator::Css("input, select, button, textarea, [tabindex]"))) {
+        if !wd!(element.is_displayed()) {
+            continue;
+        }
+        let name = wd!(client.issue_cmd(ComputedLabel(element.element_id().to_string())));
+        if name.as_str().unwrap_or_default().trim().is_empty() {
+            let html = wd!(element.html(false));
+            return fail(format!("{when}: a control without an accessible name: {html}"));
+        }
+        checked += 1;
+    }
+    Ok(checked)
+}
+
+/// The data of the uPlot chart `name` with its gaps (null: a design with
+/// no sample at that x, when pinned designs are drawn).
+async fn plotted_with_gaps(client: &Client, name: &str) -> Check<Vec<Vec<Option<f64>>>> {
+    let data = script(client, &format!("return window.haptex.plots.{name}.data;")).await?;
+    data.as_array()
+        .ok_or("no plot data")?
+        .iter()
+        .map(|column| {
+            column
+                .as_array()
+                .ok_or_else(|| format!("not an array: {column}"))
+                .map(|c| c.iter().map(Value::as_f64).collect())
+        })
+        .collect()
+}
+
+/// The samples of the series `label` of plot `name`, at the x where it
+/// has one: (x, y) pairs.
+async fn series_of(client: &Client, name: &str, label: &str) -> Check<(Vec<f64>, Vec<f64>)> {
+    let shown = labels(client, name).await?;
+    let i = shown.iter().position(|l| l == label).ok_or_else(|| format!("plot {name} has no {label:?}: {shown:?}"))?;
+    let data = plotted_with_gaps(client, name).await?;
+    let (mut x, mut y) = (Vec::new(), Vec::new());
+    for (xi, yi) in data[0].iter().zip(&data[i + 1]) {
+        if let (Some(xi), Some(yi)) = (xi, yi) {
+            x.push(*xi);
+            y.push(*yi);
+        }
+    }
+    Ok((x, y))
+}
+
+async fn pin_count(client: &Client) -> Check<u64> {
+    let n = script(client, "return document.querySelectorAll('#pins li').length;").await?;
+    n.as_u64().ok_or_else(|| format!("pins: {n}"))
+}
+
+/// Clicks *pin this design* and returns the new pin's name (P1, P2, ...).
+async fn pin(client: &Client) -> Check<String> {
+    let before = pin_count(client).await?;
+    wd!(wd!(client.find(Locator::Id("pin-design"))).click());
+    wait_for(client, &format!("document.querySelectorAll('#pins li').length === {}", before + 1), "the new pin")
+        .await?;
+    let name =
+        script(client, "const l = document.querySelectorAll('#pins li'); return l[l.length - 1].dataset.pin;").await?;
+    name.as_str().map(str::to_string).ok_or_else(|| format!("pin name {name}"))
+}
+
+/// Clicks the remove button of pin `name`.
+async fn unpin(client: &Client, name: &str) -> Check<()> {
+    let before = pin_count(client).await?;
+    wd!(wd!(client.find(Locator::Css(&format!("#pins li[data-pin='{name}'] .remove-pin")))).click());
+    wait_for(client, &format!("document.querySelectorAll('#pins li').length === {}", before - 1), "a pin removed").await
+}
+
+/// Sets the template's width slider (set-up, by script) and waits for it drawn.
+async fn template_width(client: &Client, width_mm: f64) -> Check<()> {
+    let n = updates(client).await?;
+    script(
+        client,
+        &format!(
+            "const s = document.getElementById('template-width_mm'); s.value = '{width_mm}'; \
+             s.dispatchEvent(new Event('input')); return true;"
+        ),
+    )
+    .await?;
+    wait_update(client, n, "the new width").await?;
+    wait_for(
+        client,
+        &format!("window.haptex.state.drawn.label.startsWith('bump r_w {width_mm} mm')"),
+        "the width drawn",
+    )
+    .await
+}
+
+/// Compare (issue 17): the default bump pinned (P1, relative, eq. 8 and
+/// eq. 9 together as in Fig. 2b), a wider bump pinned (P2), a narrower one
+/// shown: each plot draws the current design and both pins on the same
+/// axes, each pin's series the core's numbers for its design, named in
+/// the plot's legend and in the list with a remove button; four pins at
+/// once; removing one takes exactly its series away; the plots' text
+/// summaries (for screen readers) name the pins; eq. (8) and eq. (9)
+/// together can be switched off and on.
+async fn compare_designs(client: &Client, x: &[f64]) -> Check<()> {
+    let default = predicted_bump(client, 1.3).await?;
+    let p1 = pin(client).await?;
+    template_width(client, 2.0).await?;
+    let p2 = pin(client).await?;
+    template_width(client, 1.0).await?;
+    let shown = labels(client, "voltage").await?;
+    let expected: Vec<String> = ["U eq. (8)", "U eq. (9)", "U_max"]
+        .iter()
+        .map(|s| s.to_string())
+        .chain([&p1, &p2].iter().flat_map(|p| [format!("{p} U eq. (8)"), format!("{p} U eq. (9)")]))
+        .collect();
+    if shown != expected {
+        return fail(format!("with two pins the voltage plot shows {shown:?}, expected {expected:?}"));
+    }
+    // Each design's numbers: the core's relative mapping of its prediction.
+    for (name, width) in [(None, 1.0), (Some(&p1), 1.3), (Some(&p2), 2.0)] {
+        let predicted = if width == 1.3 { default.clone() } else { predicted_bump(client, width).await? };
+        let (eq8, eq9) = core_relative_voltages(x, &predicted, 0.5);
+        let prefix = name.map(|p| format!("{p} ")).unwrap_or_default();
+        let mu_label = name.map(|p| format!("{p} mu")).unwrap_or_else(|| "mu_RS / mu_flat · mu_HD".into());
+        let friction = series_of(client, "friction", &mu_label).await?;
+        let v8 = series_of(client, "voltage", &format!("{prefix}U eq. (8)")).await?;
+        let v9 = series_of(client, "voltage", &format!("{prefix}U eq. (9)")).await?;
+        if friction.0 != x || friction.1 != relative(&predicted, 0.5, 1.0) || v8.1 != eq8 || v9.1 != eq9 {
+            return fail(format!("the plotted design {mu_label:?} (r_w = {width} mm) is not the core's"));
+        }
+    }
+    // The legends and the list of pins.
+    let legend = wd!(wd!(client.find(Locator::Css("#friction-plot .u-legend"))).text());
+    let list = wd!(wd!(client.find(Locator::Id("pins"))).text());
+    for p in [&p1, &p2] {
+        if !legend.contains(&format!("{p} mu")) {
+            return fail(format!("the friction plot's legend does not name {p}: {legend:?}"));
+        }
+    }
+    if !list.contains(&format!("{p1}: bump r_w 1.3 mm")) || !list.contains(&format!("{p2}: bump r_w 2 mm")) {
+        return fail(format!("the list of pinned designs: {list:?}"));
+    }
+    // The plots' text summaries name the current design and the pins.
+    let summary = script(
+        client,
+        "const p = document.getElementById('voltage-plot'); \
+         return [p.getAttribute('role'), p.getAttribute('aria-describedby'), \
+                 document.getElementById(p.getAttribute('aria-describedby')).textContent];",
+    )
+    .await?;
+    let text = summary[2].as_str().unwrap_or_default();
+    if summary[0] != "img"
+        || !text.starts_with("x from ")
+        || !text.contains("U_max: 100 throughout")
+        || !text.contains(&format!("{p2} U eq. (9): min 0 at x = "))
+    {
+        return fail(format!("the voltage plot's text summary: {summary}"));
+    }
+    // Four at once.
+    let p3 = pin(client).await?;
+    template_width(client, 1.6).await?;
+    let p4 = pin(client).await?;
+    let shown = labels(client, "friction").await?;
+    for p in [&p1, &p2, &p3, &p4] {
+        if !shown.contains(&format!("{p} mu")) {
+            return fail(format!("with four pins the friction plot shows {shown:?}"));
+        }
+    }
+    wd!(client.set_window_size(1280, 1700));
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    save_screenshot("web-compare.png", &screenshot_of(client, "compare-box").await?);
+    wd!(client.set_window_size(1280, 1000));
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    // Removing P2 takes its series, and only those, away.
+    unpin(client, &p2).await?;
+    let shown = labels(client, "voltage").await?;
+    if shown.iter().any(|l| l.starts_with(&format!("{p2} "))) || !shown.contains(&format!("{p3} U eq. (8)")) {
+        return fail(format!("after removing {p2} the voltage plot shows {shown:?}"));
+    }
+    if series_of(client, "voltage", &format!("{p1} U eq. (8)")).await?.1 != core_relative_voltages(x, &default, 0.5).0 {
+        return fail(format!("after removing {p2}, {p1}'s eq. (8) changed"));
+    }
+    // eq. (8) and eq. (9) together: off, then on again.
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Id("both-methods"))).click());
+    wait_update(client, n, "the voltage without eq. (9)").await?;
+    let shown = labels(client, "voltage").await?;
+    if shown.iter().take(2).cloned().collect::<Vec<_>>() != ["U eq. (8)", "U_max"] {
+        return fail(format!("eq. (9) unticked: the voltage plot shows {shown:?}"));
+    }
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Id("both-methods"))).click());
+    wait_update(client, n, "the voltage with eq. (9) again").await?;
+    // Remove all: the plots are the current design alone, as before.
+    wd!(wd!(client.find(Locator::Id("unpin-all"))).click());
+    wait_for(client, "document.querySelectorAll('#pins li').length === 0", "no pins").await?;
+    if labels(client, "voltage").await? != ["U eq. (8)", "U eq. (9)", "U_max"] {
+        return fail("after removing every pin the voltage plot still shows pinned series");
+    }
+    template_width(client, 1.3).await
+}
+
+/// The phone viewport at `width` px: no sideways scrolling, every plot
+/// inside the viewport and as wide as the column (resized to it), the
+/// controls tall enough for a thumb (44 px), and the feel strip follows a
+/// finger (WebDriver touch actions).
+async fn phone_viewport(client: &Client, width: u32) -> Check<()> {
+    wd!(client.set_window_size(width, 844));
+    wait_for(client, &format!("window.innerWidth === {width}"), &format!("a {width} px wide viewport")).await?;
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    let overflow = script(client, "return document.documentElement.scrollWidth - window.innerWidth;").await?;
+    if overflow.as_f64().unwrap_or(1.0) > 0.0 {
+        return fail(format!("{width} px: the page scrolls sideways by {overflow} px"));
+    }
+    let plots = script(
+        client,
+        "return Array.from(document.querySelectorAll('.plot .uplot')).filter(p => p.getClientRects().length) \
+           .map(p => { const r = p.getBoundingClientRect(); \
+             return [p.parentElement.id, r.left, r.right, p.querySelector('canvas').getBoundingClientRect().width]; });",
+    )
+    .await?;
+    let plots = plots.as_array().ok_or("plots")?;
+    if plots.len() < 3 {
+        return fail(format!(
+            "{width} px: {} plots shown, expected the height, friction and voltage plots",
+            plots.len()
+        ));
+    }
+    for p in plots {
+        let (left, right, canvas) = (p[1].as_f64().unwrap_or(-1.0), p[2].as_f64().unwrap_or(1e9), p[3].as_f64());
+        if left < 0.0 || right > width as f64 || canvas.unwrap_or(0.0) < 0.85 * width as f64 {
+            return fail(format!("{width} px: plot {p} is not inside the viewport at the column's width"));
+        }
+    }
+    let small = script(
+        client,
+        "const shown = e => e.getClientRects().length > 0; \
+         const target = e => (e.type === 'checkbox' || e.type === 'radio') ? e.closest('label') || e : e; \
+         return Array.from(document.querySelectorAll('#controls button, #controls select, #controls input, \
+             #compare-box button, #feel-strip, .feel input')) \
+           .filter(shown).map(target).filter(e => e.getBoundingClientRect().height < 44) \
+           .map(e => e.id || e.outerHTML.slice(0, 80));",
+    )
+    .await?;
+    if small.as_array().is_none_or(|s| !s.is_empty()) {
+        return fail(format!("{width} px: controls less than 44 px tall (too small for a thumb): {small}"));
+    }
+    // A finger on the feel strip: down at 20% of its length, dragged to 70%.
+    let strip = wd!(client.find(Locator::Id("feel-strip")));
+    script(client, "document.getElementById('feel-strip').scrollIntoView({block: 'center'}); return true;").await?;
+    let strip_width =
+        script(client, "return document.getElementById('feel-strip').getBoundingClientRect().width;").await?;
+    let strip_width = strip_width.as_f64().ok_or("strip width")?;
+    let at = |fraction: f64| PointerAction::MoveToElement {
+        element: strip.clone(),
+        duration: Some(Duration::from_millis(30)),
+        x: (fraction - 0.5) * strip_width,
+        y: 0.0,
+    };
+    let finger = fantoccini::actions::TouchActions::new("finger".into())
+        .then(at(0.2))
+        .then(PointerAction::Down { button: fantoccini::actions::MOUSE_BUTTON_LEFT })
+        .then(at(0.7))
+        .then(PointerAction::Up { button: fantoccini::actions::MOUSE_BUTTON_LEFT });
+    wd!(client.perform_actions(finger));
+    wd!(client.release_actions());
+    let read = script(
+        client,
+        "const d = document.getElementById('feel-readout').dataset; const v = window.haptex.state.voltage; \
+         return [d.input, Number(d.xMm), v.x_mm[0], v.x_mm[v.x_mm.length - 1], 'ontouchstart' in window];",
+    )
+    .await?;
+    let (x, x0, x1) =
+        (read[1].as_f64().unwrap_or(f64::NAN), read[2].as_f64().unwrap_or(0.0), read[3].as_f64().unwrap_or(0.0));
+    let fraction = (x - x0) / (x1 - x0);
+    // With the touch events API (as on a phone, and here with
+    // --touch-events=enabled) the page follows the finger by touch events.
+    if read[0] != "touch" || (fraction - 0.7).abs() > 0.02 || read[4] != Value::Bool(true) {
+        return fail(format!("{width} px: a finger dragged to 70% of the feel strip reads {read}"));
+    }
+    Ok(())
+}
+
+/// The feel strip from the keyboard: Home, End and the arrow keys move
+/// the position read out (and its aria-valuenow).
+async fn strip_keyboard(client: &Client) -> Check<()> {
+    let strip = wd!(client.find(Locator::Id("feel-strip")));
+    let read = "const d = document.getElementById('feel-readout').dataset; const v = window.haptex.state.voltage; \
+                return [d.input, (Number(d.xMm) - v.x_mm[0]) / (v.x_mm[v.x_mm.length - 1] - v.x_mm[0]), \
+                Number(document.getElementById('feel-strip').getAttribute('aria-valuenow'))];";
+    for (keys, fraction) in [("\u{E011}", 0.0), ("\u{E010}", 1.0), ("\u{E012}\u{E012}", 0.98)] {
+        wd!(strip.send_keys(keys));
+        let r = script(client, read).await?;
+        let got = r[1].as_f64().unwrap_or(f64::NAN);
+        if r[0] != "keyboard" || (got - fraction).abs() > 1e-9 || r[2].as_f64() != Some((100.0 * fraction).round()) {
+            return fail(format!("the feel strip from the keyboard: expected {fraction} of the length, read {r}"));
+        }
+    }
+    Ok(())
 }
