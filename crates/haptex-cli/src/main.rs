@@ -32,6 +32,7 @@ enum Command {
     Serve(commands::serve::ServeArgs),
     ForceCurve(commands::force_curve::ForceCurveArgs),
     Map(commands::map::MapArgs),
+    Recipe(commands::recipe::RecipeArgs),
 }
 
 fn main() -> ExitCode {
@@ -48,6 +49,7 @@ fn main() -> ExitCode {
         Command::Serve(args) => commands::serve::run(args),
         Command::ForceCurve(args) => commands::force_curve::run(args),
         Command::Map(args) => commands::map::run(args),
+        Command::Recipe(args) => commands::recipe::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

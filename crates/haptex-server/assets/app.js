@@ -182,10 +182,11 @@
             `${answer.extrapolation ? ', extrapolated' : ''})`,
           synthetic: false,
           extrapolation: answer.extrapolation,
-          download: async () => ({
-            blob: await (await postJson('/api/predict?format=csv', body)).blob(),
-            name: `${answer.surface}-w${p.width_mm}-h${p.height_mm}-v${p.velocity_mm_s}.csv`,
-          }),
+          spec: {
+            file: `${answer.surface}-w${p.width_mm}-h${p.height_mm}-v${p.velocity_mm_s}.csv`,
+            method: 'POST', path: '/api/predict?format=csv', body,
+          },
+          provenance: { kind: 'template', ...body, fe_exact: answer.fe_exact, extrapolation: answer.extrapolation },
         };
       },
     },
@@ -217,10 +218,12 @@
           synthetic: sample.synthetic,
           material: sample.material,
           seed: sample.seed,
-          download: async () => ({
-            blob: await (await api(`${base}?seed=${encodeURIComponent(sample.seed)}&format=csv`)).blob(),
-            name: `${sample.material}-stroke-${sample.stroke.id}.csv`,
-          }),
+          spec: {
+            file: safeName(`${sample.material}-stroke-${sample.stroke.id}.csv`),
+            method: 'GET', path: `${base}?seed=${encodeURIComponent(sample.seed)}&format=csv`,
+          },
+          provenance: { kind: 'library', material: sample.material, seed: sample.seed, stroke_id: sample.stroke.id,
+            synthetic: sample.synthetic },
         };
       },
     },
@@ -243,10 +246,11 @@
         return {
           x_mm: profile.x_mm, mu: profile.mu, fn_n: profile.fn_n,
           label: file.name, synthetic: false,
-          download: async () => ({
-            blob: await (await postJson('/api/profile?format=csv', body)).blob(),
-            name: file.name.replace(/\.[^.]*$/, '') + '-profile.csv',
-          }),
+          spec: {
+            file: safeName(file.name.replace(/\.[^.]*$/, '') + '-profile.csv'),
+            method: 'POST', path: '/api/profile?format=csv', body,
+          },
+          provenance: { kind: 'upload', file: file.name },
         };
       },
     },
@@ -270,10 +274,15 @@
     await updateVoltage();
   }
 
-  function selectSource(id) {
-    state.source = id;
+  /** Shows the panel of source `id` (and the height plot for templates). */
+  function showSourcePanel(id) {
     document.querySelectorAll('.source-panel').forEach((p) => { p.hidden = p.dataset.source !== SOURCES[id].panel; });
     $('height-figure').hidden = id !== 'template';
+  }
+
+  function selectSource(id) {
+    state.source = id;
+    showSourcePanel(id);
     loadRequest += 1; // a profile still loading for the previous source is dropped
     if (SOURCES[id].method) setMethod(SOURCES[id].method);
     setRelative(SOURCES[id].relative, SOURCES[id].flatMu());
@@ -691,6 +700,21 @@
     $('seed').addEventListener('change', () => loadSource().catch(showError));
     $('another-stroke').addEventListener('click', () => loadSource({ newSeed: true }).catch(showError));
     $('upload').addEventListener('change', () => loadSource().catch(showError));
+    $('recipe-file').addEventListener('change', async () => {
+      const file = $('recipe-file').files[0];
+      if (!file) return;
+      try {
+        let parsed;
+        try {
+          parsed = JSON.parse(await file.text());
+        } catch (error) {
+          throw new ApiError(`${file.name} is not JSON (${error.message})`, 'recipe', 0);
+        }
+        await openRecipe(parsed);
+      } catch (error) {
+        showError(error);
+      }
+    });
     $('controls').addEventListener('submit', (e) => e.preventDefault());
 
     $('check-load').value = String(config.check.load_n_per_mm);
@@ -1538,24 +1562,30 @@
 
   // ----------------------------------------------------------- downloads
 
-  async function download(kind) {
-    if (!state.profile || !state.voltage) throw new ApiError('nothing to download yet', null, 0);
-    let file;
-    if (kind === 'profile-csv') {
-      file = await state.profile.download();
-    } else if (kind === 'voltage-csv') {
-      const name = isElectrovibration() ? 'voltage.csv' : `display-${state.display}.csv`;
-      file = { blob: await (await postJson('/api/voltage?format=csv', voltageBody())).blob(), name };
-    } else if (kind === 'voltage-json') {
-      file = {
-        blob: new Blob([JSON.stringify(state.voltage, null, 1)], { type: 'application/json' }),
-        name: state.voltage.summary.display ? `display-${state.voltage.summary.display}.json` : 'voltage.json',
-      };
-    } else if (kind === 'compensated-csv') {
-      const c = currentCheck();
-      if (!c || c.mode !== 'compensate') throw new ApiError('compensate first', null, 0);
-      file = { blob: new Blob([c.result.voltage_csv], { type: 'text/csv' }), name: 'voltage-compensated.csv' };
-    } else if (kind === 'stroke-wav' || kind === 'stroke-sidecar') {
+  /** A file name of letters, digits, '.', '_' and '-' only (what a recipe accepts). */
+  function safeName(name) {
+    return name.replace(/[^A-Za-z0-9._-]/g, '_').replace(/^\.+/, '_').slice(0, 200) || 'profile.csv';
+  }
+
+  /** The downloads a recipe replays: each the API request that answers it. */
+  const RECIPE_KINDS = ['profile-csv', 'voltage-csv', 'voltage-json', 'stroke-wav', 'stroke-sidecar'];
+
+  /**
+   * The request behind a download: {file, method, path, body}. The page
+   * downloads exactly the server's answer to it, and a recipe lists these
+   * requests, so that `haptex recipe run` gives the same bytes.
+   */
+  function downloadSpec(kind) {
+    if (kind === 'profile-csv') return state.profile.spec;
+    if (kind === 'voltage-csv') {
+      const file = isElectrovibration() ? 'voltage.csv' : `display-${state.display}.csv`;
+      return { file, method: 'POST', path: '/api/voltage?format=csv', body: voltageBody() };
+    }
+    if (kind === 'voltage-json') {
+      const file = isElectrovibration() ? 'voltage.json' : `display-${state.display}.json`;
+      return { file, method: 'POST', path: '/api/voltage', body: voltageBody() };
+    }
+    if (kind === 'stroke-wav' || kind === 'stroke-sidecar') {
       const v = played();
       const body = {
         voltage: { x_mm: v.x_mm, voltage_v: v.voltage_v || v.x_mm.map(() => 0) },
@@ -1574,15 +1604,74 @@
       if (kind === 'stroke-sidecar') {
         // The WAV's sidecar (scales of both channels, sample hash), as haptex play writes it.
         body.format = 'sidecar';
-        file = {
-          blob: await (await postJson('/api/play', body)).blob(),
-          name: `stroke-${state.velocity}mm_s${which}.wav.json`,
-        };
-      } else {
-        file = { blob: await (await postJson('/api/play', body)).blob(), name: `stroke-${state.velocity}mm_s${which}.wav` };
+        return { file: `stroke-${state.velocity}mm_s${which}.wav.json`, method: 'POST', path: '/api/play', body };
       }
+      return { file: `stroke-${state.velocity}mm_s${which}.wav`, method: 'POST', path: '/api/play', body };
+    }
+    throw new Error(`unknown download ${kind}`);
+  }
+
+  /** The server's answer to a download's request, as a blob. */
+  async function fetchSpec(spec) {
+    const response = spec.method === 'GET' ? await api(spec.path) : await postJson(spec.path, spec.body);
+    return response.blob();
+  }
+
+  /**
+   * The recipe of the design shown (docs/web.md, "Recipes"): the requests
+   * of its downloads, the source's provenance, the haptex version and the
+   * SHA-256 of the data the source used. `kinds` chooses the downloads.
+   */
+  function recipe(kinds = RECIPE_KINDS) {
+    const data = state.config.data || {};
+    const source = state.profile.provenance || {};
+    const r = {
+      format: 'haptex-recipe/1',
+      haptex_version: state.config.version,
+      source,
+      downloads: kinds.map(downloadSpec),
+    };
+    if (source.kind === 'library' && data.library_sha256) r.library_sha256 = data.library_sha256;
+    if (source.kind === 'template' && data.database_sha256) r.database_sha256 = data.database_sha256;
+    return r;
+  }
+
+  /** base64url of a text's UTF-8 bytes, and back (the recipe in a link). */
+  function toBase64Url(text) {
+    let binary = '';
+    new TextEncoder().encode(text).forEach((b) => { binary += String.fromCharCode(b); });
+    return btoa(binary).replace(/\+/g, '-').replace(/\//g, '_').replace(/=+$/, '');
+  }
+
+  function fromBase64Url(text) {
+    const binary = atob(text.replace(/-/g, '+').replace(/_/g, '/'));
+    return new TextDecoder().decode(Uint8Array.from(binary, (c) => c.charCodeAt(0)));
+  }
+
+  /** A link that opens this design (its voltage request) in the page. */
+  function shareLink() {
+    const link = `${location.origin}${location.pathname}#recipe=${toBase64Url(JSON.stringify(recipe(['voltage-csv'])))}`;
+    const a = $('share-link');
+    a.href = link;
+    a.hidden = false;
+    a.textContent = 'link to this design';
+    return link;
+  }
+
+  async function download(kind) {
+    if (!state.profile || !state.voltage) throw new ApiError('nothing to download yet', null, 0);
+    let file;
+    if (kind === 'compensated-csv') {
+      const c = currentCheck();
+      if (!c || c.mode !== 'compensate') throw new ApiError('compensate first', null, 0);
+      file = { blob: new Blob([c.result.voltage_csv], { type: 'text/csv' }), name: 'voltage-compensated.csv' };
+    } else if (kind === 'recipe') {
+      const text = `${JSON.stringify(recipe(), null, 1)}\n`;
+      file = { blob: new Blob([text], { type: 'application/json' }), name: 'haptex-recipe.json' };
+      shareLink();
     } else {
-      throw new Error(`unknown download ${kind}`);
+      const spec = downloadSpec(kind);
+      file = { blob: await fetchSpec(spec), name: spec.file };
     }
     const link = $('download-link');
     if (link.href) URL.revokeObjectURL(link.href);
@@ -1593,6 +1682,72 @@
     link.dataset.count = String(Number(link.dataset.count || 0) + 1);
     link.click();
     say(`Downloaded ${file.name} (${file.blob.size} bytes).`);
+  }
+
+  /**
+   * Opens a recipe (an uploaded file or a link's #recipe=): its voltage
+   * request's profile becomes the page's profile (the *your profile*
+   * source, labelled with the recipe's provenance) and its method,
+   * mapping, device and display set the controls, so the page asks the
+   * server the recipe's own voltage request.
+   */
+  async function openRecipe(r) {
+    if (!r || r.format !== 'haptex-recipe/1' || !Array.isArray(r.downloads)) {
+      throw new ApiError('not a haptex recipe (format haptex-recipe/1)', 'recipe', 0);
+    }
+    const request = r.downloads.find((d) => d && d.body && typeof d.path === 'string' &&
+      d.path.startsWith('/api/voltage'));
+    if (!request || !request.body.profile) throw new ApiError('the recipe has no voltage request', 'recipe', 0);
+    const body = request.body;
+    const p = body.profile;
+    // The server checks the profile (points, ranges) as for an upload.
+    const checked = await (await postJson('/api/profile', p)).json();
+    const source = r.source || {};
+    const what = source.kind === 'template'
+      ? `${source.surface} r_w ${fmt(source.width_mm)} mm, r_h ${fmt(source.height_mm)} mm, ${fmt(source.velocity_mm_s)} mm/s`
+      : source.kind === 'library' ? `${source.material}, stroke seed ${source.seed}`
+        : source.kind === 'upload' ? source.file : 'a profile';
+    const profileBody = { x_mm: p.x_mm, mu: p.mu };
+    if (p.fn_n) profileBody.fn_n = p.fn_n;
+    const profile = {
+      x_mm: p.x_mm, mu: p.mu, fn_n: p.fn_n || null,
+      label: `recipe: ${what}`,
+      synthetic: Boolean(source.synthetic),
+      spec: { file: 'recipe-profile.csv', method: 'POST', path: '/api/profile?format=csv', body: profileBody },
+      provenance: { ...source, opened_from_recipe: true },
+    };
+    // The upload source, showing the recipe's profile (no file to read).
+    const input = document.querySelector("input[name='source'][value='upload']");
+    if (!input) throw new ApiError('this server offers no profile upload', 'recipe', 0);
+    input.checked = true;
+    state.source = 'upload';
+    showSourcePanel('upload');
+    loadRequest += 1; // a profile still loading is dropped
+    state.profiles.upload = profile;
+    state.profile = profile;
+    $('upload-info').textContent = `${profile.label}: ${checked.n_points} points, opened from a recipe ` +
+      `(haptex ${r.haptex_version}).`;
+    // The controls, from the request.
+    setMethod(body.method || 'physical');
+    setRelative(Boolean(body.relative), body.flat_mu === undefined ? '' : String(body.flat_mu));
+    setBoth(false);
+    document.querySelectorAll('[data-param]').forEach((el) => {
+      const v = (body.device || {})[el.dataset.param];
+      el.value = v === undefined ? '' : String(v);
+      el.dispatchEvent(new Event('explain'));
+    });
+    readDevice();
+    setDisplay(body.display || 'electrovibration');
+    if (body.strategy) { state.strategy = body.strategy; $('strategy').value = body.strategy; }
+    $('weight').value = body.weight === undefined ? '' : String(body.weight);
+    $('a-max').value = body.a_max_um === undefined ? '' : String(body.a_max_um);
+    state.calibration = body.ultrasonic_calibration
+      ? { name: 'the recipe\'s calibration', text: body.ultrasonic_calibration,
+        rows: body.ultrasonic_calibration.split(/\r?\n/).filter((l) => l.trim() && !l.trim().startsWith('#')).length - 1 }
+      : null;
+    showDisplayControls();
+    await updateVoltage();
+    say(`Opened the recipe: ${profile.label}.`);
   }
 
   // --------------------------------------------------------------- start
@@ -1722,6 +1877,15 @@
       loadModel().catch((error) => { $('model-body').textContent = `The model could not be loaded: ${error.message}`; });
       selectSource(sources[0].id);
       if (!state.profile && state.source === 'upload') document.body.dataset.state = 'ready';
+      if (location.hash.startsWith('#recipe=')) {
+        let opened;
+        try {
+          opened = JSON.parse(fromBase64Url(location.hash.slice('#recipe='.length)));
+        } catch (error) {
+          throw new ApiError(`the link's recipe cannot be read (${error.message})`, 'recipe', 0);
+        }
+        await openRecipe(opened);
+      }
     } catch (error) {
       document.body.dataset.state = 'error';
       showError(error);

@@ -46,6 +46,7 @@ pub mod guard;
 pub mod input;
 mod lines;
 pub mod params;
+pub mod recipe;
 pub mod routes;
 pub mod state;
 pub mod templates;

@@ -142,6 +142,8 @@ pub struct AppState(Arc<Inner>);
 struct Inner {
     library: Option<Arc<LibraryPool>>,
     templates: Option<Arc<TemplateSet>>,
+    /// SHA-256 of the FE database's files (see [`database_sha256`]).
+    database_sha256: Option<String>,
     limits: Limits,
     hosts: HostPolicy,
     access_log: bool,
@@ -165,29 +167,47 @@ impl AppState {
     /// now so that a bad path fails at start, not at the first request).
     pub fn new(library: Option<&Path>, limits: Limits) -> Result<Self, LibraryError> {
         let library = library.map(LibraryPool::open).transpose()?.map(Arc::new);
-        Ok(Self::build(library, None, limits, HostPolicy::default(), false))
+        Ok(Self::build(library, None, None, limits, HostPolicy::default(), false))
     }
 
     /// This state, also serving the surface templates of the FE database in
     /// `dir` (loaded now, so that a bad database fails at start).
     pub fn with_database(self, dir: &Path) -> Result<Self, DatabaseError> {
         let templates = Some(Arc::new(TemplateSet::load(dir)?));
+        let hash = database_sha256(dir).map_err(|e| DatabaseError::File {
+            path: dir.to_path_buf(),
+            message: format!("cannot hash its files: {e}"),
+        })?;
         let i = &self.0;
-        Ok(Self::build(i.library.clone(), templates, i.limits.clone(), i.hosts.clone(), i.access_log))
+        Ok(Self::build(i.library.clone(), templates, Some(hash), i.limits.clone(), i.hosts.clone(), i.access_log))
     }
 
     /// This state, answering requests for these host names too (besides
     /// `localhost` and IP addresses; see [`HostPolicy`]).
     pub fn with_hosts(self, hosts: HostPolicy) -> Self {
         let i = &self.0;
-        Self::build(i.library.clone(), i.templates.clone(), i.limits.clone(), hosts, i.access_log)
+        Self::build(
+            i.library.clone(),
+            i.templates.clone(),
+            i.database_sha256.clone(),
+            i.limits.clone(),
+            hosts,
+            i.access_log,
+        )
     }
 
     /// This state, logging every request (method, path, status, latency)
     /// at info level when `on`; errors are logged either way.
     pub fn with_access_log(self, on: bool) -> Self {
         let i = &self.0;
-        Self::build(i.library.clone(), i.templates.clone(), i.limits.clone(), i.hosts.clone(), on)
+        Self::build(
+            i.library.clone(),
+            i.templates.clone(),
+            i.database_sha256.clone(),
+            i.limits.clone(),
+            i.hosts.clone(),
+            on,
+        )
     }
 
     /// The state of these sources, with fresh slots and counters for
@@ -195,6 +215,7 @@ impl AppState {
     fn build(
         library: Option<Arc<LibraryPool>>,
         templates: Option<Arc<TemplateSet>>,
+        database_sha256: Option<String>,
         limits: Limits,
         hosts: HostPolicy,
         access_log: bool,
@@ -205,6 +226,7 @@ impl AppState {
         Self(Arc::new(Inner {
             library,
             templates,
+            database_sha256,
             limits,
             hosts,
             access_log,
@@ -213,6 +235,17 @@ impl AppState {
             simulations,
             unsent_answer_bytes: AtomicUsize::new(0),
         }))
+    }
+
+    /// SHA-256 of the texture library file served (None without a library).
+    pub fn library_sha256(&self) -> Option<&str> {
+        self.0.library.as_ref().map(|l| l.sha256.as_str())
+    }
+
+    /// SHA-256 of the FE database served (None without one): see
+    /// [`database_sha256`].
+    pub fn database_sha256(&self) -> Option<&str> {
+        self.0.database_sha256.as_deref()
     }
 
     /// The surface templates, or 404 if the server has no FE database.
@@ -326,6 +359,8 @@ impl AppState {
 #[derive(Debug)]
 pub struct LibraryPool {
     path: PathBuf,
+    /// SHA-256 of the file when it was opened (what a recipe records).
+    sha256: String,
     idle: Mutex<Vec<Library>>,
 }
 
@@ -334,7 +369,11 @@ impl LibraryPool {
 
     fn open(path: &Path) -> Result<Self, LibraryError> {
         let first = Library::open_read_only(path)?;
-        Ok(Self { path: path.to_path_buf(), idle: Mutex::new(vec![first]) })
+        let sha256 = haptex_core::io::sha256_file(path).map_err(|e| LibraryError::Open {
+            path: path.display().to_string(),
+            message: format!("cannot hash it: {e}"),
+        })?;
+        Ok(Self { path: path.to_path_buf(), sha256, idle: Mutex::new(vec![first]) })
     }
 
     /// The library file.
@@ -366,4 +405,23 @@ impl LibraryPool {
         .await
         .map_err(|e| ApiError::internal(format!("library task failed: {e}")))?
     }
+}
+
+/// SHA-256 of an FE database directory: of the lines `NAME SHA256\n` of its
+/// files (metadata.json and the template CSVs, every regular file at its
+/// top level), sorted by name. Two databases with the same files give the
+/// same hash wherever they are.
+pub fn database_sha256(dir: &Path) -> std::io::Result<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)?
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
+        .filter_map(|e| e.file_name().into_string().ok())
+        .collect();
+    names.sort();
+    let mut lines = String::new();
+    for name in names {
+        let hash = haptex_core::io::sha256_file(&dir.join(&name))?;
+        lines.push_str(&format!("{name} {hash}\n"));
+    }
+    Ok(haptex_core::io::sha256_hex(lines.as_bytes()))
 }

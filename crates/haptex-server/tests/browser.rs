@@ -64,7 +64,12 @@
 //! 13. phone viewports 360 and 430 px wide: no horizontal overflow, every
 //!     plot inside the viewport at the column's width, controls at least
 //!     44 px tall, the feel strip follows a finger (WebDriver touch
-//!     actions, Chromium with the touch events API).
+//!     actions, Chromium with the touch events API);
+//! 14. recipes: the *recipe* download of a library stroke, replayed by
+//!     `haptex_server::recipe::replay` (what `haptex recipe run` runs),
+//!     gives the page's voltage CSV byte for byte; its link (#recipe=)
+//!     opened in a fresh page and the file opened in the page plot the
+//!     replayed voltage and friction, value for value.
 //!
 //! It saves screenshots (desktop and phone) in the target directory;
 //! with HAPTEX_UPDATE_SCREENSHOTS=1 also to docs/img/ (what docs/web.md
@@ -131,11 +136,7 @@ fn tool(variable: &str, default: &str) -> PathBuf {
 }
 
 async fn start_server() -> (SocketAddr, tokio::sync::oneshot::Sender<()>) {
-    let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data");
-    let state = AppState::new(Some(&data.join("library/library.sqlite")), Limits::DEFAULT)
-        .unwrap()
-        .with_database(&data.join("db"))
-        .unwrap();
+    let (state, _) = app_state();
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let addr = listener.local_addr().unwrap();
     let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
@@ -787,6 +788,8 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     save_screenshot("web-library.png", &screenshot(client).await?);
     // 10. The display selector.
     display_selector(client, scratch).await?;
+    // 14. Recipes: download, replay, open as a link and as a file.
+    recipes(client, base, scratch).await?;
 
     let errors = console_errors(client).await?;
     if !errors.is_empty() {
@@ -1552,4 +1555,78 @@ async fn strip_keyboard(client: &Client) -> Check<()> {
         }
     }
     Ok(())
+}
+
+/// Recipes (issue 17): the *recipe* download of the design shown (a
+/// library stroke) lists the requests of its downloads with the library's
+/// SHA-256; replayed by `haptex_server::recipe::replay` (what `haptex
+/// recipe run` calls; crates/haptex-cli/tests/recipe_cli.rs runs the
+/// binary) its voltage CSV is the page's download byte for byte; the
+/// design's link (#recipe=...) opened in a fresh page plots the replayed
+/// voltage and friction, value for value, and so does the recipe file
+/// opened with *Open a recipe*.
+async fn recipes(client: &Client, base: &str, scratch: &Path) -> Check<()> {
+    // From the template source (show_library switches to the library).
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css("input[name='source'][value='template']"))).click());
+    wait_update(client, n, "the template source").await?;
+    show_library(client, "latex").await?;
+    let page_csv = download(client, "voltage-csv").await?;
+    let bytes = download(client, "recipe").await?;
+    let recipe_text = String::from_utf8(bytes).map_err(|e| e.to_string())?;
+    let recipe = haptex_server::recipe::Recipe::parse(&recipe_text).map_err(|e| e.to_string())?;
+    let kinds: Vec<&str> = recipe.downloads.iter().map(|d| d.path.split('?').next().unwrap_or_default()).collect();
+    if kinds != ["/api/materials/latex/sample", "/api/voltage", "/api/voltage", "/api/play", "/api/play"]
+        || recipe.source["material"] != "latex"
+        || recipe.library_sha256.as_deref().map(str::len) != Some(64)
+    {
+        return fail(format!("the recipe download: {recipe_text}"));
+    }
+    let (state, _) = app_state();
+    let files = haptex_server::recipe::replay(state, &recipe).await.map_err(|e| e.to_string())?;
+    let replayed = files.iter().find(|(name, _)| name == "voltage.csv").ok_or("no voltage.csv replayed")?;
+    if replayed.1 != page_csv {
+        return fail("the replayed voltage.csv differs from the page's download");
+    }
+    let table = Table::read(replayed.1.as_slice(), "replayed voltage.csv").map_err(|e| e.to_string())?;
+    let (mu, voltage) =
+        (table.column("mu").ok_or("mu")?.to_vec(), table.column("voltage_v").ok_or("voltage_v")?.to_vec());
+    let link = script(client, "return document.getElementById('share-link').href;").await?;
+    let link = link.as_str().ok_or("no share link")?.to_string();
+    if !link.starts_with(base) || !link.contains("#recipe=") {
+        return fail(format!("the design's link: {link}"));
+    }
+    // The link in a fresh page, then the recipe file opened in the page.
+    wd!(client.goto("about:blank"));
+    wd!(client.goto(&link));
+    let opened = "document.body.dataset.state === 'ready' && window.haptex.state.drawn \
+                  && window.haptex.state.drawn.label.startsWith('recipe: latex')";
+    wait_for(client, opened, "the recipe's design drawn").await?;
+    if plotted(client, "voltage").await?[1] != voltage || plotted(client, "friction").await?[1] != mu {
+        return fail("the link's design is not the replayed voltage and friction");
+    }
+    wd!(client.goto("about:blank"));
+    wd!(client.goto(base));
+    wait_for(client, "document.body.dataset.state === 'ready'", "the page again").await?;
+    let file = scratch.join("haptex-recipe.json");
+    std::fs::write(&file, &recipe_text).unwrap();
+    wd!(wd!(client.find(Locator::Id("recipe-file"))).send_keys(&file.display().to_string()));
+    wait_for(client, opened, "the recipe file's design drawn").await?;
+    if plotted(client, "voltage").await?[1] != voltage || plotted(client, "friction").await?[1] != mu {
+        return fail("the opened recipe file's design is not the replayed voltage and friction");
+    }
+    if download(client, "voltage-csv").await? != replayed.1 {
+        return fail("the opened recipe's voltage CSV differs from the replay");
+    }
+    Ok(())
+}
+
+/// The server's state on the shipped data (library and FE database).
+fn app_state() -> (AppState, PathBuf) {
+    let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data");
+    let state = AppState::new(Some(&data.join("library/library.sqlite")), Limits::DEFAULT)
+        .unwrap()
+        .with_database(&data.join("db"))
+        .unwrap();
+    (state, data)
 }

@@ -8,6 +8,7 @@ pub mod library;
 pub mod map;
 pub mod play;
 pub mod predict;
+pub mod recipe;
 pub mod serve;
 pub mod simulate;
 pub mod voltage;

@@ -19,6 +19,8 @@ pub async fn get(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -
     let play = RenderSettings::DEFAULT;
     Ok(Json(json!({
         "version": env!("CARGO_PKG_VERSION"),
+        // What a recipe records of the data it was made with (haptex recipe run checks them).
+        "data": { "library_sha256": state.library_sha256(), "database_sha256": state.database_sha256() },
         "sources": state.sources(),
         "device_params": DEVICE_PARAMS,
         "explanations": crate::explain::EXPLANATIONS,

@@ -1,0 +1,262 @@
+//! `haptex recipe run` replays a recipe of the web application to the
+//! files the server answers, byte for byte: the `haptex serve` binary is
+//! asked each download's request over HTTP (as the page asks it), the
+//! `haptex recipe run` binary writes the recipe's files, and the two are
+//! compared. One recipe per kind of source the GUI has (a surface
+//! template, a library stroke, an uploaded profile on the combined
+//! display), each with the downloads the GUI puts in it (profile CSV,
+//! voltage CSV and JSON, stroke WAV and its sidecar). A recipe made with
+//! other data (its database SHA-256) is refused naming that field.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+use serde_json::{Value, json};
+
+/// `haptex serve` on a free loopback port, stopped when dropped.
+struct Server {
+    child: Child,
+    port: u16,
+}
+
+impl Server {
+    fn start() -> Self {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_haptex"))
+            .args(["serve", "--addr", "127.0.0.1:0"])
+            .env_remove("HAPTEX_LIBRARY")
+            .env_remove("HAPTEX_DB")
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run haptex serve");
+        let mut stderr = BufReader::new(child.stderr.take().unwrap());
+        let mut seen = String::new();
+        let port = loop {
+            let mut line = String::new();
+            assert!(stderr.read_line(&mut line).unwrap() > 0, "haptex serve ended before listening: {seen}");
+            seen.push_str(&line);
+            if let Some(rest) = line.strip_prefix("open http://127.0.0.1:") {
+                break rest.split('/').next().unwrap().parse::<u16>().unwrap();
+            }
+        };
+        Self { child, port }
+    }
+
+    /// The body of the answer to `method path` (with a JSON `body`); panics
+    /// unless the status is 200.
+    fn ask(&self, method: &str, path: &str, body: Option<&Value>) -> Vec<u8> {
+        let mut socket = TcpStream::connect(("127.0.0.1", self.port)).unwrap();
+        socket.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
+        let payload = body.map(|b| serde_json::to_vec(b).unwrap()).unwrap_or_default();
+        let mut head = format!("{method} {path} HTTP/1.1\r\nHost: localhost\r\nConnection: close\r\n");
+        if body.is_some() {
+            head.push_str(&format!("Content-Type: application/json\r\nContent-Length: {}\r\n", payload.len()));
+        }
+        head.push_str("\r\n");
+        socket.write_all(head.as_bytes()).unwrap();
+        socket.write_all(&payload).unwrap();
+        let mut answer = Vec::new();
+        socket.read_to_end(&mut answer).unwrap();
+        let split = answer.windows(4).position(|w| w == b"\r\n\r\n").expect("an HTTP answer");
+        let head = String::from_utf8_lossy(&answer[..split]).to_lowercase();
+        let body = answer[split + 4..].to_vec();
+        assert!(head.starts_with("http/1.1 200"), "{method} {path}: {head}\n{}", String::from_utf8_lossy(&body));
+        if head.contains("transfer-encoding: chunked") { dechunk(&body) } else { body }
+    }
+
+    fn json(&self, method: &str, path: &str, body: Option<&Value>) -> Value {
+        serde_json::from_slice(&self.ask(method, path, body)).unwrap()
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The body of a chunked HTTP/1.1 answer.
+fn dechunk(mut body: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    loop {
+        let end = body.windows(2).position(|w| w == b"\r\n").expect("a chunk size");
+        let size = usize::from_str_radix(std::str::from_utf8(&body[..end]).unwrap().trim(), 16).unwrap();
+        if size == 0 {
+            return out;
+        }
+        out.extend_from_slice(&body[end + 2..end + 2 + size]);
+        body = &body[end + 2 + size + 2..];
+    }
+}
+
+/// A recipe as the GUI writes it, with its downloads' requests.
+fn recipe(config: &Value, source: Value, downloads: Vec<(&str, &str, &str, Option<Value>)>) -> Value {
+    let mut r = json!({
+        "format": "haptex-recipe/1",
+        "haptex_version": config["version"],
+        "source": source,
+        "downloads": downloads.iter().map(|(file, method, path, body)| {
+            let mut d = json!({ "file": file, "method": method, "path": path });
+            if let Some(body) = body { d["body"] = body.clone(); }
+            d
+        }).collect::<Vec<_>>(),
+    });
+    match r["source"]["kind"].as_str() {
+        Some("template") => r["database_sha256"] = config["data"]["database_sha256"].clone(),
+        Some("library") => r["library_sha256"] = config["data"]["library_sha256"].clone(),
+        _ => {}
+    }
+    r
+}
+
+/// The play requests of the GUI's stroke WAV and its sidecar for a voltage answer.
+fn strokes(voltage: &Value) -> (Value, Value) {
+    let mut v = json!({ "x_mm": voltage["x_mm"], "voltage_v": voltage["voltage_v"] });
+    let mut wav = json!({ "voltage": v.clone(), "stroke": { "velocity_mm_s": 50 },
+        "carrier": { "shape": "sine", "frequency_hz": 1000 }, "u_max_v": 100 });
+    if voltage.get("amplitude_um").is_some() {
+        v["amplitude_um"] = voltage["amplitude_um"].clone();
+        wav["voltage"] = v;
+        wav["a_max_um"] = voltage["summary"]["ultrasonic"]["a_max_um"].clone();
+    }
+    let mut sidecar = wav.clone();
+    sidecar["format"] = json!("sidecar");
+    (wav, sidecar)
+}
+
+/// Runs `haptex recipe run` on `recipe`; the output and the files written.
+fn run_recipe(recipe: &Value) -> (std::process::Output, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("recipe.json");
+    std::fs::write(&file, serde_json::to_string_pretty(recipe).unwrap()).unwrap();
+    let output = Command::new(env!("CARGO_BIN_EXE_haptex"))
+        .args(["recipe", "run", file.to_str().unwrap(), "-o", dir.path().join("out").to_str().unwrap()])
+        .env_remove("HAPTEX_LIBRARY")
+        .env_remove("HAPTEX_DB")
+        .output()
+        .unwrap();
+    (output, dir)
+}
+
+/// Every download of `recipe` from the server equals the replayed file.
+fn replays_byte_for_byte(server: &Server, recipe: &Value) {
+    let (output, dir) = run_recipe(recipe);
+    assert!(output.status.success(), "haptex recipe run: {}", String::from_utf8_lossy(&output.stderr));
+    for d in recipe["downloads"].as_array().unwrap() {
+        let file = d["file"].as_str().unwrap();
+        let served = server.ask(d["method"].as_str().unwrap(), d["path"].as_str().unwrap(), d.get("body"));
+        let replayed = std::fs::read(dir.path().join("out").join(file)).unwrap();
+        assert!(served.len() > 40, "{file}: {} bytes served", served.len());
+        assert!(served == replayed, "{file}: the replay differs from the server's download");
+    }
+}
+
+#[test]
+fn recipe_run_reproduces_each_kind_of_download_byte_for_byte() {
+    let server = Server::start();
+    let config = server.json("GET", "/api/config", None);
+    assert_eq!(config["data"]["database_sha256"].as_str().map(str::len), Some(64), "{}", config["data"]);
+    assert_eq!(config["data"]["library_sha256"].as_str().map(str::len), Some(64), "{}", config["data"]);
+
+    // A template: the default bump, relative to mu_skin, eq. (8).
+    let template = json!({ "surface": "bump", "x0_mm": 5, "width_mm": 1.3, "height_mm": 0.27, "velocity_mm_s": 20 });
+    let predicted = server.json("POST", "/api/predict", Some(&template));
+    let voltage_body = json!({ "profile": { "x_mm": predicted["x_mm"], "mu": predicted["mu"] }, "method": "physical",
+        "device": { "mu_hd": 1, "u_max_v": 100 }, "relative": true, "flat_mu": 0.5 });
+    let voltage = server.json("POST", "/api/voltage", Some(&voltage_body));
+    let (wav, sidecar) = strokes(&voltage);
+    let mut source = template.clone();
+    source["kind"] = json!("template");
+    let r = recipe(
+        &config,
+        source,
+        vec![
+            ("bump-w1.3-h0.27-v20.csv", "POST", "/api/predict?format=csv", Some(template.clone())),
+            ("voltage.csv", "POST", "/api/voltage?format=csv", Some(voltage_body.clone())),
+            ("voltage.json", "POST", "/api/voltage", Some(voltage_body.clone())),
+            ("stroke-50mm_s.wav", "POST", "/api/play", Some(wav)),
+            ("stroke-50mm_s.wav.json", "POST", "/api/play", Some(sidecar)),
+        ],
+    );
+    replays_byte_for_byte(&server, &r);
+
+    // The same recipe made with another FE database is refused, naming the field, nothing written.
+    let mut other = r.clone();
+    other["database_sha256"] = json!("0".repeat(64));
+    let (output, dir) = run_recipe(&other);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success() && stderr.contains("database_sha256"), "{stderr}");
+    assert!(!dir.path().join("out").exists(), "files written for a refused recipe");
+
+    // A library stroke (latex, seed 3), eq. (8) as it is.
+    let sample_path = "/api/materials/latex/sample?seed=3";
+    let sample = server.json("GET", sample_path, None);
+    let voltage_body = json!({ "profile": { "x_mm": sample["x_mm"], "mu": sample["mu"], "fn_n": sample["fn_n"] },
+        "method": "physical", "device": { "mu_hd": 1 } });
+    let voltage = server.json("POST", "/api/voltage", Some(&voltage_body));
+    let (wav, _) = strokes(&voltage);
+    let r = recipe(
+        &config,
+        json!({ "kind": "library", "material": "latex", "seed": "3" }),
+        vec![
+            ("latex-stroke.csv", "GET", "/api/materials/latex/sample?seed=3&format=csv", None),
+            ("voltage.csv", "POST", "/api/voltage?format=csv", Some(voltage_body.clone())),
+            ("voltage.json", "POST", "/api/voltage", Some(voltage_body)),
+            ("stroke-50mm_s.wav", "POST", "/api/play", Some(wav)),
+        ],
+    );
+    replays_byte_for_byte(&server, &r);
+
+    // An uploaded profile on the combined display (two channels).
+    let x: Vec<f64> = (0..41).map(|i| 0.25 * f64::from(i)).collect();
+    let mu: Vec<f64> = x.iter().map(|x| 1.0 + 0.3 * (x * 1.3).sin()).collect();
+    let profile = json!({ "x_mm": x, "mu": mu });
+    let voltage_body = json!({ "profile": profile, "device": { "mu_hd": 1 }, "display": "combined",
+        "strategy": "weighted", "weight": 5 });
+    let voltage = server.json("POST", "/api/voltage", Some(&voltage_body));
+    assert!(voltage.get("amplitude_um").is_some(), "{voltage}");
+    let (wav, sidecar) = strokes(&voltage);
+    let r = recipe(
+        &config,
+        json!({ "kind": "upload", "file": "wave.csv" }),
+        vec![
+            ("wave-profile.csv", "POST", "/api/profile?format=csv", Some(profile)),
+            ("display-combined.csv", "POST", "/api/voltage?format=csv", Some(voltage_body.clone())),
+            ("display-combined.json", "POST", "/api/voltage", Some(voltage_body)),
+            ("stroke-50mm_s-combined-2ch.wav", "POST", "/api/play", Some(wav)),
+            ("stroke-50mm_s-combined-2ch.wav.json", "POST", "/api/play", Some(sidecar)),
+        ],
+    );
+    replays_byte_for_byte(&server, &r);
+}
+
+#[test]
+fn recipe_run_refuses_a_bad_recipe_naming_the_field() {
+    for (recipe, field) in [
+        (
+            json!({ "format": "haptex-recipe/9", "haptex_version": env!("CARGO_PKG_VERSION"), "downloads": [] }),
+            "format",
+        ),
+        (
+            json!({ "format": "haptex-recipe/1", "haptex_version": env!("CARGO_PKG_VERSION"),
+                "downloads": [{ "file": "../x.csv", "method": "GET", "path": "/api/health" }] }),
+            "downloads[0].file",
+        ),
+        (
+            json!({ "format": "haptex-recipe/1", "haptex_version": env!("CARGO_PKG_VERSION"),
+                "downloads": [{ "file": "x.csv", "method": "GET", "path": "/etc/passwd" }] }),
+            "downloads[0].path",
+        ),
+        (
+            json!({ "format": "haptex-recipe/1", "haptex_version": "0.0.0-other",
+                "downloads": [{ "file": "x.json", "method": "GET", "path": "/api/health" }] }),
+            "haptex_version",
+        ),
+    ] {
+        let (output, _dir) = run_recipe(&recipe);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success() && stderr.contains(field), "{field}: {stderr}");
+    }
+}

@@ -1,0 +1,178 @@
+//! Recipes: a design written down as the API requests that made its
+//! downloads, so that `haptex recipe run` replays it on the command line
+//! to byte-identical files.
+//!
+//! A recipe is the JSON the GUI's *recipe* download writes:
+//!
+//! ```json
+//! {
+//!   "format": "haptex-recipe/1",
+//!   "haptex_version": "0.1.0",
+//!   "library_sha256": "…", "database_sha256": "…",
+//!   "source": { "kind": "template", … },
+//!   "downloads": [
+//!     { "file": "voltage.csv", "method": "POST", "path": "/api/voltage?format=csv", "body": { … } },
+//!     …
+//!   ]
+//! }
+//! ```
+//!
+//! `source` is the provenance as the page states it (the template's
+//! parameters, the material and stroke seed, the file name); the requests
+//! carry everything the answers are computed from (the profile's points
+//! included). [`replay`] answers each request with this server's own
+//! router, in process: the code that builds a download in the browser and
+//! on the command line is one and the same, so the bytes are too, as long
+//! as the haptex version and the data (library, FE database: their
+//! SHA-256 in the recipe) are the same, which [`replay`] checks first.
+
+use axum::body::Body;
+use axum::http::{Method, Request, StatusCode, header};
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use tower::ServiceExt;
+
+use crate::state::AppState;
+
+/// The `format` of the recipes this haptex writes and replays.
+pub const FORMAT: &str = "haptex-recipe/1";
+
+/// At most this many downloads in one recipe.
+pub const MAX_DOWNLOADS: usize = 32;
+
+/// A design as the requests of its downloads (see the module docs).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Recipe {
+    pub format: String,
+    pub haptex_version: String,
+    #[serde(default)]
+    pub library_sha256: Option<String>,
+    #[serde(default)]
+    pub database_sha256: Option<String>,
+    /// Provenance as the page states it (not used to compute anything).
+    #[serde(default)]
+    pub source: Value,
+    pub downloads: Vec<Download>,
+}
+
+/// One download: the file it is saved as and the API request that answers it.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Download {
+    /// File name (no directory): `voltage.csv`, `stroke-50mm_s.wav`, ...
+    pub file: String,
+    /// `GET` or `POST`.
+    pub method: String,
+    /// An `/api/` path with its query.
+    pub path: String,
+    /// The JSON body of a POST.
+    #[serde(default)]
+    pub body: Option<Value>,
+}
+
+/// Why a recipe cannot be replayed; `field` names the recipe's field.
+#[derive(Debug, thiserror::Error)]
+#[error("{field}: {message}")]
+pub struct RecipeError {
+    pub field: String,
+    pub message: String,
+}
+
+fn error(field: impl Into<String>, message: impl Into<String>) -> RecipeError {
+    RecipeError { field: field.into(), message: message.into() }
+}
+
+impl Recipe {
+    /// Reads a recipe (JSON), checking its format and its downloads' names
+    /// and requests.
+    pub fn parse(text: &str) -> Result<Self, RecipeError> {
+        let recipe: Recipe = serde_json::from_str(text).map_err(|e| error("recipe", e.to_string()))?;
+        if recipe.format != FORMAT {
+            return Err(error("format", format!("{:?} is not {FORMAT:?}", recipe.format)));
+        }
+        if recipe.downloads.is_empty() || recipe.downloads.len() > MAX_DOWNLOADS {
+            return Err(error("downloads", format!("1 to {MAX_DOWNLOADS} downloads, not {}", recipe.downloads.len())));
+        }
+        for (i, d) in recipe.downloads.iter().enumerate() {
+            let ok_name = !d.file.is_empty()
+                && d.file.len() <= 200
+                && !d.file.starts_with('.')
+                && d.file.chars().all(|c| c.is_ascii_alphanumeric() || "._-".contains(c));
+            if !ok_name {
+                return Err(error(
+                    format!("downloads[{i}].file"),
+                    "a plain file name (letters, digits, . _ -), no directory",
+                ));
+            }
+            if !d.path.starts_with("/api/") {
+                return Err(error(format!("downloads[{i}].path"), "an /api/ path"));
+            }
+            match (d.method.as_str(), &d.body) {
+                ("GET", None) | ("POST", Some(_)) => {}
+                _ => return Err(error(format!("downloads[{i}].method"), "GET without a body or POST with one")),
+            }
+        }
+        Ok(recipe)
+    }
+
+    /// Checks that this haptex and the data served are the recipe's.
+    pub fn check(&self, state: &AppState) -> Result<(), RecipeError> {
+        let version = env!("CARGO_PKG_VERSION");
+        if self.haptex_version != version {
+            return Err(error(
+                "haptex_version",
+                format!("the recipe was made by haptex {}, this is {version}", self.haptex_version),
+            ));
+        }
+        for (field, want, have) in [
+            ("library_sha256", &self.library_sha256, state.library_sha256()),
+            ("database_sha256", &self.database_sha256, state.database_sha256()),
+        ] {
+            if let Some(want) = want
+                && have != Some(want.as_str())
+            {
+                return Err(error(
+                    field,
+                    format!("the recipe was made with data of SHA-256 {want}, this has {}", have.unwrap_or("none")),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The files of a recipe's downloads, each answered by the server's router
+/// (`crate::app`) as the page's download is: (file name, bytes).
+pub async fn replay(state: AppState, recipe: &Recipe) -> Result<Vec<(String, Vec<u8>)>, RecipeError> {
+    recipe.check(&state)?;
+    // The server bounds its answers; this bounds what is read of one.
+    let max = 256 << 20;
+    let app = crate::app(state);
+    let mut files = Vec::with_capacity(recipe.downloads.len());
+    for (i, d) in recipe.downloads.iter().enumerate() {
+        let method = if d.method == "GET" { Method::GET } else { Method::POST };
+        let mut request = Request::builder().method(method).uri(&d.path).header(header::HOST, "localhost");
+        let body = match &d.body {
+            Some(body) => {
+                request = request.header(header::CONTENT_TYPE, "application/json");
+                Body::from(serde_json::to_vec(body).map_err(|e| error(format!("downloads[{i}].body"), e.to_string()))?)
+            }
+            None => Body::empty(),
+        };
+        let request = request.body(body).map_err(|e| error(format!("downloads[{i}].path"), e.to_string()))?;
+        let response = app.clone().oneshot(request).await.unwrap_or_else(|never| match never {});
+        let status = response.status();
+        let bytes = axum::body::to_bytes(response.into_body(), max)
+            .await
+            .map_err(|e| error(format!("downloads[{i}]"), format!("reading the answer: {e}")))?;
+        if status != StatusCode::OK {
+            return Err(error(
+                format!("downloads[{i}]"),
+                format!("{} answered {status}: {}", d.path, String::from_utf8_lossy(&bytes)),
+            ));
+        }
+        files.push((d.file.clone(), bytes.to_vec()));
+    }
+    Ok(files)
+}
