@@ -766,6 +766,10 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     phone_viewport(client, 360).await?;
     phone_viewport(client, 430).await?;
     unpin(client, &upload_pin).await?;
+    // Redrawn, so that the screenshots show the design's message, not the removal's.
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Id("reset-device"))).click());
+    wait_update(client, n, "the template redrawn").await?;
     wd!(client.set_window_size(390, 844));
     tokio::time::sleep(Duration::from_millis(400)).await;
     let overflow = script(client, "return document.documentElement.scrollWidth - window.innerWidth;").await?;
