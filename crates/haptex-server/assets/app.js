@@ -943,6 +943,10 @@
       : `method ${s.method}`;
     say(`${state.profile.label}: ${s.n_points} points, ${how}` +
       `${s.relative ? ', relative to the flat-surface friction (Fig. 2)' : ''}.`);
+    if (state.pendingError) {
+      showError(state.pendingError);
+      state.pendingError = null;
+    }
   }
 
   /** "eq. (8)" or "eq. (9)": the method of a summary. */
@@ -1878,13 +1882,15 @@
       selectSource(sources[0].id);
       if (!state.profile && state.source === 'upload') document.body.dataset.state = 'ready';
       if (location.hash.startsWith('#recipe=')) {
-        let opened;
+        // A link's recipe that cannot be opened is reported once the
+        // first source is drawn (its message would hide it); the page works on.
+        let opened = null;
         try {
           opened = JSON.parse(fromBase64Url(location.hash.slice('#recipe='.length)));
         } catch (error) {
-          throw new ApiError(`the link's recipe cannot be read (${error.message})`, 'recipe', 0);
+          state.pendingError = new ApiError(`the link's recipe cannot be read (${error.message})`, 'recipe', 0);
         }
-        await openRecipe(opened);
+        if (opened) await openRecipe(opened).catch((error) => { state.pendingError = error; });
       }
     } catch (error) {
       document.body.dataset.state = 'error';

@@ -1622,6 +1622,16 @@ async fn recipes(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     if download(client, "voltage-csv").await? != replayed.1 {
         return fail("the opened recipe's voltage CSV differs from the replay");
     }
+    // A link whose recipe cannot be read: said so, and the page works on.
+    wd!(client.goto("about:blank"));
+    wd!(client.goto(&format!("{base}#recipe=not-a-recipe")));
+    wait_for(
+        client,
+        "document.body.dataset.state === 'ready' && \
+         document.getElementById('message').textContent.startsWith(\"recipe: the link's recipe cannot be read\")",
+        "a bad recipe link reported",
+    )
+    .await?;
     Ok(())
 }
 
