@@ -193,8 +193,12 @@ fn recipe_run_reproduces_each_kind_of_download_byte_for_byte() {
     // A library stroke (latex, seed 3), eq. (8) as it is.
     let sample_path = "/api/materials/latex/sample?seed=3";
     let sample = server.json("GET", sample_path, None);
+    // With its source, as the page sends it: the recipe in the answer's comments.
     let voltage_body = json!({ "profile": { "x_mm": sample["x_mm"], "mu": sample["mu"], "fn_n": sample["fn_n"] },
-        "method": "physical", "device": { "mu_hd": 1 } });
+        "method": "physical", "device": { "mu_hd": 1 },
+        "source": { "kind": "library", "material": "latex", "seed": "3" } });
+    let csv = server.ask("POST", "/api/voltage?format=csv", Some(&voltage_body));
+    assert!(csv.starts_with(b"# haptex ") && String::from_utf8_lossy(&csv).contains("# library_sha256: "));
     let voltage = server.json("POST", "/api/voltage", Some(&voltage_body));
     let (wav, _) = strokes(&voltage);
     let r = recipe(

@@ -1581,13 +1581,18 @@
    */
   function downloadSpec(kind) {
     if (kind === 'profile-csv') return state.profile.spec;
+    // The voltage downloads carry the recipe: the source's provenance goes
+    // with the request, and the server writes it with the haptex version,
+    // the settings, the parameters and the data's SHA-256 into the CSV's
+    // comments and the JSON's `recipe`.
+    const withSource = (body) => (state.profile.provenance ? { ...body, source: state.profile.provenance } : body);
     if (kind === 'voltage-csv') {
       const file = isElectrovibration() ? 'voltage.csv' : `display-${state.display}.csv`;
-      return { file, method: 'POST', path: '/api/voltage?format=csv', body: voltageBody() };
+      return { file, method: 'POST', path: '/api/voltage?format=csv', body: withSource(voltageBody()) };
     }
     if (kind === 'voltage-json') {
       const file = isElectrovibration() ? 'voltage.json' : `display-${state.display}.json`;
-      return { file, method: 'POST', path: '/api/voltage', body: voltageBody() };
+      return { file, method: 'POST', path: '/api/voltage', body: withSource(voltageBody()) };
     }
     if (kind === 'stroke-wav' || kind === 'stroke-sidecar') {
       const v = played();
@@ -1718,7 +1723,7 @@
       label: `recipe: ${what}`,
       synthetic: Boolean(source.synthetic),
       spec: { file: 'recipe-profile.csv', method: 'POST', path: '/api/profile?format=csv', body: profileBody },
-      provenance: { ...source, opened_from_recipe: true },
+      provenance: r.source && typeof r.source === 'object' ? r.source : undefined,
     };
     // The upload source, showing the recipe's profile (no file to read).
     const input = document.querySelector("input[name='source'][value='upload']");

@@ -432,6 +432,45 @@ async fn voltage_csv_upload_equals_json_and_the_core_mapping() {
     }
 }
 
+/// A voltage request with the design's `source` (what the page's
+/// downloads send) carries its recipe: the CSV answer begins with it in
+/// `#` comments (and reads back with the same columns and numbers), the
+/// JSON answer has it as `recipe`; without `source` the answers are
+/// unchanged; a `source` that is not a small object is refused naming it.
+#[tokio::test]
+async fn voltage_with_a_source_carries_the_recipe() {
+    let table = Table::read(bump_csv().as_bytes(), "bump").unwrap();
+    let profile = profile_json(table.column("x_mm").unwrap(), table.column("mu").unwrap());
+    let plain = json!({ "profile": profile, "method": "normalized", "device": { "u_max_v": 60 } });
+    let mut with = plain.clone();
+    with["source"] = json!({ "kind": "upload", "file": "bump_friction.csv" });
+    let (bare, recipe) =
+        (post_json("/api/voltage?format=csv", &plain).await, post_json("/api/voltage?format=csv", &with).await);
+    let text = String::from_utf8(recipe.ok().body.to_vec()).unwrap();
+    let comments: Vec<&str> = text.lines().take_while(|l| l.starts_with('#')).collect();
+    let state = shipped_state();
+    assert!(comments[0].starts_with(&format!("# haptex {} (POST /api/voltage)", env!("CARGO_PKG_VERSION"))));
+    assert!(comments.contains(&r#"# source: {"file":"bump_friction.csv","kind":"upload"}"#), "{comments:?}");
+    assert!(comments.iter().any(|c| c.starts_with("# settings: ") && c.contains(r#""method":"normalized""#)));
+    assert!(comments.iter().any(|c| c.starts_with("# parameters: ") && c.contains(r#""u_max_v":60.0"#)));
+    assert!(comments.contains(&format!("# library_sha256: {}", state.library_sha256().unwrap()).as_str()));
+    assert!(comments.contains(&format!("# database_sha256: {}", state.database_sha256().unwrap()).as_str()));
+    // Below the comments, the answer without a source.
+    assert_eq!(text.as_bytes()[text.len() - bare.ok().body.len()..], bare.body[..]);
+    assert!(!String::from_utf8_lossy(&bare.body).contains("# source: "));
+    let json_answer = post_json("/api/voltage", &with).await.ok().json();
+    assert_eq!(json_answer["recipe"]["source"]["file"], "bump_friction.csv");
+    assert_eq!(json_answer["recipe"]["library_sha256"], state.library_sha256().unwrap());
+    assert!(post_json("/api/voltage", &plain).await.ok().json().get("recipe").is_none());
+    for bad in [json!("a string"), json!([1, 2]), json!({ "note": "x".repeat(5000) })] {
+        let mut body = plain.clone();
+        body["source"] = bad;
+        let answer = post_json("/api/voltage?format=csv", &body).await;
+        assert_eq!(answer.status, 400);
+        assert_eq!(answer.json()["field"], "source");
+    }
+}
+
 #[tokio::test]
 async fn voltage_csv_answer_reads_back_with_the_haptex_reader() {
     let answer = post_raw("/api/voltage?format=csv&method=normalized", "text/csv", bump_csv()).await;

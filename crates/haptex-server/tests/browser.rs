@@ -1576,6 +1576,16 @@ async fn recipes(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     wait_update(client, n, "the template source").await?;
     show_library(client, "latex").await?;
     let page_csv = download(client, "voltage-csv").await?;
+    // The download carries the recipe in its comments.
+    let head =
+        String::from_utf8_lossy(&page_csv).lines().take_while(|l| l.starts_with('#')).collect::<Vec<_>>().join("\n");
+    if !head.starts_with("# haptex ")
+        || !head.contains("\"material\":\"latex\"")
+        || !head.contains("# library_sha256: ")
+        || !head.contains("\"mu_hd\":1.0")
+    {
+        return fail(format!("the voltage CSV's recipe comments: {head}"));
+    }
     let bytes = download(client, "recipe").await?;
     let recipe_text = String::from_utf8(bytes).map_err(|e| e.to_string())?;
     let recipe = haptex_server::recipe::Recipe::parse(&recipe_text).map_err(|e| e.to_string())?;

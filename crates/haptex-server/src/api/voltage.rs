@@ -88,6 +88,53 @@ struct VoltageBody {
     /// `amplitude_um,relative_friction` CSV.
     #[serde(default)]
     ultrasonic_calibration: Option<String>,
+    /// The design's provenance as the page states it (its recipe's
+    /// `source`, a JSON object): with `?format=csv` the answer then begins
+    /// with the recipe in `#` comments ([`recipe_comments`]).
+    #[serde(default)]
+    source: Option<serde_json::Value>,
+}
+
+/// The longest `source` accepted, serialized (one comment line).
+const MAX_SOURCE_BYTES: usize = 4096;
+
+/// The recipe of a JSON answer: the haptex version, the design's `source`,
+/// the request's settings and the SHA-256 of the data served (the
+/// parameters are the answer's own `parameters`).
+fn recipe_json(state: &AppState, source: &serde_json::Value, settings: &serde_json::Value) -> serde_json::Value {
+    serde_json::json!({
+        "haptex_version": env!("CARGO_PKG_VERSION"),
+        "source": source,
+        "settings": settings,
+        "library_sha256": state.library_sha256(),
+        "database_sha256": state.database_sha256(),
+    })
+}
+
+/// The recipe of a CSV answer as `#` comment lines: the haptex version, the
+/// design's `source` (as the request gave it), the request's settings
+/// (method, relative mapping, display; the calibration by its SHA-256),
+/// every device parameter used (defaults filled in) and the SHA-256 of
+/// the data this server serves. The profile itself is the CSV's columns.
+fn recipe_comments(
+    state: &AppState,
+    source: &serde_json::Value,
+    settings: &serde_json::Value,
+    parameters: &BTreeMap<&'static str, f64>,
+) -> String {
+    let mut text = format!(
+        "# haptex {} (POST /api/voltage); the page's recipe download replays it (haptex recipe run)\n",
+        env!("CARGO_PKG_VERSION")
+    );
+    text.push_str(&format!("# source: {source}\n# settings: {settings}\n"));
+    text.push_str(&format!("# parameters: {}\n", serde_json::json!(parameters)));
+    if let Some(hash) = state.library_sha256() {
+        text.push_str(&format!("# library_sha256: {hash}\n"));
+    }
+    if let Some(hash) = state.database_sha256() {
+        text.push_str(&format!("# database_sha256: {hash}\n"));
+    }
+    text
 }
 
 /// Whether to map relative to the flat-surface friction, and how mu_flat
@@ -128,12 +175,15 @@ pub(crate) struct VoltageAnswer<'a> {
     /// for the command line (`lower --mu-hd`); here each flag is the
     /// page's control ([`crate::explain::for_page`]).
     pub page_warnings: Vec<String>,
+    /// The recipe (a request with `source` only): [`recipe_json`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub recipe: Option<serde_json::Value>,
 }
 
 impl<'a> VoltageAnswer<'a> {
     pub fn new(parameters: BTreeMap<&'static str, f64>, voltage: &'a VoltageProfile) -> Self {
         let page_warnings = voltage.summary.warnings.iter().map(|w| crate::explain::for_page(w)).collect();
-        VoltageAnswer { parameters, voltage, page_warnings }
+        VoltageAnswer { parameters, voltage, page_warnings, recipe: None }
     }
 }
 
@@ -147,6 +197,9 @@ pub(crate) struct DisplayAnswer<'a> {
     #[serde(flatten)]
     pub display: &'a DisplayProfile,
     pub page_warnings: Vec<String>,
+    /// The recipe (a request with `source` only): [`recipe_json`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub recipe: Option<serde_json::Value>,
 }
 
 impl<'a> DisplayAnswer<'a> {
@@ -161,7 +214,7 @@ impl<'a> DisplayAnswer<'a> {
             parameters.insert("weight", weight);
         }
         let page_warnings = display.summary.warnings.iter().map(|w| crate::explain::for_page(w)).collect();
-        DisplayAnswer { parameters, display, page_warnings }
+        DisplayAnswer { parameters, display, page_warnings, recipe: None }
     }
 }
 
@@ -176,11 +229,34 @@ pub async fn post(
     let format = query.take_format(&["json", "csv"])?;
     let kind = body_kind(&headers, &[BodyKind::Json, BodyKind::Csv])?;
     let bytes = body_bytes(body, limits.max_body_bytes)?;
+    let app = state.clone();
     work::cpu(&state, bytes.len(), move || {
+        // The recipe's source and settings for the CSV's comments (JSON body with `source` only).
+        let mut recipe: Option<(serde_json::Value, serde_json::Value)> = None;
         let (profile, method, request, relative, display, prefix) = match kind {
             BodyKind::Json => {
                 query.finish()?;
                 let body: VoltageBody = parse_json(&bytes)?;
+                if let Some(source) = &body.source {
+                    if !source.is_object() || source.to_string().len() > MAX_SOURCE_BYTES {
+                        return Err(ApiError::bad_request(
+                            format!("a JSON object of at most {MAX_SOURCE_BYTES} bytes (the design's provenance)"),
+                            Some("source"),
+                        ));
+                    }
+                    let settings = serde_json::json!({
+                        "method": body.method.map(|m| format!("{m:?}").to_lowercase()),
+                        "relative": body.relative,
+                        "flat_mu": body.flat_mu,
+                        "display": body.display.map(|d| format!("{d:?}").to_lowercase()),
+                        "strategy": body.strategy.map(|s| format!("{s:?}").to_lowercase()),
+                        "weight": body.weight,
+                        "a_max_um": body.a_max_um,
+                        "ultrasonic_calibration_sha256":
+                            body.ultrasonic_calibration.as_deref().map(|t| haptex_core::io::sha256_hex(t.as_bytes())),
+                    });
+                    recipe = Some((source.clone(), settings));
+                }
                 let request = DeviceRequest::from_pairs(body.device.iter(), "device.")?;
                 let relative = relative_request(body.relative, body.flat_mu)?;
                 let display = DisplayRequest {
@@ -225,16 +301,38 @@ pub async fn post(
                 ));
             }
             let designed = compute_display(&profile, &request, relative, &design, prefix)?;
+            let mut answer = DisplayAnswer::new(&request, &design, &designed);
+            answer.recipe = recipe.as_ref().map(|(source, settings)| recipe_json(&app, source, settings));
+            let comments =
+                recipe.map(|(source, settings)| recipe_comments(&app, &source, &settings, &answer.parameters));
             return Ok(match format {
-                "csv" => super::csv_response(super::to_csv(|w| designed.write_csv(w))?, "display.csv"),
-                _ => Json(DisplayAnswer::new(&request, &design, &designed)).into_response(),
+                "csv" => super::csv_response(
+                    super::to_csv(|w| {
+                        w.write_all(comments.unwrap_or_default().as_bytes())?;
+                        designed.write_csv(w)
+                    })?,
+                    "display.csv",
+                ),
+                _ => Json(answer).into_response(),
             });
         }
         let method = method.unwrap_or(Method::Physical);
         let voltage = compute(&profile, method, &request, relative, prefix)?;
+        let json_recipe = recipe.as_ref().map(|(source, settings)| recipe_json(&app, source, settings));
+        let comments = recipe.map(|(source, settings)| recipe_comments(&app, &source, &settings, &request.values()));
         Ok(match format {
-            "csv" => super::csv_response(super::to_csv(|w| voltage.write_csv(w))?, "voltage.csv"),
-            _ => Json(VoltageAnswer::new(request.values(), &voltage)).into_response(),
+            "csv" => super::csv_response(
+                super::to_csv(|w| {
+                    w.write_all(comments.unwrap_or_default().as_bytes())?;
+                    voltage.write_csv(w)
+                })?,
+                "voltage.csv",
+            ),
+            _ => {
+                let mut answer = VoltageAnswer::new(request.values(), &voltage);
+                answer.recipe = json_recipe;
+                Json(answer).into_response()
+            }
         })
     })
     .await
