@@ -1613,6 +1613,7 @@
       if (kind === 'stroke-sidecar') {
         // The WAV's sidecar (scales of both channels, sample hash), as haptex play writes it.
         body.format = 'sidecar';
+        if (state.profile.provenance) body.source = state.profile.provenance; // the recipe, in the sidecar
         return { file: `stroke-${state.velocity}mm_s${which}.wav.json`, method: 'POST', path: '/api/play', body };
       }
       return { file: `stroke-${state.velocity}mm_s${which}.wav`, method: 'POST', path: '/api/play', body };

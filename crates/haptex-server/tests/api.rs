@@ -471,6 +471,25 @@ async fn voltage_with_a_source_carries_the_recipe() {
     }
 }
 
+/// The stroke WAV's sidecar records the design's `source` with the data's
+/// SHA-256 when the request gives it; the WAV itself is the same bytes.
+#[tokio::test]
+async fn play_sidecar_records_the_source() {
+    let play = json!({ "voltage": { "x_mm": [0, 5, 10], "voltage_v": [0, 50, 0] }, "stroke": { "velocity_mm_s": 50 } });
+    let mut with = play.clone();
+    with["source"] = json!({ "kind": "template", "surface": "bump" });
+    assert_eq!(post_json("/api/play", &play).await.ok().body, post_json("/api/play", &with).await.ok().body);
+    let mut sidecar = with.clone();
+    sidecar["format"] = json!("sidecar");
+    let answer = post_json("/api/play", &sidecar).await.ok().json();
+    let state = shipped_state();
+    assert_eq!(answer["source"]["recipe"]["design"]["surface"], "bump");
+    assert_eq!(answer["source"]["recipe"]["database_sha256"], state.database_sha256().unwrap());
+    sidecar["source"] = json!(17);
+    let refused = post_json("/api/play", &sidecar).await;
+    assert_eq!((refused.status.as_u16(), refused.json()["field"].clone()), (400, json!("source")));
+}
+
 #[tokio::test]
 async fn voltage_csv_answer_reads_back_with_the_haptex_reader() {
     let answer = post_raw("/api/voltage?format=csv&method=normalized", "text/csv", bump_csv()).await;

@@ -1602,6 +1602,13 @@ async fn recipes(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     if replayed.1 != page_csv {
         return fail("the replayed voltage.csv differs from the page's download");
     }
+    // The stroke WAV's sidecar records the recipe's source and the data's SHA-256.
+    let sidecar = files.iter().find(|(name, _)| name.ends_with(".wav.json")).ok_or("no sidecar replayed")?;
+    let sidecar: Value = serde_json::from_slice(&sidecar.1).map_err(|e| e.to_string())?;
+    let recorded = &sidecar["source"]["recipe"];
+    if recorded["design"]["material"] != "latex" || recorded["library_sha256"] != json!(recipe.library_sha256) {
+        return fail(format!("the stroke WAV sidecar's recipe: {sidecar}"));
+    }
     let table = Table::read(replayed.1.as_slice(), "replayed voltage.csv").map_err(|e| e.to_string())?;
     let (mu, voltage) =
         (table.column("mu").ok_or("mu")?.to_vec(), table.column("voltage_v").ok_or("voltage_v")?.to_vec());

@@ -86,7 +86,15 @@ struct PlayBody {
     /// clamp and full scale (with `voltage.amplitude_um` only).
     #[serde(default)]
     a_max_um: Option<f64>,
+    /// The design's provenance as the page states it (its recipe's
+    /// `source`, a JSON object of at most 4096 bytes): the sidecar then
+    /// records it with the data's SHA-256 in its `source`.
+    #[serde(default)]
+    source: Option<serde_json::Value>,
 }
+
+/// The longest `source` accepted, serialized.
+const MAX_SOURCE_BYTES: usize = 4096;
 
 /// A voltage curve: positions in mm and RMS voltages in V.
 #[derive(Debug, Deserialize)]
@@ -135,7 +143,15 @@ pub async fn post(
     Query::parse(raw_query.as_deref())?.finish()?;
     body_kind(&headers, &[BodyKind::Json])?;
     let bytes = body_bytes(body, limits.max_body_bytes)?;
-    let job = work::cpu(&state, bytes.len(), move || Job::parse(&bytes, &limits)).await?;
+    let mut job = work::cpu(&state, bytes.len(), move || Job::parse(&bytes, &limits)).await?;
+    if let Some(design) = job.design.take() {
+        // The recipe's part the request cannot state: the data this server serves.
+        job.design = Some(json!({
+            "design": design,
+            "library_sha256": state.library_sha256(),
+            "database_sha256": state.database_sha256(),
+        }));
+    }
     let permit = work::slot(state.renders()).await?;
     work::blocking(Some(permit), move || job.run()).await
 }
@@ -149,6 +165,8 @@ struct Job {
     settings: RenderSettings,
     format: PlayFormat,
     wav: WavOptions,
+    /// The request's `source` (then with the data's SHA-256), for the sidecar.
+    design: Option<serde_json::Value>,
 }
 
 impl Job {
@@ -156,6 +174,15 @@ impl Job {
     /// render within the sample limit of its format.
     fn parse(bytes: &[u8], limits: &crate::Limits) -> Result<Self, ApiError> {
         let body: PlayBody = parse_json(bytes)?;
+        if let Some(source) = &body.source
+            && (!source.is_object() || source.to_string().len() > MAX_SOURCE_BYTES)
+        {
+            return Err(ApiError::bad_request(
+                format!("a JSON object of at most {MAX_SOURCE_BYTES} bytes (the design's provenance)"),
+                Some("source"),
+            ));
+        }
+        let design = body.source.clone();
         check_points(body.voltage.x_mm.len(), limits.max_points, "voltage.x_mm")?;
         // haptex-core checks positions, voltages and amplitudes against
         // their ranges.
@@ -267,7 +294,7 @@ impl Job {
             ));
         }
         let wav = WavOptions { format: body.wav_format.unwrap_or(WavFormat::Pcm16), volts_per_full_scale };
-        Ok(Self { curve, ultrasonic, trajectory, settings, format, wav })
+        Ok(Self { curve, ultrasonic, trajectory, settings, format, wav, design })
     }
 
     /// Renders the drive and builds the answer.
@@ -284,8 +311,11 @@ impl Job {
             PlayFormat::Json => Ok(Json(json_answer(&signal)).into_response()),
             PlayFormat::Sidecar => {
                 let encoded = encode_wav(&signal, &self.wav, "response").map_err(signal_error)?;
-                let source =
+                let mut source =
                     json!({ "server": "haptex serve (POST /api/play)", "haptex_version": env!("CARGO_PKG_VERSION") });
+                if let Some(recipe) = self.design {
+                    source["recipe"] = recipe;
+                }
                 let sidecar = WavSidecar::new(WAV_FILE_NAME.to_string(), &encoded, &signal.report, source);
                 Ok(Json(sidecar).into_response())
             }
