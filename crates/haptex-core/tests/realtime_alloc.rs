@@ -9,7 +9,7 @@ mod counting_alloc;
 
 use counting_alloc::allocations_in;
 use haptex_core::realtime::{RealtimeConfig, RealtimeRenderer};
-use haptex_core::signal::{Carrier, CarrierShape, Extend, Limits, VoltageCurve};
+use haptex_core::signal::{AmplitudeCurve, Carrier, CarrierShape, Extend, Limits, VoltageCurve};
 
 #[test]
 fn fill_loop_does_not_allocate() {
@@ -18,7 +18,9 @@ fn fill_loop_does_not_allocate() {
 
     let x: Vec<f64> = (0..=2000).map(|i| i as f64 * 0.01).collect();
     let u = x.iter().map(|x| 60.0 + 50.0 * (x * 3.0).sin()).collect();
-    let curve = VoltageCurve::new(x, u).unwrap();
+    let a = x.iter().map(|x| 1.0 + (x * 2.0).cos()).collect();
+    let curve = VoltageCurve::new(x.clone(), u).unwrap();
+    let amplitude = AmplitudeCurve::new(x, a).unwrap();
     let shapes = [CarrierShape::Sine, CarrierShape::Square, CarrierShape::None];
     for (shape, extend) in shapes.into_iter().zip([Extend::Hold, Extend::Zero, Extend::Repeat]) {
         let config = RealtimeConfig {
@@ -27,35 +29,46 @@ fn fill_loop_does_not_allocate() {
             extend,
             ..RealtimeConfig::default()
         };
-        let mut renderer = RealtimeRenderer::new(&curve, &config).unwrap();
-        let mut buffer = vec![0.0f32; 256];
-        let mut volts = vec![0.0f64; 256];
-        let mut peak = 0.0f32;
-        let count = allocations_in(|| {
-            // 2 s at 48 kHz in 256-sample buffers, a touch report every
-            // 800 samples (60 Hz), the finger lifted for a while in the middle.
-            let mut rendered = 0usize;
-            let mut next_report = 0usize;
-            while rendered < 96_000 {
-                if rendered >= next_report {
-                    let t = renderer.now_s();
-                    if (0.9..1.1).contains(&t) {
-                        renderer.release();
-                    } else {
-                        renderer.touch(t, -3.0 + 30.0 * t);
+        // One- and two-channel renderers (the combined design's amplitude
+        // channel written into interleaved frames).
+        for two in [false, true] {
+            let mut renderer = if two {
+                RealtimeRenderer::two_channel(&curve, &amplitude, 1.5, &config).unwrap()
+            } else {
+                RealtimeRenderer::new(&curve, &config).unwrap()
+            };
+            let mut buffer = vec![0.0f32; 256];
+            let mut frames = vec![0.0f32; 512];
+            let mut volts = vec![0.0f64; 256];
+            let mut peak = 0.0f32;
+            let count = allocations_in(|| {
+                // 2 s at 48 kHz in 256-sample buffers, a touch report every
+                // 800 samples (60 Hz), the finger lifted for a while in the middle.
+                let mut rendered = 0usize;
+                let mut next_report = 0usize;
+                while rendered < 96_000 {
+                    if rendered >= next_report {
+                        let t = renderer.now_s();
+                        if (0.9..1.1).contains(&t) {
+                            renderer.release();
+                        } else {
+                            renderer.touch(t, -3.0 + 30.0 * t);
+                        }
+                        next_report += 800;
                     }
-                    next_report += 800;
+                    if rendered.is_multiple_of(768) {
+                        renderer.fill_frames(&mut frames, 2);
+                    } else if rendered.is_multiple_of(512) {
+                        renderer.fill(&mut buffer);
+                    } else {
+                        renderer.fill_volts(&mut volts);
+                    }
+                    peak = buffer.iter().fold(peak, |m, v| m.max(v.abs()));
+                    rendered += 256;
                 }
-                if rendered.is_multiple_of(512) {
-                    renderer.fill(&mut buffer);
-                } else {
-                    renderer.fill_volts(&mut volts);
-                }
-                peak = buffer.iter().fold(peak, |m, v| m.max(v.abs()));
-                rendered += 256;
-            }
-        });
-        assert_eq!(count, 0, "{shape:?}/{extend:?}: {count} allocations in the fill loop");
-        assert!(peak > 0.1 && peak <= 1.0, "{shape:?}: peak {peak} of full scale");
+            });
+            assert_eq!(count, 0, "{shape:?}/{extend:?}/two channels {two}: {count} allocations in the fill loop");
+            assert!(peak > 0.1 && peak <= 1.0, "{shape:?}: peak {peak} of full scale");
+        }
     }
 }
