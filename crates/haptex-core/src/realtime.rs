@@ -3,7 +3,8 @@
 //!
 //! A [`RealtimeRenderer`] is built once from a voltage curve: the curve is
 //! resampled onto a uniform lookup table, the
-//! carrier is a phase accumulator over a sine table, and the safety limits
+//! carrier is a 64-bit phase accumulator read through the offline render's
+//! polynomial sine (so live and offline drives agree to rounding), and the safety limits
 //! are checked for the whole table up front, so no output sample can exceed
 //! the amplifier range. Then, from the audio callback:
 //!
@@ -47,12 +48,6 @@ use crate::signal::{
 
 /// Largest lookup table: 2^20 points.
 pub const MAX_TABLE_POINTS: usize = 1 << 20;
-
-/// Sine table size (a power of two); with linear interpolation its largest
-/// error is (2 pi / 1024)^2 / 8 = 4.7e-6 of the peak.
-const SINE_BITS: u32 = 10;
-const SINE_LEN: usize = 1 << SINE_BITS;
-const INDEX_SHIFT: u32 = 64 - SINE_BITS;
 
 // Compile-time modes of the per-sample loop.
 const SINE: u8 = 0;
@@ -260,12 +255,10 @@ pub struct RealtimeRenderer {
     wrap: f64,
     /// Channel 2, the ultrasonic amplitude a(x), for a combined design.
     amplitude: Option<AmplitudeChannel>,
-    // Carrier: 64-bit phase accumulator (a full cycle is 2^64) over a
-    // unit-RMS sine table.
+    // Carrier: 64-bit phase accumulator (a full cycle is 2^64).
     shape: CarrierShape,
     phase: u64,
     phase_step: u64,
-    sine: Box<[f64; SINE_LEN + 1]>,
     limiter: EnvelopeLimiter,
     output_scale: f64,
     // Clock.
@@ -327,10 +320,6 @@ impl RealtimeRenderer {
             return Err(SignalError::ExceedsFullScale { amplitude_v: peak_bound_v, volts_per_full_scale: vpfs });
         }
 
-        let mut sine = Box::new([0.0; SINE_LEN + 1]);
-        for (i, v) in sine.iter_mut().enumerate() {
-            *v = std::f64::consts::SQRT_2 * (std::f64::consts::TAU * i as f64 / SINE_LEN as f64).sin();
-        }
         let cycles_per_sample =
             if config.carrier.shape == CarrierShape::None { 0.0 } else { config.carrier.frequency_hz / fs };
         let x0 = table.x0_mm;
@@ -342,7 +331,6 @@ impl RealtimeRenderer {
             shape: config.carrier.shape,
             phase: 0,
             phase_step: (cycles_per_sample * 18_446_744_073_709_551_616.0).round() as u64,
-            sine,
             limiter: EnvelopeLimiter::new(&config.limits, fs),
             output_scale: 1.0 / vpfs,
             n: 0,
@@ -473,16 +461,15 @@ impl RealtimeRenderer {
         self.amplitude.as_ref().map(|a| a.table.value_at(x_mm, self.extend).min(a.a_max_um))
     }
 
-    /// The unit-RMS carrier at `phase` (a full cycle is 2^64); `S` is the shape.
+    /// The unit-RMS carrier at `phase` (a full cycle is 2^64); `S` is the
+    /// shape. The sine is the offline render's polynomial
+    /// ([`crate::signal::sin_turns`], within 4.5e-16 of sin), at the phase
+    /// in turns (the accumulator's top 53 bits).
     #[inline(always)]
-    fn carrier_at<const S: u8>(sine: &[f64; SINE_LEN + 1], phase: u64) -> f64 {
+    fn carrier_at<const S: u8>(phase: u64) -> f64 {
         match S {
             SINE => {
-                let i = (phase >> INDEX_SHIFT) as usize;
-                // The 32 bits below the index as the fraction in [0, 1).
-                let f = ((phase >> (INDEX_SHIFT - 32)) as u32) as f64 * (1.0 / 4_294_967_296.0);
-                let (a, b) = (sine[i], sine[i + 1]);
-                a + f * (b - a)
+                std::f64::consts::SQRT_2 * crate::signal::sin_turns(phase as f64 * (1.0 / 18_446_744_073_709_551_616.0))
             }
             SQUARE => {
                 if phase < 1 << 63 {
@@ -529,7 +516,7 @@ impl RealtimeRenderer {
                 (self.x_report, 0.0, 0.0)
             };
             let envelope_v = limiter.apply(requested);
-            let signal_v = envelope_v * Self::carrier_at::<S>(&self.sine, phase);
+            let signal_v = envelope_v * Self::carrier_at::<S>(phase);
             phase = phase.wrapping_add(self.phase_step);
             write(i, Sample { t_s, x_mm, envelope_v, signal_v, amplitude_um });
         }
@@ -691,9 +678,10 @@ mod tests {
         }
     }
 
-    /// The table sine carrier against sin(): within 5e-6 of the peak (the
-    /// linear-interpolation bound of a 1024-point table, 4.7e-6), at the
-    /// frequency asked for.
+    /// The sine carrier against sin() at the frequency asked for: within
+    /// 1e-12 of the peak over 1 s (the polynomial's 4.5e-16; the
+    /// accumulator's step, f / fs rounded in f64 then to 2^-64 turns, off by
+    /// ~1e-16 relative: a phase drift of 1e-14 turns per 10^4 cycles).
     #[test]
     fn sine_carrier_matches_sin() {
         let c = VoltageCurve::new(vec![0.0, 1.0], vec![100.0, 100.0]).unwrap();
@@ -701,8 +689,11 @@ mod tests {
         r.touch(0.0, 0.5);
         for n in 0..48_000 {
             let s = r.next_sample();
-            let exact = 100.0 * std::f64::consts::SQRT_2 * (std::f64::consts::TAU * 1000.0 * n as f64 / 48_000.0).sin();
-            assert!((s.signal_v - exact).abs() < 5e-6 * 141.43, "n = {n}: {} vs {exact}", s.signal_v);
+            // The phase reduced to one turn exactly first (1000 n mod 48000):
+            // sin of the unreduced 2 pi f t carries its rounding, 1e-13 rad.
+            let turns = (1000 * n % 48_000) as f64 / 48_000.0;
+            let exact = 100.0 * std::f64::consts::SQRT_2 * (std::f64::consts::TAU * turns).sin();
+            assert!((s.signal_v - exact).abs() < 1e-12 * 141.43, "n = {n}: {} vs {exact}", s.signal_v);
         }
     }
 
