@@ -12,6 +12,7 @@ pub mod database;
 pub mod electrovibration;
 pub mod io;
 pub mod library;
+pub mod live;
 pub mod num;
 pub mod profile;
 pub mod ranges;

@@ -264,6 +264,7 @@ pub struct RealtimeRenderer {
     // Clock.
     n: u64,
     dt_s: f64,
+    sample_rate_hz: f64,
     // Touch state: last report, velocity, blended correction.
     touching: bool,
     t_report: f64,
@@ -335,6 +336,7 @@ impl RealtimeRenderer {
             output_scale: 1.0 / vpfs,
             n: 0,
             dt_s: 1.0 / fs,
+            sample_rate_hz: fs,
             touching: false,
             t_report: 0.0,
             x_report: x0,
@@ -387,6 +389,11 @@ impl RealtimeRenderer {
     /// the first sample).
     pub fn now_s(&self) -> f64 {
         self.n as f64 * self.dt_s
+    }
+
+    /// Output sample rate in Hz.
+    pub fn sample_rate_hz(&self) -> f64 {
+        self.sample_rate_hz
     }
 
     /// Samples rendered so far (the index of the next one).

@@ -72,3 +72,40 @@ fn fill_loop_does_not_allocate() {
         }
     }
 }
+
+/// Issue 18: the live engine's callback (`LiveEngine::process`, what
+/// `haptex live` runs on the audio thread) does not allocate either: touch
+/// events from a bounded std channel (`try_recv`, the CLI's queue), a
+/// scheduled log, the fades, a gap and the stop, two channels in four-channel
+/// frames. The channel and the engine are built before counting.
+#[test]
+fn live_callback_does_not_allocate() {
+    use haptex_core::live::{LiveConfig, LiveEngine, Touch, TouchEvent};
+    let x: Vec<f64> = (0..=2000).map(|i| i as f64 * 0.01).collect();
+    let u = x.iter().map(|x| 60.0 + 50.0 * (x * 3.0).sin()).collect();
+    let a = x.iter().map(|x| 1.0 + (x * 2.0).cos()).collect();
+    let curve = VoltageCurve::new(x.clone(), u).unwrap();
+    let amplitude = AmplitudeCurve::new(x, a).unwrap();
+    let renderer = RealtimeRenderer::two_channel(&curve, &amplitude, 1.5, &RealtimeConfig::default()).unwrap();
+    let schedule = (0..50).map(|k| TouchEvent { t_s: 1.0 + k as f64 / 120.0, touch: Touch::At(5.0), received: None });
+    let mut engine = LiveEngine::new(renderer, &LiveConfig::new(4)).unwrap().with_schedule(schedule.collect()).unwrap();
+    let (sender, receiver) = std::sync::mpsc::sync_channel::<TouchEvent>(64);
+    let mut out = vec![0.0f32; 4 * 256];
+    let started = std::time::Instant::now();
+    let count = allocations_in(|| {
+        for k in 0..600 {
+            let t = k as f64 * 256.0 / 48_000.0;
+            if k % 2 == 0 && !(0.5..0.8).contains(&t) {
+                let touch = if k == 100 { Touch::Lift } else { Touch::At(2.0 + 10.0 * t) };
+                sender.try_send(TouchEvent { t_s: t, touch, received: Some(started) }).unwrap();
+            }
+            if k == 550 {
+                engine.stop();
+            }
+            engine.process(&mut out, || receiver.try_recv().ok());
+        }
+    });
+    assert_eq!(count, 0, "{count} allocations in the live callback");
+    assert!(engine.is_finished());
+    assert!(engine.status().events.load(std::sync::atomic::Ordering::Relaxed) > 200);
+}
