@@ -4,6 +4,7 @@ pub mod cae;
 pub mod check;
 pub mod db;
 pub mod library;
+pub mod live;
 pub mod play;
 pub mod predict;
 pub mod serve;

@@ -1,0 +1,223 @@
+//! Issue 18 acceptance: `haptex live` on a real ALSA device. The test
+//! writes an asoundrc (HOME pointed at a temporary directory) defining
+//! `haptex_capture`, ALSA's `file` PCM plugin (built into libasound)
+//! wrapping the `null` PCM: the command opens, streams to and closes it
+//! like any output device, and the plugin writes every frame it was given
+//! to a raw file, which is compared with the offline `haptex play` of the
+//! same touch log.
+//!
+//! The `null` PCM does not pace: it takes samples as fast as the callback
+//! makes them (2 s of audio in under 1 ms here). The touch log is replayed
+//! on the output's sample clock, so the captured samples are those a
+//! paced device would get; the latency figures on this device are the
+//! renderer's only (its reported buffer delay is 0).
+//!
+//! Built only with the `live` feature (cpal, libasound2-dev); without it,
+//! the one test here checks that `haptex live` says how to get it.
+
+mod common;
+
+use common::{haptex, stderr, write};
+
+#[cfg(not(feature = "live"))]
+#[test]
+fn without_the_feature_live_says_how_to_build_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let profile = write(dir.path(), "u.csv", "x_mm,voltage_v\n0,10\n1,20\n");
+    let out = haptex(&["live", "--profile", &profile, "--stdin"]);
+    assert!(!out.status.success());
+    let e = stderr(&out);
+    assert!(e.contains("built without audio output") && e.contains("--features live"), "{e}");
+}
+
+#[cfg(feature = "live")]
+mod device {
+    use super::*;
+    use std::path::Path;
+    use std::process::{Command, Output, Stdio};
+
+    const FS: usize = 48_000;
+
+    /// A HOME with an .asoundrc defining `haptex_capture`: the file plugin
+    /// writing raw frames to `capture` through the null PCM.
+    fn alsa_home(dir: &Path, capture: &Path) {
+        let rc = format!(
+            "pcm.haptex_capture {{\n    type file\n    slave.pcm \"null\"\n    file \"{}\"\n    format \"raw\"\n    \
+             hint {{\n        show on\n        description \"haptex test capture\"\n    }}\n}}\n",
+            capture.display()
+        );
+        std::fs::write(dir.join(".asoundrc"), rc).unwrap();
+    }
+
+    fn live(home: &Path, args: &[&str], stdin: Option<&str>) -> Output {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_haptex"))
+            .arg("live")
+            .args(args)
+            .env("HOME", home)
+            .env_remove("ALSA_CONFIG_PATH")
+            .stdin(if stdin.is_some() { Stdio::piped() } else { Stdio::null() })
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run haptex live");
+        if let Some(text) = stdin {
+            use std::io::Write;
+            child.stdin.take().unwrap().write_all(text.as_bytes()).unwrap();
+        }
+        child.wait_with_output().unwrap()
+    }
+
+    fn read_f32(path: &Path) -> Vec<f32> {
+        let bytes = std::fs::read(path).unwrap();
+        bytes.chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect()
+    }
+
+    /// A combined design (`haptex voltage --display combined`: voltage and
+    /// ultrasonic amplitude) and a touch log of a constant-velocity sweep
+    /// at 120 Hz, 1 s, crossing the bump. `haptex live` replays the log
+    /// into the ALSA file device (48 kHz, 2 channels, f32, 256-frame
+    /// buffers); `haptex play` renders the same log offline as a float32
+    /// WAV. After the documented 20 ms start ramp and up to the last
+    /// report, every captured sample equals the offline one within one f32
+    /// step at full scale (2^-23): same positions (the extrapolation of a
+    /// constant velocity is exact once two reports are in), same carrier
+    /// polynomial, same scales (volts / volts_per_full_scale on channel 1,
+    /// um / a_max on channel 2). During the ramp the output stays within
+    /// gain x the U_max peak; after the stop ramp it is exactly 0.
+    #[test]
+    fn replayed_touch_log_on_the_alsa_file_device_equals_the_offline_render() {
+        let dir = tempfile::tempdir().unwrap();
+        let capture = dir.path().join("capture.raw");
+        alsa_home(dir.path(), &capture);
+        let design = dir.path().join("bump_ua.csv");
+        let bump = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/examples/bump_friction.csv");
+        let out =
+            haptex(&["voltage", "--profile", bump, "--display", "combined", "-q", "-o", design.to_str().unwrap()]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let mut log = String::from("t_s,x_mm\n");
+        for k in 0..=120 {
+            let t = k as f64 / 120.0;
+            log.push_str(&format!("{t:?},{:?}\n", 2.0 + 6.0 * t));
+        }
+        let log = write(dir.path(), "log.csv", &log);
+        let json = dir.path().join("run.json");
+        let args = [
+            "--profile",
+            design.to_str().unwrap(),
+            "--touch-log",
+            &log,
+            "--device",
+            "haptex_capture",
+            "--sample-rate",
+            "48000",
+            "--buffer-frames",
+            "256",
+            "--json",
+            json.to_str().unwrap(),
+        ];
+        let out = live(dir.path(), &args, None);
+        let e = stderr(&out);
+        assert!(out.status.success(), "{e}");
+        assert!(
+            e.contains("haptex_capture, 48000 Hz, 2 channels") && e.contains("latency: touch to first sample"),
+            "{e}"
+        );
+        let run: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        assert_eq!(run["events"], 121);
+        assert_eq!(run["sample_format"], "f32");
+        assert_eq!(run["clamped_samples"], 0);
+        assert!(run["render_latency_max_s"].as_f64().unwrap() < 1.0 / FS as f64, "{run}");
+
+        let wav = dir.path().join("offline.wav");
+        let out = haptex(&[
+            "play",
+            "--profile",
+            design.to_str().unwrap(),
+            "--trajectory",
+            &log,
+            "--wav-format",
+            "float32",
+            "-q",
+            "-o",
+            wav.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let offline: Vec<f32> = hound::WavReader::open(&wav).unwrap().samples::<f32>().map(Result::unwrap).collect();
+        let captured = read_f32(&capture);
+        let n = offline.len() / 2;
+        assert_eq!(n, FS + 1);
+        assert_eq!(captured.len() as u64, 2 * run["frames"].as_u64().unwrap(), "every frame reached the file");
+        assert!(captured.len() >= offline.len());
+
+        let ramp = FS / 50; // 20 ms
+        let step = f32::EPSILON;
+        let (mut worst_1, mut worst_2, mut moving) = (0.0f32, 0.0f32, 0usize);
+        for i in ramp..n - 1 {
+            worst_1 = worst_1.max((captured[2 * i] - offline[2 * i]).abs());
+            worst_2 = worst_2.max((captured[2 * i + 1] - offline[2 * i + 1]).abs());
+            moving += usize::from(offline[2 * i] != 0.0);
+        }
+        assert!(moving > FS / 2, "the offline drive is not silent ({moving} non-zero samples)");
+        assert!(worst_1 <= step && worst_2 <= step, "channel 1 {worst_1}, channel 2 {worst_2} (f32 step {step})");
+        // The start ramp: from 0 V, within gain x the U_max sine peak
+        // (the full scale is that peak here).
+        assert_eq!(captured[0], 0.0);
+        for i in 0..ramp {
+            let gain = (i + 1) as f32 / ramp as f32;
+            assert!(captured[2 * i].abs() <= gain + step, "sample {i}: {}", captured[2 * i]);
+        }
+        // The stop ramp from the last report (1 s), then silence.
+        assert!(captured[2 * (n + ramp + 1)..].iter().all(|&v| v == 0.0), "silent after the stop ramp");
+    }
+
+    /// Touches from stdin: events applied, the output faded at end of
+    /// input; a bad line stops the output with an error naming the line
+    /// and field. An unknown device is refused with the list of devices.
+    #[test]
+    fn stdin_touches_and_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let capture = dir.path().join("capture.raw");
+        alsa_home(dir.path(), &capture);
+        let profile = write(dir.path(), "u.csv", "x_mm,voltage_v\n0,40\n10,80\n");
+        let json = dir.path().join("run.json");
+        let args = ["--profile", &profile, "--stdin", "--device", "haptex_capture", "--json", json.to_str().unwrap()];
+        let out = live(dir.path(), &args, Some("# a comment\nx_mm\n1.0\n2.5\n0.5,3.0\nlift\n4\n"));
+        assert!(out.status.success(), "{}", stderr(&out));
+        let run: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        assert_eq!(run["events"], 5, "{run}");
+        assert_eq!(run["channels"], 1);
+        let peak = run["peak_v"].as_f64().unwrap();
+        assert!(peak <= 80.0 * std::f64::consts::SQRT_2 + 1e-3, "peak {peak} V");
+        assert!(read_f32(&capture).iter().all(|v| v.abs() <= 1.0));
+
+        let out = live(dir.path(), &args, Some("1.0\n2.0,abc\n"));
+        assert!(!out.status.success());
+        let e = stderr(&out);
+        assert!(e.contains("stdin, line 2, field 'x_mm': expected a finite number, got 'abc'"), "{e}");
+        assert!(e.contains("faded to 0 V"), "{e}");
+
+        let out = live(dir.path(), &["--profile", &profile, "--stdin", "--device", "no_such_pcm"], Some(""));
+        assert!(!out.status.success());
+        let e = stderr(&out);
+        assert!(e.contains("no output device named 'no_such_pcm'") && e.contains("haptex_capture"), "{e}");
+
+        let out = live(dir.path(), &["--list-devices"], None);
+        assert!(out.status.success());
+        assert!(String::from_utf8_lossy(&out.stdout).contains("haptex_capture  haptex test capture"));
+
+        // A combined design needs two channels.
+        let design = write(
+            dir.path(),
+            "d.csv",
+            "# at most a_max = 2 um\nx_mm,mu,voltage_v,amplitude_um\n0,1,10,0.5\n1,1,20,1\n",
+        );
+        let out = live(
+            dir.path(),
+            &["--profile", &design, "--stdin", "--device", "haptex_capture", "--channels", "1"],
+            Some(""),
+        );
+        assert!(!out.status.success());
+        let e = stderr(&out);
+        assert!(e.contains("the design has 2 channels") && e.contains("give at least 2 channels"), "{e}");
+    }
+}
