@@ -170,6 +170,50 @@ mod device {
         assert!(captured[2 * (n + ramp + 1)..].iter().all(|&v| v == 0.0), "silent after the stop ramp");
     }
 
+    /// A touch log with a gap (reports 0-0.5 s, then none until 1.0 s) on
+    /// the ALSA file device: the output is exactly 0 V from 0.5 s + gap +
+    /// ramp (100 + 20 ms, the documented drop-out time) until the reports
+    /// resume, at full level before the gap, and back after it. The
+    /// profile asks for 80 V under --u-max 70: no captured sample exceeds
+    /// the 70 V sine peak (full scale, by default sqrt(2) U_max).
+    #[test]
+    fn a_gap_in_the_touch_log_fades_to_zero_within_the_documented_time() {
+        let dir = tempfile::tempdir().unwrap();
+        let capture = dir.path().join("capture.raw");
+        alsa_home(dir.path(), &capture);
+        let profile = write(
+            dir.path(),
+            "u.csv",
+            "x_mm,voltage_v
+0,80
+10,80
+",
+        );
+        let mut log = String::from(
+            "t_s,x_mm
+",
+        );
+        for k in (0..=60).chain(120..=180) {
+            log.push_str(&format!(
+                "{:?},{:?}
+",
+                k as f64 / 120.0,
+                1.0 + k as f64 / 60.0
+            ));
+        }
+        let log = write(dir.path(), "gap.csv", &log);
+        let args = ["--profile", &profile, "--touch-log", &log, "--device", "haptex_capture", "--u-max", "70"];
+        let out = live(dir.path(), &args, None);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let c = read_f32(&capture);
+        let at = |s: f64| (s * FS as f64) as usize;
+        let level = |a: f64, b: f64| c[at(a)..at(b)].iter().fold(0.0f32, |m, v| m.max(v.abs()));
+        assert!(level(0.4, 0.59) > 0.99, "full level before the gap: {}", level(0.4, 0.59));
+        assert!(c[at(0.5 + 0.1 + 0.02) + 1..at(1.0)].iter().all(|&v| v == 0.0), "0 V from gap + ramp on");
+        assert!(level(1.1, 1.4) > 0.99, "back after the gap");
+        assert!(c.iter().all(|v| v.abs() <= 1.0), "never above the U_max peak");
+    }
+
     /// Touches from stdin: events applied, the output faded at end of
     /// input; a bad line stops the output with an error naming the line
     /// and field. An unknown device is refused with the list of devices.

@@ -156,6 +156,8 @@ mod device {
         output_latency_max_ns: AtomicU64,
         callback_busy_ns: AtomicU64,
         callback_busy_max_ns: AtomicU64,
+        xruns: AtomicU64,
+        realtime_denied: AtomicBool,
         errors: Mutex<Vec<String>>,
     }
 
@@ -184,7 +186,9 @@ mod device {
         let device = find_device(&host, args.device.as_deref())?;
         let device_name = device.id().map(|id| id.id().to_string()).unwrap_or_else(|_| "(unnamed)".into());
         let channels = args.channels.unwrap_or(design_channels);
-        let default_config = device.default_output_config().with_context(|| format!("device {device_name}"))?;
+        let default_config = device
+            .default_output_config()
+            .with_context(|| format!("device {device_name} (haptex live --list-devices lists the output devices)"))?;
         let sample_rate = args.sample_rate.unwrap_or(default_config.sample_rate());
         let format = pick_format(&device, &device_name, channels, sample_rate)?;
         let settings = args.drive.settings(sample_rate);
@@ -250,8 +254,9 @@ mod device {
         stream.play().with_context(|| format!("starting {device_name}"))?;
         if !args.quiet {
             eprintln!(
-                "live: {device_name}, {sample_rate} Hz, {channels} channels ({}), {format}, buffer {}; channel 1 at {} V per \
+                "live: {device_name}, {sample_rate} Hz, {channels} channel{} ({}), {format}, buffer {}; channel 1 at {} V per \
                  full scale (peak bound {:.3} V){}",
+                if channels == 1 { "" } else { "s" },
                 if design_channels == 2 { "drive + ultrasonic amplitude" } else { "drive" },
                 args.buffer_frames.map_or("device default".to_string(), |n| format!("{n} frames")),
                 Num(args.drive.volts_per_full_scale()),
@@ -434,10 +439,22 @@ mod device {
                 shared.callback_busy_max_ns.fetch_max(busy, Ordering::Relaxed);
             },
             move |error: cpal::Error| {
-                // An xrun is reported and the stream goes on; anything else
-                // ends the run (the main thread fades out and closes).
-                if let Ok(mut errors) = error_shared.errors.lock() {
-                    errors.push(error.to_string());
+                // An underrun (the device played silence for a moment) or a
+                // denied real-time priority is counted and the stream goes
+                // on; anything else ends the run (the main thread fades out
+                // and closes).
+                match error.kind() {
+                    cpal::ErrorKind::Xrun => {
+                        error_shared.xruns.fetch_add(1, Ordering::Relaxed);
+                    }
+                    cpal::ErrorKind::RealtimeDenied => {
+                        error_shared.realtime_denied.store(true, Ordering::Relaxed);
+                    }
+                    _ => {
+                        if let Ok(mut errors) = error_shared.errors.lock() {
+                            errors.push(error.to_string());
+                        }
+                    }
                 }
             },
             None,
@@ -549,6 +566,8 @@ mod device {
             "peak_fraction_of_full_scale": status.peak(),
             "peak_v": f64::from(status.peak()) * args.drive.volts_per_full_scale(),
             "clamped_samples": status.clamped_samples.load(Ordering::Relaxed),
+            "xruns": shared.xruns.load(Ordering::Relaxed),
+            "realtime_priority_denied": shared.realtime_denied.load(Ordering::Relaxed),
             "non_finite_samples": status.non_finite_samples.load(Ordering::Relaxed),
             "wall_s": wall_s,
             "audio_s": frames as f64 / f64::from(sample_rate),
@@ -570,23 +589,33 @@ mod device {
             r["wall_s"].as_f64().unwrap_or(0.0),
             r["peak_v"].as_f64().unwrap_or(0.0)
         );
-        eprintln!(
-            "latency: touch to first sample rendered mean {:.3} ms, max {:.3} ms over {} events (queue wait max {:.3} ms); \
+        if r["events"].as_u64().unwrap_or(0) == 0 {
+            eprintln!("latency: no touch events");
+        } else {
+            eprintln!(
+                "latency: touch to first sample rendered mean {:.3} ms, max {:.3} ms over {} events (queue wait max {:.3} ms); \
              device buffer (cpal, callback to playback) {:.3}..{:.3} ms; touch to output at most {:.3} ms",
-            ms("render_latency_mean_s"),
-            ms("render_latency_max_s"),
-            r["events"],
-            ms("queue_wait_max_s"),
-            ms("output_latency_min_s"),
-            ms("output_latency_max_s"),
-            ms("touch_to_output_max_s")
-        );
+                ms("render_latency_mean_s"),
+                ms("render_latency_max_s"),
+                r["events"],
+                ms("queue_wait_max_s"),
+                ms("output_latency_min_s"),
+                ms("output_latency_max_s"),
+                ms("touch_to_output_max_s")
+            );
+        }
         eprintln!(
             "callback: {:.1} ns per frame, longest {:.3} ms; CPU {:.1}% of one core",
             r["callback_ns_per_frame"].as_f64().unwrap_or(0.0),
             ms("callback_max_s"),
             100.0 * r["cpu_fraction"].as_f64().unwrap_or(0.0)
         );
+        let xruns = r["xruns"].as_u64().unwrap_or(0);
+        if xruns > 0 {
+            eprintln!(
+                "warning: {xruns} underruns (the device played silence while waiting for samples): try a larger --buffer-frames"
+            );
+        }
         let clamped = r["clamped_samples"].as_u64().unwrap_or(0);
         if clamped > 0 {
             eprintln!("warning: the last clamp acted on {clamped} samples (a renderer bug: report it)");
