@@ -214,6 +214,131 @@ mod device {
         assert!(c.iter().all(|v| v.abs() <= 1.0), "never above the U_max peak");
     }
 
+    /// A minimal WebSocket client (RFC 6455: the upgrade, masked text
+    /// frames out, unmasked frames in), enough to play the live page.
+    struct WsClient(std::net::TcpStream);
+
+    impl WsClient {
+        fn connect(addr: &str) -> Self {
+            use std::io::{Read, Write};
+            let mut stream = std::net::TcpStream::connect(addr).unwrap();
+            stream.set_read_timeout(Some(std::time::Duration::from_secs(10))).unwrap();
+            write!(
+                stream,
+                "GET /live/ws HTTP/1.1\r\nHost: {addr}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n\
+                 Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n"
+            )
+            .unwrap();
+            let mut head = Vec::new();
+            let mut byte = [0u8];
+            while !head.ends_with(b"\r\n\r\n") {
+                stream.read_exact(&mut byte).unwrap();
+                head.push(byte[0]);
+            }
+            let head = String::from_utf8_lossy(&head);
+            assert!(head.starts_with("HTTP/1.1 101"), "{head}");
+            // The accept key of RFC 6455's example nonce.
+            assert!(head.contains("s3pPLMBiTxaQ9kYGzzhZRbK+xOo="), "{head}");
+            Self(stream)
+        }
+
+        fn send(&mut self, text: &str) {
+            use std::io::Write;
+            let mask = [0x12u8, 0x34, 0x56, 0x78];
+            let mut frame = vec![0x81, 0x80 | text.len() as u8];
+            frame.extend_from_slice(&mask);
+            frame.extend(text.bytes().enumerate().map(|(i, b)| b ^ mask[i % 4]));
+            self.0.write_all(&frame).unwrap();
+        }
+
+        fn receive(&mut self) -> serde_json::Value {
+            use std::io::Read;
+            let mut head = [0u8; 2];
+            self.0.read_exact(&mut head).unwrap();
+            let mut n = usize::from(head[1] & 0x7f);
+            if n == 126 {
+                let mut ext = [0u8; 2];
+                self.0.read_exact(&mut ext).unwrap();
+                n = usize::from(u16::from_be_bytes(ext));
+            }
+            let mut payload = vec![0u8; n];
+            self.0.read_exact(&mut payload).unwrap();
+            serde_json::from_slice(&payload).unwrap()
+        }
+
+        /// Status frames until one satisfies `done` (at most 100, 10 s).
+        fn until(&mut self, what: &str, done: impl Fn(&serde_json::Value) -> bool) -> serde_json::Value {
+            for _ in 0..100 {
+                let frame = self.receive();
+                if done(&frame) {
+                    return frame;
+                }
+            }
+            panic!("no status frame with {what}");
+        }
+    }
+
+    /// Touches over the WebSocket of `haptex live --ws` from a test client
+    /// (the page's protocol: one touch line per message): the renderer
+    /// follows, position in and the expected voltage out, read from the
+    /// status frames the page shows (U = 10 V/mm x, so 2 mm gives 20 V and
+    /// 7.5 mm 75 V, within 1e-9 V). A bad message is answered with an
+    /// error naming the field; the page is served with the profile's span.
+    /// The horizon is 0 (the position is held at each report) and the gap
+    /// 60 s: the test's `null` device does not pace, so its clock runs
+    /// hundreds of times faster than the test's messages.
+    #[test]
+    fn websocket_touches_drive_the_renderer() {
+        use std::io::{BufRead, Read, Write};
+        let dir = tempfile::tempdir().unwrap();
+        alsa_home(dir.path(), &dir.path().join("unused.raw"));
+        let profile = write(dir.path(), "ramp.csv", "x_mm,voltage_v\n0,0\n10,100\n");
+        let json = dir.path().join("run.json");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_haptex"))
+            .args(["live", "--profile", &profile, "--ws", "127.0.0.1:0", "--device", "null"])
+            .args(["--gap-ms", "60000", "--horizon-ms", "0", "--json", json.to_str().unwrap()])
+            .env("HOME", dir.path())
+            .stdin(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut stderr_lines = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+        let addr = loop {
+            let line = stderr_lines.next().expect("haptex live printed its address").unwrap();
+            if let Some(rest) = line.split("WebSocket ws://").nth(1) {
+                break rest.split('/').next().unwrap().to_string();
+            }
+        };
+        let mut http = std::net::TcpStream::connect(&addr).unwrap();
+        write!(http, "GET / HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
+        let mut page = String::new();
+        http.read_to_string(&mut page).unwrap();
+        assert!(page.starts_with("HTTP/1.1 200") && page.contains("(0.0 .. 10.0 mm)"), "{page}");
+
+        let mut ws = WsClient::connect(&addr);
+        let near = |v: &serde_json::Value, key: &str, want: f64| (v[key].as_f64().unwrap() - want).abs() < 1e-9;
+        ws.send("2.0");
+        ws.until("x = 2 mm, U = 20 V", |f| near(f, "x_mm", 2.0) && near(f, "envelope_v", 20.0));
+        ws.send("0.25,7.5");
+        let f = ws.until("x = 7.5 mm, U = 75 V", |f| near(f, "x_mm", 7.5) && near(f, "envelope_v", 75.0));
+        assert!(f["events"].as_u64().unwrap() >= 2, "{f}");
+        ws.send("1.0,abc");
+        let f = ws.until("an error", |f| f.get("error").is_some());
+        assert!(f["error"].as_str().unwrap().contains("field 'x_mm': expected a finite number, got 'abc'"), "{f}");
+        ws.send("lift");
+        ws.until("the finger lifted (0 V)", |f| f["envelope_v"].as_f64() == Some(0.0));
+        drop(ws);
+
+        // SIGTERM: the output fades out and the command ends normally.
+        let status = Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap();
+        assert!(status.success());
+        let rest: Vec<String> = stderr_lines.map_while(Result::ok).collect();
+        assert!(child.wait().unwrap().success(), "{rest:?}");
+        let run: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        assert!(run["events"].as_u64().unwrap() >= 4, "{run}");
+        assert!(run["peak_v"].as_f64().unwrap() <= 75.0 * std::f64::consts::SQRT_2 + 1e-3, "{run}");
+    }
+
     /// Touches from stdin: events applied, the output faded at end of
     /// input; a bad line stops the output with an error naming the line
     /// and field. An unknown device is refused with the list of devices.

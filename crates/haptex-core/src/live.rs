@@ -109,6 +109,13 @@ pub struct LiveStatus {
     pub finished: AtomicBool,
     /// Largest |channel 1| written, as a fraction of full scale, f32 bits.
     pub peak_bits: AtomicU64,
+    /// The last rendered sample: estimated position (mm), the renderer's
+    /// envelope (V RMS, before the gain), the gain, and the amplitude (um,
+    /// before the gain), as f64 bits (for a live display).
+    pub last_x_mm_bits: AtomicU64,
+    pub last_envelope_v_bits: AtomicU64,
+    pub last_gain_bits: AtomicU64,
+    pub last_amplitude_um_bits: AtomicU64,
 }
 
 impl LiveStatus {
@@ -126,6 +133,18 @@ impl LiveStatus {
     /// Largest |channel 1| written, fraction of full scale.
     pub fn peak(&self) -> f32 {
         f32::from_bits(self.peak_bits.load(Ordering::Relaxed) as u32)
+    }
+
+    /// The last rendered sample: (position mm, envelope V RMS before the
+    /// gain, gain, amplitude um before the gain).
+    pub fn last_sample(&self) -> (f64, f64, f64, f64) {
+        let f = |a: &AtomicU64| f64::from_bits(a.load(Ordering::Relaxed));
+        (
+            f(&self.last_x_mm_bits),
+            f(&self.last_envelope_v_bits),
+            f(&self.last_gain_bits),
+            f(&self.last_amplitude_um_bits),
+        )
     }
 }
 
@@ -396,7 +415,9 @@ impl LiveEngine {
         let mut stop = *stopping;
         let (mut clamped, mut non_finite) = (0u64, 0u64);
         let mut peak = status.peak();
+        let mut last = None;
         renderer.render_with(n, |i, s| {
+            last = Some(s);
             stop |= s.t_s >= stop_at_s;
             let on = touching && !stop && s.t_s - last_report_s <= gap_s;
             g = if on { (g + gain_step).min(1.0) } else { (g - gain_step).max(0.0) };
@@ -426,6 +447,12 @@ impl LiveEngine {
         self.gain = g;
         self.stopping = stop;
         let status = &self.status;
+        if let Some(s) = last {
+            status.last_x_mm_bits.store(s.x_mm.to_bits(), Ordering::Relaxed);
+            status.last_envelope_v_bits.store(s.envelope_v.to_bits(), Ordering::Relaxed);
+            status.last_gain_bits.store(g.to_bits(), Ordering::Relaxed);
+            status.last_amplitude_um_bits.store(s.amplitude_um.to_bits(), Ordering::Relaxed);
+        }
         status.peak_bits.store(u64::from(peak.to_bits()), Ordering::Relaxed);
         if clamped > 0 {
             status.clamped_samples.fetch_add(clamped, Ordering::Relaxed);

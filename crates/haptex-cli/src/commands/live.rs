@@ -27,9 +27,10 @@ use super::play::DriveArgs;
 ///
 /// Touch input: --touch-log T.csv (`t_s,x_mm`, replayed on the output's
 /// clock from its first time, then the output fades out and the command
-/// ends), or --stdin (lines `x_mm`, stamped on arrival, or `t_s,x_mm` on
+/// ends), --stdin (lines `x_mm`, stamped on arrival, or `t_s,x_mm` on
 /// the sender's clock; `lift` when the finger leaves; the output fades out
-/// at end of input).
+/// at end of input), or --ws ADDR (a web page on a touchscreen or tablet
+/// sends the same lines over a WebSocket).
 ///
 /// Safety: the drive fades in over --ramp-ms at start and at every
 /// touch-down and fades out on stop, lift, error and lost input: with no
@@ -46,6 +47,7 @@ use super::play::DriveArgs;
         haptex live --list-devices\n  \
         haptex voltage --profile data/examples/bump_friction.csv -o bump_u.csv\n  \
         haptex live --profile bump_u.csv --touch-log finger.csv --device hw:CARD=USB,DEV=0 --buffer-frames 256\n  \
+        haptex live --profile bump_u.csv --ws 0.0.0.0:8090   (then open http://THIS-HOST:8090/ on the tablet)\n  \
         my_touch_reader | haptex live --profile bump_u.csv --stdin --volts-per-full-scale 200"
 )]
 pub struct LiveArgs {
@@ -58,12 +60,19 @@ pub struct LiveArgs {
     profile: Option<PathBuf>,
     /// Touch log to replay in real time: `t_s,x_mm` CSV (times strictly
     /// increasing; more columns, e.g. y, are ignored).
-    #[arg(long, value_name = "T.csv", conflicts_with = "stdin", required_unless_present_any = ["stdin", "list_devices"])]
+    #[arg(long, value_name = "T.csv", conflicts_with_all = ["stdin", "ws"], required_unless_present_any = ["stdin", "ws", "list_devices"])]
     touch_log: Option<PathBuf>,
     /// Read touches from stdin: `x_mm` or `t_s,x_mm` per line, `lift` when
     /// the finger leaves.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "ws")]
     stdin: bool,
+    /// Serve the live page and its WebSocket at this address (e.g.
+    /// 0.0.0.0:8090 for a tablet on the same network; port 0 picks one):
+    /// touches on the page's strip drive the output (the messages are
+    /// --stdin's lines), and the page shows the position, the voltage and
+    /// the latency. Runs until Ctrl-C.
+    #[arg(long, value_name = "ADDR")]
+    ws: Option<String>,
     /// Output device: its name from --list-devices (default: the host's
     /// default output).
     #[arg(long, value_name = "NAME")]
@@ -173,8 +182,8 @@ mod device {
         // The touch log is read (and refused) before the device is opened.
         let log = match &args.touch_log {
             Some(path) => Some(Trajectory::read_csv_file(path)?),
-            None if args.stdin => None,
-            None => bail!("give --touch-log T.csv or --stdin"),
+            None if args.stdin || args.ws.is_some() => None,
+            None => bail!("give --touch-log T.csv, --stdin or --ws ADDR"),
         };
         for (name, ms) in [("--gap-ms", args.gap_ms), ("--horizon-ms", args.horizon_ms), ("--blend-ms", args.blend_ms)]
         {
@@ -268,6 +277,26 @@ mod device {
         if args.stdin {
             let (clock, shared, input_error) = (Arc::clone(&clock), Arc::clone(&shared), Arc::clone(&input_error));
             std::thread::spawn(move || read_stdin(&sender, &clock, &shared, &input_error));
+        } else if let Some(addr) = &args.ws {
+            let state = WsState {
+                sender,
+                clock: Arc::clone(&clock),
+                status: Arc::clone(&status),
+                shared: Arc::clone(&shared),
+                span_mm: curve.span_mm(),
+                sample_rate,
+            };
+            let (ready_tx, ready_rx) = std::sync::mpsc::channel();
+            let addr = addr.clone();
+            std::thread::spawn(move || serve_ws(&addr, state, &ready_tx));
+            match ready_rx.recv() {
+                Ok(Ok(bound)) => {
+                    // Always printed: tests and scripts read the address from it.
+                    eprintln!("live: page http://{bound}/ , WebSocket ws://{bound}/live/ws (Ctrl-C ends)");
+                }
+                Ok(Err(e)) => failure_at_start(&shared, &status, e)?,
+                Err(_) => failure_at_start(&shared, &status, "the WebSocket server did not start".into())?,
+            }
         } else {
             drop(sender);
         }
@@ -461,18 +490,50 @@ mod device {
         )
     }
 
-    /// The stdin touch source: one event per line, stamped on the output
-    /// clock at arrival, or from the line's own `t_s` (the sender's clock,
-    /// its offset to the output clock fixed by the first stamped line;
-    /// never later than the arrival). End of input, a bad line or a full
-    /// queue stop the output (faded).
+    /// Stops the output (faded) when the input could not start, and
+    /// returns the error after the fade.
+    fn failure_at_start(shared: &Shared, status: &LiveStatus, message: String) -> anyhow::Result<()> {
+        shared.stop.store(true, Ordering::Relaxed);
+        let waited = Instant::now();
+        while !status.finished.load(Ordering::Relaxed) && waited.elapsed() < Duration::from_secs(2) {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        bail!("{message} (the output was faded to 0 V)")
+    }
+
+    /// Turns parsed touch lines into events on the output clock: stamped
+    /// at arrival, or from the line's own `t_s` (the sender's clock, its
+    /// offset to the output clock fixed by the first stamped line; never
+    /// later than the arrival).
+    #[derive(Default)]
+    struct Stamper {
+        offset: Option<f64>,
+    }
+
+    impl Stamper {
+        fn event(&mut self, line: TouchLine, received: Instant, clock: &DeviceClock) -> TouchEvent {
+            let arrival = clock.time_of(received);
+            let (t_s, touch) = match line {
+                TouchLine::Lift => (arrival, Touch::Lift),
+                TouchLine::At { t_s: None, x_mm } => (arrival, Touch::At(x_mm)),
+                TouchLine::At { t_s: Some(t), x_mm } => {
+                    let offset = *self.offset.get_or_insert(arrival - t);
+                    ((t + offset).min(arrival), Touch::At(x_mm))
+                }
+            };
+            TouchEvent { t_s, touch, received: Some(received) }
+        }
+    }
+
+    /// The stdin touch source: one event per line ([`Stamper`]). End of
+    /// input, a bad line or a full queue stop the output (faded).
     fn read_stdin(
         sender: &SyncSender<TouchEvent>,
         clock: &DeviceClock,
         shared: &Shared,
         error: &Mutex<Option<String>>,
     ) {
-        let mut offset: Option<f64> = None;
+        let mut stamper = Stamper::default();
         let fail = |message: String| {
             if let Ok(mut e) = error.lock() {
                 e.get_or_insert(message);
@@ -489,16 +550,7 @@ mod device {
                 Ok(None) => continue,
                 Err(message) => return fail(format!("stdin, line {}, {message}", i + 1)),
             };
-            let arrival = clock.time_of(received);
-            let (t_s, touch) = match parsed {
-                TouchLine::Lift => (arrival, Touch::Lift),
-                TouchLine::At { t_s: None, x_mm } => (arrival, Touch::At(x_mm)),
-                TouchLine::At { t_s: Some(t), x_mm } => {
-                    let offset = *offset.get_or_insert(arrival - t);
-                    ((t + offset).min(arrival), Touch::At(x_mm))
-                }
-            };
-            match sender.try_send(TouchEvent { t_s, touch, received: Some(received) }) {
+            match sender.try_send(stamper.event(parsed, received, clock)) {
                 Ok(()) => {}
                 Err(TrySendError::Full(_)) => {
                     return fail(format!(
@@ -512,6 +564,132 @@ mod device {
         // End of input: lost input, fade out.
         shared.stop.store(true, Ordering::Relaxed);
     }
+
+    /// What the WebSocket handlers share.
+    #[derive(Clone)]
+    struct WsState {
+        sender: SyncSender<TouchEvent>,
+        clock: Arc<DeviceClock>,
+        status: Arc<LiveStatus>,
+        shared: Arc<Shared>,
+        span_mm: (f64, f64),
+        sample_rate: u32,
+    }
+
+    /// The live page and its WebSocket, on a thread of their own (a
+    /// one-thread tokio runtime); `ready` gets the bound address or why not.
+    fn serve_ws(addr: &str, state: WsState, ready: &std::sync::mpsc::Sender<Result<std::net::SocketAddr, String>>) {
+        use axum::routing::get;
+        let runtime = match tokio::runtime::Builder::new_current_thread().enable_all().build() {
+            Ok(r) => r,
+            Err(e) => {
+                let _ = ready.send(Err(format!("starting the WebSocket server: {e}")));
+                return;
+            }
+        };
+        runtime.block_on(async move {
+            let listener = match tokio::net::TcpListener::bind(addr).await {
+                Ok(l) => l,
+                Err(e) => {
+                    let _ = ready.send(Err(format!("--ws {addr}: cannot listen there: {e}")));
+                    return;
+                }
+            };
+            let _ = ready.send(listener.local_addr().map_err(|e| e.to_string()));
+            let app = axum::Router::new().route("/", get(page)).route("/live/ws", get(ws_upgrade)).with_state(state);
+            if let Err(e) = axum::serve(listener, app).await {
+                eprintln!("live: the WebSocket server stopped: {e}");
+            }
+        });
+    }
+
+    async fn page(axum::extract::State(state): axum::extract::State<WsState>) -> axum::response::Html<String> {
+        let (x0, x1) = state.span_mm;
+        axum::response::Html(LIVE_PAGE.replace("{X0}", &format!("{x0:?}")).replace("{X1}", &format!("{x1:?}")))
+    }
+
+    async fn ws_upgrade(
+        axum::extract::State(state): axum::extract::State<WsState>,
+        upgrade: axum::extract::ws::WebSocketUpgrade,
+    ) -> axum::response::Response {
+        upgrade.on_upgrade(move |socket| ws_session(socket, state))
+    }
+
+    /// One page's session: its text messages are touch lines (as
+    /// --stdin's, one or more per message); a bad one is answered with an
+    /// error and lifts the finger; a closed socket lifts it. Every 100 ms
+    /// the page gets the last rendered sample and the latency figures.
+    async fn ws_session(mut socket: axum::extract::ws::WebSocket, state: WsState) {
+        use axum::extract::ws::Message;
+        let mut stamper = Stamper::default();
+        let mut tick = tokio::time::interval(Duration::from_millis(100));
+        let lift = |state: &WsState| {
+            let _ = state.sender.try_send(TouchEvent {
+                t_s: state.clock.time_of(Instant::now()),
+                touch: Touch::Lift,
+                received: Some(Instant::now()),
+            });
+        };
+        loop {
+            tokio::select! {
+                message = socket.recv() => {
+                    let text = match message {
+                        Some(Ok(Message::Text(text))) => text,
+                        Some(Ok(Message::Close(_))) | None | Some(Err(_)) => {
+                            lift(&state);
+                            return;
+                        }
+                        Some(Ok(_)) => continue,
+                    };
+                    let received = Instant::now();
+                    for line in text.as_str().lines() {
+                        let event = match haptex_core::live::parse_touch_line(line) {
+                            Ok(Some(parsed)) => stamper.event(parsed, received, &state.clock),
+                            Ok(None) => continue,
+                            Err(message) => {
+                                lift(&state);
+                                let reply = json!({ "error": format!("message '{line}': {message}") }).to_string();
+                                let _ = socket.send(Message::Text(reply.into())).await;
+                                break;
+                            }
+                        };
+                        if state.sender.try_send(event).is_err() {
+                            let reply = json!({ "error": "touch queue full: the output is not running" }).to_string();
+                            let _ = socket.send(Message::Text(reply.into())).await;
+                        }
+                    }
+                }
+                _ = tick.tick() => {
+                    let (x_mm, envelope_v, gain, amplitude_um) = state.status.last_sample();
+                    let ms = |ns: &AtomicU64| ns_s(ns.load(Ordering::Relaxed)) * 1e3;
+                    let render_max_ms = state.status.max_latency_s() * 1e3;
+                    let output_max_ms = ms(&state.shared.output_latency_max_ns);
+                    let frame = json!({
+                        "x_mm": x_mm,
+                        "envelope_v": envelope_v,
+                        "gain": gain,
+                        "output_v": envelope_v * gain,
+                        "amplitude_um": amplitude_um * gain,
+                        "events": state.status.events.load(Ordering::Relaxed),
+                        "render_latency_mean_ms": state.status.mean_latency_s().map(|s| s * 1e3),
+                        "render_latency_max_ms": render_max_ms,
+                        "queue_wait_max_ms": ms(&state.status.queue_wait_max_ns),
+                        "output_latency_max_ms": output_max_ms,
+                        "touch_to_output_max_ms": render_max_ms + output_max_ms,
+                        "sample_rate_hz": state.sample_rate,
+                    });
+                    if socket.send(Message::Text(frame.to_string().into())).await.is_err() {
+                        lift(&state);
+                        return;
+                    }
+                }
+            }
+        }
+    }
+
+    /// The live page: a strip spanning the profile; touches (or a held
+    /// mouse button) on it send `t_s,x_mm` lines, lifting sends `lift`.
+    const LIVE_PAGE: &str = include_str!("live_page.html");
 
     fn ns_s(ns: u64) -> f64 {
         if ns == u64::MAX { 0.0 } else { ns as f64 * 1e-9 }
