@@ -374,6 +374,17 @@ mod device {
         assert!(out.status.success());
         assert!(String::from_utf8_lossy(&out.stdout).contains("haptex_capture  haptex test capture"));
 
+        // A full scale below the drive's peak is refused before anything plays.
+        let out = live(
+            dir.path(),
+            &["--profile", &profile, "--stdin", "--device", "null", "--volts-per-full-scale", "50"],
+            Some(""),
+        );
+        assert!(!out.status.success());
+        let e = stderr(&out);
+        assert!(e.contains("exceeds the output's full scale of 50 V (--volts-per-full-scale)"), "{e}");
+        assert!(!e.contains("live: null"), "refused before the device was started: {e}");
+
         // A combined design needs two channels.
         let design = write(
             dir.path(),

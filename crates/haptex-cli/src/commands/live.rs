@@ -137,6 +137,7 @@ mod device {
     use haptex_core::live::{DeviceClock, LiveConfig, LiveEngine, LiveStatus, Touch, TouchEvent, TouchLine};
     use haptex_core::num::Num;
     use haptex_core::realtime::{RealtimeConfig, RealtimeRenderer};
+    use haptex_core::signal::SignalError;
     use haptex_core::trajectory::Trajectory;
     use serde_json::json;
 
@@ -213,9 +214,17 @@ mod device {
             table_points: None,
         };
         let renderer = match (&amplitude, a_max_um) {
-            (Some(amplitude), Some(a_max)) => RealtimeRenderer::two_channel(&curve, amplitude, a_max, &config)?,
-            _ => RealtimeRenderer::new(&curve, &config)?,
-        };
+            (Some(amplitude), Some(a_max)) => RealtimeRenderer::two_channel(&curve, amplitude, a_max, &config),
+            _ => RealtimeRenderer::new(&curve, &config),
+        }
+        .map_err(|e| match e {
+            SignalError::ExceedsFullScale { amplitude_v, volts_per_full_scale } => anyhow::anyhow!(
+                "refused: the drive's peak {amplitude_v:.3} V exceeds the output's full scale of {} V \
+                 (--volts-per-full-scale); raise it to at least {amplitude_v:.3} V or lower --u-max",
+                Num(volts_per_full_scale)
+            ),
+            other => other.into(),
+        })?;
         let peak_bound_v = renderer.peak_bound_v();
         let live_config =
             LiveConfig { channels: usize::from(channels), ramp_s: args.ramp_ms * 1e-3, gap_s: args.gap_ms * 1e-3 };
