@@ -470,7 +470,7 @@ impl RealtimeRenderer {
 
     /// The unit-RMS carrier at `phase` (a full cycle is 2^64); `S` is the
     /// shape. The sine is the offline render's polynomial
-    /// ([`crate::signal::sin_turns`], within 4.5e-16 of sin), at the phase
+    /// (`signal::carrier::sin_turns`, within 4.5e-16 of sin), at the phase
     /// in turns (the accumulator's top 53 bits).
     #[inline(always)]
     fn carrier_at<const S: u8>(phase: u64) -> f64 {
