@@ -472,6 +472,43 @@ pub enum TouchLine {
     Lift,
 }
 
+/// Largest clock-rate difference between a touch sender and the output
+/// that [`TouchStamper`] follows: 1000 ppm (crystal clocks differ by under
+/// 100 ppm).
+pub const CLOCK_DRIFT: f64 = 1e-3;
+
+/// Maps touch lines onto the output clock: a line without a time at its
+/// arrival; a line with the sender's `t_s` at t_s + offset, the offset
+/// being the smallest arrival - t_s seen (the fastest delivery), allowed to
+/// rise by [`CLOCK_DRIFT`] per second of sender time, so that a sender
+/// clock running slower than the output's does not leave the stamps ever
+/// further behind (which would look like a gap and fade the output out).
+/// No stamp is later than its arrival.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct TouchStamper {
+    offset: Option<(f64, f64)>,
+}
+
+impl TouchStamper {
+    /// The output-clock time and the touch of `line`, which arrived at
+    /// `arrival_s` on the output clock.
+    pub fn stamp(&mut self, line: TouchLine, arrival_s: f64) -> (f64, Touch) {
+        match line {
+            TouchLine::Lift => (arrival_s, Touch::Lift),
+            TouchLine::At { t_s: None, x_mm } => (arrival_s, Touch::At(x_mm)),
+            TouchLine::At { t_s: Some(t), x_mm } => {
+                let delay = arrival_s - t;
+                let offset = match self.offset {
+                    Some((offset, t_last)) => (offset + CLOCK_DRIFT * (t - t_last).abs()).min(delay),
+                    None => delay,
+                };
+                self.offset = Some((offset, t));
+                ((t + offset).min(arrival_s), Touch::At(x_mm))
+            }
+        }
+    }
+}
+
 /// Parses one line of a touch stream: `x_mm`, `t_s,x_mm` (more columns,
 /// e.g. y, are ignored), `lift` or `up`. Blank lines, `#` comments and a
 /// header (a first field that is `x_mm` or `t_s`) give `None`. The error

@@ -134,7 +134,9 @@ mod device {
     use anyhow::{Context, bail};
     use cpal::traits::{DeviceTrait, HostTrait, StreamTrait};
     use cpal::{FromSample, SampleFormat, SizedSample};
-    use haptex_core::live::{DeviceClock, LiveConfig, LiveEngine, LiveStatus, Touch, TouchEvent, TouchLine};
+    use haptex_core::live::{
+        DeviceClock, LiveConfig, LiveEngine, LiveStatus, Touch, TouchEvent, TouchLine, TouchStamper,
+    };
     use haptex_core::num::Num;
     use haptex_core::realtime::{RealtimeConfig, RealtimeRenderer};
     use haptex_core::signal::SignalError;
@@ -510,26 +512,14 @@ mod device {
         bail!("{message} (the output was faded to 0 V)")
     }
 
-    /// Turns parsed touch lines into events on the output clock: stamped
-    /// at arrival, or from the line's own `t_s` (the sender's clock, its
-    /// offset to the output clock fixed by the first stamped line; never
-    /// later than the arrival).
+    /// Turns parsed touch lines into events on the output clock
+    /// ([`TouchStamper`]: at arrival, or from the line's own `t_s`).
     #[derive(Default)]
-    struct Stamper {
-        offset: Option<f64>,
-    }
+    struct Stamper(TouchStamper);
 
     impl Stamper {
         fn event(&mut self, line: TouchLine, received: Instant, clock: &DeviceClock) -> TouchEvent {
-            let arrival = clock.time_of(received);
-            let (t_s, touch) = match line {
-                TouchLine::Lift => (arrival, Touch::Lift),
-                TouchLine::At { t_s: None, x_mm } => (arrival, Touch::At(x_mm)),
-                TouchLine::At { t_s: Some(t), x_mm } => {
-                    let offset = *self.offset.get_or_insert(arrival - t);
-                    ((t + offset).min(arrival), Touch::At(x_mm))
-                }
-            };
+            let (t_s, touch) = self.0.stamp(line, clock.time_of(received));
             TouchEvent { t_s, touch, received: Some(received) }
         }
     }
