@@ -374,6 +374,11 @@ mod device {
         assert!(out.status.success());
         assert!(String::from_utf8_lossy(&out.stdout).contains("haptex_capture  haptex test capture"));
 
+        let out = live(dir.path(), &["--profile", "-", "--stdin", "--device", "null"], Some(""));
+        assert!(stderr(&out).contains("--profile - and --stdin both read stdin"), "{}", stderr(&out));
+        let out = live(dir.path(), &["--profile", &profile, "--stdin", "--ramp-ms", "20000"], Some(""));
+        assert!(stderr(&out).contains("--ramp-ms must be at most 10000 ms, got 20000"), "{}", stderr(&out));
+
         // A full scale below the drive's peak is refused before anything plays.
         let out = live(
             dir.path(),

@@ -179,6 +179,12 @@ mod device {
             return list_devices(&host);
         }
         let profile = args.profile.as_deref().context("give --profile U.csv")?;
+        if args.stdin && profile.as_os_str() == "-" {
+            bail!("--profile - and --stdin both read stdin: give the profile as a file");
+        }
+        if args.ramp_ms > 10_000.0 {
+            bail!("--ramp-ms must be at most 10000 ms, got {}", Num(args.ramp_ms));
+        }
         let (curve, amplitude, stated_a_max) = read_curve(profile)?;
         let a_max_um = args.drive.a_max_um(profile, amplitude.as_ref(), stated_a_max)?;
         let design_channels: u16 = if a_max_um.is_some() { 2 } else { 1 };
