@@ -262,7 +262,7 @@ proptest! {
                 touch: if kind == 0 { Touch::Lift } else { Touch::At(x) },
                 received: None,
             });
-            if k == events.len() - 3 {
+            if k + 3 == events.len() {
                 engine.stop();
             }
             engine.process(&mut out, || e.take());
