@@ -279,3 +279,102 @@ fn play_over_a_map_along_a_row_is_the_profile_playback() {
     let out = haptex(&["play", "--voltage-map", &p("v.npy"), "--trajectory", &tr1, "-o", &p("s3.csv")]);
     assert!(!out.status.success() && stderr(&out).contains("y_mm"), "{}", stderr(&out));
 }
+
+/// `haptex map compose`: a 4 x 3 label image with three gray levels, a
+/// constant, a profile tiled along x and a library material (the stroke
+/// `haptex library sample --seed 7` picks, tiled): each cell holds its
+/// region's value at its x; a level without a region, a level given twice
+/// and a colour image are refused.
+#[test]
+fn compose_fills_each_region() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let png_of = |name: &str, w: u32, h: u32, color: png::ColorType, data: &[u8]| {
+        let file = std::fs::File::create(dir.path().join(name)).unwrap();
+        let mut enc = png::Encoder::new(file, w, h);
+        enc.set_color(color);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.write_header().unwrap().write_image_data(data).unwrap();
+        p(name)
+    };
+    // Top row first: the top row is y = 2 dy.
+    let labels = png_of("l.png", 4, 3, png::ColorType::Grayscale, &[0, 0, 128, 128, 255, 255, 0, 0, 128, 255, 0, 128]);
+    let out = haptex(&[
+        "map",
+        "compose",
+        &labels,
+        "--region",
+        "0=0.45",
+        "--region",
+        &format!("128=profile:{EXAMPLE}"),
+        "--region",
+        "255=material:linen",
+        "--seed",
+        "7",
+        "--pixel-mm",
+        "3.5",
+        "-o",
+        &p("c.csv"),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("gray level 255: material linen"), "{}", stderr(&out));
+    let sample = haptex(&["library", "sample", "--material", "linen", "--seed", "7"]);
+    assert!(sample.status.success(), "{}", stderr(&sample));
+    let st = Table::read(sample.stdout.as_slice(), "linen").unwrap();
+    let (lx, lm) = (st.column("x_mm").unwrap().to_vec(), st.column("mu").unwrap().to_vec());
+    let ex = Table::read(std::fs::read(EXAMPLE).unwrap().as_slice(), "ex").unwrap();
+    let (px, pm) = (ex.column("x_mm").unwrap().to_vec(), ex.column("mu").unwrap().to_vec());
+    let tiled = |xs: &[f64], ms: &[f64], x: f64| {
+        let (x0, span) = (xs[0], xs[xs.len() - 1] - xs[0]);
+        interpolate(xs, ms, x0 + (x - x0).rem_euclid(span))
+    };
+    let path = std::path::Path::new(&p("c.csv")).to_path_buf();
+    let (x, mu) = (column(&path, "x_mm"), column(&path, "mu"));
+    let image = [0u8, 0, 128, 128, 255, 255, 0, 0, 128, 255, 0, 128];
+    for k in 0..12 {
+        let (i, j) = (k % 4, k / 4);
+        let label = image[(2 - j) * 4 + i];
+        let want = match label {
+            0 => 0.45,
+            128 => tiled(&px, &pm, x[k]),
+            _ => tiled(&lx, &lm, x[k]),
+        };
+        assert!((mu[k] - want).abs() < 1e-12, "cell {k} (label {label}, x {}): {} vs {want}", x[k], mu[k]);
+    }
+    let missing = haptex(&[
+        "map",
+        "compose",
+        &labels,
+        "--region",
+        "0=0.45",
+        "--region",
+        "128=0.6",
+        "--pixel-mm",
+        "1",
+        "-o",
+        &p("d.csv"),
+    ]);
+    let e = stderr(&missing);
+    assert!(
+        !missing.status.success() && e.contains("gray level 255 has no region") && e.contains("column 0, row 1"),
+        "{e}"
+    );
+    let twice = haptex(&[
+        "map",
+        "compose",
+        &labels,
+        "--region",
+        "0=0.45",
+        "--region",
+        "0=0.6",
+        "--pixel-mm",
+        "1",
+        "-o",
+        &p("d.csv"),
+    ]);
+    assert!(stderr(&twice).contains("given twice"), "{}", stderr(&twice));
+    let rgb = png_of("rgb.png", 2, 2, png::ColorType::Rgb, &[0; 12]);
+    let e = stderr(&haptex(&["map", "compose", &rgb, "--region", "0=0.5", "--pixel-mm", "1", "-o", &p("d.csv")]));
+    assert!(e.contains("rgb.png") && e.contains("8-bit grayscale"), "{e}");
+    assert!(!dir.path().join("d.csv").exists());
+}

@@ -815,3 +815,118 @@ impl PeriodicFit {
         v
     }
 }
+
+/// What fills a region of a composed map.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RegionFill {
+    /// One friction coefficient.
+    Constant(f64),
+    /// A line texture (a library material's or any friction profile)
+    /// along x, tiled with the profile's span as its period (x -> x0 +
+    /// (x - x0) mod span) and the same on every row.
+    Texture(crate::profile::FrictionProfile),
+}
+
+impl RegionFill {
+    fn mu_at(&self, x_mm: f64) -> f64 {
+        match self {
+            RegionFill::Constant(mu) => *mu,
+            RegionFill::Texture(p) => {
+                let x = p.x_mm();
+                let (x0, span) = (x[0], x[x.len() - 1] - x[0]);
+                p.mu_at(x0 + (x_mm - x0).rem_euclid(span))
+            }
+        }
+    }
+}
+
+/// An 8-bit grayscale label image: each gray level names a region.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LabelImage {
+    pub width: usize,
+    pub height: usize,
+    /// Row by row from the top row, as the image stores them.
+    pub labels: Vec<u8>,
+}
+
+impl LabelImage {
+    /// Reads an 8-bit grayscale PNG (at most [`MAX_CELLS`] pixels).
+    pub fn read_png(bytes: &[u8], source_name: &str) -> Result<Self, MapError> {
+        let err = |m: String| MapError::new(source_name, None, m);
+        let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+        decoder.set_transformations(png::Transformations::IDENTITY);
+        let mut reader = decoder.read_info().map_err(|e| err(format!("not a readable PNG: {e}")))?;
+        let info = reader.info();
+        let (width, height) = (info.width as usize, info.height as usize);
+        if info.color_type != png::ColorType::Grayscale || info.bit_depth != png::BitDepth::Eight {
+            return Err(err(format!(
+                "{:?} at {:?}: a label image is 8-bit grayscale, one gray level per region",
+                info.color_type, info.bit_depth
+            )));
+        }
+        if width.checked_mul(height).is_none_or(|n| n > MAX_CELLS) || width < 2 || height < 2 {
+            return Err(err(format!("{width} x {height} pixels: from 2 x 2 to {MAX_CELLS} pixels")));
+        }
+        let size = reader.output_buffer_size().ok_or_else(|| err("image too large".into()))?;
+        let mut buffer = vec![0u8; size];
+        let frame = reader.next_frame(&mut buffer).map_err(|e| err(format!("cannot decode the image: {e}")))?;
+        let stride = frame.line_size;
+        let labels = (0..height).flat_map(|r| buffer[r * stride..r * stride + width].iter().copied()).collect();
+        Ok(Self { width, height, labels })
+    }
+
+    /// The map of a label image: one cell per pixel (the top row at the
+    /// largest y), each cell filled by its label's region; every label
+    /// present must have one (the error names the label and its first
+    /// pixel, column and row from the top left).
+    pub fn compose(
+        &self,
+        fill: &dyn Fn(u8) -> Option<RegionFill>,
+        spacing_mm: (f64, f64),
+        origin_mm: (f64, f64),
+        source_name: &str,
+    ) -> Result<FrictionMap, MapError> {
+        let grid = MapGrid {
+            nx: self.width,
+            ny: self.height,
+            x0_mm: origin_mm.0,
+            y0_mm: origin_mm.1,
+            dx_mm: spacing_mm.0,
+            dy_mm: spacing_mm.1,
+        };
+        grid.validate(source_name)?;
+        let mut fills: Vec<Option<RegionFill>> = vec![None; 256];
+        let mut seen = [false; 256];
+        for (k, &label) in self.labels.iter().enumerate() {
+            if !seen[label as usize] {
+                seen[label as usize] = true;
+                fills[label as usize] = Some(fill(label).ok_or_else(|| {
+                    MapError::new(
+                        source_name,
+                        Some(format!("pixel column {}, row {}", k % self.width, k / self.width)),
+                        format!("gray level {label} has no region: give one for it"),
+                    )
+                })?);
+            }
+        }
+        let mut mu = vec![0.0; grid.len()];
+        for r in 0..self.height {
+            let j = self.height - 1 - r;
+            for i in 0..self.width {
+                let region =
+                    fills[self.labels[r * self.width + i] as usize].as_ref().expect("every label seen has a fill");
+                mu[j * grid.nx + i] = region.mu_at(grid.x(i));
+            }
+        }
+        FrictionMap::new(grid, mu, source_name)
+    }
+
+    /// The distinct labels present, ascending.
+    pub fn levels(&self) -> Vec<u8> {
+        let mut seen = [false; 256];
+        for &l in &self.labels {
+            seen[l as usize] = true;
+        }
+        (0..=255u8).filter(|&l| seen[l as usize]).collect()
+    }
+}

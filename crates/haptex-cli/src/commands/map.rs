@@ -34,6 +34,42 @@ enum MapCommand {
     Voltage(MapVoltageArgs),
     SamplePath(SamplePathArgs),
     Grating(GratingArgs),
+    Compose(ComposeArgs),
+}
+
+/// A friction map from a label image: each gray level of an 8-bit
+/// grayscale PNG is a region, filled with a friction coefficient, a
+/// library material (a stroke of it, tiled along x) or a friction profile
+/// (tiled along x). One cell per pixel, the top row at the largest y.
+#[derive(Debug, Args)]
+#[command(after_help = "Example:\n  haptex map compose labels.png --region 0=0.5 --region 128=material:sponge \
+                  --region 255=profile:data/examples/bump_friction.csv --pixel-mm 0.1 -o composed.csv")]
+struct ComposeArgs {
+    /// The label image (PNG, 8-bit grayscale).
+    labels: PathBuf,
+    /// LEVEL=FILL for each gray level present: a number (mu),
+    /// material:NAME (a library material) or profile:FILE.csv.
+    #[arg(long = "region", value_name = "LEVEL=FILL", required = true)]
+    regions: Vec<String>,
+    /// Pixel size along x in mm.
+    #[arg(long, value_parser = positive)]
+    pixel_mm: f64,
+    /// Pixel size along y in mm (default: --pixel-mm).
+    #[arg(long, value_parser = positive)]
+    pixel_mm_y: Option<f64>,
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    x0_mm: f64,
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    y0_mm: f64,
+    /// Texture library for material:NAME. Default: the shipped library, or $HAPTEX_LIBRARY.
+    #[arg(long, value_name = "DB")]
+    library: Option<PathBuf>,
+    /// Seed of the stroke chosen for each material (the same seed picks the same stroke).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output map (.csv or .npy with its sidecar).
+    #[arg(short, long, value_name = "MAP")]
+    output: PathBuf,
 }
 
 /// A sine grating at an angle to the sliding direction (+x), its friction
@@ -208,6 +244,7 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         MapCommand::Voltage(a) => voltage(a),
         MapCommand::SamplePath(a) => sample_path(a),
         MapCommand::Grating(a) => grating(a),
+        MapCommand::Compose(a) => compose(a),
     }
 }
 
@@ -394,6 +431,67 @@ fn grating(a: GratingArgs) -> anyhow::Result<()> {
         )
         .write_png(png)?;
         eprintln!("wrote {}", png.display());
+    }
+    eprintln!("wrote {}", a.output.display());
+    Ok(())
+}
+
+fn compose(a: ComposeArgs) -> anyhow::Result<()> {
+    use haptex_core::map::{LabelImage, RegionFill};
+    let format = MapFormat::of(&a.output)?;
+    let mut fills: Vec<Option<(RegionFill, String)>> = vec![None; 256];
+    let mut library = None;
+    for spec in &a.regions {
+        let (level, fill) = spec
+            .split_once('=')
+            .with_context(|| format!("--region '{spec}': expected LEVEL=FILL, e.g. 0=0.5 or 255=material:sponge"))?;
+        let level: u8 = level
+            .trim()
+            .parse()
+            .map_err(|_| anyhow::anyhow!("--region '{spec}': the level must be a gray level 0 .. 255"))?;
+        if fills[level as usize].is_some() {
+            bail!("--region '{spec}': gray level {level} is given twice");
+        }
+        let fill = fill.trim();
+        let (region, described) = if let Some(name) = fill.strip_prefix("material:") {
+            if library.is_none() {
+                let db = a.library.clone().unwrap_or_else(super::library::default_db);
+                library = Some(super::library::open_read_only(&db)?);
+            }
+            let sampled = library.as_ref().expect("opened above").sample(name, Some(a.seed))?;
+            let described = format!("material {name} (stroke {}, seed {})", sampled.stored.stroke.id, sampled.seed);
+            (RegionFill::Texture(sampled.stored.profile), described)
+        } else if let Some(file) = fill.strip_prefix("profile:") {
+            (RegionFill::Texture(read_profile(Path::new(file))?), format!("profile {file}"))
+        } else {
+            let mu: f64 = fill.parse().map_err(|_| {
+                anyhow::anyhow!("--region '{spec}': FILL must be a number, material:NAME or profile:FILE.csv")
+            })?;
+            ranges::MU.check(mu).map_err(|e| anyhow::anyhow!("--region '{spec}': {e}"))?;
+            (RegionFill::Constant(mu), format!("mu = {}", Num(mu)))
+        };
+        fills[level as usize] = Some((region, described));
+    }
+    let name = a.labels.display().to_string();
+    let image = LabelImage::read_png(&read_bounded(&a.labels, 256 << 20)?, &name)?;
+    let map = image.compose(
+        &|level| fills[level as usize].as_ref().map(|(f, _)| f.clone()),
+        (a.pixel_mm, a.pixel_mm_y.unwrap_or(a.pixel_mm)),
+        (a.x0_mm, a.y0_mm),
+        &name,
+    )?;
+    let present = image.levels();
+    let unused: Vec<String> =
+        (0..=255u8).filter(|l| fills[*l as usize].is_some() && !present.contains(l)).map(|l| l.to_string()).collect();
+    write_friction_map(&map, &a.output, format)?;
+    report_map(&map);
+    for level in present {
+        if let Some((_, described)) = &fills[level as usize] {
+            eprintln!("gray level {level}: {described}");
+        }
+    }
+    if !unused.is_empty() {
+        eprintln!("warning: no pixel has gray level {}: those regions are unused", unused.join(", "));
     }
     eprintln!("wrote {}", a.output.display());
     Ok(())
