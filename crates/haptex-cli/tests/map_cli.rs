@@ -378,3 +378,61 @@ fn compose_fills_each_region() {
     assert!(e.contains("rgb.png") && e.contains("8-bit grayscale"), "{e}");
     assert!(!dir.path().join("d.csv").exists());
 }
+
+/// `haptex map voltage --display combined` on a map whose rows are the
+/// example profile on its own grid: every row is `haptex voltage --display
+/// combined` of the profile, both channels (the same allocator and bias
+/// level); the ultrasonic display alone writes amplitudes only.
+#[test]
+fn combined_display_map_rows_are_the_profile_design() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    run_ok(&["voltage", "--profile", EXAMPLE, "-q", "--display", "combined", "--strategy", "bias", "-o", &p("d1.csv")]);
+    run_ok(&[
+        "map",
+        "from-profile",
+        "--profile",
+        EXAMPLE,
+        "--dx-mm",
+        "0.01",
+        "--dy-mm",
+        "1",
+        "--ny",
+        "3",
+        "-o",
+        &p("m.csv"),
+    ]);
+    let e = run_ok(&[
+        "map",
+        "voltage",
+        "--map",
+        &p("m.csv"),
+        "--display",
+        "combined",
+        "--strategy",
+        "bias",
+        "-o",
+        &p("d2.csv"),
+    ]);
+    assert!(e.contains("band mu"), "{e}");
+    let (a, b) = (std::path::Path::new(&p("d1.csv")).to_path_buf(), std::path::Path::new(&p("d2.csv")).to_path_buf());
+    let (u1, a1) = (column(&a, "voltage_v"), column(&a, "amplitude_um"));
+    let (u2, a2) = (column(&b, "voltage_v"), column(&b, "amplitude_um"));
+    assert_eq!(u2.len(), 3 * u1.len());
+    // The profile's design takes Fe/Fn per V^2 at the profile's own Fn,
+    // the map's at 1 N: with the linear area law the same value up to
+    // rounding, so the channels agree to 1e-12 relative.
+    let n = u1.len();
+    for k in 0..3 * n {
+        let (ua, ub, aa, ab) = (u2[k], u1[k % n], a2[k], a1[k % n]);
+        assert!((ua - ub).abs() <= 1e-12 * ub.max(1.0), "cell {k}: U {ua} vs {ub}");
+        assert!((aa - ab).abs() <= 1e-12 * ab.max(1.0), "cell {k}: a {aa} vs {ab}");
+    }
+    run_ok(&["map", "voltage", "--map", &p("m.csv"), "--display", "ultrasonic", "-o", &p("d3.csv")]);
+    let t = Table::read(std::fs::read(p("d3.csv")).unwrap().as_slice(), "d3").unwrap();
+    assert!(t.column("voltage_v").is_none() && t.column("amplitude_um").is_some());
+    let e = stderr(&haptex(&["map", "voltage", "--map", &p("m.csv"), "--display", "combined", "-o", &p("d4.npy")]));
+    assert!(e.contains("written as CSV"), "{e}");
+    let e = stderr(&haptex(&["map", "voltage", "--map", &p("m.csv"), "--strategy", "bias", "-o", &p("d4.csv")]));
+    assert!(e.contains("--strategy"), "{e}");
+}

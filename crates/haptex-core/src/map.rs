@@ -930,3 +930,141 @@ impl LabelImage {
         (0..=255u8).filter(|&l| seen[l as usize]).collect()
     }
 }
+
+/// The drive of an ultrasonic or combined display over a map's grid: the
+/// voltage (None for the ultrasonic display alone) and the plate's
+/// amplitude per cell, as [`crate::combined::map_display`] designs them
+/// along a profile (the same allocator, the bias level from the map's
+/// lowest friction).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DisplayMap {
+    pub grid: MapGrid,
+    pub voltage_v: Option<Vec<f64>>,
+    pub amplitude_um: Vec<f64>,
+    /// The renderable band [mu_HD rho_min, mu_HD (1 + Fe/Fn at U_max)].
+    pub band_mu: [f64; 2],
+    /// Fractions of the cells below and above the band (saturated).
+    pub below_fraction: f64,
+    pub above_fraction: f64,
+    pub u_max_v: f64,
+    pub a_max_um: f64,
+}
+
+impl FrictionMap {
+    /// Designs an ultrasonic (`channels` = Ultrasonic) or combined display
+    /// cell by cell; every value is checked against its channel's limit.
+    pub fn display_channels(
+        &self,
+        device: &Device,
+        channels: crate::combined::Channels<'_>,
+    ) -> Result<DisplayMap, MapError> {
+        use crate::combined::{Allocator, Channels, Strategy, bias_level};
+        let device_error = |m: String| MapError::new("device", None, m);
+        device.validate().map_err(|e| device_error(e.to_string()))?;
+        if !device.contact.is_linear() {
+            return Err(device_error(
+                "a friction map is mapped with the linear contact-area law (area exponent 1)".into(),
+            ));
+        }
+        let (ultrasonic, strategy, electro) = match channels {
+            Channels::Electrovibration => {
+                return Err(device_error("the electrovibration display alone is FrictionMap::voltages".into()));
+            }
+            Channels::Ultrasonic(d) => (d, Strategy::Split, false),
+            Channels::Combined(d, s) => (d, s, true),
+        };
+        if let Strategy::Weighted { weight } = strategy {
+            ranges::STRATEGY_WEIGHT.check(weight).map_err(|e| device_error(e.to_string()))?;
+        }
+        let (mu_min, _) = self.mu.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &m| (a.min(m), b.max(m)));
+        let rho_bias = bias_level(mu_min, device.mu_hd, ultrasonic.rho_min());
+        let ratio = device.force_ratio_per_v2(1.0);
+        let allocator = Allocator::new(
+            device.mu_hd,
+            electro.then_some((ratio, device.u_max_v)),
+            Some(ultrasonic),
+            strategy,
+            rho_bias,
+        );
+        let band_mu = allocator.band();
+        let n = self.mu.len();
+        let (mut voltage_v, mut amplitude_um) = (vec![0.0; n], vec![0.0; n]);
+        let (mut below, mut above) = (0usize, 0usize);
+        for (k, &m) in self.mu.iter().enumerate() {
+            let (u, a) = allocator.allocate(m);
+            voltage_v[k] = u;
+            amplitude_um[k] = a;
+            below += usize::from(m < band_mu[0]);
+            above += usize::from(m > band_mu[1]);
+        }
+        let (u_max, a_max) = (if electro { device.u_max_v } else { 0.0 }, ultrasonic.a_max_um());
+        for (name, values, limit) in [("voltage_v", &voltage_v, u_max), ("amplitude_um", &amplitude_um, a_max)] {
+            if let Some(k) = values.iter().position(|v| !(0.0..=limit).contains(v)) {
+                return Err(MapError::new(
+                    "display design",
+                    Some(format!(
+                        "cell x = {} mm, y = {} mm",
+                        Num(self.grid.x(k % self.grid.nx)),
+                        Num(self.grid.y(k / self.grid.nx))
+                    )),
+                    format!("{name} = {} outside 0 .. {}", Num(values[k]), Num(limit)),
+                ));
+            }
+        }
+        Ok(DisplayMap {
+            grid: self.grid,
+            voltage_v: electro.then_some(voltage_v),
+            amplitude_um,
+            band_mu,
+            below_fraction: below as f64 / n as f64,
+            above_fraction: above as f64 / n as f64,
+            u_max_v: u_max,
+            a_max_um: a_max,
+        })
+    }
+}
+
+impl DisplayMap {
+    /// Writes `x_mm,y_mm[,voltage_v],amplitude_um`, row-major, after a
+    /// comment stating each channel's limit.
+    pub fn write_csv(&self, w: &mut dyn Write) -> std::io::Result<()> {
+        let g = &self.grid;
+        writeln!(
+            w,
+            "# haptex display map: {} x {} cells; band mu {:.6} .. {:.6}; {:.2}% of the area below it (plate at \
+             a_max), {:.2}% above it (clipped)",
+            g.nx,
+            g.ny,
+            self.band_mu[0],
+            self.band_mu[1],
+            100.0 * self.below_fraction,
+            100.0 * self.above_fraction
+        )?;
+        match &self.voltage_v {
+            Some(_) => writeln!(
+                w,
+                "# voltage_v is RMS, at most U_max = {} V; amplitude_um is the plate's amplitude, peak, at most a_max = {} um",
+                Num(self.u_max_v),
+                Num(self.a_max_um)
+            )?,
+            None => {
+                writeln!(w, "# amplitude_um is the plate's amplitude, peak, at most a_max = {} um", Num(self.a_max_um))?
+            }
+        }
+        writeln!(
+            w,
+            "{}",
+            if self.voltage_v.is_some() { "x_mm,y_mm,voltage_v,amplitude_um" } else { "x_mm,y_mm,amplitude_um" }
+        )?;
+        for j in 0..g.ny {
+            for i in 0..g.nx {
+                let k = j * g.nx + i;
+                match &self.voltage_v {
+                    Some(u) => write_csv_row(w, &[g.x(i), g.y(j), u[k], self.amplitude_um[k]])?,
+                    None => write_csv_row(w, &[g.x(i), g.y(j), self.amplitude_um[k]])?,
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -210,7 +210,10 @@ struct MapVoltageArgs {
     /// Highest voltage the display can apply, U_max in V RMS.
     #[arg(long, default_value_t = Device::PAPER.u_max_v, value_parser = in_range(ranges::U_MAX_V))]
     u_max: f64,
-    /// Output voltage map (.csv or .npy with its sidecar).
+    #[command(flatten)]
+    display: crate::args::DisplayArgs,
+    /// Output voltage map (.csv or .npy with its sidecar; an ultrasonic or
+    /// combined display's map is CSV, one column per channel).
     #[arg(short, long, value_name = "OUT")]
     output: PathBuf,
 }
@@ -296,6 +299,10 @@ fn voltage(a: MapVoltageArgs) -> anyhow::Result<()> {
         MethodArg::Physical => Method::Physical,
         MethodArg::Normalized => Method::Normalized,
     };
+    if a.display.display != crate::args::DisplayArg::Electrovibration {
+        return display_map(&a, &map, &device, method, format);
+    }
+    a.display.refuse_display_flags()?;
     let v = map.voltages(&device, method)?;
     match format {
         MapFormat::Csv => haptex_core::io::write_atomic(&a.output, |w| v.write_csv(w))?,
@@ -318,6 +325,47 @@ fn voltage(a: MapVoltageArgs) -> anyhow::Result<()> {
             100.0 * v.clipped_fraction
         );
     }
+    eprintln!("wrote {}", a.output.display());
+    Ok(())
+}
+
+/// `haptex map voltage --display ultrasonic|combined`: both channels per
+/// cell, as one CSV.
+fn display_map(
+    a: &MapVoltageArgs,
+    map: &FrictionMap,
+    device: &Device,
+    method: Method,
+    format: MapFormat,
+) -> anyhow::Result<()> {
+    use haptex_core::combined::Channels;
+    if method != Method::Physical {
+        bail!("--method normalized (eq. 9) is for the electrovibration display: drop it with --display");
+    }
+    if format != MapFormat::Csv {
+        bail!(
+            "{}: an ultrasonic or combined display's map is written as CSV (one column per channel)",
+            a.output.display()
+        );
+    }
+    let ultrasonic = a.display.ultrasonic()?;
+    let channels = match a.display.strategy()? {
+        Some(strategy) => Channels::Combined(&ultrasonic, strategy),
+        None => Channels::Ultrasonic(&ultrasonic),
+    };
+    let d = map.display_channels(device, channels)?;
+    haptex_core::io::write_atomic(&a.output, |w| d.write_csv(w))?;
+    eprintln!(
+        "display map: {} x {} cells; band mu {:.4} .. {:.4}; below it (plate at a_max = {} um): {:.2}% of the area, \
+         above it (clipped): {:.2}%",
+        d.grid.nx,
+        d.grid.ny,
+        d.band_mu[0],
+        d.band_mu[1],
+        Num(d.a_max_um),
+        100.0 * d.below_fraction,
+        100.0 * d.above_fraction
+    );
     eprintln!("wrote {}", a.output.display());
     Ok(())
 }
