@@ -436,3 +436,65 @@ fn combined_display_map_rows_are_the_profile_design() {
     let e = stderr(&haptex(&["map", "voltage", "--map", &p("m.csv"), "--strategy", "bias", "-o", &p("d4.csv")]));
     assert!(e.contains("--strategy"), "{e}");
 }
+
+/// Polygons over a base: a rectangle fills exactly the cells with x in
+/// [2, 6) and y in [1, 3) (even-odd at the cell positions), a triangle
+/// drawn after it over part of it; bad vertices are refused by position.
+#[test]
+fn polygons_fill_their_cells_in_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.csv");
+    let e = run_ok(&[
+        "map",
+        "compose",
+        "--base",
+        "0.5",
+        "--size-mm",
+        "10,5",
+        "--pixel-mm",
+        "0.5",
+        "--polygon",
+        "2,1;6,1;6,3;2,3=0.9",
+        "--polygon",
+        "5,0;9,0;9,4=1.2",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(e.contains("32 cells"), "{e}");
+    let (x, y, mu) = (column(&out, "x_mm"), column(&out, "y_mm"), column(&out, "mu"));
+    assert_eq!(mu.len(), 21 * 11);
+    for k in 0..mu.len() {
+        let (xk, yk) = (x[k], y[k]);
+        // The triangle (5,0)-(9,0)-(9,4): on a row y in [0, 4) the span
+        // from its slanted edge x = 5 + y (included) to x = 9 (excluded).
+        let in_triangle = (0.0..4.0).contains(&yk) && xk >= 5.0 + yk && xk < 9.0;
+        let in_rectangle = (2.0..6.0).contains(&xk) && (1.0..3.0).contains(&yk);
+        let want = if in_triangle {
+            1.2
+        } else if in_rectangle {
+            0.9
+        } else {
+            0.5
+        };
+        assert_eq!(mu[k], want, "({xk}, {yk})");
+    }
+    for (polygon, want) in
+        [("1,1;2,2=0.7", "3 to 10000"), ("1,1;2,x;3,3=0.7", "vertex 2 '2,x'"), ("1,1;2,2;3,3", "X,Y;X,Y;X,Y=FILL")]
+    {
+        let bad = haptex(&[
+            "map",
+            "compose",
+            "--base",
+            "0.5",
+            "--size-mm",
+            "10,5",
+            "--pixel-mm",
+            "0.5",
+            "--polygon",
+            polygon,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(!bad.status.success() && stderr(&bad).contains(want), "{polygon}: {}", stderr(&bad));
+    }
+}

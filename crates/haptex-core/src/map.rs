@@ -1068,3 +1068,66 @@ impl DisplayMap {
         Ok(())
     }
 }
+
+/// Most vertices of a polygon region.
+pub const MAX_POLYGON_VERTICES: usize = 10_000;
+
+impl FrictionMap {
+    /// Fills the cells inside a polygon (vertices in mm, closed implicitly;
+    /// even-odd rule at the cell positions) with `fill`, row by row: the
+    /// edges crossing each row are found and the spans between pairs of
+    /// crossings filled, O(rows x vertices + cells).
+    pub fn fill_polygon(
+        &mut self,
+        vertices: &[(f64, f64)],
+        fill: &RegionFill,
+        source_name: &str,
+    ) -> Result<usize, MapError> {
+        let err = |m: String| MapError::new(source_name, None, m);
+        if vertices.len() < 3 || vertices.len() > MAX_POLYGON_VERTICES {
+            return Err(err(format!("{} vertices: a polygon has 3 to {MAX_POLYGON_VERTICES}", vertices.len())));
+        }
+        if let Some(k) =
+            vertices.iter().position(|(x, y)| !(ranges::POSITION_MM.contains(*x) && ranges::POSITION_MM.contains(*y)))
+        {
+            return Err(err(format!(
+                "vertex {} ({}, {}): positions must be {}",
+                k + 1,
+                Num(vertices[k].0),
+                Num(vertices[k].1),
+                ranges::POSITION_MM.describe()
+            )));
+        }
+        let g = self.grid;
+        let mut crossings = Vec::with_capacity(vertices.len());
+        let mut filled = 0usize;
+        for j in 0..g.ny {
+            let y = g.y(j);
+            crossings.clear();
+            for e in 0..vertices.len() {
+                let (xa, ya) = vertices[e];
+                let (xb, yb) = vertices[(e + 1) % vertices.len()];
+                if (ya <= y && y < yb) || (yb <= y && y < ya) {
+                    crossings.push(xa + (y - ya) / (yb - ya) * (xb - xa));
+                }
+            }
+            crossings.sort_by(f64::total_cmp);
+            for pair in crossings.chunks_exact(2) {
+                // Columns with x in [pair[0], pair[1]).
+                let first = ((pair[0] - g.x0_mm) / g.dx_mm).ceil().max(0.0);
+                let last = ((pair[1] - g.x0_mm) / g.dx_mm).ceil().min(g.nx as f64);
+                if first >= last {
+                    continue;
+                }
+                for i in first as usize..last as usize {
+                    self.mu[j * g.nx + i] = fill.mu_at(g.x(i));
+                    filled += 1;
+                }
+            }
+        }
+        if let Some(k) = ranges::MU.first_outside(&self.mu) {
+            return Err(err(ranges::MU.refusal(self.mu[k]).to_string()));
+        }
+        Ok(filled)
+    }
+}

@@ -45,12 +45,24 @@ enum MapCommand {
 #[command(after_help = "Example:\n  haptex map compose labels.png --region 0=0.5 --region 128=material:sponge \
                   --region 255=profile:data/examples/bump_friction.csv --pixel-mm 0.1 -o composed.csv")]
 struct ComposeArgs {
-    /// The label image (PNG, 8-bit grayscale).
-    labels: PathBuf,
+    /// The label image (PNG, 8-bit grayscale); without it, --base and
+    /// --size-mm give the map.
+    labels: Option<PathBuf>,
     /// LEVEL=FILL for each gray level present: a number (mu),
     /// material:NAME (a library material) or profile:FILE.csv.
-    #[arg(long = "region", value_name = "LEVEL=FILL", required = true)]
+    #[arg(long = "region", value_name = "LEVEL=FILL", requires = "labels")]
     regions: Vec<String>,
+    /// Without a label image: the FILL of the whole map (then polygons).
+    #[arg(long, value_name = "FILL", conflicts_with = "labels", requires = "size_mm")]
+    base: Option<String>,
+    /// Without a label image: the map's size W,H in mm (cells at the pixel
+    /// size from the origin).
+    #[arg(long, value_name = "W,H", conflicts_with = "labels", requires = "base")]
+    size_mm: Option<String>,
+    /// "X,Y;X,Y;X,Y=FILL": a polygon (vertices in mm) filled over what is
+    /// there, in the order given (even-odd rule at the cell positions).
+    #[arg(long = "polygon", value_name = "X,Y;...=FILL")]
+    polygons: Vec<String>,
     /// Pixel size along x in mm.
     #[arg(long, value_parser = positive)]
     pixel_mm: f64,
@@ -489,19 +501,9 @@ fn compose(a: ComposeArgs) -> anyhow::Result<()> {
     let format = MapFormat::of(&a.output)?;
     let mut fills: Vec<Option<(RegionFill, String)>> = vec![None; 256];
     let mut library = None;
-    for spec in &a.regions {
-        let (level, fill) = spec
-            .split_once('=')
-            .with_context(|| format!("--region '{spec}': expected LEVEL=FILL, e.g. 0=0.5 or 255=material:sponge"))?;
-        let level: u8 = level
-            .trim()
-            .parse()
-            .map_err(|_| anyhow::anyhow!("--region '{spec}': the level must be a gray level 0 .. 255"))?;
-        if fills[level as usize].is_some() {
-            bail!("--region '{spec}': gray level {level} is given twice");
-        }
-        let fill = fill.trim();
-        let (region, described) = if let Some(name) = fill.strip_prefix("material:") {
+    let mut fill_of = |text: &str, what: &str| -> anyhow::Result<(RegionFill, String)> {
+        let text = text.trim();
+        Ok(if let Some(name) = text.strip_prefix("material:") {
             if library.is_none() {
                 let db = a.library.clone().unwrap_or_else(super::library::default_db);
                 library = Some(super::library::open_read_only(&db)?);
@@ -509,34 +511,113 @@ fn compose(a: ComposeArgs) -> anyhow::Result<()> {
             let sampled = library.as_ref().expect("opened above").sample(name, Some(a.seed))?;
             let described = format!("material {name} (stroke {}, seed {})", sampled.stored.stroke.id, sampled.seed);
             (RegionFill::Texture(sampled.stored.profile), described)
-        } else if let Some(file) = fill.strip_prefix("profile:") {
+        } else if let Some(file) = text.strip_prefix("profile:") {
             (RegionFill::Texture(read_profile(Path::new(file))?), format!("profile {file}"))
         } else {
-            let mu: f64 = fill.parse().map_err(|_| {
-                anyhow::anyhow!("--region '{spec}': FILL must be a number, material:NAME or profile:FILE.csv")
+            let mu: f64 = text.parse().map_err(|_| {
+                anyhow::anyhow!("{what}: FILL must be a number, material:NAME or profile:FILE.csv, got '{text}'")
             })?;
-            ranges::MU.check(mu).map_err(|e| anyhow::anyhow!("--region '{spec}': {e}"))?;
+            ranges::MU.check(mu).map_err(|e| anyhow::anyhow!("{what}: {e}"))?;
             (RegionFill::Constant(mu), format!("mu = {}", Num(mu)))
-        };
-        fills[level as usize] = Some((region, described));
+        })
+    };
+    for spec in &a.regions {
+        let what = format!("--region '{spec}'");
+        let (level, fill) = spec
+            .split_once('=')
+            .with_context(|| format!("{what}: expected LEVEL=FILL, e.g. 0=0.5 or 255=material:sponge"))?;
+        let level: u8 =
+            level.trim().parse().map_err(|_| anyhow::anyhow!("{what}: the level must be a gray level 0 .. 255"))?;
+        if fills[level as usize].is_some() {
+            bail!("{what}: gray level {level} is given twice");
+        }
+        fills[level as usize] = Some(fill_of(fill, &what)?);
     }
-    let name = a.labels.display().to_string();
-    let image = LabelImage::read_png(&read_bounded(&a.labels, 256 << 20)?, &name)?;
-    let map = image.compose(
-        &|level| fills[level as usize].as_ref().map(|(f, _)| f.clone()),
-        (a.pixel_mm, a.pixel_mm_y.unwrap_or(a.pixel_mm)),
-        (a.x0_mm, a.y0_mm),
-        &name,
-    )?;
-    let present = image.levels();
+    let mut polygons = Vec::new();
+    for spec in &a.polygons {
+        let what = format!("--polygon '{spec}'");
+        let (points, fill) =
+            spec.rsplit_once('=').with_context(|| format!("{what}: expected X,Y;X,Y;X,Y=FILL (mm)"))?;
+        let mut vertices = Vec::new();
+        for (k, point) in points.split(';').enumerate() {
+            let parsed = point
+                .split_once(',')
+                .and_then(|(x, y)| Some((x.trim().parse::<f64>().ok()?, y.trim().parse::<f64>().ok()?)));
+            vertices.push(parsed.with_context(|| format!("{what}: vertex {} '{point}' is not X,Y in mm", k + 1))?);
+        }
+        polygons.push((vertices, fill_of(fill, &what)?, what));
+    }
+    let spacing = (a.pixel_mm, a.pixel_mm_y.unwrap_or(a.pixel_mm));
+    let (mut map, name, present) = match (&a.labels, &a.base, &a.size_mm) {
+        (Some(labels), _, _) => {
+            if a.regions.is_empty() {
+                bail!("a label image needs --region LEVEL=FILL for each of its gray levels");
+            }
+            let name = labels.display().to_string();
+            let image = LabelImage::read_png(&read_bounded(labels, 256 << 20)?, &name)?;
+            let map = image.compose(
+                &|level| fills[level as usize].as_ref().map(|(f, _)| f.clone()),
+                spacing,
+                (a.x0_mm, a.y0_mm),
+                &name,
+            )?;
+            (map, name, image.levels())
+        }
+        (None, Some(base), Some(size)) => {
+            let (w, h) = size
+                .split_once(',')
+                .and_then(|(w, h)| Some((w.trim().parse::<f64>().ok()?, h.trim().parse::<f64>().ok()?)))
+                .filter(|(w, h)| w.is_finite() && h.is_finite() && *w > 0.0 && *h > 0.0)
+                .with_context(|| format!("--size-mm '{size}': expected W,H in mm, both positive"))?;
+            let (nx, ny) = ((w / spacing.0).floor() + 1.0, (h / spacing.1).floor() + 1.0);
+            if nx * ny > haptex_core::map::MAX_CELLS as f64 {
+                bail!(
+                    "--size-mm {size} at {} x {} mm cells: more than {} cells",
+                    Num(spacing.0),
+                    Num(spacing.1),
+                    haptex_core::map::MAX_CELLS
+                );
+            }
+            let grid = MapGrid {
+                nx: nx as usize,
+                ny: ny as usize,
+                x0_mm: a.x0_mm,
+                y0_mm: a.y0_mm,
+                dx_mm: spacing.0,
+                dy_mm: spacing.1,
+            };
+            grid.validate("--size-mm")?;
+            let (base_fill, described) = fill_of(base, "--base")?;
+            fills[0] = Some((base_fill.clone(), described));
+            let one = LabelImage { width: grid.nx, height: grid.ny, labels: vec![0; grid.len()] };
+            (
+                one.compose(&|_| Some(base_fill.clone()), spacing, (a.x0_mm, a.y0_mm), "--base")?,
+                "--base".to_string(),
+                vec![0],
+            )
+        }
+        _ => bail!("give a label image with --region LEVEL=FILL, or --base FILL with --size-mm W,H"),
+    };
+    let mut polygon_lines = Vec::new();
+    for (vertices, (fill, described), what) in &polygons {
+        let cells = map.fill_polygon(vertices, fill, what)?;
+        polygon_lines.push(format!("{what}: {described}, {cells} cells"));
+    }
     let unused: Vec<String> =
         (0..=255u8).filter(|l| fills[*l as usize].is_some() && !present.contains(l)).map(|l| l.to_string()).collect();
     write_friction_map(&map, &a.output, format)?;
     report_map(&map);
     for level in present {
         if let Some((_, described)) = &fills[level as usize] {
-            eprintln!("gray level {level}: {described}");
+            if name == "--base" {
+                eprintln!("base: {described}");
+            } else {
+                eprintln!("gray level {level}: {described}");
+            }
         }
+    }
+    for line in polygon_lines {
+        eprintln!("{line}");
     }
     if !unused.is_empty() {
         eprintln!("warning: no pixel has gray level {}: those regions are unused", unused.join(", "));
