@@ -498,3 +498,42 @@ fn polygons_fill_their_cells_in_order() {
         assert!(!bad.status.success() && stderr(&bad).contains(want), "{polygon}: {}", stderr(&bad));
     }
 }
+
+/// `haptex map export-png` then the `from-image` command it prints: the
+/// map back within half a 16-bit gray step, on the same grid.
+#[test]
+fn exported_png_reads_back_with_the_printed_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    run_ok(&[
+        "map",
+        "from-profile",
+        "--profile",
+        EXAMPLE,
+        "--dx-mm",
+        "0.05",
+        "--dy-mm",
+        "0.2",
+        "--ny",
+        "4",
+        "-o",
+        &p("m.csv"),
+    ]);
+    let e = run_ok(&["map", "export-png", "--map", &p("m.csv"), "-o", &p("m.png")]);
+    let command = e.lines().find_map(|l| l.strip_prefix("read back: haptex ")).expect("the read-back command");
+    let mut args: Vec<String> = command.split_whitespace().map(str::to_string).collect();
+    let last = args.len() - 1;
+    args[last] = p("back.csv");
+    let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+    run_ok(&refs);
+    let (a, b) = (std::path::Path::new(&p("m.csv")).to_path_buf(), std::path::Path::new(&p("back.csv")).to_path_buf());
+    let (ma, mb) = (column(&a, "mu"), column(&b, "mu"));
+    let (xa, xb, ya, yb) = (column(&a, "x_mm"), column(&b, "x_mm"), column(&a, "y_mm"), column(&b, "y_mm"));
+    let (lo, hi) = ma.iter().fold((f64::MAX, f64::MIN), |(l, h), &m| (l.min(m), h.max(m)));
+    let half_step = 0.5 * (hi - lo) / 65535.0;
+    assert_eq!(ma.len(), mb.len());
+    for k in 0..ma.len() {
+        assert!((ma[k] - mb[k]).abs() <= half_step * (1.0 + 1e-9), "cell {k}: {} vs {}", ma[k], mb[k]);
+        assert!((xa[k] - xb[k]).abs() < 1e-9 && (ya[k] - yb[k]).abs() < 1e-9);
+    }
+}

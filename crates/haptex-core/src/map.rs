@@ -273,6 +273,24 @@ impl FrictionMap {
     pub fn write_gray_png(&self, w: &mut dyn Write, mapping: &GrayMapping, bits: u8) -> std::io::Result<()> {
         let g = &self.grid;
         let mut encoder = png::Encoder::new(w, g.nx as u32, g.ny as u32);
+        // What the gray levels mean, inside the image (a tEXt chunk).
+        encoder
+            .add_text_chunk(
+                "haptex".to_string(),
+                format!(
+                    "haptex map: gray g in [0, 1] -> value = {} + ({} - {}) g^{}; pixel {} x {} mm; bottom-left pixel \
+                     at x = {} mm, y = {} mm",
+                    Num(mapping.mu_black),
+                    Num(mapping.mu_white),
+                    Num(mapping.mu_black),
+                    Num(mapping.gamma),
+                    Num(g.dx_mm),
+                    Num(g.dy_mm),
+                    Num(g.x0_mm),
+                    Num(g.y0_mm)
+                ),
+            )
+            .map_err(std::io::Error::other)?;
         encoder.set_color(png::ColorType::Grayscale);
         let sixteen = bits == 16;
         encoder.set_depth(if sixteen { png::BitDepth::Sixteen } else { png::BitDepth::Eight });

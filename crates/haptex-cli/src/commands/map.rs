@@ -35,6 +35,35 @@ enum MapCommand {
     SamplePath(SamplePathArgs),
     Grating(GratingArgs),
     Compose(ComposeArgs),
+    ExportPng(ExportPngArgs),
+}
+
+/// A map (friction or voltage, .csv or .npy) as a 16- or 8-bit grayscale
+/// PNG: its lowest value black, its highest white (or --black/--white),
+/// linear; the mapping and the grid are written into the PNG (a tEXt
+/// chunk) and printed with the `haptex map from-image` command that reads
+/// it back.
+#[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
+struct ExportPngArgs {
+    /// The map.
+    #[arg(long, value_name = "MAP")]
+    map: PathBuf,
+    /// The map's quantity: mu (a friction map) or voltage_v (a voltage map).
+    #[arg(long, default_value = "mu", value_parser = ["mu", "voltage_v"])]
+    quantity: String,
+    /// Value of black (default: the map's lowest).
+    #[arg(long)]
+    black: Option<f64>,
+    /// Value of white (default: the map's highest).
+    #[arg(long)]
+    white: Option<f64>,
+    /// Bits per pixel, 8 or 16.
+    #[arg(long, default_value_t = 16, value_parser = bits_per_pixel)]
+    bits: u8,
+    /// Output PNG.
+    #[arg(short, long, value_name = "FILE.png")]
+    output: PathBuf,
 }
 
 /// A friction map from a label image: each gray level of an 8-bit
@@ -260,6 +289,7 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         MapCommand::SamplePath(a) => sample_path(a),
         MapCommand::Grating(a) => grating(a),
         MapCommand::Compose(a) => compose(a),
+        MapCommand::ExportPng(a) => export_png(a),
     }
 }
 
@@ -377,6 +407,63 @@ fn display_map(
         Num(d.a_max_um),
         100.0 * d.below_fraction,
         100.0 * d.above_fraction
+    );
+    eprintln!("wrote {}", a.output.display());
+    Ok(())
+}
+
+fn bits_per_pixel(text: &str) -> Result<u8, String> {
+    match text.trim() {
+        "8" => Ok(8),
+        "16" => Ok(16),
+        _ => Err(format!("'{text}': a grayscale PNG here has 8 or 16 bits per pixel")),
+    }
+}
+
+fn export_png(a: ExportPngArgs) -> anyhow::Result<()> {
+    let (grid, values) = if a.quantity == "mu" {
+        let m = read_friction_map(&a.map)?;
+        (m.grid, m.mu)
+    } else {
+        let v = read_voltage_map(&a.map)?;
+        (v.grid, v.voltage_v)
+    };
+    let (lo, hi) = min_max(&values);
+    let (black, white) = (a.black.unwrap_or(lo), a.white.unwrap_or(hi));
+    if !(black.is_finite() && white.is_finite()) || black == white {
+        bail!(
+            "black {} and white {} must be two different numbers (the map is constant at {}: give --black and --white)",
+            Num(black),
+            Num(white),
+            Num(lo)
+        );
+    }
+    let mapping = GrayMapping { mu_black: black, mu_white: white, gamma: 1.0 };
+    // The encoder clamps; the map's own values stay as they are.
+    let map = FrictionMap { grid, mu: values };
+    haptex_core::io::write_atomic(&a.output, |w| map.write_gray_png(w, &mapping, a.bits))?;
+    let clamped = map.mu.iter().filter(|&&v| v < black.min(white) || v > black.max(white)).count();
+    eprintln!(
+        "{} x {} pixels, {} bit: black = {}, white = {} ({}), linear",
+        grid.nx,
+        grid.ny,
+        a.bits,
+        Num(black),
+        Num(white),
+        a.quantity
+    );
+    if clamped > 0 {
+        eprintln!("warning: {clamped} cells outside black .. white are drawn as black or white");
+    }
+    eprintln!(
+        "read back: haptex map from-image {} --mu-black {} --mu-white {} --pixel-mm {} --pixel-mm-y {} --x0-mm {} --y0-mm {} -o MAP.csv",
+        a.output.display(),
+        Num(black),
+        Num(white),
+        Num(grid.dx_mm),
+        Num(grid.dy_mm),
+        Num(grid.x0_mm),
+        Num(grid.y0_mm)
     );
     eprintln!("wrote {}", a.output.display());
     Ok(())
