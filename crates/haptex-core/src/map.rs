@@ -182,13 +182,7 @@ impl FrictionMap {
             Num(g.dx_mm),
             Num(g.dy_mm)
         )?;
-        writeln!(w, "x_mm,y_mm,mu")?;
-        for j in 0..g.ny {
-            for i in 0..g.nx {
-                write_csv_row(w, &[g.x(i), g.y(j), self.mu[j * g.nx + i]])?;
-            }
-        }
-        Ok(())
+        write_grid_rows(w, g, "mu", &self.mu)
     }
 
     /// Writes the values as a 2-D float64 NPY array of shape (ny, nx),
@@ -379,13 +373,7 @@ impl VoltageMap {
             100.0 * self.not_renderable_fraction,
             100.0 * self.clipped_fraction
         )?;
-        writeln!(w, "x_mm,y_mm,voltage_v")?;
-        for j in 0..g.ny {
-            for i in 0..g.nx {
-                write_csv_row(w, &[g.x(i), g.y(j), self.voltage_v[j * g.nx + i]])?;
-            }
-        }
-        Ok(())
+        write_grid_rows(w, g, "voltage_v", &self.voltage_v)
     }
 
     /// The voltages as a (ny, nx) float64 NPY array.
@@ -470,6 +458,17 @@ pub fn read_grid_csv<R: std::io::Read>(
     Ok((grid, mu.to_vec()))
 }
 
+/// The header row `x_mm,y_mm,NAME` and one row per cell, row-major.
+fn write_grid_rows(w: &mut dyn Write, g: &MapGrid, name: &str, values: &[f64]) -> std::io::Result<()> {
+    writeln!(w, "x_mm,y_mm,{name}")?;
+    for j in 0..g.ny {
+        for i in 0..g.nx {
+            write_csv_row(w, &[g.x(i), g.y(j), values[j * g.nx + i]])?;
+        }
+    }
+    Ok(())
+}
+
 /// Gray level g in [0, 1] (black 0, white 1) to friction:
 /// mu = mu_black + (mu_white - mu_black) g^gamma.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -523,33 +522,13 @@ fn write_npy_f64(w: &mut dyn Write, rows: usize, cols: usize, values: &[f64]) ->
 /// Reads a (rows, cols) float32/float64 NPY array, C or Fortran order,
 /// row-major out.
 fn read_npy_2d(bytes: &[u8], source_name: &str, rows: usize, cols: usize) -> Result<Vec<f64>, MapError> {
-    let err = |m: String| MapError::new(source_name, None, m);
-    crate::recording::format::check_npy_header(bytes).map_err(|m| err(format!("not a valid NPY file: {m}")))?;
-    let npy = npyz::NpyFile::new(bytes).map_err(|e| err(format!("not a valid NPY file: {e}")))?;
-    let shape = npy.shape().to_vec();
-    if shape != [rows as u64, cols as u64] {
-        return Err(err(format!("array shape {shape:?}: the grid says ({rows}, {cols}) (ny, nx)")));
-    }
-    if (rows * cols).saturating_mul(4) > bytes.len() {
-        return Err(err(format!(
-            "array shape {shape:?} claims more values than the file's {} bytes hold",
-            bytes.len()
-        )));
-    }
-    let fortran = npy.order() == npyz::Order::Fortran;
-    let dtype = npy.dtype().descr();
-    let flat: Vec<f64> = match npy.try_data::<f64>() {
-        Ok(reader) => reader.collect::<std::io::Result<_>>(),
-        Err(npy) => match npy.try_data::<f32>() {
-            Ok(reader) => reader.map(|v| v.map(f64::from)).collect::<std::io::Result<_>>(),
-            Err(_) => return Err(err(format!("dtype {dtype}: expected float32 or float64"))),
-        },
-    }
-    .map_err(|e| err(format!("cannot read the array data: {e}")))?;
-    if flat.len() != rows * cols {
-        return Err(err(format!("{} values for shape {shape:?}", flat.len())));
-    }
-    Ok(if fortran { (0..rows * cols).map(|k| flat[(k % cols) * rows + k / cols]).collect() } else { flat })
+    let (_, _, values) = crate::io::npy::read_2d(bytes, |shape| {
+        (shape == [rows as u64, cols as u64])
+            .then_some(())
+            .ok_or_else(|| format!("array shape {shape:?}: the grid says ({rows}, {cols}) (ny, nx)"))
+    })
+    .map_err(|m| MapError::new(source_name, None, m))?;
+    Ok(values)
 }
 
 /// Reads a map's grid sidecar (JSON with the [`MapGrid`] fields).

@@ -92,16 +92,8 @@ struct ComposeArgs {
     /// there, in the order given (even-odd rule at the cell positions).
     #[arg(long = "polygon", value_name = "X,Y;...=FILL")]
     polygons: Vec<String>,
-    /// Pixel size along x in mm.
-    #[arg(long, value_parser = positive)]
-    pixel_mm: f64,
-    /// Pixel size along y in mm (default: --pixel-mm).
-    #[arg(long, value_parser = positive)]
-    pixel_mm_y: Option<f64>,
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    x0_mm: f64,
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    y0_mm: f64,
+    #[command(flatten)]
+    pixels: PixelArgs,
     /// Texture library for material:NAME. Default: the shipped library, or $HAPTEX_LIBRARY.
     #[arg(long, value_name = "DB")]
     library: Option<PathBuf>,
@@ -188,18 +180,8 @@ struct FromImageArgs {
     /// Exponent on the gray level (1: linear).
     #[arg(long, default_value_t = 1.0)]
     gamma: f64,
-    /// Pixel size along x in mm.
-    #[arg(long, value_parser = positive)]
-    pixel_mm: f64,
-    /// Pixel size along y in mm (default: --pixel-mm).
-    #[arg(long, value_parser = positive)]
-    pixel_mm_y: Option<f64>,
-    /// x of the first column in mm.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    x0_mm: f64,
-    /// y of the bottom row in mm.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    y0_mm: f64,
+    #[command(flatten)]
+    pixels: PixelArgs,
     /// Output map (.csv or .npy with its sidecar).
     #[arg(short, long, value_name = "MAP")]
     output: PathBuf,
@@ -259,6 +241,33 @@ struct MapVoltageArgs {
     output: PathBuf,
 }
 
+/// One cell per pixel: its size and the bottom-left pixel's position.
+#[derive(Debug, Args)]
+struct PixelArgs {
+    /// Pixel size along x in mm.
+    #[arg(long, value_parser = positive)]
+    pixel_mm: f64,
+    /// Pixel size along y in mm (default: --pixel-mm).
+    #[arg(long, value_parser = positive)]
+    pixel_mm_y: Option<f64>,
+    /// x of the first column in mm.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    x0_mm: f64,
+    /// y of the bottom row in mm.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    y0_mm: f64,
+}
+
+impl PixelArgs {
+    fn spacing(&self) -> (f64, f64) {
+        (self.pixel_mm, self.pixel_mm_y.unwrap_or(self.pixel_mm))
+    }
+
+    fn origin(&self) -> (f64, f64) {
+        (self.x0_mm, self.y0_mm)
+    }
+}
+
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum MethodArg {
     Physical,
@@ -300,8 +309,8 @@ fn from_image(a: FromImageArgs) -> anyhow::Result<()> {
     let map = FrictionMap::read_gray_png(
         &bytes,
         &mapping,
-        (a.pixel_mm, a.pixel_mm_y.unwrap_or(a.pixel_mm)),
-        (a.x0_mm, a.y0_mm),
+        a.pixels.spacing(),
+        a.pixels.origin(),
         &a.image.display().to_string(),
     )?;
     write_friction_map(&map, &a.output, format)?;
@@ -634,7 +643,7 @@ fn compose(a: ComposeArgs) -> anyhow::Result<()> {
         }
         polygons.push((vertices, fill_of(fill, &what)?, what));
     }
-    let spacing = (a.pixel_mm, a.pixel_mm_y.unwrap_or(a.pixel_mm));
+    let (spacing, origin) = (a.pixels.spacing(), a.pixels.origin());
     let (mut map, name, present) = match (&a.labels, &a.base, &a.size_mm) {
         (Some(labels), _, _) => {
             if a.regions.is_empty() {
@@ -645,7 +654,7 @@ fn compose(a: ComposeArgs) -> anyhow::Result<()> {
             let map = image.compose(
                 &|level| fills[level as usize].as_ref().map(|(f, _)| f.clone()),
                 spacing,
-                (a.x0_mm, a.y0_mm),
+                origin,
                 &name,
             )?;
             (map, name, image.levels())
@@ -668,8 +677,8 @@ fn compose(a: ComposeArgs) -> anyhow::Result<()> {
             let grid = MapGrid {
                 nx: nx as usize,
                 ny: ny as usize,
-                x0_mm: a.x0_mm,
-                y0_mm: a.y0_mm,
+                x0_mm: origin.0,
+                y0_mm: origin.1,
                 dx_mm: spacing.0,
                 dy_mm: spacing.1,
             };
@@ -677,11 +686,7 @@ fn compose(a: ComposeArgs) -> anyhow::Result<()> {
             let (base_fill, described) = fill_of(base, "--base")?;
             fills[0] = Some((base_fill.clone(), described));
             let one = LabelImage { width: grid.nx, height: grid.ny, labels: vec![0; grid.len()] };
-            (
-                one.compose(&|_| Some(base_fill.clone()), spacing, (a.x0_mm, a.y0_mm), "--base")?,
-                "--base".to_string(),
-                vec![0],
-            )
+            (one.compose(&|_| Some(base_fill.clone()), spacing, origin, "--base")?, "--base".to_string(), vec![0])
         }
         _ => bail!("give a label image with --region LEVEL=FILL, or --base FILL with --size-mm W,H"),
     };
