@@ -209,24 +209,17 @@ impl FrictionMap {
         source_name: &str,
     ) -> Result<Self, MapError> {
         mapping.validate(source_name)?;
-        let err = |m: String| MapError::new(source_name, None, m);
-        let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
-        // Bounded: the header's size is checked below before any buffer.
-        decoder.set_transformations(png::Transformations::IDENTITY);
-        let mut reader = decoder.read_info().map_err(|e| err(format!("not a readable PNG: {e}")))?;
-        let info = reader.info();
-        let (width, height) = (info.width as usize, info.height as usize);
-        let (color, depth) = (info.color_type, info.bit_depth);
-        if color != png::ColorType::Grayscale {
-            return Err(err(format!(
-                "color type {color:?}: a friction image must be grayscale (8 or 16 bit), convert it first"
-            )));
-        }
-        let bits = match depth {
-            png::BitDepth::Eight => 8,
-            png::BitDepth::Sixteen => 16,
-            other => return Err(err(format!("bit depth {other:?}: expected 8 or 16 bit grayscale"))),
-        };
+        let GrayImage { width, height, bits, buffer, stride } =
+            GrayImage::decode(bytes, source_name, |color, depth| match (color, depth) {
+                (png::ColorType::Grayscale, png::BitDepth::Eight) => Ok(8),
+                (png::ColorType::Grayscale, png::BitDepth::Sixteen) => Ok(16),
+                (png::ColorType::Grayscale, other) => {
+                    Err(format!("bit depth {other:?}: expected 8 or 16 bit grayscale"))
+                }
+                (color, _) => Err(format!(
+                    "color type {color:?}: a friction image must be grayscale (8 or 16 bit), convert it first"
+                )),
+            })?;
         let grid = MapGrid {
             nx: width,
             ny: height,
@@ -236,10 +229,6 @@ impl FrictionMap {
             dy_mm: spacing_mm.1,
         };
         grid.validate(source_name)?;
-        let size = reader.output_buffer_size().ok_or_else(|| err("image too large".into()))?;
-        let mut buffer = vec![0u8; size];
-        let frame = reader.next_frame(&mut buffer).map_err(|e| err(format!("cannot decode the image: {e}")))?;
-        let stride = frame.line_size;
         let full = if bits == 8 { 255.0 } else { 65535.0 };
         let table: Vec<f64> =
             if bits == 8 { (0..256).map(|g| mapping.mu(g as f64 / full)).collect() } else { Vec::new() };
@@ -837,6 +826,41 @@ impl RegionFill {
     }
 }
 
+/// A decoded grayscale PNG: its rows from the top, `stride` bytes apart.
+struct GrayImage {
+    width: usize,
+    height: usize,
+    bits: u8,
+    buffer: Vec<u8>,
+    stride: usize,
+}
+
+impl GrayImage {
+    /// Decodes a PNG whose colour type and depth `accept` takes (giving
+    /// the bits per pixel, or the refusal); the size the header claims is
+    /// checked (2 x 2 to [`MAX_CELLS`] pixels) before any buffer is sized.
+    fn decode(
+        bytes: &[u8],
+        source_name: &str,
+        accept: impl FnOnce(png::ColorType, png::BitDepth) -> Result<u8, String>,
+    ) -> Result<Self, MapError> {
+        let err = |m: String| MapError::new(source_name, None, m);
+        let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+        decoder.set_transformations(png::Transformations::IDENTITY);
+        let mut reader = decoder.read_info().map_err(|e| err(format!("not a readable PNG: {e}")))?;
+        let info = reader.info();
+        let (width, height) = (info.width as usize, info.height as usize);
+        let bits = accept(info.color_type, info.bit_depth).map_err(err)?;
+        if width.checked_mul(height).is_none_or(|n| n > MAX_CELLS) || width < 2 || height < 2 {
+            return Err(err(format!("{width} x {height} pixels: from 2 x 2 to at most {MAX_CELLS} pixels")));
+        }
+        let size = reader.output_buffer_size().ok_or_else(|| err("image too large".into()))?;
+        let mut buffer = vec![0u8; size];
+        let frame = reader.next_frame(&mut buffer).map_err(|e| err(format!("cannot decode the image: {e}")))?;
+        Ok(Self { width, height, bits, buffer, stride: frame.line_size })
+    }
+}
+
 /// An 8-bit grayscale label image: each gray level names a region.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LabelImage {
@@ -849,25 +873,13 @@ pub struct LabelImage {
 impl LabelImage {
     /// Reads an 8-bit grayscale PNG (at most [`MAX_CELLS`] pixels).
     pub fn read_png(bytes: &[u8], source_name: &str) -> Result<Self, MapError> {
-        let err = |m: String| MapError::new(source_name, None, m);
-        let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
-        decoder.set_transformations(png::Transformations::IDENTITY);
-        let mut reader = decoder.read_info().map_err(|e| err(format!("not a readable PNG: {e}")))?;
-        let info = reader.info();
-        let (width, height) = (info.width as usize, info.height as usize);
-        if info.color_type != png::ColorType::Grayscale || info.bit_depth != png::BitDepth::Eight {
-            return Err(err(format!(
-                "{:?} at {:?}: a label image is 8-bit grayscale, one gray level per region",
-                info.color_type, info.bit_depth
-            )));
-        }
-        if width.checked_mul(height).is_none_or(|n| n > MAX_CELLS) || width < 2 || height < 2 {
-            return Err(err(format!("{width} x {height} pixels: from 2 x 2 to {MAX_CELLS} pixels")));
-        }
-        let size = reader.output_buffer_size().ok_or_else(|| err("image too large".into()))?;
-        let mut buffer = vec![0u8; size];
-        let frame = reader.next_frame(&mut buffer).map_err(|e| err(format!("cannot decode the image: {e}")))?;
-        let stride = frame.line_size;
+        let GrayImage { width, height, buffer, stride, .. } =
+            GrayImage::decode(bytes, source_name, |color, depth| match (color, depth) {
+                (png::ColorType::Grayscale, png::BitDepth::Eight) => Ok(8),
+                (color, depth) => {
+                    Err(format!("{color:?} at {depth:?}: a label image is 8-bit grayscale, one gray level per region"))
+                }
+            })?;
         let labels = (0..height).flat_map(|r| buffer[r * stride..r * stride + width].iter().copied()).collect();
         Ok(Self { width, height, labels })
     }
