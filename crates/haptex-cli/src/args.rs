@@ -160,6 +160,96 @@ impl MaterialArg {
     }
 }
 
+/// The carrier waveform flag (`--carrier`), shared by `haptex play` and
+/// the frequency-dependent force model of `haptex voltage`.
+#[derive(Debug, Clone, Copy, PartialEq, clap::ValueEnum)]
+pub enum CarrierArg {
+    Sine,
+    Square,
+    None,
+}
+
+impl CarrierArg {
+    pub fn shape(self) -> haptex_core::signal::CarrierShape {
+        use haptex_core::signal::CarrierShape;
+        match self {
+            CarrierArg::Sine => CarrierShape::Sine,
+            CarrierArg::Square => CarrierShape::Square,
+            CarrierArg::None => CarrierShape::None,
+        }
+    }
+}
+
+/// Which law turns voltage into electrostatic force (`haptex voltage`).
+#[derive(Debug, Clone, clap::Args)]
+pub struct ForceModelArgs {
+    /// eq3: the paper's eq. (3), independent of the carrier (default).
+    /// circuit: eq. (3) times the gain of a finger-display circuit (a leaky
+    /// stratum corneum and an air gap, docs/physics.md) for the carrier
+    /// that will be played; needs --rho-sc-ohm-m and --gap-um, and the
+    /// file says which carrier it was designed for (`haptex play` refuses
+    /// another).
+    #[arg(long, value_enum, default_value_t = ForceModelArg::Eq3)]
+    pub force_model: ForceModelArg,
+    /// Circuit model: DC resistivity of the stratum corneum, rho_sc in ohm m.
+    #[arg(long, value_parser = in_range(ranges::RHO_SC_OHM_M))]
+    pub rho_sc_ohm_m: Option<f64>,
+    /// Circuit model: air gap between skin and display, g in um (0: none).
+    #[arg(long, value_parser = in_range(ranges::GAP_UM))]
+    pub gap_um: Option<f64>,
+    /// Circuit model: the carrier the design will be played with (as
+    /// `haptex play --carrier`). Default sine.
+    #[arg(long, value_enum)]
+    pub carrier: Option<CarrierArg>,
+    /// Circuit model: the carrier frequency in Hz (as `haptex play
+    /// --carrier-hz`). Default 1000.
+    #[arg(long, value_name = "F", value_parser = in_range(ranges::CARRIER_HZ))]
+    pub carrier_hz: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, clap::ValueEnum)]
+pub enum ForceModelArg {
+    Eq3,
+    Circuit,
+}
+
+impl ForceModelArgs {
+    /// The force model the flags give, refusing circuit flags with eq. (3).
+    pub fn model(&self) -> anyhow::Result<haptex_core::frequency::ForceModel> {
+        use haptex_core::frequency::{FingerCircuit, ForceModel};
+        use haptex_core::signal::Carrier;
+        if self.force_model == ForceModelArg::Eq3 {
+            for (given, flag) in [
+                (self.rho_sc_ohm_m.is_some(), "--rho-sc-ohm-m"),
+                (self.gap_um.is_some(), "--gap-um"),
+                (self.carrier.is_some(), "--carrier"),
+                (self.carrier_hz.is_some(), "--carrier-hz"),
+            ] {
+                if given {
+                    anyhow::bail!(
+                        "{flag} is for the frequency-dependent force model: give --force-model circuit (eq. 3, the \
+                         default, does not depend on the carrier)"
+                    );
+                }
+            }
+            return Ok(ForceModel::Eq3);
+        }
+        let (Some(rho_sc_ohm_m), Some(gap_um)) = (self.rho_sc_ohm_m, self.gap_um) else {
+            anyhow::bail!(
+                "--force-model circuit needs --rho-sc-ohm-m (the stratum corneum's DC resistivity) and --gap-um (the \
+                 air gap, 0 for none): haptex has no default for either, measure or choose them (docs/physics.md)"
+            );
+        };
+        let circuit = FingerCircuit { rho_sc_ohm_m, gap_um };
+        circuit.validate()?;
+        let carrier = Carrier {
+            shape: self.carrier.unwrap_or(CarrierArg::Sine).shape(),
+            frequency_hz: self.carrier_hz.unwrap_or(Carrier::DEFAULT.frequency_hz),
+        };
+        Ok(ForceModel::Circuit { circuit, carrier })
+    }
+}
+
 /// The friction display and its ultrasonic plate, shared by `haptex
 /// voltage` and `haptex check`.
 #[derive(Debug, Clone, clap::Args)]

@@ -31,6 +31,8 @@ enum Command {
     Db(commands::db::DbArgs),
     Predict(commands::predict::PredictArgs),
     Serve(commands::serve::ServeArgs),
+    ForceCurve(commands::force_curve::ForceCurveArgs),
+    Map(commands::map::MapArgs),
 }
 
 fn main() -> ExitCode {
@@ -46,6 +48,8 @@ fn main() -> ExitCode {
         Command::Db(args) => commands::db::run(args),
         Command::Predict(args) => commands::predict::run(args),
         Command::Serve(args) => commands::serve::run(args),
+        Command::ForceCurve(args) => commands::force_curve::run(args),
+        Command::Map(args) => commands::map::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -163,12 +163,26 @@ pub struct Device {
     pub mu_hd: f64,
     /// Highest voltage the display can apply, U_max in V (RMS).
     pub u_max_v: f64,
+    /// Factor on eq. (3)'s force from a frequency-dependent force model for
+    /// the carrier that will be played ([`crate::frequency::ForceModel`]);
+    /// 1 is eq. (3) itself, the paper's (and then not serialized).
+    #[serde(default = "unit_gain", skip_serializing_if = "is_unit_gain")]
+    pub force_gain: f64,
+}
+
+fn unit_gain() -> f64 {
+    1.0
+}
+
+fn is_unit_gain(g: &f64) -> bool {
+    *g == 1.0
 }
 
 impl Device {
     /// The paper's Fig. 2 device: eps_sc = 1650, eps_i = 10, d_sc = 0.2 mm,
     /// d_i = 0.001 mm, k = 200 mm^2/N, U_max = 100 V, mu_HD = 1.
-    pub const PAPER: Self = Self { stack: LayerStack::PAPER, contact: ContactArea::PAPER, mu_hd: 1.0, u_max_v: 100.0 };
+    pub const PAPER: Self =
+        Self { stack: LayerStack::PAPER, contact: ContactArea::PAPER, mu_hd: 1.0, u_max_v: 100.0, force_gain: 1.0 };
 
     /// Checks every parameter is positive and finite.
     pub fn validate(&self) -> Result<(), ElectroError> {
@@ -176,6 +190,13 @@ impl Device {
         self.contact.validate()?;
         ranges::MU_HD.check(self.mu_hd)?;
         ranges::U_MAX_V.check(self.u_max_v)?;
+        if !(self.force_gain.is_finite() && self.force_gain > 0.0) {
+            return Err(ElectroError::Degenerate {
+                quantity: "force gain on eq. (3)",
+                value: self.force_gain,
+                hint: "check the frequency-dependent force model's parameters",
+            });
+        }
         // Each constant may be fine and their combination still overflow
         // (d_sc = 1e300 mm): the derived quantities must be finite too.
         let ratio = self.force_ratio_per_v2(1.0);
@@ -198,9 +219,11 @@ impl Device {
     }
 
     /// Fe/Fn per V^2 at normal force `fn_n` (N), from eq. (3) with A = k Fn^n:
-    /// eps0 k Fn^(n-1) / (2 (d_sc/eps_sc + d_i/eps_i)(d_sc + d_i)).
+    /// eps0 k Fn^(n-1) / (2 (d_sc/eps_sc + d_i/eps_i)(d_sc + d_i)), times
+    /// the force gain of a frequency-dependent model (1 for eq. 3).
     pub fn force_ratio_per_v2(&self, fn_n: f64) -> f64 {
-        electrostatic_force_n(&self.stack, self.contact.area_mm2(fn_n), 1.0) / fn_n
+        // Times 1.0 is exact: eq. (3)'s designs are unchanged to the bit.
+        electrostatic_force_n(&self.stack, self.contact.area_mm2(fn_n), 1.0) / fn_n * self.force_gain
     }
 
     /// Eq. (8) (eq. 7 with A = k Fn^n): the unclipped voltage in V (RMS) that

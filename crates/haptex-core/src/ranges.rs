@@ -123,6 +123,11 @@ pub const A_MAX_UM: Range = range("a_max_um", 1e-3, 100.0, "um");
 pub const RELATIVE_FRICTION: Range = range("relative_friction", 1e-6, 1.0, "");
 /// Weight of the `weighted` allocation's ultrasonic term.
 pub const STRATEGY_WEIGHT: Range = range("weight", 0.0, 1e6, "");
+/// DC resistivity of the stratum corneum in the frequency-dependent force
+/// model (its relaxation time eps0 eps_sc rho_sc stays finite).
+pub const RHO_SC_OHM_M: Range = range("rho_sc_ohm_m", 1e-3, 1e15, "ohm m");
+/// Air gap between skin and display in the frequency-dependent force model.
+pub const GAP_UM: Range = range("gap_um", 0.0, 1000.0, "um");
 
 // Drive signal.
 
@@ -158,6 +163,8 @@ pub const ALL: &[Range] = &[
     A_MAX_UM,
     RELATIVE_FRICTION,
     STRATEGY_WEIGHT,
+    RHO_SC_OHM_M,
+    GAP_UM,
     SLEW_V_PER_S,
     AMPLIFIER_RANGE_V,
     VOLTS_PER_FULL_SCALE,

@@ -44,6 +44,7 @@ fn any_device() -> impl proptest::strategy::Strategy<Value = Device> {
             contact: ContactArea { k_mm2_per_n: k, exponent: 1.0 },
             mu_hd,
             u_max_v,
+            force_gain: 1.0,
         },
     )
 }

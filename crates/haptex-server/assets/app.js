@@ -7,6 +7,10 @@
 // voltage on the finger model and compensate it (the FE finger sliding on
 // the display, POST /api/check and /api/compensate, streamed with their
 // progress), feel the voltage along a strip, download CSV / JSON / WAV.
+// The display selector designs for an ultrasonic friction-reduction plate
+// or the combined display instead (POST /api/voltage with `display`): the
+// renderable band on the friction plot, a(x) beside U(x), both channels in
+// the feel strip and the two-channel stroke WAV.
 //
 // Every number comes from the JSON API (docs/web.md); this script only
 // gathers inputs, draws and offers downloads. Sources are a registry
@@ -31,12 +35,15 @@
     drawn: null,           // the profile whose voltage is drawn
     method: 'physical',
     relative: false,       // map the profile relative to its flat-surface friction (Fig. 2)
+    display: 'electrovibration', // the friction display designed for (GET /api/config, displays)
+    strategy: 'split',     // the combined display's strategy
+    calibration: null,     // the ultrasonic calibration file chosen: {name, text}
     device: {},            // parameter name -> number (only valid ones)
     velocity: 50,
     carrierHz: 1000,
     updates: 0,
   };
-  const plots = { height: null, friction: null, voltage: null, check: null, checkVoltage: null };
+  const plots = { height: null, friction: null, voltage: null, amplitude: null, check: null, checkVoltage: null };
   window.haptex = { state, plots };
 
   // ---------------------------------------------------------------- API
@@ -103,12 +110,28 @@
     el.classList.toggle('error', isError);
   }
 
+  /** The page's name of the display fields (the server names the API's fields). */
+  const DISPLAY_FIELDS = {
+    display: 'Display',
+    strategy: 'Strategy (Display)',
+    weight: 'Weight w (Display)',
+    a_max_um: 'a_max (Display)',
+    ultrasonic_calibration: 'Ultrasonic calibration (Display)',
+  };
+
   function showError(error) {
     document.querySelectorAll('[aria-invalid="true"]').forEach((el) => el.removeAttribute('aria-invalid'));
     if (error instanceof ApiError) {
       const name = error.field ? error.field.replace(/^device\./, '') : null;
       const input = name ? document.querySelector(`[data-param="${name}"], [data-field="${name}"]`) : null;
       if (input) input.setAttribute('aria-invalid', 'true');
+      if (name && DISPLAY_FIELDS[name]) {
+        // A calibration error names the line and column of the file chosen.
+        const message = name === 'ultrasonic_calibration' && state.calibration
+          ? error.message.replace(/^ultrasonic_calibration/, state.calibration.name) : error.message;
+        say(`${DISPLAY_FIELDS[name]}: ${message}`, true);
+        return;
+      }
       say(error.field ? `${error.field}: ${error.message}` : error.message, true);
     } else {
       say(String(error && error.message ? error.message : error), true);
@@ -397,7 +420,7 @@
    * profile was computed at.
    */
   function checkBody() {
-    const body = voltageBody('physical');
+    const body = voltageBody('physical', false);
     delete body.method;
     const load = $('check-load').value.trim();
     if (load !== '') body.load_n_per_mm = Number(load);
@@ -405,8 +428,12 @@
     return body;
   }
 
-  /** The last check, when it is for the profile, device and load shown. */
+  /** Whether the electrovibration display is selected (the check on the finger model is its). */
+  const isElectrovibration = () => state.display === 'electrovibration';
+
+  /** The last check, when it is for the profile, device and load shown (electrovibration display). */
   function currentCheck() {
+    if (!isElectrovibration()) return null;
     const c = state.check;
     return c && state.profile && state.drawn === state.profile && c.key === JSON.stringify(checkBody()) ? c : null;
   }
@@ -459,7 +486,7 @@
       throw error;
     } finally {
       bar.hidden = true;
-      buttons.forEach((b) => { b.disabled = false; });
+      buttons.forEach((b) => { b.disabled = !isElectrovibration(); });
     }
   }
 
@@ -596,6 +623,8 @@
       methodBox.append(label);
     });
 
+    buildDisplayControls(config);
+
     $('relative').addEventListener('change', () => {
       state.relative = $('relative').checked;
       $('flat-mu').disabled = !state.relative;
@@ -661,6 +690,89 @@
       b.addEventListener('click', () => download(b.dataset.download).catch(showError)));
 
     (config.explanations || []).forEach(explain);
+  }
+
+  /** The display selector, the strategy, the weight, a_max and the calibration upload. */
+  function buildDisplayControls(config) {
+    const box = $('display-select');
+    (config.displays || []).forEach((d) => {
+      const label = document.createElement('label');
+      label.title = d.description;
+      const input = document.createElement('input');
+      Object.assign(input, { type: 'radio', name: 'display', value: d.id, checked: d.id === state.display });
+      input.addEventListener('change', () => { setDisplay(d.id); scheduleVoltage(); });
+      label.append(input, d.label);
+      box.append(label);
+    });
+    const select = $('strategy');
+    (config.strategies || []).forEach((st) => {
+      const option = document.createElement('option');
+      option.value = st.id;
+      option.textContent = st.label;
+      option.title = st.description;
+      select.append(option);
+    });
+    select.value = state.strategy;
+    select.addEventListener('change', () => { state.strategy = select.value; showDisplayControls(); scheduleVoltage(); });
+    const us = config.ultrasonic || {};
+    $('weight').placeholder = String(us.default_weight ?? 1);
+    $('a-max').placeholder = `calibration's last amplitude, or ${us.literature_a_max_um ?? 2.3}`;
+    $('weight').addEventListener('input', scheduleVoltage);
+    $('a-max').addEventListener('input', scheduleVoltage);
+    $('calibration').addEventListener('change', () => readCalibration().catch(showError));
+    $('clear-calibration').addEventListener('click', () => {
+      state.calibration = null;
+      $('calibration').value = '';
+      showDisplayControls();
+      scheduleVoltage();
+    });
+    showDisplayControls();
+  }
+
+  /** Selects a display (its radio button too). */
+  function setDisplay(id) {
+    state.display = id;
+    const input = document.querySelector(`input[name="display"][value="${id}"]`);
+    if (input) input.checked = true;
+    showDisplayControls();
+    showCheck();
+  }
+
+  /** Shows the controls of the selected display and what it does with the others. */
+  function showDisplayControls() {
+    const ev = isElectrovibration();
+    $('display-options').hidden = ev;
+    $('strategy-row').hidden = state.display !== 'combined';
+    $('weight-row').hidden = state.display !== 'combined' || state.strategy !== 'weighted';
+    const strategy = (state.config.strategies || []).find((st) => st.id === state.strategy);
+    $('strategy-info').textContent = strategy ? strategy.description : '';
+    // eq. (9) and the check on the finger model are the electrovibration display's.
+    document.querySelectorAll('input[name="method"]').forEach((input) => { input.disabled = !ev; });
+    [$('run-check'), $('run-compensate')].forEach((b) => { b.disabled = !ev; });
+    $('display-info').textContent = ev
+      ? 'Electrovibration only raises friction above mu_HD.'
+      : 'Method: physical (eq. 9 is the electrovibration display\'s pattern); the check on the finger model is ' +
+        'for the electrovibration display.';
+    $('calibration-info').textContent = state.calibration
+      ? `${state.calibration.name}: ${state.calibration.rows} rows (the server checks them: strictly increasing ` +
+        'amplitudes from 0, relative friction strictly decreasing from 1).'
+      : 'No calibration: the literature default stands in (a placeholder, not this device).';
+  }
+
+  /** Reads the calibration file chosen (the server checks it with the voltage). */
+  async function readCalibration() {
+    const file = $('calibration').files[0];
+    if (!file) return;
+    const max = (state.config.ultrasonic || {}).max_calibration_bytes;
+    if (max && file.size > max) {
+      $('calibration').value = '';
+      throw new ApiError(`${file.name} is ${file.size} bytes, more than the limit of ${max}`, 'ultrasonic_calibration', 0);
+    }
+    const text = await file.text();
+    const rows = text.split(/\r?\n/).filter((l) => l.trim() !== '' && !l.trim().startsWith('#')).length - 1;
+    state.calibration = { name: file.name, text, rows };
+    showDisplayControls();
+    scheduleVoltage();
   }
 
   /**
@@ -733,8 +845,11 @@
     voltageTimer = setTimeout(() => updateVoltage().catch(showError), 60);
   }
 
-  /** The POST /api/voltage body for the profile shown (by `method`, default the one chosen). */
-  function voltageBody(method = state.method) {
+  /**
+   * The POST /api/voltage body for the profile shown (by `method`, default
+   * the one chosen), for the display selected unless `withDisplay` is false.
+   */
+  function voltageBody(method = state.method, withDisplay = true) {
     const p = state.profile;
     const profile = { x_mm: p.x_mm, mu: p.mu };
     if (p.fn_n) profile.fn_n = p.fn_n;
@@ -744,6 +859,18 @@
       const flat = $('flat-mu').value.trim();
       if (flat !== '') body.flat_mu = Number(flat);
     }
+    if (withDisplay && !isElectrovibration()) {
+      delete body.method; // physical, the only method of these displays
+      body.display = state.display;
+      if (state.display === 'combined') {
+        body.strategy = state.strategy;
+        const w = $('weight').value.trim();
+        if (state.strategy === 'weighted' && w !== '') body.weight = Number(w);
+      }
+      const a = $('a-max').value.trim();
+      if (a !== '') body.a_max_um = Number(a);
+      if (state.calibration) body.ultrasonic_calibration = state.calibration.text;
+    }
     return body;
   }
 
@@ -752,7 +879,7 @@
   async function updateVoltage() {
     if (!state.profile) return;
     const id = ++voltageRequest;
-    const both = SOURCES[state.source].bothMethods;
+    const both = SOURCES[state.source].bothMethods && isElectrovibration();
     const [answer, companion] = await Promise.all([
       postJson('/api/voltage', voltageBody()).then((r) => r.json()),
       both ? postJson('/api/voltage', voltageBody(otherMethod(state.method))).then((r) => r.json()) : null,
@@ -771,8 +898,12 @@
     state.updates += 1;
     document.body.dataset.updates = String(state.updates);
     document.body.dataset.state = 'ready';
-    say(`${state.profile.label}: ${answer.summary.n_points} points, method ${answer.summary.method}` +
-      `${answer.summary.relative ? ', relative to the flat-surface friction (Fig. 2)' : ''}.`);
+    const s = answer.summary;
+    const how = s.display
+      ? `display ${s.display}${s.strategy ? `, strategy ${s.strategy}` : ''}`
+      : `method ${s.method}`;
+    say(`${state.profile.label}: ${s.n_points} points, ${how}` +
+      `${s.relative ? ', relative to the flat-surface friction (Fig. 2)' : ''}.`);
   }
 
   /** "eq. (8)" or "eq. (9)": the method of a summary. */
@@ -796,10 +927,59 @@
     note.textContent = `mu = mu_profile / ${fmt(r.flat_mu)} · ${fmt(r.mu_hd)} (mu_flat: ${origin}).`;
   }
 
+  /** The warnings of the answer as the page names its controls (page_warnings). */
+  function showWarnings(box) {
+    const warnings = state.voltage.page_warnings || state.voltage.summary.warnings;
+    if (!warnings.length) return;
+    const list = document.createElement('ul');
+    warnings.forEach((w) => {
+      const item = document.createElement('li');
+      item.className = 'warning';
+      item.textContent = w;
+      list.append(item);
+    });
+    box.append(list);
+  }
+
+  /** The summary of an ultrasonic or combined display: band, channels, regions. */
+  function showDisplaySummary(box, s) {
+    const line = (id, text) => {
+      const div = document.createElement('div');
+      div.id = id;
+      div.textContent = text;
+      box.append(div);
+    };
+    line('summary-band', `${s.display} display${s.strategy ? ` (${s.strategy})` : ''}: renderable band ` +
+      `mu ${fmt(s.band_mu[0])} .. ${fmt(s.band_mu[1])} · ${s.relative ? 'relative ' : ''}mu ${fmt(s.mu_min)} .. ` +
+      `${fmt(s.mu_max)} · mu_HD ${fmt(s.mu_hd)}`);
+    const ev = s.electrovibration;
+    if (ev) {
+      line('summary-voltage', `U ${fmt(ev.voltage_min_v)} .. ${fmt(ev.voltage_max_v)} V RMS (U_max ${fmt(ev.u_max_v)} V)` +
+        ` · Fe/Fn = ${ev.fe_over_fn_per_v2.toExponential(4)} U²`);
+    }
+    const us = s.ultrasonic;
+    const model = us.source === 'calibration'
+      ? `calibration ${state.calibration ? state.calibration.name : us.calibration_file}`
+      : 'literature default (a placeholder: upload a calibration of your plate)';
+    line('summary-amplitude', `a ${fmt(us.amplitude_min_um)} .. ${fmt(us.amplitude_max_um)} µm (a_max ` +
+      `${fmt(us.a_max_um)} µm; saturation rho_min = ${fmt(us.relative_friction_min)}) · ${model}`);
+    if (s.bias) {
+      line('summary-bias', `bias level: a = ${fmt(s.bias.amplitude_um)} µm (rho = ${fmt(s.bias.relative_friction)})` +
+        ` · lowered below it: ${pct(s.bias.lowered.fraction_of_length)} of the length`);
+    }
+    line('summary-regions', `above the band: ${pct(s.above_band.fraction_of_length)} of the length · below the ` +
+      `band: ${pct(s.below_band.fraction_of_length)}`);
+    showWarnings(box);
+  }
+
   function showSummary() {
     const s = state.voltage.summary;
     const box = $('summary');
     box.textContent = '';
+    if (s.display) {
+      showDisplaySummary(box, s);
+      return;
+    }
     const line = document.createElement('div');
     line.textContent = `${equation(s)}: U ${fmt(s.voltage_min_v)} .. ${fmt(s.voltage_max_v)} V RMS ` +
       `(U_max ${fmt(s.u_max_v)} V) · ${s.relative ? 'relative ' : ''}mu ${fmt(s.mu_min)} .. ${fmt(s.mu_max)}` +
@@ -818,17 +998,7 @@
       box.append(other);
     }
     // The server's warnings with the page's controls named, not the command line's flags.
-    const warnings = state.voltage.page_warnings || s.warnings;
-    if (warnings.length) {
-      const list = document.createElement('ul');
-      warnings.forEach((w) => {
-        const item = document.createElement('li');
-        item.className = 'warning';
-        item.textContent = w;
-        list.append(item);
-      });
-      box.append(list);
-    }
+    showWarnings(box);
     // A flat 0 V line is not a signal: say why, and offer the one-click ways out.
     if (s.method === 'physical' && s.not_renderable.fraction_of_length >= 1) {
       const way = document.createElement('div');
@@ -841,6 +1011,8 @@
         return b;
       };
       way.append(button('way-out-normalized', 'the pattern: normalized (eq. 9)', () => setMethod('normalized')));
+      way.append(' ', button('way-out-combined', 'the combined display (ultrasonic below mu_HD)',
+        () => setDisplay('combined')));
       if (!state.relative) {
         way.append(' ', button('way-out-relative', 'relative to its flat-surface friction (Fig. 2)',
           () => setRelative(true, '')));
@@ -883,7 +1055,15 @@
     const r = s.relative;
     const frictionData = [x, v.mu];
     const frictionSeries = [{ label: r ? 'mu_RS / mu_flat · mu_HD' : 'mu_RS', stroke: '#1f5fa8', width: 1.5 }];
-    if (s.method === 'physical') {
+    if (s.display) {
+      // The renderable band of the display (summary.band_mu).
+      frictionData.push(constant(x, s.mu_hd), constant(x, s.band_mu[0]), constant(x, s.band_mu[1]));
+      frictionSeries.push(
+        { label: 'mu_HD', stroke: '#888', dash: [6, 4], width: 1 },
+        { label: 'band min (mu_HD rho_min)', stroke: '#00838f', dash: [2, 4], width: 1.5 },
+        { label: s.electrovibration ? 'band max (mu at U_max)' : 'band max (mu_HD)', stroke: '#c77700',
+          dash: [2, 4], width: 1.5 });
+    } else if (s.method === 'physical') {
       frictionData.push(constant(x, s.mu_hd), constant(x, s.mu_at_u_max));
       frictionSeries.push(
         { label: 'mu_HD', stroke: '#888', dash: [6, 4], width: 1 },
@@ -896,13 +1076,13 @@
       frictionSeries.push({ label: 'mu FE model', stroke: '#2e7d32', dash: [5, 3], width: 1.5 });
     }
     const voltageData = [x, v.voltage_v];
-    const voltageSeries = [{ label: `U ${equation(s)}`, stroke: '#b3261e', width: 1.5 }];
+    const voltageSeries = [{ label: s.display ? 'U(x)' : `U ${equation(s)}`, stroke: '#b3261e', width: 1.5 }];
     const c = state.companion;
     if (c && c.voltage_v.length === x.length) {
       voltageData.push(c.voltage_v);
       voltageSeries.push({ label: `U ${equation(c.summary)}`, stroke: '#6a3d9a', dash: [5, 3], width: 1.5 });
     }
-    voltageData.push(constant(x, s.u_max_v));
+    voltageData.push(constant(x, uMaxOf(v)));
     voltageSeries.push({ label: 'U_max', stroke: '#888', dash: [6, 4], width: 1 });
     $('voltage-caption').textContent = c
       ? `: ${equation(s)} and ${equation(c.summary)} side by side, as in the paper's Fig. 2b`
@@ -915,7 +1095,34 @@
       plots.height = null;
     }
     plots.friction = replot(plots.friction, 'friction-plot', frictionSeries, frictionData);
-    plots.voltage = replot(plots.voltage, 'voltage-plot', voltageSeries, voltageData);
+    // The ultrasonic display alone has no voltage.
+    const hasVoltage = Boolean(v.voltage_v);
+    $('voltage-figure').hidden = !hasVoltage;
+    if (hasVoltage) {
+      plots.voltage = replot(plots.voltage, 'voltage-plot', voltageSeries, voltageData);
+    } else if (plots.voltage) {
+      plots.voltage.destroy();
+      plots.voltage = null;
+    }
+    const a = v.amplitude_um;
+    $('amplitude-figure').hidden = !a;
+    if (a) {
+      const aMax = s.ultrasonic.a_max_um;
+      plots.amplitude = replot(plots.amplitude, 'amplitude-plot', [
+        { label: 'a(x) (µm)', stroke: '#00838f', width: 1.5 },
+        { label: 'a_max', stroke: '#888', dash: [6, 4], width: 1 },
+      ], [x, a, constant(x, aMax)]);
+    } else if (plots.amplitude) {
+      plots.amplitude.destroy();
+      plots.amplitude = null;
+    }
+  }
+
+  /** U_max of an answer: the electrovibration answer's, or the combined display's (null without voltage). */
+  function uMaxOf(v) {
+    const s = v.summary;
+    if (s.u_max_v !== undefined) return s.u_max_v;
+    return s.electrovibration ? s.electrovibration.u_max_v : null;
   }
 
   /** Updates a plot in place when its series are unchanged, else rebuilds it. */
@@ -931,7 +1138,10 @@
 
   function clearPlots() {
     $('check-results').hidden = true;
-    ['height', 'friction', 'voltage'].forEach((k) => { if (plots[k]) { plots[k].destroy(); plots[k] = null; } });
+    ['height', 'friction', 'voltage', 'amplitude'].forEach((k) => {
+      if (plots[k]) { plots[k].destroy(); plots[k] = null; }
+    });
+    $('amplitude-figure').hidden = true;
     $('summary').textContent = '';
     state.voltage = null;
     state.companion = null;
@@ -939,8 +1149,8 @@
   }
 
   function resizePlots() {
-    const ids = { height: 'height-plot', friction: 'friction-plot', voltage: 'voltage-plot', check: 'check-plot',
-      checkVoltage: 'check-voltage-plot' };
+    const ids = { height: 'height-plot', friction: 'friction-plot', voltage: 'voltage-plot',
+      amplitude: 'amplitude-plot', check: 'check-plot', checkVoltage: 'check-voltage-plot' };
     Object.entries(ids).forEach(([k, id]) => {
       const plot = plots[k];
       if (plot) plot.setSize({ width: plotWidth(id), height: plotHeight() });
@@ -960,11 +1170,20 @@
     return compensated && $('play-compensated').checked ? compensated : state.voltage;
   }
 
-  /** U at x by linear interpolation in the played voltage profile (held at the ends). */
+  /** U at x by linear interpolation in the played voltage profile (held at the ends; 0 V without voltage). */
   function voltageAt(x) {
     const v = played();
-    const xs = v.x_mm;
-    const us = v.voltage_v;
+    return v.voltage_v ? interpolate(v.x_mm, v.voltage_v, x) : 0;
+  }
+
+  /** a at x (µm) in the played display profile, null without an ultrasonic channel. */
+  function amplitudeAt(x) {
+    const v = played();
+    return v.amplitude_um ? interpolate(v.x_mm, v.amplitude_um, x) : null;
+  }
+
+  /** ys at x by linear interpolation over xs (held at the ends). */
+  function interpolate(xs, us, x) {
     if (x <= xs[0]) return us[0];
     if (x >= xs[xs.length - 1]) return us[us.length - 1];
     let lo = 0;
@@ -995,12 +1214,21 @@
     const xs = v.x_mm;
     const x0 = xs[0];
     const span = xs[xs.length - 1] - x0;
-    const uMax = v.summary.u_max_v;
+    const uMax = uMaxOf(v);
+    // With an ultrasonic channel the lower third shows a(x) in blue (brighter: more vibration, less friction).
+    const aMax = v.amplitude_um ? v.summary.ultrasonic.a_max_um : null;
+    const top = aMax ? Math.round(height * 2 / 3) : height;
     for (let px = 0; px < width; px += 1) {
-      const u = voltageAt(x0 + (px + 0.5) / width * span);
-      const level = Math.round(30 + 225 * Math.min(1, u / uMax));
+      const xAt = x0 + (px + 0.5) / width * span;
+      const u = voltageAt(xAt);
+      const level = Math.round(30 + 225 * (uMax ? Math.min(1, u / uMax) : 0));
       ctx.fillStyle = `rgb(${level}, ${Math.round(level * 0.82)}, ${Math.round(level * 0.45)})`;
-      ctx.fillRect(px, 0, 1, height);
+      ctx.fillRect(px, 0, 1, top);
+      if (aMax) {
+        const b = Math.round(30 + 225 * Math.min(1, amplitudeAt(xAt) / aMax));
+        ctx.fillStyle = `rgb(${Math.round(b * 0.3)}, ${Math.round(b * 0.75)}, ${b})`;
+        ctx.fillRect(px, top, 1, height - top);
+      }
     }
     if (strip.marker !== null) {
       ctx.fillStyle = '#4fc3f7';
@@ -1017,13 +1245,18 @@
     const xs = v.x_mm;
     const x = xs[0] + px / rect.width * (xs[xs.length - 1] - xs[0]);
     const u = voltageAt(x);
+    const a = amplitudeAt(x);
     const readout = $('feel-readout');
-    readout.textContent = `x = ${x.toFixed(3)} mm, U = ${u.toFixed(1)} V RMS`;
+    readout.textContent = `x = ${x.toFixed(3)} mm, U = ${u.toFixed(1)} V RMS` +
+      (a === null ? '' : `, a = ${a.toFixed(3)} µm`);
     readout.dataset.xMm = String(x);
     readout.dataset.voltageV = String(u);
+    if (a === null) delete readout.dataset.amplitudeUm; else readout.dataset.amplitudeUm = String(a);
     strip.marker = px;
     drawStrip();
-    audio.set(u / v.summary.u_max_v);
+    // The audio plays the electrovibration channel, as the strip's brightness.
+    const uMax = uMaxOf(v);
+    audio.set(uMax ? u / uMax : 0);
   }
 
   function setupStrip() {
@@ -1083,26 +1316,43 @@
     if (kind === 'profile-csv') {
       file = await state.profile.download();
     } else if (kind === 'voltage-csv') {
-      file = { blob: await (await postJson('/api/voltage?format=csv', voltageBody())).blob(), name: 'voltage.csv' };
+      const name = isElectrovibration() ? 'voltage.csv' : `display-${state.display}.csv`;
+      file = { blob: await (await postJson('/api/voltage?format=csv', voltageBody())).blob(), name };
     } else if (kind === 'voltage-json') {
       file = {
         blob: new Blob([JSON.stringify(state.voltage, null, 1)], { type: 'application/json' }),
-        name: 'voltage.json',
+        name: state.voltage.summary.display ? `display-${state.voltage.summary.display}.json` : 'voltage.json',
       };
     } else if (kind === 'compensated-csv') {
       const c = currentCheck();
       if (!c || c.mode !== 'compensate') throw new ApiError('compensate first', null, 0);
       file = { blob: new Blob([c.result.voltage_csv], { type: 'text/csv' }), name: 'voltage-compensated.csv' };
-    } else if (kind === 'stroke-wav') {
+    } else if (kind === 'stroke-wav' || kind === 'stroke-sidecar') {
       const v = played();
       const body = {
-        voltage: { x_mm: v.x_mm, voltage_v: v.voltage_v },
+        voltage: { x_mm: v.x_mm, voltage_v: v.voltage_v || v.x_mm.map(() => 0) },
         stroke: { velocity_mm_s: state.velocity },
         carrier: { shape: 'sine', frequency_hz: state.carrierHz },
-        u_max_v: v.summary.u_max_v,
       };
-      const which = v === state.voltage ? '' : '-compensated';
-      file = { blob: await (await postJson('/api/play', body)).blob(), name: `stroke-${state.velocity}mm_s${which}.wav` };
+      const uMax = uMaxOf(v);
+      if (uMax !== null) body.u_max_v = uMax;
+      let which = v === state.voltage ? '' : '-compensated';
+      if (v.amplitude_um) {
+        // Two channels: 2 is the plate's amplitude, full scale a_max.
+        body.voltage.amplitude_um = v.amplitude_um;
+        body.a_max_um = v.summary.ultrasonic.a_max_um;
+        which = `-${v.summary.display}-2ch`;
+      }
+      if (kind === 'stroke-sidecar') {
+        // The WAV's sidecar (scales of both channels, sample hash), as haptex play writes it.
+        body.format = 'sidecar';
+        file = {
+          blob: await (await postJson('/api/play', body)).blob(),
+          name: `stroke-${state.velocity}mm_s${which}.wav.json`,
+        };
+      } else {
+        file = { blob: await (await postJson('/api/play', body)).blob(), name: `stroke-${state.velocity}mm_s${which}.wav` };
+      }
     } else {
       throw new Error(`unknown download ${kind}`);
     }

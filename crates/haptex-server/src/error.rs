@@ -30,6 +30,10 @@ pub struct ApiError {
     /// 1-based line of a CSV body, when the error is tied to one.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub line: Option<u64>,
+    /// The CSV column at fault, when `field` is a field holding a whole
+    /// CSV text (an ultrasonic calibration) rather than the column itself.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub column: Option<String>,
 }
 
 impl ApiError {
@@ -44,7 +48,7 @@ impl ApiError {
     pub fn new(status: StatusCode, message: impl Into<String>, field: Option<&str>) -> Self {
         let message = cut(printable(message.into()), Self::MAX_MESSAGE_BYTES);
         let field = field.map(|f| cut(printable(f.to_string()), Self::MAX_FIELD_BYTES));
-        Self { status, message, field, line: None }
+        Self { status, message, field, line: None, column: None }
     }
 
     /// 400: the request is malformed or a value is out of range.
@@ -79,6 +83,11 @@ impl ApiError {
 
     pub fn with_line(mut self, line: Option<u64>) -> Self {
         self.line = line;
+        self
+    }
+
+    pub fn with_column(mut self, column: Option<String>) -> Self {
+        self.column = column.map(|c| cut(printable(c), Self::MAX_FIELD_BYTES));
         self
     }
 

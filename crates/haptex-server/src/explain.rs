@@ -178,6 +178,31 @@ pub const EXPLANATIONS: &[Explanation] = &[
         accepted: accepted(fields::LOAD_N_PER_MM),
     },
     Explanation {
+        field: "a_max_um",
+        label: "a_max (Display)",
+        symbol: "a_max",
+        unit: "um",
+        meaning: "highest vibration amplitude (peak) of the ultrasonic plate: the clip level of a(x) and the full \
+                  scale of the drive's channel 2",
+        typical: typical(1.0, 2.3),
+        source: "typical plates: 27 to 60 kHz resonance, 1 to 2.3 um amplitude (physics.md, 'Ultrasonic friction \
+                 reduction', from Wiertlewski et al. 2016, Vezzoli et al. 2017 and Sednaoui et al. 2017); default: \
+                 the calibration's last amplitude, or 2.3 um, the literature default's validity limit",
+        accepted: accepted(ranges::A_MAX_UM),
+    },
+    Explanation {
+        field: "weight",
+        label: "weight (Display)",
+        symbol: "w",
+        unit: "",
+        meaning: "weighted strategy: the cost of the vibration leaving its bias level against the voltage's share \
+                  of U_max; 0 is split, large approaches bias",
+        typical: None,
+        source: "haptex's cost (physics.md, 'The combined display'); default 1 weighs full voltage against the \
+                 vibration fully off; no typical range sourced (a design choice, not a measured quantity)",
+        accepted: accepted(ranges::STRATEGY_WEIGHT),
+    },
+    Explanation {
         field: "velocity_mm_s",
         label: "Finger velocity (Playback)",
         symbol: "v",
@@ -209,6 +234,11 @@ const FLAGS: &[(&str, &str)] = &[
     ("--mu-hd", "mu_HD (Device and finger)"),
     ("--u-max", "U_max (Device and finger)"),
     ("--fn-n", "Fn (Device and finger)"),
+    ("--display combined", "the display combined (Display)"),
+    ("--ultrasonic-calibration", "the ultrasonic calibration file (Display)"),
+    ("--a-max-um", "a_max (Display)"),
+    ("--strategy", "the strategy (Display)"),
+    ("--weight", "the weight (Display)"),
 ];
 
 /// A message of the library (written for the command line) as the page

@@ -18,6 +18,8 @@
 //! - [`params`]: device parameters with the paper's defaults and their
 //!   accepted ranges; [`fields`]: the ranges of every other number;
 //! - [`input`]: request bodies (JSON or `text/csv`) and query strings;
+//! - [`display`]: the friction display a request designs for
+//!   (electrovibration, ultrasonic, combined) and its checks;
 //! - [`state`]: shared state ([`AppState`]: the FE database, the texture
 //!   library pool and the limits);
 //! - [`templates`]: the FE database of surface templates and the ranges of
@@ -36,6 +38,7 @@ pub mod answers;
 mod api;
 pub mod assets;
 mod connection;
+pub mod display;
 pub mod error;
 pub mod explain;
 pub mod fields;

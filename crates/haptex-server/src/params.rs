@@ -165,6 +165,7 @@ impl DeviceRequest {
             contact: ContactArea { k_mm2_per_n: get("k_mm2_per_n"), exponent: get("area_exponent") },
             mu_hd: get("mu_hd"),
             u_max_v: get("u_max_v"),
+            force_gain: 1.0,
         };
         let fn_n = values[DEVICE_PARAMS.iter().position(|p| p.name == "fn_n").expect("fn_n")];
         Ok(Self { device, fn_n })

@@ -497,6 +497,113 @@ fn route_cases(valid: &Valid) -> Vec<Case> {
                     let target = format!("/api/voltage?relative={text}");
                     cases.push(csv(format!("CSV with relative={text}"), target, 400, "relative"));
                 }
+                // The display models (issue 16): each field's range, type and
+                // place, the calibration's size and content.
+                let combined = set(&body, "display", json!("combined"));
+                let a_max = ranges::A_MAX_UM;
+                number_cases(
+                    valid,
+                    &set(&combined, "a_max_um", json!(1.0)),
+                    "a_max_um",
+                    a_max.min,
+                    a_max.max,
+                    &mut cases,
+                );
+                let weighted = set(&set(&combined, "strategy", json!("weighted")), "weight", json!(1.0));
+                let weight = ranges::STRATEGY_WEIGHT;
+                number_cases(valid, &weighted, "weight", weight.min, weight.max, &mut cases);
+                let calibration = "amplitude_um,relative_friction\n0,1\n1,0.5\n";
+                let calibrated = set(&combined, "ultrasonic_calibration", json!(calibration));
+                for (what, body, field) in [
+                    ("display = hologram", set(&body, "display", json!("hologram")), "display"),
+                    ("display = hostile", set(&body, "display", json!(hostile(1000))), "display"),
+                    ("display = 1", set(&body, "display", json!(1)), "display"),
+                    ("display = [combined]", set(&body, "display", json!(["combined"])), "display"),
+                    ("strategy = best", set(&combined, "strategy", json!("best")), "strategy"),
+                    ("strategy = hostile", set(&combined, "strategy", json!(hostile(1000))), "strategy"),
+                    ("strategy on electrovibration", set(&body, "strategy", json!("split")), "strategy"),
+                    ("weight on electrovibration", set(&body, "weight", json!(1.0)), "weight"),
+                    ("weight with split", set(&combined, "weight", json!(1.0)), "weight"),
+                    ("weight = 1e7", set(&weighted, "weight", json!(1e7)), "weight"),
+                    ("a_max_um on electrovibration", set(&body, "a_max_um", json!(1.0)), "a_max_um"),
+                    ("a_max_um beyond the literature default", set(&combined, "a_max_um", json!(2.5)), "a_max_um"),
+                    ("a_max_um beyond the calibration", set(&calibrated, "a_max_um", json!(1.5)), "a_max_um"),
+                    ("a_max_um = 0", set(&combined, "a_max_um", json!(0.0)), "a_max_um"),
+                    ("method normalized on combined", set(&combined, "method", json!("normalized")), "method"),
+                    (
+                        "calibration on electrovibration",
+                        set(&body, "ultrasonic_calibration", json!(calibration)),
+                        "ultrasonic_calibration",
+                    ),
+                    ("calibration = 5", set(&combined, "ultrasonic_calibration", json!(5)), "ultrasonic_calibration"),
+                    (
+                        "calibration = [..]",
+                        set(&combined, "ultrasonic_calibration", json!([calibration])),
+                        "ultrasonic_calibration",
+                    ),
+                    (
+                        "calibration = hostile",
+                        set(&combined, "ultrasonic_calibration", json!(hostile(10_000))),
+                        "ultrasonic_calibration",
+                    ),
+                    (
+                        "calibration with 1e308",
+                        set(
+                            &combined,
+                            "ultrasonic_calibration",
+                            json!("amplitude_um,relative_friction\n0,1\n1e308,0.5\n"),
+                        ),
+                        "ultrasonic_calibration",
+                    ),
+                    (
+                        "calibration with nan",
+                        set(&combined, "ultrasonic_calibration", json!("amplitude_um,relative_friction\n0,1\n1,nan\n")),
+                        "ultrasonic_calibration",
+                    ),
+                    (
+                        "calibration rising",
+                        set(
+                            &combined,
+                            "ultrasonic_calibration",
+                            json!("amplitude_um,relative_friction\n0,1\n1,0.5\n2,0.6\n"),
+                        ),
+                        "ultrasonic_calibration",
+                    ),
+                    (
+                        "calibration of one row",
+                        set(&combined, "ultrasonic_calibration", json!("amplitude_um,relative_friction\n0,1\n")),
+                        "ultrasonic_calibration",
+                    ),
+                ] {
+                    cases.push(valid.json(what, &body, 400, field));
+                }
+                let long = format!("amplitude_um,relative_friction\n{}", "0.5,0.5\n".repeat(40_000));
+                cases.push(valid.json(
+                    "a 320 kB calibration",
+                    &set(&combined, "ultrasonic_calibration", json!(long)),
+                    413,
+                    "ultrasonic_calibration",
+                ));
+                for text in ["1e308", "-1e308", "5e-324", "1e999", "NaN", "inf", "abc", "", "%00", "0", "3"] {
+                    let target = format!("/api/voltage?display=combined&a_max_um={text}");
+                    cases.push(csv(format!("CSV with a_max_um={text}"), target, 400, "a_max_um"));
+                }
+                for text in ["-1e308", "1e308", "1e999", "NaN", "inf", "abc", "", "%00", "-1"] {
+                    let target = format!("/api/voltage?display=combined&strategy=weighted&weight={text}");
+                    cases.push(csv(format!("CSV with weight={text}"), target, 400, "weight"));
+                }
+                for text in ["hologram", "", "%00", "COMBINED"] {
+                    let target = format!("/api/voltage?display={text}");
+                    cases.push(csv(format!("CSV with display={text}"), target, 400, "display"));
+                    let target = format!("/api/voltage?display=combined&strategy={text}");
+                    cases.push(csv(format!("CSV with strategy={text}"), target, 400, "strategy"));
+                }
+                cases.push(csv(
+                    "CSV with a calibration in the query".into(),
+                    "/api/voltage?display=combined&ultrasonic_calibration=0,1".into(),
+                    400,
+                    "ultrasonic_calibration",
+                ));
             }
         }
         "/api/check" | "/api/compensate" => {
@@ -592,6 +699,44 @@ fn route_cases(valid: &Valid) -> Vec<Case> {
                 ("voltage", json!({ "x_mm": vec![0; 100_001], "voltage_v": vec![0; 100_001] }), 413, "voltage.x_mm"),
             ] {
                 cases.push(valid.json(format!("{path} = {value:.40}"), &set(&body, path, value), status, field));
+            }
+            // Two channels (issue 16): the ultrasonic amplitude and its a_max.
+            let two = set(
+                &set(
+                    &body,
+                    "voltage",
+                    json!({ "x_mm": [0.0, 10.0], "voltage_v": [50.0, 80.0], "amplitude_um": [0.5, 1.0] }),
+                ),
+                "a_max_um",
+                json!(1.0),
+            );
+            let (a_max, amplitude) = (ranges::A_MAX_UM, ranges::AMPLITUDE_UM);
+            number_cases(valid, &two, "a_max_um", a_max.min, a_max.max, &mut cases);
+            number_cases(valid, &two, "voltage.amplitude_um[1]", amplitude.min, amplitude.max, &mut cases);
+            for (what, body, status, field) in [
+                ("a_max_um without amplitudes", set(&body, "a_max_um", json!(1.0)), 400, "a_max_um"),
+                ("amplitudes without a_max_um", set(&two, "a_max_um", Value::Null), 400, "a_max_um"),
+                (
+                    "a negative amplitude",
+                    set(&two, "voltage.amplitude_um[1]", json!(-0.5)),
+                    400,
+                    "voltage.amplitude_um[1]",
+                ),
+                (
+                    "one amplitude for two positions",
+                    set(&two, "voltage.amplitude_um", json!([0.5])),
+                    400,
+                    "voltage.amplitude_um",
+                ),
+                ("amplitudes as text", set(&two, "voltage.amplitude_um", json!("0.5,1")), 400, "voltage.amplitude_um"),
+                (
+                    "100 001 amplitudes",
+                    set(&two, "voltage.amplitude_um", json!(vec![0; 100_001])),
+                    400,
+                    "voltage.amplitude_um",
+                ),
+            ] {
+                cases.push(valid.json(what, &body, status, field));
             }
             let long = set(&with_trajectory, "trajectory", json!({ "t_s": [0.0, 1e5], "x_mm": [0.0, 10.0] }));
             cases.push(valid.json("a trajectory of 1e5 s", &long, 413, "trajectory"));

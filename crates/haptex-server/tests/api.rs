@@ -127,6 +127,9 @@ async fn config_explains_every_gui_parameter_with_ranges_the_server_accepts() {
         ("load_n_per_mm", fields::LOAD_N_PER_MM),
         ("velocity_mm_s", ranges::VELOCITY_MM_S),
         ("carrier_hz", ranges::CARRIER_HZ),
+        // The display models (issue 16).
+        ("a_max_um", ranges::A_MAX_UM),
+        ("weight", ranges::STRATEGY_WEIGHT),
     ]);
     assert_eq!(explanations.len(), checked.len());
     let mut sourced = 0;
@@ -157,6 +160,9 @@ async fn config_explains_every_gui_parameter_with_ranges_the_server_accepts() {
                 post_json("/api/voltage", &json!({ "profile": profile, "relative": true, "flat_mu": value }))
                     .await
                     .status
+            } else if field == "a_max_um" {
+                let body = json!({ "profile": profile, "display": "combined", "a_max_um": value });
+                post_json("/api/voltage", &body).await.status
             } else if field == "velocity_mm_s" {
                 let voltage = json!({ "x_mm": [0.0, 1.0], "voltage_v": [50.0, 50.0] });
                 post_json("/api/play", &json!({ "voltage": voltage, "stroke": { "velocity_mm_s": value } }))
@@ -168,8 +174,9 @@ async fn config_explains_every_gui_parameter_with_ranges_the_server_accepts() {
             assert_eq!(status, StatusCode::OK, "{field} = {value}");
         }
     }
-    // The sourced ranges: mu_HD, d_sc, n, Fn, mu_flat, the load, the velocity.
-    assert_eq!(sourced, 7);
+    // The sourced ranges: mu_HD, d_sc, n, Fn, mu_flat, the load, the
+    // velocity, a_max.
+    assert_eq!(sourced, 8);
     let mu_hd = find("mu_hd").unwrap();
     assert_eq!(mu_hd["symbol"], "mu_HD");
     assert!(mu_hd["source"].as_str().unwrap().contains("Derler"));
@@ -275,6 +282,8 @@ async fn openapi_describes_every_route_and_the_parameter_ranges() {
         ("slew_v_per_s", ranges::SLEW_V_PER_S),
         ("amplifier_range_v", ranges::AMPLIFIER_RANGE_V),
         ("volts_per_full_scale", ranges::VOLTS_PER_FULL_SCALE),
+        ("voltage.amplitude_um[]", ranges::AMPLITUDE_UM),
+        ("a_max_um", ranges::A_MAX_UM),
     ] {
         let mut schema = play;
         for part in path.trim_end_matches("[]").split('.') {
@@ -290,6 +299,12 @@ async fn openapi_describes_every_route_and_the_parameter_ranges() {
     assert_eq!(check["max_runs"]["maximum"].as_u64(), Some(u64::from(fields::MAX_RUNS)));
     let flat_mu = &doc["components"]["schemas"]["FlatMu"];
     assert_eq!(range(flat_mu), expect(ranges::FLAT_MU), "FlatMu");
+    let schemas = &doc["components"]["schemas"];
+    assert_eq!(range(&schemas["AMaxUm"]), expect(ranges::A_MAX_UM), "AMaxUm");
+    assert_eq!(range(&schemas["StrategyWeight"]), expect(ranges::STRATEGY_WEIGHT), "StrategyWeight");
+    let calibration = &doc["paths"]["/api/voltage"]["post"]["requestBody"]["content"]["application/json"]["schema"]["properties"]
+        ["ultrasonic_calibration"];
+    assert_eq!(calibration["maxLength"].as_u64(), Some(haptex_server::display::MAX_CALIBRATION_BYTES as u64));
     let u_max = DEVICE_PARAMS.iter().find(|p| p.name == "u_max_v").unwrap();
     assert_eq!(range(&play["u_max_v"]), (Some(u_max.min), Some(u_max.max)));
     // Every route answers something other than 404 for its own path.

@@ -38,7 +38,16 @@
 //!    progress of the run; *compensate* reports every FE run while it runs,
 //!    draws the felt friction of the compensated voltage (at least 3 times
 //!    closer to the target than eq. (8)'s), offers it as a CSV download
-//!    (within U_max) and the feel strip plays it.
+//!    (within U_max) and the feel strip plays it;
+//! 10. the display selector (issue 16) on a library material below mu_HD:
+//!     *combined* plots a(x) beside U(x), both the core's `map_display` of
+//!     the plotted profile bit for bit, and the renderable band on the
+//!     friction plot; the feel strip reads a(x) at the pointer; the weighted
+//!     strategy takes its weight; an uploaded calibration is the plate used,
+//!     a bad one is refused naming its file, line and column; the downloads
+//!     have both channels (CSV columns, a two-channel WAV with channel 2's
+//!     scale); *ultrasonic* alone has no voltage plot; *electrovibration*
+//!     restores the one-channel page.
 //!
 //! It saves screenshots (desktop and phone) in the target directory;
 //! with HAPTEX_UPDATE_SCREENSHOTS=1 also to docs/img/ (what docs/web.md
@@ -567,8 +576,9 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     // and turns to the warning style outside 0.2 .. 0.3 mm; the page's
     // messages name its controls, not command-line flags.
     let explained = script(client, "return document.querySelectorAll('p.explain').length;").await?;
-    if explained != 13 {
-        return fail(format!("{explained} parameters explained in the page, expected 13"));
+    // 13 of eq. (3)-(9), the mapping and playback, and the display's a_max and weight.
+    if explained != 15 {
+        return fail(format!("{explained} parameters explained in the page, expected 15"));
     }
     let label = wd!(wd!(client.find(Locator::Css("label[for='param-mu_hd']"))).text());
     if !label.starts_with("mu_HD") {
@@ -606,6 +616,10 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     // page's words.
     if summary.contains("--") || !summary.contains("lower mu_HD (Device and finger)") {
         return fail(format!("the summary does not name the page's controls: {summary:?}"));
+    }
+    // Among the ways out of the 0 V line, the combined display.
+    if wd!(client.find_all(Locator::Id("way-out-combined"))).len() != 1 {
+        return fail("the 0 V line offers no one-click way to the combined display");
     }
     // ... and a 0 V line comes with its one-click way out: relative to the
     // profile's flat-surface friction (its median), which gives a signal.
@@ -729,6 +743,8 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     save_screenshot("web-check.png", &screenshot_of(client, "check-results").await?);
     show_library(client, "latex").await?;
     save_screenshot("web-library.png", &screenshot(client).await?);
+    // 10. The display selector.
+    display_selector(client, scratch).await?;
 
     let errors = console_errors(client).await?;
     if !errors.is_empty() {
@@ -878,6 +894,227 @@ async fn screenshot_of(client: &Client, id: &str) -> Check<Vec<u8>> {
     script(client, &format!("document.getElementById('{id}').scrollIntoView(); return true;")).await?;
     tokio::time::sleep(Duration::from_millis(200)).await;
     Ok(wd!(client.screenshot()))
+}
+
+/// Clicks the radio button `name` = `value` and waits for the voltage it gives.
+async fn choose(client: &Client, name: &str, value: &str) -> Check<()> {
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css(&format!("input[name='{name}'][value='{value}']")))).click());
+    wait_update(client, n, &format!("the voltage after choosing {name} {value}")).await
+}
+
+/// Step 10: the display selector on the library's sponge (mean mu 0.996:
+/// about half of it below mu_HD = 1, which electrovibration alone cannot
+/// render), with the paper's device (the library source is active before).
+async fn display_selector(client: &Client, scratch: &Path) -> Check<()> {
+    use haptex_core::combined::{Channels, Strategy, map_display};
+    use haptex_core::ultrasonic::UltrasonicDevice;
+
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css("#material option[value='sponge']"))).click());
+    wait_update(client, n, "the sponge").await?;
+    let n = updates(client).await?;
+    let set_seed = format!(
+        "const s = document.getElementById('seed'); s.value = '{SCREENSHOT_SEED}'; \
+         s.dispatchEvent(new Event('change')); return true;"
+    );
+    script(client, &set_seed).await?;
+    wait_update(client, n, "the sponge's stroke of the fixed seed").await?;
+    wait_for(client, "window.haptex.state.drawn.material === 'sponge'", "the sponge drawn").await?;
+    choose(client, "display", "combined").await?;
+    wait_for(client, "window.haptex.state.voltage.summary.display === 'combined'", "the combined display").await?;
+    let visible = script(
+        client,
+        "return !document.getElementById('amplitude-figure').hidden && !document.getElementById('display-options').hidden          && !document.getElementById('strategy-row').hidden && document.getElementById('weight-row').hidden          && document.querySelector(\"input[name='method'][value='normalized']\").disabled;",
+    )
+    .await?;
+    if visible != Value::Bool(true) {
+        return fail("combined: the amplitude plot, strategy and a_max are not shown, or eq. (9) is still offered");
+    }
+    // The plots are the core's design of the plotted profile (haptex voltage --display combined).
+    let friction = plotted(client, "friction").await?;
+    let (x, mu) = (&friction[0], &friction[1]);
+    let profile = FrictionProfile::new(x.clone(), mu.clone()).map_err(|e| e.to_string())?;
+    let plate = UltrasonicDevice::literature_default(None).map_err(|e| e.to_string())?;
+    let core = map_display(&profile, &Device::PAPER, Channels::Combined(&plate, Strategy::Split), None, None)
+        .map_err(|e| e.to_string())?;
+    let amplitude = plotted(client, "amplitude").await?;
+    let voltage = plotted(client, "voltage").await?;
+    if Some(&amplitude[1]) != core.amplitude_um.as_ref() || Some(&voltage[1]) != core.voltage_v.as_ref() {
+        return fail("combined: the plotted a(x) or U(x) is not the core's map_display of the plotted profile");
+    }
+    let a_max = plate.a_max_um();
+    if amplitude[2].iter().any(|a| *a != a_max) {
+        return fail(format!("combined: a_max line {:?}, expected {a_max} um", amplitude[2]));
+    }
+    // Split: the plate below mu_HD, the voltage above; the sponge has both.
+    if !amplitude[1].iter().any(|a| *a > 0.0) || !voltage[1].iter().any(|u| *u > 0.0) {
+        return fail("combined (split) on the sponge: no vibration or no voltage anywhere");
+    }
+    // The band on the friction plot.
+    let shown = labels(client, "friction").await?;
+    let band = core.summary.band_mu;
+    let at = |label: &str| shown.iter().position(|l| l == label).map(|i| &friction[i + 1]);
+    match (at("band min (mu_HD rho_min)"), at("band max (mu at U_max)")) {
+        (Some(lo), Some(hi)) if lo.iter().all(|m| *m == band[0]) && hi.iter().all(|m| *m == band[1]) => {}
+        _ => return fail(format!("combined: the friction plot's series {shown:?} do not draw the band {band:?}")),
+    }
+    let summary = wd!(wd!(client.find(Locator::Id("summary-band"))).text());
+    if !summary.contains("renderable band") {
+        return fail(format!("combined: the summary does not state the band: {summary:?}"));
+    }
+    // The feel strip: a(x) at the pointer, beside U(x).
+    let strip = wd!(client.find(Locator::Id("feel-strip")));
+    let width = script(client, "return document.getElementById('feel-strip').getBoundingClientRect().width;").await?;
+    let moves = MouseActions::new("mouse".into()).then(PointerAction::MoveToElement {
+        element: strip,
+        duration: Some(Duration::from_millis(50)),
+        x: -0.2 * width.as_f64().ok_or("strip width")?,
+        y: 0.0,
+    });
+    wd!(client.perform_actions(moves));
+    wait_for(client, "document.getElementById('feel-readout').dataset.amplitudeUm !== undefined", "a at the pointer")
+        .await?;
+    let read = script(
+        client,
+        "const d = document.getElementById('feel-readout').dataset;          return [Number(d.xMm), Number(d.voltageV), Number(d.amplitudeUm)];",
+    )
+    .await?;
+    let read = numbers(&read)?;
+    let (a_want, u_want) = (
+        haptex_core::profile::interpolate(x, &amplitude[1], read[0]),
+        haptex_core::profile::interpolate(x, &voltage[1], read[0]),
+    );
+    let readout = wd!(wd!(client.find(Locator::Id("feel-readout"))).text());
+    if (read[2] - a_want).abs() > 1e-9 * a_want.max(1.0) || (read[1] - u_want).abs() > 1e-9 * u_want.max(1.0) {
+        return fail(format!(
+            "feel strip at x = {} mm: U {} a {}, the profile has U {u_want} a {a_want}",
+            read[0], read[1], read[2]
+        ));
+    }
+    if !readout.contains(" µm") {
+        return fail(format!("the feel readout does not show a: {readout:?}"));
+    }
+
+    // The weighted strategy and its weight.
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css("#strategy option[value='weighted']"))).click());
+    wait_update(client, n, "the weighted strategy").await?;
+    wait_for(client, "!document.getElementById('weight-row').hidden", "the weight shown").await?;
+    let n = updates(client).await?;
+    type_into(client, "weight", "5").await?;
+    wait_update(client, n, "the voltage with weight 5").await?;
+    wait_for(client, "window.haptex.state.voltage.summary.weight === 5", "weight 5 used").await?;
+    let weighted = plotted(client, "amplitude").await?;
+    let core = map_display(
+        &profile,
+        &Device::PAPER,
+        Channels::Combined(&plate, Strategy::Weighted { weight: 5.0 }),
+        None,
+        None,
+    )
+    .map_err(|e| e.to_string())?;
+    if Some(&weighted[1]) != core.amplitude_um.as_ref() {
+        return fail("weighted (w = 5): the plotted a(x) is not the core's");
+    }
+
+    // A calibration upload: the plate used; a bad one refused naming its line and column.
+    let good = scratch.join("my-plate.csv");
+    std::fs::write(&good, "amplitude_um,relative_friction\n0,1\n0.5,0.8\n1.0,0.5\n2.0,0.25\n").unwrap();
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Id("calibration"))).send_keys(&good.display().to_string()));
+    wait_update(client, n, "the voltage with the calibration").await?;
+    wait_for(client, "window.haptex.state.voltage.summary.ultrasonic.source === 'calibration'", "the calibrated plate")
+        .await?;
+    let calibrated = plotted(client, "amplitude").await?;
+    if calibrated[2].iter().any(|a| *a != 2.0) {
+        return fail("with the calibration, a_max is not its last amplitude, 2 um");
+    }
+    let bad = scratch.join("bad-plate.csv");
+    std::fs::write(&bad, "amplitude_um,relative_friction\n0,1\n0.5,0.8\n0.4,0.5\n").unwrap();
+    wd!(wd!(client.find(Locator::Id("calibration"))).send_keys(&bad.display().to_string()));
+    wait_for(
+        client,
+        "document.getElementById('calibration').getAttribute('aria-invalid') === 'true'",
+        "the bad calibration refused",
+    )
+    .await?;
+    let message = wd!(wd!(client.find(Locator::Id("message"))).text());
+    if !message.starts_with("Ultrasonic calibration (Display): bad-plate.csv, line 4, column 'amplitude_um'")
+        || message.contains("--")
+    {
+        return fail(format!("a bad calibration is reported as {message:?}"));
+    }
+    let logged = console_errors(client).await?;
+    if logged.is_empty() || logged.iter().any(|e| !(e.contains("/api/voltage") && e.contains("400"))) {
+        return fail(format!("console after a bad calibration: {logged:#?}"));
+    }
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Id("calibration"))).send_keys(&good.display().to_string()));
+    wait_update(client, n, "the voltage with the good calibration again").await?;
+
+    // Downloads with both channels.
+    let bytes = download(client, "voltage-csv").await?;
+    let table = Table::read(bytes.as_slice(), "downloaded display.csv").map_err(|e| e.to_string())?;
+    let state = script(client, "return window.haptex.state.voltage;").await?;
+    if table.columns() != ["x_mm", "mu", "voltage_v", "amplitude_um"]
+        || table.column("amplitude_um") != Some(numbers(&state["amplitude_um"])?.as_slice())
+    {
+        return fail(format!("combined: the downloaded CSV's columns {:?} or amplitudes", table.columns()));
+    }
+    let wav = download(client, "stroke-wav").await?;
+    let (scale, volts, channel_2) = haptex_core::signal::decode_drive_wav_channels(&wav)?;
+    match (&scale.channel_2, channel_2) {
+        (Some(c2), Some(a)) if c2.um_per_full_scale == 2.0 && a.len() == volts.len() && a.iter().any(|v| *v > 0.0) => {}
+        _ => return fail("combined: the stroke WAV has no channel 2 at the calibration's a_max = 2 um"),
+    }
+    // Its sidecar, as haptex play writes it: the same samples and channel 2's scale.
+    let sidecar = download(client, "stroke-sidecar").await?;
+    let sidecar: haptex_core::signal::WavSidecar =
+        serde_json::from_slice(&sidecar).map_err(|e| format!("the stroke WAV's sidecar: {e}"))?;
+    if sidecar.samples_sha256 != scale.samples_sha256 || sidecar.channel_2 != scale.channel_2 || sidecar.channels != 2 {
+        return fail("combined: the sidecar download does not belong to the stroke WAV");
+    }
+
+    save_screenshot("web-combined.png", &screenshot(client).await?);
+    // The display's controls fit a phone too.
+    wd!(client.set_window_size(390, 844));
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    let overflow = script(client, "return document.documentElement.scrollWidth - window.innerWidth;").await?;
+    wd!(client.set_window_size(1280, 1280));
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    if overflow.as_f64().unwrap_or(1.0) > 0.0 {
+        return fail(format!("combined display: the phone-sized window scrolls sideways by {overflow} px"));
+    }
+
+    // The ultrasonic display alone: no voltage, the band's top at mu_HD.
+    choose(client, "display", "ultrasonic").await?;
+    wait_for(client, "window.haptex.state.voltage.summary.display === 'ultrasonic'", "the ultrasonic display").await?;
+    let hidden = script(
+        client,
+        "return document.getElementById('voltage-figure').hidden && window.haptex.plots.voltage === null \
+         && document.getElementById('strategy-row').hidden;",
+    )
+    .await?;
+    if hidden != Value::Bool(true) || !labels(client, "friction").await?.iter().any(|l| l == "band max (mu_HD)") {
+        return fail("ultrasonic: a voltage plot or the strategy is still shown, or the band's top is not mu_HD");
+    }
+    // Back to electrovibration: the one-channel page.
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Id("clear-calibration"))).click());
+    wait_update(client, n, "the literature default again").await?;
+    choose(client, "display", "electrovibration").await?;
+    let restored = script(
+        client,
+        "return document.getElementById('amplitude-figure').hidden && window.haptex.plots.amplitude === null \
+         && window.haptex.state.voltage.summary.method === 'physical' \
+         && !document.querySelector(\"input[name='method'][value='normalized']\").disabled;",
+    )
+    .await?;
+    if restored != Value::Bool(true) {
+        return fail("electrovibration: the amplitude plot is still shown or eq. (9) not offered");
+    }
+    Ok(())
 }
 
 /// Shows `material` of the library with the physical method and the

@@ -127,6 +127,7 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
         contact: ContactArea { k_mm2_per_n: args.k_mm2_per_n, exponent: 1.0 },
         mu_hd,
         u_max_v: args.u_max,
+        force_gain: 1.0,
     };
     settings.device.validate()?;
     let scenario = &mut settings.scenario;

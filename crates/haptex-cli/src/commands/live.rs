@@ -144,7 +144,7 @@ mod device {
     use serde_json::json;
 
     use super::LiveArgs;
-    use crate::commands::play::read_curve;
+    use crate::commands::play::{check_design_carrier, read_curve, stated_a_max};
 
     /// Touch events queued between the input thread and the callback.
     const QUEUE: usize = 1024;
@@ -185,8 +185,9 @@ mod device {
         if args.ramp_ms > 10_000.0 {
             bail!("--ramp-ms must be at most 10000 ms, got {}", Num(args.ramp_ms));
         }
-        let (curve, amplitude, stated_a_max) = read_curve(profile)?;
-        let a_max_um = args.drive.a_max_um(profile, amplitude.as_ref(), stated_a_max)?;
+        let (curve, amplitude, comments) = read_curve(profile)?;
+        let stated = if amplitude.is_some() { stated_a_max(&comments) } else { None };
+        let a_max_um = args.drive.a_max_um(profile, amplitude.as_ref(), stated)?;
         let design_channels: u16 = if a_max_um.is_some() { 2 } else { 1 };
         // The touch log is read (and refused) before the device is opened.
         let log = match &args.touch_log {
@@ -211,6 +212,8 @@ mod device {
         let format = pick_format(&device, &device_name, channels, sample_rate)?;
         let settings = args.drive.settings(sample_rate);
         settings.check()?;
+        // A frequency-dependent design renders its target only on its carrier.
+        check_design_carrier(&comments, &settings.carrier, profile)?;
         let config = RealtimeConfig {
             sample_rate_hz: sample_rate,
             carrier: settings.carrier,

@@ -3,8 +3,10 @@
 pub mod cae;
 pub mod check;
 pub mod db;
+pub mod force_curve;
 pub mod library;
 pub mod live;
+pub mod map;
 pub mod play;
 pub mod predict;
 pub mod serve;

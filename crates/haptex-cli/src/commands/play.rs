@@ -10,13 +10,13 @@ use haptex_core::io::Table;
 use haptex_core::num::Num;
 use haptex_core::ranges;
 use haptex_core::signal::{
-    AmplitudeCurve, Carrier, CarrierShape, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions,
-    read_drive_wav, render, render_two_channel, sidecar_path, write_wav,
+    AmplitudeCurve, Carrier, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions, read_drive_wav,
+    render, render_two_channel, sidecar_path, write_wav,
 };
 use haptex_core::trajectory::Trajectory;
 use serde_json::json;
 
-use crate::args::{Output, in_range, positive};
+use crate::args::{CarrierArg, Output, in_range, positive};
 
 /// Rate at which generated trajectories are sampled (linear in between).
 const GENERATED_RATE_HZ: f64 = 1000.0;
@@ -70,8 +70,13 @@ pub struct PlayArgs {
     check: Option<PathBuf>,
     /// Voltage profile CSV (`x_mm,mu,voltage_v` from `haptex voltage`, or
     /// `x_mm,voltage_v`), or `-` for stdin. voltage_v is RMS volts.
-    #[arg(long, value_name = "U.csv", required_unless_present = "check")]
+    #[arg(long, value_name = "U.csv", required_unless_present_any = ["check", "voltage_map"])]
     profile: Option<PathBuf>,
+    /// A voltage map over (x, y) instead of a profile (`haptex map
+    /// voltage`: .csv or .npy with its sidecar), played along the finger
+    /// path of --trajectory, a CSV `t_s,x_mm,y_mm` (docs/maps.md).
+    #[arg(long, value_name = "MAP", conflicts_with_all = ["profile", "velocity", "strokes", "a_max_um"], requires = "trajectory")]
+    voltage_map: Option<PathBuf>,
     /// Finger trajectory CSV `t_s,x_mm` (times strictly increasing).
     #[arg(long, value_name = "T.csv", conflicts_with_all = ["velocity", "strokes"])]
     trajectory: Option<PathBuf>,
@@ -162,14 +167,7 @@ impl DriveArgs {
     pub fn settings(&self, sample_rate_hz: u32) -> RenderSettings {
         RenderSettings {
             sample_rate_hz,
-            carrier: Carrier {
-                shape: match self.carrier {
-                    CarrierArg::Sine => CarrierShape::Sine,
-                    CarrierArg::Square => CarrierShape::Square,
-                    CarrierArg::None => CarrierShape::None,
-                },
-                frequency_hz: self.carrier_hz,
-            },
+            carrier: Carrier { shape: self.carrier.shape(), frequency_hz: self.carrier_hz },
             limits: Limits {
                 u_max_v: self.u_max,
                 slew_v_per_s: self.slew_v_per_s,
@@ -222,13 +220,6 @@ impl DriveArgs {
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-enum CarrierArg {
-    Sine,
-    Square,
-    None,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
 enum WavFormatArg {
     Pcm16,
     Pcm24,
@@ -252,8 +243,8 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
     if let Some(wav) = &args.check {
         return check(wav, args.quiet);
     }
-    let (Some(profile), Some(output_path)) = (&args.profile, &args.output) else {
-        bail!("give --profile U.csv and -o OUT (or --check WAV)");
+    let (Some(profile), Some(output_path)) = (args.profile.as_ref().or(args.voltage_map.as_ref()), &args.output) else {
+        bail!("give --profile U.csv (or --voltage-map MAP) and -o OUT (or --check WAV)");
     };
     if args.trajectory.is_none() && args.velocity.is_none() {
         bail!("give --trajectory T.csv, or --velocity MM_PER_S to generate a trajectory");
@@ -277,15 +268,41 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
     // Refuse a directory or special file before any work.
     haptex_core::io::OutputTarget::of(output_path)?;
 
-    let (curve, amplitude, stated_a_max) = read_curve(profile)?;
+    if args.voltage_map.is_some() {
+        let map = super::map::read_voltage_map(profile)?;
+        let path_file = args.trajectory.as_ref().context("--voltage-map needs --trajectory T.csv (t_s,x_mm,y_mm)")?;
+        let name = path_file.display().to_string();
+        let file = std::fs::File::open(path_file).with_context(|| format!("cannot open {name}"))?;
+        let path = haptex_core::planar::PlanarTrajectory::read_csv(std::io::BufReader::new(file), &name)?;
+        let settings = args.drive.settings(args.sample_rate);
+        let signal = haptex_core::signal::render_map(&map, &path, &settings)?;
+        return write_signal(&args, format, &output, output_path, profile, json!({ "file": name }), &signal);
+    }
+    let (curve, amplitude, comments) = read_curve(profile)?;
+    let stated_a_max = if amplitude.is_some() { stated_a_max(&comments) } else { None };
     let a_max_um = args.drive.a_max_um(profile, amplitude.as_ref(), stated_a_max)?;
     let (trajectory, trajectory_source) = trajectory(&args, &curve)?;
     let settings = args.drive.settings(args.sample_rate);
+    check_design_carrier(&comments, &settings.carrier, profile)?;
     let signal = match (&amplitude, a_max_um) {
         (Some(amplitude), Some(a_max)) => render_two_channel(&curve, amplitude, a_max, &trajectory, &settings)?,
         _ => render(&curve, &trajectory, &settings)?,
     };
 
+    write_signal(&args, format, &output, output_path, profile, trajectory_source, &signal)
+}
+
+/// Writes the rendered signal (WAV with its scale and sidecar, or CSV;
+/// and the optional CSV and PNG) and reports what was written.
+fn write_signal(
+    args: &PlayArgs,
+    format: FormatArg,
+    output: &Output,
+    output_path: &Path,
+    profile: &Path,
+    trajectory_source: serde_json::Value,
+    signal: &haptex_core::signal::DriveSignal,
+) -> anyhow::Result<()> {
     let mut written = Vec::new();
     match format {
         FormatArg::Wav => {
@@ -304,7 +321,7 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
                 "command": std::env::args().collect::<Vec<_>>().join(" "),
                 "haptex_version": env!("CARGO_PKG_VERSION"),
             });
-            let sidecar = write_wav(path, &signal, &options, source)?;
+            let sidecar = write_wav(path, signal, &options, source)?;
             let channel_2 = match &sidecar.channel_2 {
                 Some(c) => format!("; channel 2: {} um per full scale", Num(c.um_per_full_scale)),
                 None => String::new(),
@@ -391,37 +408,94 @@ fn check(path: &Path, quiet: bool) -> anyhow::Result<()> {
 }
 
 /// Reads the voltage curve, and the amplitude curve of a profile with an
-/// `amplitude_um` column, from a file, or stdin for `-`; with the a_max
-/// its `#` header states (`at most a_max = A um`, as `haptex voltage
-/// --display combined|ultrasonic` writes), if it states one.
-pub fn read_curve(path: &Path) -> anyhow::Result<(VoltageCurve, Option<AmplitudeCurve>, Option<f64>)> {
+/// `amplitude_um` column, from a file, or stdin for `-`; with the `#`
+/// comment lines before its header row (where `haptex voltage` states an
+/// a_max and a design carrier).
+pub fn read_curve(path: &Path) -> anyhow::Result<(VoltageCurve, Option<AmplitudeCurve>, Vec<String>)> {
     if path.as_os_str() == "-" {
         let mut bytes = Vec::new();
         std::io::Read::read_to_end(&mut std::io::stdin().lock(), &mut bytes)
             .context("reading the profile from stdin")?;
         let (curve, amplitude) = VoltageCurve::from_display_table(&Table::read(bytes.as_slice(), "<stdin>")?)?;
-        let stated = if amplitude.is_some() { stated_a_max(bytes.as_slice()) } else { None };
-        return Ok((curve, amplitude, stated));
+        return Ok((curve, amplitude, header_comments(bytes.as_slice())));
     }
     let (curve, amplitude) = VoltageCurve::from_display_table(&Table::read_file(path)?)?;
-    let stated = match amplitude {
-        Some(_) => std::fs::File::open(path).ok().and_then(|f| stated_a_max(std::io::BufReader::new(f))),
-        None => None,
-    };
-    Ok((curve, amplitude, stated))
+    let comments = std::fs::File::open(path)
+        .map(|f| header_comments(std::io::BufReader::new(f)))
+        .with_context(|| format!("reading {}", path.display()))?;
+    Ok((curve, amplitude, comments))
 }
 
-/// The a_max a display profile's header comment states: the smallest
-/// `at most a_max = A um` among the `#` lines before the header row.
-fn stated_a_max(reader: impl std::io::BufRead) -> Option<f64> {
+/// The `#` lines before a CSV's header row (blank lines skipped).
+fn header_comments(reader: impl std::io::BufRead) -> Vec<String> {
     reader
         .lines()
         .map_while(Result::ok)
         .take_while(|l| l.trim_start().starts_with('#') || l.trim().is_empty())
+        .filter(|l| !l.trim().is_empty())
+        .collect()
+}
+
+/// The a_max a display profile's header comment states: the smallest
+/// `at most a_max = A um` among its comment lines.
+pub(crate) fn stated_a_max(comments: &[String]) -> Option<f64> {
+    comments
+        .iter()
         .flat_map(|l| l.split("at most a_max = ").skip(1).map(str::to_owned).collect::<Vec<_>>())
         .filter_map(|rest| rest.split_whitespace().next().and_then(|v| v.parse::<f64>().ok()))
         .filter(|a| ranges::A_MAX_UM.contains(*a))
         .reduce(f64::min)
+}
+
+/// The carrier a frequency-dependent design states it was designed for
+/// (`designed for the carrier: SHAPE F Hz`, as `haptex voltage
+/// --force-model circuit` writes): the shape word and the frequency, or
+/// the unreadable text itself as an error.
+fn stated_carrier(comments: &[String]) -> Option<Result<(String, f64), String>> {
+    let rest = comments.iter().find_map(|l| l.split_once("designed for the carrier: ").map(|(_, r)| r.to_owned()))?;
+    let mut words = rest.split_whitespace();
+    let parsed = match (words.next(), words.next().and_then(|f| f.parse::<f64>().ok()), words.next()) {
+        (Some(shape @ ("sine" | "square" | "none")), Some(f), Some("Hz")) if f.is_finite() && f > 0.0 => {
+            Some((shape.to_owned(), f))
+        }
+        _ => None,
+    };
+    Some(parsed.ok_or(rest))
+}
+
+/// Refuses to play a frequency-dependent design on another carrier than
+/// the one it was designed for: its voltages render the target only there.
+pub(crate) fn check_design_carrier(comments: &[String], carrier: &Carrier, profile: &Path) -> anyhow::Result<()> {
+    let Some(stated) = stated_carrier(comments) else {
+        return Ok(());
+    };
+    let (shape, f_hz) = stated.map_err(|text| {
+        anyhow::anyhow!(
+            "{}: cannot read the design carrier in its comment ('designed for the carrier: {text}'): expected \
+             SHAPE F Hz with SHAPE sine, square or none",
+            profile.display()
+        )
+    })?;
+    let played = match carrier.shape {
+        haptex_core::signal::CarrierShape::Sine => "sine",
+        haptex_core::signal::CarrierShape::Square => "square",
+        haptex_core::signal::CarrierShape::None => "none",
+    };
+    // A direct drive has no frequency; sine and square must match it to
+    // the digits written (the comment prints the frequency in full).
+    let same = played == shape && (shape == "none" || f_hz == carrier.frequency_hz);
+    if !same {
+        bail!(
+            "{} was designed with a frequency-dependent force model for a {shape} carrier at {} Hz, and renders its \
+             target only on that carrier: play it with --carrier {shape} --carrier-hz {} (or design it again for \
+             --carrier {played} --carrier-hz {})",
+            profile.display(),
+            Num(f_hz),
+            Num(f_hz),
+            Num(carrier.frequency_hz)
+        );
+    }
+    Ok(())
 }
 
 /// The trajectory (read or generated) and a JSON description of where it

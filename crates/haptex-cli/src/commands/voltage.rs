@@ -13,7 +13,8 @@ use haptex_core::ranges;
 use haptex_core::relative::FlatMu;
 use haptex_fem::render::{self, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping};
 
-use crate::args::{DisplayArg, DisplayArgs, LayerStackArgs, Output, in_range, read_profile};
+use crate::args::{DisplayArg, DisplayArgs, ForceModelArgs, LayerStackArgs, Output, in_range, read_profile};
+use haptex_core::frequency::ForceModel;
 
 /// Compute the voltage an electrovibration display must apply to reproduce a
 /// friction profile.
@@ -89,6 +90,8 @@ pub struct VoltageArgs {
     output: Option<PathBuf>,
     #[command(flatten)]
     display: DisplayArgs,
+    #[command(flatten)]
+    force: ForceModelArgs,
     /// Compensate the voltage on the FE finger model (physical method):
     /// eq. (8)'s voltage corrected run by run until the friction the
     /// finger feels on the display matches the profile (see `haptex
@@ -120,18 +123,28 @@ enum Format {
 
 pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
     let profile = read_profile(&args.profile)?;
+    let force_model = args.force.model()?;
+    let stack = args.stack.stack();
     let device = Device {
-        stack: args.stack.stack(),
+        stack,
         contact: ContactArea { k_mm2_per_n: args.k_mm2_per_n, exponent: args.area_exponent },
         mu_hd: args.mu_hd,
         u_max_v: args.u_max,
+        force_gain: force_model.gain(&stack),
     };
+    let force_comment = force_comment(&force_model, &device);
+    if force_comment.is_some() && args.compensate {
+        anyhow::bail!(
+            "--compensate runs the FE finger with eq. (3)'s attraction: it cannot compensate a --force-model circuit \
+             design; drop one of them"
+        );
+    }
     let method = match args.method {
         MethodArg::Physical => Method::Physical,
         MethodArg::Normalized => Method::Normalized,
     };
     if args.display.display != DisplayArg::Electrovibration {
-        return run_display(args, &profile, &device, method);
+        return run_display(args, &profile, &device, method, force_comment);
     }
     args.display.refuse_display_flags()?;
     let mut voltage = if args.relative {
@@ -165,13 +178,16 @@ pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
     }
     let output = Output::new(args.output);
     write_output(&output, args.format, &voltage, |w| {
-        if let Some(c) = &comment {
+        for c in comment.iter().chain(&force_comment) {
             writeln!(w, "{c}")?;
         }
         voltage.write_csv(w)
     })?;
     if !args.quiet {
         eprint!("{}", voltage.summary);
+        if let Some(c) = &force_comment {
+            eprintln!("{}", c.trim_start_matches("# "));
+        }
         if let Some(c) = &comment {
             eprintln!("{}", c.trim_start_matches("# "));
         }
@@ -183,7 +199,13 @@ pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
 }
 
 /// `--display ultrasonic` or `combined`: the drive of each channel in use.
-fn run_display(args: VoltageArgs, profile: &FrictionProfile, device: &Device, method: Method) -> anyhow::Result<()> {
+fn run_display(
+    args: VoltageArgs,
+    profile: &FrictionProfile,
+    device: &Device,
+    method: Method,
+    force_comment: Option<String>,
+) -> anyhow::Result<()> {
     if method != Method::Physical {
         anyhow::bail!("--method normalized (eq. 9) is for the electrovibration display: drop it with --display");
     }
@@ -198,9 +220,17 @@ fn run_display(args: VoltageArgs, profile: &FrictionProfile, device: &Device, me
     let flat = args.relative.then(|| args.flat_mu.map_or(FlatMu::Median, FlatMu::Given));
     let design = map_display(profile, device, channels, args.fn_n, flat)?;
     let output = Output::new(args.output);
-    write_output(&output, args.format, &design, |w| design.write_csv(w))?;
+    write_output(&output, args.format, &design, |w| {
+        if let Some(c) = &force_comment {
+            writeln!(w, "{c}")?;
+        }
+        design.write_csv(w)
+    })?;
     if !args.quiet {
         eprint!("{}", design.summary);
+        if let Some(c) = &force_comment {
+            eprintln!("{}", c.trim_start_matches("# "));
+        }
         if let Some(path) = output.path() {
             eprintln!("wrote {}", path.display());
         }
@@ -226,4 +256,26 @@ fn write_output<T: serde::Serialize>(
             serde_json::to_writer(&mut *w, value).map_err(std::io::Error::from).and_then(|()| w.write_all(b"\n"))
         }
     })
+}
+
+/// The file comment of a frequency-dependent design: the circuit, its gain
+/// and the carrier it was designed for, in the words `haptex play` reads
+/// (`designed for the carrier: SHAPE F Hz`). None for eq. (3).
+fn force_comment(model: &ForceModel, device: &Device) -> Option<String> {
+    let ForceModel::Circuit { circuit, carrier } = model else {
+        return None;
+    };
+    let shape = match carrier.shape {
+        haptex_core::signal::CarrierShape::Sine => "sine",
+        haptex_core::signal::CarrierShape::Square => "square",
+        haptex_core::signal::CarrierShape::None => "none",
+    };
+    Some(format!(
+        "# force model: circuit ({}); Fe = G Fe_eq3 with G = {:.6} for this carrier; designed for the carrier: {shape} {} \
+         Hz (play it with haptex play --carrier {shape} --carrier-hz {})",
+        circuit.describe(&device.stack),
+        device.force_gain,
+        Num(carrier.frequency_hz),
+        Num(carrier.frequency_hz)
+    ))
 }

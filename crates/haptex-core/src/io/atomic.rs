@@ -43,7 +43,7 @@ pub struct WriteError {
 }
 
 impl WriteError {
-    fn new(path: &Path, source: std::io::Error) -> Self {
+    pub fn new(path: &Path, source: std::io::Error) -> Self {
         Self { path: path.to_path_buf(), cause: source }
     }
 

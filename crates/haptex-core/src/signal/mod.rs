@@ -319,20 +319,9 @@ pub fn render(
 ) -> Result<DriveSignal, SignalError> {
     settings.check()?;
     let fs = settings.sample_rate_hz as f64;
-    let n_float = (trajectory.duration_s() * fs).floor() + 1.0;
-    if n_float > MAX_SAMPLES as f64 {
-        return Err(SignalError::TooLong {
-            duration_s: trajectory.duration_s(),
-            sample_rate_hz: settings.sample_rate_hz,
-            n_samples: n_float,
-        });
-    }
-    let n = n_float as usize;
+    let n = sample_count(trajectory.duration_s(), settings)?;
     let mut x_mm = crate::buffer::zeroed_f64(n);
     trajectory.positions_into(trajectory.start_s(), 1.0 / fs, &mut x_mm);
-
-    let carrier = settings.carrier;
-    let cycles_per_sample = carrier.frequency_hz / fs;
     // In passes over the samples, each a simple loop: the requested
     // envelope U(x(t)) (walking the profile with the finger), the safety
     // limits in place (a serial chain only with a slew limit), the drive
@@ -340,6 +329,93 @@ pub fn render(
     let mut envelope_v = crate::buffer::zeroed_f64(n);
     curve.voltages_along(&x_mm, settings.extend, &mut envelope_v);
     let outside = x_mm.iter().map(|&x| usize::from(!curve.contains(x))).sum::<usize>();
+    let outside_warning = (outside > 0).then(|| {
+        let (x0, x1) = curve.span_mm();
+        let what = match settings.extend {
+            Extend::Hold => "the end voltages are held",
+            Extend::Zero => "U = 0 V there",
+            Extend::Repeat => "the profile repeats",
+        };
+        format!(
+            "the finger is outside the profile ({x0} .. {x1} mm) for {:.2}% of the time: {what}",
+            100.0 * outside as f64 / n as f64
+        )
+    });
+    finish(x_mm, envelope_v, trajectory.start_s(), settings, outside, outside_warning)
+}
+
+/// Renders the drive signal of a voltage map along a finger path in the
+/// plane: the envelope is the map's voltage at the path's position (both
+/// coordinates linear between the path's samples, the map bilinear, its
+/// edge held beyond it) at each output sample; the safety limits, the
+/// carrier and the report are [`render`]'s. The signal's `x_mm` holds the
+/// x positions.
+pub fn render_map(
+    map: &crate::map::VoltageMap,
+    path: &crate::planar::PlanarTrajectory,
+    settings: &RenderSettings,
+) -> Result<DriveSignal, SignalError> {
+    settings.check()?;
+    let fs = settings.sample_rate_hz as f64;
+    let (t, xs, ys) = (path.t_s(), path.x_mm(), path.y_mm());
+    let (start, end) = (t[0], t[t.len() - 1]);
+    let n = sample_count(end - start, settings)?;
+    let mut x_mm = crate::buffer::zeroed_f64(n);
+    let mut envelope_v = crate::buffer::zeroed_f64(n);
+    let g = &map.grid;
+    let (x_hi, y_hi) = (g.x(g.nx - 1), g.y(g.ny - 1));
+    let mut outside = 0usize;
+    let mut k = 0usize;
+    for i in 0..n {
+        let ti = start + i as f64 / fs;
+        while k + 2 < t.len() && t[k + 1] <= ti {
+            k += 1;
+        }
+        let f = ((ti - t[k]) / (t[k + 1] - t[k])).clamp(0.0, 1.0);
+        let x = xs[k] + f * (xs[k + 1] - xs[k]);
+        let y = ys[k] + f * (ys[k + 1] - ys[k]);
+        outside += usize::from(!(x >= g.x0_mm && x <= x_hi && y >= g.y0_mm && y <= y_hi));
+        x_mm[i] = x;
+        envelope_v[i] = map.sample(x, y);
+    }
+    let outside_warning = (outside > 0).then(|| {
+        format!(
+            "the finger is outside the map (x {} .. {} mm, y {} .. {} mm) for {:.2}% of the time: the edge \
+             voltages are held",
+            crate::num::Num(g.x0_mm),
+            crate::num::Num(x_hi),
+            crate::num::Num(g.y0_mm),
+            crate::num::Num(y_hi),
+            100.0 * outside as f64 / n as f64
+        )
+    });
+    finish(x_mm, envelope_v, start, settings, outside, outside_warning)
+}
+
+/// The number of output samples over `duration_s` (the first and last
+/// instants included), refused beyond [`MAX_SAMPLES`].
+fn sample_count(duration_s: f64, settings: &RenderSettings) -> Result<usize, SignalError> {
+    let n_float = (duration_s * settings.sample_rate_hz as f64).floor() + 1.0;
+    if n_float > MAX_SAMPLES as f64 {
+        return Err(SignalError::TooLong { duration_s, sample_rate_hz: settings.sample_rate_hz, n_samples: n_float });
+    }
+    Ok(n_float as usize)
+}
+
+/// The safety limits on a requested envelope, the carrier, and the report:
+/// what every renderer shares once it has the envelope U(t).
+fn finish(
+    x_mm: Vec<f64>,
+    mut envelope_v: Vec<f64>,
+    start_s: f64,
+    settings: &RenderSettings,
+    outside: usize,
+    outside_warning: Option<String>,
+) -> Result<DriveSignal, SignalError> {
+    let n = envelope_v.len();
+    let fs = settings.sample_rate_hz as f64;
+    let carrier = settings.carrier;
+    let cycles_per_sample = carrier.frequency_hz / fs;
     let mut limiter = EnvelopeLimiter::new(&settings.limits, fs);
     let mut clip = ClipReport::default();
     let u_max = settings.limits.u_max_v;
@@ -372,7 +448,6 @@ pub fn render(
 
     let envelope_max_v = envelope_v.iter().fold(0.0f64, |m, &u| m.max(u));
     let peak_v = carrier.peak_per_rms() * envelope_max_v;
-    let start_s = trajectory.start_s();
     if let Some(range_v) = settings.limits.amplifier_range_v
         && peak_v > range_v
     {
@@ -395,18 +470,7 @@ pub fn render(
             100.0 * clip.clamped_fraction
         ));
     }
-    if outside > 0 {
-        let (x0, x1) = curve.span_mm();
-        let what = match settings.extend {
-            Extend::Hold => "the end voltages are held",
-            Extend::Zero => "U = 0 V there",
-            Extend::Repeat => "the profile repeats",
-        };
-        warnings.push(format!(
-            "the finger is outside the profile ({x0} .. {x1} mm) for {:.2}% of the time: {what}",
-            100.0 * outside_fraction
-        ));
-    }
+    warnings.extend(outside_warning);
     let report = SignalReport {
         sample_rate_hz: settings.sample_rate_hz,
         n_samples: n,

@@ -371,33 +371,8 @@ pub fn write_wav(
 ) -> Result<WavSidecar, SignalError> {
     let target = OutputTarget::of(path)?;
     let encoded = encode_wav(signal, options, &path.display().to_string())?;
-    let report = &signal.report;
-    let scale = &encoded.scale;
-    let sidecar = WavSidecar {
-        kind: KIND.into(),
-        wav_file: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
-        sample_rate_hz: report.sample_rate_hz,
-        channels: if scale.channel_2.is_some() { 2 } else { 1 },
-        n_samples: signal.len(),
-        sample_format: scale.sample_format,
-        bits_per_sample: scale.sample_format.bits(),
-        full_scale_value: scale.full_scale_value,
-        volts_per_full_scale: scale.volts_per_full_scale,
-        conversion: CONVERSION.into(),
-        samples_sha256: scale.samples_sha256.clone(),
-        voltage_convention: format!(
-            "the envelope U is the RMS voltage of eq. (8); the drive is U times a unit-RMS carrier, peak = {} x U{}",
-            report.carrier.peak_per_rms(),
-            if scale.channel_2.is_some() {
-                " (channel 1; channel 2 is the ultrasonic amplitude in um, scaled by channel_2.um_per_full_scale)"
-            } else {
-                ""
-            }
-        ),
-        report: report.clone(),
-        channel_2: scale.channel_2.clone(),
-        source,
-    };
+    let wav_file = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let sidecar = WavSidecar::new(wav_file, &encoded, &signal.report, source);
     write_atomic(path, |w| w.write_all(&encoded.bytes))?;
     if target.is_file() {
         fault_point("between-wav-and-sidecar");
@@ -407,6 +382,41 @@ pub fn write_wav(
         })?;
     }
     Ok(sidecar)
+}
+
+impl WavSidecar {
+    /// The sidecar of the WAV `encoded` (file name `wav_file`) of a signal
+    /// with `report`: its scales and sample hash as in the WAV's chunk.
+    /// What [`write_wav`] writes beside the WAV; a server answering the WAV
+    /// bytes offers the same document.
+    pub fn new(wav_file: String, encoded: &EncodedWav, report: &SignalReport, source: serde_json::Value) -> Self {
+        let scale = &encoded.scale;
+        WavSidecar {
+            kind: KIND.into(),
+            wav_file,
+            sample_rate_hz: report.sample_rate_hz,
+            channels: if scale.channel_2.is_some() { 2 } else { 1 },
+            n_samples: scale.n_samples,
+            sample_format: scale.sample_format,
+            bits_per_sample: scale.sample_format.bits(),
+            full_scale_value: scale.full_scale_value,
+            volts_per_full_scale: scale.volts_per_full_scale,
+            conversion: CONVERSION.into(),
+            samples_sha256: scale.samples_sha256.clone(),
+            voltage_convention: format!(
+                "the envelope U is the RMS voltage of eq. (8); the drive is U times a unit-RMS carrier, peak = {} x U{}",
+                report.carrier.peak_per_rms(),
+                if scale.channel_2.is_some() {
+                    " (channel 1; channel 2 is the ultrasonic amplitude in um, scaled by channel_2.um_per_full_scale)"
+                } else {
+                    ""
+                }
+            ),
+            report: report.clone(),
+            channel_2: scale.channel_2.clone(),
+            source,
+        }
+    }
 }
 
 /// A haptex drive-signal WAV read back and checked.

@@ -1,6 +1,7 @@
 //! `GET /api/config`: what the GUI needs to build its controls: the
 //! profile sources this server offers, the device parameters with the
-//! paper's defaults and ranges, the mapping methods, the playback defaults,
+//! paper's defaults and ranges, the mapping methods, the friction displays
+//! and the combined display's strategies, the playback defaults,
 //! the defaults of the check on the finger model and the limits.
 
 use axum::Json;
@@ -25,6 +26,21 @@ pub async fn get(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -
             { "id": "physical", "label": "physical (eq. 8)", "description": "the voltage that reproduces the reference friction force; clipped at U_max, 0 V where mu_RS < mu_HD" },
             { "id": "normalized", "label": "normalized (eq. 9)", "description": "the pattern only: min mu -> 0 V, max mu -> U_max" },
         ],
+        "displays": [
+            { "id": "electrovibration", "label": "electrovibration", "description": "eq. (8): the voltage raises friction above mu_HD; below mu_HD nothing is rendered (0 V)" },
+            { "id": "ultrasonic", "label": "ultrasonic", "description": "ultrasonic friction reduction: the plate's vibration amplitude a lowers friction below mu_HD, down to mu_HD rho_min" },
+            { "id": "combined", "label": "combined", "description": "both on one plate, the felt friction mu_HD rho(a) (1 + Fe(U)/Fn): every target in the band [mu_HD rho_min, mu at U_max] is rendered" },
+        ],
+        "strategies": [
+            { "id": "split", "label": "split", "description": "the plate only below mu_HD, the voltage only above: the least drive" },
+            { "id": "bias", "label": "bias", "description": "a constant amplitude lowers the baseline to the profile's minimum; the voltage renders the detail from there (one smooth voltage signal)" },
+            { "id": "weighted", "label": "weighted", "description": "per point the least (U/U_max)^2 + w ((rho(a) - rho_bias)/(1 - rho_bias))^2: w = 0 is split, a large w approaches bias" },
+        ],
+        "ultrasonic": {
+            "literature_a_max_um": haptex_core::ultrasonic::Exponential::LITERATURE.a_valid_um,
+            "default_weight": crate::display::DEFAULT_WEIGHT,
+            "max_calibration_bytes": crate::display::MAX_CALIBRATION_BYTES,
+        },
         "play": {
             "sample_rate_hz": play.sample_rate_hz,
             "carrier": Carrier::DEFAULT,

@@ -7,7 +7,18 @@
 //! {"velocity_mm_s": 50}}` or with `"trajectory": {"t_s": [..], "x_mm":
 //! [..]}` instead of `stroke`; optional `carrier`, `sample_rate_hz`,
 //! `u_max_v`, `slew_v_per_s`, `amplifier_range_v`, `outside`, `format`
-//! (`wav` | `json`), `wav_format`, `volts_per_full_scale`.
+//! (`wav` | `json` | `sidecar`: the sidecar JSON of the WAV this request
+//! answers, as `haptex play` writes it beside its WAV), `wav_format`,
+//! `volts_per_full_scale`.
+//!
+//! A display profile of an ultrasonic or combined display (`POST
+//! /api/voltage` with `display`) plays on two channels, as `haptex play`
+//! plays one: `voltage.amplitude_um` beside `voltage.voltage_v` (0 V for
+//! the ultrasonic display alone) and `a_max_um`, the plate's limit.
+//! Channel 1 is the drive above; channel 2 the ultrasonic amplitude
+//! envelope a(x(t)) in um, clamped at a_max, which is also its full scale
+//! (the core's `render_two_channel` and `encode_wav`: the WAV's `hptx`
+//! chunk holds both channels' scales, as the command line's file does).
 
 use axum::Json;
 use axum::body::Bytes;
@@ -18,8 +29,8 @@ use axum::response::{IntoResponse, Response};
 use haptex_core::num::Num;
 use haptex_core::profile::ProfileError;
 use haptex_core::signal::{
-    Carrier, CarrierShape, DriveSignal, Extend, Limits, RenderSettings, SignalError, VoltageCurve, WavFormat,
-    WavOptions, encode_wav, render,
+    AmplitudeCurve, Carrier, CarrierShape, DriveSignal, Extend, Limits, RenderSettings, SignalError, VoltageCurve,
+    WavFormat, WavOptions, WavSidecar, encode_wav, render, render_two_channel,
 };
 use haptex_core::trajectory::Trajectory;
 use serde::Deserialize;
@@ -33,6 +44,9 @@ use crate::state::AppState;
 use crate::work;
 use haptex_core::ranges;
 
+/// The file name the WAV answer suggests (its Content-Disposition), which
+/// its sidecar names.
+const WAV_FILE_NAME: &str = "haptex-drive.wav";
 /// Finger speed of a generated stroke when the GUI has no other, mm/s.
 pub const DEFAULT_VELOCITY_MM_S: f64 = 50.0;
 /// Rate at which generated strokes are sampled (linear in between), Hz.
@@ -68,6 +82,10 @@ struct PlayBody {
     wav_format: Option<WavFormat>,
     #[serde(default)]
     volts_per_full_scale: Option<f64>,
+    /// The ultrasonic plate's highest amplitude, um (peak): channel 2's
+    /// clamp and full scale (with `voltage.amplitude_um` only).
+    #[serde(default)]
+    a_max_um: Option<f64>,
 }
 
 /// A voltage curve: positions in mm and RMS voltages in V.
@@ -76,6 +94,9 @@ struct PlayBody {
 struct CurveJson {
     x_mm: Vec<f64>,
     voltage_v: Vec<f64>,
+    /// The ultrasonic amplitude in um (peak) at each position: channel 2.
+    #[serde(default)]
+    amplitude_um: Option<Vec<f64>>,
 }
 
 /// A generated trajectory: one sweep at constant velocity, or `strokes`
@@ -98,6 +119,10 @@ struct StrokeJson {
 enum PlayFormat {
     Wav,
     Json,
+    /// The sidecar JSON of the WAV the same request answers (what `haptex
+    /// play` writes beside its WAV: scales of both channels, sample hash,
+    /// safety report).
+    Sidecar,
 }
 
 pub async fn post(
@@ -118,6 +143,8 @@ pub async fn post(
 /// A checked request: everything the render needs.
 struct Job {
     curve: VoltageCurve,
+    /// Channel 2 and its a_max, for a two-channel drive.
+    ultrasonic: Option<(AmplitudeCurve, f64)>,
     trajectory: Trajectory,
     settings: RenderSettings,
     format: PlayFormat,
@@ -130,13 +157,47 @@ impl Job {
     fn parse(bytes: &[u8], limits: &crate::Limits) -> Result<Self, ApiError> {
         let body: PlayBody = parse_json(bytes)?;
         check_points(body.voltage.x_mm.len(), limits.max_points, "voltage.x_mm")?;
-        // haptex-core checks positions and voltages against their ranges.
-        let curve = VoltageCurve::new(body.voltage.x_mm, body.voltage.voltage_v).map_err(|e| match e {
+        // haptex-core checks positions, voltages and amplitudes against
+        // their ranges.
+        let curve_error = |e: ProfileError| match e {
             ProfileError::Invalid { index, field, message } => {
                 ApiError::bad_request(message, Some(&format!("voltage.{field}[{index}]")))
             }
             other => ApiError::bad_request(other.to_string(), Some("voltage")),
-        })?;
+        };
+        let ultrasonic = match (body.voltage.amplitude_um, body.a_max_um) {
+            (None, None) => None,
+            (None, Some(_)) => {
+                return Err(ApiError::bad_request(
+                    "a_max_um is the limit of channel 2, the ultrasonic amplitude: give voltage.amplitude_um with it",
+                    Some("a_max_um"),
+                ));
+            }
+            (Some(_), None) => {
+                return Err(ApiError::bad_request(
+                    "voltage.amplitude_um (a combined or ultrasonic display's profile) needs a_max_um, the plate's \
+                     highest amplitude in um: channel 2's clamp and full scale (summary.ultrasonic.a_max_um of \
+                     POST /api/voltage)",
+                    Some("a_max_um"),
+                ));
+            }
+            (Some(amplitude_um), Some(a_max)) => {
+                let a_max = fields::check(ranges::A_MAX_UM, a_max, "a_max_um")?;
+                if amplitude_um.len() != body.voltage.x_mm.len() {
+                    return Err(ApiError::bad_request(
+                        format!(
+                            "{} amplitudes for {} positions: one per x_mm",
+                            amplitude_um.len(),
+                            body.voltage.x_mm.len()
+                        ),
+                        Some("voltage.amplitude_um"),
+                    ));
+                }
+                let amplitude = AmplitudeCurve::new(body.voltage.x_mm.clone(), amplitude_um).map_err(curve_error)?;
+                Some((amplitude, a_max))
+            }
+        };
+        let curve = VoltageCurve::new(body.voltage.x_mm, body.voltage.voltage_v).map_err(curve_error)?;
         let format = body.format.unwrap_or(PlayFormat::Wav);
         let sample_rate_hz = body.sample_rate_hz.unwrap_or(RenderSettings::DEFAULT.sample_rate_hz);
         if !SAMPLE_RATES_HZ.contains(&sample_rate_hz) {
@@ -188,7 +249,7 @@ impl Job {
         };
         settings.check().map_err(|e| ApiError::bad_request(e.to_string(), Some("carrier")))?;
         let max_samples = match format {
-            PlayFormat::Wav => limits.max_wav_samples,
+            PlayFormat::Wav | PlayFormat::Sidecar => limits.max_wav_samples,
             PlayFormat::Json => limits.max_json_samples,
         };
         let (field, trajectory) =
@@ -200,21 +261,34 @@ impl Job {
                     "{} s at {sample_rate_hz} Hz is {} samples, more than the {max_samples} a {} answer may have",
                     Num(trajectory.duration_s()),
                     Num(samples.round()),
-                    if format == PlayFormat::Wav { "WAV" } else { "JSON" }
+                    if format == PlayFormat::Json { "JSON" } else { "WAV" }
                 ),
                 Some(field),
             ));
         }
         let wav = WavOptions { format: body.wav_format.unwrap_or(WavFormat::Pcm16), volts_per_full_scale };
-        Ok(Self { curve, trajectory, settings, format, wav })
+        Ok(Self { curve, ultrasonic, trajectory, settings, format, wav })
     }
 
     /// Renders the drive and builds the answer.
     fn run(self) -> Result<Response, ApiError> {
-        let signal = render(&self.curve, &self.trajectory, &self.settings).map_err(signal_error)?;
+        let signal = match &self.ultrasonic {
+            Some((amplitude, a_max_um)) => {
+                render_two_channel(&self.curve, amplitude, *a_max_um, &self.trajectory, &self.settings)
+            }
+            None => render(&self.curve, &self.trajectory, &self.settings),
+        }
+        .map_err(signal_error)?;
         match self.format {
             PlayFormat::Wav => wav_response(&signal, &self.wav),
             PlayFormat::Json => Ok(Json(json_answer(&signal)).into_response()),
+            PlayFormat::Sidecar => {
+                let encoded = encode_wav(&signal, &self.wav, "response").map_err(signal_error)?;
+                let source =
+                    json!({ "server": "haptex serve (POST /api/play)", "haptex_version": env!("CARGO_PKG_VERSION") });
+                let sidecar = WavSidecar::new(WAV_FILE_NAME.to_string(), &encoded, &signal.report, source);
+                Ok(Json(sidecar).into_response())
+            }
         }
     }
 }
@@ -279,26 +353,37 @@ fn signal_error(error: SignalError) -> ApiError {
 }
 
 fn wav_response(signal: &DriveSignal, options: &WavOptions) -> Result<Response, ApiError> {
-    let bytes = encode_wav(signal, options, "response").map_err(signal_error)?.bytes;
+    let encoded = encode_wav(signal, options, "response").map_err(signal_error)?;
     let number = |v: f64| HeaderValue::from_str(&v.to_string()).unwrap_or_else(|_| HeaderValue::from_static("0"));
-    Ok((
+    let mut response = (
         [
             (header::CONTENT_TYPE, HeaderValue::from_static("audio/wav")),
             (header::CONTENT_DISPOSITION, HeaderValue::from_static("attachment; filename=\"haptex-drive.wav\"")),
             (HeaderName::from_static("x-haptex-volts-per-full-scale"), number(options.volts_per_full_scale)),
             (HeaderName::from_static("x-haptex-peak-v"), number(signal.report.peak_v)),
         ],
-        bytes,
+        encoded.bytes,
     )
-        .into_response())
+        .into_response();
+    // Channel 2's scale (also in the WAV's hptx chunk).
+    if let Some(c2) = &encoded.scale.channel_2 {
+        response
+            .headers_mut()
+            .insert(HeaderName::from_static("x-haptex-um-per-full-scale"), number(c2.um_per_full_scale));
+    }
+    Ok(response)
 }
 
 fn json_answer(signal: &DriveSignal) -> serde_json::Value {
-    json!({
+    let mut answer = json!({
         "report": signal.report,
         "t_s": signal.times_s(),
         "x_mm": signal.x_mm,
         "envelope_v": signal.envelope_v,
         "signal_v": signal.signal_v,
-    })
+    });
+    if let Some(a) = &signal.amplitude_um {
+        answer["amplitude_um"] = json!(a);
+    }
+    answer
 }

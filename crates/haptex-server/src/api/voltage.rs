@@ -19,6 +19,15 @@
 //! (`haptex voltage --relative`, [`haptex_core::relative`]): mu / flat_mu *
 //! mu_HD, with `flat_mu` as given, else the profile's median. `flat_mu`
 //! without `relative: true` is refused rather than ignored.
+//!
+//! `display` (`electrovibration`, the default; `ultrasonic`; `combined`)
+//! with `strategy`, `weight`, `a_max_um` and `ultrasonic_calibration`
+//! ([`crate::display`]) designs the drive of an ultrasonic or combined
+//! display instead (`haptex voltage --display`, the core's
+//! [`map_display`]): the answer then has `amplitude_um` beside (or
+//! instead of) `voltage_v`, and a summary with the renderable band
+//! `band_mu` and each channel's limits. The electrovibration answer is
+//! the one it always was, byte for byte.
 
 use std::collections::BTreeMap;
 
@@ -28,13 +37,15 @@ use axum::extract::rejection::BytesRejection;
 use axum::extract::{RawQuery, State};
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
-use haptex_core::electrovibration::{ElectroError, Method, VoltageProfile, map_profile, map_profile_relative};
+use haptex_core::combined::{Channels, DisplayError, DisplayProfile, Strategy, map_display};
+use haptex_core::electrovibration::{ElectroError, Method, Regions, VoltageProfile, map_profile, map_profile_relative};
 use haptex_core::num::Num;
 use haptex_core::profile::FrictionProfile;
 use haptex_core::ranges;
 use haptex_core::relative::{FlatMu, RelativeError};
 use serde::{Deserialize, Serialize};
 
+use crate::display::{DisplayDesign, DisplayName, DisplayRequest, StrategyName};
 use crate::error::ApiError;
 use crate::input::{
     BodyKind, Pairs, ProfileJson, Query, body_bytes, body_kind, parse_json, parse_number, profile_from_csv,
@@ -61,6 +72,22 @@ struct VoltageBody {
     /// the profile's median).
     #[serde(default)]
     flat_mu: Option<f64>,
+    /// The friction display (default electrovibration).
+    #[serde(default)]
+    display: Option<DisplayName>,
+    /// The combined display's strategy (default split).
+    #[serde(default)]
+    strategy: Option<StrategyName>,
+    /// The weighted strategy's weight (default 1).
+    #[serde(default)]
+    weight: Option<f64>,
+    /// The plate's highest vibration amplitude, um (peak).
+    #[serde(default)]
+    a_max_um: Option<f64>,
+    /// The plate's calibration: the text of an
+    /// `amplitude_um,relative_friction` CSV.
+    #[serde(default)]
+    ultrasonic_calibration: Option<String>,
 }
 
 /// Whether to map relative to the flat-surface friction, and how mu_flat
@@ -110,6 +137,34 @@ impl<'a> VoltageAnswer<'a> {
     }
 }
 
+/// The JSON answer for an ultrasonic or combined display: the parameters
+/// used (with the plate's a_max and the weighted strategy's weight), the
+/// display profile (summary with the band, `voltage_v` and `amplitude_um`
+/// per channel in use) and the warnings as the page shows them.
+#[derive(Debug, Serialize)]
+pub(crate) struct DisplayAnswer<'a> {
+    pub parameters: BTreeMap<&'static str, f64>,
+    #[serde(flatten)]
+    pub display: &'a DisplayProfile,
+    pub page_warnings: Vec<String>,
+}
+
+impl<'a> DisplayAnswer<'a> {
+    pub fn new(request: &DeviceRequest, design: &DisplayDesign, display: &'a DisplayProfile) -> Self {
+        let mut parameters = request.values();
+        if let Channels::Ultrasonic(_) = design.channels() {
+            // The ultrasonic display alone uses mu_HD only of the device.
+            parameters.retain(|name, _| *name == "mu_hd");
+        }
+        parameters.insert("a_max_um", design.ultrasonic.a_max_um());
+        if let Some(Strategy::Weighted { weight }) = design.strategy {
+            parameters.insert("weight", weight);
+        }
+        let page_warnings = display.summary.warnings.iter().map(|w| crate::explain::for_page(w)).collect();
+        DisplayAnswer { parameters, display, page_warnings }
+    }
+}
+
 pub async fn post(
     State(state): State<AppState>,
     headers: HeaderMap,
@@ -122,26 +177,34 @@ pub async fn post(
     let kind = body_kind(&headers, &[BodyKind::Json, BodyKind::Csv])?;
     let bytes = body_bytes(body, limits.max_body_bytes)?;
     work::cpu(&state, bytes.len(), move || {
-        let (profile, method, request, relative, prefix) = match kind {
+        let (profile, method, request, relative, display, prefix) = match kind {
             BodyKind::Json => {
                 query.finish()?;
                 let body: VoltageBody = parse_json(&bytes)?;
                 let request = DeviceRequest::from_pairs(body.device.iter(), "device.")?;
                 let relative = relative_request(body.relative, body.flat_mu)?;
+                let display = DisplayRequest {
+                    display: body.display,
+                    strategy: body.strategy,
+                    weight: body.weight,
+                    a_max_um: body.a_max_um,
+                    ultrasonic_calibration: body.ultrasonic_calibration,
+                };
                 let profile = body.profile.into_profile("profile.", limits.max_points)?;
-                (profile, body.method.unwrap_or(Method::Physical), request, relative, "device.")
+                (profile, body.method, request, relative, display, "device.")
             }
             BodyKind::Csv => {
                 let method = query.take("method").map(|m| parse_method(&m, "method")).transpose()?;
                 let relative = query.take("relative").map(|t| parse_bool(&t, "relative")).transpose()?;
                 let flat_mu = query.take("flat_mu").map(|t| parse_number(&t, "flat_mu")).transpose()?;
                 let relative = relative_request(relative.unwrap_or(false), flat_mu)?;
+                let display = DisplayRequest::from_query(&mut query)?;
                 let mut pairs = Vec::new();
                 for (name, text) in query.take_all() {
                     if !DEVICE_PARAMS.iter().any(|p| p.name == name) {
                         return Err(ApiError::bad_request(
                             "unknown query parameter (with a CSV body the query takes format, method, relative, \
-                             flat_mu and the device parameters)",
+                             flat_mu, display, strategy, weight, a_max_um and the device parameters)",
                             Some(&name),
                         ));
                     }
@@ -150,9 +213,24 @@ pub async fn post(
                 }
                 let request = DeviceRequest::from_pairs(pairs.iter().map(|(k, v)| (k.as_str(), *v)), "")?;
                 let profile = profile_from_csv(&bytes, limits.max_points)?;
-                (profile, method.unwrap_or(Method::Physical), request, relative, "")
+                (profile, method, request, relative, display, "")
             }
         };
+        if let Some(design) = display.design()? {
+            if method == Some(Method::Normalized) {
+                return Err(ApiError::bad_request(
+                    "the method normalized (eq. 9) is the electrovibration display's pattern: an ultrasonic or \
+                     combined display renders the friction itself (method physical)",
+                    Some("method"),
+                ));
+            }
+            let designed = compute_display(&profile, &request, relative, &design, prefix)?;
+            return Ok(match format {
+                "csv" => super::csv_response(super::to_csv(|w| designed.write_csv(w))?, "display.csv"),
+                _ => Json(DisplayAnswer::new(&request, &design, &designed)).into_response(),
+            });
+        }
+        let method = method.unwrap_or(Method::Physical);
         let voltage = compute(&profile, method, &request, relative, prefix)?;
         Ok(match format {
             "csv" => super::csv_response(super::to_csv(|w| voltage.write_csv(w))?, "voltage.csv"),
@@ -179,7 +257,55 @@ pub(crate) fn compute(
         None => map_profile(profile, &request.device, method, request.fn_n),
         Some(flat) => map_profile_relative(profile, &request.device, method, request.fn_n, flat),
     };
-    let voltage = mapped.map_err(|e| match e {
+    let voltage = mapped.map_err(|e| electro_error(e, prefix))?;
+    let s = &voltage.summary;
+    let finite = voltage.voltage_v.iter().all(|u| u.is_finite())
+        && [s.fe_over_fn_per_v2, s.mu_at_u_max].iter().flatten().all(|v| v.is_finite() && *v > 0.0)
+        && [&s.clipped, &s.not_renderable].iter().all(|r| finite_regions(r));
+    if !finite {
+        return Err(ApiError::internal("the voltage mapping gave a non-finite number for accepted input (a bug)"));
+    }
+    Ok(voltage)
+}
+
+fn finite_regions(r: &Regions) -> bool {
+    r.length_mm.is_finite() && r.fraction_of_length.is_finite() && r.ranges_mm.iter().flatten().all(|x| x.is_finite())
+}
+
+/// Designs the drive of an ultrasonic or combined display (the core's
+/// [`map_display`], as `haptex voltage --display` does), with the same
+/// errors and guard as [`compute`].
+pub(crate) fn compute_display(
+    profile: &FrictionProfile,
+    request: &DeviceRequest,
+    relative: Option<FlatMu>,
+    design: &DisplayDesign,
+    prefix: &str,
+) -> Result<DisplayProfile, ApiError> {
+    let designed =
+        map_display(profile, &request.device, design.channels(), request.fn_n, relative).map_err(|e| match e {
+            DisplayError::Electro(e) => electro_error(e, prefix),
+            DisplayError::Relative(r) => electro_error(ElectroError::Relative(r), prefix),
+            DisplayError::OutOfRange(ref r) if r.name == "weight" => {
+                ApiError::bad_request(e.to_string(), Some("weight"))
+            }
+            DisplayError::OutOfRange(_) => ApiError::bad_request(e.to_string(), None),
+            DisplayError::Limit { .. } => ApiError::internal(format!("{e} (a bug)")),
+        })?;
+    let s = &designed.summary;
+    let finite = designed.voltage_v.iter().chain(designed.amplitude_um.iter()).flatten().all(|v| v.is_finite())
+        && s.band_mu.iter().all(|m| m.is_finite())
+        && [&s.above_band, &s.below_band].iter().all(|r| finite_regions(r));
+    if !finite {
+        return Err(ApiError::internal("the display mapping gave a non-finite number for accepted input (a bug)"));
+    }
+    Ok(designed)
+}
+
+/// An error of the electrovibration mapping, naming the field at fault
+/// (`prefix` starts the device's field names).
+fn electro_error(e: ElectroError, prefix: &str) -> ApiError {
+    match e {
         ElectroError::NormalForceRequired { exponent } => ApiError::bad_request(
             format!(
                 "the contact-area law A = k Fn^n with n = {} makes the voltage depend on the normal force: give \
@@ -202,18 +328,5 @@ pub(crate) fn compute(
             ApiError::bad_request(e.to_string(), Some(&field))
         }
         other => ApiError::bad_request(other.to_string(), Some(prefix.trim_end_matches('.')).filter(|p| !p.is_empty())),
-    })?;
-    let s = &voltage.summary;
-    let regions = [&s.clipped, &s.not_renderable];
-    let finite = voltage.voltage_v.iter().all(|u| u.is_finite())
-        && [s.fe_over_fn_per_v2, s.mu_at_u_max].iter().flatten().all(|v| v.is_finite() && *v > 0.0)
-        && regions.iter().all(|r| {
-            r.length_mm.is_finite()
-                && r.fraction_of_length.is_finite()
-                && r.ranges_mm.iter().flatten().all(|x| x.is_finite())
-        });
-    if !finite {
-        return Err(ApiError::internal("the voltage mapping gave a non-finite number for accepted input (a bug)"));
     }
-    Ok(voltage)
 }
