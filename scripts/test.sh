@@ -68,10 +68,34 @@ if ! command -v slurmctld >/dev/null 2>&1 || ! command -v slurmd >/dev/null 2>&1
     fi
 fi
 
+# `haptex live` (crates/haptex-cli/tests/live_cli.rs) streams to a real ALSA
+# device, ALSA's file plugin over the null PCM (both built into libasound),
+# through cpal, whose ALSA backend needs Debian's libasound2-dev (and
+# pkg-config) to build: the `live` feature of haptex-cli is enabled when
+# they are there, installed as root when missing. Without them the live
+# tests are skipped, and this says so.
+if ! { command -v pkg-config >/dev/null 2>&1 && pkg-config --exists alsa; }; then
+    if can_apt; then
+        echo "scripts/test.sh: installing pkg-config and libasound2-dev for the live audio output tests" >&2
+        apt_install --no-install-recommends pkg-config libasound2-dev || true
+    fi
+fi
+LIVE_FEATURE=()
+if command -v pkg-config >/dev/null 2>&1 && pkg-config --exists alsa; then
+    LIVE_FEATURE=(--features haptex-cli/live)
+else
+    echo "scripts/test.sh: SKIPPING the live audio output tests (haptex live on an ALSA device): cpal's ALSA" \
+        "backend needs pkg-config and libasound2-dev (alsa.pc), which are missing and could not be installed" \
+        "(as root: apt-get install pkg-config libasound2-dev). The rest of the suite runs without the live feature." >&2
+fi
+
 # The OpenAPI description of the web API is validated against the OpenAPI
 # 3.1 schema (crates/haptex-server/tests/api.rs) with openapi-spec-validator.
 python3 -m pip install --quiet --disable-pip-version-check openapi-spec-validator==0.9.0
 
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --locked -- -D warnings
-cargo test --workspace --profile ci --locked "$@"
+if [ "${#LIVE_FEATURE[@]}" -gt 0 ]; then
+    cargo clippy --workspace --all-targets --locked "${LIVE_FEATURE[@]}" -- -D warnings
+fi
+cargo test --workspace --profile ci --locked "${LIVE_FEATURE[@]}" "$@"

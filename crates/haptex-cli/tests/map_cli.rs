@@ -279,3 +279,261 @@ fn play_over_a_map_along_a_row_is_the_profile_playback() {
     let out = haptex(&["play", "--voltage-map", &p("v.npy"), "--trajectory", &tr1, "-o", &p("s3.csv")]);
     assert!(!out.status.success() && stderr(&out).contains("y_mm"), "{}", stderr(&out));
 }
+
+/// `haptex map compose`: a 4 x 3 label image with three gray levels, a
+/// constant, a profile tiled along x and a library material (the stroke
+/// `haptex library sample --seed 7` picks, tiled): each cell holds its
+/// region's value at its x; a level without a region, a level given twice
+/// and a colour image are refused.
+#[test]
+fn compose_fills_each_region() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let png_of = |name: &str, w: u32, h: u32, color: png::ColorType, data: &[u8]| {
+        let file = std::fs::File::create(dir.path().join(name)).unwrap();
+        let mut enc = png::Encoder::new(file, w, h);
+        enc.set_color(color);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.write_header().unwrap().write_image_data(data).unwrap();
+        p(name)
+    };
+    // Top row first: the top row is y = 2 dy.
+    let labels = png_of("l.png", 4, 3, png::ColorType::Grayscale, &[0, 0, 128, 128, 255, 255, 0, 0, 128, 255, 0, 128]);
+    let out = haptex(&[
+        "map",
+        "compose",
+        &labels,
+        "--region",
+        "0=0.45",
+        "--region",
+        &format!("128=profile:{EXAMPLE}"),
+        "--region",
+        "255=material:linen",
+        "--seed",
+        "7",
+        "--pixel-mm",
+        "3.5",
+        "-o",
+        &p("c.csv"),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("gray level 255: material linen"), "{}", stderr(&out));
+    let sample = haptex(&["library", "sample", "--material", "linen", "--seed", "7"]);
+    assert!(sample.status.success(), "{}", stderr(&sample));
+    let st = Table::read(sample.stdout.as_slice(), "linen").unwrap();
+    let (lx, lm) = (st.column("x_mm").unwrap().to_vec(), st.column("mu").unwrap().to_vec());
+    let ex = Table::read(std::fs::read(EXAMPLE).unwrap().as_slice(), "ex").unwrap();
+    let (px, pm) = (ex.column("x_mm").unwrap().to_vec(), ex.column("mu").unwrap().to_vec());
+    let tiled = |xs: &[f64], ms: &[f64], x: f64| {
+        let (x0, span) = (xs[0], xs[xs.len() - 1] - xs[0]);
+        interpolate(xs, ms, x0 + (x - x0).rem_euclid(span))
+    };
+    let path = std::path::Path::new(&p("c.csv")).to_path_buf();
+    let (x, mu) = (column(&path, "x_mm"), column(&path, "mu"));
+    let image = [0u8, 0, 128, 128, 255, 255, 0, 0, 128, 255, 0, 128];
+    for k in 0..12 {
+        let (i, j) = (k % 4, k / 4);
+        let label = image[(2 - j) * 4 + i];
+        let want = match label {
+            0 => 0.45,
+            128 => tiled(&px, &pm, x[k]),
+            _ => tiled(&lx, &lm, x[k]),
+        };
+        assert!((mu[k] - want).abs() < 1e-12, "cell {k} (label {label}, x {}): {} vs {want}", x[k], mu[k]);
+    }
+    let missing = haptex(&[
+        "map",
+        "compose",
+        &labels,
+        "--region",
+        "0=0.45",
+        "--region",
+        "128=0.6",
+        "--pixel-mm",
+        "1",
+        "-o",
+        &p("d.csv"),
+    ]);
+    let e = stderr(&missing);
+    assert!(
+        !missing.status.success() && e.contains("gray level 255 has no region") && e.contains("column 0, row 1"),
+        "{e}"
+    );
+    let twice = haptex(&[
+        "map",
+        "compose",
+        &labels,
+        "--region",
+        "0=0.45",
+        "--region",
+        "0=0.6",
+        "--pixel-mm",
+        "1",
+        "-o",
+        &p("d.csv"),
+    ]);
+    assert!(stderr(&twice).contains("given twice"), "{}", stderr(&twice));
+    let rgb = png_of("rgb.png", 2, 2, png::ColorType::Rgb, &[0; 12]);
+    let e = stderr(&haptex(&["map", "compose", &rgb, "--region", "0=0.5", "--pixel-mm", "1", "-o", &p("d.csv")]));
+    assert!(e.contains("rgb.png") && e.contains("8-bit grayscale"), "{e}");
+    assert!(!dir.path().join("d.csv").exists());
+}
+
+/// `haptex map voltage --display combined` on a map whose rows are the
+/// example profile on its own grid: every row is `haptex voltage --display
+/// combined` of the profile, both channels (the same allocator and bias
+/// level); the ultrasonic display alone writes amplitudes only.
+#[test]
+fn combined_display_map_rows_are_the_profile_design() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    run_ok(&["voltage", "--profile", EXAMPLE, "-q", "--display", "combined", "--strategy", "bias", "-o", &p("d1.csv")]);
+    run_ok(&[
+        "map",
+        "from-profile",
+        "--profile",
+        EXAMPLE,
+        "--dx-mm",
+        "0.01",
+        "--dy-mm",
+        "1",
+        "--ny",
+        "3",
+        "-o",
+        &p("m.csv"),
+    ]);
+    let e = run_ok(&[
+        "map",
+        "voltage",
+        "--map",
+        &p("m.csv"),
+        "--display",
+        "combined",
+        "--strategy",
+        "bias",
+        "-o",
+        &p("d2.csv"),
+    ]);
+    assert!(e.contains("band mu"), "{e}");
+    let (a, b) = (std::path::Path::new(&p("d1.csv")).to_path_buf(), std::path::Path::new(&p("d2.csv")).to_path_buf());
+    let (u1, a1) = (column(&a, "voltage_v"), column(&a, "amplitude_um"));
+    let (u2, a2) = (column(&b, "voltage_v"), column(&b, "amplitude_um"));
+    assert_eq!(u2.len(), 3 * u1.len());
+    // The profile's design takes Fe/Fn per V^2 at the profile's own Fn,
+    // the map's at 1 N: with the linear area law the same value up to
+    // rounding, so the channels agree to 1e-12 relative.
+    let n = u1.len();
+    for k in 0..3 * n {
+        let (ua, ub, aa, ab) = (u2[k], u1[k % n], a2[k], a1[k % n]);
+        assert!((ua - ub).abs() <= 1e-12 * ub.max(1.0), "cell {k}: U {ua} vs {ub}");
+        assert!((aa - ab).abs() <= 1e-12 * ab.max(1.0), "cell {k}: a {aa} vs {ab}");
+    }
+    run_ok(&["map", "voltage", "--map", &p("m.csv"), "--display", "ultrasonic", "-o", &p("d3.csv")]);
+    let t = Table::read(std::fs::read(p("d3.csv")).unwrap().as_slice(), "d3").unwrap();
+    assert!(t.column("voltage_v").is_none() && t.column("amplitude_um").is_some());
+    let e = stderr(&haptex(&["map", "voltage", "--map", &p("m.csv"), "--display", "combined", "-o", &p("d4.npy")]));
+    assert!(e.contains("written as CSV"), "{e}");
+    let e = stderr(&haptex(&["map", "voltage", "--map", &p("m.csv"), "--strategy", "bias", "-o", &p("d4.csv")]));
+    assert!(e.contains("--strategy"), "{e}");
+}
+
+/// Polygons over a base: a rectangle fills exactly the cells with x in
+/// [2, 6) and y in [1, 3) (even-odd at the cell positions), a triangle
+/// drawn after it over part of it; bad vertices are refused by position.
+#[test]
+fn polygons_fill_their_cells_in_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.csv");
+    let e = run_ok(&[
+        "map",
+        "compose",
+        "--base",
+        "0.5",
+        "--size-mm",
+        "10,5",
+        "--pixel-mm",
+        "0.5",
+        "--polygon",
+        "2,1;6,1;6,3;2,3=0.9",
+        "--polygon",
+        "5,0;9,0;9,4=1.2",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(e.contains("32 cells"), "{e}");
+    let (x, y, mu) = (column(&out, "x_mm"), column(&out, "y_mm"), column(&out, "mu"));
+    assert_eq!(mu.len(), 21 * 11);
+    for k in 0..mu.len() {
+        let (xk, yk) = (x[k], y[k]);
+        // The triangle (5,0)-(9,0)-(9,4): on a row y in [0, 4) the span
+        // from its slanted edge x = 5 + y (included) to x = 9 (excluded).
+        let in_triangle = (0.0..4.0).contains(&yk) && xk >= 5.0 + yk && xk < 9.0;
+        let in_rectangle = (2.0..6.0).contains(&xk) && (1.0..3.0).contains(&yk);
+        let want = if in_triangle {
+            1.2
+        } else if in_rectangle {
+            0.9
+        } else {
+            0.5
+        };
+        assert_eq!(mu[k], want, "({xk}, {yk})");
+    }
+    for (polygon, want) in
+        [("1,1;2,2=0.7", "3 to 10000"), ("1,1;2,x;3,3=0.7", "vertex 2 '2,x'"), ("1,1;2,2;3,3", "X,Y;X,Y;X,Y=FILL")]
+    {
+        let bad = haptex(&[
+            "map",
+            "compose",
+            "--base",
+            "0.5",
+            "--size-mm",
+            "10,5",
+            "--pixel-mm",
+            "0.5",
+            "--polygon",
+            polygon,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(!bad.status.success() && stderr(&bad).contains(want), "{polygon}: {}", stderr(&bad));
+    }
+}
+
+/// `haptex map export-png` then the `from-image` command it prints: the
+/// map back within half a 16-bit gray step, on the same grid.
+#[test]
+fn exported_png_reads_back_with_the_printed_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    run_ok(&[
+        "map",
+        "from-profile",
+        "--profile",
+        EXAMPLE,
+        "--dx-mm",
+        "0.05",
+        "--dy-mm",
+        "0.2",
+        "--ny",
+        "4",
+        "-o",
+        &p("m.csv"),
+    ]);
+    let e = run_ok(&["map", "export-png", "--map", &p("m.csv"), "-o", &p("m.png")]);
+    let command = e.lines().find_map(|l| l.strip_prefix("read back: haptex ")).expect("the read-back command");
+    let mut args: Vec<String> = command.split_whitespace().map(str::to_string).collect();
+    let last = args.len() - 1;
+    args[last] = p("back.csv");
+    let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+    run_ok(&refs);
+    let (a, b) = (std::path::Path::new(&p("m.csv")).to_path_buf(), std::path::Path::new(&p("back.csv")).to_path_buf());
+    let (ma, mb) = (column(&a, "mu"), column(&b, "mu"));
+    let (xa, xb, ya, yb) = (column(&a, "x_mm"), column(&b, "x_mm"), column(&a, "y_mm"), column(&b, "y_mm"));
+    let (lo, hi) = ma.iter().fold((f64::MAX, f64::MIN), |(l, h), &m| (l.min(m), h.max(m)));
+    let half_step = 0.5 * (hi - lo) / 65535.0;
+    assert_eq!(ma.len(), mb.len());
+    for k in 0..ma.len() {
+        assert!((ma[k] - mb[k]).abs() <= half_step * (1.0 + 1e-9), "cell {k}: {} vs {}", ma[k], mb[k]);
+        assert!((xa[k] - xb[k]).abs() < 1e-9 && (ya[k] - yb[k]).abs() < 1e-9);
+    }
+}

@@ -5,7 +5,7 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use haptex_core::realtime::{RealtimeConfig, RealtimeRenderer};
-use haptex_core::signal::{Carrier, CarrierShape, Extend, Limits, VoltageCurve};
+use haptex_core::signal::{AmplitudeCurve, Carrier, CarrierShape, Extend, Limits, VoltageCurve};
 use std::hint::black_box;
 
 const BUFFER: usize = 480;
@@ -49,6 +49,20 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    // A combined design on two channels: drive and ultrasonic amplitude
+    // into interleaved frames (as `haptex live` writes them).
+    let x = curve.x_mm().to_vec();
+    let amplitude = AmplitudeCurve::new(x.clone(), x.iter().map(|x| 1.0 + (x * 1.7).cos()).collect()).unwrap();
+    let mut renderer = RealtimeRenderer::two_channel(&curve, &amplitude, 1.5, &RealtimeConfig::default()).unwrap();
+    let mut frames = vec![0.0f32; 2 * BUFFER];
+    group.bench_function("sine_hold_two_channel_frames", |b| {
+        b.iter(|| {
+            let t = renderer.now_s();
+            let x = 20.0 + 15.0 * (t * 100.0 / 15.0).sin();
+            renderer.touch(t, black_box(x));
+            renderer.fill_frames(black_box(&mut frames), 2);
+        })
+    });
     group.finish();
 }
 

@@ -13,6 +13,7 @@ pub mod electrovibration;
 pub mod frequency;
 pub mod io;
 pub mod library;
+pub mod live;
 pub mod map;
 pub mod num;
 pub mod planar;

@@ -182,13 +182,7 @@ impl FrictionMap {
             Num(g.dx_mm),
             Num(g.dy_mm)
         )?;
-        writeln!(w, "x_mm,y_mm,mu")?;
-        for j in 0..g.ny {
-            for i in 0..g.nx {
-                write_csv_row(w, &[g.x(i), g.y(j), self.mu[j * g.nx + i]])?;
-            }
-        }
-        Ok(())
+        write_grid_rows(w, g, "mu", &self.mu)
     }
 
     /// Writes the values as a 2-D float64 NPY array of shape (ny, nx),
@@ -215,24 +209,17 @@ impl FrictionMap {
         source_name: &str,
     ) -> Result<Self, MapError> {
         mapping.validate(source_name)?;
-        let err = |m: String| MapError::new(source_name, None, m);
-        let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
-        // Bounded: the header's size is checked below before any buffer.
-        decoder.set_transformations(png::Transformations::IDENTITY);
-        let mut reader = decoder.read_info().map_err(|e| err(format!("not a readable PNG: {e}")))?;
-        let info = reader.info();
-        let (width, height) = (info.width as usize, info.height as usize);
-        let (color, depth) = (info.color_type, info.bit_depth);
-        if color != png::ColorType::Grayscale {
-            return Err(err(format!(
-                "color type {color:?}: a friction image must be grayscale (8 or 16 bit), convert it first"
-            )));
-        }
-        let bits = match depth {
-            png::BitDepth::Eight => 8,
-            png::BitDepth::Sixteen => 16,
-            other => return Err(err(format!("bit depth {other:?}: expected 8 or 16 bit grayscale"))),
-        };
+        let GrayImage { width, height, bits, buffer, stride } =
+            GrayImage::decode(bytes, source_name, |color, depth| match (color, depth) {
+                (png::ColorType::Grayscale, png::BitDepth::Eight) => Ok(8),
+                (png::ColorType::Grayscale, png::BitDepth::Sixteen) => Ok(16),
+                (png::ColorType::Grayscale, other) => {
+                    Err(format!("bit depth {other:?}: expected 8 or 16 bit grayscale"))
+                }
+                (color, _) => Err(format!(
+                    "color type {color:?}: a friction image must be grayscale (8 or 16 bit), convert it first"
+                )),
+            })?;
         let grid = MapGrid {
             nx: width,
             ny: height,
@@ -242,10 +229,6 @@ impl FrictionMap {
             dy_mm: spacing_mm.1,
         };
         grid.validate(source_name)?;
-        let size = reader.output_buffer_size().ok_or_else(|| err("image too large".into()))?;
-        let mut buffer = vec![0u8; size];
-        let frame = reader.next_frame(&mut buffer).map_err(|e| err(format!("cannot decode the image: {e}")))?;
-        let stride = frame.line_size;
         let full = if bits == 8 { 255.0 } else { 65535.0 };
         let table: Vec<f64> =
             if bits == 8 { (0..256).map(|g| mapping.mu(g as f64 / full)).collect() } else { Vec::new() };
@@ -273,6 +256,24 @@ impl FrictionMap {
     pub fn write_gray_png(&self, w: &mut dyn Write, mapping: &GrayMapping, bits: u8) -> std::io::Result<()> {
         let g = &self.grid;
         let mut encoder = png::Encoder::new(w, g.nx as u32, g.ny as u32);
+        // What the gray levels mean, inside the image (a tEXt chunk).
+        encoder
+            .add_text_chunk(
+                "haptex".to_string(),
+                format!(
+                    "haptex map: gray g in [0, 1] -> value = {} + ({} - {}) g^{}; pixel {} x {} mm; bottom-left pixel \
+                     at x = {} mm, y = {} mm",
+                    Num(mapping.mu_black),
+                    Num(mapping.mu_white),
+                    Num(mapping.mu_black),
+                    Num(mapping.gamma),
+                    Num(g.dx_mm),
+                    Num(g.dy_mm),
+                    Num(g.x0_mm),
+                    Num(g.y0_mm)
+                ),
+            )
+            .map_err(std::io::Error::other)?;
         encoder.set_color(png::ColorType::Grayscale);
         let sixteen = bits == 16;
         encoder.set_depth(if sixteen { png::BitDepth::Sixteen } else { png::BitDepth::Eight });
@@ -361,13 +362,7 @@ impl VoltageMap {
             100.0 * self.not_renderable_fraction,
             100.0 * self.clipped_fraction
         )?;
-        writeln!(w, "x_mm,y_mm,voltage_v")?;
-        for j in 0..g.ny {
-            for i in 0..g.nx {
-                write_csv_row(w, &[g.x(i), g.y(j), self.voltage_v[j * g.nx + i]])?;
-            }
-        }
-        Ok(())
+        write_grid_rows(w, g, "voltage_v", &self.voltage_v)
     }
 
     /// The voltages as a (ny, nx) float64 NPY array.
@@ -452,6 +447,17 @@ pub fn read_grid_csv<R: std::io::Read>(
     Ok((grid, mu.to_vec()))
 }
 
+/// The header row `x_mm,y_mm,NAME` and one row per cell, row-major.
+fn write_grid_rows(w: &mut dyn Write, g: &MapGrid, name: &str, values: &[f64]) -> std::io::Result<()> {
+    writeln!(w, "x_mm,y_mm,{name}")?;
+    for j in 0..g.ny {
+        for i in 0..g.nx {
+            write_csv_row(w, &[g.x(i), g.y(j), values[j * g.nx + i]])?;
+        }
+    }
+    Ok(())
+}
+
 /// Gray level g in [0, 1] (black 0, white 1) to friction:
 /// mu = mu_black + (mu_white - mu_black) g^gamma.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -505,33 +511,13 @@ fn write_npy_f64(w: &mut dyn Write, rows: usize, cols: usize, values: &[f64]) ->
 /// Reads a (rows, cols) float32/float64 NPY array, C or Fortran order,
 /// row-major out.
 fn read_npy_2d(bytes: &[u8], source_name: &str, rows: usize, cols: usize) -> Result<Vec<f64>, MapError> {
-    let err = |m: String| MapError::new(source_name, None, m);
-    crate::recording::format::check_npy_header(bytes).map_err(|m| err(format!("not a valid NPY file: {m}")))?;
-    let npy = npyz::NpyFile::new(bytes).map_err(|e| err(format!("not a valid NPY file: {e}")))?;
-    let shape = npy.shape().to_vec();
-    if shape != [rows as u64, cols as u64] {
-        return Err(err(format!("array shape {shape:?}: the grid says ({rows}, {cols}) (ny, nx)")));
-    }
-    if (rows * cols).saturating_mul(4) > bytes.len() {
-        return Err(err(format!(
-            "array shape {shape:?} claims more values than the file's {} bytes hold",
-            bytes.len()
-        )));
-    }
-    let fortran = npy.order() == npyz::Order::Fortran;
-    let dtype = npy.dtype().descr();
-    let flat: Vec<f64> = match npy.try_data::<f64>() {
-        Ok(reader) => reader.collect::<std::io::Result<_>>(),
-        Err(npy) => match npy.try_data::<f32>() {
-            Ok(reader) => reader.map(|v| v.map(f64::from)).collect::<std::io::Result<_>>(),
-            Err(_) => return Err(err(format!("dtype {dtype}: expected float32 or float64"))),
-        },
-    }
-    .map_err(|e| err(format!("cannot read the array data: {e}")))?;
-    if flat.len() != rows * cols {
-        return Err(err(format!("{} values for shape {shape:?}", flat.len())));
-    }
-    Ok(if fortran { (0..rows * cols).map(|k| flat[(k % cols) * rows + k / cols]).collect() } else { flat })
+    let (_, _, values) = crate::io::npy::read_2d(bytes, |shape| {
+        (shape == [rows as u64, cols as u64])
+            .then_some(())
+            .ok_or_else(|| format!("array shape {shape:?}: the grid says ({rows}, {cols}) (ny, nx)"))
+    })
+    .map_err(|m| MapError::new(source_name, None, m))?;
+    Ok(values)
 }
 
 /// Reads a map's grid sidecar (JSON with the [`MapGrid`] fields).
@@ -813,5 +799,344 @@ impl PeriodicFit {
             v += c[2 * h - 1] * cs + c[2 * h] * sn;
         }
         v
+    }
+}
+
+/// What fills a region of a composed map.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RegionFill {
+    /// One friction coefficient.
+    Constant(f64),
+    /// A line texture (a library material's or any friction profile)
+    /// along x, tiled with the profile's span as its period (x -> x0 +
+    /// (x - x0) mod span) and the same on every row.
+    Texture(crate::profile::FrictionProfile),
+}
+
+impl RegionFill {
+    fn mu_at(&self, x_mm: f64) -> f64 {
+        match self {
+            RegionFill::Constant(mu) => *mu,
+            RegionFill::Texture(p) => {
+                let x = p.x_mm();
+                let (x0, span) = (x[0], x[x.len() - 1] - x[0]);
+                p.mu_at(x0 + (x_mm - x0).rem_euclid(span))
+            }
+        }
+    }
+}
+
+/// A decoded grayscale PNG: its rows from the top, `stride` bytes apart.
+struct GrayImage {
+    width: usize,
+    height: usize,
+    bits: u8,
+    buffer: Vec<u8>,
+    stride: usize,
+}
+
+impl GrayImage {
+    /// Decodes a PNG whose colour type and depth `accept` takes (giving
+    /// the bits per pixel, or the refusal); the size the header claims is
+    /// checked (2 x 2 to [`MAX_CELLS`] pixels) before any buffer is sized.
+    fn decode(
+        bytes: &[u8],
+        source_name: &str,
+        accept: impl FnOnce(png::ColorType, png::BitDepth) -> Result<u8, String>,
+    ) -> Result<Self, MapError> {
+        let err = |m: String| MapError::new(source_name, None, m);
+        let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+        decoder.set_transformations(png::Transformations::IDENTITY);
+        let mut reader = decoder.read_info().map_err(|e| err(format!("not a readable PNG: {e}")))?;
+        let info = reader.info();
+        let (width, height) = (info.width as usize, info.height as usize);
+        let bits = accept(info.color_type, info.bit_depth).map_err(err)?;
+        if width.checked_mul(height).is_none_or(|n| n > MAX_CELLS) || width < 2 || height < 2 {
+            return Err(err(format!("{width} x {height} pixels: from 2 x 2 to at most {MAX_CELLS} pixels")));
+        }
+        let size = reader.output_buffer_size().ok_or_else(|| err("image too large".into()))?;
+        let mut buffer = vec![0u8; size];
+        let frame = reader.next_frame(&mut buffer).map_err(|e| err(format!("cannot decode the image: {e}")))?;
+        Ok(Self { width, height, bits, buffer, stride: frame.line_size })
+    }
+}
+
+/// An 8-bit grayscale label image: each gray level names a region.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LabelImage {
+    pub width: usize,
+    pub height: usize,
+    /// Row by row from the top row, as the image stores them.
+    pub labels: Vec<u8>,
+}
+
+impl LabelImage {
+    /// Reads an 8-bit grayscale PNG (at most [`MAX_CELLS`] pixels).
+    pub fn read_png(bytes: &[u8], source_name: &str) -> Result<Self, MapError> {
+        let GrayImage { width, height, buffer, stride, .. } =
+            GrayImage::decode(bytes, source_name, |color, depth| match (color, depth) {
+                (png::ColorType::Grayscale, png::BitDepth::Eight) => Ok(8),
+                (color, depth) => {
+                    Err(format!("{color:?} at {depth:?}: a label image is 8-bit grayscale, one gray level per region"))
+                }
+            })?;
+        let labels = (0..height).flat_map(|r| buffer[r * stride..r * stride + width].iter().copied()).collect();
+        Ok(Self { width, height, labels })
+    }
+
+    /// The map of a label image: one cell per pixel (the top row at the
+    /// largest y), each cell filled by its label's region; every label
+    /// present must have one (the error names the label and its first
+    /// pixel, column and row from the top left).
+    pub fn compose(
+        &self,
+        fill: &dyn Fn(u8) -> Option<RegionFill>,
+        spacing_mm: (f64, f64),
+        origin_mm: (f64, f64),
+        source_name: &str,
+    ) -> Result<FrictionMap, MapError> {
+        let grid = MapGrid {
+            nx: self.width,
+            ny: self.height,
+            x0_mm: origin_mm.0,
+            y0_mm: origin_mm.1,
+            dx_mm: spacing_mm.0,
+            dy_mm: spacing_mm.1,
+        };
+        grid.validate(source_name)?;
+        let mut fills: Vec<Option<RegionFill>> = vec![None; 256];
+        let mut seen = [false; 256];
+        for (k, &label) in self.labels.iter().enumerate() {
+            if !seen[label as usize] {
+                seen[label as usize] = true;
+                fills[label as usize] = Some(fill(label).ok_or_else(|| {
+                    MapError::new(
+                        source_name,
+                        Some(format!("pixel column {}, row {}", k % self.width, k / self.width)),
+                        format!("gray level {label} has no region: give one for it"),
+                    )
+                })?);
+            }
+        }
+        let mut mu = vec![0.0; grid.len()];
+        for r in 0..self.height {
+            let j = self.height - 1 - r;
+            for i in 0..self.width {
+                let region =
+                    fills[self.labels[r * self.width + i] as usize].as_ref().expect("every label seen has a fill");
+                mu[j * grid.nx + i] = region.mu_at(grid.x(i));
+            }
+        }
+        FrictionMap::new(grid, mu, source_name)
+    }
+
+    /// The distinct labels present, ascending.
+    pub fn levels(&self) -> Vec<u8> {
+        let mut seen = [false; 256];
+        for &l in &self.labels {
+            seen[l as usize] = true;
+        }
+        (0..=255u8).filter(|&l| seen[l as usize]).collect()
+    }
+}
+
+/// The drive of an ultrasonic or combined display over a map's grid: the
+/// voltage (None for the ultrasonic display alone) and the plate's
+/// amplitude per cell, as [`crate::combined::map_display`] designs them
+/// along a profile (the same allocator, the bias level from the map's
+/// lowest friction).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DisplayMap {
+    pub grid: MapGrid,
+    pub voltage_v: Option<Vec<f64>>,
+    pub amplitude_um: Vec<f64>,
+    /// The renderable band [mu_HD rho_min, mu_HD (1 + Fe/Fn at U_max)].
+    pub band_mu: [f64; 2],
+    /// Fractions of the cells below and above the band (saturated).
+    pub below_fraction: f64,
+    pub above_fraction: f64,
+    pub u_max_v: f64,
+    pub a_max_um: f64,
+}
+
+impl FrictionMap {
+    /// Designs an ultrasonic (`channels` = Ultrasonic) or combined display
+    /// cell by cell; every value is checked against its channel's limit.
+    pub fn display_channels(
+        &self,
+        device: &Device,
+        channels: crate::combined::Channels<'_>,
+    ) -> Result<DisplayMap, MapError> {
+        use crate::combined::{Allocator, Channels, Strategy, bias_level};
+        let device_error = |m: String| MapError::new("device", None, m);
+        device.validate().map_err(|e| device_error(e.to_string()))?;
+        if !device.contact.is_linear() {
+            return Err(device_error(
+                "a friction map is mapped with the linear contact-area law (area exponent 1)".into(),
+            ));
+        }
+        let (ultrasonic, strategy, electro) = match channels {
+            Channels::Electrovibration => {
+                return Err(device_error("the electrovibration display alone is FrictionMap::voltages".into()));
+            }
+            Channels::Ultrasonic(d) => (d, Strategy::Split, false),
+            Channels::Combined(d, s) => (d, s, true),
+        };
+        if let Strategy::Weighted { weight } = strategy {
+            ranges::STRATEGY_WEIGHT.check(weight).map_err(|e| device_error(e.to_string()))?;
+        }
+        let (mu_min, _) = self.mu.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &m| (a.min(m), b.max(m)));
+        let rho_bias = bias_level(mu_min, device.mu_hd, ultrasonic.rho_min());
+        let ratio = device.force_ratio_per_v2(1.0);
+        let allocator = Allocator::new(
+            device.mu_hd,
+            electro.then_some((ratio, device.u_max_v)),
+            Some(ultrasonic),
+            strategy,
+            rho_bias,
+        );
+        let band_mu = allocator.band();
+        let n = self.mu.len();
+        let (mut voltage_v, mut amplitude_um) = (vec![0.0; n], vec![0.0; n]);
+        let (mut below, mut above) = (0usize, 0usize);
+        for (k, &m) in self.mu.iter().enumerate() {
+            let (u, a) = allocator.allocate(m);
+            voltage_v[k] = u;
+            amplitude_um[k] = a;
+            below += usize::from(m < band_mu[0]);
+            above += usize::from(m > band_mu[1]);
+        }
+        let (u_max, a_max) = (if electro { device.u_max_v } else { 0.0 }, ultrasonic.a_max_um());
+        for (name, values, limit) in [("voltage_v", &voltage_v, u_max), ("amplitude_um", &amplitude_um, a_max)] {
+            if let Some(k) = values.iter().position(|v| !(0.0..=limit).contains(v)) {
+                return Err(MapError::new(
+                    "display design",
+                    Some(format!(
+                        "cell x = {} mm, y = {} mm",
+                        Num(self.grid.x(k % self.grid.nx)),
+                        Num(self.grid.y(k / self.grid.nx))
+                    )),
+                    format!("{name} = {} outside 0 .. {}", Num(values[k]), Num(limit)),
+                ));
+            }
+        }
+        Ok(DisplayMap {
+            grid: self.grid,
+            voltage_v: electro.then_some(voltage_v),
+            amplitude_um,
+            band_mu,
+            below_fraction: below as f64 / n as f64,
+            above_fraction: above as f64 / n as f64,
+            u_max_v: u_max,
+            a_max_um: a_max,
+        })
+    }
+}
+
+impl DisplayMap {
+    /// Writes `x_mm,y_mm[,voltage_v],amplitude_um`, row-major, after a
+    /// comment stating each channel's limit.
+    pub fn write_csv(&self, w: &mut dyn Write) -> std::io::Result<()> {
+        let g = &self.grid;
+        writeln!(
+            w,
+            "# haptex display map: {} x {} cells; band mu {:.6} .. {:.6}; {:.2}% of the area below it (plate at \
+             a_max), {:.2}% above it (clipped)",
+            g.nx,
+            g.ny,
+            self.band_mu[0],
+            self.band_mu[1],
+            100.0 * self.below_fraction,
+            100.0 * self.above_fraction
+        )?;
+        match &self.voltage_v {
+            Some(_) => writeln!(
+                w,
+                "# voltage_v is RMS, at most U_max = {} V; amplitude_um is the plate's amplitude, peak, at most a_max = {} um",
+                Num(self.u_max_v),
+                Num(self.a_max_um)
+            )?,
+            None => {
+                writeln!(w, "# amplitude_um is the plate's amplitude, peak, at most a_max = {} um", Num(self.a_max_um))?
+            }
+        }
+        writeln!(
+            w,
+            "{}",
+            if self.voltage_v.is_some() { "x_mm,y_mm,voltage_v,amplitude_um" } else { "x_mm,y_mm,amplitude_um" }
+        )?;
+        for j in 0..g.ny {
+            for i in 0..g.nx {
+                let k = j * g.nx + i;
+                match &self.voltage_v {
+                    Some(u) => write_csv_row(w, &[g.x(i), g.y(j), u[k], self.amplitude_um[k]])?,
+                    None => write_csv_row(w, &[g.x(i), g.y(j), self.amplitude_um[k]])?,
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Most vertices of a polygon region.
+pub const MAX_POLYGON_VERTICES: usize = 10_000;
+
+impl FrictionMap {
+    /// Fills the cells inside a polygon (vertices in mm, closed implicitly;
+    /// even-odd rule at the cell positions) with `fill`, row by row: the
+    /// edges crossing each row are found and the spans between pairs of
+    /// crossings filled, O(rows x vertices + cells).
+    pub fn fill_polygon(
+        &mut self,
+        vertices: &[(f64, f64)],
+        fill: &RegionFill,
+        source_name: &str,
+    ) -> Result<usize, MapError> {
+        let err = |m: String| MapError::new(source_name, None, m);
+        if vertices.len() < 3 || vertices.len() > MAX_POLYGON_VERTICES {
+            return Err(err(format!("{} vertices: a polygon has 3 to {MAX_POLYGON_VERTICES}", vertices.len())));
+        }
+        if let Some(k) =
+            vertices.iter().position(|(x, y)| !(ranges::POSITION_MM.contains(*x) && ranges::POSITION_MM.contains(*y)))
+        {
+            return Err(err(format!(
+                "vertex {} ({}, {}): positions must be {}",
+                k + 1,
+                Num(vertices[k].0),
+                Num(vertices[k].1),
+                ranges::POSITION_MM.describe()
+            )));
+        }
+        let g = self.grid;
+        let mut crossings = Vec::with_capacity(vertices.len());
+        let mut filled = 0usize;
+        for j in 0..g.ny {
+            let y = g.y(j);
+            crossings.clear();
+            for e in 0..vertices.len() {
+                let (xa, ya) = vertices[e];
+                let (xb, yb) = vertices[(e + 1) % vertices.len()];
+                if (ya <= y && y < yb) || (yb <= y && y < ya) {
+                    crossings.push(xa + (y - ya) / (yb - ya) * (xb - xa));
+                }
+            }
+            crossings.sort_by(f64::total_cmp);
+            for pair in crossings.chunks_exact(2) {
+                // Columns with x in [pair[0], pair[1]).
+                let first = ((pair[0] - g.x0_mm) / g.dx_mm).ceil().max(0.0);
+                let last = ((pair[1] - g.x0_mm) / g.dx_mm).ceil().min(g.nx as f64);
+                if first >= last {
+                    continue;
+                }
+                for i in first as usize..last as usize {
+                    self.mu[j * g.nx + i] = fill.mu_at(g.x(i));
+                    filled += 1;
+                }
+            }
+        }
+        if let Some(k) = ranges::MU.first_outside(&self.mu) {
+            return Err(err(ranges::MU.refusal(self.mu[k]).to_string()));
+        }
+        Ok(filled)
     }
 }

@@ -75,16 +75,11 @@ impl PlanarTrajectory {
 }
 
 fn validate(t_s: &[f64], x_mm: &[f64], y_mm: &[f64]) -> Result<(), crate::profile::Violation> {
-    if t_s.len() < 2 {
-        return Err((None, "t_s", format!("a path needs at least 2 samples, got {}", t_s.len())));
+    // Times and x as a 1-D trajectory's, then y.
+    crate::trajectory::validate(t_s, x_mm)?;
+    if y_mm.len() != t_s.len() {
+        return Err((None, "y_mm", format!("{} values for {} times", y_mm.len(), t_s.len())));
     }
-    for (name, v) in [("x_mm", x_mm), ("y_mm", y_mm)] {
-        if v.len() != t_s.len() {
-            return Err((None, name, format!("{} values for {} times", v.len(), t_s.len())));
-        }
-    }
-    crate::profile::check_values("t_s", t_s)?;
-    crate::profile::check_values("x_mm", x_mm)?;
     crate::profile::check_values("y_mm", y_mm)?;
     // y has the positions' range, under its own name.
     if let Some(i) = crate::ranges::POSITION_MM.first_outside(y_mm) {
@@ -92,13 +87,6 @@ fn validate(t_s: &[f64], x_mm: &[f64], y_mm: &[f64]) -> Result<(), crate::profil
             Some(i),
             "y_mm",
             format!("y_mm must be {}, got {}", crate::ranges::POSITION_MM.describe(), Num(y_mm[i])),
-        ));
-    }
-    if let Some(i) = t_s.windows(2).position(|w| w[1] <= w[0]) {
-        return Err((
-            Some(i + 1),
-            "t_s",
-            format!("times must be strictly increasing: {} follows {}", Num(t_s[i + 1]), Num(t_s[i])),
         ));
     }
     Ok(())

@@ -2,8 +2,9 @@
 //! out (kHz rates), O(1) and allocation-free per output sample.
 //!
 //! A [`RealtimeRenderer`] is built once from a voltage curve: the curve is
-//! resampled onto a uniform lookup table (already clamped at U_max), the
-//! carrier is a phase accumulator over a sine table, and the safety limits
+//! resampled onto a uniform lookup table, the
+//! carrier is a 64-bit phase accumulator read through the offline render's
+//! polynomial sine (so live and offline drives agree to rounding), and the safety limits
 //! are checked for the whole table up front, so no output sample can exceed
 //! the amplifier range. Then, from the audio callback:
 //!
@@ -30,18 +31,23 @@
 //! held), so the envelope does not step at every report. When a new report
 //! disagrees with the extrapolation, the difference is blended out linearly
 //! over `blend_s` instead of jumping.
+//!
+//! A combined (or ultrasonic) display's design has a second channel, the
+//! plate's vibration amplitude a(x) in um ([`RealtimeRenderer::two_channel`]):
+//! read from its own lookup table at the same estimated position, with the
+//! same [`Extend`] outside the span, clamped to 0 ..= a_max and without
+//! carrier (a control signal for the resonant driver), as the offline
+//! [`crate::signal::render_two_channel`] does. Its full scale is a_max:
+//! [`RealtimeRenderer::fill_frames`] writes a / a_max, as the two-channel
+//! WAV does, so no sample can stand for more than the clamp.
 
 use crate::num::Num;
-use crate::signal::{Carrier, CarrierShape, EnvelopeLimiter, Extend, Limits, SignalError, VoltageCurve};
+use crate::signal::{
+    AmplitudeCurve, Carrier, CarrierShape, EnvelopeLimiter, Extend, Limits, SignalError, VoltageCurve,
+};
 
 /// Largest lookup table: 2^20 points.
 pub const MAX_TABLE_POINTS: usize = 1 << 20;
-
-/// Sine table size (a power of two); with linear interpolation its largest
-/// error is (2 pi / 1024)^2 / 8 = 4.7e-6 of the peak.
-const SINE_BITS: u32 = 10;
-const SINE_LEN: usize = 1 << SINE_BITS;
-const INDEX_SHIFT: u32 = 64 - SINE_BITS;
 
 // Compile-time modes of the per-sample loop.
 const SINE: u8 = 0;
@@ -104,34 +110,161 @@ pub struct Sample {
     pub x_mm: f64,
     /// Envelope after the limits, V RMS (0 when no finger touches).
     pub envelope_v: f64,
-    /// Drive voltage in V.
+    /// Drive voltage in V (channel 1).
     pub signal_v: f64,
+    /// Ultrasonic vibration amplitude in um (peak), after the a_max clamp:
+    /// channel 2 of a two-channel renderer, 0 for a one-channel one and
+    /// when no finger touches.
+    pub amplitude_um: f64,
+}
+
+impl Sample {
+    /// All zero: no time, no position, no output.
+    pub const ZERO: Self = Self { t_s: 0.0, x_mm: 0.0, envelope_v: 0.0, signal_v: 0.0, amplitude_um: 0.0 };
+}
+
+/// A uniform lookup table of a curve (voltage or amplitude) over its span,
+/// with linear interpolation between its points. The values are the
+/// curve's own, not clamped: the renderer clamps after the interpolation,
+/// as the offline render does (clamping the points first would lower the
+/// values between a point above the limit and one below it).
+#[derive(Debug, Clone)]
+struct LookupTable {
+    /// The points, plus one padding entry (a copy of the last) so that a
+    /// lookup at exactly the last point can read one past it.
+    values: Box<[f64]>,
+    x0_mm: f64,
+    inv_dx: f64,
+    last_index: f64,
+    inv_last_index: f64,
+    /// Fraction of the points above the limit the renderer clamps at.
+    clamped_fraction: f64,
+}
+
+impl LookupTable {
+    /// Samples `curve` (held at its ends) on `points` (or enough for its
+    /// smallest spacing) uniform points over its span, counting those above
+    /// `ceiling`.
+    fn new(curve: &VoltageCurve, points: Option<usize>, ceiling: f64) -> Result<Self, SignalError> {
+        let (x0, x1) = curve.span_mm();
+        let points = match points {
+            Some(n) if (2..=MAX_TABLE_POINTS).contains(&n) => n,
+            Some(n) => {
+                return Err(SignalError::Settings(format!("table points must be 2..={MAX_TABLE_POINTS}, got {n}")));
+            }
+            None => {
+                // Shave rounding so a uniform curve gets exactly its own points.
+                let intervals = ((x1 - x0) / curve.min_spacing_mm() * (1.0 - 1e-9)).ceil();
+                (intervals.min((MAX_TABLE_POINTS - 1) as f64) as usize + 1).max(2)
+            }
+        };
+        let dx = (x1 - x0) / (points - 1) as f64;
+        let mut clamped = 0usize;
+        let mut values: Vec<f64> = (0..points)
+            .map(|i| {
+                let x = if i + 1 == points { x1 } else { x0 + dx * i as f64 };
+                let v = curve.voltage_at(x, Extend::Hold);
+                clamped += usize::from(v > ceiling);
+                // max(0.0): the curve is >= 0; + 0.0 keeps -0.0 out.
+                v.max(0.0) + 0.0
+            })
+            .collect();
+        values.push(values[points - 1]);
+        Ok(Self {
+            values: values.into_boxed_slice(),
+            x0_mm: x0,
+            inv_dx: 1.0 / dx,
+            last_index: (points - 1) as f64,
+            inv_last_index: 1.0 / (points - 1) as f64,
+            clamped_fraction: clamped as f64 / points as f64,
+        })
+    }
+
+    /// Largest value of the table.
+    fn max(&self) -> f64 {
+        self.values.iter().fold(0.0f64, |m, &v| m.max(v))
+    }
+
+    /// Number of points (without the padding entry).
+    fn points(&self) -> usize {
+        self.values.len() - 1
+    }
+
+    /// Table lookup with linear interpolation; `E` is the extension mode.
+    /// `wrap` (Repeat only) is the whole number of periods, in table index
+    /// units, last subtracted: kept between samples, it is recomputed only
+    /// when the finger crosses into another period.
+    #[inline(always)]
+    fn lookup<const E: u8>(&self, x_mm: f64, wrap: &mut f64) -> f64 {
+        let mut p = (x_mm - self.x0_mm) * self.inv_dx;
+        if E == ZERO && !(0.0..=self.last_index).contains(&p) {
+            return 0.0;
+        }
+        if E == REPEAT {
+            let wrapped = p - *wrap;
+            if (0.0..self.last_index).contains(&wrapped) {
+                p = wrapped;
+            } else {
+                // floor(p / last_index) periods, with a truncating cast as floor.
+                let q = p * self.inv_last_index;
+                let mut k = q as i64;
+                if (k as f64) > q {
+                    k -= 1;
+                }
+                *wrap = k as f64 * self.last_index;
+                p -= *wrap;
+            }
+        }
+        let p = if p > 0.0 { p } else { 0.0 };
+        let p = if p < self.last_index { p } else { self.last_index };
+        // p <= last_index < 2^20; the table has one padding entry past
+        // last_index, so i + 1 is in bounds even at the end.
+        let i = p as u32;
+        let f = p - f64::from(i);
+        let (a, b) = (self.values[i as usize], self.values[i as usize + 1]);
+        a + f * (b - a)
+    }
+
+    /// The value at `x_mm` for the extension mode `extend`.
+    fn value_at(&self, x_mm: f64, extend: Extend) -> f64 {
+        match extend {
+            Extend::Hold => self.lookup::<HOLD>(x_mm, &mut 0.0),
+            Extend::Zero => self.lookup::<ZERO>(x_mm, &mut 0.0),
+            Extend::Repeat => self.lookup::<REPEAT>(x_mm, &mut 0.0),
+        }
+    }
+}
+
+/// Channel 2 of a two-channel renderer: the ultrasonic amplitude table
+/// (clamped to 0 ..= a_max) and its Repeat-mode period cache.
+#[derive(Debug, Clone)]
+struct AmplitudeChannel {
+    table: LookupTable,
+    a_max_um: f64,
+    wrap: f64,
 }
 
 /// Streams the drive of a voltage curve from touch reports; see the module
 /// documentation.
 #[derive(Debug, Clone)]
 pub struct RealtimeRenderer {
-    // Uniform lookup table of U(x), clamped at U_max.
-    table: Box<[f64]>,
-    x0_mm: f64,
-    inv_dx: f64,
-    last_index: f64,
-    inv_last_index: f64,
+    // Uniform lookup table of U(x) (the limiter clamps at U_max).
+    table: LookupTable,
     extend: Extend,
     /// Periods subtracted by the last Repeat lookup (table index units).
     wrap: f64,
-    // Carrier: 64-bit phase accumulator (a full cycle is 2^64) over a
-    // unit-RMS sine table.
+    /// Channel 2, the ultrasonic amplitude a(x), for a combined design.
+    amplitude: Option<AmplitudeChannel>,
+    // Carrier: 64-bit phase accumulator (a full cycle is 2^64).
     shape: CarrierShape,
     phase: u64,
     phase_step: u64,
-    sine: Box<[f64; SINE_LEN + 1]>,
     limiter: EnvelopeLimiter,
     output_scale: f64,
     // Clock.
     n: u64,
     dt_s: f64,
+    sample_rate_hz: f64,
     // Touch state: last report, velocity, blended correction.
     touching: bool,
     t_report: f64,
@@ -142,7 +275,6 @@ pub struct RealtimeRenderer {
     blend: bool,
     horizon_s: f64,
     peak_bound_v: f64,
-    table_clamped_fraction: f64,
 }
 
 impl RealtimeRenderer {
@@ -172,34 +304,9 @@ impl RealtimeRenderer {
             )));
         }
 
-        let (x0, x1) = curve.span_mm();
-        let points = match config.table_points {
-            Some(n) if (2..=MAX_TABLE_POINTS).contains(&n) => n,
-            Some(n) => {
-                return Err(SignalError::Settings(format!("table points must be 2..={MAX_TABLE_POINTS}, got {n}")));
-            }
-            None => {
-                // Shave rounding so a uniform curve gets exactly its own points.
-                let intervals = ((x1 - x0) / curve.min_spacing_mm() * (1.0 - 1e-9)).ceil();
-                (intervals.min((MAX_TABLE_POINTS - 1) as f64) as usize + 1).max(2)
-            }
-        };
-        let dx = (x1 - x0) / (points - 1) as f64;
-        let u_max = config.limits.u_max_v;
-        let mut clamped = 0usize;
-        let mut table: Vec<f64> = (0..points)
-            .map(|i| {
-                let x = if i + 1 == points { x1 } else { x0 + dx * i as f64 };
-                let u = curve.voltage_at(x, Extend::Hold);
-                clamped += usize::from(u > u_max);
-                u.min(u_max)
-            })
-            .collect();
-        // Padding: a lookup at exactly the last point reads one entry past it.
-        table.push(table[points - 1]);
-        let table = table.into_boxed_slice();
-        let table_max = table.iter().fold(0.0f64, |m, &u| m.max(u));
-        let peak_bound_v = config.carrier.peak_per_rms() * table_max;
+        let table = LookupTable::new(curve, config.table_points, config.limits.u_max_v)?;
+        // The envelope limiter clamps every sample at U_max.
+        let peak_bound_v = config.carrier.peak_per_rms() * table.max().min(config.limits.u_max_v);
         if let Some(range_v) = config.limits.amplifier_range_v
             && peak_bound_v > range_v
         {
@@ -214,28 +321,22 @@ impl RealtimeRenderer {
             return Err(SignalError::ExceedsFullScale { amplitude_v: peak_bound_v, volts_per_full_scale: vpfs });
         }
 
-        let mut sine = Box::new([0.0; SINE_LEN + 1]);
-        for (i, v) in sine.iter_mut().enumerate() {
-            *v = std::f64::consts::SQRT_2 * (std::f64::consts::TAU * i as f64 / SINE_LEN as f64).sin();
-        }
         let cycles_per_sample =
             if config.carrier.shape == CarrierShape::None { 0.0 } else { config.carrier.frequency_hz / fs };
+        let x0 = table.x0_mm;
         Ok(Self {
             table,
-            x0_mm: x0,
-            inv_dx: 1.0 / dx,
-            last_index: (points - 1) as f64,
-            inv_last_index: 1.0 / (points - 1) as f64,
             wrap: 0.0,
             extend: config.extend,
+            amplitude: None,
             shape: config.carrier.shape,
             phase: 0,
             phase_step: (cycles_per_sample * 18_446_744_073_709_551_616.0).round() as u64,
-            sine,
             limiter: EnvelopeLimiter::new(&config.limits, fs),
             output_scale: 1.0 / vpfs,
             n: 0,
             dt_s: 1.0 / fs,
+            sample_rate_hz: fs,
             touching: false,
             t_report: 0.0,
             x_report: x0,
@@ -245,14 +346,64 @@ impl RealtimeRenderer {
             blend: config.blend_s > 0.0,
             horizon_s: config.horizon_s,
             peak_bound_v,
-            table_clamped_fraction: clamped as f64 / points as f64,
         })
+    }
+
+    /// A two-channel renderer for a combined (or ultrasonic) display's
+    /// design: channel 1 is [`new`](Self::new)'s drive of `curve`, channel
+    /// 2 the ultrasonic amplitude a(x) of `amplitude` at the same estimated
+    /// position (its own lookup table, `config.table_points` or enough for
+    /// its smallest spacing), clamped to 0 ..= `a_max_um`, no carrier, no
+    /// slew limit: the offline [`crate::signal::render_two_channel`]'s
+    /// conventions. `a_max_um` must be within [`crate::ranges::A_MAX_UM`].
+    pub fn two_channel(
+        curve: &VoltageCurve,
+        amplitude: &AmplitudeCurve,
+        a_max_um: f64,
+        config: &RealtimeConfig,
+    ) -> Result<Self, SignalError> {
+        crate::ranges::A_MAX_UM.check(a_max_um).map_err(|e| SignalError::Settings(e.to_string()))?;
+        let mut renderer = Self::new(curve, config)?;
+        let table = LookupTable::new(amplitude.curve(), config.table_points, a_max_um)?;
+        renderer.amplitude = Some(AmplitudeChannel { table, a_max_um, wrap: 0.0 });
+        Ok(renderer)
+    }
+
+    /// Output channels the design has: 1 (electrovibration), or 2 (drive
+    /// and ultrasonic amplitude).
+    pub fn channels(&self) -> usize {
+        if self.amplitude.is_some() { 2 } else { 1 }
+    }
+
+    /// Channel 2's clamp and full scale in um, for a two-channel renderer.
+    pub fn a_max_um(&self) -> Option<f64> {
+        self.amplitude.as_ref().map(|a| a.a_max_um)
+    }
+
+    /// Volts at the amplifier output for a full-scale sample of channel 1.
+    pub fn volts_per_full_scale(&self) -> f64 {
+        1.0 / self.output_scale
     }
 
     /// Time of the next output sample on the renderer's clock, in s (0 at
     /// the first sample).
     pub fn now_s(&self) -> f64 {
         self.n as f64 * self.dt_s
+    }
+
+    /// Output sample rate in Hz.
+    pub fn sample_rate_hz(&self) -> f64 {
+        self.sample_rate_hz
+    }
+
+    /// Samples rendered so far (the index of the next one).
+    pub fn samples_rendered(&self) -> u64 {
+        self.n
+    }
+
+    /// Whether a finger is down (a report came, and no release since).
+    pub fn is_touching(&self) -> bool {
+        self.touching
     }
 
     /// A touch report: the finger is at `x_mm` at time `t_s` (renderer
@@ -305,60 +456,27 @@ impl RealtimeRenderer {
         self.x_report + self.velocity * extrapolated + self.offset * left
     }
 
-    /// U in V RMS (clamped at U_max) at `x_mm`, from the lookup table.
+    /// U in V RMS at `x_mm` from the lookup table, before the U_max
+    /// clamp the limiter applies.
     pub fn voltage_at(&self, x_mm: f64) -> f64 {
-        match self.extend {
-            Extend::Hold => self.lookup::<HOLD>(x_mm, &mut 0.0),
-            Extend::Zero => self.lookup::<ZERO>(x_mm, &mut 0.0),
-            Extend::Repeat => self.lookup::<REPEAT>(x_mm, &mut 0.0),
-        }
+        self.table.value_at(x_mm, self.extend)
     }
 
-    /// Table lookup with linear interpolation; `E` is the extension mode.
-    /// `wrap` (Repeat only) is the whole number of periods, in table index
-    /// units, last subtracted: kept between samples, it is recomputed only
-    /// when the finger crosses into another period.
-    #[inline(always)]
-    fn lookup<const E: u8>(&self, x_mm: f64, wrap: &mut f64) -> f64 {
-        let mut p = (x_mm - self.x0_mm) * self.inv_dx;
-        if E == ZERO && !(0.0..=self.last_index).contains(&p) {
-            return 0.0;
-        }
-        if E == REPEAT {
-            let wrapped = p - *wrap;
-            if (0.0..self.last_index).contains(&wrapped) {
-                p = wrapped;
-            } else {
-                // floor(p / last_index) periods, with a truncating cast as floor.
-                let q = p * self.inv_last_index;
-                let mut k = q as i64;
-                if (k as f64) > q {
-                    k -= 1;
-                }
-                *wrap = k as f64 * self.last_index;
-                p -= *wrap;
-            }
-        }
-        let p = if p > 0.0 { p } else { 0.0 };
-        let p = if p < self.last_index { p } else { self.last_index };
-        // p <= last_index < 2^20; the table has one padding entry past
-        // last_index, so i + 1 is in bounds even at the end.
-        let i = p as u32;
-        let f = p - f64::from(i);
-        let (a, b) = (self.table[i as usize], self.table[i as usize + 1]);
-        a + f * (b - a)
+    /// a in um (clamped to 0 ..= a_max) at `x_mm`, from channel 2's lookup
+    /// table; `None` for a one-channel renderer.
+    pub fn amplitude_at(&self, x_mm: f64) -> Option<f64> {
+        self.amplitude.as_ref().map(|a| a.table.value_at(x_mm, self.extend).min(a.a_max_um))
     }
 
-    /// The unit-RMS carrier at `phase` (a full cycle is 2^64); `S` is the shape.
+    /// The unit-RMS carrier at `phase` (a full cycle is 2^64); `S` is the
+    /// shape. The sine is the offline render's polynomial
+    /// (`signal::carrier::sin_turns`, within 4.5e-16 of sin), at the phase
+    /// in turns (the accumulator's top 53 bits).
     #[inline(always)]
-    fn carrier_at<const S: u8>(sine: &[f64; SINE_LEN + 1], phase: u64) -> f64 {
+    fn carrier_at<const S: u8>(phase: u64) -> f64 {
         match S {
             SINE => {
-                let i = (phase >> INDEX_SHIFT) as usize;
-                // The 32 bits below the index as the fraction in [0, 1).
-                let f = ((phase >> (INDEX_SHIFT - 32)) as u32) as f64 * (1.0 / 4_294_967_296.0);
-                let (a, b) = (sine[i], sine[i + 1]);
-                a + f * (b - a)
+                std::f64::consts::SQRT_2 * crate::signal::sin_turns(phase as f64 * (1.0 / 18_446_744_073_709_551_616.0))
             }
             SQUARE => {
                 if phase < 1 << 63 {
@@ -372,92 +490,146 @@ impl RealtimeRenderer {
     }
 
     /// Renders the next `n` samples, handing each with its index to
-    /// `write`. The carrier shape `S` and extension `E` are compile-time
-    /// constants, so the per-sample loop has no mode branches.
+    /// `write`. The carrier shape `S`, extension `E` and channel count
+    /// (`TWO`: with the amplitude channel) are compile-time constants, so
+    /// the per-sample loop has no mode branches.
     #[inline(always)]
-    fn render<const S: u8, const E: u8>(&mut self, n: usize, mut write: impl FnMut(usize, Sample)) {
+    fn render<const S: u8, const E: u8, const TWO: bool>(&mut self, n: usize, mut write: impl FnMut(usize, Sample)) {
         let dt = self.dt_s;
         let t0 = self.n as f64 * dt;
         let mut phase = self.phase;
         let mut limiter = self.limiter;
         let mut wrap = self.wrap;
+        let (amplitude_table, mut amplitude_wrap, a_max_um) = match &self.amplitude {
+            Some(a) if TWO => (Some(&a.table), a.wrap, a.a_max_um),
+            _ => (None, 0.0, 0.0),
+        };
         let mut k = 0.0;
         for i in 0..n {
             let t_s = t0 + k * dt;
             k += 1.0;
-            let (x_mm, requested) = if self.touching {
+            let (x_mm, requested, amplitude_um) = if self.touching {
                 let x = self.position_at(t_s);
-                (x, self.lookup::<E>(x, &mut wrap))
+                let a = match amplitude_table {
+                    Some(table) if TWO => {
+                        // The a_max clamp (the table's values are >= 0).
+                        let a = table.lookup::<E>(x, &mut amplitude_wrap);
+                        if a < a_max_um { a } else { a_max_um }
+                    }
+                    _ => 0.0,
+                };
+                (x, self.table.lookup::<E>(x, &mut wrap), a)
             } else {
-                (self.x_report, 0.0)
+                (self.x_report, 0.0, 0.0)
             };
             let envelope_v = limiter.apply(requested);
-            let signal_v = envelope_v * Self::carrier_at::<S>(&self.sine, phase);
+            let signal_v = envelope_v * Self::carrier_at::<S>(phase);
             phase = phase.wrapping_add(self.phase_step);
-            write(i, Sample { t_s, x_mm, envelope_v, signal_v });
+            write(i, Sample { t_s, x_mm, envelope_v, signal_v, amplitude_um });
         }
         self.phase = phase;
         self.limiter = limiter;
         self.wrap = wrap;
+        if let Some(a) = &mut self.amplitude {
+            a.wrap = amplitude_wrap;
+        }
         self.n += n as u64;
     }
 
-    /// [`render`](Self::render) for the configured shape and extension.
-    fn dispatch(&mut self, n: usize, write: impl FnMut(usize, Sample)) {
+    /// Renders the next `n` samples for the configured shape, extension
+    /// and channels, handing each with its index to `write`: the primitive
+    /// the `fill*` methods and a live output's callback are built on. O(1)
+    /// per sample, no allocation.
+    pub fn render_with(&mut self, n: usize, write: impl FnMut(usize, Sample)) {
         use CarrierShape as C;
+        macro_rules! by_channels {
+            ($s:expr, $e:expr) => {
+                if self.amplitude.is_some() {
+                    self.render::<{ $s }, { $e }, true>(n, write)
+                } else {
+                    self.render::<{ $s }, { $e }, false>(n, write)
+                }
+            };
+        }
         match (self.shape, self.extend) {
-            (C::Sine, Extend::Hold) => self.render::<SINE, HOLD>(n, write),
-            (C::Sine, Extend::Zero) => self.render::<SINE, ZERO>(n, write),
-            (C::Sine, Extend::Repeat) => self.render::<SINE, REPEAT>(n, write),
-            (C::Square, Extend::Hold) => self.render::<SQUARE, HOLD>(n, write),
-            (C::Square, Extend::Zero) => self.render::<SQUARE, ZERO>(n, write),
-            (C::Square, Extend::Repeat) => self.render::<SQUARE, REPEAT>(n, write),
-            (C::None, Extend::Hold) => self.render::<NONE, HOLD>(n, write),
-            (C::None, Extend::Zero) => self.render::<NONE, ZERO>(n, write),
-            (C::None, Extend::Repeat) => self.render::<NONE, REPEAT>(n, write),
+            (C::Sine, Extend::Hold) => by_channels!(SINE, HOLD),
+            (C::Sine, Extend::Zero) => by_channels!(SINE, ZERO),
+            (C::Sine, Extend::Repeat) => by_channels!(SINE, REPEAT),
+            (C::Square, Extend::Hold) => by_channels!(SQUARE, HOLD),
+            (C::Square, Extend::Zero) => by_channels!(SQUARE, ZERO),
+            (C::Square, Extend::Repeat) => by_channels!(SQUARE, REPEAT),
+            (C::None, Extend::Hold) => by_channels!(NONE, HOLD),
+            (C::None, Extend::Zero) => by_channels!(NONE, ZERO),
+            (C::None, Extend::Repeat) => by_channels!(NONE, REPEAT),
         }
     }
 
     /// Renders the next output sample. O(1), no allocation.
     pub fn next_sample(&mut self) -> Sample {
-        let mut sample = Sample { t_s: 0.0, x_mm: 0.0, envelope_v: 0.0, signal_v: 0.0 };
-        self.dispatch(1, |_, s| sample = s);
+        let mut sample = Sample::ZERO;
+        self.render_with(1, |_, s| sample = s);
         sample
     }
 
-    /// Fills `out` with the next samples, as fractions of full scale
-    /// (volts / volts_per_full_scale, within [-1, 1]). O(1) per sample, no
-    /// allocation.
+    /// Fills `out` with the next samples of channel 1, as fractions of full
+    /// scale (volts / volts_per_full_scale, within [-1, 1]). O(1) per
+    /// sample, no allocation.
     pub fn fill(&mut self, out: &mut [f32]) {
         let scale = self.output_scale;
-        self.dispatch(out.len(), |i, s| out[i] = (s.signal_v * scale) as f32);
+        self.render_with(out.len(), |i, s| out[i] = (s.signal_v * scale) as f32);
+    }
+
+    /// Fills the interleaved frames of `out` (`channels` samples each, a
+    /// trailing partial frame left as it is) with the next samples as
+    /// fractions of full scale: channel 1 volts / volts_per_full_scale,
+    /// channel 2 (two-channel renderers) a / a_max, further channels 0.
+    /// A one-channel renderer leaves channel 2 at 0 too. O(1) per sample,
+    /// no allocation.
+    pub fn fill_frames(&mut self, out: &mut [f32], channels: usize) {
+        let channels = channels.max(1);
+        let frames = out.len() / channels;
+        let (scale, scale_2) = (self.output_scale, self.a_max_um().map_or(0.0, |a| 1.0 / a));
+        self.render_with(frames, |i, s| {
+            let frame = &mut out[i * channels..(i + 1) * channels];
+            frame.fill(0.0);
+            frame[0] = (s.signal_v * scale) as f32;
+            if channels > 1 {
+                frame[1] = (s.amplitude_um * scale_2) as f32;
+            }
+        });
     }
 
     /// Fills `out` with the next samples in volts.
     pub fn fill_volts(&mut self, out: &mut [f64]) {
-        self.dispatch(out.len(), |i, s| out[i] = s.signal_v);
+        self.render_with(out.len(), |i, s| out[i] = s.signal_v);
     }
 
-    /// Fills `out` with the next samples, each with its time, position and
-    /// envelope (for inspection and tests).
+    /// Fills `out` with the next samples, each with its time, position,
+    /// envelope and amplitude (for inspection and tests).
     pub fn fill_samples(&mut self, out: &mut [Sample]) {
-        self.dispatch(out.len(), |i, s| out[i] = s);
+        self.render_with(out.len(), |i, s| out[i] = s);
     }
 
     /// Upper bound of |drive| in V: carrier peak/RMS times the largest
-    /// (clamped) table voltage.
+    /// table voltage or U_max, whichever is lower.
     pub fn peak_bound_v(&self) -> f64 {
         self.peak_bound_v
     }
 
     /// Number of lookup-table points.
     pub fn table_points(&self) -> usize {
-        self.table.len() - 1
+        self.table.points()
     }
 
-    /// Fraction of the lookup table clamped at U_max.
+    /// Fraction of the lookup table's points above U_max (clamped when played).
     pub fn table_clamped_fraction(&self) -> f64 {
-        self.table_clamped_fraction
+        self.table.clamped_fraction
+    }
+
+    /// Fraction of channel 2's lookup table points above a_max (clamped
+    /// when played; two-channel renderers).
+    pub fn amplitude_clamped_fraction(&self) -> Option<f64> {
+        self.amplitude.as_ref().map(|a| a.table.clamped_fraction)
     }
 }
 
@@ -495,7 +667,7 @@ mod tests {
         let c = curve();
         let config = RealtimeConfig { extend: Extend::Repeat, ..RealtimeConfig::default() };
         let mut r = RealtimeRenderer::new(&c, &config).unwrap();
-        let mut samples = [Sample { t_s: 0.0, x_mm: 0.0, envelope_v: 0.0, signal_v: 0.0 }; 400];
+        let mut samples = [Sample::ZERO; 400];
         for k in 0..240 {
             // 2 s of 120 Hz reports, x swinging between -25 and 45 mm.
             let t = r.now_s();
@@ -513,9 +685,10 @@ mod tests {
         }
     }
 
-    /// The table sine carrier against sin(): within 5e-6 of the peak (the
-    /// linear-interpolation bound of a 1024-point table, 4.7e-6), at the
-    /// frequency asked for.
+    /// The sine carrier against sin() at the frequency asked for: within
+    /// 1e-12 of the peak over 1 s (the polynomial's 4.5e-16; the
+    /// accumulator's step, f / fs rounded in f64 then to 2^-64 turns, off by
+    /// ~1e-16 relative: a phase drift of 1e-14 turns per 10^4 cycles).
     #[test]
     fn sine_carrier_matches_sin() {
         let c = VoltageCurve::new(vec![0.0, 1.0], vec![100.0, 100.0]).unwrap();
@@ -523,8 +696,11 @@ mod tests {
         r.touch(0.0, 0.5);
         for n in 0..48_000 {
             let s = r.next_sample();
-            let exact = 100.0 * std::f64::consts::SQRT_2 * (std::f64::consts::TAU * 1000.0 * n as f64 / 48_000.0).sin();
-            assert!((s.signal_v - exact).abs() < 5e-6 * 141.43, "n = {n}: {} vs {exact}", s.signal_v);
+            // The phase reduced to one turn exactly first (1000 n mod 48000):
+            // sin of the unreduced 2 pi f t carries its rounding, 1e-13 rad.
+            let turns = (1000 * n % 48_000) as f64 / 48_000.0;
+            let exact = 100.0 * std::f64::consts::SQRT_2 * (std::f64::consts::TAU * turns).sin();
+            assert!((s.signal_v - exact).abs() < 1e-12 * 141.43, "n = {n}: {} vs {exact}", s.signal_v);
         }
     }
 

@@ -218,7 +218,7 @@ fn sweep_duration(from_mm: f64, to_mm: f64, speed_mm_s: f64, rate_hz: f64) -> Re
 
 /// Checks at least two samples, equal lengths, finite values and strictly
 /// increasing times; the error names the 0-based sample and the field.
-fn validate(t_s: &[f64], x_mm: &[f64]) -> Result<(), crate::profile::Violation> {
+pub(crate) fn validate(t_s: &[f64], x_mm: &[f64]) -> Result<(), crate::profile::Violation> {
     if t_s.len() < 2 {
         return Err((None, "t_s", format!("a trajectory needs at least 2 samples, got {}", t_s.len())));
     }

@@ -9,7 +9,7 @@ mod counting_alloc;
 
 use counting_alloc::allocations_in;
 use haptex_core::realtime::{RealtimeConfig, RealtimeRenderer};
-use haptex_core::signal::{Carrier, CarrierShape, Extend, Limits, VoltageCurve};
+use haptex_core::signal::{AmplitudeCurve, Carrier, CarrierShape, Extend, Limits, VoltageCurve};
 
 #[test]
 fn fill_loop_does_not_allocate() {
@@ -18,7 +18,9 @@ fn fill_loop_does_not_allocate() {
 
     let x: Vec<f64> = (0..=2000).map(|i| i as f64 * 0.01).collect();
     let u = x.iter().map(|x| 60.0 + 50.0 * (x * 3.0).sin()).collect();
-    let curve = VoltageCurve::new(x, u).unwrap();
+    let a = x.iter().map(|x| 1.0 + (x * 2.0).cos()).collect();
+    let curve = VoltageCurve::new(x.clone(), u).unwrap();
+    let amplitude = AmplitudeCurve::new(x, a).unwrap();
     let shapes = [CarrierShape::Sine, CarrierShape::Square, CarrierShape::None];
     for (shape, extend) in shapes.into_iter().zip([Extend::Hold, Extend::Zero, Extend::Repeat]) {
         let config = RealtimeConfig {
@@ -27,35 +29,83 @@ fn fill_loop_does_not_allocate() {
             extend,
             ..RealtimeConfig::default()
         };
-        let mut renderer = RealtimeRenderer::new(&curve, &config).unwrap();
-        let mut buffer = vec![0.0f32; 256];
-        let mut volts = vec![0.0f64; 256];
-        let mut peak = 0.0f32;
-        let count = allocations_in(|| {
-            // 2 s at 48 kHz in 256-sample buffers, a touch report every
-            // 800 samples (60 Hz), the finger lifted for a while in the middle.
-            let mut rendered = 0usize;
-            let mut next_report = 0usize;
-            while rendered < 96_000 {
-                if rendered >= next_report {
-                    let t = renderer.now_s();
-                    if (0.9..1.1).contains(&t) {
-                        renderer.release();
-                    } else {
-                        renderer.touch(t, -3.0 + 30.0 * t);
+        // One- and two-channel renderers (the combined design's amplitude
+        // channel written into interleaved frames).
+        for two in [false, true] {
+            let mut renderer = if two {
+                RealtimeRenderer::two_channel(&curve, &amplitude, 1.5, &config).unwrap()
+            } else {
+                RealtimeRenderer::new(&curve, &config).unwrap()
+            };
+            let mut buffer = vec![0.0f32; 256];
+            let mut frames = vec![0.0f32; 512];
+            let mut volts = vec![0.0f64; 256];
+            let mut peak = 0.0f32;
+            let count = allocations_in(|| {
+                // 2 s at 48 kHz in 256-sample buffers, a touch report every
+                // 800 samples (60 Hz), the finger lifted for a while in the middle.
+                let mut rendered = 0usize;
+                let mut next_report = 0usize;
+                while rendered < 96_000 {
+                    if rendered >= next_report {
+                        let t = renderer.now_s();
+                        if (0.9..1.1).contains(&t) {
+                            renderer.release();
+                        } else {
+                            renderer.touch(t, -3.0 + 30.0 * t);
+                        }
+                        next_report += 800;
                     }
-                    next_report += 800;
+                    if rendered.is_multiple_of(768) {
+                        renderer.fill_frames(&mut frames, 2);
+                    } else if rendered.is_multiple_of(512) {
+                        renderer.fill(&mut buffer);
+                    } else {
+                        renderer.fill_volts(&mut volts);
+                    }
+                    peak = buffer.iter().fold(peak, |m, v| m.max(v.abs()));
+                    rendered += 256;
                 }
-                if rendered.is_multiple_of(512) {
-                    renderer.fill(&mut buffer);
-                } else {
-                    renderer.fill_volts(&mut volts);
-                }
-                peak = buffer.iter().fold(peak, |m, v| m.max(v.abs()));
-                rendered += 256;
-            }
-        });
-        assert_eq!(count, 0, "{shape:?}/{extend:?}: {count} allocations in the fill loop");
-        assert!(peak > 0.1 && peak <= 1.0, "{shape:?}: peak {peak} of full scale");
+            });
+            assert_eq!(count, 0, "{shape:?}/{extend:?}/two channels {two}: {count} allocations in the fill loop");
+            assert!(peak > 0.1 && peak <= 1.0, "{shape:?}: peak {peak} of full scale");
+        }
     }
+}
+
+/// Issue 18: the live engine's callback (`LiveEngine::process`, what
+/// `haptex live` runs on the audio thread) does not allocate either: touch
+/// events from a bounded std channel (`try_recv`, the CLI's queue), a
+/// scheduled log, the fades, a gap and the stop, two channels in four-channel
+/// frames. The channel and the engine are built before counting.
+#[test]
+fn live_callback_does_not_allocate() {
+    use haptex_core::live::{LiveConfig, LiveEngine, Touch, TouchEvent};
+    let x: Vec<f64> = (0..=2000).map(|i| i as f64 * 0.01).collect();
+    let u = x.iter().map(|x| 60.0 + 50.0 * (x * 3.0).sin()).collect();
+    let a = x.iter().map(|x| 1.0 + (x * 2.0).cos()).collect();
+    let curve = VoltageCurve::new(x.clone(), u).unwrap();
+    let amplitude = AmplitudeCurve::new(x, a).unwrap();
+    let renderer = RealtimeRenderer::two_channel(&curve, &amplitude, 1.5, &RealtimeConfig::default()).unwrap();
+    let schedule = (0..50).map(|k| TouchEvent { t_s: 1.0 + k as f64 / 120.0, touch: Touch::At(5.0), received: None });
+    let mut engine = LiveEngine::new(renderer, &LiveConfig::new(4)).unwrap().with_schedule(schedule.collect()).unwrap();
+    let (sender, receiver) = std::sync::mpsc::sync_channel::<TouchEvent>(64);
+    let mut out = vec![0.0f32; 4 * 256];
+    let started = std::time::Instant::now();
+    let count = allocations_in(|| {
+        for k in 0..600 {
+            let t = k as f64 * 256.0 / 48_000.0;
+            if k % 2 == 0 && !(0.5..0.8).contains(&t) {
+                let touch = if k == 100 { Touch::Lift } else { Touch::At(2.0 + 10.0 * t) };
+                sender.try_send(TouchEvent { t_s: t, touch, received: Some(started) }).unwrap();
+            }
+            if k == 550 {
+                engine.stop();
+            }
+            engine.process(&mut out, || receiver.try_recv().ok());
+        }
+    });
+    assert_eq!(count, 0, "{count} allocations in the live callback");
+    assert!(engine.is_finished());
+    assert!(engine.status().events.load(std::sync::atomic::Ordering::Relaxed) > 200);
 }

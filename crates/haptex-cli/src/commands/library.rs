@@ -303,7 +303,7 @@ pub(crate) fn default_db() -> PathBuf {
     crate::args::shipped_data("HAPTEX_LIBRARY", SHIPPED_LIBRARY)
 }
 
-fn open_read_only(db: &Path) -> anyhow::Result<Library> {
+pub(crate) fn open_read_only(db: &Path) -> anyhow::Result<Library> {
     if !db.exists() {
         bail!(
             "{}: no library there; pass --db PATH, or create one with `haptex library import --db PATH RECORDINGS`",

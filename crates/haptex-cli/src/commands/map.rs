@@ -34,6 +34,75 @@ enum MapCommand {
     Voltage(MapVoltageArgs),
     SamplePath(SamplePathArgs),
     Grating(GratingArgs),
+    Compose(ComposeArgs),
+    ExportPng(ExportPngArgs),
+}
+
+/// A map (friction or voltage, .csv or .npy) as a 16- or 8-bit grayscale
+/// PNG: its lowest value black, its highest white (or --black/--white),
+/// linear; the mapping and the grid are written into the PNG (a tEXt
+/// chunk) and printed with the `haptex map from-image` command that reads
+/// it back.
+#[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
+struct ExportPngArgs {
+    /// The map.
+    #[arg(long, value_name = "MAP")]
+    map: PathBuf,
+    /// The map's quantity: mu (a friction map) or voltage_v (a voltage map).
+    #[arg(long, default_value = "mu", value_parser = ["mu", "voltage_v"])]
+    quantity: String,
+    /// Value of black (default: the map's lowest).
+    #[arg(long)]
+    black: Option<f64>,
+    /// Value of white (default: the map's highest).
+    #[arg(long)]
+    white: Option<f64>,
+    /// Bits per pixel, 8 or 16.
+    #[arg(long, default_value_t = 16, value_parser = bits_per_pixel)]
+    bits: u8,
+    /// Output PNG.
+    #[arg(short, long, value_name = "FILE.png")]
+    output: PathBuf,
+}
+
+/// A friction map from a label image: each gray level of an 8-bit
+/// grayscale PNG is a region, filled with a friction coefficient, a
+/// library material (a stroke of it, tiled along x) or a friction profile
+/// (tiled along x). One cell per pixel, the top row at the largest y.
+#[derive(Debug, Args)]
+#[command(after_help = "Example:\n  haptex map compose labels.png --region 0=0.5 --region 128=material:sponge \
+                  --region 255=profile:data/examples/bump_friction.csv --pixel-mm 0.1 -o composed.csv")]
+struct ComposeArgs {
+    /// The label image (PNG, 8-bit grayscale); without it, --base and
+    /// --size-mm give the map.
+    labels: Option<PathBuf>,
+    /// LEVEL=FILL for each gray level present: a number (mu),
+    /// material:NAME (a library material) or profile:FILE.csv.
+    #[arg(long = "region", value_name = "LEVEL=FILL", requires = "labels")]
+    regions: Vec<String>,
+    /// Without a label image: the FILL of the whole map (then polygons).
+    #[arg(long, value_name = "FILL", conflicts_with = "labels", requires = "size_mm")]
+    base: Option<String>,
+    /// Without a label image: the map's size W,H in mm (cells at the pixel
+    /// size from the origin).
+    #[arg(long, value_name = "W,H", conflicts_with = "labels", requires = "base")]
+    size_mm: Option<String>,
+    /// "X,Y;X,Y;X,Y=FILL": a polygon (vertices in mm) filled over what is
+    /// there, in the order given (even-odd rule at the cell positions).
+    #[arg(long = "polygon", value_name = "X,Y;...=FILL")]
+    polygons: Vec<String>,
+    #[command(flatten)]
+    pixels: PixelArgs,
+    /// Texture library for material:NAME. Default: the shipped library, or $HAPTEX_LIBRARY.
+    #[arg(long, value_name = "DB")]
+    library: Option<PathBuf>,
+    /// Seed of the stroke chosen for each material (the same seed picks the same stroke).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output map (.csv or .npy with its sidecar).
+    #[arg(short, long, value_name = "MAP")]
+    output: PathBuf,
 }
 
 /// A sine grating at an angle to the sliding direction (+x), its friction
@@ -111,18 +180,8 @@ struct FromImageArgs {
     /// Exponent on the gray level (1: linear).
     #[arg(long, default_value_t = 1.0)]
     gamma: f64,
-    /// Pixel size along x in mm.
-    #[arg(long, value_parser = positive)]
-    pixel_mm: f64,
-    /// Pixel size along y in mm (default: --pixel-mm).
-    #[arg(long, value_parser = positive)]
-    pixel_mm_y: Option<f64>,
-    /// x of the first column in mm.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    x0_mm: f64,
-    /// y of the bottom row in mm.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    y0_mm: f64,
+    #[command(flatten)]
+    pixels: PixelArgs,
     /// Output map (.csv or .npy with its sidecar).
     #[arg(short, long, value_name = "MAP")]
     output: PathBuf,
@@ -174,9 +233,39 @@ struct MapVoltageArgs {
     /// Highest voltage the display can apply, U_max in V RMS.
     #[arg(long, default_value_t = Device::PAPER.u_max_v, value_parser = in_range(ranges::U_MAX_V))]
     u_max: f64,
-    /// Output voltage map (.csv or .npy with its sidecar).
+    #[command(flatten)]
+    display: crate::args::DisplayArgs,
+    /// Output voltage map (.csv or .npy with its sidecar; an ultrasonic or
+    /// combined display's map is CSV, one column per channel).
     #[arg(short, long, value_name = "OUT")]
     output: PathBuf,
+}
+
+/// One cell per pixel: its size and the bottom-left pixel's position.
+#[derive(Debug, Args)]
+struct PixelArgs {
+    /// Pixel size along x in mm.
+    #[arg(long, value_parser = positive)]
+    pixel_mm: f64,
+    /// Pixel size along y in mm (default: --pixel-mm).
+    #[arg(long, value_parser = positive)]
+    pixel_mm_y: Option<f64>,
+    /// x of the first column in mm.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    x0_mm: f64,
+    /// y of the bottom row in mm.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    y0_mm: f64,
+}
+
+impl PixelArgs {
+    fn spacing(&self) -> (f64, f64) {
+        (self.pixel_mm, self.pixel_mm_y.unwrap_or(self.pixel_mm))
+    }
+
+    fn origin(&self) -> (f64, f64) {
+        (self.x0_mm, self.y0_mm)
+    }
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -208,6 +297,8 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         MapCommand::Voltage(a) => voltage(a),
         MapCommand::SamplePath(a) => sample_path(a),
         MapCommand::Grating(a) => grating(a),
+        MapCommand::Compose(a) => compose(a),
+        MapCommand::ExportPng(a) => export_png(a),
     }
 }
 
@@ -218,8 +309,8 @@ fn from_image(a: FromImageArgs) -> anyhow::Result<()> {
     let map = FrictionMap::read_gray_png(
         &bytes,
         &mapping,
-        (a.pixel_mm, a.pixel_mm_y.unwrap_or(a.pixel_mm)),
-        (a.x0_mm, a.y0_mm),
+        a.pixels.spacing(),
+        a.pixels.origin(),
         &a.image.display().to_string(),
     )?;
     write_friction_map(&map, &a.output, format)?;
@@ -259,6 +350,10 @@ fn voltage(a: MapVoltageArgs) -> anyhow::Result<()> {
         MethodArg::Physical => Method::Physical,
         MethodArg::Normalized => Method::Normalized,
     };
+    if a.display.display != crate::args::DisplayArg::Electrovibration {
+        return display_map(&a, &map, &device, method, format);
+    }
+    a.display.refuse_display_flags()?;
     let v = map.voltages(&device, method)?;
     match format {
         MapFormat::Csv => haptex_core::io::write_atomic(&a.output, |w| v.write_csv(w))?,
@@ -281,6 +376,104 @@ fn voltage(a: MapVoltageArgs) -> anyhow::Result<()> {
             100.0 * v.clipped_fraction
         );
     }
+    eprintln!("wrote {}", a.output.display());
+    Ok(())
+}
+
+/// `haptex map voltage --display ultrasonic|combined`: both channels per
+/// cell, as one CSV.
+fn display_map(
+    a: &MapVoltageArgs,
+    map: &FrictionMap,
+    device: &Device,
+    method: Method,
+    format: MapFormat,
+) -> anyhow::Result<()> {
+    use haptex_core::combined::Channels;
+    if method != Method::Physical {
+        bail!("--method normalized (eq. 9) is for the electrovibration display: drop it with --display");
+    }
+    if format != MapFormat::Csv {
+        bail!(
+            "{}: an ultrasonic or combined display's map is written as CSV (one column per channel)",
+            a.output.display()
+        );
+    }
+    let ultrasonic = a.display.ultrasonic()?;
+    let channels = match a.display.strategy()? {
+        Some(strategy) => Channels::Combined(&ultrasonic, strategy),
+        None => Channels::Ultrasonic(&ultrasonic),
+    };
+    let d = map.display_channels(device, channels)?;
+    haptex_core::io::write_atomic(&a.output, |w| d.write_csv(w))?;
+    eprintln!(
+        "display map: {} x {} cells; band mu {:.4} .. {:.4}; below it (plate at a_max = {} um): {:.2}% of the area, \
+         above it (clipped): {:.2}%",
+        d.grid.nx,
+        d.grid.ny,
+        d.band_mu[0],
+        d.band_mu[1],
+        Num(d.a_max_um),
+        100.0 * d.below_fraction,
+        100.0 * d.above_fraction
+    );
+    eprintln!("wrote {}", a.output.display());
+    Ok(())
+}
+
+fn bits_per_pixel(text: &str) -> Result<u8, String> {
+    match text.trim() {
+        "8" => Ok(8),
+        "16" => Ok(16),
+        _ => Err(format!("'{text}': a grayscale PNG here has 8 or 16 bits per pixel")),
+    }
+}
+
+fn export_png(a: ExportPngArgs) -> anyhow::Result<()> {
+    let (grid, values) = if a.quantity == "mu" {
+        let m = read_friction_map(&a.map)?;
+        (m.grid, m.mu)
+    } else {
+        let v = read_voltage_map(&a.map)?;
+        (v.grid, v.voltage_v)
+    };
+    let (lo, hi) = min_max(&values);
+    let (black, white) = (a.black.unwrap_or(lo), a.white.unwrap_or(hi));
+    if !(black.is_finite() && white.is_finite()) || black == white {
+        bail!(
+            "black {} and white {} must be two different numbers (the map is constant at {}: give --black and --white)",
+            Num(black),
+            Num(white),
+            Num(lo)
+        );
+    }
+    let mapping = GrayMapping { mu_black: black, mu_white: white, gamma: 1.0 };
+    // The encoder clamps; the map's own values stay as they are.
+    let map = FrictionMap { grid, mu: values };
+    haptex_core::io::write_atomic(&a.output, |w| map.write_gray_png(w, &mapping, a.bits))?;
+    let clamped = map.mu.iter().filter(|&&v| v < black.min(white) || v > black.max(white)).count();
+    eprintln!(
+        "{} x {} pixels, {} bit: black = {}, white = {} ({}), linear",
+        grid.nx,
+        grid.ny,
+        a.bits,
+        Num(black),
+        Num(white),
+        a.quantity
+    );
+    if clamped > 0 {
+        eprintln!("warning: {clamped} cells outside black .. white are drawn as black or white");
+    }
+    eprintln!(
+        "read back: haptex map from-image {} --mu-black {} --mu-white {} --pixel-mm {} --pixel-mm-y {} --x0-mm {} --y0-mm {} -o MAP.csv",
+        a.output.display(),
+        Num(black),
+        Num(white),
+        Num(grid.dx_mm),
+        Num(grid.dy_mm),
+        Num(grid.x0_mm),
+        Num(grid.y0_mm)
+    );
     eprintln!("wrote {}", a.output.display());
     Ok(())
 }
@@ -394,6 +587,132 @@ fn grating(a: GratingArgs) -> anyhow::Result<()> {
         )
         .write_png(png)?;
         eprintln!("wrote {}", png.display());
+    }
+    eprintln!("wrote {}", a.output.display());
+    Ok(())
+}
+
+fn compose(a: ComposeArgs) -> anyhow::Result<()> {
+    use haptex_core::map::{LabelImage, RegionFill};
+    let format = MapFormat::of(&a.output)?;
+    let mut fills: Vec<Option<(RegionFill, String)>> = vec![None; 256];
+    let mut library = None;
+    let mut fill_of = |text: &str, what: &str| -> anyhow::Result<(RegionFill, String)> {
+        let text = text.trim();
+        Ok(if let Some(name) = text.strip_prefix("material:") {
+            if library.is_none() {
+                let db = a.library.clone().unwrap_or_else(super::library::default_db);
+                library = Some(super::library::open_read_only(&db)?);
+            }
+            let sampled = library.as_ref().expect("opened above").sample(name, Some(a.seed))?;
+            let described = format!("material {name} (stroke {}, seed {})", sampled.stored.stroke.id, sampled.seed);
+            (RegionFill::Texture(sampled.stored.profile), described)
+        } else if let Some(file) = text.strip_prefix("profile:") {
+            (RegionFill::Texture(read_profile(Path::new(file))?), format!("profile {file}"))
+        } else {
+            let mu: f64 = text.parse().map_err(|_| {
+                anyhow::anyhow!("{what}: FILL must be a number, material:NAME or profile:FILE.csv, got '{text}'")
+            })?;
+            ranges::MU.check(mu).map_err(|e| anyhow::anyhow!("{what}: {e}"))?;
+            (RegionFill::Constant(mu), format!("mu = {}", Num(mu)))
+        })
+    };
+    for spec in &a.regions {
+        let what = format!("--region '{spec}'");
+        let (level, fill) = spec
+            .split_once('=')
+            .with_context(|| format!("{what}: expected LEVEL=FILL, e.g. 0=0.5 or 255=material:sponge"))?;
+        let level: u8 =
+            level.trim().parse().map_err(|_| anyhow::anyhow!("{what}: the level must be a gray level 0 .. 255"))?;
+        if fills[level as usize].is_some() {
+            bail!("{what}: gray level {level} is given twice");
+        }
+        fills[level as usize] = Some(fill_of(fill, &what)?);
+    }
+    let mut polygons = Vec::new();
+    for spec in &a.polygons {
+        let what = format!("--polygon '{spec}'");
+        let (points, fill) =
+            spec.rsplit_once('=').with_context(|| format!("{what}: expected X,Y;X,Y;X,Y=FILL (mm)"))?;
+        let mut vertices = Vec::new();
+        for (k, point) in points.split(';').enumerate() {
+            let parsed = point
+                .split_once(',')
+                .and_then(|(x, y)| Some((x.trim().parse::<f64>().ok()?, y.trim().parse::<f64>().ok()?)));
+            vertices.push(parsed.with_context(|| format!("{what}: vertex {} '{point}' is not X,Y in mm", k + 1))?);
+        }
+        polygons.push((vertices, fill_of(fill, &what)?, what));
+    }
+    let (spacing, origin) = (a.pixels.spacing(), a.pixels.origin());
+    let (mut map, name, present) = match (&a.labels, &a.base, &a.size_mm) {
+        (Some(labels), _, _) => {
+            if a.regions.is_empty() {
+                bail!("a label image needs --region LEVEL=FILL for each of its gray levels");
+            }
+            let name = labels.display().to_string();
+            let image = LabelImage::read_png(&read_bounded(labels, 256 << 20)?, &name)?;
+            let map = image.compose(
+                &|level| fills[level as usize].as_ref().map(|(f, _)| f.clone()),
+                spacing,
+                origin,
+                &name,
+            )?;
+            (map, name, image.levels())
+        }
+        (None, Some(base), Some(size)) => {
+            let (w, h) = size
+                .split_once(',')
+                .and_then(|(w, h)| Some((w.trim().parse::<f64>().ok()?, h.trim().parse::<f64>().ok()?)))
+                .filter(|(w, h)| w.is_finite() && h.is_finite() && *w > 0.0 && *h > 0.0)
+                .with_context(|| format!("--size-mm '{size}': expected W,H in mm, both positive"))?;
+            let (nx, ny) = ((w / spacing.0).floor() + 1.0, (h / spacing.1).floor() + 1.0);
+            if nx * ny > haptex_core::map::MAX_CELLS as f64 {
+                bail!(
+                    "--size-mm {size} at {} x {} mm cells: more than {} cells",
+                    Num(spacing.0),
+                    Num(spacing.1),
+                    haptex_core::map::MAX_CELLS
+                );
+            }
+            let grid = MapGrid {
+                nx: nx as usize,
+                ny: ny as usize,
+                x0_mm: origin.0,
+                y0_mm: origin.1,
+                dx_mm: spacing.0,
+                dy_mm: spacing.1,
+            };
+            grid.validate("--size-mm")?;
+            let (base_fill, described) = fill_of(base, "--base")?;
+            fills[0] = Some((base_fill.clone(), described));
+            let one = LabelImage { width: grid.nx, height: grid.ny, labels: vec![0; grid.len()] };
+            (one.compose(&|_| Some(base_fill.clone()), spacing, origin, "--base")?, "--base".to_string(), vec![0])
+        }
+        _ => bail!("give a label image with --region LEVEL=FILL, or --base FILL with --size-mm W,H"),
+    };
+    let mut polygon_lines = Vec::new();
+    for (vertices, (fill, described), what) in &polygons {
+        let cells = map.fill_polygon(vertices, fill, what)?;
+        polygon_lines.push(format!("{what}: {described}, {cells} cells"));
+    }
+    let unused: Vec<String> =
+        (0..=255u8).filter(|l| fills[*l as usize].is_some() && !present.contains(l)).map(|l| l.to_string()).collect();
+    write_friction_map(&map, &a.output, format)?;
+    report_map(&map);
+    for level in present {
+        if let Some((_, described)) = &fills[level as usize] {
+            if name == "--base" {
+                eprintln!("base: {described}");
+            } else {
+                eprintln!("gray level {level}: {described}");
+            }
+        }
+    }
+    for line in polygon_lines {
+        eprintln!("{line}");
+    }
+    if !unused.is_empty() {
+        eprintln!("warning: no pixel has gray level {}: those regions are unused", unused.join(", "));
     }
     eprintln!("wrote {}", a.output.display());
     Ok(())

@@ -5,6 +5,7 @@ pub mod check;
 pub mod db;
 pub mod force_curve;
 pub mod library;
+pub mod live;
 pub mod map;
 pub mod play;
 pub mod predict;

@@ -94,6 +94,39 @@ pub struct PlayArgs {
     /// End of the generated trajectory in mm (default: last x of the profile).
     #[arg(long, value_name = "MM", requires = "velocity")]
     to_mm: Option<f64>,
+    #[command(flatten)]
+    drive: DriveArgs,
+    /// Output sample rate in Hz.
+    #[arg(long, value_name = "HZ", default_value_t = 48_000, value_parser = clap::value_parser!(u32).range(1000..=768_000))]
+    sample_rate: u32,
+    /// WAV sample format.
+    #[arg(long, value_enum, default_value_t = WavFormatArg::Pcm16)]
+    wav_format: WavFormatArg,
+    /// Output: OUT.wav (plus OUT.wav.json) or OUT.csv; `-` writes CSV to
+    /// stdout. A FIFO or device (e.g. /dev/null) is written in place and
+    /// takes the format of --format (a WAV there gets no sidecar: its scale
+    /// is inside it).
+    #[arg(short, long, value_name = "OUT", required_unless_present = "check")]
+    output: Option<PathBuf>,
+    /// Output format, when -o's extension does not say (`-`, a FIFO, a
+    /// device): wav or csv.
+    #[arg(long, value_enum)]
+    format: Option<FormatArg>,
+    /// Also write the signal as CSV (`t_s,x_mm,envelope_v,signal_v`).
+    #[arg(long, value_name = "FILE.csv")]
+    csv: Option<PathBuf>,
+    /// Also write a PNG of trajectory, envelope and signal.
+    #[arg(long, value_name = "FILE.png")]
+    png: Option<PathBuf>,
+    /// Do not print the summary to stderr.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+/// The drive settings `haptex play` and `haptex live` share: carrier,
+/// limits, full scale, channel 2's a_max, the extension outside the profile.
+#[derive(Debug, Args)]
+pub struct DriveArgs {
     /// Carrier waveform: sine (peak sqrt(2) U), square (peak U), none (the
     /// envelope U itself, unipolar).
     #[arg(long, value_enum, default_value_t = CarrierArg::Sine)]
@@ -101,9 +134,6 @@ pub struct PlayArgs {
     /// Carrier frequency in Hz (below half the sample rate).
     #[arg(long, value_name = "F", default_value_t = Carrier::DEFAULT.frequency_hz, value_parser = in_range(ranges::CARRIER_HZ))]
     carrier_hz: f64,
-    /// Output sample rate in Hz.
-    #[arg(long, value_name = "HZ", default_value_t = 48_000, value_parser = clap::value_parser!(u32).range(1000..=768_000))]
-    sample_rate: u32,
     /// Highest ultrasonic amplitude in um (peak) of channel 2: higher
     /// requests are clamped (and reported); also channel 2's full scale.
     /// For a profile with an `amplitude_um` column only. Default: the a_max
@@ -126,32 +156,67 @@ pub struct PlayArgs {
     /// sqrt(2) x --u-max, the peak of a sine at U_max). Written to the sidecar.
     #[arg(long, value_name = "V", value_parser = in_range(ranges::VOLTS_PER_FULL_SCALE))]
     volts_per_full_scale: Option<f64>,
-    /// WAV sample format.
-    #[arg(long, value_enum, default_value_t = WavFormatArg::Pcm16)]
-    wav_format: WavFormatArg,
     /// Voltage where the finger is outside the profile: hold the end
     /// values, zero, or repeat the profile as a tile.
     #[arg(long, value_enum, default_value_t = ExtendArg::Hold)]
     outside: ExtendArg,
-    /// Output: OUT.wav (plus OUT.wav.json) or OUT.csv; `-` writes CSV to
-    /// stdout. A FIFO or device (e.g. /dev/null) is written in place and
-    /// takes the format of --format (a WAV there gets no sidecar: its scale
-    /// is inside it).
-    #[arg(short, long, value_name = "OUT", required_unless_present = "check")]
-    output: Option<PathBuf>,
-    /// Output format, when -o's extension does not say (`-`, a FIFO, a
-    /// device): wav or csv.
-    #[arg(long, value_enum)]
-    format: Option<FormatArg>,
-    /// Also write the signal as CSV (`t_s,x_mm,envelope_v,signal_v`).
-    #[arg(long, value_name = "FILE.csv")]
-    csv: Option<PathBuf>,
-    /// Also write a PNG of trajectory, envelope and signal.
-    #[arg(long, value_name = "FILE.png")]
-    png: Option<PathBuf>,
-    /// Do not print the summary to stderr.
-    #[arg(short, long)]
-    quiet: bool,
+}
+
+impl DriveArgs {
+    /// The render settings at `sample_rate_hz`.
+    pub fn settings(&self, sample_rate_hz: u32) -> RenderSettings {
+        RenderSettings {
+            sample_rate_hz,
+            carrier: Carrier { shape: self.carrier.shape(), frequency_hz: self.carrier_hz },
+            limits: Limits {
+                u_max_v: self.u_max,
+                slew_v_per_s: self.slew_v_per_s,
+                amplifier_range_v: self.amp_range_v,
+            },
+            extend: match self.outside {
+                ExtendArg::Hold => Extend::Hold,
+                ExtendArg::Zero => Extend::Zero,
+                ExtendArg::Repeat => Extend::Repeat,
+            },
+        }
+    }
+
+    /// Volts at the amplifier output per full-scale sample: as given, or
+    /// sqrt(2) x U_max (the peak of a sine at U_max).
+    pub fn volts_per_full_scale(&self) -> f64 {
+        self.volts_per_full_scale.unwrap_or(std::f64::consts::SQRT_2 * self.u_max)
+    }
+
+    /// Channel 2's a_max for the profile read from `profile`: --a-max-um
+    /// (at most what the profile states), else the stated one; `None` for
+    /// a profile without an amplitude channel.
+    pub fn a_max_um(
+        &self,
+        profile: &Path,
+        amplitude: Option<&AmplitudeCurve>,
+        stated_a_max: Option<f64>,
+    ) -> anyhow::Result<Option<f64>> {
+        Ok(match (amplitude, self.a_max_um, stated_a_max) {
+            (None, Some(_), _) => {
+                bail!("--a-max-um is for a profile with an amplitude_um column; {} has none", profile.display())
+            }
+            (None, None, _) => None,
+            (Some(_), Some(given), Some(stated)) if given > stated => bail!(
+                "--a-max-um {} is above the a_max = {} um {} states it was designed for: give at most that",
+                Num(given),
+                Num(stated),
+                profile.display()
+            ),
+            (Some(_), Some(given), _) => Some(given),
+            (Some(_), None, Some(stated)) => Some(stated),
+            (Some(_), None, None) => bail!(
+                "{} has an amplitude_um column (a combined or ultrasonic display's profile) but no header comment \
+                 stating its a_max: give --a-max-um, the largest amplitude of the plate, to drive channel 2 (the \
+                 ultrasonic amplitude) with it as limit and full scale",
+                profile.display()
+            ),
+        })
+    }
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -209,34 +274,15 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
         let name = path_file.display().to_string();
         let file = std::fs::File::open(path_file).with_context(|| format!("cannot open {name}"))?;
         let path = haptex_core::planar::PlanarTrajectory::read_csv(std::io::BufReader::new(file), &name)?;
-        let settings = render_settings(&args);
+        let settings = args.drive.settings(args.sample_rate);
         let signal = haptex_core::signal::render_map(&map, &path, &settings)?;
         return write_signal(&args, format, &output, output_path, profile, json!({ "file": name }), &signal);
     }
     let (curve, amplitude, comments) = read_curve(profile)?;
     let stated_a_max = if amplitude.is_some() { stated_a_max(&comments) } else { None };
-    let a_max_um = match (&amplitude, args.a_max_um, stated_a_max) {
-        (None, Some(_), _) => {
-            bail!("--a-max-um is for a profile with an amplitude_um column; {} has none", profile.display())
-        }
-        (None, None, _) => None,
-        (Some(_), Some(given), Some(stated)) if given > stated => bail!(
-            "--a-max-um {} is above the a_max = {} um {} states it was designed for: give at most that",
-            Num(given),
-            Num(stated),
-            profile.display()
-        ),
-        (Some(_), Some(given), _) => Some(given),
-        (Some(_), None, Some(stated)) => Some(stated),
-        (Some(_), None, None) => bail!(
-            "{} has an amplitude_um column (a combined or ultrasonic display's profile) but no header comment \
-             stating its a_max: give --a-max-um, the largest amplitude of the plate, to drive channel 2 (the \
-             ultrasonic amplitude) with it as limit and full scale",
-            profile.display()
-        ),
-    };
+    let a_max_um = args.drive.a_max_um(profile, amplitude.as_ref(), stated_a_max)?;
     let (trajectory, trajectory_source) = trajectory(&args, &curve)?;
-    let settings = render_settings(&args);
+    let settings = args.drive.settings(args.sample_rate);
     check_design_carrier(&comments, &settings.carrier, profile)?;
     let signal = match (&amplitude, a_max_um) {
         (Some(amplitude), Some(a_max)) => render_two_channel(&curve, amplitude, a_max, &trajectory, &settings)?,
@@ -244,20 +290,6 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
     };
 
     write_signal(&args, format, &output, output_path, profile, trajectory_source, &signal)
-}
-
-/// The render settings of the flags: rate, carrier, limits, extension.
-fn render_settings(args: &PlayArgs) -> RenderSettings {
-    RenderSettings {
-        sample_rate_hz: args.sample_rate,
-        carrier: Carrier { shape: args.carrier.shape(), frequency_hz: args.carrier_hz },
-        limits: Limits { u_max_v: args.u_max, slew_v_per_s: args.slew_v_per_s, amplifier_range_v: args.amp_range_v },
-        extend: match args.outside {
-            ExtendArg::Hold => Extend::Hold,
-            ExtendArg::Zero => Extend::Zero,
-            ExtendArg::Repeat => Extend::Repeat,
-        },
-    }
 }
 
 /// Writes the rendered signal (WAV with its scale and sidecar, or CSV;
@@ -281,7 +313,7 @@ fn write_signal(
                     WavFormatArg::Pcm24 => WavFormat::Pcm24,
                     WavFormatArg::Float32 => WavFormat::Float32,
                 },
-                volts_per_full_scale: args.volts_per_full_scale.unwrap_or(std::f64::consts::SQRT_2 * args.u_max),
+                volts_per_full_scale: args.drive.volts_per_full_scale(),
             };
             let source = json!({
                 "profile": profile.display().to_string(),
@@ -379,7 +411,7 @@ fn check(path: &Path, quiet: bool) -> anyhow::Result<()> {
 /// `amplitude_um` column, from a file, or stdin for `-`; with the `#`
 /// comment lines before its header row (where `haptex voltage` states an
 /// a_max and a design carrier).
-fn read_curve(path: &Path) -> anyhow::Result<(VoltageCurve, Option<AmplitudeCurve>, Vec<String>)> {
+pub fn read_curve(path: &Path) -> anyhow::Result<(VoltageCurve, Option<AmplitudeCurve>, Vec<String>)> {
     if path.as_os_str() == "-" {
         let mut bytes = Vec::new();
         std::io::Read::read_to_end(&mut std::io::stdin().lock(), &mut bytes)
@@ -406,7 +438,7 @@ fn header_comments(reader: impl std::io::BufRead) -> Vec<String> {
 
 /// The a_max a display profile's header comment states: the smallest
 /// `at most a_max = A um` among its comment lines.
-fn stated_a_max(comments: &[String]) -> Option<f64> {
+pub(crate) fn stated_a_max(comments: &[String]) -> Option<f64> {
     comments
         .iter()
         .flat_map(|l| l.split("at most a_max = ").skip(1).map(str::to_owned).collect::<Vec<_>>())
@@ -433,7 +465,7 @@ fn stated_carrier(comments: &[String]) -> Option<Result<(String, f64), String>> 
 
 /// Refuses to play a frequency-dependent design on another carrier than
 /// the one it was designed for: its voltages render the target only there.
-fn check_design_carrier(comments: &[String], carrier: &Carrier, profile: &Path) -> anyhow::Result<()> {
+pub(crate) fn check_design_carrier(comments: &[String], carrier: &Carrier, profile: &Path) -> anyhow::Result<()> {
     let Some(stated) = stated_carrier(comments) else {
         return Ok(());
     };

@@ -4,6 +4,7 @@
 
 mod atomic;
 mod fileset;
+pub mod npy;
 mod table;
 
 pub use atomic::{OutputTarget, WriteError, fault_point, remove_stale_temporaries, temporary_prefix_of, write_atomic};

@@ -510,72 +510,15 @@ fn missing_column(table: &Table, name: &str) -> RecordingError {
 /// Reads a 2-D float NPY array with `names.len()` columns (C or Fortran order).
 fn read_npy_columns(bytes: &[u8], file: &str, names: &[&str]) -> Result<Vec<Vec<f64>>, RecordingError> {
     let npy_error = |message: String| RecordingError::invalid(file, Place::File, None, message);
-    check_npy_header(bytes).map_err(|m| npy_error(format!("not a valid NPY file: {m}")))?;
-    let npy = npyz::NpyFile::new(bytes).map_err(|e| npy_error(format!("not a valid NPY file: {e}")))?;
-    let shape = npy.shape().to_vec();
     let k = names.len();
-    if shape.len() != 2 || shape[1] != k as u64 {
-        return Err(npy_error(format!(
-            "array shape {shape:?}: expected (samples, {k}) with columns {}",
-            names.join(", ")
-        )));
-    }
-    // The shape is the file's claim: check it against the bytes present
-    // before reading, so that no allocation is sized by it alone.
-    let fits = shape[0].checked_mul(k as u64).is_some_and(|n| n.saturating_mul(4) <= bytes.len() as u64);
-    if !fits {
-        return Err(npy_error(format!(
-            "array shape {shape:?} claims more values than the file's {} bytes hold",
-            bytes.len()
-        )));
-    }
-    let rows = shape[0] as usize;
-    let fortran = npy.order() == npyz::Order::Fortran;
-    let dtype = npy.dtype().descr();
-    let flat: Vec<f64> = match npy.try_data::<f64>() {
-        Ok(reader) => reader.collect::<std::io::Result<_>>(),
-        Err(npy) => match npy.try_data::<f32>() {
-            Ok(reader) => reader.map(|v| v.map(f64::from)).collect::<std::io::Result<_>>(),
-            Err(_) => return Err(npy_error(format!("dtype {dtype}: expected float32 or float64"))),
-        },
-    }
-    .map_err(|e| npy_error(format!("cannot read the array data: {e}")))?;
-    if flat.len() != rows * k {
-        return Err(npy_error(format!("{} values for shape {shape:?}", flat.len())));
-    }
-    Ok((0..k)
-        .map(|c| {
-            if fortran { flat[c * rows..(c + 1) * rows].to_vec() } else { (0..rows).map(|r| flat[r * k + c]).collect() }
-        })
-        .collect())
-}
-
-/// Checks that an NPY header is the plain dictionary numpy writes
-/// (`{'descr': '<f4', 'fortran_order': False, 'shape': (N, K), }`) before
-/// the NPY library parses it: its Python-literal parser takes exponential
-/// time on nested brackets (`'shape': [[[[...`, found by the fuzz
-/// campaign), which no numpy header has.
-pub(crate) fn check_npy_header(bytes: &[u8]) -> Result<(), String> {
-    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
-        return Err("no NPY magic".into());
-    }
-    let (length, start) = match bytes[6] {
-        1 => (usize::from(u16::from_le_bytes([bytes[8], bytes[9]])), 10),
-        2 | 3 if bytes.len() >= 12 => (u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize, 12),
-        version => return Err(format!("NPY version {version} is not supported")),
-    };
-    const MAX_HEADER_BYTES: usize = 4096;
-    if length > MAX_HEADER_BYTES {
-        return Err(format!("a header of {length} bytes (numpy writes under {MAX_HEADER_BYTES})"));
-    }
-    let header = bytes.get(start..start + length).ok_or("the header is cut short")?;
-    let count = |c: u8| header.iter().filter(|&&b| b == c).count();
-    if count(b'{') != 1 || count(b'}') != 1 || count(b'(') > 1 || count(b')') > 1 || count(b'[') > 0 {
-        return Err("the header is not the plain dictionary numpy writes ({'descr': ..., 'fortran_order': ..., \
-                    'shape': (..)})"
-            .into());
-    }
-    Ok(())
+    let (rows, cols, flat) = crate::io::npy::read_2d(bytes, |shape| {
+        (shape.len() == 2 && shape[1] == k as u64)
+            .then_some(())
+            .ok_or_else(|| format!("array shape {shape:?}: expected (samples, {k}) with columns {}", names.join(", ")))
+    })
+    .map_err(npy_error)?;
+    debug_assert_eq!(cols, k);
+    Ok((0..k).map(|c| (0..rows).map(|r| flat[r * k + c]).collect()).collect())
 }
 
 /// Every value finite, at least two rows, time strictly increasing.

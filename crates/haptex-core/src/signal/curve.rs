@@ -194,6 +194,22 @@ impl AmplitudeCurve {
         Ok(Self(VoltageCurve { x_mm, voltage_v: amplitude_um }))
     }
 
+    /// The curve's positions (mm) and amplitudes (um) as a [`VoltageCurve`]
+    /// for the crate's interpolation code (never played as a voltage).
+    pub(crate) fn curve(&self) -> &VoltageCurve {
+        &self.0
+    }
+
+    /// Positions in mm.
+    pub fn x_mm(&self) -> &[f64] {
+        self.0.x_mm()
+    }
+
+    /// Amplitudes in um (peak).
+    pub fn amplitude_um(&self) -> &[f64] {
+        self.0.voltage_v()
+    }
+
     /// Largest amplitude of the curve in um.
     pub fn max_um(&self) -> f64 {
         self.0.max_v()

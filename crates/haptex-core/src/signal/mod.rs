@@ -26,6 +26,7 @@ use std::io::Write;
 
 use serde::{Deserialize, Serialize};
 
+pub(crate) use carrier::sin_turns;
 pub use carrier::{Carrier, CarrierShape};
 pub use curve::{AmplitudeCurve, Extend, VoltageCurve};
 pub use safety::{ClipReport, EnvelopeLimiter, Limits};
