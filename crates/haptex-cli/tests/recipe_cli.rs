@@ -264,3 +264,20 @@ fn recipe_run_refuses_a_bad_recipe_naming_the_field() {
         assert!(!output.status.success() && stderr.contains(field), "{field}: {stderr}");
     }
 }
+
+/// A file far larger than any recipe is refused by its size, before it is
+/// parsed, and nothing is written.
+#[test]
+fn an_oversized_recipe_is_refused_unread() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("big.json");
+    std::fs::write(&path, vec![b' '; (16 << 20) + 1]).unwrap();
+    let out_dir = dir.path().join("out");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_haptex"))
+        .args(["recipe", "run", path.to_str().unwrap(), "-o", out_dir.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && e.contains("big.json") && e.contains("larger than 16 MiB"), "{e}");
+    assert!(!out_dir.exists());
+}

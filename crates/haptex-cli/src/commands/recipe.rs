@@ -48,7 +48,15 @@ struct RunArgs {
 
 pub fn run(args: RecipeArgs) -> anyhow::Result<()> {
     let RecipeCommand::Run(args) = args.command;
-    let text = std::fs::read_to_string(&args.file).with_context(|| format!("reading {}", args.file.display()))?;
+    // A recipe is a few kB of JSON; 16 MiB bounds what a wrong file costs.
+    const MAX_RECIPE_BYTES: u64 = 16 << 20;
+    let file = std::fs::File::open(&args.file).with_context(|| format!("reading {}", args.file.display()))?;
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut std::io::Read::take(file, MAX_RECIPE_BYTES + 1), &mut text)
+        .with_context(|| format!("reading {}", args.file.display()))?;
+    if text.len() as u64 > MAX_RECIPE_BYTES {
+        anyhow::bail!("{}: larger than {} MiB, not a recipe", args.file.display(), MAX_RECIPE_BYTES >> 20);
+    }
     let recipe = Recipe::parse(&text).with_context(|| format!("{}", args.file.display()))?;
     let library = args.library.unwrap_or_else(super::library::default_db);
     let db = args.db.unwrap_or_else(super::db::default_db);
@@ -58,10 +66,16 @@ pub fn run(args: RecipeArgs) -> anyhow::Result<()> {
     let files = runtime
         .block_on(replay(state, &recipe))
         .with_context(|| format!("{}: cannot replay it", args.file.display()))?;
+    // Every answer is in hand before anything is written; two downloads of
+    // one name would overwrite each other.
+    let mut names = std::collections::HashSet::new();
+    if let Some((name, _)) = files.iter().find(|(name, _)| !names.insert(name.as_str())) {
+        anyhow::bail!("{}: two downloads are both named {name}", args.file.display());
+    }
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     for (name, bytes) in files {
         let path = args.out.join(&name);
-        std::fs::write(&path, &bytes).with_context(|| format!("writing {}", path.display()))?;
+        haptex_core::io::write_atomic(&path, |w| w.write_all(&bytes))?;
         eprintln!("{}: {} bytes", path.display(), bytes.len());
     }
     Ok(())
