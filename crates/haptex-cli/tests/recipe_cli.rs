@@ -8,12 +8,14 @@
 //! voltage CSV and JSON, stroke WAV and its sidecar). A recipe made with
 //! other data (its database SHA-256) is refused naming that field.
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{BufReader, Read, Write};
 use std::net::TcpStream;
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
 use serde_json::{Value, json};
+
+mod common;
 
 /// `haptex serve` on a free loopback port, stopped when dropped.
 struct Server {
@@ -31,15 +33,7 @@ impl Server {
             .spawn()
             .expect("run haptex serve");
         let mut stderr = BufReader::new(child.stderr.take().unwrap());
-        let mut seen = String::new();
-        let port = loop {
-            let mut line = String::new();
-            assert!(stderr.read_line(&mut line).unwrap() > 0, "haptex serve ended before listening: {seen}");
-            seen.push_str(&line);
-            if let Some(rest) = line.strip_prefix("open http://127.0.0.1:") {
-                break rest.split('/').next().unwrap().parse::<u16>().unwrap();
-            }
-        };
+        let (port, _) = common::listening_port(&mut stderr);
         Self { child, port }
     }
 

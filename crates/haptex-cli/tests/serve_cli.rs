@@ -4,10 +4,12 @@
 //! name is served only with --allow-host; a missing library is refused
 //! before listening.
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{BufReader, Read, Write};
 use std::net::TcpStream;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
+
+mod common;
 
 /// GET `path` over a plain socket; returns the whole answer.
 fn http_get(port: u16, path: &str) -> String {
@@ -42,15 +44,7 @@ fn serve_answers_and_stops_gracefully_on_ctrl_c_and_sigterm() {
             .spawn()
             .expect("run haptex serve");
         let mut stderr = BufReader::new(child.stderr.take().unwrap());
-        let mut seen = String::new();
-        let port = loop {
-            let mut line = String::new();
-            assert!(stderr.read_line(&mut line).unwrap() > 0, "haptex serve ended before listening: {seen}");
-            seen.push_str(&line);
-            if let Some(rest) = line.strip_prefix("open http://127.0.0.1:") {
-                break rest.split('/').next().unwrap().parse::<u16>().unwrap();
-            }
-        };
+        let (port, seen) = common::listening_port(&mut stderr);
         assert!(seen.contains("data/library/library.sqlite"), "{seen}");
 
         let health = http_get(port, "/api/health");

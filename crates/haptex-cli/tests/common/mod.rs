@@ -21,3 +21,17 @@ pub fn write(dir: &Path, name: &str, text: &str) -> String {
 pub fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
+
+/// Reads a `haptex serve` child's standard error until it says where it
+/// listens: the port, and everything it printed up to then.
+pub fn listening_port(stderr: &mut impl std::io::BufRead) -> (u16, String) {
+    let mut seen = String::new();
+    loop {
+        let mut line = String::new();
+        assert!(stderr.read_line(&mut line).unwrap() > 0, "haptex serve ended before listening: {seen}");
+        seen.push_str(&line);
+        if let Some(rest) = line.strip_prefix("open http://127.0.0.1:") {
+            return (rest.split('/').next().unwrap().parse::<u16>().unwrap(), seen);
+        }
+    }
+}
