@@ -11,12 +11,9 @@ use proptest::prelude::*;
 
 const FS: u32 = 48_000;
 
-fn design() -> (VoltageCurve, AmplitudeCurve) {
-    let x: Vec<f64> = (0..=1000).map(|i| i as f64 * 0.01).collect();
-    let u = x.iter().map(|x| 60.0 + 50.0 * (std::f64::consts::TAU * x / 2.5).sin()).collect();
-    let a = x.iter().map(|x| 1.2 + 1.2 * (std::f64::consts::TAU * x / 3.0).cos()).collect();
-    (VoltageCurve::new(x.clone(), u).unwrap(), AmplitudeCurve::new(x, a).unwrap())
-}
+#[path = "support/two_channel_design.rs"]
+mod two_channel_design;
+use two_channel_design::design;
 
 fn at(t_s: f64, x_mm: f64) -> TouchEvent {
     TouchEvent { t_s, touch: Touch::At(x_mm), received: None }

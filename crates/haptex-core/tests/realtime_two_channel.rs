@@ -11,15 +11,9 @@ use proptest::prelude::*;
 
 const FS: u32 = 48_000;
 
-/// A combined display's design over 0..10 mm every 0.01 mm: U up to 110 V
-/// and a up to 2.4 um, above U_max = 100 V and the 2 um a_max used below
-/// over part of the span (both clamps are exercised).
-fn design() -> (VoltageCurve, AmplitudeCurve) {
-    let x: Vec<f64> = (0..=1000).map(|i| i as f64 * 0.01).collect();
-    let u = x.iter().map(|x| 60.0 + 50.0 * (std::f64::consts::TAU * x / 2.5).sin()).collect();
-    let a = x.iter().map(|x| 1.2 + 1.2 * (std::f64::consts::TAU * x / 3.0).cos()).collect();
-    (VoltageCurve::new(x.clone(), u).unwrap(), AmplitudeCurve::new(x, a).unwrap())
-}
+#[path = "support/two_channel_design.rs"]
+mod two_channel_design;
+use two_channel_design::design;
 
 /// The finger: 0.5 mm to 9.5 mm at a constant 36 mm/s (0.25 s).
 fn finger(t_s: f64) -> f64 {
