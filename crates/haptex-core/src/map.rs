@@ -91,6 +91,11 @@ impl MapGrid {
         self.y0_mm + self.dy_mm * j as f64
     }
 
+    /// Whether (x, y) lies on the grid (edges included).
+    pub fn contains(&self, x_mm: f64, y_mm: f64) -> bool {
+        (self.x0_mm..=self.x(self.nx - 1)).contains(&x_mm) && (self.y0_mm..=self.y(self.ny - 1)).contains(&y_mm)
+    }
+
     /// Bilinear interpolation of `values` (one per cell) at (x, y), the
     /// edge values held beyond the grid. On a grid line the other axis'
     /// weight is exactly 0, so a row is sampled as the 1-D linear

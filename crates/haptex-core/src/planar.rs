@@ -6,6 +6,7 @@ use std::io::Write;
 use crate::io::{Table, write_csv_row};
 use crate::map::MapGrid;
 use crate::num::Num;
+use crate::profile::WalkingCursor;
 use crate::trajectory::TrajectoryError;
 
 /// A finger path in the plane: strictly increasing times (s) and the
@@ -56,6 +57,18 @@ impl PlanarTrajectory {
 
     pub fn is_empty(&self) -> bool {
         self.t_s.is_empty()
+    }
+
+    /// Positions at increasing times `t0_s + i * dt_s`, i = 0..x_out.len(),
+    /// into `x_out` and `y_out` (linear between the samples, held beyond
+    /// the ends; one pass, as [`crate::trajectory::Trajectory::positions_into`]).
+    pub fn positions_into(&self, t0_s: f64, dt_s: f64, x_out: &mut [f64], y_out: &mut [f64]) {
+        let (mut cx, mut cy) = (WalkingCursor::default(), WalkingCursor::default());
+        for (i, (x, y)) in x_out.iter_mut().zip(y_out.iter_mut()).enumerate() {
+            let t = t0_s + i as f64 * dt_s;
+            *x = cx.interpolate(&self.t_s, &self.x_mm, t);
+            *y = cy.interpolate(&self.t_s, &self.y_mm, t);
+        }
     }
 
     /// The values of a map (one per cell of `grid`) at each sample of the

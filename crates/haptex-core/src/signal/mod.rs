@@ -357,27 +357,19 @@ pub fn render_map(
 ) -> Result<DriveSignal, SignalError> {
     settings.check()?;
     let fs = settings.sample_rate_hz as f64;
-    let (t, xs, ys) = (path.t_s(), path.x_mm(), path.y_mm());
-    let (start, end) = (t[0], t[t.len() - 1]);
-    let n = sample_count(end - start, settings)?;
+    let t = path.t_s();
+    let start = t[0];
+    let n = sample_count(t[t.len() - 1] - start, settings)?;
     let mut x_mm = crate::buffer::zeroed_f64(n);
+    let mut y_mm = crate::buffer::zeroed_f64(n);
+    path.positions_into(start, 1.0 / fs, &mut x_mm, &mut y_mm);
     let mut envelope_v = crate::buffer::zeroed_f64(n);
-    let g = &map.grid;
-    let (x_hi, y_hi) = (g.x(g.nx - 1), g.y(g.ny - 1));
-    let mut outside = 0usize;
-    let mut k = 0usize;
-    for i in 0..n {
-        let ti = start + i as f64 / fs;
-        while k + 2 < t.len() && t[k + 1] <= ti {
-            k += 1;
-        }
-        let f = ((ti - t[k]) / (t[k + 1] - t[k])).clamp(0.0, 1.0);
-        let x = xs[k] + f * (xs[k + 1] - xs[k]);
-        let y = ys[k] + f * (ys[k + 1] - ys[k]);
-        outside += usize::from(!(x >= g.x0_mm && x <= x_hi && y >= g.y0_mm && y <= y_hi));
-        x_mm[i] = x;
-        envelope_v[i] = map.sample(x, y);
+    for ((u, &x), &y) in envelope_v.iter_mut().zip(&x_mm).zip(&y_mm) {
+        *u = map.sample(x, y);
     }
+    let g = &map.grid;
+    let outside = x_mm.iter().zip(&y_mm).filter(|&(&x, &y)| !g.contains(x, y)).count();
+    let (x_hi, y_hi) = (g.x(g.nx - 1), g.y(g.ny - 1));
     let outside_warning = (outside > 0).then(|| {
         format!(
             "the finger is outside the map (x {} .. {} mm, y {} .. {} mm) for {:.2}% of the time: the edge \
