@@ -476,11 +476,7 @@ pub(crate) fn check_design_carrier(comments: &[String], carrier: &Carrier, profi
             profile.display()
         )
     })?;
-    let played = match carrier.shape {
-        haptex_core::signal::CarrierShape::Sine => "sine",
-        haptex_core::signal::CarrierShape::Square => "square",
-        haptex_core::signal::CarrierShape::None => "none",
-    };
+    let played = carrier.shape.name();
     // A direct drive has no frequency; sine and square must match it to
     // the digits written (the comment prints the frequency in full).
     let same = played == shape && (shape == "none" || f_hz == carrier.frequency_hz);

@@ -265,11 +265,7 @@ fn force_comment(model: &ForceModel, device: &Device) -> Option<String> {
     let ForceModel::Circuit { circuit, carrier } = model else {
         return None;
     };
-    let shape = match carrier.shape {
-        haptex_core::signal::CarrierShape::Sine => "sine",
-        haptex_core::signal::CarrierShape::Square => "square",
-        haptex_core::signal::CarrierShape::None => "none",
-    };
+    let shape = carrier.shape.name();
     Some(format!(
         "# force model: circuit ({}); Fe = G Fe_eq3 with G = {:.6} for this carrier; designed for the carrier: {shape} {} \
          Hz (play it with haptex play --carrier {shape} --carrier-hz {})",

@@ -29,6 +29,17 @@ pub enum CarrierShape {
     None,
 }
 
+impl CarrierShape {
+    /// The shape's name as the `--carrier` flag and the JSON spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            CarrierShape::Sine => "sine",
+            CarrierShape::Square => "square",
+            CarrierShape::None => "none",
+        }
+    }
+}
+
 /// A carrier: shape and frequency.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Carrier {
