@@ -302,6 +302,49 @@ impl<'a> Allocator<'a> {
     }
 }
 
+/// A drive channel of the combined display.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Channel {
+    /// The electrovibration voltage, V RMS.
+    Voltage,
+    /// The ultrasonic amplitude, um peak.
+    Amplitude,
+}
+
+/// A designed value outside its channel's stated limit (never expected:
+/// the guard that no such value leaves a design).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LimitViolation {
+    /// The target's index.
+    pub index: usize,
+    pub channel: Channel,
+    pub value: f64,
+    pub limit: f64,
+}
+
+impl Allocator<'_> {
+    /// Both channels for every target in `mu`, each value checked to be
+    /// finite and within 0 ..= its channel's stated limit (`u_max_v`,
+    /// `a_max_um`; 0 for a channel not in use): the first value outside is
+    /// the error.
+    pub fn allocate_all(
+        &self,
+        mu: &[f64],
+        u_max_v: f64,
+        a_max_um: f64,
+    ) -> Result<(Vec<f64>, Vec<f64>), LimitViolation> {
+        let (voltage_v, amplitude_um): (Vec<f64>, Vec<f64>) = mu.iter().map(|&m| self.allocate(m)).unzip();
+        for (channel, values, limit) in
+            [(Channel::Voltage, &voltage_v, u_max_v), (Channel::Amplitude, &amplitude_um, a_max_um)]
+        {
+            if let Some(index) = values.iter().position(|v| !(0.0..=limit).contains(v)) {
+                return Err(LimitViolation { index, channel, value: values[index], limit });
+            }
+        }
+        Ok((voltage_v, amplitude_um))
+    }
+}
+
 /// The bias level rho_bias of a profile whose lowest friction is `mu_min`:
 /// the baseline lowered to it, mu_min/mu_HD, within [rho_min, 1] (1 when
 /// the whole profile is above mu_HD: no vibration needed).
@@ -583,27 +626,19 @@ pub fn map_display(
         rho_bias,
     );
     let n = mu.len();
-    let (mut voltage_v, mut amplitude_um) = (Vec::with_capacity(n), Vec::with_capacity(n));
-    for &m in mu {
-        let (u, a) = allocator.allocate(m);
-        voltage_v.push(u);
-        amplitude_um.push(a);
-    }
-    // The guard: every value finite and within its channel's stated limit.
     let a_max = ultrasonic.map_or(0.0, UltrasonicDevice::a_max_um);
     let u_max = if electro.is_some() { device.u_max_v } else { 0.0 };
-    for (quantity, values, limit) in [("U (V)", &voltage_v, u_max), ("a (um)", &amplitude_um, a_max)] {
-        if let Some(index) = values.iter().position(|v| !(0.0..=limit).contains(v)) {
-            return Err(DisplayError::Limit {
-                index,
-                x_mm: x[index],
-                mu: mu[index],
-                quantity,
-                value: values[index],
-                limit,
-            });
-        }
-    }
+    let (voltage_v, amplitude_um) = allocator.allocate_all(mu, u_max, a_max).map_err(|v| DisplayError::Limit {
+        index: v.index,
+        x_mm: x[v.index],
+        mu: mu[v.index],
+        quantity: match v.channel {
+            Channel::Voltage => "U (V)",
+            Channel::Amplitude => "a (um)",
+        },
+        value: v.value,
+        limit: v.limit,
+    })?;
 
     let band_mu = allocator.band();
     let electrovibration = electro.map(|(fn_used, ratio)| {

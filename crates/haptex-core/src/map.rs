@@ -1002,29 +1002,28 @@ impl FrictionMap {
         );
         let band_mu = allocator.band();
         let n = self.mu.len();
-        let (mut voltage_v, mut amplitude_um) = (vec![0.0; n], vec![0.0; n]);
-        let (mut below, mut above) = (0usize, 0usize);
-        for (k, &m) in self.mu.iter().enumerate() {
-            let (u, a) = allocator.allocate(m);
-            voltage_v[k] = u;
-            amplitude_um[k] = a;
-            below += usize::from(m < band_mu[0]);
-            above += usize::from(m > band_mu[1]);
-        }
+        let below = self.mu.iter().filter(|&&m| m < band_mu[0]).count();
+        let above = self.mu.iter().filter(|&&m| m > band_mu[1]).count();
         let (u_max, a_max) = (if electro { device.u_max_v } else { 0.0 }, ultrasonic.a_max_um());
-        for (name, values, limit) in [("voltage_v", &voltage_v, u_max), ("amplitude_um", &amplitude_um, a_max)] {
-            if let Some(k) = values.iter().position(|v| !(0.0..=limit).contains(v)) {
-                return Err(MapError::new(
-                    "display design",
-                    Some(format!(
-                        "cell x = {} mm, y = {} mm",
-                        Num(self.grid.x(k % self.grid.nx)),
-                        Num(self.grid.y(k / self.grid.nx))
-                    )),
-                    format!("{name} = {} outside 0 .. {}", Num(values[k]), Num(limit)),
-                ));
-            }
-        }
+        let (voltage_v, amplitude_um) = allocator.allocate_all(&self.mu, u_max, a_max).map_err(|v| {
+            MapError::new(
+                "display design",
+                Some(format!(
+                    "cell x = {} mm, y = {} mm",
+                    Num(self.grid.x(v.index % self.grid.nx)),
+                    Num(self.grid.y(v.index / self.grid.nx))
+                )),
+                format!(
+                    "{} = {} outside 0 .. {}",
+                    match v.channel {
+                        crate::combined::Channel::Voltage => "voltage_v",
+                        crate::combined::Channel::Amplitude => "amplitude_um",
+                    },
+                    Num(v.value),
+                    Num(v.limit)
+                ),
+            )
+        })?;
         Ok(DisplayMap {
             grid: self.grid,
             voltage_v: electro.then_some(voltage_v),
