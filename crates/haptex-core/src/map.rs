@@ -590,14 +590,7 @@ pub fn read_npy_pair(path: &std::path::Path, quantity: &str) -> Result<(NpySidec
     let sidecar_path = npy_sidecar_path(path);
     let sidecar_name = sidecar_path.display().to_string();
     let read = |p: &std::path::Path, n: &str, limit: u64| -> Result<Vec<u8>, MapError> {
-        let file = std::fs::File::open(p).map_err(|e| MapError::new(n, None, format!("cannot open: {e}")))?;
-        let mut bytes = Vec::new();
-        std::io::Read::read_to_end(&mut std::io::Read::take(file, limit + 1), &mut bytes)
-            .map_err(|e| MapError::new(n, None, format!("cannot read: {e}")))?;
-        if bytes.len() as u64 > limit {
-            return Err(MapError::new(n, None, format!("larger than {limit} bytes")));
-        }
-        Ok(bytes)
+        crate::io::read_file_bounded(p, limit).map_err(|e| MapError::new(n, None, e.to_string()))
     };
     let sidecar_bytes = read(&sidecar_path, &sidecar_name, 1 << 16).map_err(|e| {
         MapError::new(&sidecar_name, None, format!("{} (an NPY map needs its JSON sidecar for the grid)", e.message))

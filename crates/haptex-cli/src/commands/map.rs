@@ -828,14 +828,7 @@ fn read_map_csv(path: &Path, quantity: &ranges::Range) -> anyhow::Result<(MapGri
 
 /// Reads a file of at most `limit` bytes.
 fn read_bounded(path: &Path, limit: u64) -> anyhow::Result<Vec<u8>> {
-    let file = std::fs::File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
-    let mut bytes = Vec::new();
-    std::io::Read::read_to_end(&mut std::io::Read::take(file, limit + 1), &mut bytes)
-        .with_context(|| format!("cannot read {}", path.display()))?;
-    if bytes.len() as u64 > limit {
-        bail!("{}: larger than {} MiB", path.display(), limit >> 20);
-    }
-    Ok(bytes)
+    haptex_core::io::read_file_bounded(path, limit).with_context(|| format!("{}", path.display()))
 }
 
 fn report_map(map: &FrictionMap) {

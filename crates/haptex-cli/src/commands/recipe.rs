@@ -50,13 +50,14 @@ pub fn run(args: RecipeArgs) -> anyhow::Result<()> {
     let RecipeCommand::Run(args) = args.command;
     // A recipe is a few kB of JSON; 16 MiB bounds what a wrong file costs.
     const MAX_RECIPE_BYTES: u64 = 16 << 20;
-    let file = std::fs::File::open(&args.file).with_context(|| format!("reading {}", args.file.display()))?;
-    let mut text = String::new();
-    std::io::Read::read_to_string(&mut std::io::Read::take(file, MAX_RECIPE_BYTES + 1), &mut text)
-        .with_context(|| format!("reading {}", args.file.display()))?;
-    if text.len() as u64 > MAX_RECIPE_BYTES {
-        anyhow::bail!("{}: larger than {} MiB, not a recipe", args.file.display(), MAX_RECIPE_BYTES >> 20);
-    }
+    let bytes = haptex_core::io::read_file_bounded(&args.file, MAX_RECIPE_BYTES).map_err(|e| match e {
+        haptex_core::io::BoundedReadError::TooLarge { .. } => {
+            anyhow::anyhow!("{}: larger than {} MiB, not a recipe", args.file.display(), MAX_RECIPE_BYTES >> 20)
+        }
+        e => anyhow::Error::new(e).context(format!("reading {}", args.file.display())),
+    })?;
+    let text =
+        String::from_utf8(bytes).with_context(|| format!("{}: not UTF-8 text, not a recipe", args.file.display()))?;
     let recipe = Recipe::parse(&text).with_context(|| format!("{}", args.file.display()))?;
     let library = args.library.unwrap_or_else(super::library::default_db);
     let db = args.db.unwrap_or_else(super::db::default_db);

@@ -3,11 +3,13 @@
 //! streams) and multi-file outputs.
 
 mod atomic;
+mod bounded;
 mod fileset;
 pub mod npy;
 mod table;
 
 pub use atomic::{OutputTarget, WriteError, fault_point, remove_stale_temporaries, temporary_prefix_of, write_atomic};
+pub use bounded::{BoundedReadError, read_file_bounded};
 pub use fileset::{FileSet, MemberError, MemberHashes, sha256_file, sha256_hex, verify_members};
 pub use table::{MAX_LINE_BYTES, Table, TableError, TableErrorKind};
 

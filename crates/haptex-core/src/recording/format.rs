@@ -345,21 +345,8 @@ fn stream_path(file: &str, dir: &Path, field: &str, relative: &str) -> Result<Pa
 /// Reads a file of at most `limit` bytes, refusing anything but a regular
 /// file, and a larger file, before reading it.
 fn read_bytes(path: &Path, limit: u64) -> Result<Vec<u8>, RecordingError> {
-    use std::io::Read;
-    let io = |message: String| RecordingError::Io { file: path.display().to_string(), message };
-    let metadata = std::fs::metadata(path).map_err(|e| io(e.to_string()))?;
-    if !metadata.is_file() {
-        return Err(io("not a regular file (a directory, device or FIFO): not read".into()));
-    }
-    if metadata.len() > limit {
-        return Err(io(format!("{} bytes: larger than the limit of {limit} bytes, not read", metadata.len())));
-    }
-    let mut bytes = Vec::with_capacity(metadata.len() as usize);
-    std::fs::File::open(path).and_then(|f| f.take(limit + 1).read_to_end(&mut bytes)).map_err(|e| io(e.to_string()))?;
-    if bytes.len() as u64 > limit {
-        return Err(io(format!("grew beyond the limit of {limit} bytes while being read")));
-    }
-    Ok(bytes)
+    crate::io::read_file_bounded(path, limit)
+        .map_err(|e| RecordingError::Io { file: path.display().to_string(), message: e.to_string() })
 }
 
 fn hex(bytes: &[u8]) -> String {
