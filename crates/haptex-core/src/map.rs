@@ -369,11 +369,6 @@ impl VoltageMap {
         )?;
         write_grid_rows(w, g, "voltage_v", &self.voltage_v)
     }
-
-    /// The voltages as a (ny, nx) float64 NPY array.
-    pub fn write_npy(&self, w: &mut dyn Write) -> std::io::Result<()> {
-        write_npy_f64(w, self.grid.ny, self.grid.nx, &self.voltage_v)
-    }
 }
 
 /// Reads a map in the long CSV format `x_mm,y_mm,QUANTITY` (other columns
