@@ -412,28 +412,13 @@ fn check(path: &Path, quiet: bool) -> anyhow::Result<()> {
 /// comment lines before its header row (where `haptex voltage` states an
 /// a_max and a design carrier).
 pub fn read_curve(path: &Path) -> anyhow::Result<(VoltageCurve, Option<AmplitudeCurve>, Vec<String>)> {
-    if path.as_os_str() == "-" {
-        let mut bytes = Vec::new();
-        std::io::Read::read_to_end(&mut std::io::stdin().lock(), &mut bytes)
-            .context("reading the profile from stdin")?;
-        let (curve, amplitude) = VoltageCurve::from_display_table(&Table::read(bytes.as_slice(), "<stdin>")?)?;
-        return Ok((curve, amplitude, header_comments(bytes.as_slice())));
-    }
-    let (curve, amplitude) = VoltageCurve::from_display_table(&Table::read_file(path)?)?;
-    let comments = std::fs::File::open(path)
-        .map(|f| header_comments(std::io::BufReader::new(f)))
-        .with_context(|| format!("reading {}", path.display()))?;
-    Ok((curve, amplitude, comments))
-}
-
-/// The `#` lines before a CSV's header row (blank lines skipped).
-fn header_comments(reader: impl std::io::BufRead) -> Vec<String> {
-    reader
-        .lines()
-        .map_while(Result::ok)
-        .take_while(|l| l.trim_start().starts_with('#') || l.trim().is_empty())
-        .filter(|l| !l.trim().is_empty())
-        .collect()
+    let table = if path.as_os_str() == "-" {
+        Table::read(std::io::stdin().lock(), "<stdin>")?
+    } else {
+        Table::read_file(path)?
+    };
+    let (curve, amplitude) = VoltageCurve::from_display_table(&table)?;
+    Ok((curve, amplitude, table.comments().to_vec()))
 }
 
 /// The a_max a display profile's header comment states: the smallest

@@ -79,7 +79,17 @@ pub struct Table {
     index: HashMap<String, usize>,
     data: Vec<Vec<f64>>,
     lines: Vec<u64>,
+    /// The `#` comment lines before the header row, trimmed (at most
+    /// [`MAX_LEADING_COMMENTS`] kept).
+    comments: Vec<String>,
 }
+
+/// The most `#` lines before the header a [`Table`] keeps (where haptex's
+/// own files state their conventions); later ones are skipped as before.
+pub const MAX_LEADING_COMMENTS: usize = 256;
+/// The most bytes of those comment lines kept, together: a line that would
+/// go beyond is skipped, so a file of long comments costs no memory.
+pub const MAX_LEADING_COMMENT_BYTES: usize = 64 << 10;
 
 impl Table {
     /// Reads a table from CSV text. `source_name` labels errors.
@@ -96,7 +106,12 @@ impl Table {
             column,
             kind,
         };
-        let mut lines = Lines { reader: BufReader::with_capacity(1 << 16, reader), buffer: Vec::new(), number: 0 };
+        let mut lines = Lines {
+            reader: BufReader::with_capacity(1 << 16, reader),
+            buffer: Vec::new(),
+            number: 0,
+            comments: Some(Vec::new()),
+        };
         let io_error = |(line, e): (u64, LineError)| {
             error(
                 Some(line),
@@ -130,6 +145,8 @@ impl Table {
             columns.push(name.to_string());
         }
 
+        // Comments after the header are skipped, not kept.
+        let comments = lines.comments.take().unwrap_or_default();
         let mut data: Vec<Vec<f64>> = vec![Vec::new(); columns.len()];
         let mut row_lines = Vec::new();
         while let Some((line, row)) = lines.next_content().map_err(io_error)? {
@@ -147,7 +164,13 @@ impl Table {
             }
             row_lines.push(line);
         }
-        Ok(Self { source_name: source_name.to_string(), header_line, columns, index, data, lines: row_lines })
+        Ok(Self { source_name: source_name.to_string(), header_line, columns, index, data, lines: row_lines, comments })
+    }
+
+    /// The `#` comment lines before the header row, trimmed, in order (the
+    /// first [`MAX_LEADING_COMMENTS`]).
+    pub fn comments(&self) -> &[String] {
+        &self.comments
     }
 
     /// Reads a table from a file; errors name the path.
@@ -257,6 +280,10 @@ struct Lines<R> {
     reader: BufReader<R>,
     buffer: Vec<u8>,
     number: u64,
+    /// While `Some`, the comment lines met are kept here (trimmed, lossy
+    /// UTF-8, at most [`MAX_LEADING_COMMENTS`] lines and
+    /// [`MAX_LEADING_COMMENT_BYTES`] bytes).
+    comments: Option<Vec<String>>,
 }
 
 impl<R: Read> Lines<R> {
@@ -273,6 +300,13 @@ impl<R: Read> Lines<R> {
             self.number += 1;
             let skip = if self.number == 1 && self.buffer.starts_with(BOM) { BOM.len() } else { 0 };
             let line = self.buffer[skip..].trim_ascii();
+            if line.starts_with(b"#")
+                && let Some(kept) = &mut self.comments
+                && kept.len() < MAX_LEADING_COMMENTS
+                && kept.iter().map(String::len).sum::<usize>() + line.len() <= MAX_LEADING_COMMENT_BYTES
+            {
+                kept.push(String::from_utf8_lossy(line).into_owned());
+            }
             if !(line.is_empty() || line.starts_with(b"#")) {
                 let start = skip + self.buffer[skip..].len() - self.buffer[skip..].trim_ascii_start().len();
                 return Ok(Some((self.number, &self.buffer[start..start + line.len()])));
@@ -360,6 +394,23 @@ mod tests {
 
     fn read(text: &str) -> Result<Table, TableError> {
         Table::read(text.as_bytes(), "t.csv")
+    }
+
+    /// The `#` lines before the header are kept, trimmed and in order (at
+    /// most MAX_LEADING_COMMENTS); comments after it are not.
+    #[test]
+    fn keeps_the_comments_before_the_header() {
+        let t = read("\u{feff}# one\n\n  # two  \nx_mm\n# after\n1\n").unwrap();
+        assert_eq!(t.comments(), ["# one", "# two"]);
+        let many: String = (0..MAX_LEADING_COMMENTS + 10).map(|i| format!("# c{i}\n")).collect::<String>() + "x\n1\n";
+        let t = read(&many).unwrap();
+        assert_eq!(t.comments().len(), MAX_LEADING_COMMENTS);
+        assert_eq!(t.comments()[0], "# c0");
+        assert!(read("x\n1\n").unwrap().comments().is_empty());
+        // A comment that would pass the byte bound is skipped, the next
+        // short one kept.
+        let long = format!("# {}\n# short\nx\n1\n", "a".repeat(MAX_LEADING_COMMENT_BYTES));
+        assert_eq!(read(&long).unwrap().comments(), ["# short"]);
     }
 
     #[test]
