@@ -7,8 +7,10 @@
 // voltage on the finger model and compensate it (the FE finger sliding on
 // the display, POST /api/check and /api/compensate, streamed with their
 // progress), feel the voltage along a strip, download CSV / JSON / WAV.
-// The display selector designs for an ultrasonic friction-reduction plate
-// or the combined display instead (POST /api/voltage with `display`): the
+// The display selector designs for the combined display (the page's
+// default, so that every source renders with its physical values), an
+// ultrasonic friction-reduction plate alone or the electrovibration
+// display (POST /api/voltage with `display`): the
 // renderable band on the friction plot, a(x) beside U(x), both channels in
 // the feel strip and the two-channel stroke WAV.
 //
@@ -35,7 +37,11 @@
     drawn: null,           // the profile whose voltage is drawn
     method: 'physical',
     relative: false,       // map the profile relative to its flat-surface friction (Fig. 2)
-    display: 'electrovibration', // the friction display designed for (GET /api/config, displays)
+    // The friction display designed for (GET /api/config, displays). The
+    // page opens on the combined display, so that the library's materials
+    // and the templates render with their physical values (docs/web.md,
+    // "Defaults"); the API's default stays electrovibration, the paper's.
+    display: 'combined',
     strategy: 'split',     // the combined display's strategy
     calibration: null,     // the ultrasonic calibration file chosen: {name, text}
     device: {},            // parameter name -> number (only valid ones)
@@ -147,14 +153,15 @@
     template: {
       panel: 'template',
       // FE profiles are skin-on-surface friction around mu_skin (0.5),
-      // below the display's own mu_HD = 1: as they are, eq. (8) gives 0 V.
-      // The paper maps them relative to their flat-surface value, mu_skin,
-      // and shows eq. (8) and eq. (9) side by side (Fig. 2b;
-      // docs/database.md): so does the GUI.
+      // below the display's own mu_HD = 1. The combined display renders
+      // them as they are (the plate lowers the friction to them). On the
+      // electrovibration display eq. (8) would give 0 V: there the page
+      // maps them relative to their flat-surface value, mu_skin, and shows
+      // eq. (8) and eq. (9) side by side, as the paper's Fig. 2b does
+      // (docs/database.md).
       method: 'physical',
-      relative: true,
+      fig2: true,
       flatMu: () => (state.templates ? String(state.templates.fe.mu_skin) : ''),
-      bothMethods: true,
       async load() {
         const body = templateBody();
         const answer = await (await postJson('/api/predict', body)).json();
@@ -193,7 +200,6 @@
     library: {
       panel: 'library',
       method: 'physical',
-      relative: false,
       flatMu: () => '',
       async load(options = {}) {
         const name = $('material').value;
@@ -229,7 +235,6 @@
     },
     upload: {
       panel: 'upload',
-      relative: false,
       flatMu: () => '',
       async load() {
         const file = $('upload').files[0];
@@ -280,13 +285,26 @@
     $('height-figure').hidden = id !== 'template';
   }
 
+  /**
+   * The mapping a source opens with on the display selected: its method;
+   * for a `fig2` source (the templates) on the electrovibration display,
+   * the profile relative to its flat-surface friction with eq. (8) and
+   * eq. (9) side by side (the paper's Fig. 2b); otherwise the profile as
+   * it is (physical values).
+   */
+  function applySourceMapping(id) {
+    const source = SOURCES[id];
+    if (source.method) setMethod(source.method);
+    const fig2 = Boolean(source.fig2) && isElectrovibration();
+    setRelative(fig2, source.flatMu());
+    setBoth(fig2);
+  }
+
   function selectSource(id) {
     state.source = id;
     showSourcePanel(id);
     loadRequest += 1; // a profile still loading for the previous source is dropped
-    if (SOURCES[id].method) setMethod(SOURCES[id].method);
-    setRelative(SOURCES[id].relative, SOURCES[id].flatMu());
-    setBoth(Boolean(SOURCES[id].bothMethods));
+    applySourceMapping(id);
     state.profile = state.profiles[id] || null;
     if (state.profile) {
       updateVoltage().catch(showError);
@@ -738,7 +756,12 @@
       label.title = d.description;
       const input = document.createElement('input');
       Object.assign(input, { type: 'radio', name: 'display', value: d.id, checked: d.id === state.display });
-      input.addEventListener('change', () => { setDisplay(d.id); scheduleVoltage(); });
+      // Chosen by the user: the source's mapping for that display too.
+      input.addEventListener('change', () => {
+        setDisplay(d.id);
+        if (state.source) applySourceMapping(state.source);
+        scheduleVoltage();
+      });
       label.append(input, d.label);
       box.append(label);
     });
@@ -1013,6 +1036,27 @@
     line('summary-regions', `above the band: ${pct(s.above_band.fraction_of_length)} of the length · below the ` +
       `band: ${pct(s.below_band.fraction_of_length)}`);
     showWarnings(box);
+    // Split on a profile below mu_HD everywhere (a template's physical
+    // values): the plate renders all of it and U is 0 V. Say so, and offer
+    // the strategy that puts the detail on the voltage.
+    if (ev && s.strategy === 'split' && ev.voltage_max_v === 0) {
+      const way = document.createElement('div');
+      way.className = 'way-out';
+      way.id = 'summary-plate-only';
+      way.append('U = 0 V: the profile lies below mu_HD everywhere, so the split strategy renders all of it with ' +
+        'the plate. One click: ');
+      const b = document.createElement('button');
+      Object.assign(b, { type: 'button', id: 'way-out-bias', className: 'small',
+        textContent: 'bias (a constant plate level, the detail on the voltage)' });
+      b.addEventListener('click', () => {
+        state.strategy = 'bias';
+        $('strategy').value = 'bias';
+        showDisplayControls();
+        scheduleVoltage();
+      });
+      way.append(b);
+      box.append(way);
+    }
   }
 
   function showSummary() {

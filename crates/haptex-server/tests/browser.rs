@@ -7,8 +7,12 @@
 //! 1. the page loads and draws the first source, a bump template predicted
 //!    from the shipped FE database, without a console error (Chromium's
 //!    own console log, read through chromedriver, at level SEVERE): the
-//!    surface height plot peaks at the default r_h = 0.27 mm and the
-//!    friction plot is the server's prediction relative to its flat value
+//!    surface height plot peaks at the default r_h = 0.27 mm; the page
+//!    opens on the combined display with the physical values (issue 16):
+//!    the friction plot is the prediction as it is, a(x) and U(x) the
+//!    core's combined design of it (split, then bias in one click); on the
+//!    electrovibration display the friction plot is the server's
+//!    prediction relative to its flat value
 //!    (paper Fig. 2a), the voltage plot eq. (8) and eq. (9) of it side by
 //!    side (Fig. 2b), each the core's mapping bit for bit, eq. (8) above
 //!    0 V; unticking *relative* plots the prediction as it is and eq. (8)
@@ -381,6 +385,69 @@ async fn click_slider(client: &Client, id: &str, fraction: f64) -> Check<()> {
     Ok(())
 }
 
+/// Step 1: the page opens on the combined display (issue 16), the
+/// template with its physical values: the friction plot is the server's
+/// prediction as it is (all of it below mu_HD = 1), a(x) and U(x) are the
+/// core's `map_display` of it on the literature plate with the split
+/// strategy bit for bit, nothing is outside the band, the page says why U
+/// is 0 V and offers the bias strategy, which puts the detail on U.
+async fn combined_default(client: &Client, friction: &[Vec<f64>], predicted: &[f64]) -> Check<()> {
+    use haptex_core::combined::{Channels, Strategy, map_display};
+    use haptex_core::ultrasonic::UltrasonicDevice;
+
+    let shown = script(
+        client,
+        "return [window.haptex.state.voltage.summary.display, window.haptex.state.voltage.summary.strategy, \
+         document.querySelector(\"input[name='display'][value='combined']\").checked, \
+         window.haptex.state.relative, window.haptex.state.both];",
+    )
+    .await?;
+    if shown != json!(["combined", "split", true, false, false]) {
+        return fail(format!("the page opens on [display, strategy, radio, relative, both] = {shown}"));
+    }
+    if friction[1] != predicted {
+        return fail("on the combined display the template's friction is not the prediction as it is");
+    }
+    let profile = FrictionProfile::new(friction[0].clone(), predicted.to_vec()).map_err(|e| e.to_string())?;
+    let plate = UltrasonicDevice::literature_default(None).map_err(|e| e.to_string())?;
+    let design = |strategy| {
+        map_display(&profile, &Device::PAPER, Channels::Combined(&plate, strategy), None, None)
+            .map_err(|e| e.to_string())
+    };
+    let core = design(Strategy::Split)?;
+    let (amplitude, voltage) = (plotted(client, "amplitude").await?, plotted(client, "voltage").await?);
+    if Some(&amplitude[1]) != core.amplitude_um.as_ref() || Some(&voltage[1]) != core.voltage_v.as_ref() {
+        return fail("the default template's plotted a(x) or U(x) is not the core's combined design");
+    }
+    let s = &core.summary;
+    if s.below_band.fraction_of_length != 0.0 || s.above_band.fraction_of_length != 0.0 {
+        return fail(format!("the default bump is not inside the combined band: {s:?}"));
+    }
+    if !amplitude[1].iter().any(|a| *a > 0.0) || voltage[1].iter().any(|u| *u != 0.0) {
+        return fail("split below mu_HD: the plate should carry all of the bump and U be 0 V");
+    }
+    let note = wd!(wd!(client.find(Locator::Id("summary-plate-only"))).text());
+    if !note.contains("below mu_HD everywhere") {
+        return fail(format!("the plate-only note says {note:?}"));
+    }
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Id("way-out-bias"))).click());
+    wait_update(client, n, "the bias strategy").await?;
+    wait_for(client, "window.haptex.state.voltage.summary.strategy === 'bias'", "the bias design").await?;
+    let biased = design(Strategy::Bias)?;
+    let (amplitude, voltage) = (plotted(client, "amplitude").await?, plotted(client, "voltage").await?);
+    if Some(&amplitude[1]) != biased.amplitude_um.as_ref() || Some(&voltage[1]) != biased.voltage_v.as_ref() {
+        return fail("bias: the plotted a(x) or U(x) is not the core's");
+    }
+    if !voltage[1].iter().any(|u| *u > 0.0) {
+        return fail("bias: the voltage carries none of the bump");
+    }
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css("#strategy option[value='split']"))).click());
+    wait_update(client, n, "the split strategy again").await?;
+    Ok(())
+}
+
 /// Step 1's checks of the relative mapping (issue 15), on the default
 /// bump whose prediction is `predicted` at positions `x`.
 async fn relative_fig2(client: &Client, x: &[f64], predicted: &[f64]) -> Check<()> {
@@ -492,6 +559,12 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     }
     let friction = plotted(client, "friction").await?;
     let predicted = predicted_bump(client, 1.3).await?;
+    combined_default(client, &friction, &predicted).await?;
+    // The electrovibration display: the template relative to its flat
+    // value, eq. (8) beside eq. (9), as the paper's Fig. 2.
+    choose(client, "display", "electrovibration").await?;
+    wait_for(client, "window.haptex.state.voltage.summary.relative !== undefined", "the relative mapping").await?;
+    let friction = plotted(client, "friction").await?;
     if friction[1] != relative(&predicted, 0.5, 1.0) {
         return fail(
             "the plotted friction is not the server's prediction for the default bump over its flat value 0.5",
@@ -776,14 +849,18 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     if overflow.as_f64().unwrap_or(1.0) > 0.0 {
         return fail(format!("phone-sized window scrolls sideways by {overflow} px"));
     }
-    // Screenshots for the docs: the default bump template (phone and
-    // desktop), and a library material with mu_RS above mu_HD, eq. 8.
+    // Screenshots for the docs: the default bump template as the page
+    // opens it, on the combined display (phone and desktop), and a
+    // library material with mu_RS above mu_HD, eq. 8.
+    choose(client, "display", "combined").await?;
     let phone = screenshot(client).await?;
     wd!(client.set_window_size(1280, 1280));
     tokio::time::sleep(Duration::from_millis(400)).await;
     let desktop = screenshot(client).await?;
     save_screenshot("web.png", &desktop);
     save_screenshot("web-phone.png", &phone);
+    choose(client, "display", "electrovibration").await?;
+    wait_for(client, "window.haptex.state.voltage.summary.relative !== undefined", "the relative mapping").await?;
     // 9. The check on the finger model and the compensation, on the
     // default template.
     finger_on_the_display(client).await?;
