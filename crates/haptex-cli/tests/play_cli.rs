@@ -461,6 +461,63 @@ fn combined_profile_plays_on_two_channels() {
     assert!(!out.status.success());
     assert!(stderr(&out).contains("does not belong to it"), "{}", stderr(&out));
 
+    // Channel 2 on the plate's resonance (--plate-resonance-hz): at
+    // 192 kHz a 40 kHz plate plays, its displacement signed and within
+    // a_max, the chunk, the sidecar, --check and the CSV's column naming
+    // it; channel 1 is the sample-for-sample the envelope render's. At
+    // 48 kHz, or for a one-channel design, it is refused and nothing is
+    // written.
+    let plate = path(d, "plate.wav");
+    let base = ["play", "--profile", &design, "--velocity", "20", "--sample-rate", "192000", "-q"];
+    let run = |extra: &[&str]| haptex(&[&base[..], extra].concat());
+    let envelope = path(d, "envelope.wav");
+    assert!(run(&["-o", &envelope]).status.success());
+    let out = run(&["--plate-resonance-hz", "40000", "-o", &plate]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (on, off) = (
+        haptex_core::signal::read_drive_wav(Path::new(&plate)).unwrap(),
+        haptex_core::signal::read_drive_wav(Path::new(&envelope)).unwrap(),
+    );
+    assert_eq!(on.volts, off.volts);
+    let c2 = on.scale.channel_2.as_ref().unwrap();
+    assert_eq!(c2.resonance_hz, Some(40_000.0));
+    let (d_um, a_um) = (on.amplitude_um.as_ref().unwrap(), off.amplitude_um.as_ref().unwrap());
+    assert!(d_um.iter().zip(a_um).all(|(d, a)| d.abs() <= a + 1e-4 && d.abs() <= c2.a_max_um));
+    let peak = a_um.iter().fold(0.0f64, |m, &a| m.max(a));
+    assert!(d_um.iter().any(|&v| v < -0.5 * peak), "the displacement swings below zero (envelope peak {peak} um)");
+    let out = haptex(&["play", "--check", &plate]);
+    assert!(stderr(&out).contains("plate displacement on its resonance 40000 Hz"), "{}", stderr(&out));
+    let plate_csv = path(d, "plate.csv");
+    assert!(run(&["--plate-resonance-hz", "40000", "-o", &plate_csv]).status.success());
+    let text = std::fs::read_to_string(&plate_csv).unwrap();
+    assert!(text.lines().any(|l| l == "t_s,x_mm,envelope_v,signal_v,displacement_um"), "{:.600}", text);
+    let refused = path(d, "refused.wav");
+    let out =
+        haptex(&["play", "--profile", &design, "--velocity", "20", "--plate-resonance-hz", "40000", "-o", &refused]);
+    assert!(
+        !out.status.success() && stderr(&out).contains("needs a sample rate of at least 88889 Hz"),
+        "{}",
+        stderr(&out)
+    );
+    let electro = path(d, "electro.csv");
+    let out = haptex(&["voltage", "--profile", "../../data/examples/bump_friction.csv", "-q", "-o", &electro]);
+    assert!(out.status.success());
+    let out = haptex(&[
+        "play",
+        "--profile",
+        &electro,
+        "--velocity",
+        "20",
+        "--sample-rate",
+        "192000",
+        "--plate-resonance-hz",
+        "40000",
+        "-o",
+        &refused,
+    ]);
+    assert!(!out.status.success() && stderr(&out).contains("two-channel drive"), "{}", stderr(&out));
+    assert!(!Path::new(&refused).exists());
+
     // simulate still refuses such a profile (its voltage alone is not the design).
     let out = haptex(&["simulate", "--surface", "display", "--voltage", &design, "-o", &path(d, "s.csv")]);
     assert!(!out.status.success());

@@ -139,6 +139,11 @@ pub const AMPLIFIER_RANGE_V: Range = range("amplifier_range_v", 1e-3, 100_000.0,
 pub const VOLTS_PER_FULL_SCALE: Range = range("volts_per_full_scale", 1e-3, 100_000.0, "V");
 /// Carrier frequency (also below the Nyquist frequency of the rate).
 pub const CARRIER_HZ: Range = range("carrier_hz", 1e-3, 1e6, "Hz");
+/// Resonance of an ultrasonic plate, the carrier of channel 2 when it is
+/// played modulated (`haptex play --plate-resonance-hz`): plates vibrate
+/// from about 20 to 100 kHz (Sednaoui et al. 2015, 2017: 27 to 60 kHz);
+/// the bounds leave room on both sides.
+pub const PLATE_RESONANCE_HZ: Range = range("plate_resonance_hz", 1e3, 1e6, "Hz");
 /// Finger speed of a generated stroke.
 pub const VELOCITY_MM_S: Range = range("velocity_mm_s", 1e-6, 1e4, "mm/s");
 

@@ -8,8 +8,8 @@ use haptex_core::electrovibration::{Device, Method, map_profile};
 use haptex_core::profile::FrictionProfile;
 use haptex_core::signal::{
     AmplitudeCurve, Carrier, CarrierShape, Extend, Limits, RenderSettings, SignalError, VoltageCurve, WavFormat,
-    WavOptions, decode_drive_wav_channels, encode_wav, read_drive_wav, render, render_two_channel, sidecar_path,
-    write_wav,
+    WavOptions, decode_drive_wav_channels, encode_wav, modulate_at_resonance, read_drive_wav, render,
+    render_two_channel, sidecar_path, write_wav,
 };
 use haptex_core::trajectory::Trajectory;
 use rustfft::FftPlanner;
@@ -470,4 +470,70 @@ fn encoder_refuses_channel_2_outside_its_limit() {
     let (mut signal, _, _) = two_channel_signal();
     signal.report.ultrasonic = None;
     assert!(encode_wav(&signal, &options, "x").unwrap_err().to_string().contains("do not agree"));
+}
+
+/// Channel 2 on the plate's resonance (issue 16's optional modulated
+/// carrier, `haptex play --plate-resonance-hz`): sample by sample the
+/// envelope a(t) times sin(2 pi f_r t) (against libm's sin, 1e-9 of
+/// a_max: the phase reaches 1e4 turns, where 2 pi p itself rounds at
+/// 1e-12), its spectrum's peak at f_r, channel 1 untouched; through a
+/// 24-bit WAV within half a step, signed, never beyond a_max, the scale
+/// chunk and sidecar naming f_r; a chunk claiming a resonance the sample
+/// rate cannot carry is refused; so are a 48 kHz drive, a one-channel
+/// drive and a second modulation.
+#[test]
+fn channel_2_on_the_plate_resonance() {
+    let (curve, trajectory, mut settings) = test_inputs();
+    settings.sample_rate_hz = 192_000;
+    let amplitude = AmplitudeCurve::new(vec![0.0, 1.0, 2.5, 4.0], vec![0.0, 1.2, 2.6, 0.4]).unwrap();
+    let a_max = 2.0;
+    let envelope = render_two_channel(&curve, &amplitude, a_max, &trajectory, &settings).unwrap();
+    let mut plate = envelope.clone();
+    let f_r = 40_000.0;
+    modulate_at_resonance(&mut plate, f_r).unwrap();
+    assert_eq!((&plate.signal_v, &plate.envelope_v), (&envelope.signal_v, &envelope.envelope_v));
+    let (a, d) = (envelope.amplitude_um.as_ref().unwrap(), plate.amplitude_um.as_ref().unwrap());
+    for (i, (&a, &d)) in a.iter().zip(d).enumerate() {
+        let want = a * (std::f64::consts::TAU * f_r * i as f64 / 192_000.0).sin();
+        assert!((d - want).abs() <= 1e-9 * a_max, "sample {i}: {d} vs {want}");
+    }
+    let spectrum = spectrum(d);
+    let peak_hz = argmax(&spectrum) as f64 * 192_000.0 / d.len() as f64;
+    assert!((peak_hz - f_r).abs() <= 2.0 * 192_000.0 / d.len() as f64, "spectrum peak at {peak_hz} Hz");
+    let us = plate.report.ultrasonic.as_ref().unwrap();
+    assert_eq!(us.resonance_hz, Some(f_r));
+    assert!(us.convention.contains("40000 Hz"), "{}", us.convention);
+
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("plate.wav");
+    let options = WavOptions { format: WavFormat::Pcm24, volts_per_full_scale: 150.0 };
+    write_wav(&path, &plate, &options, serde_json::json!({"test": true})).unwrap();
+    let read = read_drive_wav(&path).unwrap();
+    let c2 = read.scale.channel_2.as_ref().unwrap();
+    assert_eq!((c2.resonance_hz, c2.um_per_full_scale), (Some(f_r), a_max));
+    assert!(c2.quantity.contains("displacement"), "{}", c2.quantity);
+    assert_eq!(read.sidecar.as_ref().unwrap().channel_2.as_ref().unwrap().resonance_hz, Some(f_r));
+    let got = read.amplitude_um.as_ref().unwrap();
+    let step = 0.5 * a_max / WavFormat::Pcm24.full_scale() * (1.0 + 1e-9);
+    for (i, (&got, &want)) in got.iter().zip(d).enumerate() {
+        assert!((got - want).abs() <= step && got.abs() <= a_max, "sample {i}: {got} vs {want}");
+    }
+    assert!(got.iter().any(|&v| v < -1.0), "the displacement swings below zero");
+    // A scale chunk claiming 99999 Hz at 192 kHz (above 0.45 fs) is refused.
+    let bytes = std::fs::read(&path).unwrap();
+    let claim = b"\"resonance_hz\":40000.0";
+    let at = bytes.windows(claim.len()).position(|w| w == claim).expect("the chunk names the resonance");
+    let mut forged = bytes.clone();
+    forged[at..at + claim.len()].copy_from_slice(b"\"resonance_hz\":99999.0");
+    let e = decode_drive_wav_channels(&forged).unwrap_err().to_string();
+    assert!(e.contains("channel 2 is not consistent"), "{e}");
+
+    let mut low = render_two_channel(&curve, &amplitude, a_max, &trajectory, &test_inputs().2).unwrap();
+    let e = modulate_at_resonance(&mut low, f_r).unwrap_err().to_string();
+    assert!(e.contains("at least 88889 Hz") && e.contains("44100 Hz"), "{e}");
+    let mut one = test_signal();
+    assert!(modulate_at_resonance(&mut one, f_r).unwrap_err().to_string().contains("two-channel"));
+    assert!(modulate_at_resonance(&mut plate, f_r).unwrap_err().to_string().contains("already"));
+    let e = modulate_at_resonance(&mut envelope.clone(), 500.0).unwrap_err().to_string();
+    assert!(e.contains("plate_resonance_hz"), "{e}");
 }

@@ -10,8 +10,8 @@ use haptex_core::io::Table;
 use haptex_core::num::Num;
 use haptex_core::ranges;
 use haptex_core::signal::{
-    AmplitudeCurve, Carrier, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions, read_drive_wav,
-    render, render_two_channel, sidecar_path, write_wav,
+    AmplitudeCurve, Carrier, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions,
+    modulate_at_resonance, read_drive_wav, render, render_two_channel, sidecar_path, write_wav,
 };
 use haptex_core::trajectory::Trajectory;
 use serde_json::json;
@@ -60,7 +60,8 @@ const GENERATED_RATE_HZ: f64 = 1000.0;
         haptex play --profile bump_u.csv --velocity 80 --strokes 6 --slew-v-per-s 20000 -o strokes.wav\n  \
         haptex play --check bump.wav\n  \
         haptex voltage --profile data/examples/bump_friction.csv --display combined -o bump_ua.csv\n  \
-        haptex play --profile bump_ua.csv --velocity 40 -o bump2.wav"
+        haptex play --profile bump_ua.csv --velocity 40 -o bump2.wav\n  \
+        haptex play --profile bump_ua.csv --velocity 40 --sample-rate 192000 --plate-resonance-hz 40000 -o plate.wav"
 )]
 pub struct PlayArgs {
     /// Check a drive-signal WAV written by haptex instead of rendering one:
@@ -96,6 +97,13 @@ pub struct PlayArgs {
     to_mm: Option<f64>,
     #[command(flatten)]
     drive: DriveArgs,
+    /// Play channel 2 as the plate's displacement a(t) sin(2 pi F t) at
+    /// its resonance F in Hz, for an amplifier that drives the plate
+    /// directly, instead of the amplitude envelope a(t) a resonant driver
+    /// takes. Needs a two-channel design and F <= 0.45 x --sample-rate
+    /// (e.g. 192000 for plates up to 86.4 kHz).
+    #[arg(long, value_name = "F", value_parser = in_range(ranges::PLATE_RESONANCE_HZ))]
+    plate_resonance_hz: Option<f64>,
     /// Output sample rate in Hz.
     #[arg(long, value_name = "HZ", default_value_t = 48_000, value_parser = clap::value_parser!(u32).range(1000..=768_000))]
     sample_rate: u32,
@@ -275,7 +283,11 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
         let file = std::fs::File::open(path_file).with_context(|| format!("cannot open {name}"))?;
         let path = haptex_core::planar::PlanarTrajectory::read_csv(std::io::BufReader::new(file), &name)?;
         let settings = args.drive.settings(args.sample_rate);
-        let signal = haptex_core::signal::render_map(&map, &path, &settings)?;
+        let mut signal = haptex_core::signal::render_map(&map, &path, &settings)?;
+        if let Some(f) = args.plate_resonance_hz {
+            modulate_at_resonance(&mut signal, f)
+                .with_context(|| format!("--plate-resonance-hz for {}", profile.display()))?;
+        }
         return write_signal(&args, format, &output, output_path, profile, json!({ "file": name }), &signal);
     }
     let (curve, amplitude, comments) = read_curve(profile)?;
@@ -284,10 +296,14 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
     let (trajectory, trajectory_source) = trajectory(&args, &curve)?;
     let settings = args.drive.settings(args.sample_rate);
     check_design_carrier(&comments, &settings.carrier, profile)?;
-    let signal = match (&amplitude, a_max_um) {
+    let mut signal = match (&amplitude, a_max_um) {
         (Some(amplitude), Some(a_max)) => render_two_channel(&curve, amplitude, a_max, &trajectory, &settings)?,
         _ => render(&curve, &trajectory, &settings)?,
     };
+    if let Some(f) = args.plate_resonance_hz {
+        modulate_at_resonance(&mut signal, f)
+            .with_context(|| format!("--plate-resonance-hz for {}", profile.display()))?;
+    }
 
     write_signal(&args, format, &output, output_path, profile, trajectory_source, &signal)
 }
@@ -388,9 +404,12 @@ fn check(path: &Path, quiet: bool) -> anyhow::Result<()> {
         );
         if let (Some(c2), Some(a)) = (&s.channel_2, &wav.amplitude_um) {
             let peak = a.iter().fold(0.0f64, |m, &v| m.max(v.abs()));
+            let what = match c2.resonance_hz {
+                None => "ultrasonic amplitude".to_string(),
+                Some(f) => format!("plate displacement on its resonance {} Hz", Num(f)),
+            };
             eprintln!(
-                "channel 2: {} um of ultrasonic amplitude per full-scale sample ({}); peak {:.4} um, within a_max = {} \
-                 um",
+                "channel 2: {} um of {what} per full-scale sample ({}); peak {:.4} um, within a_max = {} um",
                 Num(c2.um_per_full_scale),
                 c2.conversion,
                 peak,

@@ -37,6 +37,7 @@ pub use wav::{
 };
 
 use crate::io::{WriteError, write_csv_row};
+use crate::num::Num;
 use crate::plot::{Figure, Panel};
 use crate::trajectory::Trajectory;
 
@@ -148,8 +149,13 @@ pub struct UltrasonicReport {
     pub clamped_samples: usize,
     pub clamped_fraction: f64,
     /// What channel 2 is: the amplitude envelope itself (no carrier), a
-    /// control signal for the resonant driver.
+    /// control signal for the resonant driver; or, with `resonance_hz`,
+    /// the plate's displacement a(t) sin(2 pi f_r t).
     pub convention: String,
+    /// The plate's resonance f_r when channel 2 carries the modulated
+    /// carrier ([`modulate_at_resonance`]); absent for the envelope.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub resonance_hz: Option<f64>,
 }
 
 impl fmt::Display for SignalReport {
@@ -193,10 +199,14 @@ impl fmt::Display for SignalReport {
             )?;
         }
         if let Some(us) = &self.ultrasonic {
+            let what = match us.resonance_hz {
+                None => "ultrasonic amplitude envelope, um, no carrier".to_string(),
+                Some(f) => format!("ultrasonic plate displacement, um, on its resonance {} Hz", Num(f)),
+            };
             writeln!(
                 f,
-                "channel 2 (ultrasonic amplitude envelope, um, no carrier): max {:.4} um; clamped at a_max = {} um: \
-                 {} samples ({:.2}%), largest request {:.4} um",
+                "channel 2 ({what}): max envelope {:.4} um; clamped at a_max = {} um: {} samples ({:.2}%), largest \
+                 request {:.4} um",
                 us.amplitude_max_um,
                 us.a_max_um,
                 us.clamped_samples,
@@ -268,11 +278,25 @@ impl DriveSignal {
             return Ok(());
         };
         let a_max = self.report.ultrasonic.as_ref().map_or(f64::NAN, |u| u.a_max_um);
-        writeln!(
-            w,
-            "# amplitude_um is channel 2, the ultrasonic vibration amplitude envelope (um, peak; no carrier: the envelope is the channel's signal), at most a_max = {a_max} um"
-        )?;
-        w.write_all(b"t_s,x_mm,envelope_v,signal_v,amplitude_um\n")?;
+        // A modulated channel 2 is a displacement, not an amplitude: its
+        // column is named for it, so that no reader takes it for a(t).
+        match self.report.ultrasonic.as_ref().and_then(|u| u.resonance_hz) {
+            None => {
+                writeln!(
+                    w,
+                    "# amplitude_um is channel 2, the ultrasonic vibration amplitude envelope (um, peak; no carrier: the envelope is the channel's signal), at most a_max = {a_max} um"
+                )?;
+                w.write_all(b"t_s,x_mm,envelope_v,signal_v,amplitude_um\n")?;
+            }
+            Some(f) => {
+                writeln!(
+                    w,
+                    "# displacement_um is channel 2, the ultrasonic plate's displacement a(t) sin(2 pi f_r t) (um) on its resonance f_r = {} Hz, |displacement| at most a_max = {a_max} um",
+                    Num(f)
+                )?;
+                w.write_all(b"t_s,x_mm,envelope_v,signal_v,displacement_um\n")?;
+            }
+        }
         for (i, &a) in amplitude_um.iter().enumerate() {
             write_csv_row(w, &[self.t_s(i), self.x_mm[i], self.envelope_v[i], self.signal_v[i], a])?;
         }
@@ -297,8 +321,12 @@ impl DriveSignal {
         match (&self.amplitude_um, &self.report.ultrasonic) {
             (Some(a), Some(us)) => figure.panel(
                 Panel::new("t (s)", "a (um)")
-                    .title("channel 2: ultrasonic amplitude a(x(t)) after the a_max clamp")
-                    .line("a(t)", &t, a)
+                    .title(if us.resonance_hz.is_some() {
+                        "channel 2: plate displacement a(x(t)) sin(2 pi f_r t), a after the a_max clamp"
+                    } else {
+                        "channel 2: ultrasonic amplitude a(x(t)) after the a_max clamp"
+                    })
+                    .line(if us.resonance_hz.is_some() { "displacement" } else { "a(t)" }, &t, a)
                     .series(
                         crate::plot::Series::line("a_max", &ends, &[us.a_max_um, us.a_max_um]).color((150, 150, 150)),
                     ),
@@ -527,9 +555,60 @@ pub fn render_two_channel(
         convention: "channel 2 is the ultrasonic vibration amplitude envelope a(x(t)) in um (peak), without \
                      carrier: a control signal for the plate's resonant driver"
             .into(),
+        resonance_hz: None,
     });
     signal.amplitude_um = Some(a_um);
     Ok(signal)
+}
+
+/// Highest plate resonance channel 2 may carry, as a fraction of the
+/// sample rate: 0.45 fs, where audio converters' reconstruction filters
+/// still pass the signal flat (their pass band ends at about 0.45 fs;
+/// the Nyquist frequency is 0.5 fs). A 192 kHz interface plays plates up
+/// to 86.4 kHz; 48 kHz, none (21.6 kHz is below any plate's resonance).
+pub const MAX_RESONANCE_PER_SAMPLE_RATE: f64 = 0.45;
+
+/// Turns a two-channel drive's channel 2 from the amplitude envelope a(t)
+/// into the plate's displacement at its resonance f_r, a(t) sin(2 pi f_r
+/// (t - t0)) in um (t0 the first sample's time; the same polynomial sine
+/// as channel 1's carrier), for an amplifier that drives the plate
+/// directly instead of a resonant driver that takes the envelope. Its
+/// peak stays within a_max, channel 2's full scale. Refused, naming the
+/// limit, for a one-channel drive, for f_r outside
+/// [`crate::ranges::PLATE_RESONANCE_HZ`] or above
+/// [`MAX_RESONANCE_PER_SAMPLE_RATE`] times the sample rate, and for a
+/// drive already modulated.
+pub fn modulate_at_resonance(signal: &mut DriveSignal, resonance_hz: f64) -> Result<(), SignalError> {
+    let f = crate::ranges::PLATE_RESONANCE_HZ.check(resonance_hz).map_err(|e| SignalError::Settings(e.to_string()))?;
+    let fs = f64::from(signal.report.sample_rate_hz);
+    let (Some(a_um), Some(us)) = (signal.amplitude_um.as_mut(), signal.report.ultrasonic.as_mut()) else {
+        return Err(SignalError::Settings(
+            "the plate's resonance is for a two-channel drive (a display profile with an amplitude_um column)".into(),
+        ));
+    };
+    if us.resonance_hz.is_some() {
+        return Err(SignalError::Settings("channel 2 already carries the plate's resonance".into()));
+    }
+    if f > MAX_RESONANCE_PER_SAMPLE_RATE * fs {
+        return Err(SignalError::Settings(format!(
+            "a plate resonance of {} Hz needs a sample rate of at least {} Hz (f_r <= 0.45 fs, where converters pass \
+             the signal flat); the drive is at {} Hz",
+            Num(f),
+            (f / MAX_RESONANCE_PER_SAMPLE_RATE).ceil(),
+            signal.report.sample_rate_hz
+        )));
+    }
+    let cycles_per_sample = f / fs;
+    for (i, a) in a_um.iter_mut().enumerate() {
+        *a = *a * carrier::sin_turns(i as f64 * cycles_per_sample) + 0.0;
+    }
+    us.resonance_hz = Some(f);
+    us.convention = format!(
+        "channel 2 is the ultrasonic plate's displacement a(x(t)) sin(2 pi f_r t) in um, f_r = {} Hz: the \
+         amplitude envelope a (peak, at most a_max) on the plate's resonance",
+        Num(f)
+    );
+    Ok(())
 }
 
 /// signal = envelope x sqrt(2) sin(2 pi i f / fs) (+ 0.0: no -0.0), in

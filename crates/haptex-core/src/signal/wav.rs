@@ -133,9 +133,15 @@ pub struct AmplitudeScale {
     pub a_max_um: f64,
     /// um = sample / full_scale_value * um_per_full_scale.
     pub conversion: String,
+    /// The plate's resonance in Hz when channel 2 is the displacement
+    /// a(t) sin(2 pi f_r t) (signed samples, `quantity` says so); absent
+    /// when channel 2 is the amplitude envelope a(t) (samples >= 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub resonance_hz: Option<f64>,
 }
 
 const AMPLITUDE_QUANTITY: &str = "ultrasonic vibration amplitude, peak";
+const DISPLACEMENT_QUANTITY: &str = "ultrasonic plate displacement, amplitude-modulated at resonance_hz";
 const AMPLITUDE_CONVERSION: &str = "um = sample / full_scale_value * um_per_full_scale";
 
 const KIND: &str = "haptex drive signal";
@@ -216,21 +222,31 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
         (None, None) => None,
         (Some(a), Some(us)) if a.len() == signal.len() => {
             let upfs = crate::ranges::A_MAX_UM.check(us.a_max_um).map_err(|e| SignalError::Settings(e.to_string()))?;
-            // Every amplitude within 0 ..= a_max (a NaN fails both).
-            if let Some(&bad) = a.iter().find(|&&v| !(0.0..=upfs).contains(&v)) {
+            // Every amplitude within 0 ..= a_max, every displacement within
+            // -a_max ..= a_max (a NaN fails both).
+            let (low, quantity) = match us.resonance_hz {
+                None => (0.0, AMPLITUDE_QUANTITY),
+                Some(f) => {
+                    check_resonance(f, report.sample_rate_hz).map_err(SignalError::Settings)?;
+                    (-upfs, DISPLACEMENT_QUANTITY)
+                }
+            };
+            if let Some(&bad) = a.iter().find(|&&v| !(low..=upfs).contains(&v)) {
                 return Err(SignalError::Settings(format!(
-                    "refused: channel 2's amplitude {bad} um is outside 0 .. a_max = {upfs} um, its full scale"
+                    "refused: channel 2's sample {bad} um is outside {} .. a_max = {upfs} um, its full scale",
+                    Num(low)
                 )));
             }
             Some((
                 a,
                 AmplitudeScale {
-                    quantity: AMPLITUDE_QUANTITY.into(),
+                    quantity: quantity.into(),
                     unit: "um".into(),
                     full_scale_value: full_scale,
                     um_per_full_scale: upfs,
                     a_max_um: us.a_max_um,
                     conversion: AMPLITUDE_CONVERSION.into(),
+                    resonance_hz: us.resonance_hz,
                 },
             ))
         }
@@ -321,6 +337,19 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
     append_chunk(&mut bytes, SCALE_CHUNK_ID, &serde_json::to_vec(&scale).expect("the scale chunk serializes"))
         .map_err(|message| SignalError::Wav { path: label.to_string(), message })?;
     Ok(EncodedWav { bytes, scale })
+}
+
+/// A plate resonance channel 2 can carry at `sample_rate_hz`
+/// ([`super::modulate_at_resonance`]'s rule).
+fn check_resonance(resonance_hz: f64, sample_rate_hz: u32) -> Result<(), String> {
+    crate::ranges::PLATE_RESONANCE_HZ.check(resonance_hz).map_err(|e| e.to_string())?;
+    if resonance_hz > super::MAX_RESONANCE_PER_SAMPLE_RATE * f64::from(sample_rate_hz) {
+        return Err(format!(
+            "channel 2's plate resonance {} Hz is above 0.45 x the sample rate {sample_rate_hz} Hz",
+            Num(resonance_hz)
+        ));
+    }
+    Ok(())
 }
 
 /// The byte range of the `data` chunk's content in a RIFF/WAVE file.
@@ -502,14 +531,25 @@ fn check_sidecar(sidecar: &WavSidecar, scale: &ScaleChunk) -> Result<(), String>
         ));
     }
     let bits = |c: &AmplitudeScale| {
-        (c.full_scale_value.to_bits(), c.um_per_full_scale.to_bits(), c.a_max_um.to_bits(), c.unit.clone())
+        (
+            c.full_scale_value.to_bits(),
+            c.um_per_full_scale.to_bits(),
+            c.a_max_um.to_bits(),
+            c.unit.clone(),
+            c.resonance_hz.map(f64::to_bits),
+        )
     };
     if sidecar.channel_2.as_ref().map(bits) != scale.channel_2.as_ref().map(bits)
         || sidecar.channels != if scale.channel_2.is_some() { 2 } else { 1 }
     {
         let describe = |c: &Option<AmplitudeScale>| match c {
             Some(c) => {
-                format!("channel 2 at {} um per full scale (a_max {} um)", Num(c.um_per_full_scale), Num(c.a_max_um))
+                let on = c.resonance_hz.map_or(String::new(), |f| format!(", on the plate's resonance {} Hz", Num(f)));
+                format!(
+                    "channel 2 at {} um per full scale (a_max {} um{on})",
+                    Num(c.um_per_full_scale),
+                    Num(c.a_max_um)
+                )
             }
             None => "no channel 2".to_string(),
         };
@@ -620,7 +660,8 @@ pub fn decode_drive_wav_channels(bytes: &[u8]) -> Result<(ScaleChunk, Vec<f64>, 
         ));
     }
     if let Some(c2) = &scale.channel_2
-        && (c2.quantity != AMPLITUDE_QUANTITY
+        && (c2.quantity != if c2.resonance_hz.is_some() { DISPLACEMENT_QUANTITY } else { AMPLITUDE_QUANTITY }
+            || c2.resonance_hz.is_some_and(|f| check_resonance(f, scale.sample_rate_hz).is_err())
             || c2.unit != "um"
             || c2.conversion != AMPLITUDE_CONVERSION
             || c2.full_scale_value.to_bits() != expected_full_scale.to_bits()
@@ -664,16 +705,19 @@ pub fn decode_drive_wav_channels(bytes: &[u8]) -> Result<(ScaleChunk, Vec<f64>, 
     let amplitude: Vec<f64> =
         data.chunks_exact(frame).map(|f| sample(&f[width..]) / expected_full_scale * upfs).collect();
     // No sample may stand for more than a_max (half a code of rounding
-    // allowed), nor for a negative amplitude.
+    // allowed), nor for a negative amplitude; a displacement on the
+    // plate's resonance swings between -a_max and a_max.
     let tolerance = match format {
         WavFormat::Float32 => upfs * 1e-6,
         _ => 0.5 * upfs / expected_full_scale,
     };
-    if let Some(i) = amplitude.iter().position(|&a| !(a <= c2.a_max_um + tolerance && a >= -tolerance)) {
+    let low = if c2.resonance_hz.is_some() { -c2.a_max_um } else { 0.0 };
+    if let Some(i) = amplitude.iter().position(|&a| !(a <= c2.a_max_um + tolerance && a >= low - tolerance)) {
         return Err(format!(
-            "channel 2's sample {i} stands for {} um, outside 0 .. a_max = {} um: the scale chunk does not belong \
+            "channel 2's sample {i} stands for {} um, outside {} .. a_max = {} um: the scale chunk does not belong \
              to these samples",
             Num(amplitude[i]),
+            Num(low),
             Num(c2.a_max_um)
         ));
     }
