@@ -63,6 +63,34 @@ fn bench(c: &mut Criterion) {
             renderer.fill_frames(black_box(&mut frames), 2);
         })
     });
+    // Issue 19: the planar renderer over a 40 x 40 mm map (401 x 401
+    // cells, 0.1 mm), the finger on a circle at 100 mm/s: the same buffer
+    // and report rate, compared with sine_hold above (target: within 2x
+    // its cost per sample).
+    let grid = haptex_core::map::MapGrid { nx: 401, ny: 401, x0_mm: 0.0, y0_mm: 0.0, dx_mm: 0.1, dy_mm: 0.1 };
+    let voltage_v = (0..grid.len())
+        .map(|k| {
+            let (x, y) = (grid.x(k % grid.nx), grid.y(k / grid.nx));
+            60.0 + 30.0 * (x * 3.1).sin() * (y * 1.3).cos() + 10.0 * (x * 17.0).sin()
+        })
+        .collect();
+    let map = haptex_core::map::VoltageMap {
+        grid,
+        voltage_v,
+        u_max_v: 100.0,
+        not_renderable_fraction: 0.0,
+        clipped_fraction: 0.0,
+    };
+    let mut planar = haptex_core::realtime::PlanarRenderer::new(&map, &RealtimeConfig::default()).unwrap();
+    let mut buffer = vec![0.0f32; BUFFER];
+    group.bench_function("planar_sine_hold", |b| {
+        b.iter(|| {
+            let t = planar.now_s();
+            let (x, y) = (20.0 + 15.0 * (t * 100.0 / 15.0).sin(), 20.0 + 15.0 * (t * 100.0 / 15.0).cos());
+            planar.touch(t, black_box(x), black_box(y));
+            planar.fill(black_box(&mut buffer));
+        })
+    });
     group.finish();
 }
 

@@ -73,6 +73,42 @@ fn fill_loop_does_not_allocate() {
     }
 }
 
+/// Issue 19: the planar renderer's fill loop does not allocate either
+/// (reports in x and y, a lift-off, every carrier).
+#[test]
+fn planar_fill_loop_does_not_allocate() {
+    use haptex_core::map::{MapGrid, VoltageMap};
+    use haptex_core::realtime::PlanarRenderer;
+    let grid = MapGrid { nx: 200, ny: 100, x0_mm: 0.0, y0_mm: 0.0, dx_mm: 0.1, dy_mm: 0.1 };
+    let voltage_v = (0..grid.len()).map(|k| 60.0 + 50.0 * (k as f64 * 0.01).sin()).collect();
+    let map = VoltageMap { grid, voltage_v, u_max_v: 100.0, not_renderable_fraction: 0.0, clipped_fraction: 0.0 };
+    for shape in [CarrierShape::Sine, CarrierShape::Square, CarrierShape::None] {
+        let config = RealtimeConfig { carrier: Carrier { shape, frequency_hz: 1000.0 }, ..RealtimeConfig::default() };
+        let mut renderer = PlanarRenderer::new(&map, &config).unwrap();
+        let (mut buffer, mut volts) = (vec![0.0f32; 256], vec![0.0f64; 256]);
+        let count = allocations_in(|| {
+            let mut rendered = 0usize;
+            while rendered < 96_000 {
+                if rendered.is_multiple_of(768) {
+                    let t = renderer.now_s();
+                    if (0.9..1.1).contains(&t) {
+                        renderer.release();
+                    } else {
+                        renderer.touch(t, -3.0 + 12.0 * t, 2.0 + 4.0 * t);
+                    }
+                }
+                if rendered.is_multiple_of(512) {
+                    renderer.fill(&mut buffer);
+                } else {
+                    renderer.fill_volts(&mut volts);
+                }
+                rendered += 256;
+            }
+        });
+        assert_eq!(count, 0, "{shape:?}: {count} allocations in the planar fill loop");
+    }
+}
+
 /// Issue 18: the live engine's callback (`LiveEngine::process`, what
 /// `haptex live` runs on the audio thread) does not allocate either: touch
 /// events from a bounded std channel (`try_recv`, the CLI's queue), a

@@ -41,10 +41,16 @@
 //! [`RealtimeRenderer::fill_frames`] writes a / a_max, as the two-channel
 //! WAV does, so no sample can stand for more than the clamp.
 
+mod planar;
+mod touch;
+
+pub use planar::{PlanarRenderer, PlanarSample};
+
 use crate::num::Num;
 use crate::signal::{
     AmplitudeCurve, Carrier, CarrierShape, EnvelopeLimiter, Extend, Limits, SignalError, VoltageCurve,
 };
+use touch::TouchEstimator;
 
 /// Largest lookup table: 2^20 points.
 pub const MAX_TABLE_POINTS: usize = 1 << 20;
@@ -255,33 +261,34 @@ pub struct RealtimeRenderer {
     wrap: f64,
     /// Channel 2, the ultrasonic amplitude a(x), for a combined design.
     amplitude: Option<AmplitudeChannel>,
-    // Carrier: 64-bit phase accumulator (a full cycle is 2^64).
+    /// Carrier, limits, scale and clock.
+    out: Output,
+    /// Touch state: last report, velocity, blended correction.
+    touch: TouchEstimator<1>,
+}
+
+/// What every real-time renderer shares once it has the envelope: the
+/// carrier (a 64-bit phase accumulator, a full cycle is 2^64), the
+/// envelope limiter, the output scale, the clock and the peak bound.
+#[derive(Debug, Clone)]
+struct Output {
     shape: CarrierShape,
     phase: u64,
     phase_step: u64,
     limiter: EnvelopeLimiter,
     output_scale: f64,
-    // Clock.
     n: u64,
     dt_s: f64,
     sample_rate_hz: f64,
-    // Touch state: last report, velocity, blended correction.
-    touching: bool,
-    t_report: f64,
-    x_report: f64,
-    velocity: f64,
-    offset: f64,
-    inv_blend: f64,
-    blend: bool,
-    horizon_s: f64,
     peak_bound_v: f64,
 }
 
-impl RealtimeRenderer {
-    /// Builds the renderer: the lookup table, the carrier, the limits.
-    /// Refuses a configuration whose peak (carrier peak/RMS times the largest
-    /// table voltage) exceeds the amplifier range or the full scale.
-    pub fn new(curve: &VoltageCurve, config: &RealtimeConfig) -> Result<Self, SignalError> {
+impl Output {
+    /// Checks `config` (sample rate, carrier, limits, horizon, blend, full
+    /// scale) for envelopes up to `max_envelope_v`: refuses a peak (carrier
+    /// peak/RMS times the largest envelope or U_max, whichever is lower)
+    /// above the amplifier range or the full scale.
+    fn new(config: &RealtimeConfig, max_envelope_v: f64) -> Result<Self, SignalError> {
         let fs = config.sample_rate_hz as f64;
         if config.sample_rate_hz < 100 {
             return Err(SignalError::Settings(format!("sample rate {} Hz is below 100 Hz", config.sample_rate_hz)));
@@ -303,10 +310,8 @@ impl RealtimeRenderer {
                 "volts per full scale must be a positive finite number, got {vpfs}"
             )));
         }
-
-        let table = LookupTable::new(curve, config.table_points, config.limits.u_max_v)?;
         // The envelope limiter clamps every sample at U_max.
-        let peak_bound_v = config.carrier.peak_per_rms() * table.max().min(config.limits.u_max_v);
+        let peak_bound_v = config.carrier.peak_per_rms() * max_envelope_v.min(config.limits.u_max_v);
         if let Some(range_v) = config.limits.amplifier_range_v
             && peak_bound_v > range_v
         {
@@ -320,15 +325,9 @@ impl RealtimeRenderer {
         if peak_bound_v > vpfs {
             return Err(SignalError::ExceedsFullScale { amplitude_v: peak_bound_v, volts_per_full_scale: vpfs });
         }
-
         let cycles_per_sample =
             if config.carrier.shape == CarrierShape::None { 0.0 } else { config.carrier.frequency_hz / fs };
-        let x0 = table.x0_mm;
         Ok(Self {
-            table,
-            wrap: 0.0,
-            extend: config.extend,
-            amplitude: None,
             shape: config.carrier.shape,
             phase: 0,
             phase_step: (cycles_per_sample * 18_446_744_073_709_551_616.0).round() as u64,
@@ -337,16 +336,27 @@ impl RealtimeRenderer {
             n: 0,
             dt_s: 1.0 / fs,
             sample_rate_hz: fs,
-            touching: false,
-            t_report: 0.0,
-            x_report: x0,
-            velocity: 0.0,
-            offset: 0.0,
-            inv_blend: if config.blend_s > 0.0 { 1.0 / config.blend_s } else { 1.0 },
-            blend: config.blend_s > 0.0,
-            horizon_s: config.horizon_s,
             peak_bound_v,
         })
+    }
+
+    /// Time of the next output sample, s.
+    fn now_s(&self) -> f64 {
+        self.n as f64 * self.dt_s
+    }
+}
+
+impl RealtimeRenderer {
+    /// Builds the renderer: the lookup table, the carrier, the limits.
+    /// Refuses a configuration whose peak (carrier peak/RMS times the largest
+    /// table voltage) exceeds the amplifier range or the full scale.
+    pub fn new(curve: &VoltageCurve, config: &RealtimeConfig) -> Result<Self, SignalError> {
+        // The configuration first (its errors before the table's).
+        Output::new(config, 0.0)?;
+        let table = LookupTable::new(curve, config.table_points, config.limits.u_max_v)?;
+        let out = Output::new(config, table.max())?;
+        let touch = TouchEstimator::new(config.horizon_s, config.blend_s, [table.x0_mm]);
+        Ok(Self { table, wrap: 0.0, extend: config.extend, amplitude: None, out, touch })
     }
 
     /// A two-channel renderer for a combined (or ultrasonic) display's
@@ -382,52 +392,34 @@ impl RealtimeRenderer {
 
     /// Volts at the amplifier output for a full-scale sample of channel 1.
     pub fn volts_per_full_scale(&self) -> f64 {
-        1.0 / self.output_scale
+        1.0 / self.out.output_scale
     }
 
     /// Time of the next output sample on the renderer's clock, in s (0 at
     /// the first sample).
     pub fn now_s(&self) -> f64 {
-        self.n as f64 * self.dt_s
+        self.out.now_s()
     }
 
     /// Output sample rate in Hz.
     pub fn sample_rate_hz(&self) -> f64 {
-        self.sample_rate_hz
+        self.out.sample_rate_hz
     }
 
     /// Samples rendered so far (the index of the next one).
     pub fn samples_rendered(&self) -> u64 {
-        self.n
+        self.out.n
     }
 
     /// Whether a finger is down (a report came, and no release since).
     pub fn is_touching(&self) -> bool {
-        self.touching
+        self.touch.is_touching()
     }
 
     /// A touch report: the finger is at `x_mm` at time `t_s` (renderer
     /// clock). Non-finite reports are ignored. O(1), no allocation.
     pub fn touch(&mut self, t_s: f64, x_mm: f64) {
-        if !(t_s.is_finite() && x_mm.is_finite()) {
-            return;
-        }
-        if !self.touching {
-            // Touch down: no velocity yet.
-            (self.touching, self.t_report, self.x_report, self.velocity, self.offset) = (true, t_s, x_mm, 0.0, 0.0);
-            return;
-        }
-        let estimate = self.position_at(t_s);
-        let dt = t_s - self.t_report;
-        if dt > 0.0 {
-            self.velocity = if dt <= self.horizon_s { (x_mm - self.x_report) / dt } else { 0.0 };
-            self.t_report = t_s;
-        }
-        // A report at or before the last one moves the reference position
-        // only (its timestamp carries no new velocity).
-        self.x_report = x_mm;
-        // Continuity: the new estimate at t_s equals the old one.
-        self.offset = if self.blend { estimate - x_mm } else { 0.0 };
+        self.touch.touch(t_s, [x_mm]);
     }
 
     /// A touch report stamped at [`now_s`](Self::now_s).
@@ -438,7 +430,7 @@ impl RealtimeRenderer {
     /// The finger was lifted: the envelope goes to 0 V (through the slew
     /// limit, if any) until the next report.
     pub fn release(&mut self) {
-        self.touching = false;
+        self.touch.release();
     }
 
     /// The estimated finger position in mm at time `t_s` (renderer clock):
@@ -446,14 +438,7 @@ impl RealtimeRenderer {
     /// horizon, plus what is left of the blended correction.
     #[inline]
     pub fn position_at(&self, t_s: f64) -> f64 {
-        // Plain comparisons: the operands are finite (NaN-aware f64::min/max
-        // cost extra instructions per sample).
-        let age = t_s - self.t_report;
-        let age = if age > 0.0 { age } else { 0.0 };
-        let extrapolated = if age < self.horizon_s { age } else { self.horizon_s };
-        let left = 1.0 - age * self.inv_blend;
-        let left = if left > 0.0 { left } else { 0.0 };
-        self.x_report + self.velocity * extrapolated + self.offset * left
+        self.touch.position_at(t_s)[0]
     }
 
     /// U in V RMS at `x_mm` from the lookup table, before the U_max
@@ -473,7 +458,7 @@ impl RealtimeRenderer {
     /// (`signal::carrier::sin_turns`, within 4.5e-16 of sin), at the phase
     /// in turns (the accumulator's top 53 bits).
     #[inline(always)]
-    fn carrier_at<const S: u8>(phase: u64) -> f64 {
+    pub(crate) fn carrier_at<const S: u8>(phase: u64) -> f64 {
         match S {
             SINE => {
                 std::f64::consts::SQRT_2 * crate::signal::sin_turns(phase as f64 * (1.0 / 18_446_744_073_709_551_616.0))
@@ -495,10 +480,11 @@ impl RealtimeRenderer {
     /// the per-sample loop has no mode branches.
     #[inline(always)]
     fn render<const S: u8, const E: u8, const TWO: bool>(&mut self, n: usize, mut write: impl FnMut(usize, Sample)) {
-        let dt = self.dt_s;
-        let t0 = self.n as f64 * dt;
-        let mut phase = self.phase;
-        let mut limiter = self.limiter;
+        let dt = self.out.dt_s;
+        let t0 = self.out.n as f64 * dt;
+        let mut phase = self.out.phase;
+        let mut limiter = self.out.limiter;
+        let phase_step = self.out.phase_step;
         let mut wrap = self.wrap;
         let (amplitude_table, mut amplitude_wrap, a_max_um) = match &self.amplitude {
             Some(a) if TWO => (Some(&a.table), a.wrap, a.a_max_um),
@@ -508,8 +494,8 @@ impl RealtimeRenderer {
         for i in 0..n {
             let t_s = t0 + k * dt;
             k += 1.0;
-            let (x_mm, requested, amplitude_um) = if self.touching {
-                let x = self.position_at(t_s);
+            let (x_mm, requested, amplitude_um) = if self.touch.is_touching() {
+                let [x] = self.touch.position_at(t_s);
                 let a = match amplitude_table {
                     Some(table) if TWO => {
                         // The a_max clamp (the table's values are >= 0).
@@ -520,20 +506,20 @@ impl RealtimeRenderer {
                 };
                 (x, self.table.lookup::<E>(x, &mut wrap), a)
             } else {
-                (self.x_report, 0.0, 0.0)
+                (self.touch.last()[0], 0.0, 0.0)
             };
             let envelope_v = limiter.apply(requested);
             let signal_v = envelope_v * Self::carrier_at::<S>(phase);
-            phase = phase.wrapping_add(self.phase_step);
+            phase = phase.wrapping_add(phase_step);
             write(i, Sample { t_s, x_mm, envelope_v, signal_v, amplitude_um });
         }
-        self.phase = phase;
-        self.limiter = limiter;
+        self.out.phase = phase;
+        self.out.limiter = limiter;
         self.wrap = wrap;
         if let Some(a) = &mut self.amplitude {
             a.wrap = amplitude_wrap;
         }
-        self.n += n as u64;
+        self.out.n += n as u64;
     }
 
     /// Renders the next `n` samples for the configured shape, extension
@@ -551,7 +537,7 @@ impl RealtimeRenderer {
                 }
             };
         }
-        match (self.shape, self.extend) {
+        match (self.out.shape, self.extend) {
             (C::Sine, Extend::Hold) => by_channels!(SINE, HOLD),
             (C::Sine, Extend::Zero) => by_channels!(SINE, ZERO),
             (C::Sine, Extend::Repeat) => by_channels!(SINE, REPEAT),
@@ -575,7 +561,7 @@ impl RealtimeRenderer {
     /// scale (volts / volts_per_full_scale, within [-1, 1]). O(1) per
     /// sample, no allocation.
     pub fn fill(&mut self, out: &mut [f32]) {
-        let scale = self.output_scale;
+        let scale = self.out.output_scale;
         self.render_with(out.len(), |i, s| out[i] = (s.signal_v * scale) as f32);
     }
 
@@ -588,7 +574,7 @@ impl RealtimeRenderer {
     pub fn fill_frames(&mut self, out: &mut [f32], channels: usize) {
         let channels = channels.max(1);
         let frames = out.len() / channels;
-        let (scale, scale_2) = (self.output_scale, self.a_max_um().map_or(0.0, |a| 1.0 / a));
+        let (scale, scale_2) = (self.out.output_scale, self.a_max_um().map_or(0.0, |a| 1.0 / a));
         self.render_with(frames, |i, s| {
             let frame = &mut out[i * channels..(i + 1) * channels];
             frame.fill(0.0);
@@ -613,7 +599,7 @@ impl RealtimeRenderer {
     /// Upper bound of |drive| in V: carrier peak/RMS times the largest
     /// table voltage or U_max, whichever is lower.
     pub fn peak_bound_v(&self) -> f64 {
-        self.peak_bound_v
+        self.out.peak_bound_v
     }
 
     /// Number of lookup-table points.
