@@ -173,6 +173,12 @@ async fn read_form(body: Body, boundary: String, limits: &Limits) -> Result<Uplo
             None => return Err(ApiError::bad_request("a form part without a name", Some("body"))),
         }
     }
+    if upload.provenance.is_none() && upload.files.is_empty() {
+        return Err(ApiError::bad_request(
+            "the form is empty: send the field provenance and the recordings' files (fields named files)",
+            Some("body"),
+        ));
+    }
     Ok(upload)
 }
 
