@@ -172,7 +172,7 @@ async fn an_upload_is_stored_as_the_command_line_import_stores_it() {
         // The raw forces, reduced for the plot: 20 kHz for about a second.
         let forces = &r["forces"];
         let n = numbers(&forces["t_s"]).len();
-        assert!(forces["samples"].as_u64().unwrap() > 2000 && n <= 2000 && n >= 1000, "{n}");
+        assert!(forces["samples"].as_u64().unwrap() > 2000 && (1000..=2000).contains(&n), "{n}");
         assert_eq!(numbers(&forces["fn_n"]).len(), n);
         assert_eq!(forces["decimated"], true);
         // Every kept segment lies inside the recording's time.
