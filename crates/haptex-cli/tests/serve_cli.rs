@@ -86,3 +86,114 @@ fn serve_refuses_a_missing_library() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("/nonexistent/lib.sqlite") && stderr.contains("no library"), "{stderr}");
 }
+
+/// `haptex serve --writable`: recordings uploaded to the server
+/// (`POST /api/recordings`) are stored as `haptex library import` stores
+/// the same files: `haptex library sample` of both libraries gives the
+/// same profile, value for value. The flag is said at start.
+#[cfg(unix)]
+#[test]
+fn serve_writable_stores_uploads_as_library_import_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let demo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/library/demo/tile");
+    let files = dir.path().join("tile-lab");
+    std::fs::create_dir(&files).unwrap();
+    let mut parts: Vec<(String, Vec<u8>)> = Vec::new();
+    for stroke in 1..=3 {
+        for suffix in [".recording.json", ".force.npy", ".position.npy"] {
+            let name = format!("tile-s{stroke}{suffix}");
+            let mut bytes = std::fs::read(demo.join(&name)).unwrap();
+            if suffix == ".recording.json" {
+                bytes = String::from_utf8(bytes)
+                    .unwrap()
+                    .replace("\"material\": \"tile\"", "\"material\": \"tile-lab\"")
+                    .into_bytes();
+            }
+            std::fs::write(files.join(&name), &bytes).unwrap();
+            parts.push((name, bytes));
+        }
+    }
+    let served = dir.path().join("served.sqlite");
+    let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/library/library.sqlite");
+    std::fs::copy(&shipped, &served).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_haptex"))
+        .args(["serve", "--addr", "127.0.0.1:0", "--writable", "--library"])
+        .arg(&served)
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run haptex serve");
+    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let (port, seen) = common::listening_port(&mut stderr);
+    assert!(seen.contains("writable"), "{seen}");
+
+    let boundary = "haptex-cli-test-5b2e";
+    let mut body = Vec::new();
+    write!(body, "--{boundary}\r\nContent-Disposition: form-data; name=\"provenance\"\r\n\r\nsynthetic\r\n").unwrap();
+    for (name, bytes) in &parts {
+        write!(body, "--{boundary}\r\nContent-Disposition: form-data; name=\"files\"; filename=\"{name}\"\r\n\r\n")
+            .unwrap();
+        body.extend_from_slice(bytes);
+        body.extend_from_slice(b"\r\n");
+    }
+    write!(body, "--{boundary}--\r\n").unwrap();
+    let mut socket = TcpStream::connect(("127.0.0.1", port)).unwrap();
+    socket.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+    write!(
+        socket,
+        "POST /api/recordings HTTP/1.1\r\nHost: localhost\r\nConnection: close\r\nContent-Type: multipart/form-data; \
+         boundary={boundary}\r\nContent-Length: {}\r\n\r\n",
+        body.len()
+    )
+    .unwrap();
+    socket.write_all(&body).unwrap();
+    let mut answer = String::new();
+    socket.read_to_string(&mut answer).unwrap();
+    assert!(
+        answer.starts_with("HTTP/1.1 200") && answer.contains("\"added\":3"),
+        "{}",
+        &answer[..answer.len().min(600)]
+    );
+    let kill = Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap();
+    assert!(kill.success());
+    assert!(child.wait().unwrap().success());
+
+    let imported = dir.path().join("imported.sqlite");
+    let import = Command::new(env!("CARGO_BIN_EXE_haptex"))
+        .args(["library", "import", "--quiet", "--db"])
+        .arg(&imported)
+        .arg(&files)
+        .output()
+        .unwrap();
+    assert!(import.status.success(), "{}", String::from_utf8_lossy(&import.stderr));
+    let sample = |db: &std::path::Path, seed: u64| -> serde_json::Value {
+        let out = Command::new(env!("CARGO_BIN_EXE_haptex"))
+            .args([
+                "library",
+                "sample",
+                "--material",
+                "tile-lab",
+                "--format",
+                "json",
+                "--seed",
+                &seed.to_string(),
+                "--db",
+            ])
+            .arg(db)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    for seed in 0..4 {
+        let (a, b) = (sample(&served, seed), sample(&imported, seed));
+        for column in ["x_mm", "mu", "fn_n"] {
+            assert!(a[column].as_array().is_some_and(|v| v.len() > 100), "{column}");
+            assert_eq!(a[column], b[column], "seed {seed}, {column}");
+        }
+        assert_eq!(a["stroke"]["content_sha256"], b["stroke"]["content_sha256"]);
+        assert_eq!(a["stroke"]["synthetic"], true);
+    }
+    let check =
+        Command::new(env!("CARGO_BIN_EXE_haptex")).args(["library", "check", "--db"]).arg(&served).output().unwrap();
+    assert!(check.status.success(), "{}", String::from_utf8_lossy(&check.stderr));
+}

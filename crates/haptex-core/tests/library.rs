@@ -240,3 +240,49 @@ fn settle_returns_to_a_single_file() {
     let library = Library::open(&path).unwrap();
     assert!(library.check().unwrap().is_empty());
 }
+
+/// An upload's write: all strokes or none. A stroke refused (here a
+/// measured stroke of a synthetic material) leaves the library exactly as
+/// it was, without even the import run.
+#[test]
+fn atomic_imports_store_all_or_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("lib.sqlite");
+    let mut library = Library::open(&path).unwrap();
+    let config = ProcessingConfig::default();
+    let recordings = demo(2);
+    import(&mut library, &recordings[..1]); // one synthetic sandpaper stroke
+    let before = (library.materials().unwrap(), library.imports().unwrap());
+
+    let mut measured = recordings[1].clone(); // sandpaper again, claimed measured
+    measured.meta.synthetic = false;
+    measured.sha256 = Some("a different content".into());
+    let good = &recordings[2]; // another material
+    let processed: Vec<_> = [good, &measured].iter().map(|r| process(r, &config).unwrap()).collect();
+    let refused =
+        library.add_recordings_atomically("upload", &config, &[(good, &processed[0]), (&measured, &processed[1])]);
+    assert!(matches!(refused, Err(LibraryError::SyntheticMismatch { .. })), "{refused:?}");
+    assert_eq!((library.materials().unwrap(), library.imports().unwrap()), before);
+
+    // Accepted: one run, finished, the strokes new; the same content given
+    // twice (or already stored) is a duplicate.
+    let (run, added) = library
+        .add_recordings_atomically(
+            "upload",
+            &config,
+            &[
+                (good, &processed[0]),
+                (good, &processed[0]),
+                (&recordings[0], &process(&recordings[0], &config).unwrap()),
+            ],
+        )
+        .unwrap();
+    assert!(matches!(added[..], [Added::New(a), Added::Duplicate(b), Added::Duplicate(_)] if a == b), "{added:?}");
+    let imports = library.imports().unwrap();
+    assert_eq!(imports.len(), 2);
+    assert_eq!(imports[1].id, run.0);
+    assert!(imports[1].finished_at.is_some() && imports[1].strokes == 1);
+    let Added::New(id) = added[0] else { unreachable!() };
+    assert_eq!(library.profile(id).unwrap().profile, processed[0].profile);
+    assert!(library.check().unwrap().is_empty());
+}

@@ -311,3 +311,47 @@ fn npy_header_with_nested_brackets_is_refused_at_once() {
     // not a timing of the reader.
     assert!(start.elapsed() < std::time::Duration::from_secs(2), "{:?}", start.elapsed());
 }
+
+/// Recordings from files held in memory (an upload) read exactly as from
+/// a directory: the same recording, the same content hash; a stream that
+/// is not among the files, or a name that could leave the folder, is an
+/// error naming the metadata field.
+#[test]
+fn bundles_in_memory_read_as_directories_do() {
+    use haptex_core::recording::bundle::FileBundle;
+    let demo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/library/demo/wood");
+    let mut bundle = FileBundle::new();
+    for stem in ["wood-s1", "wood-s2"] {
+        for suffix in [".recording.json", ".force.npy", ".position.npy"] {
+            let name = format!("{stem}{suffix}");
+            bundle.add(&format!("wood/{name}"), std::fs::read(demo.join(&name)).unwrap()).unwrap();
+        }
+    }
+    bundle.add("notes.txt", b"x".to_vec()).unwrap();
+    let found = bundle.recordings().unwrap();
+    assert_eq!(found.unused, ["notes.txt"]);
+    assert_eq!(found.recordings.len(), 2);
+    let loaded = Recording::load(&demo.join("wood-s1.recording.json")).unwrap();
+    let mine = &found.recordings[0];
+    assert_eq!(mine.name, "wood/wood-s1.recording.json");
+    assert_eq!(
+        (&mine.meta, &mine.force, &mine.position, &mine.sha256),
+        (&loaded.meta, &loaded.force, &loaded.position, &loaded.sha256)
+    );
+
+    let meta = std::fs::read_to_string(demo.join("wood-s1.recording.json")).unwrap();
+    for (file, expected) in [
+        ("wood-s9.force.npy", "names \"wood-s9.force.npy\", which is not among the files given"),
+        ("../wood-s1.force.npy", "is not a file name inside the recording's folder"),
+    ] {
+        let mut bundle = FileBundle::new();
+        bundle.add("m.recording.json", meta.replace("wood-s1.force.npy", file).into_bytes()).unwrap();
+        let e = bundle.recordings().unwrap_err().to_string();
+        assert!(e.starts_with("m.recording.json, field 'force.file': ") && e.contains(expected), "{e}");
+    }
+    // A value of the wrong type is reported at its field.
+    let mut bundle = FileBundle::new();
+    bundle.add("m.recording.json", meta.replace("\"rate_hz\": 400.0", "\"rate_hz\": \"fast\"").into_bytes()).unwrap();
+    let e = bundle.recordings().unwrap_err().to_string();
+    assert!(e.starts_with("m.recording.json, field 'position.rate_hz': invalid metadata: invalid type"), "{e}");
+}

@@ -51,16 +51,18 @@
     pins: [],              // pinned designs, overlaid on the plots (pinDesign)
     updates: 0,
   };
-  const plots = { height: null, friction: null, voltage: null, amplitude: null, check: null, checkVoltage: null };
+  const plots = { height: null, friction: null, voltage: null, amplitude: null, check: null, checkVoltage: null,
+    recordings: [] }; // recordings: the processing reports' plots of the last upload
   window.haptex = { state, plots };
 
   // ---------------------------------------------------------------- API
 
   class ApiError extends Error {
-    constructor(message, field, status) {
+    constructor(message, field, status, file = null) {
       super(message);
       this.field = field;
       this.status = status;
+      this.file = file; // the uploaded file at fault (POST /api/recordings)
     }
   }
 
@@ -69,12 +71,14 @@
     if (!response.ok) {
       let message = `${response.status} ${response.statusText}`;
       let field = null;
+      let file = null;
       try {
         const body = await response.json();
         message = body.error || message;
         field = body.field || null;
+        file = body.file || null;
       } catch (_) { /* not JSON */ }
-      throw new ApiError(message, field, response.status);
+      throw new ApiError(message, field, response.status, file);
     }
     return response;
   }
@@ -311,6 +315,134 @@
     } else {
       loadSource().catch(showError);
     }
+  }
+
+  /** The material choices: the library's materials (the selection kept when still there). */
+  function fillMaterials(materials) {
+    const select = $('material');
+    const chosen = select.value;
+    select.textContent = '';
+    materials.forEach((m) => {
+      const option = document.createElement('option');
+      option.value = m.name;
+      option.textContent = `${m.name}${m.synthetic ? ' (synthetic)' : ''} · mean mu ${m.mean_mu.toFixed(3)}`;
+      select.append(option);
+    });
+    if (materials.some((m) => m.name === chosen)) select.value = chosen;
+  }
+
+  // --------------------------------------------------- recordings upload
+
+  /**
+   * Uploads the chosen recording files (or zips) into the library
+   * (POST /api/recordings, a writable library only), draws the processing
+   * report of each recording over its raw forces and shows the first
+   * uploaded material.
+   */
+  async function uploadRecordings() {
+    const files = Array.from($('recording-files').files);
+    const provenance = document.querySelector('input[name="provenance"]:checked');
+    if (!files.length) throw new ApiError('choose the recording files (or a zip) first', 'files', 0);
+    if (!provenance) {
+      throw new ApiError('say whether the data are measured or synthetic: it is required', 'provenance', 0);
+    }
+    const form = new FormData();
+    form.append('provenance', provenance.value);
+    files.forEach((f) => form.append('files', f, f.name));
+    $('recordings-info').classList.remove('error');
+    $('recordings-info').textContent = `Uploading ${files.length} file${files.length === 1 ? '' : 's'}…`;
+    clearRecordingsReport();
+    const report = await (await api('/api/recordings', { method: 'POST', body: form })).json();
+    state.recordings = report;
+    const names = [...new Set(report.recordings.map((r) => r.material))];
+    $('recordings-info').textContent = `${report.added} stroke${report.added === 1 ? '' : 's'} added to the ` +
+      `library (material${names.length === 1 ? '' : 's'} ${names.join(', ')}), ${report.duplicates} already there` +
+      (report.unused_files.length ? `; not used: ${report.unused_files.join(', ')}` : '') + '.';
+    fillMaterials(report.materials);
+    report.recordings.forEach(showRecordingReport);
+    // The library changed: a recipe records its new SHA-256.
+    state.config.data = (await (await api('/api/config')).json()).data;
+    document.body.dataset.recordings = String(Number(document.body.dataset.recordings || 0) + 1);
+    // Show a stroke of the first material uploaded.
+    $('material').value = names[0];
+    $('seed').value = '';
+    await loadSource();
+  }
+
+  function showRecordingsError(error) {
+    const info = $('recordings-info');
+    info.classList.add('error');
+    const at = error instanceof ApiError && error.field && !error.message.includes(error.field)
+      ? ` (${error.field === 'provenance' ? 'The data are' : error.field})` : '';
+    info.textContent = `Not added: ${error.message}${at}`;
+    document.body.dataset.recordingsError = String(Number(document.body.dataset.recordingsError || 0) + 1);
+  }
+
+  function clearRecordingsReport() {
+    plots.recordings.forEach((p) => p.destroy());
+    plots.recordings = [];
+    $('recordings-report').textContent = '';
+  }
+
+  /** One recording's report: the raw forces with the sliding segments kept (green) and dropped (grey). */
+  function showRecordingReport(r) {
+    const figure = document.createElement('figure');
+    figure.className = 'recording-report';
+    const caption = document.createElement('figcaption');
+    caption.textContent = `${r.file}: ${r.material}, participant ${r.participant}, stroke ${r.stroke} → ` +
+      (r.duplicate ? `already in the library as stroke ${r.stroke_id}` : `stroke ${r.stroke_id}`) +
+      ` · ${r.profile.points} points over ${fmt(r.profile.x_end_mm - r.profile.x_start_mm)} mm, mean mu ` +
+      `${fmt(r.profile.mean_mu)}, Fn_RS ${fmt(r.profile.mean_fn_n)} N`;
+    figure.append(caption);
+    const holder = document.createElement('div');
+    holder.className = 'recording-plot';
+    holder.setAttribute('role', 'img');
+    figure.append(holder);
+    const list = document.createElement('ul');
+    r.segments.forEach((s, i) => {
+      const li = document.createElement('li');
+      li.className = 'kept';
+      li.textContent = `kept ${i + 1}: ${s.direction}, t ${fmt(s.t_start_s)} … ${fmt(s.t_end_s)} s, x ` +
+        `${fmt(s.x_start_mm)} → ${fmt(s.x_end_mm)} mm, ${fmt(s.mean_speed_mm_s)} mm/s, Fn ${fmt(s.mean_fn_n)} N`;
+      list.append(li);
+    });
+    r.dropped.forEach((d) => {
+      const li = document.createElement('li');
+      li.className = 'dropped';
+      li.textContent = `dropped: ${d.direction}, t ${fmt(d.t_start_s)} … ${fmt(d.t_end_s)} s: ${d.reason}`;
+      list.append(li);
+    });
+    figure.append(list);
+    $('recordings-report').append(figure);
+    const f = r.forces;
+    holder.setAttribute('aria-label', `raw forces of ${r.file} over ${fmt(f.t_s[0])} … ` +
+      `${fmt(f.t_s[f.t_s.length - 1])} s (${f.samples} samples${f.decimated ? ', min/max per bucket' : ''}), ` +
+      `${r.segments.length} sliding segments kept, ${r.dropped.length} dropped`);
+    const bands = (u) => {
+      const ctx = u.ctx;
+      ctx.save();
+      const paint = (items, colour) => items.forEach((s) => {
+        const a = u.valToPos(s.t_start_s, 'x', true);
+        const b = u.valToPos(s.t_end_s, 'x', true);
+        ctx.fillStyle = colour;
+        ctx.fillRect(Math.min(a, b), u.bbox.top, Math.max(1, Math.abs(b - a)), u.bbox.height);
+      });
+      paint(r.segments, 'rgba(40, 150, 70, 0.18)');
+      paint(r.dropped, 'rgba(120, 120, 120, 0.22)');
+      ctx.restore();
+    };
+    const options = {
+      width: Math.max(240, $('recordings-report').clientWidth || 320),
+      height: 180,
+      scales: { x: { time: false } },
+      axes: [{ label: 't (s)' }, { label: 'N' }],
+      legend: { live: false },
+      series: [{ label: 't (s)' },
+        { label: 'Fn (N)', stroke: '#1f5fa8', width: 1 },
+        { label: 'Ft (N)', stroke: '#b3261e', width: 1 }],
+      hooks: { drawClear: [bands] },
+    };
+    plots.recordings.push(new uPlot(options, [f.t_s, f.fn_n, f.ft_n], holder));
   }
 
   // ------------------------------------------------------- template source
@@ -717,6 +849,7 @@
     $('material').addEventListener('change', () => { $('seed').value = ''; loadSource().catch(showError); });
     $('seed').addEventListener('change', () => loadSource().catch(showError));
     $('another-stroke').addEventListener('click', () => loadSource({ newSeed: true }).catch(showError));
+    $('upload-recordings').addEventListener('click', () => uploadRecordings().catch(showRecordingsError));
     $('upload').addEventListener('change', () => loadSource().catch(showError));
     $('recipe-file').addEventListener('change', async () => {
       const file = $('recipe-file').files[0];
@@ -1920,13 +2053,8 @@
       }
       if (sources.some((s) => s.id === 'library')) {
         const list = await (await api('/api/materials')).json();
-        const select = $('material');
-        list.materials.forEach((m) => {
-          const option = document.createElement('option');
-          option.value = m.name;
-          option.textContent = `${m.name}${m.synthetic ? ' (synthetic)' : ''} · mean mu ${m.mean_mu.toFixed(3)}`;
-          select.append(option);
-        });
+        fillMaterials(list.materials);
+        $('recordings-box').hidden = !state.config.library_writable;
       }
       loadModel().catch((error) => { $('model-body').textContent = `The model could not be loaded: ${error.message}`; });
       selectSource(sources[0].id);

@@ -34,6 +34,10 @@ pub struct ApiError {
     /// CSV text (an ultrasonic calibration) rather than the column itself.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub column: Option<String>,
+    /// The uploaded file at fault (an upload of recordings: `field` is
+    /// then the metadata field, `line` the CSV line), when one is.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
 }
 
 impl ApiError {
@@ -48,7 +52,7 @@ impl ApiError {
     pub fn new(status: StatusCode, message: impl Into<String>, field: Option<&str>) -> Self {
         let message = cut(printable(message.into()), Self::MAX_MESSAGE_BYTES);
         let field = field.map(|f| cut(printable(f.to_string()), Self::MAX_FIELD_BYTES));
-        Self { status, message, field, line: None, column: None }
+        Self { status, message, field, line: None, column: None, file: None }
     }
 
     /// 400: the request is malformed or a value is out of range.
@@ -83,6 +87,11 @@ impl ApiError {
 
     pub fn with_line(mut self, line: Option<u64>) -> Self {
         self.line = line;
+        self
+    }
+
+    pub fn with_file(mut self, file: Option<String>) -> Self {
+        self.file = file.map(|f| cut(printable(f), Self::MAX_FIELD_BYTES));
         self
     }
 

@@ -12,7 +12,8 @@
 //! - [`routes`]: the route table (method, path, handler), the one list the
 //!   router is built from and the OpenAPI test checks;
 //! - `api/*`: one module per resource (health, config, templates, predict,
-//!   simulate, check, voltage, materials, play, profile, openapi);
+//!   simulate, check, voltage, materials, recordings, play, profile,
+//!   openapi);
 //! - [`error`]: [`ApiError`] and the middleware that turns every 4xx into
 //!   the JSON error `{"error": message, "field": name}`;
 //! - [`params`]: device parameters with the paper's defaults and their
@@ -78,8 +79,11 @@ pub struct Config {
     /// Address to listen on (default 127.0.0.1:8080: this machine only).
     pub addr: SocketAddr,
     /// The texture library (SQLite) to serve under `/api/materials`, opened
-    /// read-only; `None` serves no materials.
+    /// read-only unless `writable`; `None` serves no materials.
     pub library: Option<PathBuf>,
+    /// Let `POST /api/recordings` add uploaded recordings to the library
+    /// (`haptex serve --writable`); read-only by default.
+    pub writable: bool,
     /// The FE database of surface templates (a `haptex db` directory) to
     /// serve under `/api/templates`, `/api/predict` and `/api/simulate`;
     /// `None` serves none.
@@ -216,6 +220,9 @@ pub fn run(config: Config, on_listening: impl FnOnce(SocketAddr)) -> Result<(), 
     let mut state = AppState::new(config.library.as_deref(), config.limits.clone())?
         .with_hosts(HostPolicy::new(&config.allowed_hosts)?)
         .with_access_log(config.access_log);
+    if config.writable {
+        state = state.with_writable_library()?;
+    }
     if let Some(dir) = &config.database {
         state = state.with_database(dir)?;
     }

@@ -125,8 +125,9 @@ impl Recipe {
                 format!("the recipe was made by haptex {}, this is {version}", self.haptex_version),
             ));
         }
+        let library_sha256 = state.library_sha256();
         for (field, want, have) in [
-            ("library_sha256", &self.library_sha256, state.library_sha256()),
+            ("library_sha256", &self.library_sha256, library_sha256.as_deref()),
             ("database_sha256", &self.database_sha256, state.database_sha256()),
         ] {
             if let Some(want) = want

@@ -49,6 +49,7 @@ pub fn table() -> Vec<Endpoint> {
         endpoint(Method::POST, "/api/profile", api::profile::post),
         endpoint(Method::GET, "/api/materials", api::materials::list),
         endpoint(Method::GET, "/api/materials/{name}/sample", api::materials::sample),
+        endpoint(Method::POST, "/api/recordings", api::recordings::post),
         endpoint(Method::POST, "/api/play", api::play::post),
     ]
 }

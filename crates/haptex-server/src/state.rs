@@ -83,6 +83,12 @@ pub struct Limits {
     /// together (about 1.5 ms of one core each with the default mesh): the
     /// bound on the time it holds an FE slot.
     pub max_check_steps: usize,
+    /// Largest upload of recordings (`POST /api/recordings`) in bytes,
+    /// the whole multipart body, and also the most bytes its files may
+    /// hold once unzipped (64 MiB).
+    pub max_upload_bytes: usize,
+    /// Most files in one upload of recordings, zip entries included.
+    pub max_upload_files: usize,
 }
 
 impl Limits {
@@ -92,7 +98,8 @@ impl Limits {
     /// write progress, bodies over 64 KiB two at a time, 64 MiB of unsent
     /// answers, 2 renders at once, 1 FE simulation at once (the other core
     /// serves everything else) with a wait of up to 5 s for it; checks on
-    /// the finger model of up to 4000 points and 4000 FE steps (about 6 s).
+    /// the finger model of up to 4000 points and 4000 FE steps (about 6 s);
+    /// uploads of recordings of up to 64 MiB and 1000 files.
     pub const DEFAULT: Self = Self {
         max_body_bytes: 1 << 20,
         max_points: 100_000,
@@ -113,6 +120,8 @@ impl Limits {
         simulation_wait: Duration::from_secs(5),
         max_check_points: 4000,
         max_check_steps: 4000,
+        max_upload_bytes: 64 << 20,
+        max_upload_files: 1000,
     };
 
     /// The read buffer hyper may fill with one request head: room for the
@@ -168,6 +177,28 @@ impl AppState {
     pub fn new(library: Option<&Path>, limits: Limits) -> Result<Self, LibraryError> {
         let library = library.map(LibraryPool::open).transpose()?.map(Arc::new);
         Ok(Self::build(library, None, None, limits, HostPolicy::default(), false))
+    }
+
+    /// This state with its library writable: `POST /api/recordings`
+    /// imports uploaded recordings into it (`haptex serve --writable`).
+    /// Opened for writing now (which also migrates an older schema), so
+    /// that a file the server may not write fails at start. Without a
+    /// library this is the state as it was.
+    pub fn with_writable_library(self) -> Result<Self, LibraryError> {
+        let i = &self.0;
+        let Some(pool) = &i.library else { return Ok(self) };
+        let writer = Library::open(&pool.path)?;
+        writer.settle()?;
+        drop(writer);
+        let library = Some(Arc::new(LibraryPool::open_with(&pool.path, true)?));
+        Ok(Self::build(
+            library,
+            i.templates.clone(),
+            i.database_sha256.clone(),
+            i.limits.clone(),
+            i.hosts.clone(),
+            i.access_log,
+        ))
     }
 
     /// This state, also serving the surface templates of the FE database in
@@ -237,9 +268,15 @@ impl AppState {
         }))
     }
 
-    /// SHA-256 of the texture library file served (None without a library).
-    pub fn library_sha256(&self) -> Option<&str> {
-        self.0.library.as_ref().map(|l| l.sha256.as_str())
+    /// SHA-256 of the texture library file served (None without a
+    /// library); a writable library's changes with every upload.
+    pub fn library_sha256(&self) -> Option<String> {
+        self.0.library.as_ref().map(|l| l.sha256())
+    }
+
+    /// Whether the library takes uploads (`haptex serve --writable`).
+    pub fn library_writable(&self) -> bool {
+        self.0.library.as_ref().is_some_and(|l| l.writable)
     }
 
     /// SHA-256 of the FE database served (None without one): see
@@ -356,29 +393,84 @@ impl AppState {
 /// Read-only connections to the texture library. A [`Library`] is `Send`
 /// but not `Sync`, so each request borrows one connection (opening one
 /// when none is idle) and returns it; at most `MAX_IDLE` are kept.
+///
+/// A writable library (`haptex serve --writable`) is written by one upload
+/// at a time ([`LibraryPool::writer`]), each through its own read-write
+/// connection; readers see an upload once it has committed.
 #[derive(Debug)]
 pub struct LibraryPool {
     path: PathBuf,
-    /// SHA-256 of the file when it was opened (what a recipe records).
-    sha256: String,
+    /// SHA-256 of the file (what a recipe records): when it was opened,
+    /// and again after each upload.
+    sha256: Mutex<String>,
     idle: Mutex<Vec<Library>>,
+    writable: bool,
+    /// One upload at a time.
+    writer: Arc<Semaphore>,
 }
 
 impl LibraryPool {
     const MAX_IDLE: usize = 8;
 
     fn open(path: &Path) -> Result<Self, LibraryError> {
+        Self::open_with(path, false)
+    }
+
+    fn open_with(path: &Path, writable: bool) -> Result<Self, LibraryError> {
         let first = Library::open_read_only(path)?;
-        let sha256 = haptex_core::io::sha256_file(path).map_err(|e| LibraryError::Open {
+        let sha256 = Self::hash(path)?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            sha256: Mutex::new(sha256),
+            idle: Mutex::new(vec![first]),
+            writable,
+            writer: Arc::new(Semaphore::new(1)),
+        })
+    }
+
+    fn hash(path: &Path) -> Result<String, LibraryError> {
+        haptex_core::io::sha256_file(path).map_err(|e| LibraryError::Open {
             path: path.display().to_string(),
             message: format!("cannot hash it: {e}"),
-        })?;
-        Ok(Self { path: path.to_path_buf(), sha256, idle: Mutex::new(vec![first]) })
+        })
     }
 
     /// The library file.
     pub fn path(&self) -> &Path {
         &self.path
+    }
+
+    /// SHA-256 of the library file, as of the last upload.
+    pub fn sha256(&self) -> String {
+        self.sha256.lock().map(|s| s.clone()).unwrap_or_default()
+    }
+
+    /// Whether uploads may write to the library.
+    pub fn writable(&self) -> bool {
+        self.writable
+    }
+
+    /// The slot of the one upload written at a time.
+    pub fn writer(&self) -> &Arc<Semaphore> {
+        &self.writer
+    }
+
+    /// Runs `f` with a read-write connection (on the calling thread: call
+    /// it from blocking work, holding [`LibraryPool::writer`]), then
+    /// settles the file and hashes it again.
+    pub fn write<T>(&self, f: impl FnOnce(&mut Library) -> Result<T, ApiError>) -> Result<T, ApiError> {
+        if !self.writable {
+            return Err(ApiError::internal("a write to a read-only library"));
+        }
+        let mut library = Library::open(&self.path).map_err(ApiError::library)?;
+        let result = f(&mut library);
+        library.settle().map_err(ApiError::library)?;
+        drop(library);
+        let hash = Self::hash(&self.path).map_err(ApiError::library)?;
+        if let Ok(mut sha) = self.sha256.lock() {
+            *sha = hash;
+        }
+        result
     }
 
     /// Runs `f` with a connection on a blocking thread (SQLite is

@@ -26,7 +26,58 @@ use haptex_server::params::DEVICE_PARAMS;
 use haptex_server::routes;
 use serde_json::{Value, json};
 
-use common::{RawServer, check_json_error, shipped_state};
+use common::{RawServer, check_json_error, shipped_db, shipped_library};
+
+/// The multipart boundary of the upload cases.
+const BOUNDARY: &str = "adversarial-0f3c";
+
+/// A multipart/form-data body of these parts: (name, file name, bytes).
+fn form(parts: &[(&str, Option<&str>, &[u8])]) -> Vec<u8> {
+    let mut body = Vec::new();
+    for (name, file, bytes) in parts {
+        let file = file.map_or(String::new(), |f| format!("; filename=\"{f}\""));
+        body.extend_from_slice(
+            format!("--{BOUNDARY}\r\nContent-Disposition: form-data; name=\"{name}\"{file}\r\n\r\n").as_bytes(),
+        );
+        body.extend_from_slice(bytes);
+        body.extend_from_slice(b"\r\n");
+    }
+    body.extend_from_slice(format!("--{BOUNDARY}--\r\n").as_bytes());
+    body
+}
+
+/// The files of the shipped demo recording tile-s1 (in the library
+/// already: uploading it again stores nothing).
+fn tile_s1() -> Vec<(String, Vec<u8>)> {
+    let demo = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/library/demo/tile");
+    [".recording.json", ".force.npy", ".position.npy"]
+        .iter()
+        .map(|suffix| {
+            let name = format!("tile-s1{suffix}");
+            let bytes = std::fs::read(demo.join(&name)).unwrap();
+            (name, bytes)
+        })
+        .collect()
+}
+
+/// The upload form of `files`, with `provenance`.
+fn upload_form(provenance: &str, files: &[(String, Vec<u8>)]) -> Vec<u8> {
+    let mut parts: Vec<(&str, Option<&str>, &[u8])> = vec![("provenance", None, provenance.as_bytes())];
+    parts.extend(files.iter().map(|(n, b)| ("files", Some(n.as_str()), b.as_slice())));
+    form(&parts)
+}
+
+/// A zip of these (name, bytes) entries, stored.
+fn zip_of(entries: &[(String, Vec<u8>)]) -> Vec<u8> {
+    use std::io::Write;
+    let mut writer = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let options = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+    for (name, bytes) in entries {
+        writer.start_file(name.as_str(), options).unwrap();
+        writer.write_all(bytes).unwrap();
+    }
+    writer.finish().unwrap().into_inner()
+}
 
 /// One request of the table and the answer it must get.
 #[derive(Debug, Clone)]
@@ -214,6 +265,12 @@ fn valid_requests() -> Vec<Valid> {
             body: vec![],
         },
         Valid {
+            route: ("POST", "/api/recordings"),
+            target: "/api/recordings",
+            content_type: Some("multipart/form-data; boundary=adversarial-0f3c"),
+            body: upload_form("synthetic", &tile_s1()),
+        },
+        Valid {
             route: ("POST", "/api/play"),
             target: "/api/play",
             content_type: json_ct,
@@ -274,7 +331,29 @@ fn generic_cases(valid: &Valid) -> Vec<Case> {
     cases.push(valid.case("a header field without a colon", 400, Some("request"), |c| {
         c.headers.push(("Not a header".into(), "x".into()))
     }));
-    if method == "POST" {
+    if method == "POST" && valid.content_type.is_some_and(|c| c.starts_with("multipart/")) {
+        cases.push(valid.case("no Content-Type", 415, Some("content-type"), |c| c.headers.clear()));
+        for ct in
+            ["text/plain", "application/json", "application/zip", "multipart/form-data", "multipart/mixed; boundary=x"]
+        {
+            cases.push(valid.case(format!("Content-Type {ct:?}"), 415, Some("content-type"), |c| {
+                c.headers = vec![("Content-Type".into(), ct.into())]
+            }));
+        }
+        cases.push(valid.case("an empty body", 400, Some("body"), |c| c.body.clear()));
+        cases.push(valid.case("another boundary", 400, Some("body"), |c| {
+            c.headers = vec![("Content-Type".into(), "multipart/form-data; boundary=x".into())]
+        }));
+        let mut truncated = valid.body.clone();
+        truncated.truncate(valid.body.len() / 2);
+        cases.push(valid.case("a truncated form", 400, Some("body"), |c| c.body = truncated));
+        let big = upload_form("synthetic", &[("big.csv".into(), vec![b'0'; (64 << 20) + 1024])]);
+        cases.push(valid.case("a body over 64 MiB", 413, Some("body"), |c| c.body = big));
+        cases.push(valid.case("a chunked body with a bad chunk", 400, Some("body"), |c| {
+            c.headers.push(("Transfer-Encoding".into(), "chunked".into()));
+            c.body = b"zz\r\nabc\r\n0\r\n\r\n".to_vec();
+        }));
+    } else if method == "POST" {
         let json_only = valid.route.1 != "/api/voltage" && valid.route.1 != "/api/profile";
         cases.push(valid.case("no Content-Type", 415, Some("content-type"), |c| c.headers.clear()));
         for ct in ["text/plain", "application/xml", "multipart/form-data; boundary=x", "application/json\u{1}"] {
@@ -326,7 +405,8 @@ fn generic_cases(valid: &Valid) -> Vec<Case> {
 /// Each route's own fields.
 fn route_cases(valid: &Valid) -> Vec<Case> {
     let mut cases = Vec::new();
-    let body: Value = if valid.body.is_empty() { Value::Null } else { serde_json::from_slice(&valid.body).unwrap() };
+    let json = valid.content_type == Some("application/json");
+    let body: Value = if json { serde_json::from_slice(&valid.body).unwrap() } else { Value::Null };
     match valid.route.1 {
         "/static/{*path}" => {
             for (what, target) in [
@@ -745,6 +825,103 @@ fn route_cases(valid: &Valid) -> Vec<Case> {
                 cases.push(valid.json(format!("WAV with {path} = {value}"), &set(&wav, path, value), 400, path));
             }
         }
+        "/api/recordings" => {
+            let files = tile_s1();
+            let body = |b: Vec<u8>| move |c: &mut Case| c.body = b;
+            cases.push(valid.case("no provenance", 400, Some("provenance"), body(upload_form("", &files))));
+            let no_provenance =
+                form(&files.iter().map(|(n, b)| ("files", Some(n.as_str()), b.as_slice())).collect::<Vec<_>>());
+            cases.push(valid.case("provenance missing", 400, Some("provenance"), body(no_provenance)));
+            cases.push(valid.case(
+                "a hostile provenance",
+                400,
+                Some("provenance"),
+                body(upload_form(&hostile(10_000), &files)),
+            ));
+            cases.push(valid.case(
+                "measured, not as the metadata says",
+                400,
+                Some("provenance"),
+                body(upload_form("measured", &files)),
+            ));
+            let twice = form(&[("provenance", None, b"synthetic"), ("provenance", None, b"synthetic")]);
+            cases.push(valid.case("provenance given twice", 400, Some("provenance"), body(twice)));
+            cases.push(valid.case(
+                "an unknown form field",
+                400,
+                Some("colour"),
+                body(form(&[("colour", None, b"red")])),
+            ));
+            cases.push(valid.case(
+                "a file part without a file name",
+                400,
+                Some("files"),
+                body(form(&[("files", None, b"x")])),
+            ));
+            for name in ["../../etc/passwd.recording.json", "/etc/x.recording.json", "a\\b.csv", "c:x.npy"] {
+                let mut renamed = files.clone();
+                renamed[0].0 = name.into();
+                cases.push(valid.case(
+                    format!("a file named {name:?}"),
+                    400,
+                    Some("files"),
+                    body(upload_form("synthetic", &renamed)),
+                ));
+            }
+            let mut hostile_meta = files.clone();
+            hostile_meta[0].1 = hostile(5000).into_bytes();
+            cases.push(valid.case(
+                "hostile metadata",
+                400,
+                Some("metadata"),
+                body(upload_form("synthetic", &hostile_meta)),
+            ));
+            let mut units = files.clone();
+            units[0].1 = String::from_utf8(units[0].1.clone()).unwrap().replace("\"mm\"", "\"m\"").into_bytes();
+            cases.push(valid.case(
+                "position in m",
+                400,
+                Some("units.position"),
+                body(upload_form("synthetic", &units)),
+            ));
+            let mut npy = files.clone();
+            npy[1].1.truncate(200);
+            cases.push(valid.case("a truncated NPY stream", 400, Some("files"), body(upload_form("synthetic", &npy))));
+            let bomb = zip_of(&[("zeros.npy".to_string(), vec![0u8; 65 << 20])]);
+            cases.push(valid.case(
+                "a zip bomb",
+                413,
+                Some("files"),
+                body(upload_form("synthetic", &[("b.zip".into(), bomb)])),
+            ));
+            let flood: Vec<(String, Vec<u8>)> = (0..1001).map(|i| (format!("e{i}"), Vec::new())).collect();
+            let flood = zip_of(&flood);
+            cases.push(valid.case(
+                "a zip of 1001 entries",
+                413,
+                Some("files"),
+                body(upload_form("synthetic", &[("f.zip".into(), flood)])),
+            ));
+            let traversal = zip_of(&[("../up.recording.json".to_string(), b"{}".to_vec())]);
+            cases.push(valid.case(
+                "a zip entry named ../",
+                400,
+                Some("files"),
+                body(upload_form("synthetic", &[("t.zip".into(), traversal)])),
+            ));
+            cases.push(valid.case(
+                "not a zip",
+                400,
+                Some("files"),
+                body(upload_form("synthetic", &[("n.zip".into(), hostile(3000).into_bytes())])),
+            ));
+            cases.push(valid.case(
+                "no recording",
+                400,
+                Some("files"),
+                body(upload_form("synthetic", &[("x.csv".into(), b"t_s\n".to_vec())])),
+            ));
+        }
         _ => {}
     }
     cases
@@ -762,7 +939,18 @@ async fn every_route_answers_hostile_input_with_a_4xx_naming_the_field() {
         valid.iter().map(|v| (v.route.0.to_string(), v.route.1.to_string())).collect();
     assert_eq!(covered, served, "every route of routes::table() needs its valid request and cases here");
 
-    let server = Arc::new(RawServer::start(shipped_state()).await);
+    // A writable copy of the shipped library (POST /api/recordings needs
+    // one; its valid request uploads a recording the library holds, so
+    // nothing is added).
+    let dir = tempfile::tempdir().unwrap();
+    let library = dir.path().join("library.sqlite");
+    std::fs::copy(shipped_library(), &library).unwrap();
+    let state = haptex_server::AppState::new(Some(&library), haptex_server::Limits::DEFAULT)
+        .and_then(haptex_server::AppState::with_writable_library)
+        .unwrap()
+        .with_database(&shipped_db())
+        .unwrap();
+    let server = Arc::new(RawServer::start(state).await);
     // The valid requests are served (so the cases' refusals are theirs).
     for v in &valid {
         let case = v.case("the valid request", 200, None, |_| {});

@@ -74,6 +74,15 @@
 //!     gives the page's voltage CSV byte for byte; its link (#recipe=)
 //!     opened in a fresh page and the file opened in the page plot the
 //!     replayed voltage and friction, value for value.
+//! 15. recordings uploaded in the browser (issue 17): the read-only
+//!     server shows no upload panel; a second server on a writable copy of
+//!     the shipped library does: recordings chosen in the file input with
+//!     the wrong provenance are refused (the server's message shown, nothing
+//!     added), with the right one they are added and their processing
+//!     report drawn (the raw forces with the sliding segments kept, one plot
+//!     per recording); the new material is listed, and its stroke sampled
+//!     with a seed is plotted value for value as the command line's import
+//!     and sample of the same files give it.
 //!
 //! It saves screenshots (desktop and phone) in the target directory;
 //! with HAPTEX_UPDATE_SCREENSHOTS=1 also to docs/img/ (what docs/web.md
@@ -95,7 +104,9 @@ use fantoccini::wd::WebDriverCompatibleCommand;
 use fantoccini::{Client, ClientBuilder, Locator};
 use haptex_core::electrovibration::{Device, Method as MapMethod, map_profile_relative};
 use haptex_core::io::Table;
+use haptex_core::library::Library;
 use haptex_core::profile::FrictionProfile;
+use haptex_core::recording::{ProcessingConfig, Recording, process};
 use haptex_core::relative::FlatMu;
 use haptex_server::{AppState, Limits};
 use serde_json::{Value, json};
@@ -867,10 +878,15 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     save_screenshot("web-check.png", &screenshot_of(client, "check-results").await?);
     show_library(client, "latex").await?;
     save_screenshot("web-library.png", &screenshot(client).await?);
+    if script(client, "return document.getElementById('recordings-box').hidden;").await? != Value::Bool(true) {
+        return fail("the read-only library's source offers an upload of recordings");
+    }
     // 10. The display selector.
     display_selector(client, scratch).await?;
     // 14. Recipes: download, replay, open as a link and as a file.
     recipes(client, base, scratch).await?;
+    // 15. Recordings uploaded into a writable library (another server).
+    upload_recordings(client, scratch).await?;
 
     let errors = console_errors(client).await?;
     if !errors.is_empty() {
@@ -1737,4 +1753,165 @@ fn app_state() -> (AppState, PathBuf) {
         .with_database(&data.join("db"))
         .unwrap();
     (state, data)
+}
+
+/// Step 15: recordings uploaded into a writable library and sampled back.
+/// A second server serves a writable copy of the shipped library (no FE
+/// database: the library is its first source); three demo velvet strokes,
+/// renamed to a new material and flagged measured, are chosen in the file
+/// input.
+async fn upload_recordings(client: &Client, scratch: &Path) -> Check<()> {
+    let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/library");
+    let lab = scratch.join("lab.sqlite");
+    std::fs::copy(data.join("library.sqlite"), &lab).map_err(|e| e.to_string())?;
+    let state = AppState::new(Some(&lab), Limits::DEFAULT)
+        .and_then(AppState::with_writable_library)
+        .map_err(|e| e.to_string())?;
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.map_err(|e| e.to_string())?;
+    let addr = listener.local_addr().map_err(|e| e.to_string())?;
+    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+    tokio::spawn(haptex_server::serve(listener, state, async {
+        let _ = stopped.await;
+    }));
+    let result = upload_into(client, &format!("http://{addr}/"), &lab, scratch, &data.join("demo/velvet")).await;
+    let _ = stop.send(());
+    result
+}
+
+async fn upload_into(client: &Client, base: &str, lab: &Path, scratch: &Path, demo: &Path) -> Check<()> {
+    const MATERIAL: &str = "velvet-lab";
+    let folder = scratch.join("recordings");
+    std::fs::create_dir_all(&folder).map_err(|e| e.to_string())?;
+    let mut paths = Vec::new();
+    for stroke in 1..=3 {
+        for suffix in [".recording.json", ".force.npy", ".position.npy"] {
+            let name = format!("velvet-s{stroke}{suffix}");
+            let mut bytes = std::fs::read(demo.join(&name)).map_err(|e| e.to_string())?;
+            if suffix == ".recording.json" {
+                let text = String::from_utf8(bytes).map_err(|e| e.to_string())?;
+                bytes = text
+                    .replace("\"material\": \"velvet\"", &format!("\"material\": \"{MATERIAL}\""))
+                    .replace("\"synthetic\": true", "\"synthetic\": false")
+                    .into_bytes();
+            }
+            std::fs::write(folder.join(&name), bytes).map_err(|e| e.to_string())?;
+            paths.push(folder.join(&name));
+        }
+    }
+    wd!(client.goto(base));
+    wait_for(client, "document.body.dataset.state === 'ready'", "the writable library's page").await?;
+    wait_for(client, "!document.getElementById('recordings-box').hidden", "the upload panel").await?;
+    accessible_names(client, "the upload panel").await?;
+    let input = wd!(client.find(Locator::Id("recording-files")));
+    let list: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+    wd!(input.send_keys(&list.join("\n")));
+    let chosen = script(client, "return document.getElementById('recording-files').files.length;").await?;
+    if chosen != json!(9) {
+        return fail(format!("{chosen} files chosen in the input, not 9"));
+    }
+
+    // The wrong provenance: refused by the server, its message shown.
+    wd!(wd!(client.find(Locator::Id("provenance-synthetic"))).click());
+    wd!(wd!(client.find(Locator::Id("upload-recordings"))).click());
+    wait_for(client, "document.body.dataset.recordingsError === '1'", "the refusal").await?;
+    let info = script(client, "return document.getElementById('recordings-info').textContent;").await?;
+    let info = info.as_str().unwrap_or_default().to_string();
+    if !info.starts_with("Not added: ") || !info.contains("\"synthetic\": false") {
+        return fail(format!("the refused upload says: {info}"));
+    }
+    let listed =
+        script(client, &format!("return Boolean(document.querySelector(\"#material option[value='{MATERIAL}']\"));"))
+            .await?;
+    if listed != Value::Bool(false) {
+        return fail("a refused upload added its material");
+    }
+
+    // Measured: added, the report drawn, the material shown.
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Id("provenance-measured"))).click());
+    wd!(wd!(client.find(Locator::Id("upload-recordings"))).click());
+    wait_for(client, "document.body.dataset.recordings === '1'", "the upload's report").await?;
+    wait_update(client, n, "a stroke of the uploaded material").await?;
+    let report = script(client, "return window.haptex.state.recordings;").await?;
+    let info = script(client, "return document.getElementById('recordings-info').textContent;").await?;
+    if report["added"] != 3 || !info.as_str().unwrap_or_default().starts_with("3 strokes added") {
+        return fail(format!("the upload's report: {info}"));
+    }
+    let plotted_reports =
+        script(client, "return window.haptex.plots.recordings.map((p) => [p.data[0].length, p.series.length]);")
+            .await?;
+    if plotted_reports.as_array().map(Vec::len) != Some(3)
+        || plotted_reports.as_array().unwrap().iter().any(|p| p[1] != 3 || p[0].as_u64().unwrap_or(0) < 1000)
+    {
+        return fail(format!("the report plots (points, series): {plotted_reports}"));
+    }
+    for (i, recording) in report["recordings"].as_array().ok_or("no recordings in the report")?.iter().enumerate() {
+        let kept = recording["segments"].as_array().map_or(0, Vec::len);
+        let listed = script(
+            client,
+            &format!(
+                "return document.querySelectorAll('#recordings-report figure')[{i}].querySelectorAll('li.kept').length;"
+            ),
+        )
+        .await?;
+        if kept == 0 || listed != json!(kept) {
+            return fail(format!("recording {i}: {kept} segments kept, {listed} listed"));
+        }
+    }
+    save_screenshot("web-upload.png", &screenshot_of(client, "recordings-box").await?);
+    let selected = script(client, "return document.getElementById('material').value;").await?;
+    if selected != MATERIAL {
+        return fail(format!("the material shown after the upload is {selected}"));
+    }
+
+    // Sampled back with a seed: the command line's import and sample of
+    // the same files, value for value.
+    let cli_path = scratch.join("cli.sqlite");
+    let mut cli = Library::open(&cli_path).map_err(|e| e.to_string())?;
+    let config = ProcessingConfig::default();
+    let run = cli.begin_import("haptex library import", &config).map_err(|e| e.to_string())?;
+    let mut metadata: Vec<&PathBuf> =
+        paths.iter().filter(|p| p.to_string_lossy().ends_with(".recording.json")).collect();
+    metadata.sort();
+    for path in metadata {
+        let recording = Recording::load(path).map_err(|e| e.to_string())?;
+        let processed = process(&recording, &config).map_err(|e| e.to_string())?;
+        cli.add_recording(run, &recording, &processed, &config).map_err(|e| e.to_string())?;
+    }
+    cli.finish_import(run).map_err(|e| e.to_string())?;
+    for seed in [1u64, 4] {
+        let n = updates(client).await?;
+        let set_seed = format!(
+            "const s = document.getElementById('seed'); s.value = '{seed}'; s.dispatchEvent(new Event('change')); return true;"
+        );
+        script(client, &set_seed).await?;
+        wait_update(client, n, "the stroke of the seed").await?;
+        let drawn = format!(
+            "window.haptex.state.drawn.material === '{MATERIAL}' && window.haptex.state.drawn.seed === '{seed}'"
+        );
+        wait_for(client, &drawn, "the uploaded material's stroke drawn").await?;
+        let friction = plotted(client, "friction").await?;
+        let expected = cli.sample(MATERIAL, Some(seed)).map_err(|e| e.to_string())?;
+        let profile = &expected.stored.profile;
+        if friction[0] != profile.x_mm() || friction[1] != profile.mu() {
+            return fail(format!("seed {seed}: the plotted stroke of {MATERIAL} is not the command line's sample"));
+        }
+        let label = script(client, "return window.haptex.state.drawn.label;").await?;
+        if !label.as_str().unwrap_or_default().contains("(measured)") {
+            return fail(format!("the uploaded stroke's label: {label}"));
+        }
+    }
+    let stored = Library::open_read_only(lab).map_err(|e| e.to_string())?;
+    if stored.strokes(MATERIAL).map_err(|e| e.to_string())?.len() != 3
+        || !stored.check().map_err(|e| e.to_string())?.is_empty()
+    {
+        return fail("the writable library after the upload");
+    }
+    let errors = console_errors(client).await?;
+    // The refused upload's 400 is logged by Chromium as a failed resource.
+    let unexpected: Vec<&String> = errors.iter().filter(|e| !e.contains("/api/recordings")).collect();
+    if !unexpected.is_empty() {
+        return fail(format!("console errors during the upload: {unexpected:#?}"));
+    }
+    Ok(())
 }

@@ -690,6 +690,12 @@ fn process_one(args: ProcessArgs) -> anyhow::Result<()> {
             if *used { "" } else { " (not used: --direction)" }
         );
     }
+    for run in &processed.dropped {
+        eprintln!(
+            "dropped: {:?}, t {:.4} .. {:.4} s, x {:.2} -> {:.2} mm: {}",
+            run.direction, run.t_start_s, run.t_end_s, run.x_start_mm, run.x_end_mm, run.reason
+        );
+    }
     let p = &processed.profile;
     eprintln!(
         "profile: {} points, x {:.2} .. {:.2} mm (dx {} mm, {:.1} mm bridged), mean mu {:.4}, Fn_RS {:.4} N, \

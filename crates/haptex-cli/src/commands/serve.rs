@@ -21,6 +21,9 @@ use haptex_server::{Config, Limits};
 /// (a phone uses the address); to reach it by a host name, name it with
 /// --allow-host (requests for other names are refused: a web page of
 /// another site could otherwise reach the API by DNS rebinding).
+/// The library is read-only unless --writable, which lets the GUI (and
+/// POST /api/recordings) add uploaded recordings to it, as `haptex library
+/// import` would (docs/web.md).
 /// Ctrl-C stops the server after the requests in flight. Errors are
 /// logged to stderr; --access-log logs every request too (RUST_LOG=debug
 /// also logs every refused request with its field).
@@ -30,6 +33,7 @@ use haptex_server::{Config, Limits};
     haptex serve --addr 0.0.0.0:8080\n  \
     haptex serve --addr 0.0.0.0:8080 --allow-host mypc.local --access-log\n  \
     haptex serve --library my-lab.sqlite --addr 127.0.0.1:9000\n  \
+    haptex serve --library my-lab.sqlite --writable   (recordings uploaded in the GUI are added to it)\n  \
     haptex serve --db my-db/   (a database built by `haptex db build --out my-db`)")]
 pub struct ServeArgs {
     /// Address and port to listen on (0.0.0.0:PORT: every interface).
@@ -39,6 +43,11 @@ pub struct ServeArgs {
     /// data/library/library.sqlite, whose 12 materials are SYNTHETIC).
     #[arg(long, value_name = "PATH")]
     library: Option<PathBuf>,
+    /// Let the GUI upload recordings into the library (POST
+    /// /api/recordings): it is opened for writing. Without it the library
+    /// is read-only.
+    #[arg(long)]
+    writable: bool,
     /// FE database of surface templates to serve (default: $HAPTEX_DB, else
     /// the shipped data/db).
     #[arg(long, value_name = "DIR")]
@@ -73,13 +82,19 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
     let config = Config {
         addr: args.addr,
         library: Some(library.clone()),
+        writable: args.writable,
         database: Some(db.clone()),
         limits: Limits::DEFAULT,
         allowed_hosts: args.allow_host,
         access_log: args.access_log,
     };
     haptex_server::run(config, |addr| {
-        eprintln!("haptex serve: library {}, FE database {}", library.display(), db.display());
+        eprintln!(
+            "haptex serve: library {} ({}), FE database {}",
+            library.display(),
+            if args.writable { "writable: uploaded recordings are added to it" } else { "read-only" },
+            db.display()
+        );
         if addr.ip().is_unspecified() {
             eprintln!(
                 "listening on every interface, port {}: open http://<this machine's address>:{}/",

@@ -438,32 +438,38 @@ impl Library {
         processed: &ProcessedStroke,
         config: &ProcessingConfig,
     ) -> Result<Added, LibraryError> {
-        let meta = &recording.meta;
         let sha = recording.sha256.clone().unwrap_or_else(|| recording_hash(recording));
-        let used: Vec<_> =
-            processed.segments.iter().zip(&processed.used).filter(|(_, u)| **u).map(|(s, _)| s).collect();
-        let row = StrokeRow {
-            material: &meta.material,
-            description: &meta.material_description,
-            kind: StrokeKind::Recording,
-            participant: Some(&meta.participant),
-            stroke: Some(i64::from(meta.stroke)),
-            synthetic: meta.synthetic,
-            source: &meta.source,
-            licence: &meta.licence,
-            origin_path: &recording.name,
-            sha256: &sha,
-            metadata_json: serde_json::to_string(meta).expect("metadata serializes"),
-            force_rate_hz: Some(recording.force.rate_hz),
-            position_rate_hz: Some(recording.position.rate_hz),
-            duration_s: Some(recording.duration_s()),
-            config_json: Some(serde_json::to_string(config).expect("config serializes")),
-            sliding_s: Some(processed.sliding_s),
-            bridged_mm: Some(processed.bridged_mm),
-            segments_json: Some(serde_json::to_string(&used).expect("segments serialize")),
-            n_segments: Some(used.len() as i64),
-        };
-        self.insert(import, &row, &processed.profile)
+        self.insert(import, &recording_row(recording, processed, config, &sha), &processed.profile)
+    }
+
+    /// Stores processed recordings all or none: an import run (`command`,
+    /// `config`), every stroke with its profile and new materials, in one
+    /// transaction. If any stroke is refused (a material that mixes
+    /// synthetic and measured data, a name out of bounds) nothing is
+    /// written, not even the import run. Content already stored (or given
+    /// twice) is reported as a duplicate, as [`Library::add_recording`]
+    /// does. `config` is the configuration every stroke was processed with.
+    pub fn add_recordings_atomically(
+        &mut self,
+        command: &str,
+        config: &ProcessingConfig,
+        strokes: &[(&Recording, &ProcessedStroke)],
+    ) -> Result<(ImportId, Vec<Added>), LibraryError> {
+        let config_json = serde_json::to_string(config).expect("config serializes");
+        let tx = self.conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
+        tx.execute(
+            "INSERT INTO imports (haptex_version, command, config_json) VALUES (?1, ?2, ?3)",
+            params![env!("CARGO_PKG_VERSION"), command, config_json],
+        )?;
+        let import = ImportId(tx.last_insert_rowid());
+        let mut added = Vec::with_capacity(strokes.len());
+        for (recording, processed) in strokes {
+            let sha = recording.sha256.clone().unwrap_or_else(|| recording_hash(recording));
+            added.push(insert_in(&tx, import, &recording_row(recording, processed, config, &sha), &processed.profile)?);
+        }
+        tx.execute("UPDATE imports SET finished_at = strftime('%Y-%m-%dT%H:%M:%fZ', 'now') WHERE id = ?1", [import.0])?;
+        tx.commit()?;
+        Ok((import, added))
     }
 
     /// Stores a friction profile as a stroke of `material` (created with
@@ -508,89 +514,12 @@ impl Library {
     }
 
     fn insert(&mut self, import: ImportId, row: &StrokeRow, profile: &FrictionProfile) -> Result<Added, LibraryError> {
-        check_name(row.material)?;
-        // The library never accepts what it cannot read back: decode what
-        // would be stored exactly as `profile()` will.
-        read_back(&encode(profile.x_mm()), &encode(profile.mu()), profile.fn_n().map(encode).as_deref())
-            .map_err(|e| LibraryError::Unreadable(e.to_string()))?;
         let tx = self.conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
-        if let Some(id) =
-            tx.query_row("SELECT id FROM strokes WHERE content_sha256 = ?1", [row.sha256], |r| r.get(0)).optional()?
-        {
-            return Ok(Added::Duplicate(id));
+        let added = insert_in(&tx, import, row, profile)?;
+        if let Added::New(_) = added {
+            tx.commit()?;
         }
-        let existing: Option<(i64, String, bool)> = tx
-            .query_row("SELECT id, name, synthetic FROM materials WHERE name = ?1", [row.material], |r| {
-                Ok((r.get(0)?, r.get(1)?, r.get(2)?))
-            })
-            .optional()?;
-        let kind_word = |synthetic: bool| if synthetic { "synthetic" } else { "measured" };
-        let material_id = match existing {
-            Some((_, name, synthetic)) if synthetic != row.synthetic => {
-                return Err(LibraryError::SyntheticMismatch {
-                    name,
-                    existing: kind_word(synthetic),
-                    new: kind_word(row.synthetic),
-                });
-            }
-            Some((id, _, _)) => id,
-            None => {
-                tx.execute(
-                    "INSERT INTO materials (name, description, synthetic) VALUES (?1, ?2, ?3)",
-                    params![row.material, row.description, row.synthetic],
-                )?;
-                tx.last_insert_rowid()
-            }
-        };
-        tx.execute(
-            "INSERT INTO strokes (material_id, import_id, kind, participant, stroke, synthetic, source, licence,
-                                  origin_path, content_sha256, metadata_json, force_rate_hz, position_rate_hz,
-                                  duration_s)
-             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)",
-            params![
-                material_id,
-                import.0,
-                match row.kind {
-                    StrokeKind::Recording => "recording",
-                    StrokeKind::Profile => "profile",
-                },
-                row.participant,
-                row.stroke,
-                row.synthetic,
-                row.source,
-                row.licence,
-                row.origin_path,
-                row.sha256,
-                row.metadata_json,
-                row.force_rate_hz,
-                row.position_rate_hz,
-                row.duration_s,
-            ],
-        )?;
-        let stroke_id = tx.last_insert_rowid();
-        let mean_mu = profile.mu().iter().sum::<f64>() / profile.len() as f64;
-        tx.execute(
-            "INSERT INTO profiles (stroke_id, config_json, n_points, x_mm, mu, fn_n, mean_mu, mean_fn_n, span_mm,
-                                   sliding_s, bridged_mm, n_segments, segments_json)
-             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)",
-            params![
-                stroke_id,
-                row.config_json,
-                profile.len() as i64,
-                encode(profile.x_mm()),
-                encode(profile.mu()),
-                profile.fn_n().map(encode),
-                mean_mu,
-                profile.mean_fn_n(),
-                profile.span_mm(),
-                row.sliding_s,
-                row.bridged_mm,
-                row.n_segments,
-                row.segments_json,
-            ],
-        )?;
-        tx.commit()?;
-        Ok(Added::New(stroke_id))
+        Ok(added)
     }
 
     /// Checks the database: SQLite's integrity and foreign-key checks, and
@@ -651,6 +580,130 @@ impl Library {
 }
 
 /// The values of one new stroke row.
+/// Writes a stroke, its profile and (if new) its material within `tx`
+/// (which the caller commits): a duplicate of stored content is reported,
+/// not written.
+fn insert_in(
+    tx: &rusqlite::Transaction,
+    import: ImportId,
+    row: &StrokeRow,
+    profile: &FrictionProfile,
+) -> Result<Added, LibraryError> {
+    check_name(row.material)?;
+    // The library never accepts what it cannot read back: decode what
+    // would be stored exactly as `profile()` will.
+    read_back(&encode(profile.x_mm()), &encode(profile.mu()), profile.fn_n().map(encode).as_deref())
+        .map_err(|e| LibraryError::Unreadable(e.to_string()))?;
+    if let Some(id) =
+        tx.query_row("SELECT id FROM strokes WHERE content_sha256 = ?1", [row.sha256], |r| r.get(0)).optional()?
+    {
+        return Ok(Added::Duplicate(id));
+    }
+    let existing: Option<(i64, String, bool)> = tx
+        .query_row("SELECT id, name, synthetic FROM materials WHERE name = ?1", [row.material], |r| {
+            Ok((r.get(0)?, r.get(1)?, r.get(2)?))
+        })
+        .optional()?;
+    let kind_word = |synthetic: bool| if synthetic { "synthetic" } else { "measured" };
+    let material_id = match existing {
+        Some((_, name, synthetic)) if synthetic != row.synthetic => {
+            return Err(LibraryError::SyntheticMismatch {
+                name,
+                existing: kind_word(synthetic),
+                new: kind_word(row.synthetic),
+            });
+        }
+        Some((id, _, _)) => id,
+        None => {
+            tx.execute(
+                "INSERT INTO materials (name, description, synthetic) VALUES (?1, ?2, ?3)",
+                params![row.material, row.description, row.synthetic],
+            )?;
+            tx.last_insert_rowid()
+        }
+    };
+    tx.execute(
+        "INSERT INTO strokes (material_id, import_id, kind, participant, stroke, synthetic, source, licence,
+                              origin_path, content_sha256, metadata_json, force_rate_hz, position_rate_hz,
+                              duration_s)
+         VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)",
+        params![
+            material_id,
+            import.0,
+            match row.kind {
+                StrokeKind::Recording => "recording",
+                StrokeKind::Profile => "profile",
+            },
+            row.participant,
+            row.stroke,
+            row.synthetic,
+            row.source,
+            row.licence,
+            row.origin_path,
+            row.sha256,
+            row.metadata_json,
+            row.force_rate_hz,
+            row.position_rate_hz,
+            row.duration_s,
+        ],
+    )?;
+    let stroke_id = tx.last_insert_rowid();
+    let mean_mu = profile.mu().iter().sum::<f64>() / profile.len() as f64;
+    tx.execute(
+        "INSERT INTO profiles (stroke_id, config_json, n_points, x_mm, mu, fn_n, mean_mu, mean_fn_n, span_mm,
+                               sliding_s, bridged_mm, n_segments, segments_json)
+         VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)",
+        params![
+            stroke_id,
+            row.config_json,
+            profile.len() as i64,
+            encode(profile.x_mm()),
+            encode(profile.mu()),
+            profile.fn_n().map(encode),
+            mean_mu,
+            profile.mean_fn_n(),
+            profile.span_mm(),
+            row.sliding_s,
+            row.bridged_mm,
+            row.n_segments,
+            row.segments_json,
+        ],
+    )?;
+    Ok(Added::New(stroke_id))
+}
+
+/// The stroke row of a processed recording.
+fn recording_row<'a>(
+    recording: &'a Recording,
+    processed: &ProcessedStroke,
+    config: &ProcessingConfig,
+    sha: &'a str,
+) -> StrokeRow<'a> {
+    let meta = &recording.meta;
+    let used: Vec<_> = processed.segments.iter().zip(&processed.used).filter(|(_, u)| **u).map(|(s, _)| s).collect();
+    StrokeRow {
+        material: &meta.material,
+        description: &meta.material_description,
+        kind: StrokeKind::Recording,
+        participant: Some(&meta.participant),
+        stroke: Some(i64::from(meta.stroke)),
+        synthetic: meta.synthetic,
+        source: &meta.source,
+        licence: &meta.licence,
+        origin_path: &recording.name,
+        sha256: sha,
+        metadata_json: serde_json::to_string(meta).expect("metadata serializes"),
+        force_rate_hz: Some(recording.force.rate_hz),
+        position_rate_hz: Some(recording.position.rate_hz),
+        duration_s: Some(recording.duration_s()),
+        config_json: Some(serde_json::to_string(config).expect("config serializes")),
+        sliding_s: Some(processed.sliding_s),
+        bridged_mm: Some(processed.bridged_mm),
+        segments_json: Some(serde_json::to_string(&used).expect("segments serialize")),
+        n_segments: Some(used.len() as i64),
+    }
+}
+
 struct StrokeRow<'a> {
     material: &'a str,
     description: &'a str,

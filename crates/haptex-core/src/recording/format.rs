@@ -353,9 +353,23 @@ fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
-/// Parses and checks a metadata file's bytes.
-fn parse_meta(name: &str, bytes: &[u8]) -> Result<RecordingMeta, RecordingError> {
-    let meta: RecordingMeta = serde_json::from_slice(bytes)
+/// Parses and checks a metadata file's bytes. A value of the wrong type
+/// is reported at its field (`force.rate_hz`); a missing or unknown field,
+/// or malformed JSON, with serde's message (which names the field, or the
+/// line and column).
+pub(crate) fn parse_meta(name: &str, bytes: &[u8]) -> Result<RecordingMeta, RecordingError> {
+    let mut deserializer = serde_json::Deserializer::from_slice(bytes);
+    let meta: RecordingMeta = serde_path_to_error::deserialize(&mut deserializer).map_err(|e| {
+        let path = e.path().to_string();
+        let message = format!("invalid metadata: {}", e.inner());
+        if path == "." || path == "?" {
+            RecordingError::Metadata { file: name.to_string(), message }
+        } else {
+            RecordingError::field(name, &path, message)
+        }
+    })?;
+    deserializer
+        .end()
         .map_err(|e| RecordingError::Metadata { file: name.to_string(), message: format!("invalid metadata: {e}") })?;
     check_meta(name, &meta)?;
     Ok(meta)

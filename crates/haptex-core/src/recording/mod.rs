@@ -1,6 +1,7 @@
 //! Recorded finger strokes to location-domain friction profiles (paper
 //! section 2.4), and synthetic recordings for testing and the demo library.
 //!
+//! - [`bundle`]: recordings from files held in memory (an upload);
 //! - [`format`]: the raw recording format (metadata JSON + force and
 //!   position streams in CSV or NPY) and its validation;
 //! - [`filter`]: the anti-alias FIR filter and resampling to the position
@@ -12,6 +13,7 @@
 //! - [`synth`]: the stochastic model behind the shipped demo recordings;
 //! - [`rng`]: the fixed random generator that makes them reproducible.
 
+pub mod bundle;
 pub mod error;
 pub mod filter;
 pub mod format;
@@ -24,4 +26,4 @@ pub mod synth;
 pub use error::{Location, Place, RecordingError};
 pub use format::{ForceStream, PositionStream, Recording, RecordingMeta, StreamFormat, StreamMeta, Units};
 pub use pipeline::{DirectionFilter, ProcessedStroke, ProcessingConfig, friction_coefficient, process};
-pub use sliding::{Direction, SlidingSegment};
+pub use sliding::{Direction, DroppedRun, SlidingSegment};

@@ -17,7 +17,7 @@ use super::error::RecordingError;
 use super::filter::{LowPassFir, resample_filtered};
 use super::format::Recording;
 use super::location::{GridSeries, combine_segments, to_location_grid};
-use super::sliding::{Direction, SlidingCriteria, SlidingSegment, detect_sliding, finger_velocity};
+use super::sliding::{Direction, DroppedRun, SlidingCriteria, SlidingSegment, detect_sliding_report, finger_velocity};
 use crate::num::Num;
 use crate::profile::FrictionProfile;
 
@@ -189,6 +189,9 @@ pub struct ProcessedStroke {
     pub segments: Vec<SlidingSegment>,
     /// Whether each segment contributed (direction filter).
     pub used: Vec<bool>,
+    /// Runs of sliding samples not kept as segments (too short once
+    /// trimmed), with the reason: the processing report.
+    pub dropped: Vec<DroppedRun>,
     /// Fn_RS: mean normal force over the profile, N (paper section 2.4).
     pub mean_fn_n: f64,
     /// Mean friction coefficient over the profile.
@@ -238,8 +241,9 @@ pub fn process(recording: &Recording, config: &ProcessingConfig) -> Result<Proce
     // Step 2: velocity and sliding segments.
     let half = ((0.5 * config.speed_window_s * position.rate_hz).round() as usize).max(1);
     let v_mm_s = finger_velocity(&t_s, &x_mm, half);
-    let segments = detect_sliding(&t_s, &x_mm, &v_mm_s, &fn_n, 1.0 / position.rate_hz, &config.criteria())
+    let detected = detect_sliding_report(&t_s, &x_mm, &v_mm_s, &fn_n, 1.0 / position.rate_hz, &config.criteria())
         .map_err(|message| RecordingError::NoSliding { file: file.clone(), message })?;
+    let (segments, dropped) = (detected.segments, detected.dropped);
     let used: Vec<bool> = segments.iter().map(|s| config.direction.admits(s.direction)).collect();
     if !used.iter().any(|&u| u) {
         return Err(RecordingError::NoSliding {
@@ -295,6 +299,7 @@ pub fn process(recording: &Recording, config: &ProcessingConfig) -> Result<Proce
         profile,
         segments,
         used,
+        dropped,
         mean_fn_n,
         mean_mu,
         sliding_s,

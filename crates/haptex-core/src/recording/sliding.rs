@@ -98,6 +98,27 @@ pub fn finger_velocity(t_s: &[f64], x_mm: &[f64], half: usize) -> Vec<f64> {
         .collect()
 }
 
+/// A run of sliding samples that was not kept as a segment, and why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DroppedRun {
+    pub direction: Direction,
+    /// The run before trimming.
+    pub t_start_s: f64,
+    pub t_end_s: f64,
+    pub x_start_mm: f64,
+    pub x_end_mm: f64,
+    /// Why it was dropped, e.g. "lasts 0.030 s after trimming, less than
+    /// min_duration_s = 0.05 s".
+    pub reason: String,
+}
+
+/// The segments kept and the runs dropped by [`detect_sliding_report`].
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SlidingReport {
+    pub segments: Vec<SlidingSegment>,
+    pub dropped: Vec<DroppedRun>,
+}
+
 /// Finds the sliding segments. `nominal_dt_s` is the position stream's
 /// nominal sample interval (gaps longer than 1.5 of it split segments).
 /// The error explains why nothing qualified.
@@ -109,6 +130,19 @@ pub fn detect_sliding(
     nominal_dt_s: f64,
     criteria: &SlidingCriteria,
 ) -> Result<Vec<SlidingSegment>, String> {
+    detect_sliding_report(t_s, x_mm, v_mm_s, fn_n, nominal_dt_s, criteria).map(|r| r.segments)
+}
+
+/// [`detect_sliding`], also reporting the runs of sliding samples that
+/// were dropped (too short once trimmed) with the reason.
+pub fn detect_sliding_report(
+    t_s: &[f64],
+    x_mm: &[f64],
+    v_mm_s: &[f64],
+    fn_n: &[f64],
+    nominal_dt_s: f64,
+    criteria: &SlidingCriteria,
+) -> Result<SlidingReport, String> {
     let n = t_s.len();
     let moving: Vec<bool> =
         (0..n).map(|i| fn_n[i] >= criteria.min_fn_n && v_mm_s[i].abs() >= criteria.min_speed_mm_s).collect();
@@ -130,6 +164,7 @@ pub fn detect_sliding(
         (0..n).map(|i| moving[i] && (fn_n[i] - fn_ref).abs() <= criteria.fn_tolerance * fn_ref).collect();
 
     let mut segments = Vec::new();
+    let mut dropped = Vec::new();
     let mut i = 0;
     while i < n {
         if !sliding[i] {
@@ -145,11 +180,26 @@ pub fn detect_sliding(
         let (t0, t1) = (t_s[i] + criteria.trim_s, t_s[j - 1] - criteria.trim_s);
         let start = i + t_s[i..j].partition_point(|&t| t < t0);
         let end = i + t_s[i..j].partition_point(|&t| t <= t1);
-        if end > start + 1 {
+        let direction = if sign { Direction::Forward } else { Direction::Backward };
+        let drop = |reason: String| DroppedRun {
+            direction,
+            t_start_s: t_s[i],
+            t_end_s: t_s[j - 1],
+            x_start_mm: x_mm[i],
+            x_end_mm: x_mm[j - 1],
+            reason,
+        };
+        if end <= start + 1 {
+            dropped.push(drop(format!(
+                "lasts {:.3} s, too short to keep anything after trimming trim_s = {} s at each end",
+                t_s[j - 1] - t_s[i],
+                criteria.trim_s
+            )));
+        } else {
             let segment = SlidingSegment {
                 start,
                 end,
-                direction: if sign { Direction::Forward } else { Direction::Backward },
+                direction,
                 t_start_s: t_s[start],
                 t_end_s: t_s[end - 1],
                 x_start_mm: x_mm[start],
@@ -157,7 +207,19 @@ pub fn detect_sliding(
                 mean_speed_mm_s: v_mm_s[start..end].iter().map(|v| v.abs()).sum::<f64>() / (end - start) as f64,
                 mean_fn_n: fn_n[start..end].iter().sum::<f64>() / (end - start) as f64,
             };
-            if segment.duration_s() >= criteria.min_duration_s && segment.length_mm() >= criteria.min_length_mm {
+            if segment.duration_s() < criteria.min_duration_s {
+                dropped.push(drop(format!(
+                    "lasts {:.3} s after trimming, less than min_duration_s = {} s",
+                    segment.duration_s(),
+                    criteria.min_duration_s
+                )));
+            } else if segment.length_mm() < criteria.min_length_mm {
+                dropped.push(drop(format!(
+                    "covers {:.3} mm after trimming, less than min_length_mm = {} mm",
+                    segment.length_mm(),
+                    criteria.min_length_mm
+                )));
+            } else {
                 segments.push(segment);
             }
         }
@@ -175,12 +237,50 @@ pub fn detect_sliding(
             criteria.trim_s
         ));
     }
-    Ok(segments)
+    Ok(SlidingReport { segments, dropped })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A long run is kept; a short one (0.04 s of sliding) is dropped with
+    /// the reason, and so is one too short to survive the trimming.
+    #[test]
+    fn short_runs_are_reported_with_the_reason() {
+        let dt = 0.0025;
+        let n = 400;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
+        // Moving forward at 50 mm/s on samples 20..200 (0.45 s), 250..266
+        // (0.04 s) and 300..306 (0.015 s); still elsewhere.
+        let moving = |i: usize| (20..200).contains(&i) || (250..266).contains(&i) || (300..306).contains(&i);
+        let v: Vec<f64> = (0..n).map(|i| if moving(i) { 50.0 } else { 0.0 }).collect();
+        let mut x = vec![0.0; n];
+        for i in 1..n {
+            x[i] = x[i - 1] + v[i] * dt;
+        }
+        let fn_n = vec![0.5; n];
+        let criteria = SlidingCriteria {
+            speed_window_s: 0.02,
+            min_speed_mm_s: 10.0,
+            min_fn_n: 0.05,
+            fn_tolerance: 0.5,
+            trim_s: 0.01,
+            min_duration_s: 0.05,
+            min_length_mm: 1.0,
+        };
+        let report = detect_sliding_report(&t, &x, &v, &fn_n, dt, &criteria).unwrap();
+        assert_eq!(report.segments.len(), 1);
+        assert_eq!(report.dropped.len(), 2, "{:?}", report.dropped);
+        assert!(report.dropped[0].reason.contains("less than min_duration_s = 0.05 s"), "{:?}", report.dropped[0]);
+        assert!((report.dropped[0].t_start_s - 250.0 * dt).abs() < 1e-12);
+        assert!(
+            report.dropped[1].reason.contains("too short to keep anything after trimming"),
+            "{:?}",
+            report.dropped[1]
+        );
+        assert_eq!(detect_sliding(&t, &x, &v, &fn_n, dt, &criteria).unwrap(), report.segments);
+    }
 
     #[test]
     fn velocity_of_a_quadratic_is_exact_at_the_centre() {

@@ -22,6 +22,8 @@ pub async fn get(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -
         // What a recipe records of the data it was made with (haptex recipe run checks them).
         "data": { "library_sha256": state.library_sha256(), "database_sha256": state.database_sha256() },
         "sources": state.sources(),
+        // Whether POST /api/recordings may add recordings to the library (haptex serve --writable).
+        "library_writable": state.library_writable(),
         "device_params": DEVICE_PARAMS,
         "explanations": crate::explain::EXPLANATIONS,
         "methods": [

@@ -9,6 +9,7 @@ pub mod openapi;
 pub mod play;
 pub mod predict;
 pub mod profile;
+pub mod recordings;
 pub mod simulate;
 pub mod templates;
 pub mod voltage;
