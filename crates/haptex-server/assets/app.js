@@ -582,7 +582,8 @@
    * profile was computed at.
    */
   function checkBody() {
-    const body = voltageBody('physical', false);
+    // The combined display's design is checked with its plate and strategy.
+    const body = voltageBody('physical', state.display === 'combined');
     delete body.method;
     const load = $('check-load').value.trim();
     if (load !== '') body.load_n_per_mm = Number(load);
@@ -590,12 +591,14 @@
     return body;
   }
 
-  /** Whether the electrovibration display is selected (the check on the finger model is its). */
+  /** Whether the electrovibration display is selected (eq. 9 and the compensation are its). */
   const isElectrovibration = () => state.display === 'electrovibration';
+  /** Whether the display selected can be checked on the finger model (electrovibration, combined). */
+  const isCheckable = () => state.display === 'electrovibration' || state.display === 'combined';
 
-  /** The last check, when it is for the profile, device and load shown (electrovibration display). */
+  /** The last check, when it is for the profile, device, display and load shown. */
   function currentCheck() {
-    if (!isElectrovibration()) return null;
+    if (!isCheckable()) return null;
     const c = state.check;
     return c && state.profile && state.drawn === state.profile && c.key === JSON.stringify(checkBody()) ? c : null;
   }
@@ -648,7 +651,8 @@
       throw error;
     } finally {
       bar.hidden = true;
-      buttons.forEach((b) => { b.disabled = !isElectrovibration(); });
+      $('run-check').disabled = !isCheckable();
+      $('run-compensate').disabled = !isElectrovibration();
     }
   }
 
@@ -669,13 +673,14 @@
     const r = c.result;
     const x = r.x_mm;
     const comp = r.compensated;
+    const first = checkTrial(r);
     const frictionSeries = [
       { label: 'target', stroke: '#1f5fa8', width: 1.5 },
-      { label: 'felt, eq. (8)', stroke: '#b3261e', dash: [5, 3], width: 1.5 },
+      { label: `felt, ${first.name}`, stroke: '#b3261e', dash: [5, 3], width: 1.5 },
     ];
-    const frictionData = [x, r.target_mu, r.eq8.felt_mu];
-    const voltageSeries = [{ label: 'U eq. (8)', stroke: '#b3261e', width: 1.5 }];
-    const voltageData = [x, r.eq8.voltage_v];
+    const frictionData = [x, r.target_mu, first.felt_mu];
+    const voltageSeries = [{ label: r.eq8 ? 'U eq. (8)' : 'U(x), combined', stroke: '#b3261e', width: 1.5 }];
+    const voltageData = [x, first.voltage_v];
     if (comp) {
       frictionSeries.push({ label: 'felt, compensated', stroke: '#2e7d32', width: 1.5 });
       frictionData.push(comp.felt_mu);
@@ -685,7 +690,8 @@
     frictionSeries.push({ label: 'mu_HD', stroke: '#888', dash: [6, 4], width: 1 });
     frictionData.push(constant(x, r.settings.mu_hd));
     voltageSeries.push({ label: 'U_max', stroke: '#888', dash: [6, 4], width: 1 });
-    voltageData.push(constant(x, r.voltage.summary.u_max_v));
+    const summary = r.voltage.summary;
+    voltageData.push(constant(x, summary.u_max_v ?? summary.electrovibration.u_max_v));
     const felt = withPins(frictionSeries, frictionData,
       (p) => ({ x: p.felt ? p.felt.x_mm : null, lines: p.felt ? [{ label: p.felt.label, data: p.felt.mu }] : [] }));
     plots.check = replot(plots.check, 'check-plot', felt.series, felt.data);
@@ -693,11 +699,20 @@
     showCheckMetrics(r);
   }
 
-  /** The error figures of eq. (8) and the compensated voltage, side by side. */
+  /**
+   * The first trial of a check: eq. (8)'s voltage (`eq8`), or the combined
+   * display's design (`design`, with its a(x)), with the page's name for it.
+   */
+  function checkTrial(r) {
+    return r.eq8 ? { ...r.eq8, name: 'eq. (8)' } : { ...r.design, name: 'combined' };
+  }
+
+  /** The error figures of eq. (8) (or the combined design) and the compensated voltage, side by side. */
   function showCheckMetrics(r) {
     const box = $('check-summary');
     box.textContent = '';
-    const columns = [['eq. (8)', r.eq8.metrics]];
+    const first = checkTrial(r);
+    const columns = [[first.name, first.metrics]];
     if (r.compensated) columns.push([`compensated (run ${r.compensated.trial})`, r.compensated.metrics]);
     const rows = [
       ['RMS error', (m) => fmt(m.rms_error)],
@@ -722,13 +737,23 @@
       row.append(th);
       columns.forEach(([, m]) => { row.insertCell().textContent = value(m); });
     });
-    const m = r.eq8.metrics;
+    const m = first.metrics;
     const title = document.createElement('div');
-    title.textContent = 'Felt against the target over the renderable region (mu_HD ≤ target ≤ mu at U_max):';
     const regions = document.createElement('div');
+    const finger = `load ${fmt(r.settings.load_n_per_mm)} N/mm, ${fmt(r.settings.velocity_mm_s)} mm/s`;
+    if (!r.eq8) {
+      // The combined display: the plate vibrating with a(x) under U(x).
+      const band = r.voltage.summary.band_mu;
+      title.textContent = `Felt against the target over the combined display's band (mu ${fmt(band[0])} .. ` +
+        `${fmt(band[1])}), the plate vibrating with a(x) (${r.settings.strategy}) under U(x):`;
+      regions.textContent = `below the band: ${pct(m.not_renderable_fraction)} of the length · above it: ` +
+        `${pct(m.clipped_fraction)} · ${finger}`;
+      box.append(title, table, regions);
+      return;
+    }
+    title.textContent = 'Felt against the target over the renderable region (mu_HD ≤ target ≤ mu at U_max):';
     regions.textContent = `not renderable (target < mu_HD = ${fmt(r.settings.mu_hd)}): ${pct(m.not_renderable_fraction)} ` +
-      `of the length · above mu at U_max: ${pct(m.clipped_fraction)} · load ${fmt(r.settings.load_n_per_mm)} N/mm, ` +
-      `${fmt(r.settings.velocity_mm_s)} mm/s`;
+      `of the length · above mu at U_max: ${pct(m.clipped_fraction)} · ${finger}`;
     const k = document.createElement('div');
     k.textContent = `eq. (8) used k = ${fmt(r.parameters.k_mm2_per_n)} mm²/N; the FE finger's contact length per ` +
       `normal force is k_FE = ${fmt(m.k_fe_mm2_per_n)} mm²/N (per mm of width, docs/display.md) `;
@@ -940,14 +965,18 @@
     $('weight-row').hidden = state.display !== 'combined' || state.strategy !== 'weighted';
     const strategy = (state.config.strategies || []).find((st) => st.id === state.strategy);
     $('strategy-info').textContent = strategy ? strategy.description : '';
-    // eq. (9) and the check on the finger model are the electrovibration display's.
+    // eq. (9) and the compensation are the electrovibration display's; the
+    // check on the finger model is also the combined display's.
     document.querySelectorAll('input[name="method"]').forEach((input) => { input.disabled = !ev; });
-    [$('run-check'), $('run-compensate')].forEach((b) => { b.disabled = !ev; });
+    $('run-check').disabled = !isCheckable();
+    $('run-compensate').disabled = !ev;
     $('both-methods').disabled = !ev;
     $('display-info').textContent = ev
       ? 'Electrovibration only raises friction above mu_HD.'
-      : 'Method: physical (eq. 9 is the electrovibration display\'s pattern); the check on the finger model is ' +
-        'for the electrovibration display.';
+      : 'Method: physical (eq. 9 is the electrovibration display\'s pattern); the compensation on the finger model ' +
+        'is for the electrovibration display' +
+        (isCheckable() ? '; the check applies this design to the finger on the vibrating plate.' : ', its check ' +
+          'for the electrovibration and combined displays.');
     $('calibration-info').textContent = state.calibration
       ? `${state.calibration.name}: ${state.calibration.rows} rows (the server checks them: strictly increasing ` +
         'amplitudes from 0, relative friction strictly decreasing from 1).'
@@ -1291,7 +1320,8 @@
     if (check) {
       const r = check.result;
       const comp = r.compensated;
-      felt = { x_mm: r.x_mm, mu: comp ? comp.felt_mu : r.eq8.felt_mu, label: comp ? 'felt, compensated' : 'felt, eq. (8)' };
+      const first = checkTrial(r);
+      felt = { x_mm: r.x_mm, mu: comp ? comp.felt_mu : first.felt_mu, label: comp ? 'felt, compensated' : `felt, ${first.name}` };
     }
     state.pins.push({
       name,

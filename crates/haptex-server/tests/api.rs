@@ -1505,6 +1505,64 @@ async fn compensate_is_the_libraries_compensation_and_offers_its_voltage() {
     assert_eq!(table.column("voltage_v").unwrap(), offered.as_slice());
 }
 
+/// The combined display checked on the finger model (issue 16, `haptex
+/// check --display combined` in the web API): a dip below mu_HD and a
+/// rise above it, split between the plate and the voltage. The answer is
+/// the library's `check_combined` of the same target bit for bit (design,
+/// felt friction, metrics), the design offered is `POST /api/voltage`'s
+/// for that display (both channels), nothing is outside the band, and the
+/// CSV offered reads back as that design.
+#[tokio::test]
+async fn combined_check_is_the_libraries_check_of_the_combined_design() {
+    use haptex_core::combined::Strategy;
+    use haptex_core::ultrasonic::UltrasonicDevice;
+    let x: Vec<f64> = (0..=40).map(|i| 0.1 * f64::from(i)).collect();
+    let mu: Vec<f64> = x
+        .iter()
+        .map(|&x| {
+            if (0.8..1.6).contains(&x) {
+                0.4
+            } else if (2.4..3.2).contains(&x) {
+                0.56
+            } else {
+                0.5
+            }
+        })
+        .collect();
+    let target = FrictionProfile::new(x.clone(), mu.clone()).unwrap();
+    let body = json!({
+        "profile": profile_json(&x, &mu), "device": { "mu_hd": 0.5 }, "display": "combined", "strategy": "split",
+    });
+    let device = Device { mu_hd: 0.5, ..Device::PAPER };
+    let plate = UltrasonicDevice::literature_default(None).unwrap();
+    let expected =
+        haptex_fem::render::check_combined(&target, &render_settings(device), &plate, Strategy::Split, &mut |_| {})
+            .unwrap();
+    let result = stream_result(&post_json("/api/check", &body).await, 1);
+    assert!(result["eq8"].is_null() && result["compensated"].is_null(), "{:.300}", result);
+    assert_trial_equals(&result["design"], &expected, "combined");
+    assert_eq!(numbers(&result["design"]["amplitude_um"]), expected.amplitude_um.clone().unwrap());
+    assert_eq!(
+        (result["settings"]["display"].as_str(), result["settings"]["strategy"].as_str()),
+        (Some("combined"), Some("split"))
+    );
+    let m = &expected.metrics;
+    assert_eq!((m.not_renderable_fraction, m.clipped_fraction), (0.0, 0.0), "{m:?}");
+    // The design offered: POST /api/voltage's for this display.
+    let designed = post_json("/api/voltage", &body).await.ok().json();
+    for channel in ["voltage_v", "amplitude_um"] {
+        assert_eq!(result["voltage"][channel], designed[channel], "{channel}");
+    }
+    let csv = result["voltage_csv"].as_str().unwrap();
+    assert!(
+        csv.starts_with("# haptex check on the finger model") && csv.contains("combined display (split)"),
+        "{csv:.300}"
+    );
+    let table = Table::read(csv.as_bytes(), "voltage_csv").unwrap();
+    assert_eq!(table.column("voltage_v").unwrap(), expected.voltage_v.as_slice());
+    assert_eq!(table.column("amplitude_um").unwrap(), expected.amplitude_um.as_deref().unwrap());
+}
+
 /// Every voltage of a compensation stays within the U_max asked for,
 /// where the correction pushes against it (a target above mu at U_max,
 /// 0.581 at 90 V, over a third of its length), and the file states that
@@ -1584,6 +1642,22 @@ async fn check_bad_input_is_refused_naming_the_field_before_any_fe_run() {
     for (body, field) in [(with("max_runs", json!(2)), "max_runs"), (with("tolerance", json!(1e-3)), "tolerance")] {
         cases.push(("/api/check", body, 400, field));
     }
+    // The combined display's check (issue 16): its fields checked as
+    // POST /api/voltage checks them; the ultrasonic plate alone and the
+    // compensation of a combined design refused naming `display`.
+    for (body, field) in [
+        (with("display", json!("ultrasonic")), "display"),
+        (with("display", json!("holographic")), "display"),
+        (with("strategy", json!("bias")), "strategy"),
+        (set_field(with("display", json!("combined")), "a_max_um", json!(1000)), "a_max_um"),
+        (
+            set_field(with("display", json!("combined")), "ultrasonic_calibration", json!("amplitude_um,x\n")),
+            "ultrasonic_calibration",
+        ),
+    ] {
+        cases.push(("/api/check", body, 400, field));
+    }
+    cases.push(("/api/compensate", with("display", json!("combined")), 400, "display"));
     for (body, field) in [
         (with("max_runs", json!(0)), "max_runs"),
         (with("max_runs", json!(9)), "max_runs"),

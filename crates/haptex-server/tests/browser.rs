@@ -456,6 +456,35 @@ async fn combined_default(client: &Client, friction: &[Vec<f64>], predicted: &[f
     let n = updates(client).await?;
     wd!(wd!(client.find(Locator::Css("#strategy option[value='split']"))).click());
     wait_update(client, n, "the split strategy again").await?;
+
+    // The check on the finger model applies the combined design: the
+    // finger on the plate vibrating with a(x) under U(x) (the compensation
+    // is the electrovibration display's).
+    let buttons = "return [document.getElementById('run-check').disabled, \
+                   document.getElementById('run-compensate').disabled];";
+    if script(client, buttons).await? != json!([false, true]) {
+        return fail("combined: the check should be offered and the compensation not");
+    }
+    wd!(wd!(client.find(Locator::Id("run-check"))).click());
+    let state = "window.haptex.state";
+    wait_for(client, &format!("{state}.check && {state}.check.result.design"), "the combined check's result").await?;
+    wait_for(client, "!document.getElementById('check-results').hidden", "the combined check's plots").await?;
+    let result = script(client, &format!("return {state}.check.result;")).await?;
+    let (check, friction) = (plotted(client, "check").await?, plotted(client, "friction").await?);
+    let (amplitude, voltage) = (plotted(client, "amplitude").await?, plotted(client, "voltage").await?);
+    let design = &result["design"];
+    if check[1] != friction[1] || check[2] != numbers(&design["felt_mu"])? {
+        return fail("combined check: the plot is not the target plotted above and the friction the finger felt");
+    }
+    if numbers(&design["voltage_v"])? != voltage[1] || numbers(&design["amplitude_um"])? != amplitude[1] {
+        return fail("combined check: the design applied is not the U(x) and a(x) plotted");
+    }
+    let summary = wd!(wd!(client.find(Locator::Id("check-summary"))).text());
+    if !summary.contains("combined display's band")
+        || !labels(client, "check").await?.iter().any(|l| l == "felt, combined")
+    {
+        return fail(format!("combined check: the summary says {summary:?}"));
+    }
     Ok(())
 }
 

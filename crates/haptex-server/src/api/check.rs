@@ -20,6 +20,18 @@
 //!   eq. (8)'s run included) and `tolerance` ([`TOLERANCE`], default 1e-4
 //!   in mu).
 //!
+//! `display` `combined` (with `strategy`, `weight`, `a_max_um` and
+//! `ultrasonic_calibration`, as `POST /api/voltage` takes them; `POST
+//! /api/check` only, `haptex check --display combined`) checks the
+//! combined display's design instead of eq. (8)'s: the target allocated to
+//! (U(x), a(x)), the finger sliding on the plate vibrating with a(x) under
+//! U(x) ([`render::check_combined`]). The result's `design` then holds
+//! the trial (`voltage_v`, `amplitude_um`, `felt_mu`, `metrics` over the
+//! combined display's band) and `eq8` is null; `voltage` is the design as
+//! `POST /api/voltage` answers it for that display and `voltage_csv` its
+//! `x_mm,mu,voltage_v,amplitude_um` file. The compensation iterates eq.
+//! (8)'s voltage: it is the electrovibration display's.
+//!
 //! The target is the profile as the voltage mapping sees it: relative to
 //! its flat-surface friction when `relative` is true (the answer's
 //! `target_mu`). The finger is the shipped model (default mesh,
@@ -87,6 +99,7 @@ use haptex_fem::scenario::Progress;
 use serde::Deserialize;
 use serde_json::{Value, json};
 
+use crate::display::{DisplayDesign, DisplayName, DisplayRequest, StrategyName};
 use crate::error::ApiError;
 use crate::fields::{self, CHECK_VELOCITY_MM_S, LOAD_N_PER_MM, MAX_RUNS, STEP_MM, TOLERANCE};
 use crate::input::{BodyKind, Pairs, ProfileJson, Query, body_bytes, body_kind, check_points, parse_json};
@@ -138,6 +151,16 @@ struct CheckBody {
     max_runs: Option<u32>,
     #[serde(default)]
     tolerance: Option<f64>,
+    #[serde(default)]
+    display: Option<DisplayName>,
+    #[serde(default)]
+    strategy: Option<StrategyName>,
+    #[serde(default)]
+    weight: Option<f64>,
+    #[serde(default)]
+    a_max_um: Option<f64>,
+    #[serde(default)]
+    ultrasonic_calibration: Option<String>,
 }
 
 pub async fn check(
@@ -196,6 +219,8 @@ struct Job {
     target: FrictionProfile,
     settings: RenderSettings,
     stopping: Stopping,
+    /// The combined display's plate and strategy (`display` combined).
+    combined: Option<(DisplayDesign, haptex_core::combined::Strategy)>,
 }
 
 impl Job {
@@ -235,6 +260,34 @@ impl Job {
                 Some("device.u_max_v"),
             ));
         }
+        let display = DisplayRequest {
+            display: body.display,
+            strategy: body.strategy,
+            weight: body.weight,
+            a_max_um: body.a_max_um,
+            ultrasonic_calibration: body.ultrasonic_calibration,
+        };
+        let combined = match display.design()? {
+            None => None,
+            Some(_) if mode == Mode::Compensate => {
+                return Err(ApiError::bad_request(
+                    "the compensation iterates eq. (8)'s voltage: it is the electrovibration display's (POST \
+                     /api/check checks a combined display's design)",
+                    Some("display"),
+                ));
+            }
+            Some(design) => match design.strategy {
+                Some(strategy) => Some((design, strategy)),
+                None => {
+                    return Err(ApiError::bad_request(
+                        "the check on the finger model is for the electrovibration and combined displays: an \
+                         ultrasonic plate alone is the combined display with U = 0 V where the target is below \
+                         mu_HD (display combined)",
+                        Some("display"),
+                    ));
+                }
+            },
+        };
         let relative = super::voltage::relative_request(body.relative, body.flat_mu)?;
         let load = fields::check(LOAD_N_PER_MM, body.load_n_per_mm.unwrap_or(DEFAULT_LOAD_N_PER_MM), "load_n_per_mm")?;
         let velocity =
@@ -275,7 +328,7 @@ impl Job {
         settings.scenario.velocity_mm_s = velocity;
         settings.scenario.step_mm = step_mm;
         settings.run_up_mm = RUN_UP_MM;
-        Ok(Self { mode, request, mapped, target, settings, stopping })
+        Ok(Self { mode, request, mapped, target, settings, stopping, combined })
     }
 
     /// Runs the FE model (once, or as the compensation needs), reporting
@@ -292,18 +345,29 @@ impl Job {
                 })
             })
         };
-        let (trials, best) = match self.mode {
-            Mode::Check => {
+        let (trials, best) = match (self.mode, &self.combined) {
+            (Mode::Check, Some((design, strategy))) => {
+                let check =
+                    render::check_combined(&self.target, &self.settings, &design.ultrasonic, *strategy, &mut |p| {
+                        report(0, p)
+                    })
+                    .map_err(fe_error)?;
+                (vec![check], 0)
+            }
+            (Mode::Check, None) => {
                 (vec![render::check(&self.target, &self.settings, &mut |p| report(0, p)).map_err(fe_error)?], 0)
             }
-            Mode::Compensate => {
+            (Mode::Compensate, _) => {
                 let c =
                     render::compensate(&self.target, &self.settings, self.stopping, &mut report).map_err(fe_error)?;
                 (c.trials, c.best)
             }
         };
         let fe_seconds = started.elapsed().as_secs_f64();
-        self.answer(&trials, best, fe_seconds)
+        match &self.combined {
+            Some((design, _)) => self.answer_combined(&trials[0], design, fe_seconds),
+            None => self.answer(&trials, best, fe_seconds),
+        }
     }
 
     /// The result of the trials (eq. 8's first, `best` the one offered).
@@ -357,16 +421,7 @@ impl Job {
                 value
             }
         };
-        let mut settings = json!({
-            "load_n_per_mm": load_of(s),
-            "velocity_mm_s": scenario.velocity_mm_s,
-            "step_mm": scenario.step_mm,
-            "run_up_mm": s.run_up_mm,
-            "loading": "load",
-            "mesh": "default",
-            "tissue": "viscoelastic",
-            "mu_hd": s.device.mu_hd,
-        });
+        let mut settings = self.settings_json();
         if self.mode == Mode::Compensate {
             settings["max_runs"] = json!(self.stopping.max_runs);
             settings["tolerance"] = json!(self.stopping.tolerance);
@@ -382,6 +437,92 @@ impl Job {
             "compensated": compensated,
             "trials": trials.iter().enumerate().map(|(i, t)| json!({ "trial": i + 1, "metrics": t.metrics })).collect::<Vec<_>>(),
             "fe_runs": trials.len(),
+            "fe_seconds": fe_seconds,
+            "voltage": voltage_json,
+            "voltage_csv": csv,
+        }))
+    }
+}
+
+impl Job {
+    /// The settings of the answer (the finger's, defaults filled in).
+    fn settings_json(&self) -> Value {
+        let s = &self.settings;
+        json!({
+            "load_n_per_mm": load_of(s),
+            "velocity_mm_s": s.scenario.velocity_mm_s,
+            "step_mm": s.scenario.step_mm,
+            "run_up_mm": s.run_up_mm,
+            "loading": "load",
+            "mesh": "default",
+            "tissue": "viscoelastic",
+            "mu_hd": s.device.mu_hd,
+        })
+    }
+
+    /// The result of a combined display's check: the design applied (as
+    /// `POST /api/voltage` designs it for the target with this display:
+    /// the same allocation, checked equal), what the finger felt, the
+    /// metrics over the band.
+    fn answer_combined(&self, check: &Check, design: &DisplayDesign, fe_seconds: f64) -> Result<Value, ApiError> {
+        // The target as it is (already relative when asked), with no Fn:
+        // the design render::check_combined applied.
+        let request = crate::params::DeviceRequest { device: self.request.device, fn_n: None };
+        let designed = super::voltage::compute_display(&self.target, &request, None, design, "device.")?;
+        if designed.voltage_v.as_ref() != Some(&check.voltage_v) || designed.amplitude_um != check.amplitude_um {
+            return Err(ApiError::internal("the combined design offered differs from the one the finger felt (a bug)"));
+        }
+        let m = &check.metrics;
+        let finite = check.felt.mu.iter().all(|v| v.is_finite())
+            && [m.rms_error, m.max_error, m.lag_mm, m.k_fe_mm2_per_n, m.contact_mm, m.target_detail_rms]
+                .iter()
+                .chain(&m.detail_retained)
+                .all(|v| v.is_finite());
+        if !finite {
+            return Err(ApiError::internal("the check gave a non-finite number for accepted input (a bug)"));
+        }
+        let s = &self.settings;
+        let answer = super::voltage::DisplayAnswer::new(&request, design, &designed);
+        let strategy = match design.strategy {
+            Some(haptex_core::combined::Strategy::Split) => "split",
+            Some(haptex_core::combined::Strategy::Bias) => "bias",
+            Some(haptex_core::combined::Strategy::Weighted { .. }) => "weighted",
+            None => "none",
+        };
+        let comment = format!(
+            "# haptex check on the finger model: visco-elastic FE finger, default mesh, load {} N/mm, {} mm/s, step {} \
+             mm; combined display ({strategy}); felt-friction RMS error {:.3e} over the combined display's band",
+            Num(load_of(s)),
+            Num(s.scenario.velocity_mm_s),
+            Num(s.scenario.step_mm),
+            m.rms_error
+        );
+        let csv = super::to_csv(|w| {
+            writeln!(w, "{comment}")?;
+            designed.write_csv(w)
+        })?;
+        let csv =
+            String::from_utf8(csv).map_err(|e| ApiError::internal(format!("the design CSV is not UTF-8: {e}")))?;
+        let mut settings = self.settings_json();
+        settings["display"] = json!("combined");
+        settings["strategy"] = json!(strategy);
+        let voltage_json = serde_json::to_value(&answer)
+            .map_err(|e| ApiError::internal(format!("cannot serialize the design: {e}")))?;
+        Ok(json!({
+            "settings": settings,
+            "parameters": answer.parameters,
+            "x_mm": self.target.x_mm(),
+            "target_mu": self.target.mu(),
+            "eq8": Value::Null,
+            "design": {
+                "voltage_v": check.voltage_v,
+                "amplitude_um": check.amplitude_um,
+                "felt_mu": check.felt.mu,
+                "metrics": check.metrics,
+            },
+            "compensated": Value::Null,
+            "trials": [json!({ "trial": 1, "metrics": check.metrics })],
+            "fe_runs": 1,
             "fe_seconds": fe_seconds,
             "voltage": voltage_json,
             "voltage_csv": csv,
