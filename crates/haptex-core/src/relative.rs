@@ -32,7 +32,7 @@
 //!   would be pulled by every peak. It is an estimate, and reported as
 //!   one: half of a profile with no flat part lies below its median (on
 //!   the shipped database the median is within 0.0004 of 0.5 for every
-//!   bump, up to 0.065 above it for an edge, and 0.15 to 0.54 for a sine).
+//!   bump, up to 0.065 above it for an edge, and 0.15 to 0.56 for a sine).
 
 use serde::{Deserialize, Serialize};
 

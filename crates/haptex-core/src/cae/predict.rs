@@ -305,7 +305,7 @@ impl Cae {
                 diagnostics.push(diag);
             }
             if rows_used * SPARSE_BLOCK_FRACTION < q_block * n {
-                // Narrow kernels (the shipped database's): each query reads
+                // Narrow kernels (the database shipped until 2026-11-25): each query reads
                 // only its own few rows, as one query does; a product over
                 // every row would do N / used times the work.
                 for (w_row, o) in scratch.weights.chunks_exact(n).zip(out_block.chunks_exact_mut(m)) {
