@@ -1419,7 +1419,33 @@
       cursor: { drag: { x: true, y: false } },
       series: [{ label: 'x (mm)' }, ...series],
     };
-    return new uPlot(options, data, $(id));
+    const plot = new uPlot(options, data, $(id));
+    keyboardLegend(plot);
+    return plot;
+  }
+
+  /**
+   * The legend's entries as toggle buttons for the keyboard: Tab reaches
+   * each series' entry, Enter or Space shows or hides it (what a click on
+   * it does), and aria-pressed says whether it is shown.
+   */
+  function keyboardLegend(plot) {
+    plot.root.querySelectorAll('.u-legend tr.u-series').forEach((row, i) => {
+      const th = row.querySelector('th');
+      if (i === 0 || !th) return; // the x column is no series to hide
+      const pressed = () => th.setAttribute('aria-pressed', String(plot.series[i].show !== false));
+      th.tabIndex = 0;
+      th.setAttribute('role', 'button');
+      th.setAttribute('aria-label', `show or hide ${plot.series[i].label}`);
+      pressed();
+      // After uPlot's own click handler (registered first): the new state.
+      th.addEventListener('click', pressed);
+      th.addEventListener('keydown', (e) => {
+        if (e.key !== 'Enter' && e.key !== ' ') return;
+        e.preventDefault();
+        th.click();
+      });
+    });
   }
 
   function constant(x, value) {

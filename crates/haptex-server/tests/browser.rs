@@ -557,6 +557,38 @@ async fn relative_fig2(client: &Client, x: &[f64], predicted: &[f64]) -> Check<(
     Ok(())
 }
 
+/// The plot legends from the keyboard (issue 17): the voltage plot's
+/// second series (eq. 9) is reached with Tab, hidden with Enter and shown
+/// again with Space, its aria-pressed following.
+async fn legend_keyboard(client: &Client) -> Check<()> {
+    let entry = "document.querySelectorAll('#voltage-plot .u-legend tr.u-series')[2].querySelector('th')";
+    let state = format!("return [window.haptex.plots.voltage.series[2].show, {entry}.getAttribute('aria-pressed')];");
+    if script(client, &state).await? != json!([true, "true"]) {
+        return fail("the voltage plot's eq. (9) entry is not a shown toggle");
+    }
+    // Focus the entry before it, then Tab to it (the browser's own focus order).
+    script(
+        client,
+        "document.querySelectorAll('#voltage-plot .u-legend tr.u-series')[1].querySelector('th').focus(); return true;",
+    )
+    .await?;
+    let active = wd!(client.active_element());
+    wd!(active.send_keys("\u{E004}")); // Tab
+    let focused = script(client, &format!("return document.activeElement === {entry};")).await?;
+    if focused != Value::Bool(true) {
+        return fail("Tab from the first legend entry does not reach the second");
+    }
+    wd!(wd!(client.active_element()).send_keys("\u{E007}")); // Enter
+    if script(client, &state).await? != json!([false, "false"]) {
+        return fail("Enter on a legend entry does not hide its series");
+    }
+    wd!(wd!(client.active_element()).send_keys(" "));
+    if script(client, &state).await? != json!([true, "true"]) {
+        return fail("Space on a hidden legend entry does not show its series again");
+    }
+    Ok(())
+}
+
 /// The model section, opened: eq. (8) with the Fig. 2 constant physics.md
 /// quotes, the shipped finger's dermis modulus, the finger file with its
 /// sources and the database's leave-one-out errors.
@@ -611,6 +643,7 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
         );
     }
     relative_fig2(client, &friction[0], &predicted).await?;
+    legend_keyboard(client).await?;
     model_section(client).await?;
     let named = accessible_names(client, "the template source").await?;
     if named < 30 {
