@@ -877,6 +877,13 @@ async fn material_sample_is_the_librarys_seeded_choice() {
     csv.ok();
     let text = csv.text();
     assert!(text.contains("SYNTHETIC"), "{text}");
+    assert!(
+        text.contains(&format!(
+            "# haptex {} (GET /api/materials/NAME/sample); library_sha256: ",
+            env!("CARGO_PKG_VERSION")
+        )),
+        "{text}"
+    );
     let table = Table::read(csv.body.as_ref(), "answer").unwrap();
     assert_eq!(table.columns(), ["x_mm", "mu", "fn_n"]);
     assert_eq!(table.column("mu").unwrap(), expected.stored.profile.mu());
@@ -1174,6 +1181,12 @@ async fn predict_csv_reads_back_as_a_friction_profile() {
     assert!(text.starts_with("# haptex predict: sine x0=0 mm r_w=2 mm r_h=0.2 mm velocity=50 mm/s"), "{text}");
     assert!(
         text.contains("# flat-surface friction mu_flat = 0.5 (Ft/Fn on a flat surface: the FE skin friction"),
+        "{text}"
+    );
+    // The download's recipe: the version and the data it was predicted from.
+    let sha = haptex_server::state::database_sha256(&shipped_db()).unwrap();
+    assert!(
+        text.contains(&format!("# haptex {} (POST /api/predict); database_sha256: {sha}", env!("CARGO_PKG_VERSION"))),
         "{text}"
     );
     let profile = FrictionProfile::from_table(&Table::read(text.as_bytes(), "answer").unwrap()).unwrap();

@@ -35,18 +35,26 @@ pub async fn sample(
     let format = query.take_format(&["json", "csv"])?;
     query.finish()?;
     let pool = state.library()?;
+    let library_sha256 = state.library_sha256();
     // The library read, the answer and its serialization on a blocking
     // thread (a stroke can have many thousand points).
     pool.with(move |library| {
         let sampled = library.sample(&name, seed).map_err(ApiError::library)?;
         let total = library.strokes(&name).map_err(ApiError::library)?.len();
-        answer(&sampled, total, format)
+        answer(&sampled, total, format, library_sha256.as_deref())
     })
     .await
 }
 
-/// The sample's answer: JSON, or CSV with the provenance in comments.
-fn answer(sampled: &SampledProfile, total: usize, format: &str) -> Result<Response, ApiError> {
+/// The sample's answer: JSON, or CSV with the provenance in comments and
+/// the recipe's rest (the haptex version and the library's SHA-256: with
+/// the material and seed, what reproduces the file).
+fn answer(
+    sampled: &SampledProfile,
+    total: usize,
+    format: &str,
+    library_sha256: Option<&str>,
+) -> Result<Response, ApiError> {
     let stroke = &sampled.stored.stroke;
     let profile = &sampled.stored.profile;
     if format == "csv" {
@@ -58,6 +66,11 @@ fn answer(sampled: &SampledProfile, total: usize, format: &str) -> Result<Respon
             sampled.seed
         )];
         comments.extend(stroke.provenance_lines());
+        comments.push(format!(
+            "haptex {} (GET /api/materials/NAME/sample); library_sha256: {}",
+            env!("CARGO_PKG_VERSION"),
+            library_sha256.unwrap_or("(none)")
+        ));
         let bytes = super::to_csv(|w| profile.write_csv_commented(w, &comments))?;
         return Ok(super::csv_response(bytes, &format!("{}-stroke-{}.csv", safe_name(&stroke.material), stroke.id)));
     }

@@ -15,7 +15,8 @@
 //! warnings, the template's typical error and the profile's flat-surface
 //! friction `flat_mu` (the FE skin friction: what `relative` voltage
 //! mappings divide by, paper Fig. 2); `?format=csv` answers the
-//! `x_mm,mu` file `haptex predict` writes.
+//! `x_mm,mu` file `haptex predict` writes, with the haptex version and the
+//! database's SHA-256 in a last comment line (the download's recipe).
 
 use axum::Json;
 use axum::body::Bytes;
@@ -39,6 +40,7 @@ pub async fn post(
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Response, ApiError> {
     let body = super::TemplateCall::start(&state, &headers, raw_query.as_deref(), body)?;
+    let database_sha256 = state.database_sha256().map(str::to_owned);
     work::cpu(&state, body.bytes.len(), move || {
         let call = body.parse()?;
         let (format, set, request) = (call.format, &call.set, call.request);
@@ -62,6 +64,12 @@ pub async fn post(
                 set.metadata().fe.flat_mu_comment(),
             ];
             comments.extend(warning.map(|w| format!("warning: {w}")));
+            // The recipe's rest: with the parameters above, what reproduces the file.
+            comments.push(format!(
+                "haptex {} (POST /api/predict); database_sha256: {}",
+                env!("CARGO_PKG_VERSION"),
+                database_sha256.as_deref().unwrap_or("(none)")
+            ));
             let bytes = super::to_csv(|w| profile.write_csv_commented(w, &comments))?;
             return Ok(super::csv_response(
                 bytes,
