@@ -380,17 +380,7 @@ impl Job {
             .clone()
             .with_voltages(offered.voltage_v.clone())
             .map_err(|e| ApiError::internal(format!("the voltage offered is outside the device's limits: {e}")))?;
-        let finite = trials.iter().all(|t| {
-            let m = &t.metrics;
-            t.felt.mu.iter().chain(&t.voltage_v).all(|v| v.is_finite())
-                && [m.rms_error, m.max_error, m.lag_mm, m.k_fe_mm2_per_n, m.contact_mm, m.target_detail_rms]
-                    .iter()
-                    .chain(&m.detail_retained)
-                    .all(|v| v.is_finite())
-        });
-        if !finite {
-            return Err(ApiError::internal("the check gave a non-finite number for accepted input (a bug)"));
-        }
+        trials.iter().try_for_each(finite)?;
         let s = &self.settings;
         let scenario = &s.scenario;
         let label = match self.mode {
@@ -406,12 +396,7 @@ impl Job {
             offered.metrics.rms_error,
             trials[0].metrics.rms_error
         );
-        let csv = super::to_csv(|w| {
-            writeln!(w, "{comment}")?;
-            voltage.write_csv(w)
-        })?;
-        let csv =
-            String::from_utf8(csv).map_err(|e| ApiError::internal(format!("the voltage CSV is not UTF-8: {e}")))?;
+        let csv = commented_csv(&comment, |w| voltage.write_csv(w))?;
         let trial = |t: &Check| json!({ "voltage_v": t.voltage_v, "felt_mu": t.felt.mu, "metrics": t.metrics });
         let compensated = match self.mode {
             Mode::Check => Value::Null,
@@ -472,15 +457,8 @@ impl Job {
         if designed.voltage_v.as_ref() != Some(&check.voltage_v) || designed.amplitude_um != check.amplitude_um {
             return Err(ApiError::internal("the combined design offered differs from the one the finger felt (a bug)"));
         }
+        finite(check)?;
         let m = &check.metrics;
-        let finite = check.felt.mu.iter().all(|v| v.is_finite())
-            && [m.rms_error, m.max_error, m.lag_mm, m.k_fe_mm2_per_n, m.contact_mm, m.target_detail_rms]
-                .iter()
-                .chain(&m.detail_retained)
-                .all(|v| v.is_finite());
-        if !finite {
-            return Err(ApiError::internal("the check gave a non-finite number for accepted input (a bug)"));
-        }
         let s = &self.settings;
         let answer = super::voltage::DisplayAnswer::new(&request, design, &designed);
         let strategy = match design.strategy {
@@ -497,12 +475,7 @@ impl Job {
             Num(s.scenario.step_mm),
             m.rms_error
         );
-        let csv = super::to_csv(|w| {
-            writeln!(w, "{comment}")?;
-            designed.write_csv(w)
-        })?;
-        let csv =
-            String::from_utf8(csv).map_err(|e| ApiError::internal(format!("the design CSV is not UTF-8: {e}")))?;
+        let csv = commented_csv(&comment, |w| designed.write_csv(w))?;
         let mut settings = self.settings_json();
         settings["display"] = json!("combined");
         settings["strategy"] = json!(strategy);
@@ -528,6 +501,36 @@ impl Job {
             "voltage_csv": csv,
         }))
     }
+}
+
+/// A check's numbers are finite (its voltage and felt friction, every
+/// error figure); a non-finite one for accepted input is a bug (500).
+fn finite(check: &Check) -> Result<(), ApiError> {
+    let m = &check.metrics;
+    let finite =
+        check.felt.mu.iter().chain(&check.voltage_v).chain(check.amplitude_um.iter().flatten()).all(|v| v.is_finite())
+            && [m.rms_error, m.max_error, m.lag_mm, m.k_fe_mm2_per_n, m.contact_mm, m.target_detail_rms]
+                .iter()
+                .chain(&m.detail_retained)
+                .all(|v| v.is_finite());
+    if finite {
+        Ok(())
+    } else {
+        Err(ApiError::internal("the check gave a non-finite number for accepted input (a bug)"))
+    }
+}
+
+/// The text of a drive file offered: `comment` (one `#` line), then what
+/// `write` writes.
+fn commented_csv(
+    comment: &str,
+    write: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
+) -> Result<String, ApiError> {
+    let csv = super::to_csv(|w| {
+        writeln!(w, "{comment}")?;
+        write(w)
+    })?;
+    String::from_utf8(csv).map_err(|e| ApiError::internal(format!("the drive CSV is not UTF-8: {e}")))
 }
 
 /// The load of the settings (N/mm; they are built with load control).
