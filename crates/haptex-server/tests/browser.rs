@@ -1947,7 +1947,7 @@ async fn map_view(client: &Client, base: &str, scratch: &Path) -> Check<()> {
         .map(|k| {
             let (i, j) = ((k % nx) as f64, (k / nx) as f64);
             let disc = if (i - 40.0).powi(2) + (j - 22.0).powi(2) < 100.0 { 0.5 } else { 0.0 };
-            let stripe = if (i as usize / 4) % 2 == 0 && j < 12.0 { -0.2 } else { 0.0 };
+            let stripe = if (i as usize / 4).is_multiple_of(2) && j < 12.0 { -0.2 } else { 0.0 };
             (0.2 + 0.5 * i / 63.0 + disc + stripe).clamp(0.0, 1.0)
         })
         .collect();
