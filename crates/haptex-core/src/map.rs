@@ -819,6 +819,23 @@ impl RegionFill {
     }
 }
 
+/// The width and height (pixels) a PNG's header claims, read from its
+/// first chunk (IHDR) without decoding anything else: what a caller with a
+/// tighter bound than [`MAX_CELLS`] checks before
+/// [`FrictionMap::read_gray_png`] sizes any buffer by them.
+pub fn png_size(bytes: &[u8], source_name: &str) -> Result<(usize, usize), MapError> {
+    const SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+    if bytes.len() < 24 || &bytes[..8] != SIGNATURE || &bytes[12..16] != b"IHDR" {
+        return Err(MapError::new(
+            source_name,
+            None,
+            "not a readable PNG: no PNG signature and header (IHDR) at its start",
+        ));
+    }
+    let be = |k: usize| u32::from_be_bytes([bytes[k], bytes[k + 1], bytes[k + 2], bytes[k + 3]]) as usize;
+    Ok((be(16), be(20)))
+}
+
 /// A decoded grayscale PNG: its rows from the top, `stride` bytes apart.
 struct GrayImage {
     width: usize,

@@ -58,6 +58,12 @@ pub async fn index(headers: HeaderMap, RawQuery(raw_query): RawQuery) -> Result<
     Ok(serve("index.html", &headers))
 }
 
+/// `GET /map`: the map view's page (friction maps from an image).
+pub async fn map_page(headers: HeaderMap, RawQuery(raw_query): RawQuery) -> Result<Response, ApiError> {
+    Query::parse(raw_query.as_deref())?.finish()?;
+    Ok(serve("map.html", &headers))
+}
+
 /// `GET /static/{*path}`: an embedded file, or 404.
 pub async fn file(
     path: Result<Path<String>, PathRejection>,

@@ -51,6 +51,9 @@ pub fn table() -> Vec<Endpoint> {
         endpoint(Method::GET, "/api/materials/{name}/sample", api::materials::sample),
         endpoint(Method::POST, "/api/recordings", api::recordings::post),
         endpoint(Method::POST, "/api/play", api::play::post),
+        endpoint(Method::GET, "/map", assets::map_page),
+        endpoint(Method::POST, "/api/map", api::map::post),
+        endpoint(Method::POST, "/api/map/path", api::map::path),
     ]
 }
 

@@ -89,6 +89,11 @@ pub struct Limits {
     pub max_upload_bytes: usize,
     /// Most files in one upload of recordings, zip entries included.
     pub max_upload_files: usize,
+    /// Most pixels of an image turned into a map (`POST /api/map`,
+    /// `/api/map/path`): 512 x 512. The answer holds two numbers per
+    /// pixel (about 10 MB of JSON at the limit); larger images are for
+    /// `haptex map from-image`.
+    pub max_map_pixels: usize,
 }
 
 impl Limits {
@@ -99,7 +104,8 @@ impl Limits {
     /// answers, 2 renders at once, 1 FE simulation at once (the other core
     /// serves everything else) with a wait of up to 5 s for it; checks on
     /// the finger model of up to 4000 points and 4000 FE steps (about 6 s);
-    /// uploads of recordings of up to 64 MiB and 1000 files.
+    /// uploads of recordings of up to 64 MiB and 1000 files; images of up
+    /// to 512 x 512 pixels turned into maps.
     pub const DEFAULT: Self = Self {
         max_body_bytes: 1 << 20,
         max_points: 100_000,
@@ -122,6 +128,7 @@ impl Limits {
         max_check_steps: 4000,
         max_upload_bytes: 64 << 20,
         max_upload_files: 1000,
+        max_map_pixels: 512 * 512,
     };
 
     /// The read buffer hyper may fill with one request head: room for the

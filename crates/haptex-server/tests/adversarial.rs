@@ -200,6 +200,19 @@ fn hostile(n: usize) -> String {
     "../\u{0}\u{1b}[31m\"\\\n\r\u{202e}é∞".chars().cycle().take(n).collect()
 }
 
+/// The body of `POST /api/map`: a 4 x 3 grayscale image and its mapping.
+fn map_body() -> Value {
+    use haptex_core::map::{FrictionMap, GrayMapping, MapGrid};
+    let grid = MapGrid { nx: 4, ny: 3, x0_mm: 0.0, y0_mm: 0.0, dx_mm: 1.0, dy_mm: 1.0 };
+    let map = FrictionMap { grid, mu: (0..12).map(|k| k as f64 / 11.0).collect() };
+    let mut png = Vec::new();
+    map.write_gray_png(&mut png, &GrayMapping { mu_black: 0.0, mu_white: 1.0, gamma: 1.0 }, 8).unwrap();
+    json!({
+        "image_png_base64": common::base64(&png), "mu_black": 0.8, "mu_white": 1.4, "gamma": 1.0,
+        "pixel_mm": 0.1, "x0_mm": 0.0, "y0_mm": 0.0, "method": "physical", "device": { "u_max_v": 100.0 },
+    })
+}
+
 fn valid_requests() -> Vec<Valid> {
     let json_ct = Some("application/json");
     let profile = json!({ "x_mm": [0.0, 1.0, 2.0], "mu": [1.0, 1.2, 1.1] });
@@ -269,6 +282,21 @@ fn valid_requests() -> Vec<Valid> {
             target: "/api/recordings",
             content_type: Some("multipart/form-data; boundary=adversarial-0f3c"),
             body: upload_form("synthetic", &tile_s1()),
+        },
+        Valid { route: ("GET", "/map"), target: "/map", content_type: None, body: vec![] },
+        Valid {
+            route: ("POST", "/api/map"),
+            target: "/api/map",
+            content_type: json_ct,
+            body: map_body().to_string().into_bytes(),
+        },
+        Valid {
+            route: ("POST", "/api/map/path"),
+            target: "/api/map/path",
+            content_type: json_ct,
+            body: set(&map_body(), "path", json!({ "t_s": [0.0, 0.1], "x_mm": [0.0, 0.3], "y_mm": [0.1, 0.2] }))
+                .to_string()
+                .into_bytes(),
         },
         Valid {
             route: ("POST", "/api/play"),
@@ -734,6 +762,41 @@ fn route_cases(valid: &Valid) -> Vec<Case> {
                 cases.push(valid.json("tolerance on a check", &set(&body, "tolerance", json!(1e-3)), 400, "tolerance"));
             }
             cases.push(valid.target("format=csv", format!("{}?format=csv", valid.target), 400, "format"));
+        }
+        "/api/map" | "/api/map/path" => {
+            for (path, min, max) in [
+                ("mu_black", -1e3, 1e3),
+                ("mu_white", -1e3, 1e3),
+                ("gamma", 0.05, 20.0),
+                ("pixel_mm", 5e-324, 1e5),
+                ("x0_mm", -1e6, 1e6),
+                ("device.u_max_v", 1e-3, 1e4),
+            ] {
+                number_cases(valid, &body, path, min, max, &mut cases);
+            }
+            for (path, value, status, field) in [
+                ("image_png_base64", json!(hostile(1000)), 400, "image_png_base64"),
+                ("image_png_base64", json!("iVBORw0KGgo="), 400, "image_png_base64"),
+                ("image_png_base64", json!(1), 400, "image_png_base64"),
+                ("device.area_exponent", json!(2.0), 400, "device.area_exponent"),
+                ("method", json!(hostile(100)), 400, "method"),
+            ] {
+                cases.push(valid.json(format!("{path} = {value:.40}"), &set(&body, path, value), status, field));
+            }
+            if valid.route.1 == "/api/map/path" {
+                for axis in ["t_s", "x_mm", "y_mm"] {
+                    number_cases(valid, &body, &format!("path.{axis}[1]"), -1e6, 1e6, &mut cases);
+                }
+                for (value, status, field) in [
+                    (json!({ "t_s": [0.0, 0.0], "x_mm": [0.0, 0.3], "y_mm": [0.1, 0.2] }), 400, "path.t_s[1]"),
+                    (json!({ "t_s": [0.0, 0.1], "x_mm": [0.0, 0.3] }), 400, "path"),
+                    (json!({ "t_s": vec![0; 100_001], "x_mm": [0.0], "y_mm": [0.0] }), 413, "path.t_s"),
+                ] {
+                    cases.push(valid.json(format!("path = {value:.40}"), &set(&body, "path", value), status, field));
+                }
+            } else {
+                cases.push(valid.json("a path", &set(&body, "path", json!({})), 400, "path"));
+            }
         }
         "/api/play" => {
             for (path, min, max) in [

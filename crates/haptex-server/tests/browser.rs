@@ -83,6 +83,17 @@
 //!     per recording); the new material is listed, and its stroke sampled
 //!     with a seed is plotted value for value as the command line's import
 //!     and sample of the same files give it.
+//! 16. the map view (issue 19, /map): a grayscale PNG written here is
+//!     uploaded with its gray mapping; the heat map's voltages are the
+//!     core's map of that image (`FrictionMap::read_gray_png`, then
+//!     `FrictionMap::voltages`: what `haptex map from-image` and `haptex
+//!     map voltage` call); the pointer over the map reads U there as the
+//!     core's bilinear `VoltageMap::sample`; a path drawn over the map with
+//!     WebDriver pointer actions (press, drag, release) is plotted as U(t)
+//!     equal, value for value (1e-12), to the core's
+//!     `PlanarTrajectory::sample` of that path (what `haptex map
+//!     sample-path` calls); its path and U(t) CSV downloads hold the same
+//!     numbers; a 390 px window does not scroll sideways.
 //!
 //! It saves screenshots (desktop and phone) in the target directory;
 //! with HAPTEX_UPDATE_SCREENSHOTS=1 also to docs/img/ (what docs/web.md
@@ -949,6 +960,8 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     recipes(client, base, scratch).await?;
     // 15. Recordings uploaded into a writable library (another server).
     upload_recordings(client, scratch).await?;
+    // 16. The map view (issue 19): an uploaded image, felt and drawn over.
+    map_view(client, base, scratch).await?;
 
     let errors = console_errors(client).await?;
     if !errors.is_empty() {
@@ -1976,4 +1989,190 @@ async fn upload_into(client: &Client, base: &str, lab: &Path, scratch: &Path, de
         return fail(format!("console errors during the upload: {unexpected:#?}"));
     }
     Ok(())
+}
+
+/// The map view (issue 19): uploads a grayscale PNG written here with a
+/// gray mapping, checks the heat map's voltages and the pointer's reading
+/// against the core, draws a path over the map with the mouse (press, drag,
+/// release) and checks the plotted U(t) against the core's sampling of the
+/// same path over the same map: the functions `haptex map from-image`,
+/// `haptex map voltage` and `haptex map sample-path` call, in-process
+/// (`FrictionMap::read_gray_png`, `FrictionMap::voltages`,
+/// `PlanarTrajectory::sample`), value for value within 1e-12.
+async fn map_view(client: &Client, base: &str, scratch: &Path) -> Check<()> {
+    use haptex_core::map::{FrictionMap, GrayMapping, MapGrid};
+    use haptex_core::planar::PlanarTrajectory;
+    // A 64 x 40 image: a ramp along x, a bright disc and dark stripes.
+    let (nx, ny) = (64usize, 40usize);
+    let grid = MapGrid { nx, ny, x0_mm: 0.0, y0_mm: 0.0, dx_mm: 1.0, dy_mm: 1.0 };
+    let levels: Vec<f64> = (0..nx * ny)
+        .map(|k| {
+            let (i, j) = ((k % nx) as f64, (k / nx) as f64);
+            let disc = if (i - 40.0).powi(2) + (j - 22.0).powi(2) < 100.0 { 0.5 } else { 0.0 };
+            let stripe = if (i as usize / 4).is_multiple_of(2) && j < 12.0 { -0.2 } else { 0.0 };
+            (0.2 + 0.5 * i / 63.0 + disc + stripe).clamp(0.0, 1.0)
+        })
+        .collect();
+    let mut png = Vec::new();
+    FrictionMap { grid, mu: levels }
+        .write_gray_png(&mut png, &GrayMapping { mu_black: 0.0, mu_white: 1.0, gamma: 1.0 }, 8)
+        .map_err(|e| e.to_string())?;
+    let file = scratch.join("map-texture.png");
+    std::fs::write(&file, &png).map_err(|e| e.to_string())?;
+    // The core's maps of it with the mapping typed below (the paper's device).
+    let mapping = GrayMapping { mu_black: 0.95, mu_white: 1.25, gamma: 1.0 };
+    let friction = FrictionMap::read_gray_png(&png, &mapping, (0.25, 0.25), (0.0, 0.0), "map-texture.png")
+        .map_err(|e| e.to_string())?;
+    let voltage = friction.voltages(&Device::PAPER, MapMethod::Physical).map_err(|e| e.to_string())?;
+
+    wd!(client.set_window_size(1280, 1000));
+    wd!(client.goto(&format!("{base}map")));
+    wait_for(client, "document.body.dataset.state === 'empty' && window.haptexMap", "the map page").await?;
+    accessible_names(client, "the map view").await?;
+    for (id, value) in [("mu_black", "0.95"), ("mu_white", "1.25"), ("gamma", "1"), ("pixel_mm", "0.25")] {
+        type_into(client, id, value).await?;
+    }
+    wd!(wd!(client.find(Locator::Id("image"))).send_keys(&file.display().to_string()));
+    wait_for(client, "document.body.dataset.state === 'ready'", "the map of the uploaded image").await?;
+    let map = script(client, "return window.haptexMap.state.map;").await?;
+    if numbers(&map["voltage_v"])? != voltage.voltage_v || numbers(&map["mu"])? != friction.mu {
+        return fail("the map page's friction or voltage map is not the core's map of the uploaded image");
+    }
+    if voltage.voltage_v.iter().all(|&u| u == voltage.voltage_v[0]) {
+        return fail("the test image gives a constant voltage map: nothing is tested");
+    }
+    accessible_names(client, "the map view with a map").await?;
+
+    // The pointer over the map reads U there (the core's bilinear sample).
+    let canvas = wd!(client.find(Locator::Id("map-canvas")));
+    let size = script(
+        client,
+        "const r = document.getElementById('map-canvas').getBoundingClientRect(); return [r.width, r.height];",
+    )
+    .await?;
+    let size = numbers(&size)?;
+    let (w, h) = (size[0], size[1]);
+    let at = |fx: f64, fy: f64| PointerAction::MoveToElement {
+        element: canvas.clone(),
+        duration: Some(Duration::from_millis(25)),
+        x: (fx - 0.5) * w,
+        y: (fy - 0.5) * h,
+    };
+    wd!(client.perform_actions(MouseActions::new("mouse".into()).then(at(0.37, 0.41))));
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    let read = script(
+        client,
+        "const d = document.getElementById('map-readout').dataset; return [Number(d.xMm), Number(d.yMm), Number(d.voltageV)];",
+    )
+    .await?;
+    let read = numbers(&read)?;
+    let expected = voltage.sample(read[0], read[1]);
+    if (read[2] - expected).abs() > 1e-12 || (read[0] - 0.37 * 16.0).abs() > 0.3 || (read[1] - 0.59 * 10.0).abs() > 0.3
+    {
+        return fail(format!("the pointer over the map reads {read:?}; the core's U there is {expected} V"));
+    }
+
+    // A path drawn with the mouse: pressed, dragged through the disc, released.
+    let before = script(client, "return Number(document.body.dataset.path || 0);").await?;
+    let before = before.as_u64().unwrap_or(0);
+    let mut drag = MouseActions::new("mouse".into())
+        .then(at(0.1, 0.8))
+        .then(PointerAction::Down { button: fantoccini::actions::MOUSE_BUTTON_LEFT });
+    for k in 1..=16 {
+        let f = k as f64 / 16.0;
+        drag = drag.then(at(0.1 + 0.8 * f, 0.8 - 0.6 * f * f));
+    }
+    drag = drag.then(PointerAction::Up { button: fantoccini::actions::MOUSE_BUTTON_LEFT });
+    wd!(client.perform_actions(drag));
+    wd!(client.release_actions());
+    wait_for(client, &format!("Number(document.body.dataset.path || 0) > {before}"), "U(t) of the drawn path").await?;
+    let path = script(client, "return window.haptexMap.state.path;").await?;
+    let (t, x, y) = (numbers(&path["t_s"])?, numbers(&path["x_mm"])?, numbers(&path["y_mm"])?);
+    let drawn = PlanarTrajectory::new(t.clone(), x.clone(), y.clone()).map_err(|e| e.to_string())?;
+    let expected = drawn.sample(&voltage.grid, &voltage.voltage_v);
+    let plotted = plotted_map(client).await?;
+    if t.len() < 10 || (x[0] - 0.1 * 16.0).abs() > 0.3 || (x[x.len() - 1] - 0.9 * 16.0).abs() > 0.3 {
+        return fail(format!(
+            "the path recorded from the drag: {} samples, x from {} to {} mm",
+            t.len(),
+            x[0],
+            x[x.len() - 1]
+        ));
+    }
+    if plotted[0] != t || plotted[1].len() != expected.len() {
+        return fail("the U(t) plot is not over the path's times");
+    }
+    if let Some(k) = (0..expected.len()).find(|&k| (plotted[1][k] - expected[k]).abs() > 1e-12) {
+        return fail(format!(
+            "U(t) at t = {} s (x {} mm, y {} mm): plotted {} V, the core's sample-path gives {} V",
+            t[k], x[k], y[k], plotted[1][k], expected[k]
+        ));
+    }
+    let (lo, hi) = expected.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &u| (a.min(u), b.max(u)));
+    if hi - lo < 1.0 {
+        return fail(format!("the drawn path's U(t) hardly varies ({lo} .. {hi} V): nothing is tested"));
+    }
+    // The downloads: the path and U(t) as the command line writes it.
+    let bytes = download(client, "path-csv").await?;
+    let table = Table::read(bytes.as_slice(), "map-path.csv").map_err(|e| e.to_string())?;
+    if table.column("t_s") != Some(t.as_slice())
+        || table.column("x_mm") != Some(x.as_slice())
+        || table.column("y_mm") != Some(y.as_slice())
+    {
+        return fail("the path CSV download is not the path drawn");
+    }
+    let bytes = download(client, "voltage-csv").await?;
+    let table = Table::read(bytes.as_slice(), "map-path-voltage.csv").map_err(|e| e.to_string())?;
+    if table.column("voltage_v") != Some(expected.as_slice()) || table.column("t_s") != Some(t.as_slice()) {
+        return fail("the U(t) CSV download is not the core's samples of the path drawn");
+    }
+    // The friction view and its colour bar.
+    show_map(client, "friction").await?;
+    let title = wd!(wd!(client.find(Locator::Id("map-title"))).text());
+    let bar = script(client, "return document.getElementById('colour-bar').getAttribute('aria-label');").await?;
+    if !title.contains("Friction") || !bar.as_str().unwrap_or_default().contains("mu from 0.95") {
+        return fail(format!("the friction view: title {title:?}, colour bar {bar}"));
+    }
+    show_map(client, "voltage").await?;
+    let bar = script(client, "return document.getElementById('colour-bar').getAttribute('aria-label');").await?;
+    if !bar.as_str().unwrap_or_default().contains("V RMS") {
+        return fail(format!("the voltage colour bar has no unit: {bar}"));
+    }
+    wd!(client.set_window_size(1280, 1250));
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    script(client, "document.activeElement.blur(); window.scrollTo(0, 0); return true;").await?;
+    save_screenshot("web-map.png", &wd!(client.screenshot()));
+    // A phone's width: no sideways scrolling, the map inside the viewport.
+    wd!(client.set_window_size(390, 844));
+    wait_for(client, "window.innerWidth === 390", "a 390 px wide viewport").await?;
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    let overflow = script(
+        client,
+        "const r = document.getElementById('colour-bar').getBoundingClientRect(); \
+         return [document.documentElement.scrollWidth - window.innerWidth, r.right - window.innerWidth];",
+    )
+    .await?;
+    wd!(client.set_window_size(1280, 1000));
+    let overflow = numbers(&overflow)?;
+    if overflow[0] > 0.0 || overflow[1] > 0.0 {
+        return fail(format!("the map view at 390 px scrolls sideways ({overflow:?})"));
+    }
+    let errors = console_errors(client).await?;
+    if !errors.is_empty() {
+        return fail(format!("console errors on the map page: {errors:#?}"));
+    }
+    Ok(())
+}
+
+/// The data of the map page's U(t) plot: [t, U].
+async fn plotted_map(client: &Client) -> Check<Vec<Vec<f64>>> {
+    let data = script(client, "return window.haptexMap.plots.path.data;").await?;
+    data.as_array().ok_or("no U(t) plot data")?.iter().map(numbers).collect()
+}
+
+/// Shows the friction or the voltage map (the page's select).
+async fn show_map(client: &Client, what: &str) -> Check<()> {
+    let n = updates(client).await?;
+    wd!(wd!(client.find(Locator::Css(&format!("#show option[value='{what}']")))).click());
+    wait_update(client, n, &format!("the {what} map shown")).await
 }

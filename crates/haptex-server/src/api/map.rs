@@ -1,0 +1,338 @@
+//! `POST /api/map` and `POST /api/map/path`: friction maps over (x, y)
+//! from a grayscale image (docs/maps.md), as `haptex map from-image`,
+//! `haptex map voltage` and `haptex map sample-path` make them.
+//!
+//! Body (JSON), both routes: `{"image_png_base64": "...", "mu_black":
+//! 0.4, "mu_white": 1.2, "gamma": 1, "pixel_mm": 0.1, "pixel_mm_y": 0.1,
+//! "x0_mm": 0, "y0_mm": 0, "method": "physical", "device": {...}}` (the
+//! names are the command line's flags; `gamma`, `pixel_mm_y`, the origin,
+//! `method` and `device` are optional, with the command line's defaults).
+//! The image is an 8- or 16-bit grayscale PNG of at most
+//! [`Limits::max_map_pixels`](crate::Limits::max_map_pixels) pixels (413
+//! beyond, checked on its header before anything is decoded), one cell per
+//! pixel, its top row at the largest y.
+//!
+//! `/api/map` answers the grid, the friction map `mu` and the voltage map
+//! `voltage_v` (row by row from y0, index j nx + i) with the device limits
+//! as areas. `/api/map/path` takes a finger path `"path": {"t_s": [..],
+//! "x_mm": [..], "y_mm": [..]}` beside the same fields and answers the
+//! voltage at each of its samples: the core's
+//! [`PlanarTrajectory::sample`] of the voltage map, as `haptex map
+//! sample-path` computes it (bilinear, the map's edge held beyond it);
+//! `?format=csv` answers that command's CSV. The server keeps nothing
+//! between requests: the page sends the image again with its path.
+
+use std::collections::BTreeMap;
+
+use axum::Json;
+use axum::body::Bytes;
+use axum::extract::rejection::BytesRejection;
+use axum::extract::{RawQuery, State};
+use axum::http::HeaderMap;
+use axum::response::{IntoResponse, Response};
+use haptex_core::electrovibration::Method;
+use haptex_core::map::{FrictionMap, GrayMapping, MapError, MapGrid, VoltageMap, png_size};
+use haptex_core::planar::PlanarTrajectory;
+use haptex_core::trajectory::TrajectoryError;
+use serde::{Deserialize, Serialize};
+
+use crate::error::ApiError;
+use crate::input::{BodyKind, Pairs, Query, body_bytes, body_kind, check_points, parse_json};
+use crate::params::DeviceRequest;
+use crate::state::AppState;
+use crate::work;
+
+/// The name errors about the image give as their field.
+const IMAGE: &str = "image_png_base64";
+
+/// The body of both routes.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MapBody {
+    /// The PNG's bytes, base64 (standard alphabet, padding optional).
+    image_png_base64: String,
+    mu_black: f64,
+    mu_white: f64,
+    #[serde(default)]
+    gamma: Option<f64>,
+    pixel_mm: f64,
+    #[serde(default)]
+    pixel_mm_y: Option<f64>,
+    #[serde(default)]
+    x0_mm: Option<f64>,
+    #[serde(default)]
+    y0_mm: Option<f64>,
+    #[serde(default)]
+    method: Option<Method>,
+    #[serde(default)]
+    device: Pairs,
+    /// `/api/map/path` only.
+    #[serde(default)]
+    path: Option<PathJson>,
+}
+
+/// A finger path over the map.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PathJson {
+    t_s: Vec<f64>,
+    x_mm: Vec<f64>,
+    y_mm: Vec<f64>,
+}
+
+/// The grid and the maps, as the core makes them.
+struct Built {
+    request: DeviceRequest,
+    method: Method,
+    mapping: GrayMapping,
+    friction: FrictionMap,
+    voltage: VoltageMap,
+    bits: u8,
+}
+
+#[derive(Serialize)]
+struct MapAnswer<'a> {
+    parameters: BTreeMap<&'static str, f64>,
+    method: &'static str,
+    mapping: MappingAnswer,
+    grid: &'a MapGrid,
+    /// Bits per pixel of the image (8 or 16).
+    bits: u8,
+    mu: &'a [f64],
+    voltage_v: &'a [f64],
+    u_max_v: f64,
+    not_renderable_fraction: f64,
+    clipped_fraction: f64,
+}
+
+#[derive(Serialize)]
+struct MappingAnswer {
+    mu_black: f64,
+    mu_white: f64,
+    gamma: f64,
+}
+
+#[derive(Serialize)]
+struct PathAnswer<'a> {
+    parameters: BTreeMap<&'static str, f64>,
+    method: &'static str,
+    grid: &'a MapGrid,
+    t_s: &'a [f64],
+    x_mm: &'a [f64],
+    y_mm: &'a [f64],
+    voltage_v: &'a [f64],
+    /// Samples of the path outside the map (their voltage is the edge's).
+    outside: usize,
+}
+
+fn method_name(method: Method) -> &'static str {
+    match method {
+        Method::Physical => "physical",
+        Method::Normalized => "normalized",
+    }
+}
+
+/// `POST /api/map`.
+pub async fn post(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    RawQuery(raw_query): RawQuery,
+    body: Result<Bytes, BytesRejection>,
+) -> Result<Response, ApiError> {
+    let limits = state.limits().clone();
+    Query::parse(raw_query.as_deref())?.finish()?;
+    body_kind(&headers, &[BodyKind::Json])?;
+    let bytes = body_bytes(body, limits.max_body_bytes)?;
+    work::cpu(&state, bytes.len(), move || {
+        let body: MapBody = parse_json(&bytes)?;
+        if body.path.is_some() {
+            return Err(ApiError::bad_request("a path is sampled by POST /api/map/path", Some("path")));
+        }
+        let b = build(body, limits.max_map_pixels)?;
+        let answer = MapAnswer {
+            parameters: b.request.values(),
+            method: method_name(b.method),
+            mapping: MappingAnswer {
+                mu_black: b.mapping.mu_black,
+                mu_white: b.mapping.mu_white,
+                gamma: b.mapping.gamma,
+            },
+            grid: &b.voltage.grid,
+            bits: b.bits,
+            mu: &b.friction.mu,
+            voltage_v: &b.voltage.voltage_v,
+            u_max_v: b.voltage.u_max_v,
+            not_renderable_fraction: b.voltage.not_renderable_fraction,
+            clipped_fraction: b.voltage.clipped_fraction,
+        };
+        Ok(Json(answer).into_response())
+    })
+    .await
+}
+
+/// `POST /api/map/path`.
+pub async fn path(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    RawQuery(raw_query): RawQuery,
+    body: Result<Bytes, BytesRejection>,
+) -> Result<Response, ApiError> {
+    let limits = state.limits().clone();
+    let mut query = Query::parse(raw_query.as_deref())?;
+    let format = query.take_format(&["json", "csv"])?;
+    query.finish()?;
+    body_kind(&headers, &[BodyKind::Json])?;
+    let bytes = body_bytes(body, limits.max_body_bytes)?;
+    work::cpu(&state, bytes.len(), move || {
+        let mut body: MapBody = parse_json(&bytes)?;
+        let path = body
+            .path
+            .take()
+            .ok_or_else(|| ApiError::bad_request("a finger path {t_s, x_mm, y_mm} is required", Some("path")))?;
+        check_points(path.t_s.len(), limits.max_points, "path.t_s")?;
+        let path = PlanarTrajectory::new(path.t_s, path.x_mm, path.y_mm).map_err(|e| match e {
+            TrajectoryError::Invalid { index, field, message } => {
+                ApiError::bad_request(message, Some(&format!("path.{field}[{index}]")))
+            }
+            other => ApiError::bad_request(other.to_string(), Some("path")),
+        })?;
+        let b = build(body, limits.max_map_pixels)?;
+        let v = &b.voltage;
+        // What `haptex map sample-path` computes.
+        let u = path.sample(&v.grid, &v.voltage_v);
+        if u.iter().any(|u| !u.is_finite()) {
+            return Err(ApiError::internal("a non-finite voltage sampled from a finite map (a bug)"));
+        }
+        if format == "csv" {
+            return Ok(super::csv_response(
+                super::to_csv(|w| {
+                    writeln!(
+                        w,
+                        "# haptex map sample-path: voltage (V RMS) of the uploaded image's map along the path"
+                    )?;
+                    path.write_csv_with(w, "voltage_v", &u)
+                })?,
+                "map-path-voltage.csv",
+            ));
+        }
+        let g = &v.grid;
+        let outside = path.x_mm().iter().zip(path.y_mm()).filter(|&(&x, &y)| !g.contains(x, y)).count();
+        let answer = PathAnswer {
+            parameters: b.request.values(),
+            method: method_name(b.method),
+            grid: g,
+            t_s: path.t_s(),
+            x_mm: path.x_mm(),
+            y_mm: path.y_mm(),
+            voltage_v: &u,
+            outside,
+        };
+        Ok(Json(answer).into_response())
+    })
+    .await
+}
+
+/// The image decoded with its mapping and the voltage map of it: the
+/// core's `FrictionMap::read_gray_png` and `FrictionMap::voltages`, what
+/// `haptex map from-image` and `haptex map voltage` call.
+fn build(body: MapBody, max_pixels: usize) -> Result<Built, ApiError> {
+    let png = decode_base64(&body.image_png_base64)
+        .map_err(|m| ApiError::bad_request(format!("not base64: {m}"), Some(IMAGE)))?;
+    let (width, height) = png_size(&png, IMAGE).map_err(|e| ApiError::bad_request(e.to_string(), Some(IMAGE)))?;
+    if width.saturating_mul(height) > max_pixels {
+        return Err(ApiError::too_large(
+            format!(
+                "{width} x {height} pixels: at most {max_pixels} pixels here (use haptex map from-image for larger)"
+            ),
+            Some(IMAGE),
+        ));
+    }
+    let mapping = GrayMapping { mu_black: body.mu_black, mu_white: body.mu_white, gamma: body.gamma.unwrap_or(1.0) };
+    let spacing = (body.pixel_mm, body.pixel_mm_y.unwrap_or(body.pixel_mm));
+    let origin = (body.x0_mm.unwrap_or(0.0), body.y0_mm.unwrap_or(0.0));
+    let request = DeviceRequest::from_pairs(body.device.iter(), "device.")?;
+    let method = body.method.unwrap_or(Method::Physical);
+    if method == Method::Physical && request.device.contact.exponent != 1.0 {
+        return Err(ApiError::bad_request(
+            "a friction map is mapped with the linear contact-area law (area exponent 1), as eq. (8)",
+            Some("device.area_exponent"),
+        ));
+    }
+    let friction = FrictionMap::read_gray_png(&png, &mapping, spacing, origin, IMAGE)
+        .map_err(|e| map_error(e, body.pixel_mm_y.is_some()))?;
+    let voltage = friction.voltages(&request.device, method).map_err(|e| map_error(e, false))?;
+    if voltage.voltage_v.iter().any(|u| !u.is_finite()) {
+        return Err(ApiError::internal("the voltage mapping gave a non-finite number for accepted input (a bug)"));
+    }
+    let bits = if png.len() > 24 && png[24] == 16 { 16 } else { 8 };
+    Ok(Built { request, method, mapping, friction, voltage, bits })
+}
+
+/// A core map error with the request field it is about.
+fn map_error(e: MapError, pixel_y_given: bool) -> ApiError {
+    let field = match (e.source_name.as_str(), e.place.as_deref()) {
+        ("device", _) => "device".to_string(),
+        (_, Some(place @ ("mu_black" | "mu_white" | "gamma" | "x0_mm" | "y0_mm"))) => place.to_string(),
+        (_, Some("dx_mm" | "x_mm")) => "pixel_mm".to_string(),
+        (_, Some("dy_mm" | "y_mm")) => (if pixel_y_given { "pixel_mm_y" } else { "pixel_mm" }).to_string(),
+        _ => IMAGE.to_string(),
+    };
+    ApiError::bad_request(e.to_string(), Some(&field))
+}
+
+/// Standard base64 (RFC 4648, `+` and `/`), padding optional, no
+/// whitespace; linear in the text's length.
+fn decode_base64(text: &str) -> Result<Vec<u8>, String> {
+    let bytes = text.trim_end_matches('=').as_bytes();
+    if text.len() - bytes.len() > 2 {
+        return Err("more than two '=' at the end".into());
+    }
+    if bytes.len() % 4 == 1 {
+        return Err(format!("{} characters: a truncated text", text.len()));
+    }
+    let mut out = Vec::with_capacity(bytes.len() / 4 * 3 + 2);
+    let (mut acc, mut n) = (0u32, 0u32);
+    for (k, &c) in bytes.iter().enumerate() {
+        let v = match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' => 62,
+            b'/' => 63,
+            _ => return Err(format!("character {} at position {k} is not in the base64 alphabet", c.escape_ascii())),
+        };
+        acc = (acc << 6) | u32::from(v);
+        n += 6;
+        if n >= 8 {
+            n -= 8;
+            out.push((acc >> n) as u8);
+            acc &= (1 << n) - 1;
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::decode_base64;
+
+    #[test]
+    fn base64_decodes_the_rfc_4648_vectors_and_refuses_others() {
+        for (text, bytes) in [
+            ("", ""),
+            ("Zg==", "f"),
+            ("Zm8=", "fo"),
+            ("Zm9v", "foo"),
+            ("Zm9vYg==", "foob"),
+            ("Zm9vYmE=", "fooba"),
+            ("Zm9vYmFy", "foobar"),
+            ("Zm9vYg", "foob"),
+        ] {
+            assert_eq!(decode_base64(text).unwrap(), bytes.as_bytes(), "{text}");
+        }
+        assert_eq!(decode_base64("//+/").unwrap(), [0xff, 0xff, 0xbf]);
+        for bad in ["Zm9v!", "Z", "Zm9v====", "Zm 9v", "Zm9v\n"] {
+            assert!(decode_base64(bad).is_err(), "{bad:?}");
+        }
+    }
+}
