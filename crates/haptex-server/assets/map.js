@@ -12,6 +12,8 @@
   const $ = (id) => document.getElementById(id);
   /** Most samples of a drawn path (the server takes up to its max_points). */
   const MAX_PATH_POINTS = 20000;
+  /** The finger speed of a path drawn with the keyboard, mm/s (the templates' sliding velocity). */
+  const KEY_SPEED_MM_S = 20;
   const BAR_WIDTH = 64;
 
   const state = {
@@ -327,14 +329,17 @@
     if (!state.map || !layout) return null;
     const rect = $('map-canvas').getBoundingClientRect();
     const [x, y] = fromCanvas(e.clientX - rect.left, e.clientY - rect.top);
+    return readPoint(x, y, e.pointerType || 'mouse');
+  }
+
+  /** Reads the map at (x, y) mm, from `input` (mouse, pen, touch or keyboard). */
+  function readPoint(x, y, input) {
     const mu = sample(state.map.mu, x, y);
     const u = sample(state.map.voltage_v, x, y);
     const readout = $('map-readout');
     readout.textContent = `x = ${x.toFixed(3)} mm, y = ${y.toFixed(3)} mm, mu = ${mu.toFixed(3)}, ` +
       `U = ${u.toFixed(1)} V RMS`;
-    Object.assign(readout.dataset, {
-      xMm: String(x), yMm: String(y), mu: String(mu), voltageV: String(u), input: e.pointerType || 'mouse',
-    });
+    Object.assign(readout.dataset, { xMm: String(x), yMm: String(y), mu: String(mu), voltageV: String(u), input });
     $('map-canvas').setAttribute('aria-description', readout.textContent);
     state.hover = { x_mm: x, y_mm: y };
     return [x, y];
@@ -379,6 +384,44 @@
       samplePath().catch(showError);
     };
     canvas.addEventListener('pointerup', finish);
+    // The keyboard: the arrows move the reading one cell (Shift: ten);
+    // Enter or Space starts a path at the reading and ends it, each arrow
+    // step between adding a sample at KEY_SPEED_MM_S; Escape drops it.
+    canvas.addEventListener('keydown', (e) => {
+      if (!state.map || !layout) return;
+      const g = state.map.grid;
+      const moves = { ArrowLeft: [-1, 0], ArrowRight: [1, 0], ArrowUp: [0, 1], ArrowDown: [0, -1] };
+      const keyboardDrawing = state.drawing && state.drawing.keyboard;
+      if (moves[e.key]) {
+        e.preventDefault();
+        const cells = e.shiftKey ? 10 : 1;
+        const h = state.hover || { x_mm: g.x0_mm + 0.5 * (g.nx - 1) * g.dx_mm, y_mm: g.y0_mm + 0.5 * (g.ny - 1) * g.dy_mm };
+        const clamp = (v, lo, n, d) => Math.min(lo + (n - 1) * d, Math.max(lo, v));
+        const x = clamp(h.x_mm + moves[e.key][0] * cells * g.dx_mm, g.x0_mm, g.nx, g.dx_mm);
+        const y = clamp(h.y_mm + moves[e.key][1] * cells * g.dy_mm, g.y0_mm, g.ny, g.dy_mm);
+        readPoint(x, y, 'keyboard');
+        if (keyboardDrawing) {
+          const d = state.drawing;
+          const [t, x0, y0] = d.points[d.points.length - 1];
+          record(d.t0 + 1000 * (t + Math.hypot(x - x0, y - y0) / KEY_SPEED_MM_S), [x, y]);
+        }
+        redrawOverlay();
+      } else if (e.key === 'Enter' || e.key === ' ') {
+        e.preventDefault();
+        if (keyboardDrawing) {
+          finish();
+        } else if (!state.drawing) {
+          const h = state.hover || { x_mm: g.x0_mm, y_mm: g.y0_mm };
+          const at = readPoint(h.x_mm, h.y_mm, 'keyboard');
+          state.drawing = { t0: 0, last: -Infinity, points: [], keyboard: true };
+          record(0, at);
+          redrawOverlay();
+        }
+      } else if (e.key === 'Escape' && keyboardDrawing) {
+        state.drawing = null;
+        redrawOverlay();
+      }
+    });
     canvas.addEventListener('pointercancel', finish);
     canvas.addEventListener('pointerleave', (e) => {
       if (!state.drawing && e.pointerType !== 'touch') { state.hover = null; redrawOverlay(); }

@@ -2126,6 +2126,26 @@ async fn map_view(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     if table.column("voltage_v") != Some(expected.as_slice()) || table.column("t_s") != Some(t.as_slice()) {
         return fail("the U(t) CSV download is not the core's samples of the path drawn");
     }
+    // The keyboard: Enter starts a path at the reading, five Right arrows
+    // add a sample a cell (0.25 mm) further each at 20 mm/s, Enter ends
+    // it; its U(t) is the core's sample-path of those six samples.
+    let canvas = wd!(client.find(Locator::Id("map-canvas")));
+    let n = script(client, "return Number(document.body.dataset.path || 0);").await?.as_u64().unwrap_or(0);
+    wd!(canvas.send_keys("\u{E007}\u{E014}\u{E014}\u{E014}\u{E014}\u{E014}\u{E007}"));
+    wait_for(client, &format!("Number(document.body.dataset.path || 0) > {n}"), "the keyboard path's U(t)").await?;
+    let path = script(client, "return window.haptexMap.state.path;").await?;
+    let (t, x, y) = (numbers(&path["t_s"])?, numbers(&path["x_mm"])?, numbers(&path["y_mm"])?);
+    let steps_ok = t.len() == 6
+        && (1..6).all(|k| (x[k] - x[k - 1] - 0.25).abs() < 1e-12 && (t[k] - t[k - 1] - 0.25 / 20.0).abs() < 1e-12)
+        && y.iter().all(|&v| v == y[0]);
+    let input = script(client, "return document.getElementById('map-readout').dataset.input;").await?;
+    if !steps_ok || input != json!("keyboard") {
+        return fail(format!("the keyboard path: t {t:?}, x {x:?}, y {y:?}; readout from {input}"));
+    }
+    let keyed = PlanarTrajectory::new(t, x, y).map_err(|e| e.to_string())?;
+    if plotted_map(client).await?[1] != keyed.sample(&voltage.grid, &voltage.voltage_v) {
+        return fail("the keyboard path's U(t) is not the core's sample-path");
+    }
     // The friction view and its colour bar.
     show_map(client, "friction").await?;
     let title = wd!(wd!(client.find(Locator::Id("map-title"))).text());
