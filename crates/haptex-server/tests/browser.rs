@@ -2146,6 +2146,38 @@ async fn map_view(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     if plotted_map(client).await?[1] != keyed.sample(&voltage.grid, &voltage.voltage_v) {
         return fail("the keyboard path's U(t) is not the core's sample-path");
     }
+    // A finger (WebDriver touch actions): dragged across the map, it draws
+    // a path as the mouse does (the map takes the drag instead of the
+    // page's scrolling), read as touch, its U(t) the core's.
+    let n = script(client, "return Number(document.body.dataset.path || 0);").await?.as_u64().unwrap_or(0);
+    let mut finger = fantoccini::actions::TouchActions::new("finger".into())
+        .then(at(0.15, 0.3))
+        .then(PointerAction::Down { button: fantoccini::actions::MOUSE_BUTTON_LEFT });
+    for k in 1..=12 {
+        finger = finger.then(at(0.15 + 0.7 * k as f64 / 12.0, 0.3 + 0.4 * k as f64 / 12.0));
+    }
+    wd!(client.perform_actions(finger.then(PointerAction::Up { button: fantoccini::actions::MOUSE_BUTTON_LEFT })));
+    wd!(client.release_actions());
+    wait_for(client, &format!("Number(document.body.dataset.path || 0) > {n}"), "the finger path's U(t)").await?;
+    let path = script(client, "return window.haptexMap.state.path;").await?;
+    let (t, x, y) = (numbers(&path["t_s"])?, numbers(&path["x_mm"])?, numbers(&path["y_mm"])?);
+    let input = script(client, "return document.getElementById('map-readout').dataset.input;").await?;
+    if t.len() < 5
+        || (x[0] - 0.15 * 16.0).abs() > 0.3
+        || (x[x.len() - 1] - 0.85 * 16.0).abs() > 0.3
+        || input != json!("touch")
+    {
+        return fail(format!(
+            "the finger path: {} samples, x {:?} .. {:?}; read from {input}",
+            t.len(),
+            x.first(),
+            x.last()
+        ));
+    }
+    let touched = PlanarTrajectory::new(t, x, y).map_err(|e| e.to_string())?;
+    if plotted_map(client).await?[1] != touched.sample(&voltage.grid, &voltage.voltage_v) {
+        return fail("the finger path's U(t) is not the core's sample-path");
+    }
     // The friction view and its colour bar.
     show_map(client, "friction").await?;
     let title = wd!(wd!(client.find(Locator::Id("map-title"))).text());
