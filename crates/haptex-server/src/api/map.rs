@@ -93,8 +93,8 @@ struct Built {
 #[derive(Serialize)]
 struct MapAnswer<'a> {
     parameters: BTreeMap<&'static str, f64>,
-    method: &'static str,
-    mapping: MappingAnswer,
+    method: Method,
+    mapping: GrayMapping,
     grid: &'a MapGrid,
     /// Bits per pixel of the image (8 or 16).
     bits: u8,
@@ -106,16 +106,9 @@ struct MapAnswer<'a> {
 }
 
 #[derive(Serialize)]
-struct MappingAnswer {
-    mu_black: f64,
-    mu_white: f64,
-    gamma: f64,
-}
-
-#[derive(Serialize)]
 struct PathAnswer<'a> {
     parameters: BTreeMap<&'static str, f64>,
-    method: &'static str,
+    method: Method,
     grid: &'a MapGrid,
     t_s: &'a [f64],
     x_mm: &'a [f64],
@@ -123,13 +116,6 @@ struct PathAnswer<'a> {
     voltage_v: &'a [f64],
     /// Samples of the path outside the map (their voltage is the edge's).
     outside: usize,
-}
-
-fn method_name(method: Method) -> &'static str {
-    match method {
-        Method::Physical => "physical",
-        Method::Normalized => "normalized",
-    }
 }
 
 /// `POST /api/map`.
@@ -151,12 +137,8 @@ pub async fn post(
         let b = build(body, limits.max_map_pixels)?;
         let answer = MapAnswer {
             parameters: b.request.values(),
-            method: method_name(b.method),
-            mapping: MappingAnswer {
-                mu_black: b.mapping.mu_black,
-                mu_white: b.mapping.mu_white,
-                gamma: b.mapping.gamma,
-            },
+            method: b.method,
+            mapping: b.mapping,
             grid: &b.voltage.grid,
             bits: b.bits,
             mu: &b.friction.mu,
@@ -219,7 +201,7 @@ pub async fn path(
         let outside = path.x_mm().iter().zip(path.y_mm()).filter(|&(&x, &y)| !g.contains(x, y)).count();
         let answer = PathAnswer {
             parameters: b.request.values(),
-            method: method_name(b.method),
+            method: b.method,
             grid: g,
             t_s: path.t_s(),
             x_mm: path.x_mm(),
