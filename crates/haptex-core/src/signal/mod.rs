@@ -568,6 +568,23 @@ pub fn render_two_channel(
 /// to 86.4 kHz; 48 kHz, none (21.6 kHz is below any plate's resonance).
 pub const MAX_RESONANCE_PER_SAMPLE_RATE: f64 = 0.45;
 
+/// A plate resonance channel 2 can carry at `sample_rate_hz`: within
+/// [`crate::ranges::PLATE_RESONANCE_HZ`] and at most
+/// [`MAX_RESONANCE_PER_SAMPLE_RATE`] times the sample rate (the rule of
+/// [`modulate_at_resonance`] and of the WAV reader).
+pub(crate) fn plate_resonance(resonance_hz: f64, sample_rate_hz: u32) -> Result<f64, String> {
+    let f = crate::ranges::PLATE_RESONANCE_HZ.check(resonance_hz).map_err(|e| e.to_string())?;
+    if f > MAX_RESONANCE_PER_SAMPLE_RATE * f64::from(sample_rate_hz) {
+        return Err(format!(
+            "a plate resonance of {} Hz needs a sample rate of at least {} Hz (f_r <= 0.45 fs, where converters pass \
+             the signal flat); the drive is at {sample_rate_hz} Hz",
+            Num(f),
+            (f / MAX_RESONANCE_PER_SAMPLE_RATE).ceil(),
+        ));
+    }
+    Ok(f)
+}
+
 /// Turns a two-channel drive's channel 2 from the amplitude envelope a(t)
 /// into the plate's displacement at its resonance f_r, a(t) sin(2 pi f_r
 /// (t - t0)) in um (t0 the first sample's time; the same polynomial sine
@@ -579,8 +596,7 @@ pub const MAX_RESONANCE_PER_SAMPLE_RATE: f64 = 0.45;
 /// [`MAX_RESONANCE_PER_SAMPLE_RATE`] times the sample rate, and for a
 /// drive already modulated.
 pub fn modulate_at_resonance(signal: &mut DriveSignal, resonance_hz: f64) -> Result<(), SignalError> {
-    let f = crate::ranges::PLATE_RESONANCE_HZ.check(resonance_hz).map_err(|e| SignalError::Settings(e.to_string()))?;
-    let fs = f64::from(signal.report.sample_rate_hz);
+    let sample_rate_hz = signal.report.sample_rate_hz;
     let (Some(a_um), Some(us)) = (signal.amplitude_um.as_mut(), signal.report.ultrasonic.as_mut()) else {
         return Err(SignalError::Settings(
             "the plate's resonance is for a two-channel drive (a display profile with an amplitude_um column)".into(),
@@ -589,16 +605,8 @@ pub fn modulate_at_resonance(signal: &mut DriveSignal, resonance_hz: f64) -> Res
     if us.resonance_hz.is_some() {
         return Err(SignalError::Settings("channel 2 already carries the plate's resonance".into()));
     }
-    if f > MAX_RESONANCE_PER_SAMPLE_RATE * fs {
-        return Err(SignalError::Settings(format!(
-            "a plate resonance of {} Hz needs a sample rate of at least {} Hz (f_r <= 0.45 fs, where converters pass \
-             the signal flat); the drive is at {} Hz",
-            Num(f),
-            (f / MAX_RESONANCE_PER_SAMPLE_RATE).ceil(),
-            signal.report.sample_rate_hz
-        )));
-    }
-    let cycles_per_sample = f / fs;
+    let f = plate_resonance(resonance_hz, sample_rate_hz).map_err(SignalError::Settings)?;
+    let cycles_per_sample = f / f64::from(sample_rate_hz);
     for (i, a) in a_um.iter_mut().enumerate() {
         *a = *a * carrier::sin_turns(i as f64 * cycles_per_sample) + 0.0;
     }

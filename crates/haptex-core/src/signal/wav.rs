@@ -227,7 +227,7 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
             let (low, quantity) = match us.resonance_hz {
                 None => (0.0, AMPLITUDE_QUANTITY),
                 Some(f) => {
-                    check_resonance(f, report.sample_rate_hz).map_err(SignalError::Settings)?;
+                    super::plate_resonance(f, report.sample_rate_hz).map_err(SignalError::Settings)?;
                     (-upfs, DISPLACEMENT_QUANTITY)
                 }
             };
@@ -337,19 +337,6 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
     append_chunk(&mut bytes, SCALE_CHUNK_ID, &serde_json::to_vec(&scale).expect("the scale chunk serializes"))
         .map_err(|message| SignalError::Wav { path: label.to_string(), message })?;
     Ok(EncodedWav { bytes, scale })
-}
-
-/// A plate resonance channel 2 can carry at `sample_rate_hz`
-/// ([`super::modulate_at_resonance`]'s rule).
-fn check_resonance(resonance_hz: f64, sample_rate_hz: u32) -> Result<(), String> {
-    crate::ranges::PLATE_RESONANCE_HZ.check(resonance_hz).map_err(|e| e.to_string())?;
-    if resonance_hz > super::MAX_RESONANCE_PER_SAMPLE_RATE * f64::from(sample_rate_hz) {
-        return Err(format!(
-            "channel 2's plate resonance {} Hz is above 0.45 x the sample rate {sample_rate_hz} Hz",
-            Num(resonance_hz)
-        ));
-    }
-    Ok(())
 }
 
 /// The byte range of the `data` chunk's content in a RIFF/WAVE file.
@@ -661,7 +648,7 @@ pub fn decode_drive_wav_channels(bytes: &[u8]) -> Result<(ScaleChunk, Vec<f64>, 
     }
     if let Some(c2) = &scale.channel_2
         && (c2.quantity != if c2.resonance_hz.is_some() { DISPLACEMENT_QUANTITY } else { AMPLITUDE_QUANTITY }
-            || c2.resonance_hz.is_some_and(|f| check_resonance(f, scale.sample_rate_hz).is_err())
+            || c2.resonance_hz.is_some_and(|f| super::plate_resonance(f, scale.sample_rate_hz).is_err())
             || c2.unit != "um"
             || c2.conversion != AMPLITUDE_CONVERSION
             || c2.full_scale_value.to_bits() != expected_full_scale.to_bits()
