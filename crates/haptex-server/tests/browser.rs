@@ -1104,13 +1104,19 @@ async fn finger_on_the_display(client: &Client) -> Check<()> {
     }
     unpin(client, &felt_pin).await?;
     // The results fit a phone's width too.
+    fits_a_phone(client, "with the check's results").await
+}
+
+/// At a phone's size (390 x 844) the page does not scroll sideways; the
+/// desktop size (1280 x 1280) is restored after.
+async fn fits_a_phone(client: &Client, what: &str) -> Check<()> {
     wd!(client.set_window_size(390, 844));
     tokio::time::sleep(Duration::from_millis(400)).await;
     let overflow = script(client, "return document.documentElement.scrollWidth - window.innerWidth;").await?;
     wd!(client.set_window_size(1280, 1280));
     tokio::time::sleep(Duration::from_millis(400)).await;
     if overflow.as_f64().unwrap_or(1.0) > 0.0 {
-        return fail(format!("with the check's results, a phone-sized window scrolls sideways by {overflow} px"));
+        return fail(format!("{what}: a phone-sized window scrolls sideways by {overflow} px"));
     }
     Ok(())
 }
@@ -1305,14 +1311,7 @@ async fn display_selector(client: &Client, scratch: &Path) -> Check<()> {
 
     save_screenshot("web-combined.png", &screenshot(client).await?);
     // The display's controls fit a phone too.
-    wd!(client.set_window_size(390, 844));
-    tokio::time::sleep(Duration::from_millis(400)).await;
-    let overflow = script(client, "return document.documentElement.scrollWidth - window.innerWidth;").await?;
-    wd!(client.set_window_size(1280, 1280));
-    tokio::time::sleep(Duration::from_millis(400)).await;
-    if overflow.as_f64().unwrap_or(1.0) > 0.0 {
-        return fail(format!("combined display: the phone-sized window scrolls sideways by {overflow} px"));
-    }
+    fits_a_phone(client, "combined display").await?;
 
     // The ultrasonic display alone: no voltage, the band's top at mu_HD.
     let combined = (plotted(client, "amplitude").await?, plotted(client, "voltage").await?);
