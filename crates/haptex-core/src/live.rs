@@ -148,6 +148,68 @@ impl LiveStatus {
     }
 }
 
+/// What a running live output shows (a live page's status line, a
+/// WebSocket status frame): the last rendered sample and the latency
+/// figures so far, in ms.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct LiveFigures {
+    /// Estimated finger position of the last sample, mm.
+    pub x_mm: f64,
+    /// The renderer's envelope there (V RMS, before the gain).
+    pub envelope_v: f64,
+    /// The fade gain, 0 ..= 1.
+    pub gain: f64,
+    /// The envelope played: envelope x gain, V RMS.
+    pub output_v: f64,
+    /// The ultrasonic amplitude played (um, after the gain); 0 on one channel.
+    pub amplitude_um: f64,
+    /// Touch events applied.
+    pub events: u64,
+    /// Touch event to the first sample rendered after it (output clock).
+    pub render_latency_mean_ms: Option<f64>,
+    pub render_latency_max_ms: f64,
+    /// Arrival to the callback that applied it (wall clock).
+    pub queue_wait_max_ms: f64,
+    /// The device's buffer latency (callback to playback), as the audio API reports it.
+    pub output_latency_max_ms: f64,
+    /// render_latency_max_ms + output_latency_max_ms.
+    pub touch_to_output_max_ms: f64,
+    /// Frames written so far.
+    pub frames: u64,
+    pub sample_rate_hz: u32,
+    /// Underruns the device reported (it played silence for a moment).
+    pub underruns: u64,
+    /// The output has faded out for good (stopped, or a fault).
+    pub finished: bool,
+}
+
+impl LiveStatus {
+    /// The figures now, with what the audio API reports: its largest buffer
+    /// latency (s) and its underruns.
+    pub fn figures(&self, sample_rate_hz: u32, output_latency_max_s: f64, underruns: u64) -> LiveFigures {
+        let (x_mm, envelope_v, gain, amplitude_um) = self.last_sample();
+        let render_latency_max_ms = self.max_latency_s() * 1e3;
+        let output_latency_max_ms = output_latency_max_s * 1e3;
+        LiveFigures {
+            x_mm,
+            envelope_v,
+            gain,
+            output_v: envelope_v * gain,
+            amplitude_um: amplitude_um * gain,
+            events: self.events.load(Ordering::Relaxed),
+            render_latency_mean_ms: self.mean_latency_s().map(|s| s * 1e3),
+            render_latency_max_ms,
+            queue_wait_max_ms: self.queue_wait_max_ns.load(Ordering::Relaxed) as f64 * 1e-6,
+            output_latency_max_ms,
+            touch_to_output_max_ms: render_latency_max_ms + output_latency_max_ms,
+            frames: self.frames.load(Ordering::Relaxed),
+            sample_rate_hz,
+            underruns,
+            finished: self.finished.load(Ordering::Relaxed),
+        }
+    }
+}
+
 /// The output's sample clock published for input threads: the frames
 /// written before the latest callback and the wall-clock time of that
 /// callback (a seqlock of three atomics, no locking).

@@ -1646,9 +1646,10 @@
     return us[lo] + t * (us[hi] - us[lo]);
   }
 
-  let strip = { marker: null, fraction: null };
+  let strip = { marker: null, fraction: null, contact: false };
 
   function drawStrip() {
+    live.follow();
     const canvas = $('feel-strip');
     const ratio = window.devicePixelRatio || 1;
     const width = canvas.clientWidth;
@@ -1687,13 +1688,13 @@
   }
 
   /** Feels the strip at the viewport x `clientX` (a mouse, pen or finger); `input` says which. */
-  function feelAt(clientX, input) {
+  function feelAt(clientX, input, timeStamp) {
     const rect = $('feel-strip').getBoundingClientRect();
-    feelAtFraction(Math.min(Math.max((clientX - rect.left) / rect.width, 0), 1), input);
+    feelAtFraction(Math.min(Math.max((clientX - rect.left) / rect.width, 0), 1), input, timeStamp);
   }
 
   /** Feels the strip at `fraction` of its length (0 = the profile's first x, 1 = its last). */
-  function feelAtFraction(fraction, input) {
+  function feelAtFraction(fraction, input, timeStamp) {
     if (!state.voltage) return;
     const canvas = $('feel-strip');
     const rect = canvas.getBoundingClientRect();
@@ -1715,6 +1716,7 @@
     if (a === null) delete readout.dataset.amplitudeUm; else readout.dataset.amplitudeUm = String(a);
     strip.marker = px;
     drawStrip();
+    live.touch(x, timeStamp ?? performance.now());
     // The audio plays the electrovibration channel, as the strip's brightness.
     const uMax = uMaxOf(v);
     audio.set(uMax ? u / uMax : 0);
@@ -1727,13 +1729,16 @@
    */
   function setupStrip() {
     const canvas = $('feel-strip');
-    const stop = () => audio.set(0);
+    // `contact`: a button, pen or finger is down (or a key moved the
+    // marker): only then does the live output follow, not a hovering mouse.
+    const stop = () => { audio.set(0); strip.contact = false; live.lift(); };
     const byPointer = (e) => {
       // A finger is followed by the touch events below where the browser has them.
       if (e.pointerType === 'touch' && 'ontouchstart' in window) return;
-      feelAt(e.clientX, e.pointerType || 'mouse');
+      feelAt(e.clientX, e.pointerType || 'mouse', e.timeStamp);
     };
     canvas.addEventListener('pointerdown', (e) => {
+      strip.contact = true;
       if (canvas.setPointerCapture) canvas.setPointerCapture(e.pointerId);
       byPointer(e);
     });
@@ -1742,8 +1747,9 @@
     canvas.addEventListener('pointerleave', (e) => { if (e.pointerType !== 'touch') stop(); });
     const byTouch = (e) => {
       if (!e.touches.length) return;
+      strip.contact = true;
       e.preventDefault(); // no scrolling, no emulated mouse events
-      feelAt(e.touches[0].clientX, 'touch');
+      feelAt(e.touches[0].clientX, 'touch', e.timeStamp);
     };
     canvas.addEventListener('touchstart', byTouch, { passive: false });
     canvas.addEventListener('touchmove', byTouch, { passive: false });
@@ -1756,6 +1762,7 @@
         Home: 0, End: 1 }[e.key];
       if (to === undefined) return;
       e.preventDefault();
+      strip.contact = true;
       feelAtFraction(Math.min(Math.max(to, 0), 1), 'keyboard');
     });
     canvas.addEventListener('blur', stop);
@@ -1794,6 +1801,125 @@
     },
     setFrequency(f) {
       if (this.oscillator) this.oscillator.frequency.setTargetAtTime(f, this.context.currentTime, 0.01);
+    },
+  };
+
+  // ------------------------------------------------------------ live output
+
+  /**
+   * The server's live output (haptex serve --live, docs/live.md): while
+   * live, the design the strip plays is sent over a WebSocket, and every
+   * position the strip takes (pointer, finger or keyboard) is sent as a
+   * `t_s,x_mm` line stamped with the event's own time; the server plays it
+   * on its audio device and answers the figures (position, voltage played,
+   * latency) every 100 ms. Lifting the finger sends `lift`.
+   */
+  const live = {
+    info: null,
+    socket: null,
+    sent: null,
+    /** Shows the panel when the server has a live output. */
+    async setup() {
+      let answer;
+      try {
+        answer = await (await api('/api/live')).json();
+      } catch (error) {
+        return; // an older server: no live mode
+      }
+      if (!answer.available) return;
+      this.info = answer.output;
+      const o = answer.output;
+      $('live-output').textContent = `${o.device}, ${o.sample_rate_hz} Hz, U_max ${o.u_max_v} V, ` +
+        `${fmt(o.volts_per_full_scale)} V per full scale` + (o.a_max_um ? `, ultrasonic a_max ${o.a_max_um} µm` : '');
+      $('live-box').hidden = false;
+      $('live-toggle').addEventListener('click', () => (this.socket ? this.stop() : this.start()));
+    },
+    start() {
+      const scheme = location.protocol === 'https:' ? 'wss' : 'ws';
+      const socket = new WebSocket(`${scheme}://${location.host}/api/live/ws`);
+      this.socket = socket;
+      this.sent = null;
+      this.show('connecting…');
+      $('live-toggle').textContent = 'Stop live';
+      $('live-toggle').setAttribute('aria-pressed', 'true');
+      socket.addEventListener('open', () => this.follow());
+      socket.addEventListener('message', (e) => this.receive(e.data));
+      socket.addEventListener('close', () => {
+        if (this.socket !== socket) return;
+        this.socket = null;
+        this.sent = null;
+        $('live-toggle').textContent = 'Go live';
+        $('live-toggle').setAttribute('aria-pressed', 'false');
+        $('live-box').dataset.live = 'off';
+      });
+    },
+    stop() {
+      if (!this.socket) return;
+      if (this.socket.readyState === WebSocket.OPEN) this.socket.send(JSON.stringify({ stop: true }));
+      const socket = this.socket;
+      setTimeout(() => socket.close(), 300);
+      this.show('stopped: faded to 0 V');
+      this.socket = null;
+      $('live-toggle').textContent = 'Go live';
+      $('live-toggle').setAttribute('aria-pressed', 'false');
+      $('live-box').dataset.live = 'off';
+    },
+    /** Sends the design the strip plays, when it is not the one sent last. */
+    follow() {
+      if (!this.socket || this.socket.readyState !== WebSocket.OPEN) return;
+      const v = state.voltage ? played() : null;
+      if (v === this.sent) return;
+      this.sent = v;
+      if (!v) {
+        this.socket.send(JSON.stringify({ stop: true }));
+        return;
+      }
+      const design = { x_mm: v.x_mm };
+      if (v.voltage_v) design.voltage_v = v.voltage_v;
+      if (v.amplitude_um) design.amplitude_um = v.amplitude_um;
+      this.socket.send(JSON.stringify({ design }));
+      this.show('opening the output…');
+    },
+    /** A position of the strip, at the event's time `timeStamp` (ms, the page's clock). */
+    touch(x, timeStamp) {
+      if (!strip.contact || !this.socket || this.socket.readyState !== WebSocket.OPEN || !this.sent) return;
+      this.socket.send(`${(timeStamp / 1000).toFixed(6)},${x}`);
+    },
+    lift() {
+      if (this.socket && this.socket.readyState === WebSocket.OPEN && this.sent) this.socket.send('lift');
+    },
+    receive(text) {
+      let m;
+      try { m = JSON.parse(text); } catch (error) { return; }
+      const box = $('live-box');
+      if (m.error) {
+        this.show(`refused: ${m.error}`, true);
+        box.dataset.error = m.error;
+        return;
+      }
+      if (m.opened) {
+        box.dataset.live = 'on';
+        delete box.dataset.error;
+        this.show(`live on ${m.opened.output.device}: touch the strip (peak at most ${m.opened.peak_bound_v.toFixed(1)} V)`);
+      } else if (m.status) {
+        const f = m.status;
+        box.dataset.xMm = String(f.x_mm);
+        box.dataset.outputV = String(f.output_v);
+        box.dataset.events = String(f.events);
+        box.dataset.touchToOutputMs = String(f.touch_to_output_max_ms);
+        const latency = f.events ? `touch → sample ${f.render_latency_max_ms.toFixed(2)} ms (max), device buffer ` +
+          `${f.output_latency_max_ms.toFixed(2)} ms, end to end ≤ ${f.touch_to_output_max_ms.toFixed(2)} ms` : 'no touch yet';
+        this.show(`live: x = ${f.x_mm.toFixed(3)} mm, U = ${f.output_v.toFixed(1)} V RMS played` +
+          (f.amplitude_um ? `, a = ${f.amplitude_um.toFixed(3)} µm` : '') + ` · ${latency} · ${f.events} touches` +
+          (f.underruns ? ` · ${f.underruns} underruns` : ''));
+      } else if (m.closed !== undefined) {
+        box.dataset.live = 'off';
+      }
+    },
+    show(text, isError = false) {
+      const readout = $('live-readout');
+      readout.textContent = text;
+      readout.classList.toggle('error', isError);
     },
   };
 
@@ -2101,6 +2227,7 @@
       state.config = await (await api('/api/config')).json();
       buildControls(state.config);
       setupStrip();
+      live.setup();
       let resizeTimer = null;
       window.addEventListener('resize', () => { clearTimeout(resizeTimer); resizeTimer = setTimeout(resizePlots, 100); });
       const sources = state.config.sources.filter((s) => SOURCES[s.id]);

@@ -31,6 +31,9 @@
 //!   off the async workers, heavy requests in bounded slots), [`answers`]
 //!   (the memory of unread answers), `connection` (write timeout, hyper's
 //!   own answers made like ours), `access_log`;
+//! - [`live`]: the page's live output (`haptex serve --live`): the
+//!   design a page sends, the WebSocket conversation, and the trait the
+//!   binary implements with its audio device;
 //! - `lines`: answers streamed as JSON lines (the progress of the check on
 //!   the finger model, then its result).
 
@@ -46,6 +49,7 @@ pub mod fields;
 pub mod guard;
 pub mod input;
 mod lines;
+pub mod live;
 pub mod params;
 pub mod recipe;
 pub mod routes;
@@ -95,6 +99,9 @@ pub struct Config {
     /// Log every request (`haptex serve --access-log`); errors are logged
     /// either way.
     pub access_log: bool,
+    /// The audio output the page plays designs on live (`haptex serve
+    /// --live`); `None`: no live mode.
+    pub live: Option<Arc<dyn live::LiveOutput>>,
 }
 
 impl Config {
@@ -170,7 +177,13 @@ pub async fn serve(
         .header_read_timeout(limits.header_timeout)
         .max_buf_size(head.head_bytes)
         .max_headers(head.headers);
-    let connections = hyper_util::server::graceful::GracefulShutdown::new();
+    // Graceful shutdown: each connection's task holds a clone of `open`
+    // and watches `stop`; at shutdown every connection finishes its request
+    // in flight, and `closed` ends when the last task has dropped its clone.
+    // (hyper-util's GracefulShutdown does not take the connections with
+    // upgrades that the live page's WebSocket needs.)
+    let (stop, stopped) = tokio::sync::watch::channel(false);
+    let (open, mut closed) = tokio::sync::mpsc::channel::<()>(1);
     let mut shutdown = std::pin::pin!(shutdown);
     loop {
         let (stream, peer) = tokio::select! {
@@ -199,15 +212,27 @@ pub async fn serve(
                 Ok::<_, Infallible>(response.map(|body| Body::new(connection::Held::new(body, open))))
             }
         });
-        let connection = connections.watch(http.serve_connection(TokioIo::new(socket), service));
+        let connection = http.serve_connection(TokioIo::new(socket), service).with_upgrades();
+        let (mut stop, open) = (stopped.clone(), open.clone());
         tokio::spawn(async move {
-            if let Err(e) = connection.await {
+            let mut connection = std::pin::pin!(connection);
+            let ended = tokio::select! {
+                ended = connection.as_mut() => ended,
+                _ = async { stop.wait_for(|&s| s).await.map(|_| ()) } => {
+                    connection.as_mut().graceful_shutdown();
+                    connection.await
+                }
+            };
+            if let Err(e) = ended {
                 tracing::debug!(%peer, "connection ended with an error: {e}");
             }
+            drop(open);
         });
     }
     drop(listener);
-    if tokio::time::timeout(limits.request_timeout, connections.shutdown()).await.is_err() {
+    let _ = stop.send(true);
+    drop(open);
+    if tokio::time::timeout(limits.request_timeout, closed.recv()).await.is_err() {
         tracing::warn!("connections still open after {:?}: closing them", limits.request_timeout);
     }
     Ok(())
@@ -225,6 +250,9 @@ pub fn run(config: Config, on_listening: impl FnOnce(SocketAddr)) -> Result<(), 
     }
     if let Some(dir) = &config.database {
         state = state.with_database(dir)?;
+    }
+    if let Some(output) = &config.live {
+        state = state.with_live_output(Arc::clone(output));
     }
     let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build().map_err(ServeError::Runtime)?;
     runtime.block_on(async move {

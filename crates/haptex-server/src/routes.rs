@@ -54,6 +54,8 @@ pub fn table() -> Vec<Endpoint> {
         endpoint(Method::GET, "/map", assets::map_page),
         endpoint(Method::POST, "/api/map", api::map::post),
         endpoint(Method::POST, "/api/map/path", api::map::path),
+        endpoint(Method::GET, "/api/live", api::live::get),
+        endpoint(Method::GET, "/api/live/ws", api::live::socket),
     ]
 }
 

@@ -17,6 +17,7 @@ use tokio::sync::Semaphore;
 
 use crate::error::ApiError;
 use crate::guard::HostPolicy;
+use crate::live::{LiveHub, LiveOutput};
 use crate::templates::TemplateSet;
 
 /// What one request may ask of the server.
@@ -163,6 +164,8 @@ struct Inner {
     limits: Limits,
     hosts: HostPolicy,
     access_log: bool,
+    /// The live output (`haptex serve --live`).
+    live: Option<Arc<LiveHub>>,
     heavy: Arc<Semaphore>,
     renders: Arc<Semaphore>,
     simulations: Arc<Semaphore>,
@@ -178,12 +181,47 @@ pub struct SourceInfo {
     pub description: &'static str,
 }
 
+/// What a state is made of besides its slots and counters (which
+/// [`AppState::build`] makes fresh).
+#[derive(Debug, Clone)]
+struct Parts {
+    library: Option<Arc<LibraryPool>>,
+    templates: Option<Arc<TemplateSet>>,
+    database_sha256: Option<String>,
+    limits: Limits,
+    hosts: HostPolicy,
+    access_log: bool,
+    live: Option<Arc<LiveHub>>,
+}
+
 impl AppState {
     /// State serving the library at `library` (opened read-only, checked
     /// now so that a bad path fails at start, not at the first request).
     pub fn new(library: Option<&Path>, limits: Limits) -> Result<Self, LibraryError> {
         let library = library.map(LibraryPool::open).transpose()?.map(Arc::new);
-        Ok(Self::build(library, None, None, limits, HostPolicy::default(), false))
+        Ok(Self::build(Parts {
+            library,
+            templates: None,
+            database_sha256: None,
+            limits,
+            hosts: HostPolicy::default(),
+            access_log: false,
+            live: None,
+        }))
+    }
+
+    /// What this state is made of.
+    fn parts(&self) -> Parts {
+        let i = &self.0;
+        Parts {
+            library: i.library.clone(),
+            templates: i.templates.clone(),
+            database_sha256: i.database_sha256.clone(),
+            limits: i.limits.clone(),
+            hosts: i.hosts.clone(),
+            access_log: i.access_log,
+            live: i.live.clone(),
+        }
     }
 
     /// This state with its library writable: `POST /api/recordings`
@@ -192,20 +230,12 @@ impl AppState {
     /// that a file the server may not write fails at start. Without a
     /// library this is the state as it was.
     pub fn with_writable_library(self) -> Result<Self, LibraryError> {
-        let i = &self.0;
-        let Some(pool) = &i.library else { return Ok(self) };
+        let Some(pool) = &self.0.library else { return Ok(self) };
         let writer = Library::open(&pool.path)?;
         writer.settle()?;
         drop(writer);
         let library = Some(Arc::new(LibraryPool::open_with(&pool.path, true)?));
-        Ok(Self::build(
-            library,
-            i.templates.clone(),
-            i.database_sha256.clone(),
-            i.limits.clone(),
-            i.hosts.clone(),
-            i.access_log,
-        ))
+        Ok(Self::build(Parts { library, ..self.parts() }))
     }
 
     /// This state, also serving the surface templates of the FE database in
@@ -216,48 +246,30 @@ impl AppState {
             path: dir.to_path_buf(),
             message: format!("cannot hash its files: {e}"),
         })?;
-        let i = &self.0;
-        Ok(Self::build(i.library.clone(), templates, Some(hash), i.limits.clone(), i.hosts.clone(), i.access_log))
+        Ok(Self::build(Parts { templates, database_sha256: Some(hash), ..self.parts() }))
     }
 
     /// This state, answering requests for these host names too (besides
     /// `localhost` and IP addresses; see [`HostPolicy`]).
     pub fn with_hosts(self, hosts: HostPolicy) -> Self {
-        let i = &self.0;
-        Self::build(
-            i.library.clone(),
-            i.templates.clone(),
-            i.database_sha256.clone(),
-            i.limits.clone(),
-            hosts,
-            i.access_log,
-        )
+        Self::build(Parts { hosts, ..self.parts() })
     }
 
     /// This state, logging every request (method, path, status, latency)
     /// at info level when `on`; errors are logged either way.
     pub fn with_access_log(self, on: bool) -> Self {
-        let i = &self.0;
-        Self::build(
-            i.library.clone(),
-            i.templates.clone(),
-            i.database_sha256.clone(),
-            i.limits.clone(),
-            i.hosts.clone(),
-            on,
-        )
+        Self::build(Parts { access_log: on, ..self.parts() })
     }
 
-    /// The state of these sources, with fresh slots and counters for
-    /// `limits`.
-    fn build(
-        library: Option<Arc<LibraryPool>>,
-        templates: Option<Arc<TemplateSet>>,
-        database_sha256: Option<String>,
-        limits: Limits,
-        hosts: HostPolicy,
-        access_log: bool,
-    ) -> Self {
+    /// This state, playing designs live on `output` for the page
+    /// (`haptex serve --live`; [`crate::live`]).
+    pub fn with_live_output(self, output: Arc<dyn LiveOutput>) -> Self {
+        Self::build(Parts { live: Some(Arc::new(LiveHub::new(output))), ..self.parts() })
+    }
+
+    /// The state of these parts, with fresh slots and counters for its limits.
+    fn build(parts: Parts) -> Self {
+        let Parts { library, templates, database_sha256, limits, hosts, access_log, live } = parts;
         let heavy = Arc::new(Semaphore::new(limits.concurrent_heavy.max(1)));
         let renders = Arc::new(Semaphore::new(limits.concurrent_renders.max(1)));
         let simulations = Arc::new(Semaphore::new(limits.concurrent_simulations));
@@ -268,11 +280,17 @@ impl AppState {
             limits,
             hosts,
             access_log,
+            live,
             heavy,
             renders,
             simulations,
             unsent_answer_bytes: AtomicUsize::new(0),
         }))
+    }
+
+    /// The live output, if the server has one (`haptex serve --live`).
+    pub fn live(&self) -> Option<&Arc<LiveHub>> {
+        self.0.live.as_ref()
     }
 
     /// SHA-256 of the texture library file served (None without a

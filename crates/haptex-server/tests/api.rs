@@ -311,6 +311,12 @@ async fn openapi_describes_every_route_and_the_parameter_ranges() {
     for (method, path) in routes::list() {
         let uri = path.replace("{path}", "app.js").replace("{name}", "velvet");
         let answer = send(Request::builder().method(method.clone()).uri(&uri).body(Body::empty()).unwrap()).await;
+        if uri == "/api/live/ws" {
+            // Without a live output (the shipped state has none) the route
+            // itself answers 404, saying so (tests/live_api.rs has the rest).
+            assert!(answer.text().contains("this server has no live output"), "{}", answer.text());
+            continue;
+        }
         assert_ne!(answer.status, StatusCode::NOT_FOUND, "{method} {uri}");
         assert_ne!(answer.status, StatusCode::METHOD_NOT_ALLOWED, "{method} {uri}");
     }

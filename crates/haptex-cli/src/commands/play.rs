@@ -133,7 +133,7 @@ pub struct PlayArgs {
 
 /// The drive settings `haptex play` and `haptex live` share: carrier,
 /// limits, full scale, channel 2's a_max, the extension outside the profile.
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, PartialEq, Args)]
 pub struct DriveArgs {
     /// Carrier waveform: sine (peak sqrt(2) U), square (peak U), none (the
     /// envelope U itself, unipolar).
@@ -189,6 +189,12 @@ impl DriveArgs {
         }
     }
 
+    /// Channel 2's a_max as given (`--a-max-um`), before any profile.
+    #[cfg_attr(not(feature = "live"), allow(dead_code))]
+    pub fn given_a_max_um(&self) -> Option<f64> {
+        self.a_max_um
+    }
+
     /// Volts at the amplifier output per full-scale sample: as given, or
     /// sqrt(2) x U_max (the peak of a sine at U_max).
     pub fn volts_per_full_scale(&self) -> f64 {
@@ -227,14 +233,14 @@ impl DriveArgs {
     }
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, ValueEnum)]
 enum WavFormatArg {
     Pcm16,
     Pcm24,
     Float32,
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, ValueEnum)]
 enum ExtendArg {
     Hold,
     Zero,

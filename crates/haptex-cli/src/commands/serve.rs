@@ -61,6 +61,14 @@ pub struct ServeArgs {
     /// default, errors are logged either way.
     #[arg(long)]
     access_log: bool,
+    /// Play designs live on an audio output: the page's "live" panel then
+    /// streams the finger's positions to this server, which renders the
+    /// drive on the device (the options below are `haptex live`'s; needs a
+    /// haptex built with the `live` feature; docs/live.md).
+    #[arg(long)]
+    live: bool,
+    #[command(flatten, next_help_heading = "Live output (with --live)")]
+    output: super::live::OutputArgs,
 }
 
 pub fn run(args: ServeArgs) -> anyhow::Result<()> {
@@ -79,6 +87,7 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
             db.display()
         );
     }
+    let live = live_output(args.live, args.output)?;
     let config = Config {
         addr: args.addr,
         library: Some(library.clone()),
@@ -87,6 +96,7 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
         limits: Limits::DEFAULT,
         allowed_hosts: args.allow_host,
         access_log: args.access_log,
+        live: live.clone(),
     };
     haptex_server::run(config, |addr| {
         eprintln!(
@@ -95,6 +105,17 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
             if args.writable { "writable: uploaded recordings are added to it" } else { "read-only" },
             db.display()
         );
+        if let Some(output) = &live {
+            let info = output.info();
+            eprintln!(
+                "live output: {}, {} Hz, U_max {} V, {} V per full scale{}; the page's live panel drives it",
+                info.device,
+                info.sample_rate_hz,
+                haptex_core::num::Num(info.u_max_v),
+                haptex_core::num::Num(info.volts_per_full_scale),
+                info.a_max_um.map_or(String::new(), |a| format!(", channel 2 a_max {} um", haptex_core::num::Num(a)))
+            );
+        }
         if addr.ip().is_unspecified() {
             eprintln!(
                 "listening on every interface, port {}: open http://<this machine's address>:{}/",
@@ -107,6 +128,31 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
     })?;
     eprintln!("haptex serve: stopped");
     Ok(())
+}
+
+/// The live output of `--live` (its device checked now); the live options
+/// without `--live` are refused rather than ignored.
+fn live_output(
+    live: bool,
+    output: super::live::OutputArgs,
+) -> anyhow::Result<Option<std::sync::Arc<dyn haptex_server::live::LiveOutput>>> {
+    if !live {
+        if output != super::live::OutputArgs::defaults() {
+            anyhow::bail!("the live output options (--device, --u-max, ...) are for --live: add --live");
+        }
+        return Ok(None);
+    }
+    #[cfg(feature = "live")]
+    {
+        Ok(Some(std::sync::Arc::new(super::live::served::ServedOutput::new(output)?)))
+    }
+    #[cfg(not(feature = "live"))]
+    {
+        anyhow::bail!(
+            "--live: this haptex was built without audio output (the `live` cargo feature): build it with \
+             `cargo build --release -p haptex-cli --features live` (on Linux: apt-get install libasound2-dev)"
+        )
+    }
 }
 
 /// Logging to stderr: RUST_LOG if set, else info for the server (errors,

@@ -3,6 +3,7 @@
 pub mod check;
 pub mod config;
 pub mod health;
+pub mod live;
 pub mod map;
 pub mod materials;
 pub mod model;

@@ -4,6 +4,8 @@
 
 #![allow(dead_code)]
 
+pub mod paced_output;
+
 use std::io::Write;
 use std::net::SocketAddr;
 use std::path::PathBuf;
