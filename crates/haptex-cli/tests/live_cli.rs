@@ -220,12 +220,16 @@ mod device {
 
     impl WsClient {
         fn connect(addr: &str) -> Self {
+            Self::connect_to(addr, "/live/ws")
+        }
+
+        fn connect_to(addr: &str, path: &str) -> Self {
             use std::io::{Read, Write};
             let mut stream = std::net::TcpStream::connect(addr).unwrap();
             stream.set_read_timeout(Some(std::time::Duration::from_secs(10))).unwrap();
             write!(
                 stream,
-                "GET /live/ws HTTP/1.1\r\nHost: {addr}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n\
+                "GET {path} HTTP/1.1\r\nHost: {addr}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n\
                  Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n"
             )
             .unwrap();
@@ -245,7 +249,10 @@ mod device {
         fn send(&mut self, text: &str) {
             use std::io::Write;
             let mask = [0x12u8, 0x34, 0x56, 0x78];
-            let mut frame = vec![0x81, 0x80 | text.len() as u8];
+            let mut frame = match text.len() {
+                n @ 0..126 => vec![0x81, 0x80 | n as u8],
+                n => [vec![0x81, 0x80 | 126], u16::try_from(n).unwrap().to_be_bytes().to_vec()].concat(),
+            };
             frame.extend_from_slice(&mask);
             frame.extend(text.bytes().enumerate().map(|(i, b)| b ^ mask[i % 4]));
             self.0.write_all(&frame).unwrap();
@@ -274,7 +281,7 @@ mod device {
                     return frame;
                 }
             }
-            panic!("no status frame with {what}");
+            panic!("no status frame with {what}; the last: {}", self.receive());
         }
     }
 
@@ -337,6 +344,92 @@ mod device {
         let run: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
         assert!(run["events"].as_u64().unwrap() >= 4, "{run}");
         assert!(run["peak_v"].as_f64().unwrap() <= 75.0 * std::f64::consts::SQRT_2 + 1e-3, "{run}");
+    }
+
+    /// `haptex serve --live` on the ALSA file device: the page's WebSocket
+    /// (`/api/live/ws`, a test client speaking the page's protocol) sends a
+    /// design (U = 10 V/mm x), a touch and a stop; the run's figures come
+    /// back with the close (x = 2 mm, 20 V, within 1e-9 V). The captured
+    /// frames stay within the 20 V sine's peak sqrt(2) x 20 V (0.2 of the
+    /// sqrt(2) x 100 V full scale) and end at exactly 0. (Following a
+    /// finger's touches in the status frames is `websocket_touches_drive_the_renderer`
+    /// here and, paced, crates/haptex-server/tests/live_api.rs.) The server starts
+    /// only with a device it can open; the live options need --live.
+    #[test]
+    fn serve_live_on_the_alsa_file_device() {
+        use std::io::BufRead;
+        let dir = tempfile::tempdir().unwrap();
+        let capture = dir.path().join("capture.raw");
+        alsa_home(dir.path(), &capture);
+        let serve = |args: &[&str]| {
+            Command::new(env!("CARGO_BIN_EXE_haptex"))
+                .args(["serve", "--addr", "127.0.0.1:0"])
+                .args(args)
+                .env("HOME", dir.path())
+                .env_remove("ALSA_CONFIG_PATH")
+                .stdin(Stdio::null())
+                .stdout(Stdio::null())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap()
+        };
+        let out = serve(&["--live", "--device", "no_such_pcm"]).wait_with_output().unwrap();
+        assert!(!out.status.success());
+        assert!(stderr(&out).contains("no output device named 'no_such_pcm'"), "{}", stderr(&out));
+        let out = serve(&["--device", "haptex_capture"]).wait_with_output().unwrap();
+        assert!(stderr(&out).contains("are for --live: add --live"), "{}", stderr(&out));
+
+        let mut child = serve(&[
+            "--live",
+            "--device",
+            "haptex_capture",
+            "--sample-rate",
+            "48000",
+            "--buffer-frames",
+            "256",
+            "--gap-ms",
+            "60000",
+            "--horizon-ms",
+            "0",
+        ]);
+        let mut lines = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+        let mut said = Vec::new();
+        let addr = loop {
+            let line = lines.next().expect("haptex serve printed its address").unwrap();
+            if let Some(rest) = line.split("open http://").nth(1) {
+                break rest.split('/').next().unwrap().to_string();
+            }
+            said.push(line);
+        };
+        assert!(said.iter().any(|l| l.contains("live output: haptex_capture, 48000 Hz, U_max 100 V")), "{said:?}");
+        let mut ws = WsClient::connect_to(&addr, "/api/live/ws");
+        let design = serde_json::json!({ "design": { "x_mm": [0.0, 10.0], "voltage_v": [0.0, 100.0] } });
+        ws.send(&design.to_string());
+        let opened = ws.until("opened", |f| f.get("opened").is_some());
+        assert_eq!(opened["opened"]["output"]["device"], "haptex_capture");
+        assert_eq!(opened["opened"]["output"]["buffer_frames"], 256);
+        // The file device does not pace: its clock runs hundreds of times
+        // faster than the wall clock (the gap of 60 s passes in a fraction
+        // of a second, and the capture grows by megabytes per second), so
+        // the touch and the stop go together and the run's figures come
+        // with the close.
+        ws.send("2.0");
+        ws.send(r#"{"stop": true}"#);
+        let closed = ws.until("closed", |f| f.get("closed").is_some());
+        let near = |v: &serde_json::Value, key: &str, want: f64| (v[key].as_f64().unwrap() - want).abs() < 1e-9;
+        let figures = &closed["closed"];
+        assert!(near(figures, "x_mm", 2.0) && near(figures, "envelope_v", 20.0), "{closed}");
+        assert_eq!(figures["events"], 1, "{closed}");
+        assert_eq!(figures["finished"], true, "{closed}");
+        let samples = read_f32(&capture);
+        let peak = samples.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+        assert!(peak > 0.0 && peak <= 0.2 + 1e-6, "peak {peak} of full scale");
+        assert_eq!(samples.last(), Some(&0.0));
+        drop(ws);
+        let status = Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap();
+        assert!(status.success());
+        let rest: Vec<String> = lines.map_while(Result::ok).collect();
+        assert!(child.wait().unwrap().success(), "{rest:?}");
     }
 
     /// Touches from stdin: events applied, the output faded at end of

@@ -104,6 +104,8 @@
 //! HAPTEX_CHROMIUM / HAPTEX_CHROMEDRIVER. HAPTEX_BROWSER_TEST=skip skips
 //! the test, saying so.
 
+mod common;
+
 use std::net::{SocketAddr, TcpListener as StdListener};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -962,6 +964,8 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     upload_recordings(client, scratch).await?;
     // 16. The map view (issue 19): an uploaded image, felt and drawn over.
     map_view(client, base, scratch).await?;
+    // 17. The live output (issue 18): the strip drives a server's audio output.
+    live_output(client, base).await?;
 
     let errors = console_errors(client).await?;
     if !errors.is_empty() {
@@ -1827,6 +1831,106 @@ fn app_state() -> (AppState, PathBuf) {
         .with_database(&data.join("db"))
         .unwrap();
     (state, data)
+}
+
+/// Step 17: the live output. A third server has a live output (the paced
+/// test output of `common::paced_output`: the core's LiveEngine called
+/// every 5 ms, with an ultrasonic channel of a_max 10 um): the page shows
+/// the panel with the output; *Go live* sends the design the strip plays;
+/// the strip from the keyboard (End: the profile's last x) drives it, and
+/// the panel reads the position and the voltage played back from the
+/// server (equal to the design's there within 1e-9 V, the fade done) with
+/// the latency; a mouse hovering over the strip without a button sends
+/// nothing; *Stop live* closes the output (faded). The page of a server
+/// without a live output has no panel (checked on the first server).
+async fn live_output(client: &Client, first: &str) -> Check<()> {
+    wd!(client.goto(first));
+    wait_for(client, "document.body.dataset.state === 'ready'", "the first server's page").await?;
+    if script(client, "return document.getElementById('live-box').hidden;").await? != Value::Bool(true) {
+        return fail("a server without a live output shows the live panel");
+    }
+    let output = std::sync::Arc::new(common::paced_output::PacedOutput::new(Some(10.0)));
+    let (state, _) = app_state();
+    let state =
+        state.with_live_output(std::sync::Arc::clone(&output) as std::sync::Arc<dyn haptex_server::live::LiveOutput>);
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.map_err(|e| e.to_string())?;
+    let addr = listener.local_addr().map_err(|e| e.to_string())?;
+    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+    tokio::spawn(haptex_server::serve(listener, state, async {
+        let _ = stopped.await;
+    }));
+    let result = drive_live(client, &format!("http://{addr}/"), &output).await;
+    let _ = stop.send(());
+    result
+}
+
+async fn drive_live(client: &Client, base: &str, output: &common::paced_output::PacedOutput) -> Check<()> {
+    use std::sync::atomic::Ordering;
+    wd!(client.set_window_size(1280, 1000));
+    wd!(client.goto(base));
+    wait_for(client, "document.body.dataset.state === 'ready' && window.haptex.state.voltage", "the page").await?;
+    wait_for(client, "!document.getElementById('live-box').hidden", "the live panel").await?;
+    let told = script(client, "return document.getElementById('live-output').textContent;").await?;
+    if !told.as_str().is_some_and(|t| t.starts_with("paced test output, 48000 Hz, U_max 100 V")) {
+        return fail(format!("the live panel names the output as {told}"));
+    }
+    wd!(wd!(client.find(Locator::Id("live-toggle"))).click());
+    wait_for(client, "document.getElementById('live-box').dataset.live === 'on'", "the output opened").await?;
+    let strip = wd!(client.find(Locator::Id("feel-strip")));
+    wd!(strip.send_keys("\u{E010}")); // End
+    let expected = script(
+        client,
+        "const v = window.haptex.state.voltage; return [v.x_mm[v.x_mm.length - 1], v.voltage_v[v.voltage_v.length - 1]];",
+    )
+    .await?;
+    let expected = numbers(&expected)?;
+    let code = format!(
+        "Math.abs(Number(document.getElementById('live-box').dataset.xMm) - {:?}) < 1e-9 && \
+         Math.abs(Number(document.getElementById('live-box').dataset.outputV) - {:?}) < 1e-9",
+        expected[0], expected[1]
+    );
+    wait_for(client, &code, "the position and the voltage played back from the live output").await?;
+    let read = script(
+        client,
+        "const d = document.getElementById('live-box').dataset; return [Number(d.events), Number(d.touchToOutputMs), \
+         document.getElementById('live-readout').textContent];",
+    )
+    .await?;
+    let (events, latency) = (read[0].as_f64().unwrap_or(0.0), read[1].as_f64().unwrap_or(f64::NAN));
+    let text = read[2].as_str().unwrap_or("");
+    if events < 1.0 || !(latency > 0.0 && latency < 100.0) || !text.contains("end to end") {
+        return fail(format!("the live readout after a touch: {read}"));
+    }
+    // The feel strip with the live panel, for docs/live.md.
+    script(client, "document.getElementById('feel').scrollIntoView(); return true;").await?;
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    save_screenshot("web-live.png", &wd!(wd!(client.find(Locator::Id("feel"))).screenshot()));
+    // A hovering mouse (no button) sends no touch.
+    let hover = MouseActions::new("mouse".into()).then(PointerAction::MoveToElement {
+        element: strip,
+        duration: Some(Duration::from_millis(50)),
+        x: 0.0,
+        y: 0.0,
+    });
+    wd!(client.perform_actions(hover));
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    let after = script(client, "return Number(document.getElementById('live-box').dataset.events);").await?;
+    // The keyboard's touch was one event; the blur when the mouse moved may lift the finger (one more).
+    if after.as_f64().unwrap_or(0.0) > events + 1.0 {
+        return fail(format!("a hovering mouse drove the live output: {events} events before, {after} after"));
+    }
+    wd!(wd!(client.find(Locator::Id("live-toggle"))).click());
+    let start = Instant::now();
+    while output.closed.load(Ordering::SeqCst) < 1 {
+        if start.elapsed() > WAIT {
+            return fail("Stop live did not close the output");
+        }
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+    if output.opened.load(Ordering::SeqCst) != 1 {
+        return fail(format!("the output was opened {} times for one design", output.opened.load(Ordering::SeqCst)));
+    }
+    Ok(())
 }
 
 /// Step 15: recordings uploaded into a writable library and sampled back.
