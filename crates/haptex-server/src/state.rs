@@ -157,15 +157,7 @@ pub struct AppState(Arc<Inner>);
 
 #[derive(Debug)]
 struct Inner {
-    library: Option<Arc<LibraryPool>>,
-    templates: Option<Arc<TemplateSet>>,
-    /// SHA-256 of the FE database's files (see [`database_sha256`]).
-    database_sha256: Option<String>,
-    limits: Limits,
-    hosts: HostPolicy,
-    access_log: bool,
-    /// The live output (`haptex serve --live`).
-    live: Option<Arc<LiveHub>>,
+    parts: Parts,
     heavy: Arc<Semaphore>,
     renders: Arc<Semaphore>,
     simulations: Arc<Semaphore>,
@@ -187,10 +179,12 @@ pub struct SourceInfo {
 struct Parts {
     library: Option<Arc<LibraryPool>>,
     templates: Option<Arc<TemplateSet>>,
+    /// SHA-256 of the FE database's files (see [`database_sha256`]).
     database_sha256: Option<String>,
     limits: Limits,
     hosts: HostPolicy,
     access_log: bool,
+    /// The live output (`haptex serve --live`).
     live: Option<Arc<LiveHub>>,
 }
 
@@ -212,16 +206,7 @@ impl AppState {
 
     /// What this state is made of.
     fn parts(&self) -> Parts {
-        let i = &self.0;
-        Parts {
-            library: i.library.clone(),
-            templates: i.templates.clone(),
-            database_sha256: i.database_sha256.clone(),
-            limits: i.limits.clone(),
-            hosts: i.hosts.clone(),
-            access_log: i.access_log,
-            live: i.live.clone(),
-        }
+        self.0.parts.clone()
     }
 
     /// This state with its library writable: `POST /api/recordings`
@@ -230,7 +215,7 @@ impl AppState {
     /// that a file the server may not write fails at start. Without a
     /// library this is the state as it was.
     pub fn with_writable_library(self) -> Result<Self, LibraryError> {
-        let Some(pool) = &self.0.library else { return Ok(self) };
+        let Some(pool) = &self.0.parts.library else { return Ok(self) };
         let writer = Library::open(&pool.path)?;
         writer.settle()?;
         drop(writer);
@@ -269,50 +254,39 @@ impl AppState {
 
     /// The state of these parts, with fresh slots and counters for its limits.
     fn build(parts: Parts) -> Self {
-        let Parts { library, templates, database_sha256, limits, hosts, access_log, live } = parts;
+        let limits = &parts.limits;
         let heavy = Arc::new(Semaphore::new(limits.concurrent_heavy.max(1)));
         let renders = Arc::new(Semaphore::new(limits.concurrent_renders.max(1)));
         let simulations = Arc::new(Semaphore::new(limits.concurrent_simulations));
-        Self(Arc::new(Inner {
-            library,
-            templates,
-            database_sha256,
-            limits,
-            hosts,
-            access_log,
-            live,
-            heavy,
-            renders,
-            simulations,
-            unsent_answer_bytes: AtomicUsize::new(0),
-        }))
+        Self(Arc::new(Inner { parts, heavy, renders, simulations, unsent_answer_bytes: AtomicUsize::new(0) }))
     }
 
     /// The live output, if the server has one (`haptex serve --live`).
     pub fn live(&self) -> Option<&Arc<LiveHub>> {
-        self.0.live.as_ref()
+        self.0.parts.live.as_ref()
     }
 
     /// SHA-256 of the texture library file served (None without a
     /// library); a writable library's changes with every upload.
     pub fn library_sha256(&self) -> Option<String> {
-        self.0.library.as_ref().map(|l| l.sha256())
+        self.0.parts.library.as_ref().map(|l| l.sha256())
     }
 
     /// Whether the library takes uploads (`haptex serve --writable`).
     pub fn library_writable(&self) -> bool {
-        self.0.library.as_ref().is_some_and(|l| l.writable)
+        self.0.parts.library.as_ref().is_some_and(|l| l.writable)
     }
 
     /// SHA-256 of the FE database served (None without one): see
     /// [`database_sha256`].
     pub fn database_sha256(&self) -> Option<&str> {
-        self.0.database_sha256.as_deref()
+        self.0.parts.database_sha256.as_deref()
     }
 
     /// The surface templates, or 404 if the server has no FE database.
     pub fn templates(&self) -> Result<&Arc<TemplateSet>, ApiError> {
         self.0
+            .parts
             .templates
             .as_ref()
             .ok_or_else(|| ApiError::not_found("this server has no FE database of templates", None))
@@ -320,31 +294,31 @@ impl AppState {
 
     /// Whether surface templates are served.
     pub fn has_templates(&self) -> bool {
-        self.0.templates.is_some()
+        self.0.parts.templates.is_some()
     }
 
     pub fn limits(&self) -> &Limits {
-        &self.0.limits
+        &self.0.parts.limits
     }
 
     /// The texture library, or 404 if the server has none.
     pub fn library(&self) -> Result<&Arc<LibraryPool>, ApiError> {
-        self.0.library.as_ref().ok_or_else(|| ApiError::not_found("this server has no texture library", None))
+        self.0.parts.library.as_ref().ok_or_else(|| ApiError::not_found("this server has no texture library", None))
     }
 
     /// Whether a texture library is served.
     pub fn has_library(&self) -> bool {
-        self.0.library.is_some()
+        self.0.parts.library.is_some()
     }
 
     /// The host names this server answers for.
     pub fn hosts(&self) -> &HostPolicy {
-        &self.0.hosts
+        &self.0.parts.hosts
     }
 
     /// Whether every request is logged.
     pub fn access_log(&self) -> bool {
-        self.0.access_log
+        self.0.parts.access_log
     }
 
     /// Bounds the number of heavy requests (bodies over
@@ -373,7 +347,7 @@ impl AppState {
     /// Counts `bytes` of a new answer, if they fit the budget (`always`:
     /// count them even if they do not); false when refused.
     pub(crate) fn reserve_answer(&self, bytes: usize, always: bool) -> bool {
-        let max = self.0.limits.max_unsent_answer_bytes;
+        let max = self.0.parts.limits.max_unsent_answer_bytes;
         self.0
             .unsent_answer_bytes
             .fetch_update(Ordering::AcqRel, Ordering::Acquire, |held| {
