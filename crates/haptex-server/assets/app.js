@@ -1769,40 +1769,9 @@
     $('audio').addEventListener('change', () => ($('audio').checked ? audio.start() : audio.stop()));
   }
 
-  // Web Audio: a sine at the carrier frequency whose amplitude follows U.
-  // Full scale (sample 1.0) stands for sqrt(2) U_max at the amplifier, so
-  // an RMS envelope U gives a peak of sqrt(2) U: gain = U / U_max.
-  const audio = {
-    context: null,
-    oscillator: null,
-    gain: null,
-    start() {
-      const Context = window.AudioContext || window.webkitAudioContext;
-      if (!Context) { say('This browser has no Web Audio.', true); return; }
-      this.context = new Context();
-      this.oscillator = this.context.createOscillator();
-      this.oscillator.type = 'sine';
-      this.oscillator.frequency.value = state.carrierHz;
-      this.gain = this.context.createGain();
-      this.gain.gain.value = 0;
-      this.oscillator.connect(this.gain).connect(this.context.destination);
-      this.oscillator.start();
-    },
-    stop() {
-      if (this.context) this.context.close();
-      this.context = null;
-      this.oscillator = null;
-      this.gain = null;
-    },
-    set(level) {
-      if (!this.gain) return;
-      const value = Math.min(1, Math.max(0, level));
-      this.gain.gain.setTargetAtTime(value, this.context.currentTime, 0.004);
-    },
-    setFrequency(f) {
-      if (this.oscillator) this.oscillator.frequency.setTargetAtTime(f, this.context.currentTime, 0.01);
-    },
-  };
+  // The browser's audio output (audio.js): a sine at the carrier
+  // frequency whose level follows U / U_max.
+  const audio = window.haptexAudio.create(() => state.carrierHz, (text) => say(text, true));
 
   // ------------------------------------------------------------ live output
 

@@ -28,7 +28,11 @@
     hover: null, // { x_mm, y_mm } under the pointer
   };
   const plots = { path: null };
-  window.haptexMap = { state, plots, sample };
+  /** The carrier of the browser's audio (the server's, from /api/config). */
+  let carrierHz = 1000;
+  // The browser's audio output (audio.js): U / U_max at the reading.
+  const audio = window.haptexAudio.create(() => carrierHz, (text) => say(text, true));
+  window.haptexMap = { state, plots, sample, audio };
 
   function say(text, error) {
     const m = $('message');
@@ -342,6 +346,7 @@
     Object.assign(readout.dataset, { xMm: String(x), yMm: String(y), mu: String(mu), voltageV: String(u), input });
     $('map-canvas').setAttribute('aria-description', readout.textContent);
     state.hover = { x_mm: x, y_mm: y };
+    audio.set(state.map.u_max_v ? u / state.map.u_max_v : 0);
     return [x, y];
   }
 
@@ -383,7 +388,10 @@
       redrawOverlay();
       samplePath().catch(showError);
     };
-    canvas.addEventListener('pointerup', finish);
+    canvas.addEventListener('pointerup', (e) => {
+      if (e.pointerType === 'touch') audio.set(0); // the finger left the screen
+      finish();
+    });
     // The keyboard: the arrows move the reading one cell (Shift: ten);
     // Enter or Space starts a path at the reading and ends it, each arrow
     // step between adding a sample at KEY_SPEED_MM_S; Escape drops it.
@@ -424,8 +432,10 @@
     });
     canvas.addEventListener('pointercancel', finish);
     canvas.addEventListener('pointerleave', (e) => {
+      if (e.pointerType !== 'touch') audio.set(0);
       if (!state.drawing && e.pointerType !== 'touch') { state.hover = null; redrawOverlay(); }
     });
+    canvas.addEventListener('blur', () => audio.set(0));
   }
 
   /** Adds a sample to the path drawn: times strictly increasing, in s from the press. */
@@ -476,6 +486,7 @@
     try {
       const config = await (await fetch('/api/config')).json();
       const n = config.limits && config.limits.max_map_pixels;
+      if (config.play && config.play.carrier) carrierHz = config.play.carrier.frequency_hz;
       if (n) $('max-pixels').textContent = `${n} (${Math.floor(Math.sqrt(n))} x ${Math.floor(Math.sqrt(n))})`;
     } catch (_) { /* the default text stays */ }
     $('image').addEventListener('change', async () => {
@@ -509,6 +520,7 @@
       redrawOverlay();
       bump();
     });
+    $('audio').addEventListener('change', () => ($('audio').checked ? audio.start() : audio.stop()));
     setupPointer();
     let resizeTimer = null;
     window.addEventListener('resize', () => {

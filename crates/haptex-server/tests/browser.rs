@@ -2174,6 +2174,24 @@ async fn map_view(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     {
         return fail(format!("the pointer over the map reads {read:?}; the core's U there is {expected} V"));
     }
+    // The browser's audio follows the reading: U / U_max of full scale
+    // (the audio output itself is switched on by the checkbox; headless
+    // Chromium has no sound device, so the level asked for is read).
+    wd!(wd!(client.find(Locator::Id("audio"))).click());
+    wd!(client.perform_actions(MouseActions::new("mouse".into()).then(at(0.37, 0.42)).then(at(0.37, 0.41))));
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    let heard = script(
+        client,
+        "const a = window.haptexMap.audio; return [a.level, a.context !== null, \
+         Number(document.getElementById('map-readout').dataset.voltageV) / window.haptexMap.state.map.u_max_v];",
+    )
+    .await?;
+    if heard[1] != Value::Bool(true)
+        || (heard[0].as_f64().unwrap_or(f64::NAN) - heard[2].as_f64().unwrap_or(0.0)).abs() > 1e-12
+    {
+        return fail(format!("the map's audio: [level, on, U / U_max] = {heard}"));
+    }
+    wd!(wd!(client.find(Locator::Id("audio"))).click());
 
     // A path drawn with the mouse: pressed, dragged through the disc, released.
     let before = script(client, "return Number(document.body.dataset.path || 0);").await?;
