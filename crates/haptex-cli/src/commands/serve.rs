@@ -34,7 +34,8 @@ use haptex_server::{Config, Limits};
     haptex serve --addr 0.0.0.0:8080 --allow-host mypc.local --access-log\n  \
     haptex serve --library my-lab.sqlite --addr 127.0.0.1:9000\n  \
     haptex serve --library my-lab.sqlite --writable   (recordings uploaded in the GUI are added to it)\n  \
-    haptex serve --db my-db/   (a database built by `haptex db build --out my-db`)")]
+    haptex serve --db my-db/   (a database built by `haptex db build --out my-db`)\n  \
+    haptex serve --live --device hw:CARD=USB,DEV=0 --buffer-frames 128   (the page's live panel plays on the interface)")]
 pub struct ServeArgs {
     /// Address and port to listen on (0.0.0.0:PORT: every interface).
     #[arg(long, value_name = "IP:PORT", default_value = Config::DEFAULT_ADDR)]
