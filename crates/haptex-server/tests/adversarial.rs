@@ -115,6 +115,16 @@ impl Case {
     }
 }
 
+/// The live output's WebSocket: its valid request is an upgrade (101), whose
+/// headers every case of the route starts from.
+const LIVE_SOCKET: &str = "/api/live/ws";
+const WEBSOCKET_UPGRADE: [(&str, &str); 4] = [
+    ("Connection", "Upgrade"),
+    ("Upgrade", "websocket"),
+    ("Sec-WebSocket-Version", "13"),
+    ("Sec-WebSocket-Key", "dGhlIHNhbXBsZSBub25jZQ=="),
+];
+
 /// A valid request of a route, from which its cases are derived.
 #[derive(Debug, Clone)]
 struct Valid {
@@ -133,7 +143,11 @@ impl Valid {
             what: what.into(),
             method: self.route.0.to_string(),
             target: self.target.to_string(),
-            headers: self.content_type.map(|c| vec![("Content-Type".to_string(), c.to_string())]).unwrap_or_default(),
+            headers: if self.route.1 == LIVE_SOCKET {
+                WEBSOCKET_UPGRADE.iter().map(|(n, v)| (n.to_string(), v.to_string())).collect()
+            } else {
+                self.content_type.map(|c| vec![("Content-Type".to_string(), c.to_string())]).unwrap_or_default()
+            },
             body: self.body.clone(),
             status,
             field: field.map(str::to_string),
@@ -271,6 +285,8 @@ fn valid_requests() -> Vec<Valid> {
             body: profile.to_string().into_bytes(),
         },
         Valid { route: ("GET", "/api/materials"), target: "/api/materials", content_type: None, body: vec![] },
+        Valid { route: ("GET", "/api/live"), target: "/api/live", content_type: None, body: vec![] },
+        Valid { route: ("GET", LIVE_SOCKET), target: LIVE_SOCKET, content_type: None, body: vec![] },
         Valid {
             route: ("GET", "/api/materials/{name}/sample"),
             target: "/api/materials/velvet/sample?seed=7",
@@ -436,6 +452,34 @@ fn route_cases(valid: &Valid) -> Vec<Case> {
     let json = valid.content_type == Some("application/json");
     let body: Value = if json { serde_json::from_slice(&valid.body).unwrap() } else { Value::Null };
     match valid.route.1 {
+        LIVE_SOCKET => {
+            let header = |name: &str, value: &str| {
+                let (name, value) = (name.to_string(), value.to_string());
+                move |c: &mut Case| {
+                    c.headers.retain(|(n, _)| !n.eq_ignore_ascii_case(&name));
+                    if !value.is_empty() {
+                        c.headers.push((name, value));
+                    }
+                }
+            };
+            cases.push(valid.case(
+                "a page of another site",
+                403,
+                Some("origin"),
+                header("Origin", "http://evil.example"),
+            ));
+            cases.push(valid.case("a sandboxed page (Origin null)", 403, Some("origin"), header("Origin", "null")));
+            cases.push(valid.case(
+                "an Origin with control characters",
+                400,
+                Some("request"),
+                header("Origin", "http://a\u{1}b"),
+            ));
+            cases.push(valid.case("no Upgrade", 400, Some("upgrade"), header("Upgrade", "")));
+            cases.push(valid.case("Upgrade: h2c", 400, Some("upgrade"), header("Upgrade", "h2c")));
+            cases.push(valid.case("WebSocket version 8", 400, Some("upgrade"), header("Sec-WebSocket-Version", "8")));
+            cases.push(valid.case("no key", 400, Some("upgrade"), header("Sec-WebSocket-Key", "")));
+        }
         "/static/{*path}" => {
             for (what, target) in [
                 ("traversal", "/static/../Cargo.toml".to_string()),
@@ -1012,19 +1056,17 @@ async fn every_route_answers_hostile_input_with_a_4xx_naming_the_field() {
         .and_then(haptex_server::AppState::with_writable_library)
         .unwrap()
         .with_database(&shipped_db())
-        .unwrap();
+        .unwrap()
+        .with_live_output(Arc::new(common::paced_output::PacedOutput::new(None)));
     let server = Arc::new(RawServer::start(state).await);
     // The valid requests are served (so the cases' refusals are theirs).
     for v in &valid {
         let case = v.case("the valid request", 200, None, |_| {});
         let answer = server.raw(&case.bytes()).await;
-        assert!(
-            answer.starts_with("HTTP/1.1 200"),
-            "{} {}: {}",
-            v.route.0,
-            v.route.1,
-            &answer[..answer.len().min(300)]
-        );
+        // The WebSocket's valid request switches protocols (and the socket
+        // is closed at once, releasing the output).
+        let ok = if v.route.1 == LIVE_SOCKET { "HTTP/1.1 101" } else { "HTTP/1.1 200" };
+        assert!(answer.starts_with(ok), "{} {}: {}", v.route.0, v.route.1, &answer[..answer.len().min(300)]);
     }
     let mut cases: Vec<Case> = valid.iter().flat_map(|v| [generic_cases(v), route_cases(v)].concat()).collect();
     for v in &valid {
