@@ -571,6 +571,21 @@ impl TouchStamper {
     }
 }
 
+impl TouchEvent {
+    /// The event of `line`, received at wall-clock instant `received`,
+    /// stamped on `clock` by `stamper` (a live source: stdin, a WebSocket).
+    pub fn received(line: TouchLine, received: Instant, clock: &DeviceClock, stamper: &mut TouchStamper) -> Self {
+        let (t_s, touch) = stamper.stamp(line, clock.time_of(received));
+        Self { t_s, touch, received: Some(received) }
+    }
+
+    /// A lift-off now, on `clock` (a source that went away or sent a bad line).
+    pub fn lift_now(clock: &DeviceClock) -> Self {
+        let now = Instant::now();
+        Self { t_s: clock.time_of(now), touch: Touch::Lift, received: Some(now) }
+    }
+}
+
 /// Parses one line of a touch stream: `x_mm`, `t_s,x_mm` (more columns,
 /// e.g. y, are ignored), `lift` or `up`. Blank lines, `#` comments and a
 /// header (a first field that is `x_mm` or `t_s`) give `None`. The error

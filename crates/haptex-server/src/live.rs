@@ -29,7 +29,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use axum::extract::ws::{CloseFrame, Message, WebSocket, close_code};
-use haptex_core::live::{DeviceClock, LiveFigures, Touch, TouchEvent, TouchStamper, parse_touch_line};
+use haptex_core::live::{DeviceClock, LiveFigures, TouchEvent, TouchStamper, parse_touch_line};
 use haptex_core::num::Num;
 use haptex_core::profile::ProfileError;
 use haptex_core::signal::{AmplitudeCurve, VoltageCurve};
@@ -393,8 +393,7 @@ fn touches(text: &str, session: Option<&dyn LiveSession>, stamper: &mut TouchSta
                 );
             }
         };
-        let (t_s, touch) = stamper.stamp(parsed, live.clock().time_of(received));
-        if !live.queue(TouchEvent { t_s, touch, received: Some(received) }) {
+        if !live.queue(TouchEvent::received(parsed, received, live.clock(), stamper)) {
             return Some(Refusal::new("the touch queue is full: the output is not taking samples", "message").json());
         }
     }
@@ -404,7 +403,6 @@ fn touches(text: &str, session: Option<&dyn LiveSession>, stamper: &mut TouchSta
 /// Lifts the finger (the drive fades out) on a refused message.
 fn lift(session: Option<&dyn LiveSession>) {
     if let Some(live) = session {
-        let now = Instant::now();
-        let _ = live.queue(TouchEvent { t_s: live.clock().time_of(now), touch: Touch::Lift, received: Some(now) });
+        let _ = live.queue(TouchEvent::lift_now(live.clock()));
     }
 }

@@ -10,7 +10,7 @@ use anyhow::{Context, bail};
 use cpal::traits::{DeviceTrait, HostTrait, StreamTrait};
 use cpal::{FromSample, SampleFormat, SizedSample};
 use haptex_core::live::{
-    DeviceClock, LiveConfig, LiveEngine, LiveFigures, LiveStatus, Touch, TouchEvent, TouchLine, TouchStamper,
+    DeviceClock, LiveConfig, LiveEngine, LiveFigures, LiveStatus, Touch, TouchEvent, TouchStamper,
 };
 use haptex_core::num::Num;
 use haptex_core::realtime::{RealtimeConfig, RealtimeRenderer};
@@ -486,22 +486,10 @@ where
     )
 }
 
-/// Turns parsed touch lines into events on the output clock
-/// ([`TouchStamper`]: at arrival, or from the line's own `t_s`).
-#[derive(Default)]
-struct Stamper(TouchStamper);
-
-impl Stamper {
-    fn event(&mut self, line: TouchLine, received: Instant, clock: &DeviceClock) -> TouchEvent {
-        let (t_s, touch) = self.0.stamp(line, clock.time_of(received));
-        TouchEvent { t_s, touch, received: Some(received) }
-    }
-}
-
-/// The stdin touch source: one event per line ([`Stamper`]). End of
+/// The stdin touch source: one event per line (stamped by a [`TouchStamper`]). End of
 /// input, a bad line or a full queue stop the output (faded).
 fn read_stdin(sender: &SyncSender<TouchEvent>, clock: &DeviceClock, shared: &Shared, error: &Mutex<Option<String>>) {
-    let mut stamper = Stamper::default();
+    let mut stamper = TouchStamper::default();
     let fail = |message: String| {
         if let Ok(mut e) = error.lock() {
             e.get_or_insert(message);
@@ -518,7 +506,7 @@ fn read_stdin(sender: &SyncSender<TouchEvent>, clock: &DeviceClock, shared: &Sha
             Ok(None) => continue,
             Err(message) => return fail(format!("stdin, line {}, {message}", i + 1)),
         };
-        match sender.try_send(stamper.event(parsed, received, clock)) {
+        match sender.try_send(TouchEvent::received(parsed, received, clock, &mut stamper)) {
             Ok(()) => {}
             Err(TrySendError::Full(_)) => {
                 return fail(format!(
@@ -589,14 +577,10 @@ async fn ws_upgrade(
 /// the page gets the last rendered sample and the latency figures.
 async fn ws_session(mut socket: axum::extract::ws::WebSocket, state: WsState) {
     use axum::extract::ws::Message;
-    let mut stamper = Stamper::default();
+    let mut stamper = TouchStamper::default();
     let mut tick = tokio::time::interval(Duration::from_millis(100));
     let lift = |state: &WsState| {
-        let _ = state.sender.try_send(TouchEvent {
-            t_s: state.clock.time_of(Instant::now()),
-            touch: Touch::Lift,
-            received: Some(Instant::now()),
-        });
+        let _ = state.sender.try_send(TouchEvent::lift_now(&state.clock));
     };
     loop {
         tokio::select! {
@@ -612,7 +596,7 @@ async fn ws_session(mut socket: axum::extract::ws::WebSocket, state: WsState) {
                 let received = Instant::now();
                 for line in text.as_str().lines() {
                     let event = match haptex_core::live::parse_touch_line(line) {
-                        Ok(Some(parsed)) => stamper.event(parsed, received, &state.clock),
+                        Ok(Some(parsed)) => TouchEvent::received(parsed, received, &state.clock, &mut stamper),
                         Ok(None) => continue,
                         Err(message) => {
                             lift(&state);
