@@ -1813,14 +1813,7 @@
       $('live-toggle').setAttribute('aria-pressed', 'true');
       socket.addEventListener('open', () => this.follow());
       socket.addEventListener('message', (e) => this.receive(e.data));
-      socket.addEventListener('close', () => {
-        if (this.socket !== socket) return;
-        this.socket = null;
-        this.sent = null;
-        $('live-toggle').textContent = 'Go live';
-        $('live-toggle').setAttribute('aria-pressed', 'false');
-        $('live-box').dataset.live = 'off';
-      });
+      socket.addEventListener('close', () => { if (this.socket === socket) this.off(); });
     },
     stop() {
       if (!this.socket) return;
@@ -1828,7 +1821,12 @@
       const socket = this.socket;
       setTimeout(() => socket.close(), 300);
       this.show('stopped: faded to 0 V');
+      this.off();
+    },
+    /** The panel as without a connection (the socket stopped or lost). */
+    off() {
       this.socket = null;
+      this.sent = null;
       $('live-toggle').textContent = 'Go live';
       $('live-toggle').setAttribute('aria-pressed', 'false');
       $('live-box').dataset.live = 'off';
