@@ -1,6 +1,7 @@
-//! Live output: a [`RealtimeRenderer`] driven by timestamped touch events
-//! into an audio device's interleaved buffers, with the safety envelope a
-//! real output needs. Independent of the audio API: `haptex live` calls
+//! Live output: a renderer ([`RealtimeRenderer`] on a line,
+//! [`PlanarRenderer`] over a voltage map; the [`LiveRenderer`] trait)
+//! driven by timestamped touch events into an audio device's interleaved
+//! buffers, with the safety envelope a real output needs. Independent of the audio API: `haptex live` calls
 //! [`LiveEngine::process`] from its cpal callback, tests call it directly.
 //!
 //! Clock: the output's sample clock. Sample n is at t = n / fs; every touch
@@ -39,16 +40,198 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
 
-use crate::realtime::RealtimeRenderer;
+use crate::realtime::{PlanarRenderer, RealtimeRenderer};
 use crate::signal::SignalError;
+
+/// The coordinates a touch source reports: x on a line design, x and y
+/// over a map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TouchAxes {
+    /// x only (a profile along a line).
+    X,
+    /// x and y (a voltage map).
+    XY,
+}
 
 /// What a touch event says.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Touch {
-    /// The finger is at this position, in mm.
+    /// The finger is at this x, in mm (a line's position).
     At(f64),
+    /// The finger is at this (x, y), in mm (a map's position; a line
+    /// renderer uses its x).
+    AtXY(f64, f64),
     /// The finger was lifted.
     Lift,
+}
+
+impl Touch {
+    /// Whether every number in it is finite.
+    fn is_finite(&self) -> bool {
+        match *self {
+            Touch::At(x) => x.is_finite(),
+            Touch::AtXY(x, y) => x.is_finite() && y.is_finite(),
+            Touch::Lift => true,
+        }
+    }
+}
+
+/// One output sample of a live renderer with the quantities behind it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LiveSample {
+    /// Time on the renderer's clock in s.
+    pub t_s: f64,
+    /// Estimated finger position in mm (y is 0 on a line).
+    pub x_mm: f64,
+    pub y_mm: f64,
+    /// Envelope after the limits, V RMS.
+    pub envelope_v: f64,
+    /// Drive voltage in V (channel 1).
+    pub signal_v: f64,
+    /// Ultrasonic amplitude in um (channel 2; 0 on one channel).
+    pub amplitude_um: f64,
+}
+
+/// A renderer a [`LiveEngine`] drives: [`RealtimeRenderer`] (a line, one
+/// or two channels) or [`PlanarRenderer`] (a voltage map, one channel).
+/// Its settings were checked when it was built (peak bound against the
+/// full scale and the amplifier range); the engine adds the fades and the
+/// last clamp.
+pub trait LiveRenderer: Send + std::fmt::Debug {
+    /// The coordinates its touch reports carry.
+    const AXES: TouchAxes;
+    /// Output channels of the design: 1 (drive) or 2 (drive, amplitude).
+    fn channels(&self) -> usize;
+    /// Output sample rate in Hz.
+    fn sample_rate_hz(&self) -> f64;
+    /// Volts at the amplifier for a full-scale sample of channel 1.
+    fn volts_per_full_scale(&self) -> f64;
+    /// Channel 2's full scale in um (two channels only).
+    fn a_max_um(&self) -> Option<f64>;
+    /// Upper bound of |drive| in V.
+    fn peak_bound_v(&self) -> f64;
+    /// Samples rendered so far.
+    fn samples_rendered(&self) -> u64;
+    /// Time of the next sample on its clock, s.
+    fn now_s(&self) -> f64;
+    /// Whether a finger is down.
+    fn is_touching(&self) -> bool;
+    /// A position report at `t_s`. Returns false (and ignores it) if the
+    /// report lacks a coordinate the renderer needs (an x alone over a map).
+    fn report(&mut self, t_s: f64, touch: Touch) -> bool;
+    /// The finger was lifted.
+    fn release(&mut self);
+    /// Renders the next `n` samples, handing each to `write`. No allocation.
+    fn render_live(&mut self, n: usize, write: impl FnMut(usize, LiveSample));
+}
+
+impl LiveRenderer for RealtimeRenderer {
+    const AXES: TouchAxes = TouchAxes::X;
+    fn channels(&self) -> usize {
+        RealtimeRenderer::channels(self)
+    }
+    fn sample_rate_hz(&self) -> f64 {
+        RealtimeRenderer::sample_rate_hz(self)
+    }
+    fn volts_per_full_scale(&self) -> f64 {
+        RealtimeRenderer::volts_per_full_scale(self)
+    }
+    fn a_max_um(&self) -> Option<f64> {
+        RealtimeRenderer::a_max_um(self)
+    }
+    fn peak_bound_v(&self) -> f64 {
+        RealtimeRenderer::peak_bound_v(self)
+    }
+    fn samples_rendered(&self) -> u64 {
+        RealtimeRenderer::samples_rendered(self)
+    }
+    fn now_s(&self) -> f64 {
+        RealtimeRenderer::now_s(self)
+    }
+    fn is_touching(&self) -> bool {
+        RealtimeRenderer::is_touching(self)
+    }
+    fn report(&mut self, t_s: f64, touch: Touch) -> bool {
+        match touch {
+            Touch::At(x) | Touch::AtXY(x, _) => self.touch(t_s, x),
+            Touch::Lift => self.release(),
+        }
+        true
+    }
+    fn release(&mut self) {
+        RealtimeRenderer::release(self)
+    }
+    #[inline(always)]
+    fn render_live(&mut self, n: usize, mut write: impl FnMut(usize, LiveSample)) {
+        self.render_with(n, |i, s| {
+            write(
+                i,
+                LiveSample {
+                    t_s: s.t_s,
+                    x_mm: s.x_mm,
+                    y_mm: 0.0,
+                    envelope_v: s.envelope_v,
+                    signal_v: s.signal_v,
+                    amplitude_um: s.amplitude_um,
+                },
+            )
+        });
+    }
+}
+
+impl LiveRenderer for PlanarRenderer {
+    const AXES: TouchAxes = TouchAxes::XY;
+    fn channels(&self) -> usize {
+        1
+    }
+    fn sample_rate_hz(&self) -> f64 {
+        PlanarRenderer::sample_rate_hz(self)
+    }
+    fn volts_per_full_scale(&self) -> f64 {
+        PlanarRenderer::volts_per_full_scale(self)
+    }
+    fn a_max_um(&self) -> Option<f64> {
+        None
+    }
+    fn peak_bound_v(&self) -> f64 {
+        PlanarRenderer::peak_bound_v(self)
+    }
+    fn samples_rendered(&self) -> u64 {
+        PlanarRenderer::samples_rendered(self)
+    }
+    fn now_s(&self) -> f64 {
+        PlanarRenderer::now_s(self)
+    }
+    fn is_touching(&self) -> bool {
+        PlanarRenderer::is_touching(self)
+    }
+    fn report(&mut self, t_s: f64, touch: Touch) -> bool {
+        match touch {
+            Touch::AtXY(x, y) => self.touch(t_s, x, y),
+            Touch::At(_) => return false,
+            Touch::Lift => self.release(),
+        }
+        true
+    }
+    fn release(&mut self) {
+        PlanarRenderer::release(self)
+    }
+    #[inline(always)]
+    fn render_live(&mut self, n: usize, mut write: impl FnMut(usize, LiveSample)) {
+        self.render_with(n, |i, s| {
+            write(
+                i,
+                LiveSample {
+                    t_s: s.t_s,
+                    x_mm: s.x_mm,
+                    y_mm: s.y_mm,
+                    envelope_v: s.envelope_v,
+                    signal_v: s.signal_v,
+                    amplitude_um: 0.0,
+                },
+            )
+        });
+    }
 }
 
 /// A touch event on the output's sample clock.
@@ -113,6 +296,10 @@ pub struct LiveStatus {
     /// envelope (V RMS, before the gain), the gain, and the amplitude (um,
     /// before the gain), as f64 bits (for a live display).
     pub last_x_mm_bits: AtomicU64,
+    /// The last sample's y (mm), f64 bits; meaningful when `planar`.
+    pub last_y_mm_bits: AtomicU64,
+    /// The renderer is a map's (positions are (x, y)).
+    pub planar: AtomicBool,
     pub last_envelope_v_bits: AtomicU64,
     pub last_gain_bits: AtomicU64,
     pub last_amplitude_um_bits: AtomicU64,
@@ -155,6 +342,9 @@ impl LiveStatus {
 pub struct LiveFigures {
     /// Estimated finger position of the last sample, mm.
     pub x_mm: f64,
+    /// Its y over a map (absent on a line).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub y_mm: Option<f64>,
     /// The renderer's envelope there (V RMS, before the gain).
     pub envelope_v: f64,
     /// The fade gain, 0 ..= 1.
@@ -192,6 +382,10 @@ impl LiveStatus {
         let output_latency_max_ms = output_latency_max_s * 1e3;
         LiveFigures {
             x_mm,
+            y_mm: self
+                .planar
+                .load(Ordering::Relaxed)
+                .then(|| f64::from_bits(self.last_y_mm_bits.load(Ordering::Relaxed))),
             envelope_v,
             gain,
             output_v: envelope_v * gain,
@@ -266,8 +460,8 @@ impl DeviceClock {
 
 /// The live output: renderer, event schedule, gain ramp, last clamp.
 #[derive(Debug)]
-pub struct LiveEngine {
-    renderer: RealtimeRenderer,
+pub struct LiveEngine<R = RealtimeRenderer> {
+    renderer: R,
     channels: usize,
     fs: f64,
     scale_1: f64,
@@ -286,11 +480,11 @@ pub struct LiveEngine {
     status: Arc<LiveStatus>,
 }
 
-impl LiveEngine {
+impl<R: LiveRenderer> LiveEngine<R> {
     /// An engine around `renderer` (its clock at 0). Refuses fewer device
     /// channels than the design has, and ramp or gap times that are not
     /// finite and positive (ramp) or >= 0 (gap).
-    pub fn new(renderer: RealtimeRenderer, config: &LiveConfig) -> Result<Self, SignalError> {
+    pub fn new(renderer: R, config: &LiveConfig) -> Result<Self, SignalError> {
         if config.channels < renderer.channels() {
             return Err(SignalError::Settings(format!(
                 "the design has {} channels (electrovibration drive and ultrasonic amplitude) but the output has {}: \
@@ -325,24 +519,26 @@ impl LiveEngine {
             schedule: Box::new([]),
             next: 0,
             stop_at_s: f64::INFINITY,
-            status: Arc::new(LiveStatus::default()),
+            status: Arc::new(LiveStatus { planar: AtomicBool::new(R::AXES == TouchAxes::XY), ..LiveStatus::default() }),
             renderer,
         })
     }
 
     /// Plays `events` (times on the output clock, non-decreasing) at their
     /// times, each applied at the first sample at or after it, then stops
-    /// (fades out from the last event's time). Refuses events out of order
-    /// or with non-finite values.
+    /// (fades out from the last event's time). Refuses events out of order,
+    /// with non-finite values, or without a y over a map.
     pub fn with_schedule(mut self, events: Vec<TouchEvent>) -> Result<Self, SignalError> {
-        if let Some((i, _)) = events.iter().enumerate().find(|(_, e)| {
-            !e.t_s.is_finite()
-                || match e.touch {
-                    Touch::At(x) => !x.is_finite(),
-                    Touch::Lift => false,
-                }
-        }) {
+        if let Some((i, _)) = events.iter().enumerate().find(|(_, e)| !(e.t_s.is_finite() && e.touch.is_finite())) {
             return Err(SignalError::Settings(format!("touch event {}: time or position is not finite", i + 1)));
+        }
+        if R::AXES == TouchAxes::XY
+            && let Some(i) = events.iter().position(|e| matches!(e.touch, Touch::At(_)))
+        {
+            return Err(SignalError::Settings(format!(
+                "touch event {}: a position over a map needs x and y, it has x only",
+                i + 1
+            )));
         }
         // All finite from here.
         for (i, pair) in events.windows(2).enumerate() {
@@ -366,7 +562,7 @@ impl LiveEngine {
     }
 
     /// The renderer (for its settings).
-    pub fn renderer(&self) -> &RealtimeRenderer {
+    pub fn renderer(&self) -> &R {
         &self.renderer
     }
 
@@ -389,12 +585,14 @@ impl LiveEngine {
     /// reflects it), recording its latency.
     fn apply(&mut self, event: TouchEvent, t_now_s: f64, now: Option<Instant>) {
         match event.touch {
-            Touch::At(x) if x.is_finite() && event.t_s.is_finite() => {
-                self.renderer.touch(event.t_s, x);
+            Touch::Lift => self.renderer.release(),
+            touch if touch.is_finite() && event.t_s.is_finite() => {
+                if !self.renderer.report(event.t_s, touch) {
+                    return;
+                }
                 self.last_report_s = self.last_report_s.max(event.t_s);
             }
-            Touch::At(_) => return,
-            Touch::Lift => self.renderer.release(),
+            _ => return,
         }
         let latency_ns = ((t_now_s - event.t_s).max(0.0) * 1e9) as u64;
         let s = &self.status;
@@ -478,7 +676,7 @@ impl LiveEngine {
         let (mut clamped, mut non_finite) = (0u64, 0u64);
         let mut peak = status.peak();
         let mut last = None;
-        renderer.render_with(n, |i, s| {
+        renderer.render_live(n, |i, s| {
             last = Some(s);
             stop |= s.t_s >= stop_at_s;
             let on = touching && !stop && s.t_s - last_report_s <= gap_s;
@@ -511,6 +709,7 @@ impl LiveEngine {
         let status = &self.status;
         if let Some(s) = last {
             status.last_x_mm_bits.store(s.x_mm.to_bits(), Ordering::Relaxed);
+            status.last_y_mm_bits.store(s.y_mm.to_bits(), Ordering::Relaxed);
             status.last_envelope_v_bits.store(s.envelope_v.to_bits(), Ordering::Relaxed);
             status.last_gain_bits.store(g.to_bits(), Ordering::Relaxed);
             status.last_amplitude_um_bits.store(s.amplitude_um.to_bits(), Ordering::Relaxed);
@@ -528,8 +727,10 @@ impl LiveEngine {
 /// One line of a live touch stream (`haptex live --stdin`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum TouchLine {
-    /// `x_mm` (stamped on arrival) or `t_s,x_mm` (the sender's clock).
+    /// On a line: `x_mm` (stamped on arrival) or `t_s,x_mm` (the sender's clock).
     At { t_s: Option<f64>, x_mm: f64 },
+    /// Over a map: `x_mm,y_mm` (stamped on arrival) or `t_s,x_mm,y_mm`.
+    AtXY { t_s: Option<f64>, x_mm: f64, y_mm: f64 },
     /// `lift` (or `up`): the finger left the surface.
     Lift,
 }
@@ -555,19 +756,21 @@ impl TouchStamper {
     /// The output-clock time and the touch of `line`, which arrived at
     /// `arrival_s` on the output clock.
     pub fn stamp(&mut self, line: TouchLine, arrival_s: f64) -> (f64, Touch) {
-        match line {
-            TouchLine::Lift => (arrival_s, Touch::Lift),
-            TouchLine::At { t_s: None, x_mm } => (arrival_s, Touch::At(x_mm)),
-            TouchLine::At { t_s: Some(t), x_mm } => {
-                let delay = arrival_s - t;
-                let offset = match self.offset {
-                    Some((offset, t_last)) => (offset + CLOCK_DRIFT * (t - t_last).abs()).min(delay),
-                    None => delay,
-                };
-                self.offset = Some((offset, t));
-                ((t + offset).min(arrival_s), Touch::At(x_mm))
-            }
-        }
+        let (sent, touch) = match line {
+            TouchLine::Lift => return (arrival_s, Touch::Lift),
+            TouchLine::At { t_s, x_mm } => (t_s, Touch::At(x_mm)),
+            TouchLine::AtXY { t_s, x_mm, y_mm } => (t_s, Touch::AtXY(x_mm, y_mm)),
+        };
+        let Some(t) = sent else {
+            return (arrival_s, touch);
+        };
+        let delay = arrival_s - t;
+        let offset = match self.offset {
+            Some((offset, t_last)) => (offset + CLOCK_DRIFT * (t - t_last).abs()).min(delay),
+            None => delay,
+        };
+        self.offset = Some((offset, t));
+        ((t + offset).min(arrival_s), touch)
     }
 }
 
@@ -586,11 +789,13 @@ impl TouchEvent {
     }
 }
 
-/// Parses one line of a touch stream: `x_mm`, `t_s,x_mm` (more columns,
-/// e.g. y, are ignored), `lift` or `up`. Blank lines, `#` comments and a
+/// Parses one line of a touch stream, `lift` or `up`, or a position: on a
+/// line ([`TouchAxes::X`]) `x_mm` or `t_s,x_mm` (more columns, e.g. y, are
+/// ignored); over a map ([`TouchAxes::XY`]) `x_mm,y_mm` or
+/// `t_s,x_mm,y_mm` (more columns ignored). Blank lines, `#` comments and a
 /// header (a first field that is `x_mm` or `t_s`) give `None`. The error
 /// names the field; the caller adds where the line came from.
-pub fn parse_touch_line(line: &str) -> Result<Option<TouchLine>, String> {
+pub fn parse_touch_line(line: &str, axes: TouchAxes) -> Result<Option<TouchLine>, String> {
     let line = line.trim();
     if line.is_empty() || line.starts_with('#') {
         return Ok(None);
@@ -608,10 +813,23 @@ pub fn parse_touch_line(line: &str) -> Result<Option<TouchLine>, String> {
             _ => Err(format!("field '{name}': expected a finite number, got '{text}'")),
         }
     };
-    if fields.len() == 1 {
-        return Ok(Some(TouchLine::At { t_s: None, x_mm: number("x_mm", fields[0])? }));
+    match (axes, fields.len()) {
+        (TouchAxes::X, 1) => Ok(Some(TouchLine::At { t_s: None, x_mm: number("x_mm", fields[0])? })),
+        (TouchAxes::X, _) => {
+            let t_s = number("t_s", fields[0])?;
+            Ok(Some(TouchLine::At { t_s: Some(t_s), x_mm: number("x_mm", fields[1])? }))
+        }
+        (TouchAxes::XY, 1) => {
+            Err(format!("field 'y_mm': missing (over a map a position is x_mm,y_mm or t_s,x_mm,y_mm), got '{line}'"))
+        }
+        (TouchAxes::XY, 2) => {
+            let x_mm = number("x_mm", fields[0])?;
+            Ok(Some(TouchLine::AtXY { t_s: None, x_mm, y_mm: number("y_mm", fields[1])? }))
+        }
+        (TouchAxes::XY, _) => {
+            let t_s = number("t_s", fields[0])?;
+            let x_mm = number("x_mm", fields[1])?;
+            Ok(Some(TouchLine::AtXY { t_s: Some(t_s), x_mm, y_mm: number("y_mm", fields[2])? }))
+        }
     }
-    let t_s = number("t_s", fields[0])?;
-    let x_mm = number("x_mm", fields[1])?;
-    Ok(Some(TouchLine::At { t_s: Some(t_s), x_mm }))
 }

@@ -3,7 +3,9 @@
 //! offline render, the fades (start, stop, gap), and the limits over random
 //! designs and touch streams.
 
-use haptex_core::live::{LiveConfig, LiveEngine, Touch, TouchEvent, TouchLine, TouchStamper, parse_touch_line};
+use haptex_core::live::{
+    LiveConfig, LiveEngine, Touch, TouchAxes, TouchEvent, TouchLine, TouchStamper, parse_touch_line,
+};
 use haptex_core::realtime::{RealtimeConfig, RealtimeRenderer};
 use haptex_core::signal::{AmplitudeCurve, Extend, Limits, RenderSettings, VoltageCurve, render_two_channel};
 use haptex_core::trajectory::Trajectory;
@@ -156,16 +158,19 @@ fn bad_settings_are_refused() {
 
 #[test]
 fn touch_lines() {
-    assert_eq!(parse_touch_line(" 3.5 "), Ok(Some(TouchLine::At { t_s: None, x_mm: 3.5 })));
-    assert_eq!(parse_touch_line("0.25,4,7"), Ok(Some(TouchLine::At { t_s: Some(0.25), x_mm: 4.0 })));
-    assert_eq!(parse_touch_line("lift"), Ok(Some(TouchLine::Lift)));
-    assert_eq!(parse_touch_line("UP"), Ok(Some(TouchLine::Lift)));
-    assert_eq!(parse_touch_line("# c"), Ok(None));
-    assert_eq!(parse_touch_line("t_s,x_mm"), Ok(None));
-    assert_eq!(parse_touch_line(""), Ok(None));
-    assert_eq!(parse_touch_line("1,nan"), Err("field 'x_mm': expected a finite number, got 'nan'".into()));
-    assert_eq!(parse_touch_line("abc"), Err("field 'x_mm': expected a finite number, got 'abc'".into()));
-    assert_eq!(parse_touch_line("x,1"), Err("field 't_s': expected a finite number, got 'x'".into()));
+    assert_eq!(parse_touch_line(" 3.5 ", TouchAxes::X), Ok(Some(TouchLine::At { t_s: None, x_mm: 3.5 })));
+    assert_eq!(parse_touch_line("0.25,4,7", TouchAxes::X), Ok(Some(TouchLine::At { t_s: Some(0.25), x_mm: 4.0 })));
+    assert_eq!(parse_touch_line("lift", TouchAxes::X), Ok(Some(TouchLine::Lift)));
+    assert_eq!(parse_touch_line("UP", TouchAxes::X), Ok(Some(TouchLine::Lift)));
+    assert_eq!(parse_touch_line("# c", TouchAxes::X), Ok(None));
+    assert_eq!(parse_touch_line("t_s,x_mm", TouchAxes::X), Ok(None));
+    assert_eq!(parse_touch_line("", TouchAxes::X), Ok(None));
+    assert_eq!(
+        parse_touch_line("1,nan", TouchAxes::X),
+        Err("field 'x_mm': expected a finite number, got 'nan'".into())
+    );
+    assert_eq!(parse_touch_line("abc", TouchAxes::X), Err("field 'x_mm': expected a finite number, got 'abc'".into()));
+    assert_eq!(parse_touch_line("x,1", TouchAxes::X), Err("field 't_s': expected a finite number, got 'x'".into()));
 }
 
 /// Sender stamps mapped onto the output clock: never later than the

@@ -73,18 +73,22 @@ fn fill_loop_does_not_allocate() {
     }
 }
 
+/// A 200 x 100 voltage map, 0.1 mm cells, 10 .. 110 V.
+fn planar_map() -> haptex_core::map::VoltageMap {
+    use haptex_core::map::{MapGrid, VoltageMap};
+    let grid = MapGrid { nx: 200, ny: 100, x0_mm: 0.0, y0_mm: 0.0, dx_mm: 0.1, dy_mm: 0.1 };
+    let voltage_v = (0..grid.len()).map(|k| 60.0 + 50.0 * (k as f64 * 0.01).sin()).collect();
+    VoltageMap { grid, voltage_v, u_max_v: 100.0, not_renderable_fraction: 0.0, clipped_fraction: 0.0 }
+}
+
 /// Issue 19: the planar renderer's fill loop does not allocate either
 /// (reports in x and y, a lift-off, every carrier).
 #[test]
 fn planar_fill_loop_does_not_allocate() {
-    use haptex_core::map::{MapGrid, VoltageMap};
-    use haptex_core::realtime::PlanarRenderer;
-    let grid = MapGrid { nx: 200, ny: 100, x0_mm: 0.0, y0_mm: 0.0, dx_mm: 0.1, dy_mm: 0.1 };
-    let voltage_v = (0..grid.len()).map(|k| 60.0 + 50.0 * (k as f64 * 0.01).sin()).collect();
-    let map = VoltageMap { grid, voltage_v, u_max_v: 100.0, not_renderable_fraction: 0.0, clipped_fraction: 0.0 };
+    let map = planar_map();
     for shape in [CarrierShape::Sine, CarrierShape::Square, CarrierShape::None] {
         let config = RealtimeConfig { carrier: Carrier { shape, frequency_hz: 1000.0 }, ..RealtimeConfig::default() };
-        let mut renderer = PlanarRenderer::new(&map, &config).unwrap();
+        let mut renderer = haptex_core::realtime::PlanarRenderer::new(&map, &config).unwrap();
         let (mut buffer, mut volts) = (vec![0.0f32; 256], vec![0.0f64; 256]);
         let count = allocations_in(|| {
             let mut rendered = 0usize;
@@ -144,4 +148,34 @@ fn live_callback_does_not_allocate() {
     assert_eq!(count, 0, "{count} allocations in the live callback");
     assert!(engine.is_finished());
     assert!(engine.status().events.load(std::sync::atomic::Ordering::Relaxed) > 200);
+}
+
+/// Issue 19: the live engine over a voltage map (`haptex live
+/// --voltage-map`) allocates nothing in its callback either: (x, y)
+/// touches from the bounded channel, a lift, a gap and the stop.
+#[test]
+fn planar_live_callback_does_not_allocate() {
+    use haptex_core::live::{LiveConfig, LiveEngine, Touch, TouchEvent};
+    let renderer = haptex_core::realtime::PlanarRenderer::new(&planar_map(), &RealtimeConfig::default()).unwrap();
+    let mut engine = LiveEngine::new(renderer, &LiveConfig::new(2)).unwrap();
+    let (sender, receiver) = std::sync::mpsc::sync_channel::<TouchEvent>(64);
+    let mut out = vec![0.0f32; 2 * 256];
+    let started = std::time::Instant::now();
+    let count = allocations_in(|| {
+        for k in 0..600 {
+            let t = k as f64 * 256.0 / 48_000.0;
+            if k % 2 == 0 && !(0.5..0.8).contains(&t) {
+                let touch = if k == 100 { Touch::Lift } else { Touch::AtXY(1.0 + 2.0 * t, 0.5 + t) };
+                sender.try_send(TouchEvent { t_s: t, touch, received: Some(started) }).unwrap();
+            }
+            if k == 550 {
+                engine.stop();
+            }
+            engine.process(&mut out, || receiver.try_recv().ok());
+        }
+    });
+    assert_eq!(count, 0, "{count} allocations in the planar live callback");
+    assert!(engine.is_finished());
+    assert!(engine.status().events.load(std::sync::atomic::Ordering::Relaxed) > 200);
+    assert!(engine.status().peak() > 0.1, "it played");
 }

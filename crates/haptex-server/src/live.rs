@@ -29,7 +29,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use axum::extract::ws::{CloseFrame, Message, WebSocket, close_code};
-use haptex_core::live::{DeviceClock, LiveFigures, TouchEvent, TouchStamper, parse_touch_line};
+use haptex_core::live::{DeviceClock, LiveFigures, TouchAxes, TouchEvent, TouchStamper, parse_touch_line};
 use haptex_core::num::Num;
 use haptex_core::profile::ProfileError;
 use haptex_core::signal::{AmplitudeCurve, VoltageCurve};
@@ -383,7 +383,7 @@ fn touches(text: &str, session: Option<&dyn LiveSession>, stamper: &mut TouchSta
     };
     let received = Instant::now();
     for line in text.lines() {
-        let parsed = match parse_touch_line(line) {
+        let parsed = match parse_touch_line(line, TouchAxes::X) {
             Ok(Some(parsed)) => parsed,
             Ok(None) => continue,
             Err(message) => {

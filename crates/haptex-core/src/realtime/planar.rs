@@ -116,6 +116,16 @@ impl PlanarRenderer {
         self.out.sample_rate_hz
     }
 
+    /// Samples rendered so far (the index of the next one).
+    pub fn samples_rendered(&self) -> u64 {
+        self.out.n
+    }
+
+    /// The voltage map it plays.
+    pub fn map(&self) -> &VoltageMap {
+        &self.map
+    }
+
     /// Whether a finger is down.
     pub fn is_touching(&self) -> bool {
         self.touch.is_touching()

@@ -10,7 +10,7 @@ use anyhow::{Context, bail};
 use cpal::traits::{DeviceTrait, HostTrait, StreamTrait};
 use cpal::{FromSample, SampleFormat, SizedSample};
 use haptex_core::live::{
-    DeviceClock, LiveConfig, LiveEngine, LiveFigures, LiveStatus, Touch, TouchEvent, TouchStamper,
+    DeviceClock, LiveConfig, LiveEngine, LiveFigures, LiveStatus, Touch, TouchAxes, TouchEvent, TouchStamper,
 };
 use haptex_core::num::Num;
 use haptex_core::realtime::{RealtimeConfig, RealtimeRenderer};
@@ -501,7 +501,7 @@ fn read_stdin(sender: &SyncSender<TouchEvent>, clock: &DeviceClock, shared: &Sha
             Ok(line) => line,
             Err(e) => return fail(format!("reading stdin, line {}: {e}", i + 1)),
         };
-        let parsed = match haptex_core::live::parse_touch_line(&line) {
+        let parsed = match haptex_core::live::parse_touch_line(&line, TouchAxes::X) {
             Ok(Some(p)) => p,
             Ok(None) => continue,
             Err(message) => return fail(format!("stdin, line {}, {message}", i + 1)),
@@ -595,7 +595,7 @@ async fn ws_session(mut socket: axum::extract::ws::WebSocket, state: WsState) {
                 };
                 let received = Instant::now();
                 for line in text.as_str().lines() {
-                    let event = match haptex_core::live::parse_touch_line(line) {
+                    let event = match haptex_core::live::parse_touch_line(line, TouchAxes::X) {
                         Ok(Some(parsed)) => TouchEvent::received(parsed, received, &state.clock, &mut stamper),
                         Ok(None) => continue,
                         Err(message) => {
