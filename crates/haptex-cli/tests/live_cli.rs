@@ -214,6 +214,88 @@ mod device {
         assert!(c.iter().all(|v| v.abs() <= 1.0), "never above the U_max peak");
     }
 
+    /// A voltage map CSV over 8 x 4 mm (81 x 41 cells): U = 50 + 30 sin(2
+    /// pi x / 2.5) cos(2 pi y / 3) + 5 y V.
+    fn wavy_map(dir: &Path) -> String {
+        let mut csv = String::from("x_mm,y_mm,voltage_v\n");
+        let tau = std::f64::consts::TAU;
+        for j in 0..=40 {
+            for i in 0..=80 {
+                let (x, y) = (i as f64 * 0.1, j as f64 * 0.1);
+                let u = 50.0 + 30.0 * (tau * x / 2.5).sin() * (tau * y / 3.0).cos() + 5.0 * y;
+                csv.push_str(&format!("{x:?},{y:?},{u:?}\n"));
+            }
+        }
+        write(dir, "map.csv", &csv)
+    }
+
+    /// Issue 19: `haptex live --voltage-map` replays a planar touch log
+    /// (`t_s,x_mm,y_mm`, a diagonal at 120 Hz for 1 s) into the ALSA file
+    /// device (1 channel, f32), against `haptex play --voltage-map` of the
+    /// same log as a float32 WAV: after the 20 ms start ramp and up to the
+    /// last report every sample agrees within one f32 step at full scale
+    /// (2^-23; the extrapolation of a constant velocity is exact in x and
+    /// y, and the bilinear lookup and the carrier are the offline render's).
+    /// Over a map stdin's lines need a y: an `x_mm` alone is refused naming
+    /// the line and the field, and the output fades out.
+    #[test]
+    fn replayed_planar_log_over_a_voltage_map_equals_the_offline_render() {
+        let dir = tempfile::tempdir().unwrap();
+        let capture = dir.path().join("capture.raw");
+        alsa_home(dir.path(), &capture);
+        let map = wavy_map(dir.path());
+        let mut log = String::from("t_s,x_mm,y_mm\n");
+        for k in 0..=120 {
+            let t = k as f64 / 120.0;
+            log.push_str(&format!("{t:?},{:?},{:?}\n", 0.5 + 7.0 * t, 3.5 - 3.0 * t));
+        }
+        let log = write(dir.path(), "path.csv", &log);
+        let json = dir.path().join("run.json");
+        let args = ["--voltage-map", &map, "--touch-log", &log, "--device", "haptex_capture"];
+        let args = [&args[..], &["--sample-rate", "48000", "--buffer-frames", "256", "--json", json.to_str().unwrap()]]
+            .concat();
+        let out = live(dir.path(), &args, None);
+        let e = stderr(&out);
+        assert!(out.status.success(), "{e}");
+        assert!(e.contains("haptex_capture, 48000 Hz, 1 channel (drive over a 81 x 41 map"), "{e}");
+        let run: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        assert_eq!(run["events"], 121);
+        assert_eq!(run["clamped_samples"], 0);
+
+        let wav = dir.path().join("offline.wav");
+        let out = haptex(&[
+            "play",
+            "--voltage-map",
+            &map,
+            "--trajectory",
+            &log,
+            "--wav-format",
+            "float32",
+            "-q",
+            "-o",
+            wav.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let offline: Vec<f32> = hound::WavReader::open(&wav).unwrap().samples::<f32>().map(Result::unwrap).collect();
+        let captured = read_f32(&capture);
+        assert_eq!(offline.len(), FS + 1);
+        assert_eq!(captured.len() as u64, run["frames"].as_u64().unwrap(), "every frame reached the file");
+        let ramp = FS / 50;
+        let worst = (ramp..FS).fold(0.0f32, |m, i| m.max((captured[i] - offline[i]).abs()));
+        assert!(offline[ramp..FS].iter().filter(|v| v.abs() > 0.1).count() > FS / 2, "the drive plays");
+        assert!(worst <= f32::EPSILON, "worst {worst} (f32 step {})", f32::EPSILON);
+        assert_eq!(captured[0], 0.0);
+        assert!(captured[FS + ramp + 2..].iter().all(|&v| v == 0.0), "silent after the stop ramp");
+
+        // stdin over a map: x and y per line.
+        let args = ["--voltage-map", &map, "--stdin", "--device", "haptex_capture"];
+        let out = live(dir.path(), &args, Some("1.0,2.0\n3.0\n"));
+        let e = stderr(&out);
+        assert!(!out.status.success(), "{e}");
+        assert!(e.contains("stdin, line 2, field 'y_mm': missing"), "{e}");
+        assert!(e.contains("faded to 0 V"), "{e}");
+    }
+
     /// A minimal WebSocket client (RFC 6455: the upgrade, masked text
     /// frames out, unmasked frames in), enough to play the live page.
     struct WsClient(std::net::TcpStream);
@@ -301,7 +383,7 @@ mod device {
         alsa_home(dir.path(), &dir.path().join("unused.raw"));
         let profile = write(dir.path(), "ramp.csv", "x_mm,voltage_v\n0,0\n10,100\n");
         let json = dir.path().join("run.json");
-        let mut child = Command::new(env!("CARGO_BIN_EXE_haptex"))
+        let child = Command::new(env!("CARGO_BIN_EXE_haptex"))
             .args(["live", "--profile", &profile, "--ws", "127.0.0.1:0", "--device", "null"])
             .args(["--gap-ms", "60000", "--horizon-ms", "0", "--json", json.to_str().unwrap()])
             .env("HOME", dir.path())
@@ -309,7 +391,8 @@ mod device {
             .stderr(Stdio::piped())
             .spawn()
             .unwrap();
-        let mut stderr_lines = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+        let mut child = KillOnDrop(child);
+        let mut stderr_lines = std::io::BufReader::new(child.0.stderr.take().unwrap()).lines();
         let addr = loop {
             let line = stderr_lines.next().expect("haptex live printed its address").unwrap();
             if let Some(rest) = line.split("WebSocket ws://").nth(1) {
@@ -337,13 +420,81 @@ mod device {
         drop(ws);
 
         // SIGTERM: the output fades out and the command ends normally.
-        let status = Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap();
+        let status = Command::new("kill").args(["-TERM", &child.0.id().to_string()]).status().unwrap();
         assert!(status.success());
         let rest: Vec<String> = stderr_lines.map_while(Result::ok).collect();
-        assert!(child.wait().unwrap().success(), "{rest:?}");
+        assert!(child.0.wait().unwrap().success(), "{rest:?}");
         let run: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
         assert!(run["events"].as_u64().unwrap() >= 4, "{run}");
         assert!(run["peak_v"].as_f64().unwrap() <= 75.0 * std::f64::consts::SQRT_2 + 1e-3, "{run}");
+    }
+
+    /// Issue 19: `haptex live --voltage-map --ws`: the page is a pad over
+    /// the map's x and y, its messages are `t_s,x_mm,y_mm` lines, and the
+    /// status frames carry y. On U = 10 x + 5 y (bilinear sampling is exact
+    /// on it) a touch at (2, 1) mm plays 25 V and one at (7.5, 3) mm 90 V,
+    /// within 1e-9 V; an x alone is answered with an error naming y_mm.
+    #[test]
+    fn websocket_touches_over_a_voltage_map() {
+        use std::io::{BufRead, Read, Write};
+        let dir = tempfile::tempdir().unwrap();
+        alsa_home(dir.path(), &dir.path().join("unused.raw"));
+        let mut csv = String::from("x_mm,y_mm,voltage_v\n");
+        for j in 0..=4 {
+            for i in 0..=10 {
+                csv.push_str(&format!("{i},{j},{}\n", 10 * i + 5 * j));
+            }
+        }
+        let map = write(dir.path(), "plane.csv", &csv);
+        let child = Command::new(env!("CARGO_BIN_EXE_haptex"))
+            .args(["live", "--voltage-map", &map, "--ws", "127.0.0.1:0", "--device", "null"])
+            .args(["--gap-ms", "60000", "--horizon-ms", "0", "--u-max", "100"])
+            .env("HOME", dir.path())
+            .stdin(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut child = KillOnDrop(child);
+        let mut stderr_lines = std::io::BufReader::new(child.0.stderr.take().unwrap()).lines();
+        let addr = loop {
+            let line = stderr_lines.next().expect("haptex live printed its address").unwrap();
+            if let Some(rest) = line.split("WebSocket ws://").nth(1) {
+                break rest.split('/').next().unwrap().to_string();
+            }
+        };
+        let mut http = std::net::TcpStream::connect(&addr).unwrap();
+        write!(http, "GET / HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
+        let mut page = String::new();
+        http.read_to_string(&mut page).unwrap();
+        assert!(page.contains("const X0 = 0.0, X1 = 10.0;") && page.contains("const Y0 = 0.0, Y1 = 4.0,"), "{page}");
+
+        let mut ws = WsClient::connect(&addr);
+        let near = |v: &serde_json::Value, key: &str, want: f64| (v[key].as_f64().unwrap() - want).abs() < 1e-9;
+        ws.send("2.0,1.0");
+        ws.until("(2, 1) mm at 25 V", |f| near(f, "x_mm", 2.0) && near(f, "y_mm", 1.0) && near(f, "envelope_v", 25.0));
+        ws.send("0.25,7.5,3");
+        ws.until("(7.5, 3) mm at 90 V", |f| {
+            near(f, "x_mm", 7.5) && near(f, "y_mm", 3.0) && near(f, "envelope_v", 90.0)
+        });
+        ws.send("4.0");
+        let f = ws.until("an error", |f| f.get("error").is_some());
+        assert!(f["error"].as_str().unwrap().contains("field 'y_mm': missing"), "{f}");
+        drop(ws);
+        let status = Command::new("kill").args(["-TERM", &child.0.id().to_string()]).status().unwrap();
+        assert!(status.success());
+        let rest: Vec<String> = stderr_lines.map_while(Result::ok).collect();
+        assert!(child.0.wait().unwrap().success(), "{rest:?}");
+    }
+
+    /// A child process killed when the test ends, also when an assertion
+    /// fails before the test's own kill.
+    struct KillOnDrop(std::process::Child);
+
+    impl Drop for KillOnDrop {
+        fn drop(&mut self) {
+            let _ = self.0.kill();
+            let _ = self.0.wait();
+        }
     }
 
     /// `haptex serve --live` on the ALSA file device: the page's WebSocket
@@ -379,7 +530,7 @@ mod device {
         let out = serve(&["--device", "haptex_capture"]).wait_with_output().unwrap();
         assert!(stderr(&out).contains("are for --live: add --live"), "{}", stderr(&out));
 
-        let mut child = serve(&[
+        let mut child = KillOnDrop(serve(&[
             "--live",
             "--device",
             "haptex_capture",
@@ -391,8 +542,8 @@ mod device {
             "60000",
             "--horizon-ms",
             "0",
-        ]);
-        let mut lines = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+        ]));
+        let mut lines = std::io::BufReader::new(child.0.stderr.take().unwrap()).lines();
         let mut said = Vec::new();
         let addr = loop {
             let line = lines.next().expect("haptex serve printed its address").unwrap();
@@ -409,27 +560,32 @@ mod device {
         assert_eq!(opened["opened"]["output"]["device"], "haptex_capture");
         assert_eq!(opened["opened"]["output"]["buffer_frames"], 256);
         // The file device does not pace: its clock runs hundreds of times
-        // faster than the wall clock (the gap of 60 s passes in a fraction
-        // of a second, and the capture grows by megabytes per second), so
-        // the touch and the stop go together and the run's figures come
-        // with the close.
-        ws.send("2.0");
+        // faster than the wall clock (the 60 s gap passes in about a
+        // millisecond, and the capture grows by megabytes per second). So
+        // the page's touch is repeated every millisecond for 20 ms (each
+        // renews the gap; a single touch could reach the callback together
+        // with the stop, and the fade-in would never start), the stop
+        // follows at once, and the run's figures come with the close.
+        for _ in 0..20 {
+            ws.send("2.0");
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
         ws.send(r#"{"stop": true}"#);
         let closed = ws.until("closed", |f| f.get("closed").is_some());
         let near = |v: &serde_json::Value, key: &str, want: f64| (v[key].as_f64().unwrap() - want).abs() < 1e-9;
         let figures = &closed["closed"];
         assert!(near(figures, "x_mm", 2.0) && near(figures, "envelope_v", 20.0), "{closed}");
-        assert_eq!(figures["events"], 1, "{closed}");
+        assert_eq!(figures["events"], 20, "{closed}");
         assert_eq!(figures["finished"], true, "{closed}");
         let samples = read_f32(&capture);
         let peak = samples.iter().fold(0.0f32, |m, v| m.max(v.abs()));
         assert!(peak > 0.0 && peak <= 0.2 + 1e-6, "peak {peak} of full scale");
         assert_eq!(samples.last(), Some(&0.0));
         drop(ws);
-        let status = Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap();
+        let status = Command::new("kill").args(["-TERM", &child.0.id().to_string()]).status().unwrap();
         assert!(status.success());
         let rest: Vec<String> = lines.map_while(Result::ok).collect();
-        assert!(child.wait().unwrap().success(), "{rest:?}");
+        assert!(child.0.wait().unwrap().success(), "{rest:?}");
     }
 
     /// Touches from stdin: events applied, the output faded at end of

@@ -278,6 +278,11 @@ fn play_over_a_map_along_a_row_is_the_profile_playback() {
     // A 1-D trajectory is not a planar path.
     let out = haptex(&["play", "--voltage-map", &p("v.npy"), "--trajectory", &tr1, "-o", &p("s3.csv")]);
     assert!(!out.status.success() && stderr(&out).contains("y_mm"), "{}", stderr(&out));
+    // A map holds its edges: a profile's --outside is refused, not ignored.
+    let out =
+        haptex(&["play", "--voltage-map", &p("v.npy"), "--trajectory", &tr2, "--outside", "zero", "-o", &p("s4.csv")]);
+    assert!(!out.status.success() && stderr(&out).contains("--outside zero) is for a profile"), "{}", stderr(&out));
+    assert!(!std::path::Path::new(&p("s4.csv")).exists());
 }
 
 /// `haptex map compose`: a 4 x 3 label image with three gray levels, a

@@ -91,6 +91,31 @@ fn bench(c: &mut Criterion) {
             planar.fill(black_box(&mut buffer));
         })
     });
+    // The live engine's callback (`LiveEngine::process`: renderer, fades,
+    // last clamp, counters) on a line and over the map: what `haptex live`
+    // runs per buffer, one report per buffer through the queue closure.
+    use haptex_core::live::{LiveConfig, LiveEngine, Touch, TouchEvent};
+    let renderer = RealtimeRenderer::new(&curve, &RealtimeConfig::default()).unwrap();
+    let mut engine = LiveEngine::new(renderer, &LiveConfig::new(1)).unwrap();
+    group.bench_function("live_process_line", |b| {
+        b.iter(|| {
+            let t = engine.renderer().now_s();
+            let mut event =
+                Some(TouchEvent { t_s: t, touch: Touch::At(20.0 + 15.0 * (t * 100.0 / 15.0).sin()), received: None });
+            engine.process(black_box(&mut buffer), || event.take());
+        })
+    });
+    let planar = haptex_core::realtime::PlanarRenderer::new(&map, &RealtimeConfig::default()).unwrap();
+    let mut engine = LiveEngine::new(planar, &LiveConfig::new(1)).unwrap();
+    group.bench_function("live_process_planar", |b| {
+        b.iter(|| {
+            let t = engine.renderer().now_s();
+            let w = t * 100.0 / 15.0;
+            let touch = Touch::AtXY(20.0 + 15.0 * w.sin(), 20.0 + 15.0 * w.cos());
+            let mut event = Some(TouchEvent { t_s: t, touch, received: None });
+            engine.process(black_box(&mut buffer), || event.take());
+        })
+    });
     group.finish();
 }
 

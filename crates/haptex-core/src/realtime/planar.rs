@@ -33,7 +33,7 @@
 use super::touch::TouchEstimator;
 use super::{NONE, Output, RealtimeConfig, RealtimeRenderer, SINE, SQUARE};
 use crate::map::VoltageMap;
-use crate::signal::{CarrierShape, Extend, SignalError};
+use crate::signal::{CarrierShape, SignalError};
 
 /// One output sample of a [`PlanarRenderer`] with the quantities behind it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -73,13 +73,7 @@ impl PlanarRenderer {
     /// range or the full scale, and a map with a voltage that is not a
     /// finite number >= 0.
     pub fn new(map: &VoltageMap, config: &RealtimeConfig) -> Result<Self, SignalError> {
-        if config.extend != Extend::Hold {
-            return Err(SignalError::Settings(format!(
-                "a map holds its edge voltages beyond it (as haptex play --voltage-map does): extend {:?} is for a \
-                 profile",
-                config.extend
-            )));
-        }
+        crate::signal::check_map_extend(config.extend)?;
         let g = &map.grid;
         g.validate("the voltage map").map_err(|e| SignalError::Settings(e.to_string()))?;
         if map.voltage_v.len() != g.nx * g.ny {

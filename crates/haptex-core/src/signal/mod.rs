@@ -372,6 +372,18 @@ pub fn render(
     finish(x_mm, envelope_v, trajectory.start_s(), settings, outside, outside_warning)
 }
 
+/// A map holds its edge voltages beyond it: any other extension (zero,
+/// repeat: a profile's) is refused rather than silently ignored.
+pub fn check_map_extend(extend: Extend) -> Result<(), SignalError> {
+    if extend == Extend::Hold {
+        return Ok(());
+    }
+    let name = format!("{extend:?}").to_lowercase();
+    Err(SignalError::Settings(format!(
+        "a map holds its edge voltages beyond it: extending with {name} (--outside {name}) is for a profile"
+    )))
+}
+
 /// Renders the drive signal of a voltage map along a finger path in the
 /// plane: the envelope is the map's voltage at the path's position (both
 /// coordinates linear between the path's samples, the map bilinear, its
@@ -384,6 +396,7 @@ pub fn render_map(
     settings: &RenderSettings,
 ) -> Result<DriveSignal, SignalError> {
     settings.check()?;
+    check_map_extend(settings.extend)?;
     let fs = settings.sample_rate_hz as f64;
     let t = path.t_s();
     let start = t[0];

@@ -10,10 +10,13 @@ use anyhow::{Context, bail};
 use cpal::traits::{DeviceTrait, HostTrait, StreamTrait};
 use cpal::{FromSample, SampleFormat, SizedSample};
 use haptex_core::live::{
-    DeviceClock, LiveConfig, LiveEngine, LiveFigures, LiveStatus, Touch, TouchAxes, TouchEvent, TouchStamper,
+    DeviceClock, LiveConfig, LiveEngine, LiveFigures, LiveRenderer, LiveStatus, Touch, TouchAxes, TouchEvent,
+    TouchStamper,
 };
+use haptex_core::map::VoltageMap;
 use haptex_core::num::Num;
-use haptex_core::realtime::{RealtimeConfig, RealtimeRenderer};
+use haptex_core::planar::PlanarTrajectory;
+use haptex_core::realtime::{PlanarRenderer, RealtimeConfig, RealtimeRenderer};
 use haptex_core::signal::{AmplitudeCurve, SignalError, VoltageCurve};
 use haptex_core::trajectory::Trajectory;
 use serde_json::json;
@@ -83,9 +86,31 @@ pub(super) fn renderer(
     curve: &VoltageCurve,
     amplitude: Option<(&AmplitudeCurve, f64)>,
 ) -> anyhow::Result<RealtimeRenderer> {
+    let config = realtime_config(output, sample_rate)?;
+    match amplitude {
+        Some((amplitude, a_max)) => RealtimeRenderer::two_channel(curve, amplitude, a_max, &config),
+        None => RealtimeRenderer::new(curve, &config),
+    }
+    .map_err(full_scale_hint)
+}
+
+/// The renderer of a voltage map for `output`'s drive at `sample_rate`
+/// (one channel; the map's edge held beyond it, as `haptex play
+/// --voltage-map` does: another --outside is refused). A map whose peak
+/// exceeds the full scale is refused, saying which option to change.
+pub(super) fn planar_renderer(
+    output: &OutputArgs,
+    sample_rate: u32,
+    map: &VoltageMap,
+) -> anyhow::Result<PlanarRenderer> {
+    PlanarRenderer::new(map, &realtime_config(output, sample_rate)?).map_err(full_scale_hint)
+}
+
+/// The real-time settings of `output`'s drive at `sample_rate`.
+fn realtime_config(output: &OutputArgs, sample_rate: u32) -> anyhow::Result<RealtimeConfig> {
     let settings = output.drive.settings(sample_rate);
     settings.check()?;
-    let config = RealtimeConfig {
+    Ok(RealtimeConfig {
         sample_rate_hz: sample_rate,
         carrier: settings.carrier,
         limits: settings.limits,
@@ -94,24 +119,28 @@ pub(super) fn renderer(
         horizon_s: output.horizon_ms * 1e-3,
         blend_s: output.blend_ms * 1e-3,
         table_points: None,
-    };
-    match amplitude {
-        Some((amplitude, a_max)) => RealtimeRenderer::two_channel(curve, amplitude, a_max, &config),
-        None => RealtimeRenderer::new(curve, &config),
-    }
-    .map_err(|e| match e {
+    })
+}
+
+/// A renderer's refusal, naming the option to change for a peak above the full scale.
+fn full_scale_hint(e: SignalError) -> anyhow::Error {
+    match e {
         SignalError::ExceedsFullScale { amplitude_v, volts_per_full_scale } => anyhow::anyhow!(
             "refused: the drive's peak {amplitude_v:.3} V exceeds the output's full scale of {} V \
              (--volts-per-full-scale); raise it to at least {amplitude_v:.3} V or lower --u-max",
             Num(volts_per_full_scale)
         ),
         other => other.into(),
-    })
+    }
 }
 
 /// The engine of `renderer` on `channels` device channels with
 /// `output`'s fades.
-pub(super) fn engine(output: &OutputArgs, renderer: RealtimeRenderer, channels: u16) -> anyhow::Result<LiveEngine> {
+pub(super) fn engine<R: LiveRenderer>(
+    output: &OutputArgs,
+    renderer: R,
+    channels: u16,
+) -> anyhow::Result<LiveEngine<R>> {
     let config =
         LiveConfig { channels: usize::from(channels), ramp_s: output.ramp_ms * 1e-3, gap_s: output.gap_ms * 1e-3 };
     Ok(LiveEngine::new(renderer, &config)?)
@@ -130,7 +159,7 @@ pub(super) struct Playing {
 
 impl Playing {
     /// Builds the stream of `engine` on the resolved device and starts it.
-    pub fn start(resolved: &Resolved, engine: LiveEngine) -> anyhow::Result<Self> {
+    pub fn start<R: LiveRenderer + 'static>(resolved: &Resolved, engine: LiveEngine<R>) -> anyhow::Result<Self> {
         let status = engine.status();
         let clock = Arc::new(DeviceClock::new(resolved.sample_rate));
         let shared = Arc::new(Shared { output_latency_min_ns: AtomicU64::new(u64::MAX), ..Shared::default() });
@@ -145,10 +174,10 @@ impl Playing {
         };
         let device = &resolved.device;
         let stream = match resolved.format {
-            SampleFormat::F32 => build::<f32>(device, &stream_config, engine, receiver, &clock, &shared),
-            SampleFormat::I32 => build::<i32>(device, &stream_config, engine, receiver, &clock, &shared),
-            SampleFormat::I16 => build::<i16>(device, &stream_config, engine, receiver, &clock, &shared),
-            SampleFormat::F64 => build::<f64>(device, &stream_config, engine, receiver, &clock, &shared),
+            SampleFormat::F32 => build::<f32, R>(device, &stream_config, engine, receiver, &clock, &shared),
+            SampleFormat::I32 => build::<i32, R>(device, &stream_config, engine, receiver, &clock, &shared),
+            SampleFormat::I16 => build::<i16, R>(device, &stream_config, engine, receiver, &clock, &shared),
+            SampleFormat::F64 => build::<f64, R>(device, &stream_config, engine, receiver, &clock, &shared),
             other => bail!("sample format {other} is not supported"),
         }
         .with_context(|| {
@@ -215,29 +244,30 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
         return list_devices(&cpal::default_host());
     }
     let output = &args.output;
-    let profile = args.profile.as_deref().context("give --profile U.csv")?;
-    if args.stdin && profile.as_os_str() == "-" {
-        bail!("--profile - and --stdin both read stdin: give the profile as a file");
+    let design =
+        args.profile.as_deref().or(args.voltage_map.as_deref()).context("give --profile U.csv or --voltage-map MAP")?;
+    if args.stdin && design.as_os_str() == "-" {
+        bail!("--profile - and --stdin both read stdin: give the design as a file");
     }
     output.check()?;
+    if args.touch_log.is_none() && !args.stdin && args.ws.is_none() {
+        bail!("give --touch-log T.csv, --stdin or --ws ADDR");
+    }
+    if args.voltage_map.is_some() {
+        return run_map(&args, design);
+    }
+    let profile = design;
     let (curve, amplitude, comments) = read_curve(profile)?;
     let stated = if amplitude.is_some() { stated_a_max(&comments) } else { None };
     let a_max_um = output.drive.a_max_um(profile, amplitude.as_ref(), stated)?;
     let design_channels: u16 = if a_max_um.is_some() { 2 } else { 1 };
     // The touch log is read (and refused) before the device is opened.
-    let log = match &args.touch_log {
-        Some(path) => Some(Trajectory::read_csv_file(path)?),
-        None if args.stdin || args.ws.is_some() => None,
-        None => bail!("give --touch-log T.csv, --stdin or --ws ADDR"),
-    };
+    let log = args.touch_log.as_deref().map(Trajectory::read_csv_file).transpose()?;
     let resolved = resolve(output, output.channels.unwrap_or(design_channels))?;
-    let (device_name, sample_rate, channels, format) =
-        (resolved.name.clone(), resolved.sample_rate, resolved.channels, resolved.format);
     // A frequency-dependent design renders its target only on its carrier.
-    check_design_carrier(&comments, &output.drive.settings(sample_rate).carrier, profile)?;
-    let renderer = renderer(output, sample_rate, &curve, amplitude.as_ref().zip(a_max_um))?;
-    let peak_bound_v = renderer.peak_bound_v();
-    let mut engine = engine(output, renderer, channels)?;
+    check_design_carrier(&comments, &output.drive.settings(resolved.sample_rate).carrier, profile)?;
+    let renderer = renderer(output, resolved.sample_rate, &curve, amplitude.as_ref().zip(a_max_um))?;
+    let mut engine = engine(output, renderer, resolved.channels)?;
     if let Some(log) = &log {
         let t0 = log.start_s();
         let events = log
@@ -248,6 +278,67 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
             .collect();
         engine = engine.with_schedule(events)?;
     }
+    let what = if design_channels == 2 { "drive + ultrasonic amplitude" } else { "drive" };
+    let channel_2 = a_max_um.map_or(String::new(), |a| format!(", channel 2 at {} um (a_max) per full scale", Num(a)));
+    let (x0, x1) = curve.span_mm();
+    play(&args, &resolved, engine, &format!("{what}){channel_2}"), PageArea { x_mm: (x0, x1), y_mm: None })
+}
+
+/// `haptex live --voltage-map`: the map's drive at the (x, y) positions of
+/// a planar touch log (`t_s,x_mm,y_mm`), of stdin's or of the page's.
+fn run_map(args: &LiveArgs, path: &std::path::Path) -> anyhow::Result<()> {
+    let output = &args.output;
+    let map = crate::commands::map::read_voltage_map(path)?;
+    let log = match &args.touch_log {
+        Some(log) => {
+            let name = log.display().to_string();
+            let file = std::fs::File::open(log).with_context(|| format!("cannot open {name}"))?;
+            Some(PlanarTrajectory::read_csv(std::io::BufReader::new(file), &name)?)
+        }
+        None => None,
+    };
+    let resolved = resolve(output, output.channels.unwrap_or(1))?;
+    let renderer = planar_renderer(output, resolved.sample_rate, &map)
+        .with_context(|| format!("the voltage map {}", path.display()))?;
+    let mut engine = engine(output, renderer, resolved.channels)?;
+    if let Some(log) = &log {
+        let t0 = log.t_s()[0];
+        let events = (0..log.len())
+            .map(|k| TouchEvent {
+                t_s: log.t_s()[k] - t0,
+                touch: Touch::AtXY(log.x_mm()[k], log.y_mm()[k]),
+                received: None,
+            })
+            .collect();
+        engine = engine.with_schedule(events)?;
+    }
+    let g = &map.grid;
+    let area = PageArea { x_mm: (g.x0_mm, g.x(g.nx - 1)), y_mm: Some((g.y0_mm, g.y(g.ny - 1))) };
+    play(args, &resolved, engine, &format!("drive over a {} x {} map)", g.nx, g.ny), area)
+}
+
+/// What the live page spans: x, and y over a map.
+#[derive(Debug, Clone, Copy)]
+struct PageArea {
+    x_mm: (f64, f64),
+    y_mm: Option<(f64, f64)>,
+}
+
+/// Plays `engine` on the resolved device from the touch source of `args`
+/// until the log ends, the input ends, an error or a signal; then the
+/// fade, the close and the report. `what` ends the start line's
+/// description of the channels.
+fn play<R: LiveRenderer + 'static>(
+    args: &LiveArgs,
+    resolved: &Resolved,
+    engine: LiveEngine<R>,
+    what: &str,
+    area: PageArea,
+) -> anyhow::Result<()> {
+    let output = &args.output;
+    let (device_name, sample_rate, channels, format) =
+        (resolved.name.clone(), resolved.sample_rate, resolved.channels, resolved.format);
+    let peak_bound_v = engine.renderer().peak_bound_v();
     // SAFETY: the handler only stores to an atomic (async-signal-safe).
     unsafe {
         libc::signal(libc::SIGINT, on_signal as *const () as libc::sighandler_t);
@@ -255,33 +346,32 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
     }
     let cpu_before = cpu_time_s();
     let started = Instant::now();
-    let playing = Playing::start(&resolved, engine)?;
+    let playing = Playing::start(resolved, engine)?;
     let (status, shared, clock) =
         (Arc::clone(&playing.status), Arc::clone(&playing.shared), Arc::clone(&playing.clock));
     if !args.quiet {
         eprintln!(
-            "live: {device_name}, {sample_rate} Hz, {channels} channel{} ({}), {format}, buffer {}; channel 1 at {} V per \
-             full scale (peak bound {:.3} V){}",
+            "live: {device_name}, {sample_rate} Hz, {channels} channel{} ({what}, {format}, buffer {}; channel 1 at {} V per \
+             full scale (peak bound {:.3} V)",
             if channels == 1 { "" } else { "s" },
-            if design_channels == 2 { "drive + ultrasonic amplitude" } else { "drive" },
             output.buffer_frames.map_or("device default".to_string(), |n| format!("{n} frames")),
             Num(output.drive.volts_per_full_scale()),
             peak_bound_v,
-            a_max_um.map_or(String::new(), |a| format!(", channel 2 at {} um (a_max) per full scale", Num(a)))
         );
     }
     let input_error: Arc<Mutex<Option<String>>> = Arc::new(Mutex::new(None));
     if args.stdin {
         let (sender, clock, shared, input_error) =
             (playing.sender.clone(), Arc::clone(&clock), Arc::clone(&shared), Arc::clone(&input_error));
-        std::thread::spawn(move || read_stdin(&sender, &clock, &shared, &input_error));
+        std::thread::spawn(move || read_stdin(R::AXES, &sender, &clock, &shared, &input_error));
     } else if let Some(addr) = &args.ws {
         let state = WsState {
             sender: playing.sender.clone(),
             clock: Arc::clone(&clock),
             status: Arc::clone(&status),
             shared: Arc::clone(&shared),
-            span_mm: curve.span_mm(),
+            axes: R::AXES,
+            area,
             sample_rate,
         };
         let (ready_tx, ready_rx) = std::sync::mpsc::channel();
@@ -335,7 +425,7 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
     let wall_s = started.elapsed().as_secs_f64();
     let cpu_s = cpu_time_s() - cpu_before;
 
-    let report = report(&args, &device_name, sample_rate, channels, format, &status, &shared, wall_s, cpu_s);
+    let report = report(args, &device_name, sample_rate, channels, format, &status, &shared, wall_s, cpu_s);
     if let Some(path) = &args.json {
         haptex_core::io::write_atomic(path, |w| {
             serde_json::to_writer_pretty(&mut *w, &report).map_err(std::io::Error::other)?;
@@ -423,10 +513,10 @@ fn pick_format(device: &cpal::Device, name: &str, channels: u16, rate: u32) -> a
 /// receiver locks only to wake a blocked sender, and the senders never
 /// block: `try_send`), the figures go to atomics. The error callback
 /// (errors only) locks a mutex to record the message.
-fn build<T>(
+fn build<T, R: LiveRenderer + 'static>(
     device: &cpal::Device,
     config: &cpal::StreamConfig,
-    mut engine: LiveEngine,
+    mut engine: LiveEngine<R>,
     receiver: Receiver<TouchEvent>,
     clock: &Arc<DeviceClock>,
     shared: &Arc<Shared>,
@@ -488,7 +578,13 @@ where
 
 /// The stdin touch source: one event per line (stamped by a [`TouchStamper`]). End of
 /// input, a bad line or a full queue stop the output (faded).
-fn read_stdin(sender: &SyncSender<TouchEvent>, clock: &DeviceClock, shared: &Shared, error: &Mutex<Option<String>>) {
+fn read_stdin(
+    axes: TouchAxes,
+    sender: &SyncSender<TouchEvent>,
+    clock: &DeviceClock,
+    shared: &Shared,
+    error: &Mutex<Option<String>>,
+) {
     let mut stamper = TouchStamper::default();
     let fail = |message: String| {
         if let Ok(mut e) = error.lock() {
@@ -501,7 +597,7 @@ fn read_stdin(sender: &SyncSender<TouchEvent>, clock: &DeviceClock, shared: &Sha
             Ok(line) => line,
             Err(e) => return fail(format!("reading stdin, line {}: {e}", i + 1)),
         };
-        let parsed = match haptex_core::live::parse_touch_line(&line, TouchAxes::X) {
+        let parsed = match haptex_core::live::parse_touch_line(&line, axes) {
             Ok(Some(p)) => p,
             Ok(None) => continue,
             Err(message) => return fail(format!("stdin, line {}, {message}", i + 1)),
@@ -528,7 +624,8 @@ struct WsState {
     clock: Arc<DeviceClock>,
     status: Arc<LiveStatus>,
     shared: Arc<Shared>,
-    span_mm: (f64, f64),
+    axes: TouchAxes,
+    area: PageArea,
     sample_rate: u32,
 }
 
@@ -560,8 +657,15 @@ fn serve_ws(addr: &str, state: WsState, ready: &std::sync::mpsc::Sender<Result<s
 }
 
 async fn page(axum::extract::State(state): axum::extract::State<WsState>) -> axum::response::Html<String> {
-    let (x0, x1) = state.span_mm;
-    axum::response::Html(LIVE_PAGE.replace("{X0}", &format!("{x0:?}")).replace("{X1}", &format!("{x1:?}")))
+    let ((x0, x1), y) = (state.area.x_mm, state.area.y_mm);
+    let (y0, y1) = y.map_or(("null".to_string(), "null".to_string()), |(a, b)| (format!("{a:?}"), format!("{b:?}")));
+    axum::response::Html(
+        LIVE_PAGE
+            .replace("{X0}", &format!("{x0:?}"))
+            .replace("{X1}", &format!("{x1:?}"))
+            .replace("{Y0}", &y0)
+            .replace("{Y1}", &y1),
+    )
 }
 
 async fn ws_upgrade(
@@ -595,7 +699,7 @@ async fn ws_session(mut socket: axum::extract::ws::WebSocket, state: WsState) {
                 };
                 let received = Instant::now();
                 for line in text.as_str().lines() {
-                    let event = match haptex_core::live::parse_touch_line(line, TouchAxes::X) {
+                    let event = match haptex_core::live::parse_touch_line(line, state.axes) {
                         Ok(Some(parsed)) => TouchEvent::received(parsed, received, &state.clock, &mut stamper),
                         Ok(None) => continue,
                         Err(message) => {

@@ -25,12 +25,17 @@ use super::play::DriveArgs;
 /// channel 2's full scale is a_max). The device runs at its own sample
 /// rate (or --sample-rate).
 ///
-/// Touch input: --touch-log T.csv (`t_s,x_mm`, replayed on the output's
-/// clock from its first time, then the output fades out and the command
-/// ends), --stdin (lines `x_mm`, stamped on arrival, or `t_s,x_mm` on
-/// the sender's clock; `lift` when the finger leaves; the output fades out
+/// Or a voltage map over (x, y) (`haptex map voltage`, --voltage-map),
+/// played on one channel at the finger's (x, y), bilinear, the map's edge
+/// held beyond it, as `haptex play --voltage-map` renders it offline.
+///
+/// Touch input: --touch-log T.csv (`t_s,x_mm`, or `t_s,x_mm,y_mm` over a
+/// map, replayed on the output's clock from its first time, then the
+/// output fades out and the command ends), --stdin (lines `x_mm`, stamped
+/// on arrival, or `t_s,x_mm` on the sender's clock; over a map `x_mm,y_mm`
+/// or `t_s,x_mm,y_mm`; `lift` when the finger leaves; the output fades out
 /// at end of input), or --ws ADDR (a web page on a touchscreen or tablet
-/// sends the same lines over a WebSocket).
+/// sends the same lines over a WebSocket: a strip, or over a map a pad).
 ///
 /// Safety: the drive fades in over --ramp-ms at start and at every
 /// touch-down and fades out on stop, lift, error and lost input: with no
@@ -48,6 +53,7 @@ use super::play::DriveArgs;
         haptex voltage --profile data/examples/bump_friction.csv -o bump_u.csv\n  \
         haptex live --profile bump_u.csv --touch-log finger.csv --device hw:CARD=USB,DEV=0 --buffer-frames 256\n  \
         haptex live --profile bump_u.csv --ws 0.0.0.0:8090   (then open http://THIS-HOST:8090/ on the tablet)\n  \
+        haptex live --voltage-map texture-u.npy --touch-log path.csv   (path.csv: t_s,x_mm,y_mm)\n  \
         my_touch_reader | haptex live --profile bump_u.csv --stdin --volts-per-full-scale 200"
 )]
 pub struct LiveArgs {
@@ -56,14 +62,19 @@ pub struct LiveArgs {
     list_devices: bool,
     /// Design to play: voltage profile CSV (`x_mm,mu,voltage_v`), or a
     /// display profile with an `amplitude_um` column for two channels.
-    #[arg(long, value_name = "U.csv", required_unless_present = "list_devices")]
+    #[arg(long, value_name = "U.csv", required_unless_present_any = ["list_devices", "voltage_map"])]
     profile: Option<PathBuf>,
+    /// A voltage map over (x, y) instead of a profile (`haptex map
+    /// voltage`: .csv or .npy with its sidecar); touches are then (x, y).
+    #[arg(long, value_name = "MAP", conflicts_with = "profile")]
+    voltage_map: Option<PathBuf>,
     /// Touch log to replay in real time: `t_s,x_mm` CSV (times strictly
-    /// increasing; more columns, e.g. y, are ignored).
+    /// increasing; more columns, e.g. y, are ignored), or `t_s,x_mm,y_mm`
+    /// over a map.
     #[arg(long, value_name = "T.csv", conflicts_with_all = ["stdin", "ws"], required_unless_present_any = ["stdin", "ws", "list_devices"])]
     touch_log: Option<PathBuf>,
-    /// Read touches from stdin: `x_mm` or `t_s,x_mm` per line, `lift` when
-    /// the finger leaves.
+    /// Read touches from stdin: `x_mm` or `t_s,x_mm` per line (over a map
+    /// `x_mm,y_mm` or `t_s,x_mm,y_mm`), `lift` when the finger leaves.
     #[arg(long, conflicts_with = "ws")]
     stdin: bool,
     /// Serve the live page and its WebSocket at this address (e.g.
