@@ -11,6 +11,7 @@ pub mod combined;
 pub mod database;
 pub mod electrovibration;
 pub mod frequency;
+pub mod height;
 pub mod io;
 pub mod library;
 pub mod live;

@@ -448,7 +448,7 @@ pub fn read_grid_csv<R: std::io::Read>(
 }
 
 /// The header row `x_mm,y_mm,NAME` and one row per cell, row-major.
-fn write_grid_rows(w: &mut dyn Write, g: &MapGrid, name: &str, values: &[f64]) -> std::io::Result<()> {
+pub(crate) fn write_grid_rows(w: &mut dyn Write, g: &MapGrid, name: &str, values: &[f64]) -> std::io::Result<()> {
     writeln!(w, "x_mm,y_mm,{name}")?;
     for j in 0..g.ny {
         for i in 0..g.nx {

@@ -73,6 +73,9 @@ const fn range(name: &'static str, min: f64, max: f64, unit: &'static str) -> Ra
 
 // Quantities of files and request bodies.
 
+/// Surface heights of a height map (mm): +-1 m, the FE surfaces' limit.
+pub const HEIGHT_MM: Range = range("h_mm", -1e3, 1e3, "mm");
+
 /// Positions along the surface (profiles, voltage curves, trajectories,
 /// stroke ends): +-1 km.
 pub const POSITION_MM: Range = range("x_mm", -1e6, 1e6, "mm");
@@ -150,6 +153,7 @@ pub const VELOCITY_MM_S: Range = range("velocity_mm_s", 1e-6, 1e4, "mm/s");
 /// Every range, in the order the docs list them.
 pub const ALL: &[Range] = &[
     POSITION_MM,
+    HEIGHT_MM,
     MU,
     FT_N,
     FN_N,

@@ -35,8 +35,11 @@ enum MapCommand {
     SamplePath(SamplePathArgs),
     Grating(GratingArgs),
     Compose(ComposeArgs),
+    Height(height::HeightArgs),
     ExportPng(ExportPngArgs),
 }
+
+mod height;
 
 /// A map (friction or voltage, .csv or .npy) as a 16- or 8-bit grayscale
 /// PNG: its lowest value black, its highest white (or --black/--white),
@@ -298,6 +301,7 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         MapCommand::SamplePath(a) => sample_path(a),
         MapCommand::Grating(a) => grating(a),
         MapCommand::Compose(a) => compose(a),
+        MapCommand::Height(a) => height::run(a),
         MapCommand::ExportPng(a) => export_png(a),
     }
 }
@@ -660,29 +664,7 @@ fn compose(a: ComposeArgs) -> anyhow::Result<()> {
             (map, name, image.levels())
         }
         (None, Some(base), Some(size)) => {
-            let (w, h) = size
-                .split_once(',')
-                .and_then(|(w, h)| Some((w.trim().parse::<f64>().ok()?, h.trim().parse::<f64>().ok()?)))
-                .filter(|(w, h)| w.is_finite() && h.is_finite() && *w > 0.0 && *h > 0.0)
-                .with_context(|| format!("--size-mm '{size}': expected W,H in mm, both positive"))?;
-            let (nx, ny) = ((w / spacing.0).floor() + 1.0, (h / spacing.1).floor() + 1.0);
-            if nx * ny > haptex_core::map::MAX_CELLS as f64 {
-                bail!(
-                    "--size-mm {size} at {} x {} mm cells: more than {} cells",
-                    Num(spacing.0),
-                    Num(spacing.1),
-                    haptex_core::map::MAX_CELLS
-                );
-            }
-            let grid = MapGrid {
-                nx: nx as usize,
-                ny: ny as usize,
-                x0_mm: origin.0,
-                y0_mm: origin.1,
-                dx_mm: spacing.0,
-                dy_mm: spacing.1,
-            };
-            grid.validate("--size-mm")?;
+            let grid = sized_grid(size, spacing, origin)?;
             let (base_fill, described) = fill_of(base, "--base")?;
             fills[0] = Some((base_fill.clone(), described));
             let one = LabelImage { width: grid.nx, height: grid.ny, labels: vec![0; grid.len()] };
@@ -829,6 +811,41 @@ fn read_map_csv(path: &Path, quantity: &ranges::Range) -> anyhow::Result<(MapGri
 /// Reads a file of at most `limit` bytes.
 fn read_bounded(path: &Path, limit: u64) -> anyhow::Result<Vec<u8>> {
     haptex_core::io::read_file_bounded(path, limit).with_context(|| format!("{}", path.display()))
+}
+
+/// "A,B" as two finite numbers; the error names `what`.
+fn parse_pair(text: &str, what: &str) -> anyhow::Result<(f64, f64)> {
+    text.split_once(',')
+        .and_then(|(a, b)| Some((a.trim().parse::<f64>().ok()?, b.trim().parse::<f64>().ok()?)))
+        .filter(|(a, b)| a.is_finite() && b.is_finite())
+        .with_context(|| format!("{what} '{text}': expected two numbers A,B"))
+}
+
+/// The grid of a W,H mm map (`--size-mm`) at `spacing`, from `origin`.
+fn sized_grid(size: &str, spacing: (f64, f64), origin: (f64, f64)) -> anyhow::Result<MapGrid> {
+    let (w, h) = parse_pair(size, "--size-mm")
+        .ok()
+        .filter(|(w, h)| *w > 0.0 && *h > 0.0)
+        .with_context(|| format!("--size-mm '{size}': expected W,H in mm, both positive"))?;
+    let (nx, ny) = ((w / spacing.0).floor() + 1.0, (h / spacing.1).floor() + 1.0);
+    if nx * ny > haptex_core::map::MAX_CELLS as f64 {
+        bail!(
+            "--size-mm {size} at {} x {} mm cells: more than {} cells",
+            Num(spacing.0),
+            Num(spacing.1),
+            haptex_core::map::MAX_CELLS
+        );
+    }
+    let grid = MapGrid {
+        nx: nx as usize,
+        ny: ny as usize,
+        x0_mm: origin.0,
+        y0_mm: origin.1,
+        dx_mm: spacing.0,
+        dy_mm: spacing.1,
+    };
+    grid.validate("--size-mm")?;
+    Ok(grid)
 }
 
 fn report_map(map: &FrictionMap) {
