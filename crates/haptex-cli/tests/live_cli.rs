@@ -378,31 +378,12 @@ mod device {
     /// hundreds of times faster than the test's messages.
     #[test]
     fn websocket_touches_drive_the_renderer() {
-        use std::io::{BufRead, Read, Write};
         let dir = tempfile::tempdir().unwrap();
         alsa_home(dir.path(), &dir.path().join("unused.raw"));
         let profile = write(dir.path(), "ramp.csv", "x_mm,voltage_v\n0,0\n10,100\n");
         let json = dir.path().join("run.json");
-        let child = Command::new(env!("CARGO_BIN_EXE_haptex"))
-            .args(["live", "--profile", &profile, "--ws", "127.0.0.1:0", "--device", "null"])
-            .args(["--gap-ms", "60000", "--horizon-ms", "0", "--json", json.to_str().unwrap()])
-            .env("HOME", dir.path())
-            .stdin(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let mut child = KillOnDrop(child);
-        let mut stderr_lines = std::io::BufReader::new(child.0.stderr.take().unwrap()).lines();
-        let addr = loop {
-            let line = stderr_lines.next().expect("haptex live printed its address").unwrap();
-            if let Some(rest) = line.split("WebSocket ws://").nth(1) {
-                break rest.split('/').next().unwrap().to_string();
-            }
-        };
-        let mut http = std::net::TcpStream::connect(&addr).unwrap();
-        write!(http, "GET / HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
-        let mut page = String::new();
-        http.read_to_string(&mut page).unwrap();
+        let design = ["--profile", &profile, "--json", json.to_str().unwrap()];
+        let (mut child, stderr_lines, addr, page) = live_ws(dir.path(), &design);
         assert!(page.starts_with("HTTP/1.1 200") && page.contains("(0.0 .. 10.0 mm)"), "{page}");
 
         let mut ws = WsClient::connect(&addr);
@@ -436,7 +417,6 @@ mod device {
     /// within 1e-9 V; an x alone is answered with an error naming y_mm.
     #[test]
     fn websocket_touches_over_a_voltage_map() {
-        use std::io::{BufRead, Read, Write};
         let dir = tempfile::tempdir().unwrap();
         alsa_home(dir.path(), &dir.path().join("unused.raw"));
         let mut csv = String::from("x_mm,y_mm,voltage_v\n");
@@ -446,26 +426,7 @@ mod device {
             }
         }
         let map = write(dir.path(), "plane.csv", &csv);
-        let child = Command::new(env!("CARGO_BIN_EXE_haptex"))
-            .args(["live", "--voltage-map", &map, "--ws", "127.0.0.1:0", "--device", "null"])
-            .args(["--gap-ms", "60000", "--horizon-ms", "0", "--u-max", "100"])
-            .env("HOME", dir.path())
-            .stdin(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let mut child = KillOnDrop(child);
-        let mut stderr_lines = std::io::BufReader::new(child.0.stderr.take().unwrap()).lines();
-        let addr = loop {
-            let line = stderr_lines.next().expect("haptex live printed its address").unwrap();
-            if let Some(rest) = line.split("WebSocket ws://").nth(1) {
-                break rest.split('/').next().unwrap().to_string();
-            }
-        };
-        let mut http = std::net::TcpStream::connect(&addr).unwrap();
-        write!(http, "GET / HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
-        let mut page = String::new();
-        http.read_to_string(&mut page).unwrap();
+        let (mut child, stderr_lines, addr, page) = live_ws(dir.path(), &["--voltage-map", &map, "--u-max", "100"]);
         assert!(page.contains("const X0 = 0.0, X1 = 10.0;") && page.contains("const Y0 = 0.0, Y1 = 4.0,"), "{page}");
 
         let mut ws = WsClient::connect(&addr);
@@ -484,6 +445,37 @@ mod device {
         assert!(status.success());
         let rest: Vec<String> = stderr_lines.map_while(Result::ok).collect();
         assert!(child.0.wait().unwrap().success(), "{rest:?}");
+    }
+
+    /// `haptex live --ws` on the `null` device with `design`'s options (the
+    /// horizon 0, the gap 60 s: the device does not pace), its stderr lines
+    /// after the address line, the address, and the page it serves.
+    fn live_ws(
+        home: &Path,
+        design: &[&str],
+    ) -> (KillOnDrop, std::io::Lines<std::io::BufReader<std::process::ChildStderr>>, String, String) {
+        use std::io::{BufRead, Read, Write};
+        let child = Command::new(env!("CARGO_BIN_EXE_haptex"))
+            .args(["live", "--ws", "127.0.0.1:0", "--device", "null", "--gap-ms", "60000", "--horizon-ms", "0"])
+            .args(design)
+            .env("HOME", home)
+            .stdin(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut child = KillOnDrop(child);
+        let mut stderr_lines = std::io::BufReader::new(child.0.stderr.take().unwrap()).lines();
+        let addr = loop {
+            let line = stderr_lines.next().expect("haptex live printed its address").unwrap();
+            if let Some(rest) = line.split("WebSocket ws://").nth(1) {
+                break rest.split('/').next().unwrap().to_string();
+            }
+        };
+        let mut http = std::net::TcpStream::connect(&addr).unwrap();
+        write!(http, "GET / HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
+        let mut page = String::new();
+        http.read_to_string(&mut page).unwrap();
+        (child, stderr_lines, addr, page)
     }
 
     /// A child process killed when the test ends, also when an assertion
