@@ -53,13 +53,16 @@ impl HeightMap {
     /// [`ranges::HEIGHT_MM`]); errors name the cell.
     pub fn new(grid: MapGrid, h_mm: Vec<f64>, source_name: &str) -> Result<Self, MapError> {
         grid.validate(source_name)?;
-        let err =
-            |place: Option<String>, m: String| MapError { source_name: source_name.to_string(), place, message: m };
         if h_mm.len() != grid.len() {
-            return Err(err(None, format!("{} heights for a {} x {} grid", h_mm.len(), grid.nx, grid.ny)));
+            return Err(MapError::new(
+                source_name,
+                None,
+                format!("{} heights for a {} x {} grid", h_mm.len(), grid.nx, grid.ny),
+            ));
         }
         if let Some(k) = ranges::HEIGHT_MM.first_outside(&h_mm) {
-            return Err(err(
+            return Err(MapError::new(
+                source_name,
                 Some(format!("cell (column {}, row {})", k % grid.nx, k / grid.nx)),
                 format!("h_mm = {} is outside {}", Num(h_mm[k]), ranges::HEIGHT_MM.describe()),
             ));
@@ -86,32 +89,23 @@ impl HeightMap {
         let name = "the path";
         template.validate()?;
         if !(2..=MAX_PATH_VERTICES).contains(&path.len()) {
-            return Err(MapError {
-                source_name: name.into(),
-                place: None,
-                message: format!("a path has 2 to {MAX_PATH_VERTICES} vertices, got {}", path.len()),
-            });
+            return Err(MapError::new(
+                name,
+                None,
+                format!("a path has 2 to {MAX_PATH_VERTICES} vertices, got {}", path.len()),
+            ));
         }
         if let Some(k) =
             path.iter().position(|&(x, y)| !(ranges::POSITION_MM.contains(x) && ranges::POSITION_MM.contains(y)))
         {
-            return Err(MapError {
-                source_name: name.into(),
-                place: Some(format!("vertex {}", k + 1)),
-                message: format!(
-                    "({}, {}) mm is outside {}",
-                    Num(path[k].0),
-                    Num(path[k].1),
-                    ranges::POSITION_MM.describe()
-                ),
-            });
+            return Err(MapError::new(
+                name,
+                Some(format!("vertex {}", k + 1)),
+                format!("({}, {}) mm is outside {}", Num(path[k].0), Num(path[k].1), ranges::POSITION_MM.describe()),
+            ));
         }
         if path.windows(2).all(|w| w[0] == w[1]) {
-            return Err(MapError {
-                source_name: name.into(),
-                place: None,
-                message: "the path's vertices are all the same point".into(),
-            });
+            return Err(MapError::new(name, None, "the path's vertices are all the same point"));
         }
         grid.validate("the grid")?;
         let mut h = Vec::with_capacity(grid.len());
@@ -150,11 +144,7 @@ impl PathTemplate {
     /// Width in (0, 1e4] mm, |height| within [`ranges::HEIGHT_MM`].
     pub fn validate(&self) -> Result<(), MapError> {
         let (w, h) = self.parts();
-        let err = |field: &str, m: String| MapError {
-            source_name: "the template".into(),
-            place: Some(field.into()),
-            message: m,
-        };
+        let err = |field: &str, m: String| MapError::new("the template", Some(field.into()), m);
         if !(w.is_finite() && w > 0.0 && w <= 1e4) {
             return Err(err("width", format!("must be in (0, 10000] mm, got {}", Num(w))));
         }
@@ -223,11 +213,11 @@ impl SlidingLines {
     pub fn new(map: &MapGrid, angle_deg: f64) -> Result<Self, MapError> {
         map.validate("the map")?;
         if !(angle_deg.is_finite() && angle_deg.abs() <= 360.0) {
-            return Err(MapError {
-                source_name: "the sliding direction".into(),
-                place: Some("angle_deg".into()),
-                message: format!("must be from -360 to 360 degrees, got {}", Num(angle_deg)),
-            });
+            return Err(MapError::new(
+                "the sliding direction",
+                Some("angle_deg".into()),
+                format!("must be from -360 to 360 degrees, got {}", Num(angle_deg)),
+            ));
         }
         // Exact at the axes (sin 90 deg is not exactly 1 in f64 radians).
         let (sin, cos, quarter) = match angle_deg.rem_euclid(360.0) {
@@ -326,11 +316,11 @@ impl SlidingLines {
     /// bilinear interpolation at its (s, r).
     pub fn assemble(&self, map: &MapGrid, mu_lines: &[f64], source_name: &str) -> Result<FrictionMap, MapError> {
         if mu_lines.len() != self.grid.len() {
-            return Err(MapError {
-                source_name: source_name.into(),
-                place: None,
-                message: format!("{} line values for {} x {} line points", mu_lines.len(), self.grid.nx, self.grid.ny),
-            });
+            return Err(MapError::new(
+                source_name,
+                None,
+                format!("{} line values for {} x {} line points", mu_lines.len(), self.grid.nx, self.grid.ny),
+            ));
         }
         let mut mu = vec![0.0; map.len()];
         if self.quarter.is_some() {

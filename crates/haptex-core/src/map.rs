@@ -31,7 +31,7 @@ pub struct MapError {
 }
 
 impl MapError {
-    fn new(source_name: &str, place: Option<String>, message: impl Into<String>) -> Self {
+    pub(crate) fn new(source_name: &str, place: Option<String>, message: impl Into<String>) -> Self {
         Self { source_name: source_name.to_string(), place, message: message.into() }
     }
 }

@@ -115,11 +115,6 @@ impl PlanarRenderer {
         self.out.n
     }
 
-    /// The voltage map it plays.
-    pub fn map(&self) -> &VoltageMap {
-        &self.map
-    }
-
     /// Whether a finger is down.
     pub fn is_touching(&self) -> bool {
         self.touch.is_touching()
