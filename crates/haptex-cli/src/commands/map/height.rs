@@ -4,8 +4,6 @@
 
 use std::collections::HashMap;
 use std::path::PathBuf;
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::{Context, bail};
 use clap::Args;
@@ -13,6 +11,7 @@ use haptex_core::height::{HeightMap, PathTemplate, SlidingLines};
 use haptex_core::map::{read_npy_pair, write_npy_pair};
 use haptex_core::num::Num;
 use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
 
 use super::{MapFormat, min_max, parse_pair, report_map, sized_grid, write_friction_map};
 use crate::args::positive;
@@ -150,52 +149,30 @@ pub(super) fn run(a: HeightArgs) -> anyhow::Result<()> {
         );
         bar
     };
-    let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<Vec<f64>>>> = Mutex::new(vec![None; unique.len()]);
-    let failure: Mutex<Option<anyhow::Error>> = Mutex::new(None);
-    std::thread::scope(|scope| {
-        for _ in 0..jobs.min(unique.len()) {
-            scope.spawn(|| {
-                loop {
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    if i >= unique.len() || failure.lock().map_or(true, |f| f.is_some()) {
-                        return;
-                    }
-                    let (s, h) = &unique[i];
-                    let k = first_line[i];
-                    match line_friction(s, h, a.velocity).with_context(|| {
-                        format!(
-                            "line {} of {} (r = {} mm across the sliding direction)",
-                            k + 1,
-                            lines.count(),
-                            Num(lines.grid.y(k))
-                        )
-                    }) {
-                        Ok(mu) => {
-                            if let Ok(mut r) = results.lock() {
-                                r[i] = Some(mu);
-                            }
-                            bar.inc(1);
-                        }
-                        Err(e) => {
-                            if let Ok(mut f) = failure.lock() {
-                                f.get_or_insert(e);
-                            }
-                            return;
-                        }
-                    }
-                }
-            });
-        }
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build().context("starting the FE workers")?;
+    let results = pool.install(|| {
+        unique
+            .par_iter()
+            .zip(&first_line)
+            .map(|((s, h), &k)| {
+                let mu = line_friction(s, h, a.velocity).with_context(|| {
+                    format!(
+                        "line {} of {} (r = {} mm across the sliding direction)",
+                        k + 1,
+                        lines.count(),
+                        Num(lines.grid.y(k))
+                    )
+                })?;
+                bar.inc(1);
+                Ok(mu)
+            })
+            .collect::<anyhow::Result<Vec<Vec<f64>>>>()
     });
     bar.finish_and_clear();
-    if let Some(e) = failure.into_inner().ok().flatten() {
-        return Err(e);
-    }
-    let results = results.into_inner().map_err(|_| anyhow::anyhow!("an FE worker panicked"))?;
+    let results = results?;
     let mut mu_lines = Vec::with_capacity(lines.grid.len());
     for &i in &of_line {
-        mu_lines.extend_from_slice(results[i].as_deref().context("an FE line was not computed")?);
+        mu_lines.extend_from_slice(&results[i]);
     }
     let map = lines.assemble(&heights.grid, &mu_lines, "the height map's friction")?;
 
@@ -235,20 +212,7 @@ pub fn line_friction(s: &[f64], h: &[f64], velocity: f64) -> anyhow::Result<Vec<
     let result = scenario::run(&scenario, &mut |_| {})?;
     let profile = result.profile.context("the FE run gave no profile")?;
     let (px, pmu) = (profile.x_mm(), profile.mu());
-    Ok(x.iter().map(|&v| interpolate(px, pmu, v)).collect())
-}
-
-/// Linear interpolation of (xs, ys) at `x`, the ends held.
-fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
-    let i = xs.partition_point(|&v| v < x);
-    if i == 0 {
-        return ys[0];
-    }
-    if i >= xs.len() {
-        return ys[xs.len() - 1];
-    }
-    let t = (x - xs[i - 1]) / (xs[i] - xs[i - 1]);
-    ys[i - 1] + t * (ys[i] - ys[i - 1])
+    Ok(x.iter().map(|&v| haptex_core::profile::interpolate(px, pmu, v)).collect())
 }
 
 fn parse_template(text: &str) -> anyhow::Result<PathTemplate> {
