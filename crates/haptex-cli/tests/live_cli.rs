@@ -67,6 +67,16 @@ mod device {
         child.wait_with_output().unwrap()
     }
 
+    /// `haptex play` of `design` (its option and file) along the touch log
+    /// `log`, as the float32 WAV's interleaved samples.
+    fn offline_float32(dir: &Path, design: &[&str], log: &str) -> Vec<f32> {
+        let wav = dir.join("offline.wav");
+        let args = [&["play"][..], design, &["--trajectory", log, "--wav-format", "float32", "-q"]].concat();
+        let out = haptex(&[&args[..], &["-o", wav.to_str().unwrap()]].concat());
+        assert!(out.status.success(), "{}", stderr(&out));
+        hound::WavReader::open(&wav).unwrap().samples::<f32>().map(Result::unwrap).collect()
+    }
+
     fn read_f32(path: &Path) -> Vec<f32> {
         let bytes = std::fs::read(path).unwrap();
         bytes.chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect()
@@ -128,21 +138,7 @@ mod device {
         assert_eq!(run["clamped_samples"], 0);
         assert!(run["render_latency_max_s"].as_f64().unwrap() < 1.0 / FS as f64, "{run}");
 
-        let wav = dir.path().join("offline.wav");
-        let out = haptex(&[
-            "play",
-            "--profile",
-            design.to_str().unwrap(),
-            "--trajectory",
-            &log,
-            "--wav-format",
-            "float32",
-            "-q",
-            "-o",
-            wav.to_str().unwrap(),
-        ]);
-        assert!(out.status.success(), "{}", stderr(&out));
-        let offline: Vec<f32> = hound::WavReader::open(&wav).unwrap().samples::<f32>().map(Result::unwrap).collect();
+        let offline = offline_float32(dir.path(), &["--profile", design.to_str().unwrap()], &log);
         let captured = read_f32(&capture);
         let n = offline.len() / 2;
         assert_eq!(n, FS + 1);
@@ -262,21 +258,7 @@ mod device {
         assert_eq!(run["events"], 121);
         assert_eq!(run["clamped_samples"], 0);
 
-        let wav = dir.path().join("offline.wav");
-        let out = haptex(&[
-            "play",
-            "--voltage-map",
-            &map,
-            "--trajectory",
-            &log,
-            "--wav-format",
-            "float32",
-            "-q",
-            "-o",
-            wav.to_str().unwrap(),
-        ]);
-        assert!(out.status.success(), "{}", stderr(&out));
-        let offline: Vec<f32> = hound::WavReader::open(&wav).unwrap().samples::<f32>().map(Result::unwrap).collect();
+        let offline = offline_float32(dir.path(), &["--voltage-map", &map], &log);
         let captured = read_f32(&capture);
         assert_eq!(offline.len(), FS + 1);
         assert_eq!(captured.len() as u64, run["frames"].as_u64().unwrap(), "every frame reached the file");

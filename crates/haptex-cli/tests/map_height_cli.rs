@@ -4,6 +4,7 @@
 //! sampled one), and the direction dependence of a ridge.
 
 use haptex_core::io::Table;
+use haptex_core::profile::interpolate as at;
 
 mod common;
 use common::{haptex, stderr, write};
@@ -12,12 +13,6 @@ use common::{haptex, stderr, write};
 fn columns(path: &str, names: &[&str]) -> Vec<Vec<f64>> {
     let t = Table::read(std::fs::read(path).unwrap().as_slice(), path).unwrap();
     names.iter().map(|n| t.column(n).unwrap().to_vec()).collect()
-}
-
-/// Linear interpolation of (xs, ys) at x.
-fn at(xs: &[f64], ys: &[f64], x: f64) -> f64 {
-    let i = xs.partition_point(|&v| v < x).clamp(1, xs.len() - 1);
-    ys[i - 1] + (x - xs[i - 1]) / (xs[i] - xs[i - 1]) * (ys[i] - ys[i - 1])
 }
 
 fn run_ok(args: &[&str]) -> String {
