@@ -1,6 +1,6 @@
 //! `haptex map`: friction maps over (x, y) (docs/maps.md): from a
-//! grayscale image or a 1-D profile, to voltages per cell, and sampled
-//! along a finger path.
+//! grayscale image, a 1-D profile, regions, a grating or a height map, to
+//! voltages per cell, and sampled along a finger path.
 
 use std::path::{Path, PathBuf};
 
@@ -14,10 +14,11 @@ use haptex_core::ranges;
 
 use crate::args::{LayerStackArgs, in_range, positive, read_profile};
 
-/// Friction maps over (x, y): build one from an image or a profile, map
-/// it to voltages cell by cell, sample it along a finger path.
+/// Friction maps over (x, y): build one from an image, a profile, regions,
+/// a grating or a height map (through the FE model), map it to voltages
+/// cell by cell, sample it along a finger path.
 ///
-/// Maps are CSV (`x_mm,y_mm,mu` or `x_mm,y_mm,voltage_v`, rows running
+/// Maps are CSV (`x_mm,y_mm,mu`, `x_mm,y_mm,voltage_v` or `x_mm,y_mm,h_mm`, rows running
 /// through x for each y in turn) or NPY (a (ny, nx) float64 array, row j
 /// at y0 + j dy) with a JSON sidecar `MAP.npy.json` holding the grid and
 /// the NPY's SHA-256; the format follows the file's extension.
