@@ -158,3 +158,80 @@ fn bad_height_input_is_refused() {
     let out = haptex(&["map", "height", "--height", &h, "-o", &out_path]);
     assert!(!out.status.success() && stderr(&out).contains("line 4"), "{}", stderr(&out));
 }
+
+/// A height map through a grayscale PNG and back: `map export-png
+/// --quantity h_mm` prints the `map height --height H.png` command that
+/// reads it, whose heights equal the CSV's within half a gray step (the
+/// height range / 65535 / 2 at 16 bit, / 255 / 2 at 8 bit), and whose friction is,
+/// bit for bit, the friction of those decoded heights given as a CSV (the
+/// PNG is only another way in to the same FE lines).
+#[test]
+fn a_height_map_round_trips_through_a_png() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let mut csv = String::from("x_mm,y_mm,h_mm\n");
+    let mut h0 = Vec::new();
+    for j in 0..2 {
+        for i in 0..=60 {
+            let x = i as f64 * 0.1;
+            let h = 0.2 * (-((x - 3.0) / 0.5).powi(2)).exp();
+            h0.push(h);
+            csv.push_str(&format!("{x:?},{:?},{h:?}\n", 0.25 + j as f64 * 0.5));
+        }
+    }
+    let h = write(dir.path(), "h.csv", &csv);
+    for bits in ["16", "8"] {
+        let png = p(&format!("h{bits}.png"));
+        let e = run_ok(&["map", "export-png", "--map", &h, "--quantity", "h_mm", "--bits", bits, "-o", &png]);
+        let command = e.lines().find_map(|l| l.strip_prefix("read back: haptex ")).expect("the read-back command");
+        let (mu_png, h_png) = (p(&format!("mu{bits}.csv")), p(&format!("h{bits}_back.csv")));
+        let mut args: Vec<&str> = command.split_whitespace().collect();
+        assert_eq!(args.pop(), Some("MAP.csv"), "{command}");
+        args.extend([mu_png.as_str(), "--heights-out", &h_png, "-q"]);
+        assert!(command.contains("--origin-mm 0,0.25"), "{command}");
+        run_ok(&args);
+        let back = columns(&h_png, &["x_mm", "y_mm", "h_mm"]);
+        // Black is the lowest height, white the highest (export-png's default).
+        let top = h0.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        let bottom = h0.iter().cloned().fold(f64::INFINITY, f64::min);
+        let step = (top - bottom) / if bits == "16" { 65535.0 } else { 255.0 };
+        let worst = back[2].iter().zip(&h0).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(worst <= step / 2.0 + 1e-12, "{bits} bit: worst {worst}, half step {}", step / 2.0);
+        assert_eq!(back[0][..61], (0..=60).map(|i| i as f64 * 0.1).collect::<Vec<_>>()[..], "x positions");
+        assert_eq!(back[1][61], 0.75, "the second row's y");
+        // The same FE lines as the decoded heights given as a CSV.
+        let mu_csv = p(&format!("mu{bits}_from_csv.csv"));
+        run_ok(&["map", "height", "--height", &h_png, "-q", "-o", &mu_csv]);
+        assert_eq!(columns(&mu_png, &["mu"]), columns(&mu_csv, &["mu"]), "{bits} bit");
+    }
+}
+
+/// A PNG height map needs its gray-to-height mapping and its pixel size;
+/// a CSV's grid is its own. Each refusal names the flag, nothing written.
+#[test]
+fn png_height_input_is_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let h = write(dir.path(), "h.csv", "x_mm,y_mm,h_mm\n0,0,0\n1,0,0.1\n0,1,0\n1,1,0.1\n");
+    let png = p("h.png");
+    run_ok(&["map", "export-png", "--map", &h, "--quantity", "h_mm", "-o", &png]);
+    let junk = write(dir.path(), "junk.png", "not an image");
+    let map = ["--h-black-mm", "0", "--h-white-mm", "0.1"];
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--height", &png, "--pixel-mm", "0.1"], "--h-black-mm and --h-white-mm"),
+        ([&["--height", &png][..], &map].concat(), "needs --pixel-mm"),
+        (vec!["--height", &png, "--h-black-mm", "0.1", "--h-white-mm", "0.1", "--pixel-mm", "1"], "h_white_mm"),
+        (vec!["--height", &png, "--h-black-mm", "0", "--h-white-mm", "2000", "--pixel-mm", "1"], "h_white_mm"),
+        ([&["--height", &junk, "--pixel-mm", "1"][..], &map].concat(), "not a readable PNG"),
+        (vec!["--height", &h, "--pixel-mm", "0.1"], "--pixel-mm is for a PNG or a template"),
+        (vec!["--height", &h, "--origin-mm", "1,1"], "--origin-mm is for a PNG or a template"),
+    ];
+    let out_path = p("out.csv");
+    for (args, want) in cases {
+        let all = [&["map", "height"][..], &args, &["-o", &out_path]].concat();
+        let out = haptex(&all);
+        assert!(!out.status.success(), "{all:?}");
+        assert!(stderr(&out).contains(want), "{all:?}: {}", stderr(&out));
+        assert!(!std::path::Path::new(&out_path).exists());
+    }
+}

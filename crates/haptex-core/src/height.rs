@@ -81,6 +81,30 @@ impl HeightMap {
         crate::map::write_grid_rows(w, &self.grid, "h_mm", &self.h_mm)
     }
 
+    /// Reads an 8- or 16-bit grayscale PNG as heights, linear in the gray
+    /// level: black is `h_black_mm`, white `h_white_mm` (the mapping
+    /// `haptex map export-png --quantity h_mm` writes and prints). One cell
+    /// per pixel, the image's top row at the largest y.
+    pub fn read_gray_png(
+        bytes: &[u8],
+        h_black_mm: f64,
+        h_white_mm: f64,
+        spacing_mm: (f64, f64),
+        origin_mm: (f64, f64),
+        source_name: &str,
+    ) -> Result<Self, MapError> {
+        for (name, v) in [("h_black_mm", h_black_mm), ("h_white_mm", h_white_mm)] {
+            ranges::HEIGHT_MM.check(v).map_err(|e| MapError::new(source_name, Some(name.into()), e.to_string()))?;
+        }
+        if h_black_mm == h_white_mm {
+            return Err(MapError::new(source_name, Some("h_white_mm".into()), "must differ from h_black_mm"));
+        }
+        let (grid, h) = crate::map::read_gray_grid(bytes, spacing_mm, origin_mm, source_name, |g| {
+            h_black_mm + (h_white_mm - h_black_mm) * g
+        })?;
+        Self::new(grid, h, source_name)
+    }
+
     /// A height map from a template's cross-section laid along a path
     /// (a polyline of at least two vertices, mm): each cell's height is
     /// the cross-section at the cell's distance from the path (signed for

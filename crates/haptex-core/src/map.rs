@@ -214,44 +214,7 @@ impl FrictionMap {
         source_name: &str,
     ) -> Result<Self, MapError> {
         mapping.validate(source_name)?;
-        let GrayImage { width, height, bits, buffer, stride } =
-            GrayImage::decode(bytes, source_name, |color, depth| match (color, depth) {
-                (png::ColorType::Grayscale, png::BitDepth::Eight) => Ok(8),
-                (png::ColorType::Grayscale, png::BitDepth::Sixteen) => Ok(16),
-                (png::ColorType::Grayscale, other) => {
-                    Err(format!("bit depth {other:?}: expected 8 or 16 bit grayscale"))
-                }
-                (color, _) => Err(format!(
-                    "color type {color:?}: a friction image must be grayscale (8 or 16 bit), convert it first"
-                )),
-            })?;
-        let grid = MapGrid {
-            nx: width,
-            ny: height,
-            x0_mm: origin_mm.0,
-            y0_mm: origin_mm.1,
-            dx_mm: spacing_mm.0,
-            dy_mm: spacing_mm.1,
-        };
-        grid.validate(source_name)?;
-        let full = if bits == 8 { 255.0 } else { 65535.0 };
-        let table: Vec<f64> =
-            if bits == 8 { (0..256).map(|g| mapping.mu(g as f64 / full)).collect() } else { Vec::new() };
-        let mut mu = vec![0.0; width * height];
-        for r in 0..height {
-            let line = &buffer[r * stride..r * stride + stride];
-            let j = height - 1 - r;
-            let out = &mut mu[j * width..(j + 1) * width];
-            if bits == 8 {
-                for (o, &g) in out.iter_mut().zip(line) {
-                    *o = table[g as usize];
-                }
-            } else {
-                for (o, g) in out.iter_mut().zip(line.chunks_exact(2)) {
-                    *o = mapping.mu(u16::from_be_bytes([g[0], g[1]]) as f64 / full);
-                }
-            }
-        }
+        let (grid, mu) = read_gray_grid(bytes, spacing_mm, origin_mm, source_name, |g| mapping.mu(g))?;
         Self::new(grid, mu, source_name)
     }
 
@@ -834,6 +797,55 @@ pub fn png_size(bytes: &[u8], source_name: &str) -> Result<(usize, usize), MapEr
     }
     let be = |k: usize| u32::from_be_bytes([bytes[k], bytes[k + 1], bytes[k + 2], bytes[k + 3]]) as usize;
     Ok((be(16), be(20)))
+}
+
+/// Decodes an 8- or 16-bit grayscale PNG into a grid of `value(g)` per
+/// pixel, g the gray level in [0, 1] (black 0, white 1): one cell per
+/// pixel, the image's top row at the largest y; nx and ny are the image's
+/// width and height. An 8-bit image's 256 values are computed once.
+pub(crate) fn read_gray_grid(
+    bytes: &[u8],
+    spacing_mm: (f64, f64),
+    origin_mm: (f64, f64),
+    source_name: &str,
+    value: impl Fn(f64) -> f64,
+) -> Result<(MapGrid, Vec<f64>), MapError> {
+    let GrayImage { width, height, bits, buffer, stride } =
+        GrayImage::decode(bytes, source_name, |color, depth| match (color, depth) {
+            (png::ColorType::Grayscale, png::BitDepth::Eight) => Ok(8),
+            (png::ColorType::Grayscale, png::BitDepth::Sixteen) => Ok(16),
+            (png::ColorType::Grayscale, other) => Err(format!("bit depth {other:?}: expected 8 or 16 bit grayscale")),
+            (color, _) => {
+                Err(format!("color type {color:?}: the image must be grayscale (8 or 16 bit), convert it first"))
+            }
+        })?;
+    let grid = MapGrid {
+        nx: width,
+        ny: height,
+        x0_mm: origin_mm.0,
+        y0_mm: origin_mm.1,
+        dx_mm: spacing_mm.0,
+        dy_mm: spacing_mm.1,
+    };
+    grid.validate(source_name)?;
+    let full = if bits == 8 { 255.0 } else { 65535.0 };
+    let table: Vec<f64> = if bits == 8 { (0..256).map(|g| value(g as f64 / full)).collect() } else { Vec::new() };
+    let mut values = vec![0.0; width * height];
+    for r in 0..height {
+        let line = &buffer[r * stride..r * stride + stride];
+        let j = height - 1 - r;
+        let out = &mut values[j * width..(j + 1) * width];
+        if bits == 8 {
+            for (o, &g) in out.iter_mut().zip(line) {
+                *o = table[g as usize];
+            }
+        } else {
+            for (o, g) in out.iter_mut().zip(line.chunks_exact(2)) {
+                *o = value(u16::from_be_bytes([g[0], g[1]]) as f64 / full);
+            }
+        }
+    }
+    Ok((grid, values))
 }
 
 /// A decoded grayscale PNG: its rows from the top, `stride` bytes apart.

@@ -42,19 +42,21 @@ enum MapCommand {
 
 mod height;
 
-/// A map (friction or voltage, .csv or .npy) as a 16- or 8-bit grayscale
-/// PNG: its lowest value black, its highest white (or --black/--white),
-/// linear; the mapping and the grid are written into the PNG (a tEXt
-/// chunk) and printed with the `haptex map from-image` command that reads
-/// it back.
+/// A map (friction, voltage or heights, .csv or .npy) as a 16- or 8-bit
+/// grayscale PNG: its lowest value black, its highest white (or
+/// --black/--white), linear; the mapping and the grid are written into the
+/// PNG (a tEXt chunk) and printed with the command that reads it back
+/// (`haptex map from-image` for friction, `haptex map height --height` for
+/// heights).
 #[derive(Debug, Args)]
 #[command(allow_negative_numbers = true)]
 struct ExportPngArgs {
     /// The map.
     #[arg(long, value_name = "MAP")]
     map: PathBuf,
-    /// The map's quantity: mu (a friction map) or voltage_v (a voltage map).
-    #[arg(long, default_value = "mu", value_parser = ["mu", "voltage_v"])]
+    /// The map's quantity: mu (a friction map), voltage_v (a voltage map)
+    /// or h_mm (a height map).
+    #[arg(long, default_value = "mu", value_parser = ["mu", "voltage_v", "h_mm"])]
     quantity: String,
     /// Value of black (default: the map's lowest).
     #[arg(long)]
@@ -435,12 +437,19 @@ fn bits_per_pixel(text: &str) -> Result<u8, String> {
 }
 
 fn export_png(a: ExportPngArgs) -> anyhow::Result<()> {
-    let (grid, values) = if a.quantity == "mu" {
-        let m = read_friction_map(&a.map)?;
-        (m.grid, m.mu)
-    } else {
-        let v = read_voltage_map(&a.map)?;
-        (v.grid, v.voltage_v)
+    let (grid, values) = match a.quantity.as_str() {
+        "mu" => {
+            let m = read_friction_map(&a.map)?;
+            (m.grid, m.mu)
+        }
+        "h_mm" => {
+            let h = height::read_height_map(&a.map)?;
+            (h.grid, h.h_mm)
+        }
+        _ => {
+            let v = read_voltage_map(&a.map)?;
+            (v.grid, v.voltage_v)
+        }
     };
     let (lo, hi) = min_max(&values);
     let (black, white) = (a.black.unwrap_or(lo), a.white.unwrap_or(hi));
@@ -469,16 +478,31 @@ fn export_png(a: ExportPngArgs) -> anyhow::Result<()> {
     if clamped > 0 {
         eprintln!("warning: {clamped} cells outside black .. white are drawn as black or white");
     }
-    eprintln!(
-        "read back: haptex map from-image {} --mu-black {} --mu-white {} --pixel-mm {} --pixel-mm-y {} --x0-mm {} --y0-mm {} -o MAP.csv",
-        a.output.display(),
-        Num(black),
-        Num(white),
-        Num(grid.dx_mm),
-        Num(grid.dy_mm),
-        Num(grid.x0_mm),
-        Num(grid.y0_mm)
-    );
+    if a.quantity == "h_mm" {
+        eprintln!(
+            "read back: haptex map height --height {} --h-black-mm {} --h-white-mm {} --pixel-mm {} --pixel-mm-y {} \
+             --origin-mm {},{} -o MAP.csv",
+            a.output.display(),
+            Num(black),
+            Num(white),
+            Num(grid.dx_mm),
+            Num(grid.dy_mm),
+            Num(grid.x0_mm),
+            Num(grid.y0_mm)
+        );
+    } else {
+        eprintln!(
+            "read back: haptex map from-image {} --mu-black {} --mu-white {} --pixel-mm {} --pixel-mm-y {} --x0-mm {} \
+             --y0-mm {} -o MAP.csv",
+            a.output.display(),
+            Num(black),
+            Num(white),
+            Num(grid.dx_mm),
+            Num(grid.dy_mm),
+            Num(grid.x0_mm),
+            Num(grid.y0_mm)
+        );
+    }
     eprintln!("wrote {}", a.output.display());
     Ok(())
 }

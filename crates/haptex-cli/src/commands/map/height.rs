@@ -33,8 +33,10 @@ pub const LEAD_IN_MM: f64 = 3.0;
 /// length no bump at all. Lines with the same heights (relative to their
 /// start) are run once; one FE run takes about 0.04 s per mm of slide.
 ///
-/// The heights come from a file (--height: `x_mm,y_mm,h_mm` CSV, or NPY
-/// with its sidecar, quantity h_mm) or from a template's cross-section laid
+/// The heights come from a file (--height: `x_mm,y_mm,h_mm` CSV, NPY with
+/// its sidecar, quantity h_mm, or an 8/16-bit grayscale PNG with
+/// --h-black-mm, --h-white-mm and --pixel-mm, linear in the gray level, as
+/// `haptex map export-png --quantity h_mm` writes it) or from a template's cross-section laid
 /// along a path (--template with --path and --size-mm): a ridge (bump), a
 /// step (edge, up on the left of the path) or grooves (sine) following a
 /// polyline.
@@ -47,7 +49,8 @@ pub const LEAD_IN_MM: f64 = 3.0;
         haptex map height --height surface.npy --direction-deg 45 -o surface_mu.npy"
 )]
 pub(super) struct HeightArgs {
-    /// Height map: .csv `x_mm,y_mm,h_mm` or .npy with its sidecar (quantity h_mm).
+    /// Height map: .csv `x_mm,y_mm,h_mm`, .npy with its sidecar (quantity
+    /// h_mm) or a grayscale .png (with --h-black-mm, --h-white-mm, --pixel-mm).
     #[arg(long, value_name = "H", conflicts_with_all = ["template", "path", "size_mm"], required_unless_present = "template")]
     height: Option<PathBuf>,
     /// A template's cross-section laid along --path: bump:WIDTH,HEIGHT (a
@@ -62,12 +65,21 @@ pub(super) struct HeightArgs {
     /// With --template: the map's size W,H in mm.
     #[arg(long, value_name = "W,H")]
     size_mm: Option<String>,
-    /// With --template: cell size in mm (both axes).
+    /// With --template or a PNG: cell size in mm (both axes, unless --pixel-mm-y).
     #[arg(long, value_parser = positive)]
     pixel_mm: Option<f64>,
-    /// With --template: x and y of the first cell in mm.
-    #[arg(long, value_name = "X,Y", default_value = "0,0", allow_hyphen_values = true)]
-    origin_mm: String,
+    /// With a PNG: cell size along y in mm (default: --pixel-mm).
+    #[arg(long, value_parser = positive, requires = "pixel_mm")]
+    pixel_mm_y: Option<f64>,
+    /// With --template or a PNG: x and y of the first cell (bottom left) in mm.
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
+    origin_mm: Option<String>,
+    /// With a PNG: the height of black in mm.
+    #[arg(long, value_name = "MM", requires = "h_white_mm")]
+    h_black_mm: Option<f64>,
+    /// With a PNG: the height of white in mm.
+    #[arg(long, value_name = "MM", requires = "h_black_mm")]
+    h_white_mm: Option<f64>,
     /// Sliding direction from +x in degrees (counter-clockwise): 0 slides
     /// along +x, 90 along +y.
     #[arg(long, default_value_t = 0.0)]
@@ -94,14 +106,37 @@ pub(super) fn run(a: HeightArgs) -> anyhow::Result<()> {
     let format = MapFormat::of(&a.output)?;
     let heights_format = a.heights_out.as_deref().map(MapFormat::of).transpose()?;
     haptex_core::io::OutputTarget::of(&a.output)?;
+    let origin = a.origin_mm.as_deref().map_or(Ok((0.0, 0.0)), |o| parse_pair(o, "--origin-mm"))?;
     let heights = match (&a.height, &a.template) {
-        (Some(path), _) => read_height_map(path)?,
+        (Some(path), _) if is_png(path) => {
+            let (Some(black), Some(white)) = (a.h_black_mm, a.h_white_mm) else {
+                bail!("{}: a PNG's gray levels need --h-black-mm and --h-white-mm (mm)", path.display());
+            };
+            let pixel = a.pixel_mm.with_context(|| format!("{}: a PNG needs --pixel-mm", path.display()))?;
+            let bytes =
+                haptex_core::io::read_file_bounded(path, 256 << 20).with_context(|| format!("{}", path.display()))?;
+            let spacing = (pixel, a.pixel_mm_y.unwrap_or(pixel));
+            HeightMap::read_gray_png(&bytes, black, white, spacing, origin, &path.display().to_string())?
+        }
+        (Some(path), _) => {
+            let png_only = [
+                (a.pixel_mm.is_some(), "--pixel-mm"),
+                (a.origin_mm.is_some(), "--origin-mm"),
+                (a.h_black_mm.is_some(), "--h-black-mm"),
+            ];
+            if let Some((_, flag)) = png_only.iter().find(|(given, _)| *given) {
+                bail!("{flag} is for a PNG or a template: {} holds its own grid and heights", path.display());
+            }
+            read_height_map(path)?
+        }
         (None, Some(template)) => {
+            if a.h_black_mm.is_some() || a.pixel_mm_y.is_some() {
+                bail!("--h-black-mm, --h-white-mm and --pixel-mm-y are for a PNG height map, not a template");
+            }
             let template = parse_template(template)?;
             let path = parse_path(a.path.as_deref().context("--template needs --path")?)?;
             let size = a.size_mm.as_deref().context("--template needs --size-mm W,H")?;
             let pixel = a.pixel_mm.context("--template needs --pixel-mm")?;
-            let origin = parse_pair(&a.origin_mm, "--origin-mm")?;
             let grid = sized_grid(size, (pixel, pixel), origin)?;
             HeightMap::along_path(grid, template, &path)?
         }
@@ -233,7 +268,12 @@ fn parse_path(text: &str) -> anyhow::Result<Vec<(f64, f64)>> {
     text.split(';').enumerate().map(|(k, point)| parse_pair(point, &format!("--path, vertex {}", k + 1))).collect()
 }
 
-fn read_height_map(path: &std::path::Path) -> anyhow::Result<HeightMap> {
+fn is_png(path: &std::path::Path) -> bool {
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("png"))
+}
+
+/// A height map from .csv or .npy (with its sidecar).
+pub(super) fn read_height_map(path: &std::path::Path) -> anyhow::Result<HeightMap> {
     let name = path.display().to_string();
     Ok(match MapFormat::of(path)? {
         MapFormat::Csv => {
