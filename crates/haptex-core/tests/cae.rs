@@ -395,6 +395,25 @@ fn pruned_predictions_equal_the_sum_over_every_row() {
     assert!(pruned_queries >= 10 && left_out >= 50, "{pruned_queries} queries pruned, {left_out} rows left out");
 }
 
+/// The sum of eq. (11) reads whole quads of rows from the interleaved
+/// panels and the rest row by row (`cae::panels`): with N and M not
+/// multiples of four, from a width where every row enters (all quads whole)
+/// to one where most are left out (quads broken up), every prediction
+/// equals the brute-force sum over every row (1e-12 relative, issue 4's
+/// tolerance).
+#[test]
+fn panels_and_listed_rows_sum_to_the_brute_force() {
+    let x = random_matrix(31, 203, 3, 7);
+    for w in [2.0, 0.3, 0.1, 0.03] {
+        let cae = Cae::new(x.clone(), Widths::constant(w).unwrap()).unwrap();
+        for q in queries(&x, 32, 25) {
+            let (got, _) = cae.predict(&q).unwrap();
+            let (want, _) = brute_force_every_row(&x, w, &q);
+            assert_relative(&got, &want, 1e-12, &format!("w {w}"));
+        }
+    }
+}
+
 /// Pruning weighs a row's outputs, not only its weight: one model vector
 /// whose outputs are 1e15 times the others' has a relative weight of
 /// e^-45 = 2.9e-20 at the query, which alone would be negligible, but its

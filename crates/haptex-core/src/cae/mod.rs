@@ -12,7 +12,9 @@
 //!   w_nl, constant or between w_min and w_max by the local density of model
 //!   vectors, and the log-space Gaussian of eq. (12);
 //! - [`Cae`] (`predict`): prediction by eq. (11) into a caller's buffer,
-//!   without allocation, with a per-query extrapolation diagnostic;
+//!   without allocation, with a per-query extrapolation diagnostic; its
+//!   outputs also laid out for one sequential read (`panels`) and the rows
+//!   that cannot matter left out (`prune`);
 //! - [`Loo`] and [`optimize_widths`] (`loo`): leave-one-out error and the
 //!   search for the widths that minimize it;
 //! - `nelder_mead`: the simplex minimizer that search uses.
@@ -25,6 +27,7 @@ mod loo;
 mod matrix;
 pub mod nelder_mead;
 mod normalize;
+mod panels;
 mod predict;
 mod prune;
 mod widths;

@@ -15,12 +15,15 @@
 //! more than PRUNE_RELATIVE = 1e-16 of its value are not read at all
 //! (`prune`, which states the bound).
 //!
-//! Memory layout for speed: outputs are stored row-major, so eq. (11) is a
-//! sum of contiguous rows a_n C_n over the listed rows, accumulated four
-//! rows at a time into the caller's output buffer. A prediction allocates
+//! Memory layout for speed: besides the row-major outputs, the estimator
+//! keeps them in quads of rows interleaved four outputs at a time
+//! (`panels`), so that eq. (11) over most of the rows reads one sequential
+//! stream; a prediction that uses few rows (narrow kernels) sums just the
+//! listed rows from the row-major outputs instead. A prediction allocates
 //! nothing.
 
-use super::prune::{Pruning, weighted_sum};
+use super::panels::Panels;
+use super::prune::{Pruning, add_weighted_rows, weighted_sum};
 use super::widths::transpose;
 use super::{CaeError, Density, Kernel, ModelMatrix, Normalization, Widths};
 use crate::num::Num;
@@ -50,6 +53,8 @@ pub struct Cae {
     x_t: Vec<f64>,
     /// Which model vectors a prediction may leave out.
     pruning: Pruning,
+    /// The outputs in quads of rows, for one prediction's sum.
+    panels: Panels,
 }
 
 /// Per-query working memory (one value per model vector). Make one with
@@ -63,6 +68,8 @@ pub struct Scratch {
     /// `Diagnostics::weights_used`).
     rows: Vec<usize>,
     weights: Vec<f64>,
+    /// Every row's weight (0 if left out), padded to whole quads.
+    dense: Vec<f64>,
 }
 
 /// Queries a batched prediction puts into one matrix product: a block's
@@ -129,7 +136,8 @@ impl Cae {
         kernel.set(&norm, &w);
         let x_t = transpose(&norm.normalize_rows(matrix.inputs_flat()), d);
         let pruning = Pruning::new(&matrix);
-        Ok(Self { matrix, norm, widths, w, kernel, x_t, pruning })
+        let panels = Panels::new(matrix.outputs_flat(), n, matrix.m());
+        Ok(Self { matrix, norm, widths, w, kernel, x_t, pruning, panels })
     }
 
     /// The model matrix.
@@ -163,7 +171,14 @@ impl Cae {
     /// Working memory for [`Cae::predict_into`].
     pub fn scratch(&self) -> Scratch {
         let (n, d) = (self.matrix.n(), self.matrix.d());
-        Scratch { log_a: vec![0.0; n], d2: vec![0.0; n], query: vec![0.0; d], rows: vec![0; n], weights: vec![0.0; n] }
+        Scratch {
+            log_a: vec![0.0; n],
+            d2: vec![0.0; n],
+            query: vec![0.0; d],
+            rows: vec![0; n],
+            weights: vec![0.0; n],
+            dense: vec![0.0; 4 * self.panels.quads()],
+        }
     }
 
     /// Predicts the M outputs at the input vector `b` (D values in the
@@ -176,9 +191,23 @@ impl Cae {
         }
         let (diagnostics, sum) = self.weights(b, scratch)?;
         // Eq. (11) over the listed rows, then the division by the sum of
-        // every weight.
+        // every weight: the quads whose four rows are all listed from the
+        // panels (one sequential read), the other listed rows one by one.
         let used = diagnostics.weights_used;
-        weighted_sum(self.matrix.outputs_flat(), m, &scratch.rows[..used], &scratch.weights[..used], out);
+        scratch.dense.fill(0.0);
+        let (mut read, mut rest) = (0, 0);
+        while read < used {
+            let row = scratch.rows[read];
+            if row.is_multiple_of(4) && read + 3 < used && scratch.rows[read + 3] == row + 3 {
+                scratch.dense[row..row + 4].copy_from_slice(&scratch.weights[read..read + 4]);
+                read += 4;
+            } else {
+                (scratch.rows[rest], scratch.weights[rest]) = (row, scratch.weights[read]);
+                (read, rest) = (read + 1, rest + 1);
+            }
+        }
+        self.panels.weighted_sum(&scratch.dense, out);
+        add_weighted_rows(self.matrix.outputs_flat(), m, &scratch.rows[..rest], &scratch.weights[..rest], out);
         let inv = 1.0 / sum;
         for o in out.iter_mut() {
             *o *= inv;
@@ -199,7 +228,8 @@ impl Cae {
             return Err(CaeError::Query(format!("input '{}' is not finite: {}", self.matrix.inputs()[l], b[l])));
         }
         let scratch_ok = [scratch.log_a.len(), scratch.d2.len(), scratch.rows.len(), scratch.weights.len()] == [n; 4]
-            && scratch.query.len() == d;
+            && scratch.query.len() == d
+            && scratch.dense.len() == 4 * self.panels.quads();
         if !scratch_ok {
             return Err(CaeError::Query(format!(
                 "{} scratch values for a model with {n} rows: make the scratch with Cae::scratch",
