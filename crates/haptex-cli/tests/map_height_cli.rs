@@ -21,6 +21,18 @@ fn run_ok(args: &[&str]) -> String {
     stderr(&out)
 }
 
+/// Each `haptex map height` command line fails, its error contains the
+/// text given, and `out_path` is not written.
+fn assert_refused(out_path: &str, cases: Vec<(Vec<&str>, &str)>) {
+    for (args, want) in cases {
+        let all = [&["map", "height"][..], &args, &["-o", out_path]].concat();
+        let out = haptex(&all);
+        assert!(!out.status.success(), "{all:?}");
+        assert!(stderr(&out).contains(want), "{all:?}: {}", stderr(&out));
+        assert!(!std::path::Path::new(out_path).exists());
+    }
+}
+
 /// `haptex simulate` of a bump (analytic template) placed where a map
 /// line's bump is: the map's line starts 3 mm (the lead-in) after the
 /// finger, so a bump at x on the map is at x + 3 in the run, which slides
@@ -146,17 +158,9 @@ fn bad_height_input_is_refused() {
         ([&["--template", "bump:-1,0.1", "--path", "0,0;4,1"][..], &grid].concat(), "width"),
         (vec!["--template", "bump:1,0.1", "--path", "0,0;4,1"], "--size-mm"),
     ];
-    let out_path = p("out.csv");
-    for (args, want) in cases {
-        let all = [&["map", "height"][..], &args, &["-o", &out_path]].concat();
-        let out = haptex(&all);
-        assert!(!out.status.success(), "{all:?}");
-        assert!(stderr(&out).contains(want), "{all:?}: {}", stderr(&out));
-        assert!(!std::path::Path::new(&out_path).exists());
-    }
     let h = write(dir.path(), "h.csv", "x_mm,y_mm,h_mm\n0,0,0\n1,0,0\n0,1,nan\n1,1,0\n");
-    let out = haptex(&["map", "height", "--height", &h, "-o", &out_path]);
-    assert!(!out.status.success() && stderr(&out).contains("line 4"), "{}", stderr(&out));
+    let nan = (vec!["--height", h.as_str()], "line 4");
+    assert_refused(&p("out.csv"), cases.into_iter().chain([nan]).collect());
 }
 
 /// A height map through a grayscale PNG and back: `map export-png
@@ -226,12 +230,5 @@ fn png_height_input_is_checked() {
         (vec!["--height", &h, "--pixel-mm", "0.1"], "--pixel-mm is for a PNG or a template"),
         (vec!["--height", &h, "--origin-mm", "1,1"], "--origin-mm is for a PNG or a template"),
     ];
-    let out_path = p("out.csv");
-    for (args, want) in cases {
-        let all = [&["map", "height"][..], &args, &["-o", &out_path]].concat();
-        let out = haptex(&all);
-        assert!(!out.status.success(), "{all:?}");
-        assert!(stderr(&out).contains(want), "{all:?}: {}", stderr(&out));
-        assert!(!std::path::Path::new(&out_path).exists());
-    }
+    assert_refused(&p("out.csv"), cases);
 }

@@ -478,31 +478,24 @@ fn export_png(a: ExportPngArgs) -> anyhow::Result<()> {
     if clamped > 0 {
         eprintln!("warning: {clamped} cells outside black .. white are drawn as black or white");
     }
-    if a.quantity == "h_mm" {
-        eprintln!(
-            "read back: haptex map height --height {} --h-black-mm {} --h-white-mm {} --pixel-mm {} --pixel-mm-y {} \
-             --origin-mm {},{} -o MAP.csv",
+    let pixels = format!("--pixel-mm {} --pixel-mm-y {}", Num(grid.dx_mm), Num(grid.dy_mm));
+    let (x0, y0) = (Num(grid.x0_mm), Num(grid.y0_mm));
+    let read_back = if a.quantity == "h_mm" {
+        format!(
+            "map height --height {} --h-black-mm {} --h-white-mm {} {pixels} --origin-mm {x0},{y0}",
             a.output.display(),
             Num(black),
-            Num(white),
-            Num(grid.dx_mm),
-            Num(grid.dy_mm),
-            Num(grid.x0_mm),
-            Num(grid.y0_mm)
-        );
+            Num(white)
+        )
     } else {
-        eprintln!(
-            "read back: haptex map from-image {} --mu-black {} --mu-white {} --pixel-mm {} --pixel-mm-y {} --x0-mm {} \
-             --y0-mm {} -o MAP.csv",
+        format!(
+            "map from-image {} --mu-black {} --mu-white {} {pixels} --x0-mm {x0} --y0-mm {y0}",
             a.output.display(),
             Num(black),
-            Num(white),
-            Num(grid.dx_mm),
-            Num(grid.dy_mm),
-            Num(grid.x0_mm),
-            Num(grid.y0_mm)
-        );
-    }
+            Num(white)
+        )
+    };
+    eprintln!("read back: haptex {read_back} -o MAP.csv");
     eprintln!("wrote {}", a.output.display());
     Ok(())
 }
