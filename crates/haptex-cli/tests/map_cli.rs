@@ -283,6 +283,31 @@ fn play_over_a_map_along_a_row_is_the_profile_playback() {
         haptex(&["play", "--voltage-map", &p("v.npy"), "--trajectory", &tr2, "--outside", "zero", "-o", &p("s4.csv")]);
     assert!(!out.status.success() && stderr(&out).contains("--outside zero) is for a profile"), "{}", stderr(&out));
     assert!(!std::path::Path::new(&p("s4.csv")).exists());
+    // A combined display's map (voltage_v beside amplitude_um): its voltages
+    // assume the plate's amplitudes, so a one-channel drive over it is
+    // refused, naming the column, as a combined profile is (issue 16).
+    run_ok(&[
+        "map",
+        "voltage",
+        "--map",
+        &p("m.csv"),
+        "--display",
+        "combined",
+        "--strategy",
+        "split",
+        "-o",
+        &p("vc.csv"),
+    ]);
+    for command in ["play", "map"] {
+        let out = if command == "play" {
+            haptex(&["play", "--voltage-map", &p("vc.csv"), "--trajectory", &tr2, "-o", &p("s5.wav")])
+        } else {
+            haptex(&["map", "sample-path", "--voltage-map", &p("vc.csv"), "--trajectory", &tr2, "-o", &p("s5.wav")])
+        };
+        let e = stderr(&out);
+        assert!(!out.status.success() && e.contains("amplitude_um") && e.contains("combined"), "{command}: {e}");
+        assert!(!std::path::Path::new(&p("s5.wav")).exists());
+    }
 }
 
 /// `haptex map compose`: a 4 x 3 label image with three gray levels, a

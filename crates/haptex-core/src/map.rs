@@ -354,6 +354,16 @@ pub fn read_grid_csv<R: std::io::Read>(
         })
     };
     let (x, y, mu) = (col("x_mm")?, col("y_mm")?, col(quantity.name)?);
+    if quantity.name == ranges::VOLTAGE_V.name && table.column("amplitude_um").is_some() {
+        // As `VoltageCurve::from_table` refuses such a profile.
+        return Err(MapError::new(
+            source_name,
+            Some("amplitude_um".into()),
+            "this map was designed for a combined or ultrasonic display: its voltages assume the plate amplitudes \
+             beside them, which a voltage-only reader cannot apply (two-channel playback over a map is not built); \
+             design it with haptex map voltage --display electrovibration",
+        ));
+    }
     let n = x.len();
     let line = |k: usize| Some(format!("line {}", table.line_of_row(k)));
     // nx: the first row whose y differs from the first y.
