@@ -18,7 +18,6 @@ const LANES: usize = 4;
 #[derive(Debug, Clone)]
 pub(crate) struct Panels {
     data: Vec<f64>,
-    n: usize,
     m: usize,
     /// Blocks of four outputs per quad: ceil(M / 4).
     blocks: usize,
@@ -37,39 +36,34 @@ impl Panels {
                 data[((q * blocks + j) * LANES + i) * LANES + l] = v;
             }
         }
-        Self { data, n, m, blocks }
+        Self { data, m, blocks }
     }
 
-    /// Quads of rows (N / 4 rounded up).
-    pub(crate) fn quads(&self) -> usize {
-        self.n.div_ceil(LANES)
-    }
-
-    /// out = sum over every row of a_n C_n (eq. 11 before the division by
-    /// the sum of the weights), `a` the N weights padded with zeros to
-    /// 4 x [`Panels::quads`] values; a quad whose four weights are all 0
-    /// is not read. Each output is updated per quad as
+    /// out = sum over the quads q for which `quad_weights(q)` gives the
+    /// weights of its four rows 4q .. 4q + 3 of their a_n C_n (eq. 11
+    /// before the division by the sum of the weights); a quad it gives
+    /// None is not read. `quad_weights` is called once per quad, in order
+    /// (also for the quads past the last row, none). Each output is
+    /// updated per quad as
     /// out_k += ((a_0 c_0k + a_1 c_1k) + a_2 c_2k) + a_3 c_3k (no fused
     /// multiply-add), so the AVX2 build used where the CPU has it gives the
-    /// same bits as the portable one, and a quad of four listed rows adds
-    /// exactly what `prune::weighted_sum` adds for it.
-    pub(crate) fn weighted_sum(&self, a: &[f64], out: &mut [f64]) {
-        assert!(a.len() == self.quads() * LANES && out.len() == self.m, "weights per padded row, M outputs");
+    /// same bits as the portable one, and a quad adds exactly what
+    /// `prune::add_weighted_rows` adds for its four rows.
+    pub(crate) fn sum_quads(&self, out: &mut [f64], quad_weights: impl FnMut(usize) -> Option<[f64; 4]>) {
+        assert_eq!(out.len(), self.m, "M outputs");
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2, checked just above; the
-            // lengths were checked above.
-            return unsafe { self.weighted_sum_avx2(a, out) };
+            // length was checked above.
+            return unsafe { self.sum_quads_avx2(out, quad_weights) };
         }
-        self.weighted_sum_portable(a, out)
+        self.sum_quads_portable(out, quad_weights)
     }
 
-    fn weighted_sum_portable(&self, a: &[f64], out: &mut [f64]) {
+    fn sum_quads_portable(&self, out: &mut [f64], mut quad_weights: impl FnMut(usize) -> Option<[f64; 4]>) {
         let mut acc = vec![0.0; self.blocks * LANES];
-        for (quad, w) in self.data.chunks_exact(self.blocks * LANES * LANES).zip(a.chunks_exact(LANES)) {
-            if w.iter().all(|&v| v == 0.0) {
-                continue;
-            }
+        for (q, quad) in self.data.chunks_exact(self.blocks * LANES * LANES).enumerate() {
+            let Some(w) = quad_weights(q) else { continue };
             for (o, v) in acc.chunks_exact_mut(LANES).zip(quad.chunks_exact(LANES * LANES)) {
                 for l in 0..LANES {
                     o[l] += ((w[0] * v[l] + w[1] * v[4 + l]) + w[2] * v[8 + l]) + w[3] * v[12 + l];
@@ -82,21 +76,19 @@ impl Panels {
     /// The AVX2 build: one register per block of four outputs.
     ///
     /// # Safety
-    /// The CPU must support AVX2; `a` holds 4 x quads weights and `out` M
-    /// values (checked by the caller).
+    /// The CPU must support AVX2; `out` holds M values (checked by the
+    /// caller).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn weighted_sum_avx2(&self, a: &[f64], out: &mut [f64]) {
+    unsafe fn sum_quads_avx2(&self, out: &mut [f64], mut quad_weights: impl FnMut(usize) -> Option<[f64; 4]>) {
         use std::arch::x86_64::{_mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_storeu_pd};
         let whole = self.m / LANES;
         let (body, tail) = out.split_at_mut(whole * LANES);
         body.fill(0.0);
         let mut last = [0.0f64; LANES];
         let quad_len = self.blocks * LANES * LANES;
-        for (quad, w) in self.data.chunks_exact(quad_len).zip(a.chunks_exact(LANES)) {
-            if w.iter().all(|&v| v == 0.0) {
-                continue;
-            }
+        for (q, quad) in self.data.chunks_exact(quad_len).enumerate() {
+            let Some(w) = quad_weights(q) else { continue };
             let p = quad.as_ptr();
             // SAFETY: block j of a quad is quad[16 j .. 16 j + 16], j <
             // blocks; body holds `whole` blocks of four and `last` one.
@@ -139,15 +131,19 @@ mod tests {
         for (n, m) in [(1, 1), (4, 4), (5, 7), (13, 501), (16, 3)] {
             let c: Vec<f64> = (0..n * m).map(|k| ((k * 7919) % 1000) as f64 / 997.0 - 0.3).collect();
             let panels = Panels::new(&c, n, m);
-            let mut a = vec![0.0; panels.quads() * LANES];
+            let mut a = vec![0.0; n.div_ceil(LANES) * LANES];
             for (r, w) in a.iter_mut().enumerate().take(n) {
                 // The second quad all zero: skipped.
                 *w = if r / 4 == 1 { 0.0 } else { 1.0 / (1.0 + r as f64) };
             }
+            let nonzero = |q: usize| {
+                let w = [a[4 * q], a[4 * q + 1], a[4 * q + 2], a[4 * q + 3]];
+                (w != [0.0; 4]).then_some(w)
+            };
             let mut out = vec![f64::NAN; m];
-            panels.weighted_sum(&a, &mut out);
+            panels.sum_quads(&mut out, nonzero);
             let mut portable = vec![f64::NAN; m];
-            panels.weighted_sum_portable(&a, &mut portable);
+            panels.sum_quads_portable(&mut portable, nonzero);
             assert_eq!(
                 out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
                 portable.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),

@@ -68,8 +68,6 @@ pub struct Scratch {
     /// `Diagnostics::weights_used`).
     rows: Vec<usize>,
     weights: Vec<f64>,
-    /// Every row's weight (0 if left out), padded to whole quads.
-    dense: Vec<f64>,
 }
 
 /// Queries a batched prediction puts into one matrix product: a block's
@@ -171,14 +169,7 @@ impl Cae {
     /// Working memory for [`Cae::predict_into`].
     pub fn scratch(&self) -> Scratch {
         let (n, d) = (self.matrix.n(), self.matrix.d());
-        Scratch {
-            log_a: vec![0.0; n],
-            d2: vec![0.0; n],
-            query: vec![0.0; d],
-            rows: vec![0; n],
-            weights: vec![0.0; n],
-            dense: vec![0.0; 4 * self.panels.quads()],
-        }
+        Scratch { log_a: vec![0.0; n], d2: vec![0.0; n], query: vec![0.0; d], rows: vec![0; n], weights: vec![0.0; n] }
     }
 
     /// Predicts the M outputs at the input vector `b` (D values in the
@@ -194,20 +185,23 @@ impl Cae {
         // every weight: the quads whose four rows are all listed from the
         // panels (one sequential read), the other listed rows one by one.
         let used = diagnostics.weights_used;
-        scratch.dense.fill(0.0);
+        let (rows, weights) = (&mut scratch.rows, &mut scratch.weights);
+        // The list is in row order: quad q's rows, if listed, are next.
         let (mut read, mut rest) = (0, 0);
-        while read < used {
-            let row = scratch.rows[read];
-            if row.is_multiple_of(4) && read + 3 < used && scratch.rows[read + 3] == row + 3 {
-                scratch.dense[row..row + 4].copy_from_slice(&scratch.weights[read..read + 4]);
+        self.panels.sum_quads(out, |q| {
+            let first = 4 * q;
+            if read + 3 < used && rows[read] == first && rows[read + 3] == first + 3 {
                 read += 4;
-            } else {
-                (scratch.rows[rest], scratch.weights[rest]) = (row, scratch.weights[read]);
+                return Some([weights[read - 4], weights[read - 3], weights[read - 2], weights[read - 1]]);
+            }
+            // A quad with some rows listed: they are summed one by one after.
+            while read < used && rows[read] < first + 4 {
+                (rows[rest], weights[rest]) = (rows[read], weights[read]);
                 (read, rest) = (read + 1, rest + 1);
             }
-        }
-        self.panels.weighted_sum(&scratch.dense, out);
-        add_weighted_rows(self.matrix.outputs_flat(), m, &scratch.rows[..rest], &scratch.weights[..rest], out);
+            None
+        });
+        add_weighted_rows(self.matrix.outputs_flat(), m, &rows[..rest], &weights[..rest], out);
         let inv = 1.0 / sum;
         for o in out.iter_mut() {
             *o *= inv;
@@ -228,8 +222,7 @@ impl Cae {
             return Err(CaeError::Query(format!("input '{}' is not finite: {}", self.matrix.inputs()[l], b[l])));
         }
         let scratch_ok = [scratch.log_a.len(), scratch.d2.len(), scratch.rows.len(), scratch.weights.len()] == [n; 4]
-            && scratch.query.len() == d
-            && scratch.dense.len() == 4 * self.panels.quads();
+            && scratch.query.len() == d;
         if !scratch_ok {
             return Err(CaeError::Query(format!(
                 "{} scratch values for a model with {n} rows: make the scratch with Cae::scratch",
