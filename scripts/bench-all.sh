@@ -113,22 +113,16 @@ step 35-library-import hyperfine -w 1 -r 10 --prepare "rm -f $WORK/lib.sqlite*" 
 step 36-simulate hyperfine -w 1 -r 5 \
     "$HAPTEX simulate --surface bump --x0 5 --width 1.5 --height 0.3 -o $WORK/b.csv -q" \
     "$HAPTEX simulate --finger data/finger/half-disc.toml --material elastic --surface bump -o $WORK/h.csv -q"
-python3 - "$WORK" <<'PY'
+# The model matrix of the CAE benches (405 x (4 + 500), no noise), for
+# `cae loo`: the synthetic case of compare_cae_numpy.py.
+python3 -c "
 import sys
+sys.path.insert(0, 'scripts')
+from compare_cae_numpy import synthetic, write_csv
 import numpy as np
-# The model matrix of the CAE benches (405 x (4 + 500), no noise), for `cae loo`.
-g = np.array([(0.5 + 0.25 * i, 0.1 + 0.1 * j, 10.0 + 20.0 * k, 0.4 + 0.1 * l)
-              for i in range(9) for j in range(5) for k in range(3) for l in range(3)])
-x = np.linspace(0, 10, 500)
-rw, rh, v, mu = (g[:, c:c + 1] for c in range(4))
-u = (x[None, :] - 5) / rw
-out = mu * (1 - 0.6 * rh * u * np.exp(-u * u) * (1 + 0.002 * v))
-n = ["r_w", "r_h", "v", "mu"]
-with open(f"{sys.argv[1]}/m500.csv", "w") as f:
-    f.write(",".join(n + [f"c{k}" for k in range(500)]) + "\n")
-    for r in np.hstack([g, out]):
-        f.write(",".join(repr(float(a)) for a in r) + "\n")
-PY
+names, inputs, outputs = synthetic()
+write_csv('$WORK/m500.csv', names, np.hstack([inputs, outputs]))
+"
 step 37-cae-loo hyperfine -w 1 -r 10 \
     "$HAPTEX cae loo --model $WORK/m500.csv --inputs r_w,r_h,v,mu -o $WORK/l.json" \
     "$HAPTEX cae loo --model $WORK/m500.csv --inputs r_w,r_h,v,mu --constant -o $WORK/l.json"
