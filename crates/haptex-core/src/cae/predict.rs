@@ -17,10 +17,10 @@
 //!
 //! Memory layout for speed: besides the row-major outputs, the estimator
 //! keeps them in quads of rows interleaved four outputs at a time
-//! (`panels`), so that eq. (11) over most of the rows reads one sequential
-//! stream; a prediction that uses few rows (narrow kernels) sums just the
-//! listed rows from the row-major outputs instead. A prediction allocates
-//! nothing.
+//! (`panels`), so that eq. (11) over the quads whose four rows all enter
+//! reads one sequential stream; the other rows that enter (with narrow
+//! kernels, most of them) are summed one by one from the row-major
+//! outputs. A prediction allocates nothing.
 
 use super::panels::Panels;
 use super::prune::{Pruning, add_weighted_rows, weighted_sum};
@@ -65,7 +65,8 @@ pub struct Scratch {
     d2: Vec<f64>,
     query: Vec<f64>,
     /// The rows that enter eq. (11) and their weights (the first
-    /// `Diagnostics::weights_used`).
+    /// `Diagnostics::weights_used`), as `weights` lists them;
+    /// `predict_into` overwrites the list as it sums.
     rows: Vec<usize>,
     weights: Vec<f64>,
 }
