@@ -62,12 +62,13 @@ fn bench(c: &mut Criterion) {
     // read (the N x M outputs, 1.62 MB), summed in 16 independent
     // accumulators, nothing else. A prediction cannot be faster than this
     // on the machine it runs on; BENCHMARKS.md reports the ratio
-    // predict_constant / stream_floor. The predicting Cae's own row-major
-    // matrix (not a copy made for the benchmark), read with AVX2 where the
-    // CPU has it: the fastest plain read measured on AMD EPYC, 2026-11-25
-    // (the two-lane build was 13% slower, AVX-512 2% slower).
-    let outputs = constant.matrix().outputs_flat();
-    group.bench_function("stream_floor_outputs_1.62MB", |b| b.iter(|| stream_sum(black_box(outputs))));
+    // predict_constant / stream_floor. The outputs copied into 64-byte
+    // aligned chunks (where the allocator put an unaligned copy, the same
+    // read was 9% slower: AMD EPYC, 2026-11-26) and read with AVX2 where
+    // the CPU has it: the fastest plain read measured on AMD EPYC,
+    // 2026-11-25 (the two-lane build was 13% slower, AVX-512 2% slower).
+    let outputs = aligned_chunks(constant.matrix().outputs_flat());
+    group.bench_function("stream_floor_outputs_1.62MB", |b| b.iter(|| stream_sum(black_box(&outputs))));
     // 256 queries at once (four blocks), per call; divide by 256 for the
     // time per query.
     let batch: Vec<f64> = (0..256)
@@ -99,8 +100,24 @@ fn bench(c: &mut Criterion) {
     group.finish();
 }
 
+/// Sixteen doubles on a 64-byte boundary.
+#[derive(Clone, Copy)]
+#[repr(C, align(64))]
+struct Chunk([f64; 16]);
+
+/// `v` in aligned chunks, the last one padded with zeros.
+fn aligned_chunks(v: &[f64]) -> Vec<Chunk> {
+    v.chunks(16)
+        .map(|c| {
+            let mut chunk = Chunk([0.0; 16]);
+            chunk.0[..c.len()].copy_from_slice(c);
+            chunk
+        })
+        .collect()
+}
+
 /// The sum of `v` in 16 accumulators: a streaming read.
-fn stream_sum(v: &[f64]) -> [f64; 16] {
+fn stream_sum(v: &[Chunk]) -> [f64; 16] {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2, checked just above.
@@ -111,14 +128,14 @@ fn stream_sum(v: &[f64]) -> [f64; 16] {
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn stream_sum_avx2(v: &[f64]) -> [f64; 16] {
+fn stream_sum_avx2(v: &[Chunk]) -> [f64; 16] {
     stream_sum_lanes(v)
 }
 
 #[inline(always)]
-fn stream_sum_lanes(v: &[f64]) -> [f64; 16] {
+fn stream_sum_lanes(v: &[Chunk]) -> [f64; 16] {
     let mut acc = [0.0f64; 16];
-    for chunk in v.chunks_exact(16) {
+    for Chunk(chunk) in v {
         for (a, x) in acc.iter_mut().zip(chunk) {
             *a += x;
         }

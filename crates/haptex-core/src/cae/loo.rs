@@ -173,18 +173,19 @@ impl<'a> Loo<'a> {
 
 /// Row i of the LOO weight matrix: the normalized weights of eq. (12) of
 /// every model vector for the query b_i, with w_ii = 0. Runs the AVX2 build
-/// of the same code when the CPU has it.
+/// of the same code when the CPU has it (with FMA, which `exp_near_zero`
+/// uses; without it that is a libm call).
 fn weight_row(kernel: &Kernel, x_t: &[f64], bi: &[f64], i: usize, row: &mut [f64]) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2, checked just above.
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the CPU supports AVX2 and FMA, checked just above.
         return unsafe { weight_row_avx2(kernel, x_t, bi, i, row) };
     }
     weight_row_lanes(kernel, x_t, bi, i, row)
 }
 
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
+#[target_feature(enable = "avx2,fma")]
 fn weight_row_avx2(kernel: &Kernel, x_t: &[f64], bi: &[f64], i: usize, row: &mut [f64]) {
     weight_row_lanes(kernel, x_t, bi, i, row)
 }

@@ -94,6 +94,52 @@ impl Pruning {
     }
 }
 
+impl Pruning {
+    /// The rows [`Pruning::select`] lists, sorted by quads (rows 4q to
+    /// 4q + 3): the quads whose four rows are all kept go to `quads` and
+    /// `quad_weights`, the other kept rows to `rows` and `row_weights`,
+    /// both in row order; returns how many of each. Without branches on
+    /// single rows: every slot of `rows` up to N may be written.
+    pub(crate) fn classify(
+        &self,
+        weights: &[f64],
+        sum: f64,
+        quads: &mut [usize],
+        quad_weights: &mut [[f64; 4]],
+        rows: &mut [usize],
+        row_weights: &mut [f64],
+    ) -> (usize, usize) {
+        let n = weights.len();
+        let (rows, row_weights) = (&mut rows[..n], &mut row_weights[..n]);
+        let (quads, quad_weights) = (&mut quads[..n / 4], &mut quad_weights[..n / 4]);
+        // The rule of `select`: rho_n >= 1 and the threshold is >= 0, so a
+        // zero weight is never kept.
+        let threshold = PRUNE_RELATIVE * sum / n as f64;
+        let ratio = &self.ratio;
+        let keep = |row: usize, a: f64| if ratio.is_empty() { a > 0.0 } else { a * ratio[row] > threshold };
+        let (mut whole, mut rest) = (0, 0);
+        for (q, a) in weights.chunks_exact(4).enumerate() {
+            let a = [a[0], a[1], a[2], a[3]];
+            let kept = [0, 1, 2, 3].map(|i| keep(4 * q + i, a[i]));
+            if kept == [true; 4] {
+                (quads[whole], quad_weights[whole]) = (q, a);
+                whole += 1;
+            } else {
+                for i in 0..4 {
+                    (rows[rest], row_weights[rest]) = (4 * q + i, a[i]);
+                    rest += usize::from(kept[i]);
+                }
+            }
+        }
+        let first = n - n % 4;
+        for (row, &a) in weights.iter().enumerate().skip(first) {
+            (rows[rest], row_weights[rest]) = (row, a);
+            rest += usize::from(keep(row, a));
+        }
+        (whole, rest)
+    }
+}
+
 /// out = sum over the listed rows of a_n C_n, C the N x M outputs
 /// row-major (eq. 11 before the division by the sum of the weights).
 pub(crate) fn weighted_sum(c: &[f64], m: usize, rows: &[usize], weights: &[f64], out: &mut [f64]) {
@@ -191,6 +237,57 @@ mod tests {
             }
         }
         assert!(left_out_total > 100, "only {left_out_total} rows left out");
+    }
+
+    /// `classify` keeps exactly the rows `select` lists, with their
+    /// weights: the wholly kept quads in `quads`, the rest in row order,
+    /// for N a multiple of four and not, pruning active and not.
+    #[test]
+    fn classify_keeps_the_rows_select_lists() {
+        let names = |p: &str, k: usize| (0..k).map(|i| format!("{p}{i}")).collect::<Vec<_>>();
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut uniform = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut wholes, mut rests) = (0, 0);
+        for (n, sign) in [(40, 1.0), (43, 1.0), (43, -1.0)] {
+            // One output of one sign (pruning) or of both (none).
+            let c: Vec<f64> =
+                (0..n).map(|i| if i % 2 == 0 { 1.0 + uniform() } else { sign * (1.0 + uniform()) }).collect();
+            let b: Vec<f64> = (0..n).map(|i| i as f64).collect();
+            let pruning = Pruning::new(&ModelMatrix::new(names("b", 1), names("c", 1), b, c).unwrap());
+            assert_eq!(pruning.is_active(), sign > 0.0);
+            for trial in 0..20 {
+                // Runs of kept and dropped rows: whole quads, partial ones.
+                let a: Vec<f64> = (0..n)
+                    .map(|r| if (r / (trial % 5 + 1) + trial) % 3 == 0 { 0.0 } else { (-46.0 * uniform()).exp() })
+                    .collect();
+                let sum: f64 = a.iter().sum();
+                let (mut rows, mut weights) = (vec![0; n], vec![0.0; n]);
+                let used = pruning.select(&a, sum, &mut rows, &mut weights);
+                let (mut quads, mut quad_weights) = (vec![0; n / 4], vec![[0.0; 4]; n / 4]);
+                let (mut rest_rows, mut rest_weights) = (vec![0; n], vec![0.0; n]);
+                let (whole, rest) =
+                    pruning.classify(&a, sum, &mut quads, &mut quad_weights, &mut rest_rows, &mut rest_weights);
+                let mut listed: Vec<(usize, f64)> = quads[..whole]
+                    .iter()
+                    .zip(&quad_weights[..whole])
+                    .flat_map(|(&q, w)| (0..4).map(move |i| (4 * q + i, w[i])))
+                    .chain(rest_rows[..rest].iter().copied().zip(rest_weights[..rest].iter().copied()))
+                    .collect();
+                assert!(rest_rows[..rest].windows(2).all(|w| w[0] < w[1]));
+                assert!(rest_rows[..rest].iter().all(|&r| r >= 4 * (n / 4) || !quads[..whole].contains(&(r / 4))));
+                listed.sort_by_key(|&(r, _)| r);
+                let selected: Vec<(usize, f64)> =
+                    rows[..used].iter().copied().zip(weights[..used].iter().copied()).collect();
+                assert_eq!(listed, selected, "N {n}, trial {trial}");
+                (wholes, rests) = (wholes + whole, rests + rest);
+            }
+        }
+        assert!(wholes > 50 && rests > 50, "{wholes} whole quads, {rests} other rows");
     }
 
     /// An output that changes sign or is zero somewhere disables pruning:

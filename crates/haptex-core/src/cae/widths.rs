@@ -216,6 +216,39 @@ impl Kernel {
         }
     }
 
+    /// [`Kernel::log_weights`] and, in the same pass, the squared
+    /// normalized distances sum_l (b_l - b_nl)^2 over the inputs
+    /// `in_distance(l)` is true for, into `d2`.
+    #[inline(always)]
+    pub fn log_weights_and_distances(
+        &self,
+        x_t: &[f64],
+        b: &[f64],
+        in_distance: impl Fn(usize) -> bool,
+        log_a: &mut [f64],
+        d2: &mut [f64],
+    ) {
+        let n = self.n;
+        let (log_a, d2) = (&mut log_a[..n], &mut d2[..n]);
+        log_a.copy_from_slice(&self.log_norm);
+        d2.fill(0.0);
+        for (l, &bl) in b.iter().enumerate().take(self.d) {
+            let (coef, x) = (&self.coef_t[l * n..(l + 1) * n], &x_t[l * n..(l + 1) * n]);
+            if in_distance(l) {
+                for (((a, s), c), x) in log_a.iter_mut().zip(d2.iter_mut()).zip(coef).zip(x) {
+                    let diff = bl - x;
+                    *a -= c * diff * diff;
+                    *s += diff * diff;
+                }
+            } else {
+                for ((a, c), x) in log_a.iter_mut().zip(coef).zip(x) {
+                    let diff = bl - x;
+                    *a -= c * diff * diff;
+                }
+            }
+        }
+    }
+
     /// The log normalizers -sum_l ln w_nl.
     pub fn log_norm(&self) -> &[f64] {
         &self.log_norm
