@@ -191,6 +191,16 @@ fn add_weighted_rows_lanes(c: &[f64], m: usize, rows: &[usize], weights: &[f64],
 mod tests {
     use super::*;
 
+    /// Uniform numbers in [0, 1) from a xorshift generator with this seed.
+    fn uniform_from(mut state: u64) -> impl FnMut() -> f64 {
+        move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     /// The bound of the module doc, checked directly: for random weights
     /// spanning 1 .. e^-46 and outputs of one sign per column with
     /// magnitudes over two decades, the rows `select` leaves out change no
@@ -200,13 +210,7 @@ mod tests {
     #[test]
     fn rows_left_out_change_no_output_by_more_than_the_bound() {
         let (n, m) = (300, 6);
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut uniform = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = uniform_from(0x2545_f491_4f6c_dd1d);
         let names = |p: &str, k: usize| (0..k).map(|i| format!("{p}{i}")).collect::<Vec<_>>();
         let b: Vec<f64> = (0..n).map(|i| i as f64).collect();
         let c: Vec<f64> = (0..n * m)
@@ -245,13 +249,7 @@ mod tests {
     #[test]
     fn classify_keeps_the_rows_select_lists() {
         let names = |p: &str, k: usize| (0..k).map(|i| format!("{p}{i}")).collect::<Vec<_>>();
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut uniform = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = uniform_from(0x9e37_79b9_7f4a_7c15);
         let (mut wholes, mut rests) = (0, 0);
         for (n, sign) in [(40, 1.0), (43, 1.0), (43, -1.0)] {
             // One output of one sign (pruning) or of both (none).
