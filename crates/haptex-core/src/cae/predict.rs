@@ -272,14 +272,6 @@ impl Cae {
             }
         }
 
-        let diagnostics = Diagnostics {
-            nearest_row: pass.nearest_row,
-            nearest_distance: pass.nearest_d2.sqrt(),
-            kernel_distance: (2.0 * pass.s_min.max(0.0)).sqrt(),
-            outside_range,
-            constant_mismatch,
-            weights_used: 0,
-        };
         // The rows that enter eq. (11), the ones whose outputs cannot
         // matter left out (`prune`: together they change no output by more
         // than PRUNE_RELATIVE of its value).
@@ -292,7 +284,15 @@ impl Cae {
                 4 * whole + rest
             }
         };
-        Ok((Diagnostics { weights_used: used, ..diagnostics }, pass.sum))
+        let diagnostics = Diagnostics {
+            nearest_row: pass.nearest_row,
+            nearest_distance: pass.nearest_d2.sqrt(),
+            kernel_distance: (2.0 * pass.s_min.max(0.0)).sqrt(),
+            outside_range,
+            constant_mismatch,
+            weights_used: used,
+        };
+        Ok((diagnostics, pass.sum))
     }
 
     /// Working memory for [`Cae::predict_batch_into`].
