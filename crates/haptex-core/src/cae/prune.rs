@@ -68,6 +68,16 @@ impl Pruning {
         !self.ratio.is_empty()
     }
 
+    /// Whether a prediction sums row n of weight a_n, given the sum S of
+    /// every weight and N: a_n rho_n > eps S / N when pruning, a_n > 0
+    /// otherwise (rho_n >= 1 and the threshold is >= 0, so a zero weight
+    /// is never kept).
+    #[inline(always)]
+    fn keeps(&self, sum: f64, n: usize) -> impl Fn(usize, f64) -> bool + '_ {
+        let threshold = PRUNE_RELATIVE * sum / n as f64;
+        move |row, a| if self.ratio.is_empty() { a > 0.0 } else { a * self.ratio[row] > threshold }
+    }
+
     /// Lists the rows a prediction sums, from the weights of every row (0
     /// below the cutoff) and their sum S: into `rows` and `row_weights`,
     /// returning how many. Without branches: every row is written, and the
@@ -76,25 +86,15 @@ impl Pruning {
     pub(crate) fn select(&self, weights: &[f64], sum: f64, rows: &mut [usize], row_weights: &mut [f64]) -> usize {
         let n = weights.len();
         let (rows, row_weights) = (&mut rows[..n], &mut row_weights[..n]);
+        let keep = self.keeps(sum, n);
         let mut used = 0;
-        if self.ratio.is_empty() {
-            for (row, &a) in weights.iter().enumerate() {
-                (rows[used], row_weights[used]) = (row, a);
-                used += usize::from(a > 0.0);
-            }
-        } else {
-            // rho_n >= 1 and the threshold is >= 0: a zero weight is never kept.
-            let threshold = PRUNE_RELATIVE * sum / n as f64;
-            for (row, (&a, &rho)) in weights.iter().zip(&self.ratio[..n]).enumerate() {
-                (rows[used], row_weights[used]) = (row, a);
-                used += usize::from(a * rho > threshold);
-            }
+        for (row, &a) in weights.iter().enumerate() {
+            (rows[used], row_weights[used]) = (row, a);
+            used += usize::from(keep(row, a));
         }
         used
     }
-}
 
-impl Pruning {
     /// The rows [`Pruning::select`] lists, sorted by quads (rows 4q to
     /// 4q + 3): the quads whose four rows are all kept go to `quads` and
     /// `quad_weights`, the other kept rows to `rows` and `row_weights`,
@@ -112,11 +112,7 @@ impl Pruning {
         let n = weights.len();
         let (rows, row_weights) = (&mut rows[..n], &mut row_weights[..n]);
         let (quads, quad_weights) = (&mut quads[..n / 4], &mut quad_weights[..n / 4]);
-        // The rule of `select`: rho_n >= 1 and the threshold is >= 0, so a
-        // zero weight is never kept.
-        let threshold = PRUNE_RELATIVE * sum / n as f64;
-        let ratio = &self.ratio;
-        let keep = |row: usize, a: f64| if ratio.is_empty() { a > 0.0 } else { a * ratio[row] > threshold };
+        let keep = self.keeps(sum, n);
         let (mut whole, mut rest) = (0, 0);
         for (q, a) in weights.chunks_exact(4).enumerate() {
             let a = [a[0], a[1], a[2], a[3]];

@@ -204,21 +204,14 @@ impl Kernel {
     /// from vector n in kernel widths.
     #[inline(always)]
     pub fn log_weights(&self, x_t: &[f64], b: &[f64], log_a: &mut [f64]) {
-        let n = self.n;
-        let log_a = &mut log_a[..n];
-        log_a.copy_from_slice(&self.log_norm);
-        for (l, &bl) in b.iter().enumerate().take(self.d) {
-            let (coef, x) = (&self.coef_t[l * n..(l + 1) * n], &x_t[l * n..(l + 1) * n]);
-            for ((a, c), x) in log_a.iter_mut().zip(coef).zip(x) {
-                let diff = bl - x;
-                *a -= c * diff * diff;
-            }
-        }
+        self.log_weights_and_distances(x_t, b, |_| false, log_a, &mut []);
     }
 
     /// [`Kernel::log_weights`] and, in the same pass, the squared
     /// normalized distances sum_l (b_l - b_nl)^2 over the inputs
-    /// `in_distance(l)` is true for, into `d2`.
+    /// `in_distance(l)` is true for, into `d2` (zeroed first; it needs N
+    /// values when some input is in the distance, and may be empty
+    /// otherwise).
     #[inline(always)]
     pub fn log_weights_and_distances(
         &self,
@@ -229,13 +222,13 @@ impl Kernel {
         d2: &mut [f64],
     ) {
         let n = self.n;
-        let (log_a, d2) = (&mut log_a[..n], &mut d2[..n]);
+        let log_a = &mut log_a[..n];
         log_a.copy_from_slice(&self.log_norm);
         d2.fill(0.0);
         for (l, &bl) in b.iter().enumerate().take(self.d) {
             let (coef, x) = (&self.coef_t[l * n..(l + 1) * n], &x_t[l * n..(l + 1) * n]);
             if in_distance(l) {
-                for (((a, s), c), x) in log_a.iter_mut().zip(d2.iter_mut()).zip(coef).zip(x) {
+                for (((a, s), c), x) in log_a.iter_mut().zip(&mut d2[..n]).zip(coef).zip(x) {
                     let diff = bl - x;
                     *a -= c * diff * diff;
                     *s += diff * diff;
