@@ -58,6 +58,22 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    // The weights alone (eqs. 12 and the rows that enter eq. 11): the same
+    // inputs and width with only the first four outputs, so the sum is
+    // negligible. predict_constant minus this is the time of the sum.
+    let four: Vec<f64> = x.outputs_flat().chunks_exact(M).flat_map(|row| row[..4].to_vec()).collect();
+    let x4 = ModelMatrix::new(x.inputs().to_vec(), x.outputs()[..4].to_vec(), x.inputs_flat().to_vec(), four).unwrap();
+    let weights_only = Cae::new(x4, Widths::constant(0.13).unwrap()).unwrap();
+    let mut scratch = weights_only.scratch();
+    let mut out = [0.0; 4];
+    let mut q = 0;
+    group.bench_function("weights_constant_w0.13_m4", |b| {
+        b.iter(|| {
+            q = (q + 1) % queries.len();
+            weights_only.predict_into(black_box(&queries[q]), &mut scratch, &mut out).unwrap();
+            black_box(&out);
+        })
+    });
     // The streaming floor of one prediction: one read of the bytes it must
     // read (the N x M outputs, 1.62 MB), summed in 16 independent
     // accumulators, nothing else. A prediction cannot be faster than this

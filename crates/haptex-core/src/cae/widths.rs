@@ -209,9 +209,16 @@ impl Kernel {
 
     /// [`Kernel::log_weights`] and, in the same pass, the squared
     /// normalized distances sum_l (b_l - b_nl)^2 over the inputs
-    /// `in_distance(l)` is true for, into `d2` (zeroed first; it needs N
-    /// values when some input is in the distance, and may be empty
-    /// otherwise).
+    /// `in_distance(l)` is true for, into `d2` (it needs N values when
+    /// some input is in the distance, and may be empty otherwise).
+    ///
+    /// Four model vectors at a time, the inputs inner: their ln a_n and
+    /// distances stay in registers over the D inputs and are stored once,
+    /// instead of D passes that each load and store them (the weights of
+    /// one prediction at N 405, D 4, `weights_constant_w0.13_m4` in the
+    /// CAE benchmark, took 1.55 against 1.73 µs, AMD EPYC, 2026-11-28).
+    /// The same operations in the same order for every vector, so the same
+    /// bits.
     #[inline(always)]
     pub fn log_weights_and_distances(
         &self,
@@ -221,23 +228,49 @@ impl Kernel {
         log_a: &mut [f64],
         d2: &mut [f64],
     ) {
-        let n = self.n;
-        let log_a = &mut log_a[..n];
-        log_a.copy_from_slice(&self.log_norm);
-        d2.fill(0.0);
-        for (l, &bl) in b.iter().enumerate().take(self.d) {
-            let (coef, x) = (&self.coef_t[l * n..(l + 1) * n], &x_t[l * n..(l + 1) * n]);
-            if in_distance(l) {
-                for (((a, s), c), x) in log_a.iter_mut().zip(&mut d2[..n]).zip(coef).zip(x) {
-                    let diff = bl - x;
-                    *a -= c * diff * diff;
-                    *s += diff * diff;
+        let (n, d) = (self.n, self.d);
+        let b = &b[..d];
+        let (x_t, coef_t, log_a) = (&x_t[..d * n], &self.coef_t[..d * n], &mut log_a[..n]);
+        let keep_d2 = d2.len() >= n;
+        // One vector's ln a_n and distance from input 0 on.
+        let vector = |j: usize| {
+            let (mut a, mut s) = (self.log_norm[j], 0.0);
+            for (l, &bl) in b.iter().enumerate() {
+                let diff = bl - x_t[l * n + j];
+                a -= coef_t[l * n + j] * diff * diff;
+                if in_distance(l) {
+                    s += diff * diff;
                 }
-            } else {
-                for ((a, c), x) in log_a.iter_mut().zip(coef).zip(x) {
-                    let diff = bl - x;
-                    *a -= c * diff * diff;
+            }
+            (a, s)
+        };
+        let whole = n - n % 4;
+        for j in (0..whole).step_by(4) {
+            let mut a: [f64; 4] = self.log_norm[j..j + 4].try_into().expect("four values");
+            let mut s = [0.0; 4];
+            for (l, &bl) in b.iter().enumerate() {
+                let x: &[f64; 4] = x_t[l * n + j..l * n + j + 4].try_into().expect("four values");
+                let c: &[f64; 4] = coef_t[l * n + j..l * n + j + 4].try_into().expect("four values");
+                let diff = x.map(|x| bl - x);
+                for i in 0..4 {
+                    a[i] -= c[i] * diff[i] * diff[i];
                 }
+                if in_distance(l) {
+                    for i in 0..4 {
+                        s[i] += diff[i] * diff[i];
+                    }
+                }
+            }
+            log_a[j..j + 4].copy_from_slice(&a);
+            if keep_d2 {
+                d2[j..j + 4].copy_from_slice(&s);
+            }
+        }
+        for j in whole..n {
+            let (a, s) = vector(j);
+            log_a[j] = a;
+            if keep_d2 {
+                d2[j] = s;
             }
         }
     }
