@@ -17,13 +17,18 @@
 //!
 //! Memory layout for speed: besides the row-major outputs, the estimator
 //! keeps them in quads of rows interleaved four outputs at a time
-//! (`panels`). A prediction sorts the rows that enter into the quads whose
-//! four rows all enter, summed from the panels (one sequential read), and
-//! the other rows (with narrow kernels, most of them), summed one by one
-//! from the row-major outputs (`Pruning::classify`). A prediction
-//! allocates nothing.
+//! (`panels`), the rows taken along a Z-order curve through the inputs
+//! (`panels::z_order`) so that a quad's rows are near neighbours and a
+//! query's kernels rarely cut a quad in parts. The kernel, the inputs and
+//! the pruning ratios are kept in that order too, so the weights come in
+//! it; the diagnostics and every row index a caller sees are the matrix's.
+//! A prediction sorts the rows that enter into the quads of which at least
+//! three rows enter, summed from the panels (one sequential read; a row
+//! left out there is summed with weight 0), and the other rows (with
+//! narrow kernels, most of them), summed one by one from the row-major
+//! outputs (`Pruning::classify`). A prediction allocates nothing.
 
-use super::panels::Panels;
+use super::panels::{Panels, z_order};
 use super::prune::{Pruning, add_weighted_rows, weighted_sum};
 use super::widths::transpose;
 use super::{CaeError, Density, Kernel, ModelMatrix, Normalization, Widths};
@@ -65,13 +70,14 @@ pub struct Scratch {
     log_a: Vec<f64>,
     d2: Vec<f64>,
     query: Vec<f64>,
-    /// The rows that enter eq. (11) and their weights, as `weights` lists
-    /// them: all of them (`Listing::Rows`), or those outside `quads`
-    /// (`Listing::Quads`).
+    /// The matrix rows that enter eq. (11) and their weights, as
+    /// `weights` lists them: all of them (`Listing::Rows`), or those
+    /// outside `quads` (`Listing::Quads`).
     rows: Vec<usize>,
     weights: Vec<f64>,
-    /// The quads (of rows 4q .. 4q + 3) whose four rows enter eq. (11),
-    /// and their weights.
+    /// The quads (of positions 4q .. 4q + 3 in the estimator's row order)
+    /// of which three or four rows enter eq. (11), and their weights (0
+    /// for a row left out).
     quads: Vec<usize>,
     quad_weights: Vec<[f64; 4]>,
     /// How many quads and rows `weights` listed in `Listing::Quads`.
@@ -81,10 +87,10 @@ pub struct Scratch {
 /// How [`Cae::weights`] lists the rows that enter eq. (11).
 #[derive(Debug, Clone, Copy)]
 enum Listing {
-    /// In `rows` and `weights`, in row order.
+    /// In `rows` and `weights`, in the estimator's row order.
     Rows,
-    /// The quads whose four rows all enter in `quads` and `quad_weights`,
-    /// the other rows that enter in `rows` and `weights`.
+    /// The quads of which three or four rows enter in `quads` and
+    /// `quad_weights`, the other rows that enter in `rows` and `weights`.
     Quads,
 }
 
@@ -145,14 +151,21 @@ impl Cae {
         let widths = Widths::range(widths.w_min, widths.w_max)?;
         let (n, d) = (matrix.n(), matrix.d());
         let norm = Normalization::fit(matrix.inputs_flat(), d)?;
-        let density = (!widths.is_constant()).then(|| Density::new(&norm, &norm.normalize_rows(matrix.inputs_flat())));
+        let bn = norm.normalize_rows(matrix.inputs_flat());
+        let density = (!widths.is_constant()).then(|| Density::new(&norm, &bn));
         let mut w = vec![0.0; n * d];
         widths.fill(density.as_ref(), &mut w);
+        // The kernel, the inputs, the pruning ratios and the panels in the
+        // estimator's own row order (`panels::z_order`); `w`, the
+        // diagnostics and the rows read one by one in the matrix's.
+        let order = z_order(&bn, d, |l| !norm.is_constant(l));
+        let in_order =
+            |v: &[f64]| order.iter().flat_map(|&r| v[r * d..(r + 1) * d].iter().copied()).collect::<Vec<_>>();
         let mut kernel = Kernel::zeros(n, d);
-        kernel.set(&norm, &w);
-        let x_t = transpose(&norm.normalize_rows(matrix.inputs_flat()), d);
-        let pruning = Pruning::new(&matrix);
-        let panels = Panels::new(matrix.outputs_flat(), n, matrix.m());
+        kernel.set(&norm, &in_order(&w));
+        let x_t = transpose(&in_order(&bn), d);
+        let pruning = Pruning::new(&matrix, &order);
+        let panels = Panels::new(matrix.outputs_flat(), n, matrix.m(), &order);
         Ok(Self { matrix, norm, widths, w, kernel, x_t, pruning, panels })
     }
 
@@ -279,9 +292,9 @@ impl Cae {
             Listing::Rows => self.pruning.select(&scratch.log_a, pass.sum, &mut scratch.rows, &mut scratch.weights),
             Listing::Quads => {
                 let Scratch { log_a, quads, quad_weights, rows, weights, .. } = &mut *scratch;
-                let (whole, rest) = self.pruning.classify(log_a, pass.sum, quads, quad_weights, rows, weights);
+                let (whole, rest, used) = self.pruning.classify(log_a, pass.sum, quads, quad_weights, rows, weights);
                 scratch.listed = (whole, rest);
-                4 * whole + rest
+                used
             }
         };
         let diagnostics = Diagnostics {
@@ -551,7 +564,9 @@ fn evaluate_lanes(cae: &Cae, scratch: &mut Scratch) -> Pass {
     let fold_max = |v: [f64; 4]| v.into_iter().fold(f64::NEG_INFINITY, |a, e| if e > a { e } else { a });
     let fold_min = |v: [f64; 4]| v.into_iter().fold(f64::INFINITY, |a, e| if e < a { e } else { a });
     let (e_max, s_min, nearest_d2) = (fold_max(e_max), fold_min(s_min), fold_min(d2_min));
-    let nearest_row = d2.iter().position(|&v| v == nearest_d2).unwrap_or(0);
+    // The first matrix row at the smallest distance.
+    let order = cae.pruning.order();
+    let nearest_row = d2.iter().zip(order).filter(|&(&v, _)| v == nearest_d2).map(|(_, &r)| r).min().unwrap_or(0);
 
     // Pass 2: the weights shifted by their maximum (0 below the cutoff)
     // and their sum, in vectorizable passes.
