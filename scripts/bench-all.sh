@@ -51,6 +51,11 @@ for bench in cae:haptex-core database:haptex-core voltage:haptex-core combined:h
     realtime:haptex-core recording:haptex-core simulate:haptex-fem render:haptex-fem; do
     step "10-criterion-${bench%%:*}" cargo bench -p "${bench#*:}" --bench "${bench%%:*}"
 done
+# One query against the streaming floor, timed in turns in one process;
+# three processes, since where a process's memory lands moves the floor.
+for run in 1 2 3; do
+    step "11-floor-ratio-$run" cargo bench -p haptex-core --bench floor_ratio
+done
 
 # Peers, both sides in one process or interleaved.
 step 20-cae-numpy-one-thread env OPENBLAS_NUM_THREADS=1 RAYON_NUM_THREADS=1 \
