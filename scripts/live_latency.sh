@@ -14,7 +14,10 @@ RUNS=${2:-3}
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 HAPTEX=$ROOT/target/release/haptex
 WORK=$(mktemp -d)
-trap 'kill "${JACKD:-}" "${SERVE:-}" 2>/dev/null || true; rm -rf "$WORK"' EXIT
+# The JACK server is waited for, not only signalled: a run right after
+# this one (bench-all runs 256 then 128 frames) otherwise finds the old
+# server still holding the default server's name, and its own fails to start.
+trap 'kill "${JACKD:-}" "${SERVE:-}" 2>/dev/null || true; wait 2>/dev/null || true; rm -rf "$WORK"' EXIT
 cd "$WORK"
 cat > .asoundrc <<'RC'
 pcm.jackout {
@@ -27,6 +30,11 @@ export HOME=$WORK JACK_NO_AUDIO_RESERVATION=1
 jackd --no-realtime -d dummy -r 48000 -p "$FRAMES" -P 2 -C 0 >jackd.log 2>&1 &
 JACKD=$!
 sleep 2
+if ! kill -0 "$JACKD" 2>/dev/null; then
+    echo "live_latency.sh: jackd did not start:" >&2
+    cat jackd.log >&2
+    exit 1
+fi
 printf 'x_mm,voltage_v\n0,40\n10,80\n' > u.csv
 # 5 s of touches at 120 Hz: x = 5 + 4 sin(2 pi t) mm.
 python3 -c 'import math
