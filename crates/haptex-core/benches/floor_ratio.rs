@@ -5,7 +5,7 @@
 //!
 //! Criterion times the two one after the other, each over a few seconds,
 //! and where the process's memory landed moves the floor's time from one
-//! process to the next (12.8-14.0 µs over four processes of one build, AMD
+//! process to the next (12.8-13.7 µs over three processes of one build, AMD
 //! EPYC, 2026-11-28). Here each round times 4000 floor reads, then 4000
 //! predictions cycling through the 16 queries, and the ratio is taken per
 //! round; the median and quartiles over the rounds are printed.
