@@ -165,7 +165,7 @@ impl Pruning {
         let mut used = 0;
         for ((&a, &rho), &row) in weights.iter().zip(ratio).zip(order) {
             (rows[used], row_weights[used]) = (row, a);
-            used += usize::from(a * rho > threshold);
+            used += usize::from(keeps(a, rho, threshold));
         }
         used
     }
@@ -197,10 +197,10 @@ impl Pruning {
         for (q, (a, rho)) in weights.chunks_exact(4).zip(ratio.chunks_exact(4)).enumerate() {
             let a: [f64; 4] = a.try_into().expect("four weights");
             let kept = [
-                a[0] * rho[0] > threshold,
-                a[1] * rho[1] > threshold,
-                a[2] * rho[2] > threshold,
-                a[3] * rho[3] > threshold,
+                keeps(a[0], rho[0], threshold),
+                keeps(a[1], rho[1], threshold),
+                keeps(a[2], rho[2], threshold),
+                keeps(a[3], rho[3], threshold),
             ];
             let count = kept.iter().map(|&k| usize::from(k)).sum::<usize>();
             kept_rows += count;
@@ -220,10 +220,17 @@ impl Pruning {
         let first = n - n % 4;
         for ((&a, &rho), &row) in weights.iter().zip(ratio).zip(order).skip(first) {
             (rows[rest], row_weights[rest]) = (row, a);
-            rest += usize::from(a * rho > threshold);
+            rest += usize::from(keeps(a, rho, threshold));
         }
         (whole, rest, kept_rows + rest - in_quads)
     }
+}
+
+/// Whether a prediction sums a row of weight a_n and pruning ratio rho_n,
+/// given [`Pruning::threshold`].
+#[inline(always)]
+fn keeps(a: f64, rho: f64, threshold: f64) -> bool {
+    a * rho > threshold
 }
 
 /// out = sum over the listed rows of a_n C_n, C the N x M outputs
