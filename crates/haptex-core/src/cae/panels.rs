@@ -9,9 +9,9 @@
 //! neighbours in input space together) and each quad is stored as M/4
 //! blocks of 16 values: the quad's four rows' outputs 4j .. 4j + 3, row
 //! after row, each block on a 64-byte boundary. Rows past N and outputs
-//! past M are zeros. The layout
-//! costs a second copy of the outputs (N x M doubles, rounded up to
-//! multiples of 4). A prediction lists the quads it reads (`sum_quads`).
+//! past M are zeros. The layout costs a second copy of the outputs (N x M
+//! doubles, rounded up to multiples of 4). A prediction lists the quads it
+//! reads (`sum_quads`).
 //!
 //! Rows read one by one from the row-major outputs are short streams
 //! (M doubles) and cost more per byte than a quad: on AMD EPYC (Zen 5, KVM
