@@ -129,10 +129,20 @@ fn time_domain_mean_force_matches_the_closed_forms() {
     }
 }
 
+/// Relative rounding allowance of a gain: G is a rational expression of
+/// about 20 correctly rounded operations (each within half an ulp, 1.1e-16
+/// relative), so two exact gains that are equal or nearly so may compare
+/// either way by a few 1e-16; 1e-13 leaves a wide margin over that and is
+/// still far below any change the properties are about (0.1 % of f moves G
+/// by up to 7.5e-4 relative near the corner). A fresh CI run once found
+/// G(f) = 1.000000000000042 < G(1.001 f) = 1.0000000000000422 far above the
+/// corner, where G is flat to rounding.
+const GAIN_ROUNDING: f64 = 1e-13;
+
 proptest! {
     /// Without a gap the gain falls monotonically and continuously with the
     /// carrier frequency, from G(0) > 1 down to 1; a gap lowers it at every
-    /// frequency.
+    /// frequency. Each comparison allows [`GAIN_ROUNDING`] (relative).
     #[test]
     fn gain_falls_with_frequency_and_with_the_gap(
         log_rho in 2.0f64..9.0,
@@ -142,11 +152,15 @@ proptest! {
         let c = FingerCircuit { rho_sc_ohm_m: 10f64.powf(log_rho), gap_um: 0.0 };
         let f = 10f64.powf(log_f);
         let (g0, g1, g2) = (c.gain(&PAPER, f), c.gain(&PAPER, f * 1.001), c.gain(&PAPER, f * 1.01));
-        prop_assert!(g0 >= g1 && g1 >= g2, "{g0} {g1} {g2}");
-        prop_assert!(g2 >= 1.0 && g0 <= c.gain(&PAPER, 0.0));
+        let at_least = |a: f64, b: f64| a >= b * (1.0 - GAIN_ROUNDING);
+        prop_assert!(at_least(g0, g1) && at_least(g1, g2), "{g0} {g1} {g2}");
+        prop_assert!(at_least(g2, 1.0) && at_least(c.gain(&PAPER, 0.0), g0), "{g2} {g0}");
         prop_assert!((g0 - g1).abs() < 0.01 * g0);
         let (s0, s1) = (c.square_gain(&PAPER, f), c.square_gain(&PAPER, f * 1.01));
-        prop_assert!(s0 >= s1 && s1 >= 1.0 - 1e-12, "{s0} {s1}");
+        prop_assert!(at_least(s0, s1) && at_least(s1, 1.0), "{s0} {s1}");
+        // The smallest gap (0.01 um) adds 1e-5 mm to a stack of at most
+        // d_sc/eps_sc + d_i/eps_i = 2.2e-4 mm: G falls by several percent,
+        // far beyond rounding, so the comparison is strict.
         let with_gap = FingerCircuit { gap_um, ..c };
         prop_assert!(with_gap.gain(&PAPER, f) < c.gain(&PAPER, f));
     }

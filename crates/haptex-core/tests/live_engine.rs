@@ -232,6 +232,8 @@ proptest! {
     /// profile, a scheduled log, a stop): channel 1 never exceeds
     /// sqrt(2) U_max / volts_per_full_scale, channel 2 stays in 0 ..= 1
     /// (a_max), other channels are 0, and the last clamp never had to act.
+    /// Exact, no tolerance: a safety limit, which the engine's last clamp
+    /// enforces in the same f32 arithmetic.
     #[test]
     fn output_never_exceeds_u_max(
         (u, a, a_max, extend, slew) in arb_design(),

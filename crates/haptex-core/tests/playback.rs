@@ -415,6 +415,10 @@ proptest::proptest! {
     #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
     /// Over random profiles, trajectories and limits: no sample of either
     /// channel exceeds its limit, rendered or read back from the WAV.
+    /// Rendered: exact, no tolerance (a safety limit: the envelope is
+    /// clamped to U_max and a_max, and sqrt(2) U sin(...) with U <= U_max
+    /// and |sin| <= 1 cannot round above sqrt(2) U_max); read back: the
+    /// scale's 1 ulp below.
     #[test]
     fn limits_are_never_exceeded_on_either_channel(
         points in proptest::collection::vec((0.01f64..3.0, 0.0f64..250.0, 0.0f64..6.0), 2..12),

@@ -111,6 +111,9 @@ proptest! {
 
     /// Safety over random maps and touch streams: no sample above the
     /// peak bound, which is at most sqrt(2) U_max; silence after a release.
+    /// The bound within 1e-15 relative (sqrt(2) times U_max, one rounding);
+    /// the samples within 1e-12 of it (a product of the bounded envelope and
+    /// a carrier within 1, a few roundings).
     #[test]
     fn never_above_u_max(
         values in proptest::collection::vec(0.0f64..300.0, 16),

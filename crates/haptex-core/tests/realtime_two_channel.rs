@@ -147,7 +147,9 @@ proptest! {
     /// late, repeated and out-of-order reports, positions far outside the
     /// span, lifts): channel 2 stays within 0 ..= a_max, channel 1 within
     /// sqrt(2) U_max (the sine peak at U_max = 100 V), and the frames
-    /// within full scale.
+    /// within full scale. Channel 2 and the frames exact (clamped, a safety
+    /// limit); the drive within 1e-12 of sqrt(2) U_max (the envelope times
+    /// the carrier, a few roundings).
     #[test]
     fn outputs_never_exceed_their_limits(
         (u, a, a_max, extend) in arb_design(),
