@@ -98,4 +98,4 @@ cargo clippy --workspace --all-targets --locked -- -D warnings
 if [ "${#LIVE_FEATURE[@]}" -gt 0 ]; then
     cargo clippy --workspace --all-targets --locked "${LIVE_FEATURE[@]}" -- -D warnings
 fi
-cargo test --workspace --profile ci --locked "${LIVE_FEATURE[@]}" "$@"
+cargo test --workspace --profile ci --locked --no-fail-fast "${LIVE_FEATURE[@]}" "$@"
