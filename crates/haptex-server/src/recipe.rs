@@ -24,7 +24,8 @@
 //! router, in process: the code that builds a download in the browser and
 //! on the command line is one and the same, so the bytes are too, as long
 //! as the haptex version and the data (library, FE database: their
-//! SHA-256 in the recipe) are the same, which [`replay`] checks first.
+//! SHA-256 in the recipe) are the same, which [`replay`] checks first. A
+//! download's `file` is a name by the one rule of [`haptex_core::name`].
 
 use axum::body::Body;
 use axum::http::{Method, Request, StatusCode, header};
@@ -95,15 +96,10 @@ impl Recipe {
             return Err(error("downloads", format!("1 to {MAX_DOWNLOADS} downloads, not {}", recipe.downloads.len())));
         }
         for (i, d) in recipe.downloads.iter().enumerate() {
-            let ok_name = !d.file.is_empty()
-                && d.file.len() <= 200
-                && !d.file.starts_with('.')
-                && d.file.chars().all(|c| c.is_ascii_alphanumeric() || "._-".contains(c));
-            if !ok_name {
-                return Err(error(
-                    format!("downloads[{i}].file"),
-                    "a plain file name (letters, digits, . _ -), no directory",
-                ));
+            // The file is written into the replay's directory: a name by the
+            // one rule, no directory.
+            if let Err(e) = haptex_core::name::check_name(&d.file) {
+                return Err(error(format!("downloads[{i}].file"), format!("{e}: a plain file name, no directory")));
             }
             if !d.path.starts_with("/api/") {
                 return Err(error(format!("downloads[{i}].path"), "an /api/ path"));

@@ -5,6 +5,8 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Args, Subcommand};
+use haptex_core::io::OutputDir;
+use haptex_core::text::Quoted;
 use haptex_server::recipe::{Recipe, replay};
 use haptex_server::{AppState, Limits};
 
@@ -71,12 +73,16 @@ pub fn run(args: RecipeArgs) -> anyhow::Result<()> {
     // one name would overwrite each other.
     let mut names = std::collections::HashSet::new();
     if let Some((name, _)) = files.iter().find(|(name, _)| !names.insert(name.as_str())) {
-        anyhow::bail!("{}: two downloads are both named {name}", args.file.display());
+        anyhow::bail!("{}: two downloads are both named {}", args.file.display(), Quoted(name));
     }
-    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    // Each file is checked inside the directory (its name, and no link
+    // leading out) before the first is written.
+    let out = OutputDir::create(&args.out)?;
+    for (name, _) in &files {
+        out.member(name)?;
+    }
     for (name, bytes) in files {
-        let path = args.out.join(&name);
-        haptex_core::io::write_atomic(&path, |w| w.write_all(&bytes))?;
+        let path = out.write(&name, |w| w.write_all(&bytes))?;
         eprintln!("{}: {} bytes", path.display(), bytes.len());
     }
     Ok(())
