@@ -140,6 +140,12 @@ fn user_names_never_escape_their_directory() {
         refused("manifest", &verify_members(&out, &members).unwrap_err());
         std::fs::remove_dir_all(&db_dir).unwrap();
     }
+    // A name the rule takes but that would take the marker's place (a
+    // material named manifest.json in a library export) is refused too.
+    let mut set = FileSet::begin(&out, "manifest.json").unwrap();
+    let e = set.write("Manifest.json/stroke-1.csv", |w| w.write_all(b"x")).unwrap_err().to_string();
+    assert!(e.contains("the set's marker"), "{e}");
+    assert_eq!(tree(&out), BTreeSet::new());
     let mut expected = before.clone();
     expected.insert("out".into());
     assert_eq!(tree(sandbox.path()), expected, "something was written outside");

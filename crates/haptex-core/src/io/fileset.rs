@@ -156,6 +156,15 @@ impl FileSet {
     where
         F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
     {
+        // A member in the marker's place (a material named manifest.json)
+        // would leave no room for the marker: refused, the set incomplete.
+        let first = relative.split('/').next().unwrap_or_default();
+        if first.eq_ignore_ascii_case(&self.marker_name) {
+            return Err(WriteError::refused(
+                &self.out.path().join(&self.marker_name),
+                format!("a member {} would take the place of the set's marker", crate::text::Quoted(relative)),
+            ));
+        }
         let mut hasher = Sha256::new();
         let path = self.out.write(relative, |w| {
             let mut hashing = HashingWriter { inner: w, hasher: &mut hasher };
