@@ -25,6 +25,7 @@ pub const TARGETS: &[(&str, fn(&[u8]))] = &[
     ("finger_toml", finger_toml),
     ("surface_file", surface_file),
     ("http_body", http_body),
+    ("library_names", library_names),
 ];
 
 /// An error message must stay readable whatever the input.
@@ -239,4 +240,132 @@ pub fn http_body(data: &[u8]) {
         // escaping (quotes and backslashes double).
         assert!(bytes.len() <= 6 * 1024, "an error answer of {} bytes", bytes.len());
     }
+}
+
+/// Library names (issue 35, RELIABILITY.md "a name never escapes its
+/// directory"): the input, as UTF-8 (invalid bytes replaced), is a name
+/// given to every entry point of the library's path: the name rule, a
+/// profile imported under it as a material, a recording whose metadata
+/// names it, the file a library export writes the stored material's
+/// stroke to, and a multi-file writer given it as a relative path. The
+/// promise: the rule and every entry point agree; a name accepted yields
+/// only paths inside the output directory; a name refused leaves nothing
+/// written.
+pub fn library_names(data: &[u8]) {
+    use haptex_core::io::{FileSet, OutputDir};
+    use haptex_core::library::{Added, Library, ProfileProvenance, export_file};
+    use haptex_core::name::check_name;
+    use std::path::{Component, Path};
+
+    thread_local! {
+        /// An in-memory library and an import run, one per thread.
+        static LIBRARY: std::cell::RefCell<(Library, haptex_core::library::ImportId)> = {
+            let library = Library::open(Path::new(":memory:")).expect("an in-memory library");
+            let run = library.begin_import("fuzz", &Default::default()).expect("an import run");
+            std::cell::RefCell::new((library, run))
+        };
+        /// A scratch directory, one per thread: `out/` is written into.
+        static SCRATCH: std::path::PathBuf = {
+            let dir = std::env::temp_dir().join(format!("haptex-fuzz-names-{}", std::process::id()));
+            std::fs::create_dir_all(&dir).expect("a scratch directory");
+            dir
+        };
+    }
+    let name = String::from_utf8_lossy(data);
+    let name = name.as_ref();
+    let accepted = check_name(name).is_ok();
+    if let Err(e) = check_name(name) {
+        short(e.to_string());
+    }
+    if accepted {
+        let base = Path::new("/export");
+        let joined = base.join(name);
+        assert_eq!(joined.parent(), Some(base), "{name:?} leaves its directory");
+        assert_eq!(joined.components().next_back(), Some(Component::Normal(name.as_ref())), "{name:?}");
+    }
+
+    // A recording whose metadata names the material.
+    let meta = serde_json::json!({
+        "format": "haptex-recording-1", "material": name, "participant": "P1", "stroke": 1,
+        "force": {"file": "f.csv", "rate_hz": 1000}, "position": {"file": "p.csv", "rate_hz": 100},
+        "units": {"time": "s", "force": "N", "position": "mm"}, "source": "fuzz", "licence": "CC0-1.0" });
+    let force: String = std::iter::once("t_s,fn_n,ft_n\n".to_string())
+        .chain((0..=100).map(|i| format!("{},0.5,0.25\n", i as f64 / 1000.0)))
+        .collect();
+    let position: String = std::iter::once("t_s,x_mm\n".to_string())
+        .chain((0..=10).map(|k| format!("{},{k}\n", k as f64 / 100.0)))
+        .collect();
+    let meta = serde_json::to_vec(&meta).expect("JSON");
+    match Recording::parse("r.recording.json", &meta, ("f.csv", force.as_bytes()), ("p.csv", position.as_bytes())) {
+        Ok(_) => assert!(accepted, "a recording of material {name:?} was accepted"),
+        Err(e) => {
+            assert!(!accepted, "a recording of material {name:?} was refused: {e}");
+            short(e.to_string());
+        }
+    }
+
+    // A profile imported under the name, then exported as the CLI does.
+    let profile = FrictionProfile::new(vec![0.0, 1.0], vec![0.5, 0.6]).expect("a profile");
+    let provenance = ProfileProvenance {
+        source: "fuzz".into(),
+        licence: "CC0-1.0".into(),
+        synthetic: true,
+        origin_path: "p.csv".into(),
+    };
+    let stored = LIBRARY.with(|cell| {
+        let (library, run) = &mut *cell.borrow_mut();
+        match library.add_profile(*run, name, "", &profile, &provenance) {
+            Ok(Added::New(id) | Added::Duplicate(id)) => {
+                assert!(accepted, "material {name:?} was stored");
+                Some((library.stroke(id).expect("the stroke stored").material, id))
+            }
+            Err(e) => {
+                assert!(!accepted, "material {name:?} was refused: {e}");
+                short(e.to_string());
+                None
+            }
+        }
+    });
+    SCRATCH.with(|scratch| {
+        let out = scratch.join("out");
+        let _ = std::fs::remove_dir_all(&out);
+        if let Some((material, id)) = stored {
+            let file = export_file(&material, id).expect("a stored name exports");
+            let mut set = FileSet::begin(&out, "manifest.json").expect("the export's directory");
+            // Written inside, or refused (a material in the manifest's place).
+            match set.write(&file, |w| w.write_all(b"x_mm,mu\n0,1\n")) {
+                Ok(path) => {
+                    let real = std::fs::canonicalize(&path).expect("written");
+                    let home = std::fs::canonicalize(&out).expect("out");
+                    assert!(real.starts_with(home), "{name:?} wrote {}", real.display());
+                    set.finish(|w, _| w.write_all(b"{}")).expect("the manifest");
+                }
+                Err(e) => short(e.to_string()),
+            }
+        } else {
+            assert!(export_file(name, 1).is_err(), "a refused name {name:?} exports");
+        }
+        // The name as a relative path given to a multi-file writer: inside, or nothing.
+        let _ = std::fs::remove_dir_all(&out);
+        let dir = OutputDir::create(&out).expect("out");
+        match dir.write(name, |w| w.write_all(b"x")) {
+            Ok(path) => {
+                let real = std::fs::canonicalize(&path).expect("written");
+                assert!(
+                    real.starts_with(std::fs::canonicalize(&out).expect("out")),
+                    "{name:?} wrote {}",
+                    real.display()
+                );
+                assert!(haptex_core::name::check_relative_path(name).is_ok());
+            }
+            Err(e) => {
+                short(e.to_string());
+                assert!(std::fs::read_dir(&out).expect("out").next().is_none(), "a refused {name:?} wrote a file");
+            }
+        }
+        let mut siblings: Vec<_> =
+            std::fs::read_dir(scratch).expect("scratch").flatten().map(|e| e.file_name()).collect();
+        siblings.retain(|n| n != "out");
+        assert!(siblings.is_empty(), "{name:?} wrote beside the output: {siblings:?}");
+    });
 }

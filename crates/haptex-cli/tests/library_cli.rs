@@ -68,7 +68,7 @@ fn demo_import_list_sample_export_and_voltage() {
     let out = haptex(&["library", "sample", "--db", s(&db), "--material", "granite"]);
     assert!(!out.status.success());
     assert!(
-        stderr(&out).contains("no material named \"granite\" in the library (it has: aluminium, latex"),
+        stderr(&out).contains("no material named \"granite\" in the library (it has: \"aluminium\", \"latex\""),
         "{}",
         stderr(&out)
     );

@@ -97,11 +97,9 @@ fn recipe(config: &Value, source: Value, downloads: Vec<(&str, &str, &str, Optio
             d
         }).collect::<Vec<_>>(),
     });
-    match r["source"]["kind"].as_str() {
-        Some("template") => r["database_sha256"] = config["data"]["database_sha256"].clone(),
-        Some("library") => r["library_sha256"] = config["data"]["library_sha256"].clone(),
-        _ => {}
-    }
+    // Every data set served, as the page records them (a replay refuses an unpinned one).
+    r["database_sha256"] = config["data"]["database_sha256"].clone();
+    r["library_sha256"] = config["data"]["library_sha256"].clone();
     r
 }
 
@@ -122,11 +120,17 @@ fn strokes(voltage: &Value) -> (Value, Value) {
 
 /// Runs `haptex recipe run` on `recipe`; the output and the files written.
 fn run_recipe(recipe: &Value) -> (std::process::Output, tempfile::TempDir) {
+    run_recipe_with(recipe, &[])
+}
+
+/// [`run_recipe`] with more flags.
+fn run_recipe_with(recipe: &Value, flags: &[&str]) -> (std::process::Output, tempfile::TempDir) {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("recipe.json");
     std::fs::write(&file, serde_json::to_string_pretty(recipe).unwrap()).unwrap();
     let output = Command::new(env!("CARGO_BIN_EXE_haptex"))
         .args(["recipe", "run", file.to_str().unwrap(), "-o", dir.path().join("out").to_str().unwrap()])
+        .args(flags)
         .env_remove("HAPTEX_LIBRARY")
         .env_remove("HAPTEX_DB")
         .output()
@@ -274,4 +278,59 @@ fn an_oversized_recipe_is_refused_unread() {
     let e = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && e.contains("big.json") && e.contains("larger than 16 MiB"), "{e}");
     assert!(!out_dir.exists());
+}
+
+/// Issue 35: a recipe replays only against the data it was made with. The
+/// answers depend on the texture library and the FE database served
+/// (their strokes and templates, and their SHA-256 in the voltage CSV's
+/// recipe comments and the WAV sidecar), so a recipe that does not pin one
+/// (no `library_sha256` or `database_sha256`, or `null`) is refused naming
+/// the field, nothing written; `--allow-unpinned` replays it and says on
+/// stderr what was not checked; a hash that differs is refused either way.
+#[test]
+fn a_recipe_must_pin_every_data_set_it_depends_on() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let library_sha256 = haptex_core::io::sha256_file(&root.join("data/library/library.sqlite")).unwrap();
+    let database_sha256 = haptex_server::state::database_sha256(&root.join("data/db")).unwrap();
+    let pinned = json!({ "format": "haptex-recipe/1", "haptex_version": env!("CARGO_PKG_VERSION"),
+        "library_sha256": library_sha256, "database_sha256": database_sha256,
+        "source": { "kind": "library", "material": "latex", "seed": "3" },
+        "downloads": [{ "file": "latex-stroke.csv", "method": "GET", "path": "/api/materials/latex/sample?seed=3&format=csv" }] });
+    let (output, dir) = run_recipe(&pinned);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let replayed = std::fs::read(dir.path().join("out/latex-stroke.csv")).unwrap();
+    assert!(String::from_utf8_lossy(&replayed).contains(&format!("library_sha256: {library_sha256}")));
+
+    for field in ["library_sha256", "database_sha256"] {
+        for unpinned in [None, Some(Value::Null)] {
+            let mut r = pinned.clone();
+            match &unpinned {
+                None => drop(r.as_object_mut().unwrap().remove(field)),
+                Some(null) => r[field] = null.clone(),
+            }
+            let (output, dir) = run_recipe(&r);
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            assert!(!output.status.success(), "{field} {unpinned:?}: replayed unpinned");
+            assert!(
+                stderr.contains(&format!("{field}: missing (or null)")) && stderr.contains("--allow-unpinned"),
+                "{stderr}"
+            );
+            assert!(!dir.path().join("out").exists(), "files written for a refused recipe");
+
+            let (output, dir) = run_recipe_with(&r, &["--allow-unpinned"]);
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            assert!(output.status.success(), "{stderr}");
+            assert!(stderr.contains(&format!("warning: {field}: the recipe does not pin")), "{stderr}");
+            assert!(stderr.contains("not checked"), "{stderr}");
+            assert_eq!(stderr.matches("warning:").count(), 1, "{stderr}");
+            assert_eq!(std::fs::read(dir.path().join("out/latex-stroke.csv")).unwrap(), replayed);
+        }
+        // Another data set's hash is refused, --allow-unpinned or not.
+        let mut r = pinned.clone();
+        r[field] = json!("0".repeat(64));
+        let (output, dir) = run_recipe_with(&r, &["--allow-unpinned"]);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success() && stderr.contains(field), "{stderr}");
+        assert!(!dir.path().join("out").exists());
+    }
 }

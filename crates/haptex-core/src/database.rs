@@ -282,6 +282,19 @@ impl Metadata {
                 message: format!("format '{}' is not '{FORMAT}'", metadata.format),
             });
         }
+        // The files it names are read from the database's directory: each
+        // a name by the one rule, so that the file cannot point elsewhere.
+        let listed = metadata.files_sha256.iter().flat_map(|hashes| hashes.keys());
+        for (i, file) in metadata.templates.iter().map(|e| &e.file).chain(listed).enumerate() {
+            crate::name::check_name(file).map_err(|e| DatabaseError::File {
+                path: path.clone(),
+                message: if i < metadata.templates.len() {
+                    format!("templates[{i}].file: {e}")
+                } else {
+                    format!("files_sha256: {e}")
+                },
+            })?;
+        }
         Ok(metadata)
     }
 

@@ -16,6 +16,7 @@ pub mod io;
 pub mod library;
 pub mod live;
 pub mod map;
+pub mod name;
 pub mod num;
 pub mod planar;
 pub mod profile;

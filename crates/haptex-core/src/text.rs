@@ -18,8 +18,19 @@ pub struct Quoted<'a>(pub &'a str);
 
 impl fmt::Display for Quoted<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let text = self.0;
-        match text.char_indices().nth(SHOWN) {
+        QuotedUpTo(self.0, SHOWN).fmt(f)
+    }
+}
+
+/// [`Quoted`] cut after the given number of characters instead of 40
+/// (a listing that shows names whole up to the longest a name may be).
+#[derive(Debug, Clone, Copy)]
+pub struct QuotedUpTo<'a>(pub &'a str, pub usize);
+
+impl fmt::Display for QuotedUpTo<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Self(text, shown) = *self;
+        match text.char_indices().nth(shown) {
             None => write!(f, "{text:?}"),
             Some((end, _)) => write!(f, "{:?}... ({} bytes)", &text[..end], text.len()),
         }
@@ -39,5 +50,8 @@ mod tests {
         assert!(shown.len() < 70 && shown.ends_with("... (100000 bytes)"), "{shown}");
         let wide = "é".repeat(50);
         assert!(Quoted(&wide).to_string().ends_with("(100 bytes)"));
+        assert_eq!(QuotedUpTo(&wide, 50).to_string(), format!("\"{wide}\""));
+        // Format characters (U+202E, U+200B) are escaped as control characters are.
+        assert_eq!(Quoted("a\u{202e}b\u{200b}").to_string(), "\"a\\u{202e}b\\u{200b}\"");
     }
 }

@@ -91,6 +91,60 @@ fn output_through_a_symlink_replaces_the_target_and_keeps_the_link() {
     assert_eq!(std::fs::read_to_string(&target).unwrap(), "new\n");
 }
 
+/// Issue 35: a dangling symbolic link given as the output (a link to a
+/// file that does not exist yet) stays a link, and the file it names is
+/// created, atomically (the temporary beside the target: nothing is left
+/// beside the link): absolute and relative links (relative to the link's
+/// own directory, not the working directory), and chains of links. A link
+/// whose target's directory does not exist is a clear error, and nothing
+/// is created. (It used to replace the link by a regular file.)
+#[cfg(unix)]
+#[test]
+fn output_through_a_dangling_symlink_creates_the_target_and_keeps_the_link() {
+    use std::os::unix::fs::symlink;
+    let dir = tempfile::tempdir().unwrap();
+    let links = dir.path().join("links");
+    let data = dir.path().join("data");
+    std::fs::create_dir_all(&links).unwrap();
+    std::fs::create_dir_all(&data).unwrap();
+    let is_link = |p: &Path| std::fs::symlink_metadata(p).unwrap().file_type().is_symlink();
+
+    // Absolute, relative (to the link's directory), and a chain of two.
+    symlink(data.join("abs.csv"), links.join("abs")).unwrap();
+    symlink("../data/rel.csv", links.join("rel")).unwrap();
+    symlink("middle", links.join("chain")).unwrap();
+    symlink("../data/end.csv", links.join("middle")).unwrap();
+    for (link, target) in [("abs", "abs.csv"), ("rel", "rel.csv"), ("chain", "end.csv")] {
+        let link = links.join(link);
+        let OutputTarget::File(resolved) = OutputTarget::of(&link).unwrap() else { panic!("{}", link.display()) };
+        assert_eq!(resolved.file_name().unwrap(), target);
+        assert_eq!(std::fs::canonicalize(resolved.parent().unwrap()).unwrap(), std::fs::canonicalize(&data).unwrap());
+        write_atomic(&link, |w| w.write_all(b"x_mm,mu\n0,1\n")).unwrap();
+        assert!(is_link(&link), "{}: the link was replaced", link.display());
+        assert_eq!(std::fs::read_to_string(data.join(target)).unwrap(), "x_mm,mu\n0,1\n", "{target}");
+        // Written again, through the link to the now existing file.
+        write_atomic(&link, |w| w.write_all(b"x_mm,mu\n0,2\n")).unwrap();
+        assert!(is_link(&link));
+        assert_eq!(std::fs::read_to_string(data.join(target)).unwrap(), "x_mm,mu\n0,2\n");
+    }
+    // The links' directory holds the links only (no temporary, no file).
+    let mut names: Vec<String> =
+        std::fs::read_dir(&links).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    names.sort();
+    assert_eq!(names, ["abs", "chain", "middle", "rel"]);
+
+    // A target in a directory that does not exist: an error naming it.
+    let missing = links.join("missing");
+    symlink(dir.path().join("no-such-dir/out.csv"), &missing).unwrap();
+    let e = write_atomic(&missing, |w| w.write_all(b"x")).unwrap_err().to_string();
+    assert!(e.contains("no-such-dir/out.csv") && e.contains("its directory does not exist"), "{e}");
+    assert!(is_link(&missing) && !dir.path().join("no-such-dir").exists());
+    // A loop of links is an error too, not an endless walk.
+    symlink("loop-b", links.join("loop-a")).unwrap();
+    symlink("loop-a", links.join("loop-b")).unwrap();
+    assert!(write_atomic(&links.join("loop-a"), |w| w.write_all(b"x")).is_err());
+}
+
 /// Temporary files of processes that no longer run (killed writes) are
 /// removed by the next write into their directory; a live process's are
 /// kept, and so are those of a process table this process cannot see (the

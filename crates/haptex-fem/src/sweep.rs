@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use haptex_core::cae::{ModelMatrix, OptimizeOptions, optimize_widths};
 use haptex_core::database::{self, FeSettings, Grid, INPUTS, Metadata, Sweep, Template, TemplateEntry};
-use haptex_core::io::{FileSet, Table, write_atomic};
+use haptex_core::io::{FileSet, OutputDir, Table, write_atomic};
 use haptex_core::num::Num;
 use rayon::prelude::*;
 use sha2::{Digest, Sha256};
@@ -439,6 +439,7 @@ pub fn build_runs(
         let json = serde_json::to_string_pretty(&record).expect("record serializes");
         write_atomic(&dir.join("sweep.json"), |w| writeln!(w, "{json}"))?;
     }
+    let runs_out = OutputDir::create(&runs_dir)?;
     let pending: Vec<&Run> = runs.iter().filter(|r| !runs_dir.join(r.file_name()).exists()).collect();
     let done_before = runs.len() - pending.len();
     let done = AtomicUsize::new(done_before);
@@ -453,8 +454,8 @@ pub fn build_runs(
             let scenario = spec.scenario(run);
             let result = run_scenario(&scenario).map_err(|error| SweepError::Run { run: run.describe(), error })?;
             let mu = sample(slid(&result, run)?, spec, &spec.grid.positions());
-            let path = runs_dir.join(run.file_name());
-            write_atomic(&path, |w| write_run(w, run, &spec.grid, &mu, result.statistics.wall_time_s))?;
+            // Each run's file checked inside runs/ as every multi-file output's is.
+            runs_out.write(&run.file_name(), |w| write_run(w, run, &spec.grid, &mu, result.statistics.wall_time_s))?;
             *cpu.lock().expect("no panics while holding the lock") += result.statistics.wall_time_s;
             progress(done.fetch_add(1, Ordering::SeqCst) + 1, runs.len());
             Ok(())

@@ -1956,7 +1956,7 @@
   /**
    * The recipe of the design shown (docs/web.md, "Recipes"): the requests
    * of its downloads, the source's provenance, the haptex version and the
-   * SHA-256 of the data the source used. `kinds` chooses the downloads.
+   * SHA-256 of the data served. `kinds` chooses the downloads.
    */
   function recipe(kinds = RECIPE_KINDS) {
     const data = state.config.data || {};
@@ -1967,8 +1967,11 @@
       source,
       downloads: kinds.map(downloadSpec),
     };
-    if (source.kind === 'library' && data.library_sha256) r.library_sha256 = data.library_sha256;
-    if (source.kind === 'template' && data.database_sha256) r.database_sha256 = data.database_sha256;
+    // Every data set the server serves: the downloads depend on each (a
+    // library stroke, a template, and the data's SHA-256 in the voltage
+    // CSV's and the sidecar's recipe), and a replay refuses an unpinned one.
+    if (data.library_sha256) r.library_sha256 = data.library_sha256;
+    if (data.database_sha256) r.database_sha256 = data.database_sha256;
     return r;
   }
 

@@ -115,10 +115,19 @@ impl ApiError {
 
 /// `text` with control characters escaped (`\0`, `\n`, `\u{1b}`), so
 /// that the cut below bounds the answer: JSON would write each as six
-/// bytes.
+/// bytes; and format characters too (`\u{202e}`, `\u{200b}`: what the name
+/// rule refuses as invisible, `haptex_core::name::is_invisible`), so that
+/// a name from a file cannot reorder or hide the message's text.
 fn printable(text: String) -> String {
-    if text.chars().any(char::is_control) {
-        text.chars().map(|c| if c.is_control() { c.escape_debug().to_string() } else { c.to_string() }).collect()
+    let invisible = haptex_core::name::is_invisible;
+    if text.chars().any(invisible) {
+        text.chars()
+            .map(|c| match c {
+                c if c.is_control() => c.escape_debug().to_string(),
+                c if invisible(c) => c.escape_unicode().to_string(),
+                c => c.to_string(),
+            })
+            .collect()
     } else {
         text
     }

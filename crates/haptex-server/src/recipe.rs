@@ -24,7 +24,9 @@
 //! router, in process: the code that builds a download in the browser and
 //! on the command line is one and the same, so the bytes are too, as long
 //! as the haptex version and the data (library, FE database: their
-//! SHA-256 in the recipe) are the same, which [`replay`] checks first.
+//! SHA-256 in the recipe) are the same, which [`replay`] checks first
+//! ([`Recipe::check`]: every data set served must be pinned). A download's
+//! `file` is a name by the one rule of [`haptex_core::name`].
 
 use axum::body::Body;
 use axum::http::{Method, Request, StatusCode, header};
@@ -95,15 +97,10 @@ impl Recipe {
             return Err(error("downloads", format!("1 to {MAX_DOWNLOADS} downloads, not {}", recipe.downloads.len())));
         }
         for (i, d) in recipe.downloads.iter().enumerate() {
-            let ok_name = !d.file.is_empty()
-                && d.file.len() <= 200
-                && !d.file.starts_with('.')
-                && d.file.chars().all(|c| c.is_ascii_alphanumeric() || "._-".contains(c));
-            if !ok_name {
-                return Err(error(
-                    format!("downloads[{i}].file"),
-                    "a plain file name (letters, digits, . _ -), no directory",
-                ));
+            // The file is written into the replay's directory: a name by the
+            // one rule, no directory.
+            if let Err(e) = haptex_core::name::check_name(&d.file) {
+                return Err(error(format!("downloads[{i}].file"), format!("{e}: a plain file name, no directory")));
             }
             if !d.path.starts_with("/api/") {
                 return Err(error(format!("downloads[{i}].path"), "an /api/ path"));
@@ -116,8 +113,16 @@ impl Recipe {
         Ok(recipe)
     }
 
-    /// Checks that this haptex and the data served are the recipe's.
-    pub fn check(&self, state: &AppState) -> Result<(), RecipeError> {
+    /// Checks that this haptex and the data served are the recipe's: the
+    /// haptex version (which fixes the code and the finger model compiled
+    /// into it), and the SHA-256 of every data set the replay serves (the
+    /// texture library, the FE database). Each data set served must be
+    /// pinned by the recipe, since the answers depend on it (a library
+    /// stroke, a template's prediction, and the data's SHA-256 written into
+    /// the voltage downloads' recipe comments and the WAV sidecar): a
+    /// recipe without the field (or with `null`) is refused, unless
+    /// `allow_unpinned`, when the answer lists what was not checked.
+    pub fn check(&self, state: &AppState, allow_unpinned: bool) -> Result<Unpinned, RecipeError> {
         let version = env!("CARGO_PKG_VERSION");
         if self.haptex_version != version {
             return Err(error(
@@ -126,27 +131,59 @@ impl Recipe {
             ));
         }
         let library_sha256 = state.library_sha256();
-        for (field, want, have) in [
-            ("library_sha256", &self.library_sha256, library_sha256.as_deref()),
-            ("database_sha256", &self.database_sha256, state.database_sha256()),
+        let mut unpinned = Unpinned::default();
+        for (field, what, want, have) in [
+            ("library_sha256", "texture library", &self.library_sha256, library_sha256.as_deref()),
+            ("database_sha256", "FE database", &self.database_sha256, state.database_sha256()),
         ] {
-            if let Some(want) = want
-                && have != Some(want.as_str())
-            {
-                return Err(error(
-                    field,
-                    format!("the recipe was made with data of SHA-256 {want}, this has {}", have.unwrap_or("none")),
-                ));
+            match (want, have) {
+                (Some(want), have) if have != Some(want.as_str()) => {
+                    return Err(error(
+                        field,
+                        format!(
+                            "the recipe was made with data of SHA-256 {}, this has {}",
+                            haptex_core::text::Quoted(want),
+                            have.unwrap_or("none")
+                        ),
+                    ));
+                }
+                (Some(_), _) | (None, None) => {}
+                (None, Some(have)) if allow_unpinned => unpinned.0.push(format!(
+                    "{field}: the recipe does not pin the {what}; replayed with the one served here (SHA-256 {have}), \
+                     not checked"
+                )),
+                (None, Some(have)) => {
+                    return Err(error(
+                        field,
+                        format!(
+                            "missing (or null): the answers depend on the {what}, and the recipe does not say which \
+                             it was made with (this one's SHA-256 is {have}); add the field, or replay without the \
+                             check (haptex recipe run --allow-unpinned)"
+                        ),
+                    ));
+                }
             }
         }
-        Ok(())
+        Ok(unpinned)
     }
 }
 
+/// What [`Recipe::check`] did not check (with `allow_unpinned`): one line
+/// per data set the recipe does not pin; empty when everything was.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Unpinned(pub Vec<String>);
+
 /// The files of a recipe's downloads, each answered by the server's router
-/// (`crate::app`) as the page's download is: (file name, bytes).
+/// (`crate::app`) as the page's download is: (file name, bytes). The
+/// recipe is checked first ([`Recipe::check`]).
 pub async fn replay(state: AppState, recipe: &Recipe) -> Result<Vec<(String, Vec<u8>)>, RecipeError> {
-    recipe.check(&state)?;
+    recipe.check(&state, false)?;
+    answers(state, recipe).await
+}
+
+/// The files of a recipe's downloads without [`Recipe::check`]: the caller
+/// checked it (with `allow_unpinned`, and reports what was not pinned).
+pub async fn answers(state: AppState, recipe: &Recipe) -> Result<Vec<(String, Vec<u8>)>, RecipeError> {
     // The server bounds its answers; this bounds what is read of one.
     let max = 256 << 20;
     let app = crate::app(state);

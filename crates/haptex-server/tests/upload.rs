@@ -13,6 +13,7 @@ use axum::Router;
 use axum::body::Body;
 use axum::http::{Request, StatusCode, header};
 use haptex_core::library::Library;
+use haptex_core::name::HOSTILE_NAMES;
 use haptex_core::recording::{ProcessingConfig, Recording, process};
 use haptex_server::{AppState, Limits, app};
 use serde_json::Value;
@@ -322,7 +323,9 @@ async fn bad_uploads_are_refused_with_the_file_and_field_and_change_nothing() {
         Some("\"../wood-s1.force.npy\""),
         "..",
     );
-    for (evil, why) in [("/etc/evil.recording.json", "absolute path"), ("../evil.recording.json", "'..' component")] {
+    for (evil, why) in
+        [("/etc/evil.recording.json", "absolute path"), ("../evil.recording.json", "'.' and '..' name a directory")]
+    {
         let mut entries = good.clone();
         entries.push((evil.into(), b"{}".to_vec()));
         let zip = zip_of(&entries, None);
@@ -397,4 +400,81 @@ async fn zip_bombs_floods_and_oversized_bodies_are_refused() {
     let answer = small.upload(Some("measured"), &[("two.zip".into(), zipped)]).await;
     answer.error(StatusCode::PAYLOAD_TOO_LARGE, Some("files"));
     assert_eq!(lab.contents(), before);
+}
+
+/// Issue 35, "a name from a user never escapes its directory", through
+/// the HTTP route: a recording whose metadata names a hostile material
+/// (it would become a directory of a library export), and a hostile file
+/// name in the form or in a zip, are refused with a 400 naming the field,
+/// the name quoted (no control or format character raw in the answer),
+/// and the library left as it was. Names read back from a library file
+/// another program wrote are quoted in the answers' messages.
+#[tokio::test]
+async fn user_names_never_escape_their_directory() {
+    let lab = Lab::new(Limits::DEFAULT);
+    let before = lab.contents();
+    let good = renamed("wood", "wood-lab", true, &[1]);
+    let mut names: Vec<String> = HOSTILE_NAMES.iter().map(|s| s.to_string()).collect();
+    names.push("x".repeat(5000));
+    names.push("\0".repeat(300));
+    for name in &names {
+        let shown = haptex_core::text::Quoted(name).to_string();
+        // The metadata's material.
+        let files: Vec<(String, Vec<u8>)> = good
+            .iter()
+            .map(|(n, b)| {
+                if n.ends_with(".recording.json") {
+                    let mut meta: Value = serde_json::from_slice(b).unwrap();
+                    meta["material"] = serde_json::json!(name);
+                    (n.clone(), serde_json::to_vec(&meta).unwrap())
+                } else {
+                    (n.clone(), b.clone())
+                }
+            })
+            .collect();
+        let error = lab.upload(Some("synthetic"), &files).await.error(StatusCode::BAD_REQUEST, Some("material"));
+        let message = error["error"].as_str().unwrap();
+        assert!(message.contains("is not accepted as a name") && shows_nothing_raw(&error, name), "{shown}: {error}");
+
+        // The name of a file in the form, and of a zip's entry (a hidden
+        // entry, `.hidden`, is skipped as an archiver's, not refused).
+        let mut files = good.clone();
+        files.push((name.clone(), b"x".to_vec()));
+        let answer = lab.upload(Some("synthetic"), &files).await;
+        assert!(answer.status.is_client_error(), "{shown}: {}", answer.text());
+        assert!(shows_nothing_raw(&answer.json(), name), "{shown}: {}", answer.text());
+        let zip = zip_of(&[(name.clone(), b"x".to_vec())], None);
+        let error =
+            lab.upload(Some("synthetic"), &[("x.zip".into(), zip)]).await.error(StatusCode::BAD_REQUEST, Some("files"));
+        let message = error["error"].as_str().unwrap();
+        let refused = message.contains("not accepted as a file name") || message.contains("no recording among them");
+        assert!(refused && shows_nothing_raw(&error, name), "{shown}: {error}");
+        assert_eq!(lab.contents(), before, "{shown}: the library changed");
+    }
+
+    // A library in which another program renamed a material: the answers'
+    // messages quote the name.
+    for name in &names {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("tampered.sqlite");
+        std::fs::copy(shipped_library(), &path).unwrap();
+        let conn = rusqlite::Connection::open(&path).unwrap();
+        conn.execute("UPDATE materials SET name = ?1 WHERE name = 'wood'", [name]).unwrap();
+        drop(conn);
+        let router = app(AppState::new(Some(&path), Limits::DEFAULT).unwrap());
+        let answer = send_to(router, Request::get("/api/materials/granite/sample").body(Body::empty()).unwrap()).await;
+        let error = answer.error(StatusCode::NOT_FOUND, Some("name"));
+        let message = error["error"].as_str().unwrap();
+        let quoted = haptex_core::text::Quoted(name).to_string();
+        assert!(message.contains(&quoted) && shows_nothing_raw(&error, name), "{quoted}: {error}");
+    }
+}
+
+/// No character of `name` that a name may not hold (control, format ...)
+/// appears raw in the JSON answer's texts.
+fn shows_nothing_raw(answer: &Value, name: &str) -> bool {
+    let texts: Vec<&str> = ["error", "field", "file"].iter().filter_map(|k| answer[*k].as_str()).collect();
+    name.chars()
+        .filter(|c| !"/\\: ".contains(*c) && haptex_core::name::check_name(&format!("a{c}b")).is_err())
+        .all(|c| texts.iter().all(|t| !t.contains(c)))
 }

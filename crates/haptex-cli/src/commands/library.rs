@@ -8,10 +8,12 @@ use anyhow::{Context, bail};
 use clap::{Args, Subcommand, ValueEnum};
 use haptex_core::FrictionProfile;
 use haptex_core::io::{FileSet, write_atomic, write_csv_row};
-use haptex_core::library::{Added, ImportId, Library, ProfileProvenance, StoredProfile};
+use haptex_core::library::{Added, ImportId, Library, ProfileProvenance, StoredProfile, export_file};
+use haptex_core::name::{MAX_NAME_CHARS, check_name};
 use haptex_core::recording::format::METADATA_SUFFIX;
 use haptex_core::recording::synth::{DEMO_SEED, DEMO_STROKES_PER_MATERIAL, write_demo};
 use haptex_core::recording::{DirectionFilter, ProcessingConfig, Recording, process};
+use haptex_core::text::{Quoted, QuotedUpTo};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::{Output, positive};
@@ -53,7 +55,8 @@ enum LibraryCommand {
     Process(ProcessArgs),
     Demo(DemoArgs),
     /// Check the library's consistency (SQLite integrity and foreign keys,
-    /// every stroke with its profile); exits non-zero on a problem.
+    /// every stroke with its profile, every material name by the rule an
+    /// import applies); exits non-zero on a problem.
     Check,
     /// Migrate a library written by an older haptex to this schema version.
     Upgrade,
@@ -81,7 +84,10 @@ struct ImportArgs {
     /// --synthetic.
     #[arg(long, value_name = "P.csv", requires_all = ["material", "provenance"])]
     profile: Option<PathBuf>,
-    /// Material of the --profile (created if new).
+    /// Material of the --profile (created if new). A material name is a
+    /// file name of an export: 1 to 100 characters, no '/', '\\' or ':',
+    /// no control or invisible format characters, not beginning with '.'
+    /// or '-', no white space at either end (docs/recordings.md).
     #[arg(long, value_name = "NAME", requires = "profile")]
     material: Option<String>,
     /// Description of a new --material.
@@ -313,6 +319,13 @@ pub(crate) fn open_read_only(db: &Path) -> anyhow::Result<Library> {
     Ok(Library::open_read_only(db)?)
 }
 
+/// A text read from the library (a name, a description) as a listing
+/// shows it: quoted, control and format characters escaped, whole up to
+/// the longest a name may be.
+fn shown(text: &str) -> String {
+    QuotedUpTo(text, MAX_NAME_CHARS).to_string()
+}
+
 fn synthetic_word(synthetic: bool) -> &'static str {
     if synthetic { "SYNTHETIC" } else { "measured" }
 }
@@ -321,10 +334,12 @@ fn import(db: &Path, args: ImportArgs) -> anyhow::Result<()> {
     let config = args.processing.config()?;
     let command_line = std::env::args().collect::<Vec<_>>().join(" ");
     if let Some(profile_path) = &args.profile {
+        let material = args.material.as_deref().expect("clap requires --material with --profile");
+        // Checked before the library is opened: a refused name leaves no trace.
+        check_name(material).context("--material")?;
         let profile = FrictionProfile::read_csv_file(profile_path)?;
         let mut library = Library::open(db)?;
         let run = library.begin_import(&command_line, &config)?;
-        let material = args.material.as_deref().expect("clap requires --material with --profile");
         let provenance = ProfileProvenance {
             source: args.source.clone().unwrap_or_else(|| format!("user profile {}", profile_path.display())),
             licence: args.licence.clone(),
@@ -341,8 +356,9 @@ fn import(db: &Path, args: ImportArgs) -> anyhow::Result<()> {
         if !args.quiet {
             match added {
                 Added::New(id) => eprintln!(
-                    "added {} as stroke {id} of material {material:?} ({} points) to {}",
+                    "added {} as stroke {id} of material {} ({} points) to {}",
                     profile_path.display(),
+                    Quoted(material),
                     profile.len(),
                     db.display()
                 ),
@@ -473,13 +489,13 @@ fn list(db: &Path, args: ListArgs) -> anyhow::Result<()> {
                     writeln!(
                         w,
                         "{:<16} {:<10} {:>7} {:>8.3} {:>13} {:>9}  {}",
-                        m.name,
+                        shown(&m.name),
                         synthetic_word(m.synthetic),
                         m.strokes,
                         m.mean_mu,
                         format!("{:.3}..{:.3}", m.mu_range.0, m.mu_range.1),
                         fn_text,
-                        m.description
+                        shown(&m.description)
                     )?;
                 }
                 writeln!(w, "{} materials, {strokes} strokes", materials.len())?;
@@ -506,14 +522,14 @@ fn list(db: &Path, args: ListArgs) -> anyhow::Result<()> {
                         "{:>5} {:<10} {:<11} {:>6} {:>7} {:>7.1} {:>7.3} {:>9} {:>4}  {}",
                         s.id,
                         synthetic_word(s.synthetic),
-                        s.participant.as_deref().unwrap_or("-"),
+                        s.participant.as_deref().map_or("-".into(), shown),
                         s.stroke.map_or("-".into(), |n| n.to_string()),
                         s.n_points,
                         s.span_mm,
                         s.mean_mu,
                         s.mean_fn_n.map_or("-".into(), |f| format!("{f:.3}")),
                         s.n_segments.map_or("-".into(), |n| n.to_string()),
-                        s.origin_path
+                        shown(&s.origin_path)
                     )?;
                 }
                 Ok(())
@@ -524,7 +540,10 @@ fn list(db: &Path, args: ListArgs) -> anyhow::Result<()> {
         eprintln!(
             "note: import {} (started {}) did not finish; its {} complete strokes are kept, run it again to add the \
              rest: {}",
-            import.id, import.started_at, import.strokes, import.command
+            import.id,
+            shown(&import.started_at),
+            import.strokes,
+            QuotedUpTo(&import.command, 1000)
         );
     }
     Ok(())
@@ -541,8 +560,8 @@ fn sample(db: &Path, args: SampleArgs) -> anyhow::Result<()> {
         _ => SampleFormat::Csv,
     });
     let mut comments = vec![format!(
-        "haptex library sample: material {:?} ({} data), stroke id {} (one of {total}), seed {}",
-        stroke.material,
+        "haptex library sample: material {} ({} data), stroke id {} (one of {total}), seed {}",
+        Quoted(&stroke.material),
         synthetic_word(stroke.synthetic),
         stroke.id,
         sampled.seed
@@ -563,9 +582,9 @@ fn sample(db: &Path, args: SampleArgs) -> anyhow::Result<()> {
         }
     })?;
     eprintln!(
-        "material {:?} ({} data): stroke id {} (one of {total}; --seed {} repeats the choice): {} points over {:.1} mm, \
+        "material {} ({} data): stroke id {} (one of {total}; --seed {} repeats the choice): {} points over {:.1} mm, \
          mean mu {:.3}{}",
-        stroke.material,
+        Quoted(&stroke.material),
         synthetic_word(stroke.synthetic),
         stroke.id,
         sampled.seed,
@@ -589,6 +608,18 @@ fn export(db: &Path, args: ExportArgs) -> anyhow::Result<()> {
         }
         None => library.materials()?,
     };
+    // Names read from the library file (which another program may have
+    // written) meet the rule an import applies before any file is written:
+    // each becomes a directory of the export.
+    for material in &materials {
+        export_file(&material.name, 0).with_context(|| {
+            format!(
+                "{}: cannot export material {}: `haptex library check` lists the names to change",
+                db.display(),
+                Quoted(&material.name)
+            )
+        })?;
+    }
     // The manifest is the export's marker: removed first, written last with
     // the SHA-256 of every file, so an interrupted export has no manifest
     // (or one whose hashes do not match) and is seen to be incomplete.
@@ -597,8 +628,8 @@ fn export(db: &Path, args: ExportArgs) -> anyhow::Result<()> {
     for material in &materials {
         for stroke in library.strokes(&material.name)? {
             let stored = library.profile(stroke.id)?;
-            let file = format!("{}/stroke-{}.csv", file_name(&material.name), stroke.id);
-            let mut comments = vec![format!("haptex library export: material {:?}", material.name)];
+            let file = export_file(&material.name, stroke.id)?;
+            let mut comments = vec![format!("haptex library export: material {}", Quoted(&material.name))];
             comments.extend(stroke.provenance_lines());
             set.write(&file, |w| stored.profile.write_csv_commented(w, &comments))?;
             manifest_strokes.push(serde_json::json!({ "file": file, "stroke": stroke }));
@@ -623,12 +654,6 @@ fn export(db: &Path, args: ExportArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A material name as a directory name: anything but letters, digits,
-/// `-`, `_` and `.` becomes `_`.
-fn file_name(name: &str) -> String {
-    name.chars().map(|c| if c.is_alphanumeric() || "-_.".contains(c) { c } else { '_' }).collect()
-}
-
 fn process_one(args: ProcessArgs) -> anyhow::Result<()> {
     let config = args.processing.config()?;
     let recording = Recording::load(&args.recording)?;
@@ -636,10 +661,10 @@ fn process_one(args: ProcessArgs) -> anyhow::Result<()> {
     let meta = &recording.meta;
     let comments = vec![
         format!(
-            "haptex library process {}: material {:?}, participant {}, stroke {} ({} data)",
+            "haptex library process {}: material {}, participant {}, stroke {} ({} data)",
             args.recording.display(),
-            meta.material,
-            meta.participant,
+            Quoted(&meta.material),
+            Quoted(&meta.participant),
             meta.stroke,
             synthetic_word(meta.synthetic)
         ),

@@ -5,7 +5,9 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Args, Subcommand};
-use haptex_server::recipe::{Recipe, replay};
+use haptex_core::io::OutputDir;
+use haptex_core::text::Quoted;
+use haptex_server::recipe::{Recipe, answers};
 use haptex_server::{AppState, Limits};
 
 /// Recipes: a design of the web application written down as the API
@@ -28,7 +30,10 @@ enum RecipeCommand {
 /// process (no server is started). The recipe's haptex version and the
 /// SHA-256 of the texture library and FE database it was made with must
 /// be this haptex's and these files' (else nothing is written and the
-/// error names the recipe's field).
+/// error names the recipe's field). A recipe must pin every data set used
+/// here (library_sha256 when a library is found, database_sha256 when an
+/// FE database is): one without the field, or with null, is refused unless
+/// --allow-unpinned.
 #[derive(Debug, Args)]
 #[command(after_help = "Example:\n  haptex recipe run haptex-recipe.json -o replay/")]
 struct RunArgs {
@@ -44,6 +49,12 @@ struct RunArgs {
     /// FE database (default: $HAPTEX_DB, else the shipped data/db).
     #[arg(long, value_name = "DIR")]
     db: Option<PathBuf>,
+    /// Replay a recipe that does not pin a data set used here (no
+    /// library_sha256 or database_sha256, or null) with the data found
+    /// here; what was not checked is printed on stderr. The files may then
+    /// differ from the ones the recipe was made from.
+    #[arg(long)]
+    allow_unpinned: bool,
 }
 
 pub fn run(args: RecipeArgs) -> anyhow::Result<()> {
@@ -63,20 +74,30 @@ pub fn run(args: RecipeArgs) -> anyhow::Result<()> {
     let db = args.db.unwrap_or_else(super::db::default_db);
     let state = AppState::new(library.is_file().then_some(library.as_path()), Limits::DEFAULT)?;
     let state = if db.join("metadata.json").is_file() { state.with_database(&db)? } else { state };
+    let unpinned = recipe
+        .check(&state, args.allow_unpinned)
+        .with_context(|| format!("{}: cannot replay it", args.file.display()))?;
+    for line in &unpinned.0 {
+        eprintln!("warning: {line} (--allow-unpinned)");
+    }
     let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build()?;
     let files = runtime
-        .block_on(replay(state, &recipe))
+        .block_on(answers(state, &recipe))
         .with_context(|| format!("{}: cannot replay it", args.file.display()))?;
     // Every answer is in hand before anything is written; two downloads of
     // one name would overwrite each other.
     let mut names = std::collections::HashSet::new();
     if let Some((name, _)) = files.iter().find(|(name, _)| !names.insert(name.as_str())) {
-        anyhow::bail!("{}: two downloads are both named {name}", args.file.display());
+        anyhow::bail!("{}: two downloads are both named {}", args.file.display(), Quoted(name));
     }
-    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    // Each file is checked inside the directory (its name, and no link
+    // leading out) before the first is written.
+    let out = OutputDir::create(&args.out)?;
+    for (name, _) in &files {
+        out.member(name)?;
+    }
     for (name, bytes) in files {
-        let path = args.out.join(&name);
-        haptex_core::io::write_atomic(&path, |w| w.write_all(&bytes))?;
+        let path = out.write(&name, |w| w.write_all(&bytes))?;
         eprintln!("{}: {} bytes", path.display(), bytes.len());
     }
     Ok(())

@@ -7,7 +7,11 @@
 //!   temporary file beside it (`.haptex-PID-SPACE-XXXXXX.tmp`), synced and renamed
 //!   over it, so that a reader never sees a half-written file and a failed
 //!   or killed write leaves the previous file untouched. A symbolic link to
-//!   a regular file keeps the link: its target is replaced;
+//!   a regular file keeps the link: its target is replaced; a dangling link
+//!   (to a file that does not exist yet) keeps the link too: its target is
+//!   created (the temporary beside the target, chains of links and
+//!   relative links followed), and a target whose directory does not exist
+//!   is an error;
 //! - `-`, a character device (`/dev/null`, a terminal), a FIFO, or a
 //!   descriptor path (`/dev/stdout`, `/dev/fd/N`, `/proc/self/fd/N`):
 //!   written directly, in place. Replacing them by rename would destroy
@@ -47,7 +51,7 @@ impl WriteError {
         Self { path: path.to_path_buf(), cause: source }
     }
 
-    fn refused(path: &Path, message: String) -> Self {
+    pub(crate) fn refused(path: &Path, message: String) -> Self {
         Self::new(path, std::io::Error::new(std::io::ErrorKind::InvalidInput, message))
     }
 }
@@ -77,24 +81,40 @@ impl OutputTarget {
         let metadata = match std::fs::metadata(path) {
             Ok(m) => m,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                // A new file, or a dangling symbolic link (written as a new
-                // file in the link's place, as any tool would).
                 if path.file_name().is_none() {
                     return Err(WriteError::refused(path, "not a file name".into()));
                 }
-                return Ok(Self::File(path.to_path_buf()));
+                // A new file, or a dangling symbolic link: then the file
+                // the link names is created, and the link kept.
+                let target = follow_links(path).map_err(|e| WriteError::new(path, e))?;
+                if target != path {
+                    let dir = match target.parent() {
+                        Some(p) if !p.as_os_str().is_empty() => p,
+                        _ => Path::new("."),
+                    };
+                    if target.file_name().is_none() || !dir.is_dir() {
+                        return Err(WriteError::refused(
+                            path,
+                            format!(
+                                "is a symbolic link to {}, which cannot be created: {}",
+                                target.display(),
+                                if target.file_name().is_none() {
+                                    "not a file name"
+                                } else {
+                                    "its directory does not exist"
+                                }
+                            ),
+                        ));
+                    }
+                }
+                return Ok(Self::File(target));
             }
             Err(e) => return Err(WriteError::new(path, e)),
         };
         let kind = metadata.file_type();
         if kind.is_file() {
             // Replace the file a symbolic link points to, not the link.
-            let resolved = if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) {
-                std::fs::canonicalize(path).map_err(|e| WriteError::new(path, e))?
-            } else {
-                path.to_path_buf()
-            };
-            return Ok(Self::File(resolved));
+            return Ok(Self::File(follow_links(path).map_err(|e| WriteError::new(path, e))?));
         }
         if kind.is_dir() {
             return Err(WriteError::refused(path, "is a directory, not a file".into()));
@@ -129,6 +149,30 @@ impl OutputTarget {
     pub fn is_file(&self) -> bool {
         matches!(self, Self::File(_))
     }
+}
+
+/// Most symbolic links followed from one output path (Linux's own limit).
+const MAX_LINKS: usize = 40;
+
+/// Where a write to `path` lands: `path` itself, or, if its last component
+/// is a symbolic link, the path the chain of links ends at (each relative
+/// link read from the link's own directory), whether that exists or not.
+pub(crate) fn follow_links(path: &Path) -> std::io::Result<PathBuf> {
+    let mut current = path.to_path_buf();
+    for _ in 0..=MAX_LINKS {
+        match std::fs::symlink_metadata(&current) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let next = std::fs::read_link(&current)?;
+                current = match current.parent() {
+                    Some(dir) if next.is_relative() => dir.join(next),
+                    _ => next,
+                };
+            }
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(e),
+            _ => return Ok(current),
+        }
+    }
+    Err(std::io::Error::other(format!("more than {MAX_LINKS} symbolic links in a chain (a loop?)")))
 }
 
 /// `/dev/stdout`, `/dev/stderr`, `/dev/fd/N`, `/proc/self/fd/N`: paths that

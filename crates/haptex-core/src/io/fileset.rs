@@ -1,7 +1,17 @@
 //! Outputs made of several files (a database: model matrices and
-//! `metadata.json`; a library export: CSV files and `manifest.json`).
+//! `metadata.json`; a library export: CSV files and `manifest.json`; a VTK
+//! series; a recording's metadata and streams; a recipe's downloads).
 //!
-//! One file of the set, the *marker*, describes the others and lists the
+//! Every file written into an output directory goes through
+//! [`OutputDir`]: its name relative to the directory is checked against
+//! the name rule ([`crate::name::check_relative_path`]: no `..`, no
+//! separators, no control or format characters ...), and the place it
+//! resolves to (following symbolic links of the directories on the way
+//! and of the file itself) must be inside the directory, or nothing is
+//! written. So a name from a user, or a link planted in the directory,
+//! never makes a writer write elsewhere.
+//!
+//! One file of a set, the *marker*, describes the others and lists the
 //! SHA-256 of each. A [`FileSet`] removes the marker first, writes every
 //! member atomically, and writes the marker last (atomically too). So the
 //! set is either whole, or detectably incomplete: a run killed part way
@@ -14,17 +24,108 @@ use std::path::{Path, PathBuf};
 
 use sha2::{Digest, Sha256};
 
+use super::atomic::follow_links;
 use super::{WriteError, write_atomic};
+use crate::name::check_relative_path;
 
 /// Members of a file set: path relative to the set's directory (with `/`
 /// separators) -> lowercase hex SHA-256 of the file's bytes.
 pub type MemberHashes = BTreeMap<String, String>;
 
+/// A directory that several files are written into; see the module
+/// documentation.
+#[derive(Debug, Clone)]
+pub struct OutputDir {
+    /// As given (for messages).
+    dir: PathBuf,
+    /// Resolved (symbolic links followed): what every member must be in.
+    real: PathBuf,
+}
+
+impl OutputDir {
+    /// `dir`, created if needed.
+    pub fn create(dir: &Path) -> Result<Self, WriteError> {
+        std::fs::create_dir_all(dir).map_err(|e| WriteError::new(dir, e))?;
+        let real = std::fs::canonicalize(dir).map_err(|e| WriteError::new(dir, e))?;
+        Ok(Self { dir: dir.to_path_buf(), real })
+    }
+
+    /// The directory as given.
+    pub fn path(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The path of member `relative` (`name` or `sub/name`), after checking
+    /// that it is a relative path of names and that it resolves inside the
+    /// directory; its parent directories are created (each checked before
+    /// the next is entered). The member itself is not created.
+    pub fn member(&self, relative: &str) -> Result<PathBuf, WriteError> {
+        // A refused name is quoted in the message, never printed as a path.
+        check_relative_path(relative).map_err(|e| WriteError::refused(&self.dir, format!("a file {e}")))?;
+        let path = self.dir.join(relative);
+        let components: Vec<&str> = relative.split('/').collect();
+        let (file, parents) = components.split_last().expect("split gives at least one component");
+        let mut real = self.real.clone();
+        for part in parents {
+            let next = real.join(part);
+            match std::fs::create_dir(&next) {
+                Ok(()) => {}
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+                Err(e) => return Err(WriteError::new(&path, e)),
+            }
+            real = std::fs::canonicalize(&next).map_err(|e| WriteError::new(&path, e))?;
+            self.inside(&path, &real)?;
+        }
+        // Where a write lands: through a symbolic link, its target's directory.
+        let target = follow_links(&real.join(file)).map_err(|e| WriteError::new(&path, e))?;
+        let target_dir = match target.parent() {
+            Some(dir) if !dir.as_os_str().is_empty() => dir,
+            _ => Path::new("."),
+        };
+        let target_dir = std::fs::canonicalize(target_dir).map_err(|e| WriteError::new(&path, e))?;
+        self.inside(&path, &target_dir)?;
+        Ok(path)
+    }
+
+    /// Refuses `path` unless `resolved` is the directory or inside it.
+    fn inside(&self, path: &Path, resolved: &Path) -> Result<(), WriteError> {
+        if resolved.starts_with(&self.real) {
+            Ok(())
+        } else {
+            Err(WriteError::refused(
+                path,
+                format!(
+                    "resolves to {}, outside the output directory {} (a symbolic link?): not written",
+                    resolved.display(),
+                    self.dir.display()
+                ),
+            ))
+        }
+    }
+
+    /// Writes member `relative` atomically ([`OutputDir::member`], then
+    /// [`write_atomic`]); its path.
+    pub fn write<F>(&self, relative: &str, fill: F) -> Result<PathBuf, WriteError>
+    where
+        F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
+    {
+        let path = self.member(relative)?;
+        write_atomic(&path, fill)?;
+        Ok(path)
+    }
+
+    /// The subdirectory `name` (a member, checked as one), created if needed.
+    pub fn subdir(&self, name: &str) -> Result<OutputDir, WriteError> {
+        let path = self.member(name)?;
+        Self::create(&path)
+    }
+}
+
 /// A multi-file output being written; see the module documentation.
 #[derive(Debug)]
 pub struct FileSet {
-    dir: PathBuf,
-    marker: PathBuf,
+    out: OutputDir,
+    marker_name: String,
     members: MemberHashes,
 }
 
@@ -33,35 +134,39 @@ impl FileSet {
     /// `dir/marker_name`: the marker is removed now, so that until
     /// [`FileSet::finish`] the directory reads as incomplete.
     pub fn begin(dir: &Path, marker_name: &str) -> Result<Self, WriteError> {
-        let wrap = |source| WriteError { path: dir.to_path_buf(), cause: source };
-        std::fs::create_dir_all(dir).map_err(wrap)?;
-        let marker = dir.join(marker_name);
+        let out = OutputDir::create(dir)?;
+        let marker = out.member(marker_name)?;
         match std::fs::remove_file(&marker) {
             Ok(()) => {}
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
             Err(source) => return Err(WriteError { path: marker, cause: source }),
         }
-        Ok(Self { dir: dir.to_path_buf(), marker, members: MemberHashes::new() })
+        Ok(Self { out, marker_name: marker_name.to_string(), members: MemberHashes::new() })
     }
 
     /// The set's directory.
     pub fn dir(&self) -> &Path {
-        &self.dir
+        self.out.path()
     }
 
-    /// Writes member `relative` (a path inside the set's directory; its
-    /// parent directories are created) atomically and records its hash.
+    /// Writes member `relative` (a path inside the set's directory, checked
+    /// by [`OutputDir::member`]; its parent directories are created)
+    /// atomically and records its hash.
     pub fn write<F>(&mut self, relative: &str, fill: F) -> Result<PathBuf, WriteError>
     where
         F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
     {
-        let path = self.dir.join(relative);
-        if let Some(parent) = path.parent() {
-            std::fs::create_dir_all(parent)
-                .map_err(|source| WriteError { path: parent.to_path_buf(), cause: source })?;
+        // A member in the marker's place (a material named manifest.json)
+        // would leave no room for the marker: refused, the set incomplete.
+        let first = relative.split('/').next().unwrap_or_default();
+        if first.eq_ignore_ascii_case(&self.marker_name) {
+            return Err(WriteError::refused(
+                &self.out.path().join(&self.marker_name),
+                format!("a member {} would take the place of the set's marker", crate::text::Quoted(relative)),
+            ));
         }
         let mut hasher = Sha256::new();
-        write_atomic(&path, |w| {
+        let path = self.out.write(relative, |w| {
             let mut hashing = HashingWriter { inner: w, hasher: &mut hasher };
             fill(&mut hashing)
         })?;
@@ -81,8 +186,7 @@ impl FileSet {
     {
         super::fault_point("before-marker");
         let members = self.members;
-        write_atomic(&self.marker, |w| fill(w, &members))?;
-        Ok(self.marker)
+        self.out.write(&self.marker_name, |w| fill(w, &members))
     }
 }
 
@@ -96,9 +200,24 @@ pub struct MemberError {
 
 /// Checks that every member listed in `members` exists under `dir` with
 /// its recorded SHA-256.
+/// Every name listed must be a relative path of names
+/// ([`check_relative_path`]): a marker someone else wrote cannot make this
+/// read a file outside `dir`.
 pub fn verify_members(dir: &Path, members: &MemberHashes) -> Result<(), MemberError> {
     for (relative, expected) in members {
+        check_relative_path(relative)
+            .map_err(|e| MemberError { path: dir.to_path_buf(), problem: format!("a member {e}") })?;
         let path = dir.join(relative);
+        let problem = |problem: String| MemberError { path: path.clone(), problem };
+        let real = std::fs::canonicalize(&path).map_err(|e| problem(e.to_string()))?;
+        let home = std::fs::canonicalize(dir).map_err(|e| problem(e.to_string()))?;
+        if !real.starts_with(&home) || !real.is_file() {
+            return Err(problem(format!(
+                "not a regular file inside {} (resolves to {})",
+                dir.display(),
+                real.display()
+            )));
+        }
         let actual = sha256_file(&path).map_err(|e| MemberError { path: path.clone(), problem: e.to_string() })?;
         if &actual != expected {
             return Err(MemberError {

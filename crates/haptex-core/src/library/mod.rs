@@ -33,6 +33,7 @@ use rusqlite::{Connection, OpenFlags, OptionalExtension, TransactionBehavior, pa
 use serde::Serialize;
 use sha2::{Digest, Sha256};
 
+use crate::name::{NameError, check_name};
 use crate::profile::FrictionProfile;
 use crate::recording::rng::SplitMix64;
 use crate::recording::{ProcessedStroke, ProcessingConfig, Recording};
@@ -42,8 +43,8 @@ pub use schema::SCHEMA_VERSION;
 
 /// How long a connection waits for a lock before giving up.
 const BUSY_TIMEOUT: Duration = Duration::from_secs(10);
-/// Longest material name.
-const MAX_NAME_CHARS: usize = 100;
+/// Most material names an "unknown material" error lists.
+const KNOWN_SHOWN: usize = 20;
 
 /// A library operation failed.
 #[derive(Debug, thiserror::Error)]
@@ -63,8 +64,9 @@ pub enum LibraryError {
     UnknownMaterial { name: String, known: String },
     #[error("no stroke with id {0} in the library")]
     UnknownStroke(i64),
-    #[error("invalid material name {}: {message}", Quoted(name))]
-    InvalidName { name: String, message: String },
+    /// A material name that breaks the name rule ([`crate::name`]).
+    #[error("material {0}")]
+    InvalidName(#[from] NameError),
     #[error(
         "material {} holds {existing} strokes, this one is {new}: a material never mixes synthetic and \
          measured data; import it under another name (e.g. {name}-{new}) or into another library (--db)",
@@ -551,7 +553,17 @@ impl Library {
             .prepare("SELECT name FROM materials WHERE id NOT IN (SELECT material_id FROM strokes)")?
             .query_map([], |r| r.get(0))?
             .collect::<Result<_, _>>()?;
-        problems.extend(empty.iter().map(|name| format!("material {name:?} has no strokes")));
+        problems.extend(empty.iter().map(|name| format!("material {} has no strokes", Quoted(name))));
+        // Names a foreign or edited file may hold though no import takes
+        // them: each would be refused by an export.
+        let names: Vec<String> = self
+            .conn
+            .prepare("SELECT name FROM materials ORDER BY id")?
+            .query_map([], |r| r.get(0))?
+            .collect::<Result<_, _>>()?;
+        problems.extend(names.iter().filter_map(|name| check_name(name).err()).map(|e| {
+            format!("material {e}; rename it (a material name is a file name of an export: docs/recordings.md)")
+        }));
         let ids: Vec<i64> = self
             .conn
             .prepare("SELECT stroke_id FROM profiles")?
@@ -572,9 +584,13 @@ impl Library {
             return Ok(id);
         }
         let known: Vec<String> = self.materials()?.into_iter().map(|m| m.name).collect();
+        let mut shown: Vec<String> = known.iter().take(KNOWN_SHOWN).map(|n| Quoted(n).to_string()).collect();
+        if known.len() > KNOWN_SHOWN {
+            shown.push(format!("and {} more", known.len() - KNOWN_SHOWN));
+        }
         Err(LibraryError::UnknownMaterial {
             name: name.to_string(),
-            known: if known.is_empty() { "no materials".into() } else { known.join(", ") },
+            known: if known.is_empty() { "no materials".into() } else { shown.join(", ") },
         })
     }
 }
@@ -761,23 +777,17 @@ fn stroke_info(r: &rusqlite::Row<'_>) -> rusqlite::Result<StrokeInfo> {
     })
 }
 
-/// Material names: 1 to 100 characters, no control characters, no
-/// leading or trailing space.
-fn check_name(name: &str) -> Result<(), LibraryError> {
-    let invalid = |message: &str| Err(LibraryError::InvalidName { name: name.to_string(), message: message.into() });
-    if name.trim().is_empty() {
-        return invalid("empty");
-    }
-    if name.trim() != name {
-        return invalid("leading or trailing spaces");
-    }
-    if name.chars().count() > MAX_NAME_CHARS {
-        return invalid("longer than 100 characters");
-    }
-    if name.chars().any(char::is_control) {
-        return invalid("contains control characters");
-    }
-    Ok(())
+/// The file a library export writes stroke `stroke_id` of `material` to,
+/// relative to the export's directory: `MATERIAL/stroke-ID.csv`, the
+/// material's name with anything but letters, digits, `-`, `_` and `.`
+/// replaced by `_`. A name read from a library file is checked here by
+/// the name rule ([`crate::name`]) an import applies: one that breaks it
+/// (a foreign or edited file) is an error, never a path.
+pub fn export_file(material: &str, stroke_id: i64) -> Result<String, NameError> {
+    check_name(material)?;
+    let dir: String =
+        material.chars().map(|c| if c.is_alphanumeric() || "-_.".contains(c) { c } else { '_' }).collect();
+    Ok(format!("{dir}/stroke-{stroke_id}.csv"))
 }
 
 /// A profile from its stored blobs, validated as any profile is.

@@ -6,7 +6,8 @@
 //! name, an uploaded file's name). Names are only compared, never used to
 //! open anything, and a name that could mean another place on a disk (an
 //! absolute path, a drive letter, a `..` or `.` component, a backslash, an
-//! empty component) is refused, so a set that passes here is also a set
+//! empty component) or that breaks the name rule otherwise
+//! ([`crate::name`]) is refused, so a set that passes here is also a set
 //! of files that could sit side by side in one directory. A metadata file
 //! (`*.recording.json`) names its streams relative to its own folder, as
 //! on disk.
@@ -128,32 +129,14 @@ impl FileBundle {
     }
 }
 
-/// A name is a plain relative path: `/`-separated components, none empty,
-/// `.` or `..`, no backslash, no drive letter or other colon, no control
-/// character, at most 1024 bytes.
+/// A name is a plain relative path: `/`-separated components, each a name
+/// by the one rule ([`crate::name::check_relative_path`]: none empty, `.`
+/// or `..`, no backslash, colon, control or format character ...).
 fn check_name(name: &str) -> Result<(), RecordingError> {
-    let refuse = |why: &str| {
-        Err(RecordingError::Io {
-            file: Quoted(name).to_string(),
-            message: format!("not accepted as a file name: {why}"),
-        })
-    };
-    if name.is_empty() {
-        return refuse("it is empty");
-    }
-    if name.len() > 1024 {
-        return refuse("longer than 1024 bytes");
-    }
-    if name.chars().any(|c| c.is_control() || c == '\\' || c == ':') {
-        return refuse("a control character, '\\' or ':' in it");
-    }
-    if name.starts_with('/') {
-        return refuse("an absolute path");
-    }
-    if name.split('/').any(|part| part.is_empty() || part == "." || part == "..") {
-        return refuse("an empty, '.' or '..' component (names stay inside the upload)");
-    }
-    Ok(())
+    crate::name::check_relative_path(name).map_err(|e| RecordingError::Io {
+        file: Quoted(name).to_string(),
+        message: format!("not accepted as a file name: {} (names stay inside the upload)", e.problem),
+    })
 }
 
 #[cfg(test)]

@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use super::error::{Place, RecordingError};
-use crate::io::{Table, WriteError, write_atomic, write_csv_row};
+use crate::io::{OutputDir, Table, WriteError, write_atomic, write_csv_row};
 use crate::num::Num;
 use crate::text::Quoted;
 
@@ -233,9 +233,13 @@ impl Recording {
     /// written atomically, and the metadata, which names the streams, is
     /// removed first and written last: an interrupted write leaves no
     /// metadata (so no recording an import would find), never one beside
-    /// streams of another write. Returns the metadata path.
+    /// streams of another write. `dir` is created if missing; the stem must
+    /// be a name ([`crate::name::check_name`]) and every file must resolve
+    /// inside `dir` ([`OutputDir`]). Returns the metadata path.
     pub fn write(&self, dir: &Path, stem: &str, format: StreamFormat) -> Result<PathBuf, WriteError> {
-        let meta_path = dir.join(format!("{stem}{METADATA_SUFFIX}"));
+        let out = OutputDir::create(dir)?;
+        crate::name::check_name(stem).map_err(|e| WriteError::refused(dir, format!("a recording's stem {e}")))?;
+        let meta_path = out.member(&format!("{stem}{METADATA_SUFFIX}"))?;
         match std::fs::remove_file(&meta_path) {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
                 return Err(WriteError { path: meta_path, cause: e });
@@ -245,27 +249,27 @@ impl Recording {
         let ext = format.extension();
         let force_file = format!("{stem}.force.{ext}");
         let position_file = format!("{stem}.position.{ext}");
+        let (force_path, position_path) = (out.member(&force_file)?, out.member(&position_file)?);
         let f = &self.force;
         let p = &self.position;
         match format {
             StreamFormat::Csv => {
-                write_csv_stream(&dir.join(&force_file), &FORCE_COLUMNS, &[&f.t_s, &f.fn_n, &f.ft_n])?;
-                write_csv_stream(&dir.join(&position_file), &POSITION_COLUMNS, &[&p.t_s, &p.x_mm])?;
+                write_csv_stream(&force_path, &FORCE_COLUMNS, &[&f.t_s, &f.fn_n, &f.ft_n])?;
+                write_csv_stream(&position_path, &POSITION_COLUMNS, &[&p.t_s, &p.x_mm])?;
             }
             StreamFormat::Npy => {
-                write_npy_f32(&dir.join(&force_file), &[&f.t_s, &f.fn_n, &f.ft_n])?;
-                write_npy_f32(&dir.join(&position_file), &[&p.t_s, &p.x_mm])?;
+                write_npy_f32(&force_path, &[&f.t_s, &f.fn_n, &f.ft_n])?;
+                write_npy_f32(&position_path, &[&p.t_s, &p.x_mm])?;
             }
         }
         let mut meta = self.meta.clone();
         meta.force.file = force_file;
         meta.position.file = position_file;
         crate::io::fault_point("before-recording-metadata");
-        write_atomic(&meta_path, |w| {
+        out.write(&format!("{stem}{METADATA_SUFFIX}"), |w| {
             serde_json::to_writer_pretty(&mut *w, &meta).map_err(std::io::Error::from)?;
             w.write_all(b"\n")
-        })?;
-        Ok(meta_path)
+        })
     }
 }
 
@@ -314,16 +318,16 @@ pub const MAX_STREAM_BYTES: u64 = 1 << 30;
 /// the recording's directory (symbolic links resolved), so that metadata
 /// cannot make haptex read `/dev/zero`, a FIFO, or a file elsewhere.
 fn stream_path(file: &str, dir: &Path, field: &str, relative: &str) -> Result<PathBuf, RecordingError> {
-    use std::path::Component;
     let named = Path::new(relative);
-    if relative.is_empty() || !named.components().all(|c| matches!(c, Component::Normal(_))) {
+    if let Err(e) = crate::name::check_relative_path(relative) {
         return Err(RecordingError::field(
             file,
             field,
             format!(
                 "{} is not a file name inside the recording's directory (no absolute paths, no '..'): streams \
-                 sit beside their metadata",
-                Quoted(relative)
+                 sit beside their metadata ({})",
+                Quoted(relative),
+                e.problem
             ),
         ));
     }
@@ -384,10 +388,11 @@ fn check_meta(file: &str, meta: &RecordingMeta) -> Result<(), RecordingError> {
             format!("is {}; this haptex reads {FORMAT:?}", Quoted(&meta.format)),
         ));
     }
-    for (field, value) in [("material", &meta.material), ("participant", &meta.participant)] {
-        if value.trim().is_empty() {
-            return Err(RecordingError::field(file, field, "must not be empty"));
-        }
+    // A material names the directory a library export writes its strokes
+    // into: one rule for every such name (docs/recordings.md).
+    crate::name::check_name(&meta.material).map_err(|e| RecordingError::field(file, "material", e.to_string()))?;
+    if meta.participant.trim().is_empty() {
+        return Err(RecordingError::field(file, "participant", "must not be empty"));
     }
     for (field, rate) in [("force.rate_hz", meta.force.rate_hz), ("position.rate_hz", meta.position.rate_hz)] {
         if !(rate.is_finite() && rate > 0.0) {

@@ -511,11 +511,11 @@ pub fn demo_recordings(seed: u64, strokes_per_material: usize) -> Vec<(String, R
 /// Writes the demo library's recordings under `dir/<material>/` as float32
 /// NPY streams with their metadata. Returns the metadata paths.
 pub fn write_demo(dir: &Path, seed: u64, strokes_per_material: usize) -> Result<Vec<PathBuf>, WriteError> {
+    let out = crate::io::OutputDir::create(dir)?;
     let mut paths = Vec::new();
     for (stem, recording) in demo_recordings(seed, strokes_per_material) {
-        let sub = dir.join(&recording.meta.material);
-        std::fs::create_dir_all(&sub).map_err(|source| WriteError { path: sub.clone(), cause: source })?;
-        paths.push(recording.write(&sub, &stem, StreamFormat::Npy)?);
+        let sub = out.subdir(&recording.meta.material)?;
+        paths.push(recording.write(sub.path(), &stem, StreamFormat::Npy)?);
     }
     Ok(paths)
 }

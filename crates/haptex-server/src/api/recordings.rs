@@ -28,8 +28,11 @@
 //! count and declared sizes are checked before anything is unzipped, and
 //! an entry that unzips to more than it declared is refused. Nothing is
 //! written to disk but the library: files are held in memory by name, and
-//! a name that could leave a folder (absolute, `..`, a backslash) is
-//! refused. One upload is processed at a time.
+//! a name that breaks the name rule ([`haptex_core::name`]: absolute, `..`,
+//! a backslash, a control or format character ...) is refused; a zip's
+//! hidden entries (`.DS_Store`, `._x`) are skipped like `__MACOSX/`. A
+//! recording's material must be a name by the same rule (it names a
+//! directory of a library export). One upload is processed at a time.
 //!
 //! The answer is the processing report: per recording, the stroke stored
 //! (or the one it duplicates), the sliding segments kept and the runs
@@ -310,7 +313,8 @@ impl Budget<'_> {
 /// anything is unzipped; an entry unzipping to other than its declared
 /// size, an encrypted entry, a symbolic link or a compression other than
 /// stored and deflate is refused. Entries under `__MACOSX/` (the resource
-/// forks macOS's archiver adds) are skipped.
+/// forks macOS's archiver adds) and hidden entries ([`is_hidden`]) are
+/// skipped.
 fn unzip_into(
     bundle: &mut FileBundle,
     zip_name: &str,
@@ -356,7 +360,7 @@ fn unzip_into(
         if entry.is_dir() {
             continue;
         }
-        if name.starts_with("__MACOSX/") {
+        if name.starts_with("__MACOSX/") || is_hidden(&name) {
             skipped.push(format!("{zip_name}: {name}"));
             continue;
         }
@@ -381,6 +385,13 @@ fn unzip_into(
         bundle.add(&name, data).map_err(|e| recording_error(e).with_file(Some(format!("{zip_name}: {name}"))))?;
     }
     Ok(())
+}
+
+/// A hidden file (`.DS_Store`, `._x`, `.git/...`: a component beginning
+/// with `.` other than `.` and `..`, which the name rule refuses as ways
+/// out of a folder): what an archiver adds, skipped like `__MACOSX/`.
+fn is_hidden(name: &str) -> bool {
+    name.split('/').any(|part| part.starts_with('.') && part != "." && part != "..")
 }
 
 /// The entry count of a zip's end-of-central-directory record (the last
@@ -447,10 +458,9 @@ fn library_write_error(error: LibraryError) -> ApiError {
             ),
             Some("material"),
         ),
-        LibraryError::InvalidName { name, message } => ApiError::bad_request(
-            format!("invalid material name {}: {message}. Nothing was stored.", quote(&name)),
-            Some("material"),
-        ),
+        LibraryError::InvalidName(e) => {
+            ApiError::bad_request(format!("material {e}. Nothing was stored."), Some("material"))
+        }
         other => ApiError::library(other),
     }
 }
