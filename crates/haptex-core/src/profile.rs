@@ -218,12 +218,13 @@ impl FrictionProfile {
         let intervals = (self.span_mm() / dx_mm).floor();
         if intervals < 1.0 {
             return Err(ProfileError::Resample(format!(
-                "spacing {dx_mm} mm is longer than the profile ({} mm)",
-                self.span_mm()
+                "spacing {} mm is longer than the profile ({} mm)",
+                Num(dx_mm),
+                Num(self.span_mm())
             )));
         }
         if intervals > 1e9 {
-            return Err(ProfileError::Resample(format!("spacing {dx_mm} mm gives more than 1e9 points")));
+            return Err(ProfileError::Resample(format!("spacing {} mm gives more than 1e9 points", Num(dx_mm))));
         }
         let x0 = self.x_mm[0];
         self.resample_at((0..=intervals as usize).map(|i| x0 + dx_mm * i as f64).collect())
@@ -241,8 +242,8 @@ impl FrictionProfile {
         // so small that consecutive points round to the same value.
         validate(&x_mm, &[("mu", &mu)]).map_err(|(_, _, m)| {
             ProfileError::Resample(format!(
-                "cannot resample a {:e} mm span onto {} points: {m}",
-                self.span_mm(),
+                "cannot resample a {} mm span onto {} points: {m}",
+                Num(self.span_mm()),
                 x_mm.len()
             ))
         })?;
@@ -358,22 +359,37 @@ pub(crate) fn validate(x_mm: &[f64], columns: &[(&'static str, &[f64])]) -> Resu
     }
     check_values("x_mm", x_mm)?;
     if let Some(i) = x_mm.windows(2).position(|w| w[1] <= w[0]) {
-        return Err((
-            Some(i + 1),
-            "x_mm",
-            format!("positions must be strictly increasing: {} follows {}", Num(x_mm[i + 1]), Num(x_mm[i])),
-        ));
+        return Err((Some(i + 1), "x_mm", {
+            let (next, previous) = crate::num::distinct(x_mm[i + 1], x_mm[i]);
+            format!("positions must be strictly increasing: {next} follows {previous}")
+        }));
     }
     Ok(())
 }
 
 /// mu = ft / fn (paper eq. 4) from checked forces, itself checked: a tiny
 /// fn (5e-324 N) makes an infinite or absurd mu, refused at its row and
-/// blamed on fn_n.
+/// blamed on fn_n; a negative ft (a force along -x, which only a stroke's
+/// direction can turn into friction) is refused at its row and blamed on
+/// ft_n ([`crate::ranges::MU`]).
 fn mu_from_forces(ft_n: &[f64], fn_n: &[f64]) -> Result<Vec<f64>, Violation> {
     let mu: Vec<f64> = ft_n.iter().zip(fn_n).map(|(t, n)| t / n).collect();
     check_values("mu", &mu).map_err(|(i, _, _)| {
         let i = i.unwrap_or(0);
+        if ft_n[i] < 0.0 {
+            return (
+                Some(i),
+                "ft_n",
+                format!(
+                    "ft_n = {} N is negative: a friction profile's ft_n is the friction force along the sliding \
+                     direction, so that mu = ft_n / fn_n >= 0 (mu must be {}); a force signed along +x is a \
+                     recording's (NAME.recording.json, haptex library import), whose pipeline takes each stroke's \
+                     direction into account",
+                    Num(ft_n[i]),
+                    crate::ranges::MU.describe()
+                ),
+            );
+        }
         (
             Some(i),
             "fn_n",
