@@ -236,7 +236,8 @@ impl FmtFields {
             ("bits per sample", self.bits_per_sample.to_string()),
             ("valid bits per sample", opt(self.valid_bits_per_sample.map(|v| v.to_string()))),
             ("channel mask", opt(self.channel_mask.map(|v| v.to_string()))),
-            ("subformat", opt(self.subformat.clone())),
+            // Text from the file: quoted (escaped, cut short).
+            ("subformat", opt(self.subformat.as_deref().map(|s| crate::text::Quoted(s).to_string()))),
         ]
     }
 
@@ -683,7 +684,9 @@ pub fn read_drive_wav(path: &Path) -> Result<DriveWav, SignalError> {
     if metadata.len() > u64::from(u32::MAX) + 8 {
         return Err(bad(format!("{} bytes: larger than a WAV file can be (4 GiB)", metadata.len())));
     }
-    let mut bytes = Vec::with_capacity(metadata.len() as usize);
+    let mut bytes =
+        crate::buffer::try_with_capacity(metadata.len() as usize, || format!("its {} bytes", metadata.len()))
+            .map_err(|e| bad(e.to_string()))?;
     std::fs::File::open(path)
         .and_then(|f| f.take(metadata.len()).read_to_end(&mut bytes))
         .map_err(|e| bad(e.to_string()))?;
