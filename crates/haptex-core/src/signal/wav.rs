@@ -33,7 +33,7 @@
 //!
 //! Versions of the chunk: version 2 (`"version": 2`, this one) states the
 //! `fmt ` fields and hashes them. Version 1 (no `version` field, haptex
-//! before 2026-12) hashed the samples only; it is still read, with the
+//! before issue 35) hashed the samples only; it is still read, with the
 //! same checks except the `fmt ` hash, which it does not have: its `fmt `
 //! chunk must be, field by field, the one haptex writes for the chunk's
 //! format, channels and rate (the only one haptex ever wrote), so an
