@@ -11,7 +11,7 @@ use haptex_core::electrovibration::{Device, Method, map_profile, map_profile_rel
 use haptex_core::profile::FrictionProfile;
 use haptex_core::relative::FlatMu;
 use haptex_core::recording::Recording;
-use haptex_core::signal::{VoltageCurve, decode_drive_wav};
+use haptex_core::signal::{VoltageCurve, WavFormat, decode_drive_wav, decode_drive_wav_channels};
 use haptex_core::trajectory::Trajectory;
 
 /// The parsers, by name: what `replay` and the campaign script iterate.
@@ -135,14 +135,53 @@ fn split<'a>(data: &'a [u8], separator: &'a [u8]) -> impl Iterator<Item = &'a [u
     })
 }
 
-/// A drive-signal WAV read back with its scale chunk.
+/// A drive-signal WAV read back with its scale chunk. A WAV haptex
+/// accepts must be, to every reader, what its scale chunk says: every
+/// sample of every channel finite and within the stated full scale
+/// (channel 1 within volts_per_full_scale, channel 2 within its um per
+/// full scale); and hound, an independent reader that knows nothing of
+/// the scale chunk, must read from the fmt chunk the chunk's format,
+/// channel count and rate, and the same samples, code for code.
 pub fn drive_wav(data: &[u8]) {
-    match decode_drive_wav(data) {
-        Ok((scale, volts)) => {
-            assert_eq!(volts.len(), scale.n_samples);
-            assert!(volts.iter().all(|v| v.is_finite() && v.abs() <= scale.volts_per_full_scale * 1.0001));
-        }
-        Err(message) => short(message),
+    let (scale, volts, amplitude) = match decode_drive_wav_channels(data) {
+        Ok(decoded) => decoded,
+        Err(message) => return short(message),
+    };
+    assert_eq!(decode_drive_wav(data).map(|(_, v)| v).as_ref(), Ok(&volts));
+    let channels: usize = if scale.channel_2.is_some() { 2 } else { 1 };
+    assert_eq!((volts.len(), amplitude.is_some()), (scale.n_samples, channels == 2));
+    let vpfs = scale.volts_per_full_scale;
+    assert!(volts.iter().all(|v| v.is_finite() && v.abs() <= vpfs), "channel 1 beyond {vpfs} V");
+    let upfs = scale.channel_2.as_ref().map_or(1.0, |c| c.um_per_full_scale);
+    if let Some(a) = &amplitude {
+        assert!(a.iter().all(|v| v.is_finite() && v.abs() <= upfs), "channel 2 beyond {upfs} um");
+    }
+    let reader = hound::WavReader::new(std::io::Cursor::new(data)).expect("an accepted WAV reads with hound");
+    let spec = reader.spec();
+    let (float, bits) = match scale.sample_format {
+        WavFormat::Pcm16 => (false, 16),
+        WavFormat::Pcm24 => (false, 24),
+        WavFormat::Float32 => (true, 32),
+    };
+    assert_eq!(
+        (usize::from(spec.channels), spec.sample_rate, spec.bits_per_sample, spec.sample_format == hound::SampleFormat::Float),
+        (channels, scale.sample_rate_hz, bits, float),
+        "hound reads another format from the fmt chunk"
+    );
+    let codes: Vec<f64> = if float {
+        reader.into_samples::<f32>().map(|s| f64::from(s.expect("hound reads the samples"))).collect()
+    } else {
+        reader.into_samples::<i32>().map(|s| f64::from(s.expect("hound reads the samples"))).collect()
+    };
+    assert_eq!(codes.len(), scale.n_samples * channels, "hound reads another number of samples");
+    let full = scale.full_scale_value;
+    for (k, code) in codes.iter().enumerate() {
+        let (ours, per_full_scale) = match (k % channels, &amplitude) {
+            (1, Some(a)) => (a[k / channels], upfs),
+            _ => (volts[k / channels], vpfs),
+        };
+        assert!(code.abs() <= full, "hound reads code {code} beyond the full scale {full}");
+        assert_eq!(code / full * per_full_scale, ours, "hound reads sample {k} as another value");
     }
 }
 

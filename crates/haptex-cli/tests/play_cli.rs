@@ -7,6 +7,8 @@ use haptex_core::signal::WavFormat;
 
 mod common;
 use common::{haptex, stderr, write};
+#[path = "../../haptex-core/tests/support/forge_wav.rs"]
+mod forge_wav;
 
 fn path(dir: &Path, name: &str) -> String {
     dir.join(name).to_str().unwrap().to_string()
@@ -322,10 +324,16 @@ fn release(fifo: &Path, out: &Output) {
     }
 }
 
-/// One-channel output is byte-identical to haptex before the two-channel
-/// drive: the SHA-256 of each file as the previous release wrote it
-/// (measured with its binary on the same commands; the sidecar with its
-/// `command` line, which names the test's paths, blanked).
+/// One-channel output keeps its format: the `fmt ` chunk and the samples
+/// are byte-identical to those haptex wrote before the two-channel drive
+/// (the SHA-256 of each WAV's bytes from "WAVE" to the end of the data
+/// chunk, as the previous release wrote them, measured with its binary on
+/// the same commands). What changed, in issue 35, is the scale chunk after
+/// the samples (version 2 states every field of the `fmt ` chunk and
+/// hashes it; so the RIFF size changed too) and the sidecar (its
+/// `fmt_sha256`): their hashes as this version writes them follow, so
+/// that any further change is seen (the sidecar with its `command` line,
+/// which names the test's paths, blanked).
 #[test]
 fn one_channel_output_is_unchanged() {
     let dir = tempfile::tempdir().unwrap();
@@ -334,10 +342,19 @@ fn one_channel_output_is_unchanged() {
     let out = haptex(&["voltage", "--profile", "../../data/examples/bump_friction.csv", "-o", &u, "-q"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let sha = |p: &str| haptex_core::io::sha256_hex(&std::fs::read(p).unwrap());
-    let blanked_sidecar = |p: &str| {
+    // "WAVE", the fmt chunk and the data chunk: what every audio program reads.
+    let format_and_samples = |p: &str| {
+        let bytes = std::fs::read(p).unwrap();
+        let data = bytes.windows(4).position(|w| w == b"data").unwrap();
+        let size = u32::from_le_bytes(bytes[data + 4..data + 8].try_into().unwrap()) as usize;
+        haptex_core::io::sha256_hex(&bytes[8..data + 8 + size])
+    };
+    // Without its fmt_sha256 line, the sidecar is the previous release's.
+    let blanked_sidecar = |p: &str, without_fmt_hash: bool| {
         let text = std::fs::read_to_string(p).unwrap();
         let text: String = text
             .lines()
+            .filter(|l| !(without_fmt_hash && l.contains("\"fmt_sha256\":")))
             .map(|l| if l.contains("\"command\":") { "    \"command\": \"X\"," } else { l })
             .fold(String::new(), |mut s, l| {
                 s.push_str(l);
@@ -346,20 +363,26 @@ fn one_channel_output_is_unchanged() {
             });
         haptex_core::io::sha256_hex(text.as_bytes())
     };
-    for (format, wav_hash, sidecar_hash) in [
+    for (format, previous, wav_hash, sidecar_hash, previous_sidecar) in [
         (
             "pcm16",
-            "536dfbe6bdc706555eb4885a265a16674f86eaa78b59f437b74103b143985be5",
+            "ffcdbff919217e4abbd0b950827612d6d82380c2e063d729e5e5aa9c2be148e8",
+            "7c9ffd0b41b641afd589c470242ced0c707cdd801273e11317f17faf28a0a501",
+            "c2cc0a7c01a7fbd3ba1b0f5864ebf68efe6fd1d8456bc08d3abdf37dcd04df9f",
             "33130a2308b66311c2c1ed58f51e09913a0fccc67b7a557ad89c30296bf761ee",
         ),
         (
             "pcm24",
-            "c1b1f8949df3b959123d1889b1e17a22ee806166bcbd2072c95e62b4fce824ad",
+            "264487919ff763e0e3464295a0785f6a9e6e63044f397003ecfba90674163ade",
+            "7edbe20eb1318d29121ee8d6a9571685cb6b733bb7d3a787d0281bf309eb9a63",
+            "20cde01749dbc24e539ec6f43d6a58c0e5a45c444df18f44599fd296dab9994a",
             "089bdc7f36e0dd136f097754a575190f52390579bb757e42e67249ef0515e871",
         ),
         (
             "float32",
-            "fdbd35c650de60701d93f7d18c26490102f51df5244f9ec9cd4975df05b315f9",
+            "7674fd189aa4321579ac42d6bac8fe2f36f3ce812c2a6606e0c9e918f1e7d50d",
+            "8db967f6ad5bffe5cceab461ed095e4e5ec15cb5e0dc8f48b8556abf5878fef9",
+            "ae38e67d1847c4216f0c4f84edd26c4d47da25f33004d402ba04e361694bfa2a",
             "99cfefb9157beb91793695d6cbeae0b384ab8422e19a16999c6cb344a3d118d1",
         ),
     ] {
@@ -371,8 +394,11 @@ fn one_channel_output_is_unchanged() {
             .output()
             .unwrap();
         assert!(out.status.success(), "{}", stderr(&out));
+        assert_eq!(format_and_samples(&path(d, &name)), previous, "{format}: fmt chunk or samples");
         assert_eq!(sha(&path(d, &name)), wav_hash, "{format} WAV");
-        assert_eq!(blanked_sidecar(&path(d, &format!("{name}.json"))), sidecar_hash, "{format} sidecar");
+        let sidecar = path(d, &format!("{name}.json"));
+        assert_eq!(blanked_sidecar(&sidecar, false), sidecar_hash, "{format} sidecar");
+        assert_eq!(blanked_sidecar(&sidecar, true), previous_sidecar, "{format} sidecar but its fmt_sha256");
     }
     let csv = path(d, "b.csv");
     let out = haptex(&["play", "--profile", &u, "--velocity", "40", "--carrier", "square", "-o", &csv, "-q"]);
@@ -522,4 +548,79 @@ fn combined_profile_plays_on_two_channels() {
     let out = haptex(&["simulate", "--surface", "display", "--voltage", &design, "-o", &path(d, "s.csv")]);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("designed for a combined display"), "{}", stderr(&out));
+}
+
+/// A float32 WAV `haptex play` wrote (volts per full scale 150 V), and
+/// its path in `dir`.
+fn float_wav(dir: &Path) -> (String, Vec<u8>) {
+    let u = write(dir, "u.csv", "x_mm,voltage_v\n0,10\n10,40\n");
+    let wav = path(dir, "drive.wav");
+    let out = haptex(&[
+        "play",
+        "--profile",
+        &u,
+        "--velocity",
+        "100",
+        "--wav-format",
+        "float32",
+        "--volts-per-full-scale",
+        "150",
+        "-o",
+        &wav,
+        "-q",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    std::fs::remove_file(format!("{wav}.json")).unwrap();
+    let bytes = std::fs::read(&wav).unwrap();
+    (wav, bytes)
+}
+
+/// `haptex play --check` on forged bytes: refused with a "cannot read"
+/// message containing `fragment`.
+fn check_refuses(wav: &str, bytes: &[u8], fragment: &str) {
+    std::fs::write(wav, bytes).unwrap();
+    let out = haptex(&["play", "--check", wav]);
+    let text = stderr(&out);
+    assert!(!out.status.success(), "a forged WAV passed --check: {text}");
+    assert!(text.contains("cannot read the WAV file") && text.contains(fragment), "{fragment}: {text}");
+    assert!(!text.contains("cannot encode") && !text.contains("peak"), "{text}");
+}
+
+/// Issue 35, through `haptex play --check`: a float32 WAV whose format tag
+/// was edited to integer PCM (2 bytes, hashes recomputed) passed, and
+/// every other program then read the float bit patterns as integer noise.
+#[test]
+fn wav_format_fields_are_covered_by_the_scale_chunk() {
+    let dir = tempfile::tempdir().unwrap();
+    let (wav, bytes) = float_wav(dir.path());
+    assert!(haptex(&["play", "--check", &wav]).status.success());
+    // WAVE_FORMAT_EXTENSIBLE relabelled as WAVE_FORMAT_PCM.
+    let forged = forge_wav::forge(&bytes, |p| forge_wav::put_u16(&mut p.fmt, 0, 1));
+    check_refuses(&wav, &forged, "format tag 1 where the scale chunk says 65534");
+    // The subformat GUID: IEEE float relabelled as integer PCM.
+    let forged = forge_wav::forge(&bytes, |p| p.fmt[24] = 1);
+    check_refuses(&wav, &forged, "subformat");
+}
+
+/// Issue 35, through `haptex play --check`: NaN, an infinity or 50.0 in
+/// channel 1 of a float WAV (hashes recomputed) passed as "peak inf V" or
+/// "peak 7071 V", and a rate of 0 Hz as "0 Hz (inf s) ... ok".
+#[test]
+fn every_channel_of_every_sample_is_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let (wav, bytes) = float_wav(dir.path());
+    for value in [f32::NAN, f32::INFINITY, 50.0] {
+        let forged = forge_wav::forge(&bytes, |p| p.data[400..404].copy_from_slice(&value.to_le_bytes()));
+        check_refuses(&wav, &forged, "channel 1's sample 100");
+    }
+    let forged = forge_wav::forge(&bytes, |p| {
+        forge_wav::put_u32(&mut p.fmt, 4, 0);
+        forge_wav::put_u32(&mut p.fmt, 8, 0);
+        p.scale["sample_rate_hz"] = 0.into();
+        if let Some(fields) = p.scale.get_mut("fmt") {
+            fields["sample_rate_hz"] = 0.into();
+            fields["byte_rate"] = 0.into();
+        }
+    });
+    check_refuses(&wav, &forged, "0 Hz");
 }

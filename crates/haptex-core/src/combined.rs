@@ -26,7 +26,7 @@ use std::io::Write;
 use serde::Serialize;
 
 use crate::electrovibration::{Device, ElectroError, Regions, force_ratio_for, format_ranges, min_max};
-use crate::num::Num;
+use crate::num::{Fixed, Num};
 use crate::profile::FrictionProfile;
 use crate::ranges::{self, RangeError};
 use crate::relative::{FlatMu, Relative, RelativeError};
@@ -438,15 +438,24 @@ impl fmt::Display for DisplaySummary {
         }
         writeln!(
             f,
-            "profile: {} points, x {} .. {} mm, mu {:.4} .. {:.4}",
-            self.n_points, self.x_min_mm, self.x_max_mm, self.mu_min, self.mu_max
+            "profile: {} points, x {} .. {} mm, mu {} .. {}",
+            self.n_points,
+            Num(self.x_min_mm),
+            Num(self.x_max_mm),
+            Fixed(self.mu_min, 4),
+            Fixed(self.mu_max, 4)
         )?;
         if let Some(ev) = &self.electrovibration {
-            write!(f, "electrovibration: mu_HD = {}, Fe/Fn = {:.5e} U^2 (U in V)", self.mu_hd, ev.fe_over_fn_per_v2)?;
+            write!(
+                f,
+                "electrovibration: mu_HD = {}, Fe/Fn = {:.5e} U^2 (U in V)",
+                Num(self.mu_hd),
+                ev.fe_over_fn_per_v2
+            )?;
             if let Some(fn_n) = ev.fn_n {
-                write!(f, " at Fn = {fn_n} N")?;
+                write!(f, " at Fn = {} N", Num(fn_n))?;
             }
-            writeln!(f, ", U_max = {} V", ev.u_max_v)?;
+            writeln!(f, ", U_max = {} V", Num(ev.u_max_v))?;
         }
         if let Some(us) = &self.ultrasonic {
             writeln!(f, "ultrasonic: {}", us.model.description)?;
@@ -461,7 +470,9 @@ impl fmt::Display for DisplaySummary {
             writeln!(
                 f,
                 "voltage (RMS): {:.3} .. {:.3} V, U_max = {} V",
-                ev.voltage_min_v, ev.voltage_max_v, ev.u_max_v
+                ev.voltage_min_v,
+                ev.voltage_max_v,
+                Num(ev.u_max_v)
             )?;
         }
         if let Some(us) = &self.ultrasonic {
@@ -553,14 +564,15 @@ impl DisplayProfile {
             units.push(format!(
                 "voltage_v is the electrovibration voltage, RMS (a sine carrier needs peak sqrt(2)*voltage_v), at \
                  most U_max = {} V",
-                Num(ev.u_max_v)
+                crate::num::Exact(ev.u_max_v)
             ));
         }
         if let Some(us) = &s.ultrasonic {
             header.push_str(",amplitude_um");
             units.push(format!(
                 "amplitude_um is the ultrasonic vibration amplitude, peak, in um, at most a_max = {} um",
-                Num(us.model.a_max_um)
+                // Read back by `haptex play` as channel 2's limit: in full.
+                crate::num::Exact(us.model.a_max_um)
             ));
             writeln!(w, "# ultrasonic model: {}", us.model.description)?;
         }

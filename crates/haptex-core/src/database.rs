@@ -107,7 +107,17 @@ impl Template {
     /// profiles give it: `bump x0=5 mm r_w=1.3 mm r_h=0.27 mm velocity=20
     /// mm/s` (`query`: r_w, r_h, velocity).
     pub fn describe_query(self, x0_mm: f64, query: &[f64; 3]) -> String {
-        format!("{} x0={x0_mm} mm r_w={} mm r_h={} mm velocity={} mm/s", self.name(), query[0], query[1], query[2])
+        {
+            use crate::num::Num;
+            format!(
+                "{} x0={} mm r_w={} mm r_h={} mm velocity={} mm/s",
+                self.name(),
+                Num(x0_mm),
+                Num(query[0]),
+                Num(query[1]),
+                Num(query[2])
+            )
+        }
     }
 
     /// What the width r_w and the height r_h mean for this template.
@@ -406,7 +416,7 @@ impl TemplateModel {
         velocity_mm_s: f64,
     ) -> Result<Prediction, DatabaseError> {
         if !x0_mm.is_finite() {
-            return Err(DatabaseError::Query(format!("x0 must be a finite number, got {x0_mm}")));
+            return Err(DatabaseError::Query(format!("x0 must be a finite number, got {}", crate::num::Num(x0_mm))));
         }
         let mut scratch = self.cae.scratch();
         let mut mu = vec![0.0; self.grid.points];

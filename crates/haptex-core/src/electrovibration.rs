@@ -12,7 +12,7 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use crate::num::Num;
+use crate::num::{Fixed, Num};
 use crate::profile::FrictionProfile;
 use crate::ranges::{self, RangeError};
 use crate::relative::{FlatMu, Relative, RelativeError};
@@ -356,20 +356,26 @@ impl fmt::Display for VoltageSummary {
         }
         writeln!(
             f,
-            "profile: {} points, x {} .. {} mm, mu {:.4} .. {:.4}",
-            self.n_points, self.x_min_mm, self.x_max_mm, self.mu_min, self.mu_max
+            "profile: {} points, x {} .. {} mm, mu {} .. {}",
+            self.n_points,
+            Num(self.x_min_mm),
+            Num(self.x_max_mm),
+            Fixed(self.mu_min, 4),
+            Fixed(self.mu_max, 4)
         )?;
         if let (Some(mu_hd), Some(ratio)) = (self.mu_hd, self.fe_over_fn_per_v2) {
-            write!(f, "device: mu_HD = {mu_hd}, Fe/Fn = {ratio:.5e} U^2 (U in V)")?;
+            write!(f, "device: mu_HD = {}, Fe/Fn = {ratio:.5e} U^2 (U in V)", Num(mu_hd))?;
             if let Some(fn_n) = self.fn_n {
-                write!(f, " at Fn = {fn_n} N")?;
+                write!(f, " at Fn = {} N", Num(fn_n))?;
             }
             writeln!(f)?;
         }
         writeln!(
             f,
             "voltage (RMS): {:.3} .. {:.3} V, U_max = {} V",
-            self.voltage_min_v, self.voltage_max_v, self.u_max_v
+            self.voltage_min_v,
+            self.voltage_max_v,
+            Num(self.u_max_v)
         )?;
         for (label, regions) in [("clipped at U_max", &self.clipped), ("mu_RS < mu_HD (U = 0 V)", &self.not_renderable)]
         {
@@ -600,10 +606,10 @@ fn physical_warnings(s: &VoltageSummary) -> Vec<String> {
     }
     if !s.clipped.is_empty() {
         warnings.push(format!(
-            "U exceeds U_max = {} V over {:.2}% of the length (mu_RS > {:.4}): clipped to U_max",
-            s.u_max_v,
+            "U exceeds U_max = {} V over {:.2}% of the length (mu_RS > {}): clipped to U_max",
+            Num(s.u_max_v),
             percent(&s.clipped),
-            s.mu_at_u_max.unwrap_or(f64::NAN)
+            Fixed(s.mu_at_u_max.unwrap_or(f64::NAN), 4)
         ));
     }
     warnings

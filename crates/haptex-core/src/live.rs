@@ -40,6 +40,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
 
+use crate::num::Num;
 use crate::realtime::{PlanarRenderer, RealtimeRenderer};
 use crate::signal::SignalError;
 
@@ -495,10 +496,10 @@ impl<R: LiveRenderer> LiveEngine<R> {
             )));
         }
         if !(config.ramp_s.is_finite() && config.ramp_s > 0.0 && config.ramp_s <= 10.0) {
-            return Err(SignalError::Settings(format!("ramp time must be in (0, 10] s, got {}", config.ramp_s)));
+            return Err(SignalError::Settings(format!("ramp time must be in (0, 10] s, got {}", Num(config.ramp_s))));
         }
         if !(config.gap_s.is_finite() && (0.0..=60.0).contains(&config.gap_s)) {
-            return Err(SignalError::Settings(format!("gap time must be in [0, 60] s, got {}", config.gap_s)));
+            return Err(SignalError::Settings(format!("gap time must be in [0, 60] s, got {}", Num(config.gap_s))));
         }
         if renderer.samples_rendered() != 0 {
             return Err(SignalError::Settings("the renderer has already rendered samples".into()));
@@ -546,8 +547,8 @@ impl<R: LiveRenderer> LiveEngine<R> {
                 return Err(SignalError::Settings(format!(
                     "touch event {}: time {} s is before the previous event's {} s",
                     i + 2,
-                    pair[1].t_s,
-                    pair[0].t_s
+                    crate::num::distinct(pair[1].t_s, pair[0].t_s).0,
+                    crate::num::distinct(pair[1].t_s, pair[0].t_s).1
                 )));
             }
         }

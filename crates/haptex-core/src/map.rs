@@ -1084,12 +1084,15 @@ impl DisplayMap {
             Some(_) => writeln!(
                 w,
                 "# voltage_v is RMS, at most U_max = {} V; amplitude_um is the plate's amplitude, peak, at most a_max = {} um",
-                Num(self.u_max_v),
-                Num(self.a_max_um)
+                crate::num::Exact(self.u_max_v),
+                crate::num::Exact(self.a_max_um)
             )?,
-            None => {
-                writeln!(w, "# amplitude_um is the plate's amplitude, peak, at most a_max = {} um", Num(self.a_max_um))?
-            }
+            // The stated a_max is read back by `haptex play`: in full.
+            None => writeln!(
+                w,
+                "# amplitude_um is the plate's amplitude, peak, at most a_max = {} um",
+                crate::num::Exact(self.a_max_um)
+            )?,
         }
         writeln!(
             w,

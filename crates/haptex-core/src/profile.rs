@@ -206,7 +206,7 @@ impl FrictionProfile {
         }
         let (x0, x1) = (self.x_mm[0], self.x_mm[self.len() - 1]);
         let step = (x1 - x0) / (n - 1) as f64;
-        self.resample_at((0..n).map(|i| if i + 1 == n { x1 } else { x0 + step * i as f64 }).collect())
+        self.resample_at(n, |i| if i + 1 == n { x1 } else { x0 + step * i as f64 })
     }
 
     /// The profile resampled onto a uniform grid of spacing `dx_mm` starting
@@ -218,31 +218,42 @@ impl FrictionProfile {
         let intervals = (self.span_mm() / dx_mm).floor();
         if intervals < 1.0 {
             return Err(ProfileError::Resample(format!(
-                "spacing {dx_mm} mm is longer than the profile ({} mm)",
-                self.span_mm()
+                "spacing {} mm is longer than the profile ({} mm)",
+                Num(dx_mm),
+                Num(self.span_mm())
             )));
         }
         if intervals > 1e9 {
-            return Err(ProfileError::Resample(format!("spacing {dx_mm} mm gives more than 1e9 points")));
+            return Err(ProfileError::Resample(format!("spacing {} mm gives more than 1e9 points", Num(dx_mm))));
         }
         let x0 = self.x_mm[0];
-        self.resample_at((0..=intervals as usize).map(|i| x0 + dx_mm * i as f64).collect())
+        self.resample_at(intervals as usize + 1, |i| x0 + dx_mm * i as f64)
     }
 
-    /// Linear interpolation of every column at increasing positions `x_mm`.
-    fn resample_at(&self, x_mm: Vec<f64>) -> Result<Self, ProfileError> {
-        let resample = |values: &[f64]| -> Vec<f64> {
-            let mut cursor = Cursor::default();
-            x_mm.iter().map(|&x| cursor.interpolate(&self.x_mm, values, x)).collect()
+    /// Linear interpolation of every column at the `n` increasing positions
+    /// `x(0), x(1), ...`; the buffers (sized by the caller's n) allocated
+    /// fallibly, so that a grid the memory cannot hold is an error.
+    fn resample_at(&self, n: usize, x: impl Fn(usize) -> f64) -> Result<Self, ProfileError> {
+        let buffer = || {
+            crate::buffer::try_with_capacity::<f64>(n, || format!("a profile of {n} points"))
+                .map_err(|e| ProfileError::Resample(e.to_string()))
         };
-        let mu = resample(&self.mu);
-        let fn_n = self.fn_n.as_deref().map(resample);
+        let mut x_mm = buffer()?;
+        x_mm.extend((0..n).map(x));
+        let resample = |values: &[f64]| -> Result<Vec<f64>, ProfileError> {
+            let mut out = buffer()?;
+            let mut cursor = Cursor::default();
+            out.extend(x_mm.iter().map(|&x| cursor.interpolate(&self.x_mm, values, x)));
+            Ok(out)
+        };
+        let mu = resample(&self.mu)?;
+        let fn_n = self.fn_n.as_deref().map(resample).transpose()?;
         // A grid over a valid span is strictly increasing unless the span is
         // so small that consecutive points round to the same value.
         validate(&x_mm, &[("mu", &mu)]).map_err(|(_, _, m)| {
             ProfileError::Resample(format!(
-                "cannot resample a {:e} mm span onto {} points: {m}",
-                self.span_mm(),
+                "cannot resample a {} mm span onto {} points: {m}",
+                Num(self.span_mm()),
                 x_mm.len()
             ))
         })?;
@@ -358,22 +369,37 @@ pub(crate) fn validate(x_mm: &[f64], columns: &[(&'static str, &[f64])]) -> Resu
     }
     check_values("x_mm", x_mm)?;
     if let Some(i) = x_mm.windows(2).position(|w| w[1] <= w[0]) {
-        return Err((
-            Some(i + 1),
-            "x_mm",
-            format!("positions must be strictly increasing: {} follows {}", Num(x_mm[i + 1]), Num(x_mm[i])),
-        ));
+        return Err((Some(i + 1), "x_mm", {
+            let (next, previous) = crate::num::distinct(x_mm[i + 1], x_mm[i]);
+            format!("positions must be strictly increasing: {next} follows {previous}")
+        }));
     }
     Ok(())
 }
 
 /// mu = ft / fn (paper eq. 4) from checked forces, itself checked: a tiny
 /// fn (5e-324 N) makes an infinite or absurd mu, refused at its row and
-/// blamed on fn_n.
+/// blamed on fn_n; a negative ft (a force along -x, which only a stroke's
+/// direction can turn into friction) is refused at its row and blamed on
+/// ft_n ([`crate::ranges::MU`]).
 fn mu_from_forces(ft_n: &[f64], fn_n: &[f64]) -> Result<Vec<f64>, Violation> {
     let mu: Vec<f64> = ft_n.iter().zip(fn_n).map(|(t, n)| t / n).collect();
     check_values("mu", &mu).map_err(|(i, _, _)| {
         let i = i.unwrap_or(0);
+        if ft_n[i] < 0.0 {
+            return (
+                Some(i),
+                "ft_n",
+                format!(
+                    "ft_n = {} N is negative: a friction profile's ft_n is the friction force along the sliding \
+                     direction, so that mu = ft_n / fn_n >= 0 (mu must be {}); a force signed along +x is a \
+                     recording's (NAME.recording.json, haptex library import), whose pipeline takes each stroke's \
+                     direction into account",
+                    Num(ft_n[i]),
+                    crate::ranges::MU.describe()
+                ),
+            );
+        }
         (
             Some(i),
             "fn_n",
@@ -413,6 +439,14 @@ mod tests {
         assert_eq!(r.x_mm(), [0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0]);
         assert_eq!(r.mu(), [1.0, 1.5, 2.0, 1.5, 1.0, 0.5, 0.0]);
         assert!(p.resample_uniform(1).is_err());
+    }
+
+    /// A grid the memory cannot hold is an error naming it, not an abort.
+    #[test]
+    fn a_grid_the_memory_cannot_hold_is_an_error() {
+        let p = FrictionProfile::new(vec![0.0, 1.0], vec![0.0, 1.0]).unwrap();
+        let e = p.resample_uniform(usize::MAX / 4).unwrap_err().to_string();
+        assert!(e.starts_with("cannot allocate a profile of"), "{e}");
     }
 
     #[test]

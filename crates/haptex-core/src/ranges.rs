@@ -26,13 +26,19 @@ pub struct Range {
 
 /// A value outside its [`Range`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{name} must be {}, got {}", range_text(*min, *max, unit), Num(*value))]
+#[error("{name} must be {}, got {}", range_text(*min, *max, unit), shown(*value, *min, *max))]
 pub struct RangeError {
     pub name: &'static str,
     pub value: f64,
     pub min: f64,
     pub max: f64,
     pub unit: &'static str,
+}
+
+/// The refused value, in full when [`Num`] would show it as its bound
+/// (1000.0000000000001 is not "1000").
+fn shown(value: f64, min: f64, max: f64) -> String {
+    crate::num::against(value, &[min, max])
 }
 
 fn range_text(min: f64, max: f64, unit: &str) -> String {
@@ -79,8 +85,17 @@ pub const HEIGHT_MM: Range = range("h_mm", -1e3, 1e3, "mm");
 /// Positions along the surface (profiles, voltage curves, trajectories,
 /// stroke ends): +-1 km.
 pub const POSITION_MM: Range = range("x_mm", -1e6, 1e6, "mm");
-/// Friction coefficients, given or derived (mu = ft/fn).
-pub const MU: Range = range("mu", -1e3, 1e3, "");
+/// Friction coefficients, given or derived (mu = ft/fn): >= 0. A friction
+/// coefficient is the magnitude of the friction force over the normal
+/// force (Coulomb); the friction force's direction is the sliding
+/// direction's, not the coefficient's. A negative mu would stand for a
+/// surface that pushes the finger along, which eq. (8) would render as a
+/// negative electrostatic force, which no display can produce. The sign
+/// of a recorded force belongs to the recordings pipeline, which knows the
+/// direction of each stroke ([`crate::recording::pipeline`]: mu =
+/// sign(direction) ft_n / fn_n); a profile's `ft_n` is the friction force
+/// along the sliding direction, so its mu = ft_n / fn_n is >= 0 too.
+pub const MU: Range = range("mu", 0.0, 1e3, "");
 /// Tangential (friction) force.
 pub const FT_N: Range = range("ft_n", -100.0, 100.0, "N");
 /// Normal force of a profile, and the exploration force of eq. (8).
@@ -199,6 +214,14 @@ mod tests {
         }
         assert_eq!(U_MAX_V.check(1e308).unwrap_err().to_string(), "u_max_v must be from 0.001 to 10000 V, got 1e308");
         assert_eq!(FN_N.check(5e-324).unwrap_err().to_string(), "fn_n must be from 1e-6 to 100 N, got 5e-324");
+        assert_eq!(MU.check(-1.0).unwrap_err().to_string(), "mu must be from 0 to 1000, got -1");
+        assert_eq!(MU.check(0.0), Ok(0.0));
+        // A value that rounds to its bound at 15 digits is shown in full.
+        assert_eq!(
+            MU.check(1000.0000000000001).unwrap_err().to_string(),
+            "mu must be from 0 to 1000, got 1000.0000000000001"
+        );
+        assert_eq!(MU.check(0.1 + 1e3).unwrap_err().to_string(), "mu must be from 0 to 1000, got 1000.1");
         let names: std::collections::HashSet<_> = ALL.iter().map(|r| r.name).collect();
         assert_eq!(names.len(), ALL.len());
     }

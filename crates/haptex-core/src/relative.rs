@@ -181,7 +181,7 @@ mod tests {
 
     #[test]
     fn a_median_that_is_not_a_friction_coefficient_is_refused() {
-        for mu in [[0.0, 0.0, 0.3], [-0.1, -0.2, 0.3], [20.0, 20.0, 1.0]] {
+        for mu in [[0.0, 0.0, 0.3], [0.0005, 0.0002, 0.3], [20.0, 20.0, 1.0]] {
             let e = Relative::new(&profile(&mu), FlatMu::Median, 1.0).unwrap_err();
             assert!(matches!(e, RelativeError::Median { .. }), "{e}");
             assert!(e.to_string().contains("give flat_mu"), "{e}");

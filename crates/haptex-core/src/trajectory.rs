@@ -228,11 +228,10 @@ pub(crate) fn validate(t_s: &[f64], x_mm: &[f64]) -> Result<(), crate::profile::
     crate::profile::check_values("t_s", t_s)?;
     crate::profile::check_values("x_mm", x_mm)?;
     if let Some(i) = t_s.windows(2).position(|w| w[1] <= w[0]) {
-        return Err((
-            Some(i + 1),
-            "t_s",
-            format!("times must be strictly increasing: {} follows {}", Num(t_s[i + 1]), Num(t_s[i])),
-        ));
+        return Err((Some(i + 1), "t_s", {
+            let (next, previous) = crate::num::distinct(t_s[i + 1], t_s[i]);
+            format!("times must be strictly increasing: {next} follows {previous}")
+        }));
     }
     Ok(())
 }

@@ -184,23 +184,19 @@ fn check(amplitude_um: &[f64], relative_friction: &[f64]) -> Result<(), Violatio
         ));
     }
     if let Some(i) = amplitude_um.windows(2).position(|w| w[1] <= w[0]) {
-        return Err((
-            i + 1,
-            "amplitude_um",
-            format!("amplitudes must increase strictly: {} follows {}", Num(amplitude_um[i + 1]), Num(amplitude_um[i])),
-        ));
+        return Err((i + 1, "amplitude_um", {
+            let (next, previous) = crate::num::distinct(amplitude_um[i + 1], amplitude_um[i]);
+            format!("amplitudes must increase strictly: {next} follows {previous}")
+        }));
     }
     if let Some(i) = relative_friction.windows(2).position(|w| w[1] >= w[0]) {
-        return Err((
-            i + 1,
-            "relative_friction",
+        return Err((i + 1, "relative_friction", {
+            let (next, previous) = crate::num::distinct(relative_friction[i + 1], relative_friction[i]);
             format!(
-                "the relative friction must decrease strictly with amplitude: {} follows {} (a flat or rising \
-                 step has no unique amplitude for its friction)",
-                Num(relative_friction[i + 1]),
-                Num(relative_friction[i])
-            ),
-        ));
+                "the relative friction must decrease strictly with amplitude: {next} follows {previous} (a \
+                     flat or rising step has no unique amplitude for its friction)"
+            )
+        }));
     }
     Ok(())
 }

@@ -183,7 +183,7 @@ fn degenerate_device_is_refused_not_mapped() {
     // Huge friction values never reach the device check: the profile
     // refuses them.
     assert!(FrictionProfile::new(vec![0.0, 1.0], vec![-1e308, 1e308]).is_err());
-    let wide = profile(&[0.0, 1.0], &[-1e3, 1e3]);
+    let wide = profile(&[0.0, 1.0], &[0.0, 1e3]);
     let v = map_profile(&wide, &Device::PAPER, Method::Normalized, None).unwrap();
     assert_eq!(v.voltage_v, [0.0, 100.0]);
 }
@@ -269,9 +269,9 @@ fn relative_bad_flat_values_are_typed_errors() {
             "{bad}: {err}"
         );
     }
-    let below_zero = profile(&[0.0, 1.0, 2.0], &[-0.1, -0.1, 0.2]);
-    let err = map_profile_relative(&below_zero, &Device::PAPER, Method::Physical, None, FlatMu::Median).unwrap_err();
-    assert!(matches!(err, ElectroError::Relative(RelativeError::Median { median }) if median == -0.1), "{err}");
+    let zero = profile(&[0.0, 1.0, 2.0], &[0.0, 0.0, 0.2]);
+    let err = map_profile_relative(&zero, &Device::PAPER, Method::Physical, None, FlatMu::Median).unwrap_err();
+    assert!(matches!(err, ElectroError::Relative(RelativeError::Median { median }) if median == 0.0), "{err}");
     // The device is checked first, as without --relative.
     let err = map_profile_relative(&p, &Device { mu_hd: 0.0, ..Device::PAPER }, Method::Physical, None, FlatMu::Median)
         .unwrap_err();

@@ -395,7 +395,7 @@ fn tampered_channel_2_scale_is_refused() {
     let riff = (mono_chunk.len() - 8) as u32;
     mono_chunk[4..8].copy_from_slice(&riff.to_le_bytes());
     let e = decode_drive_wav_channels(&mono_chunk).unwrap_err();
-    assert!(e.contains("2 channels") && e.contains("1 channel(s)"), "{e}");
+    assert!(e.contains("2 channel(s)") && e.contains("1 channel(s)"), "{e}");
 }
 
 fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
@@ -540,4 +540,221 @@ fn channel_2_on_the_plate_resonance() {
     assert!(modulate_at_resonance(&mut plate, f_r).unwrap_err().to_string().contains("already"));
     let e = modulate_at_resonance(&mut envelope.clone(), 500.0).unwrap_err().to_string();
     assert!(e.contains("plate_resonance_hz"), "{e}");
+}
+
+#[path = "support/forge_wav.rs"]
+mod forge_wav;
+
+/// An edit of a `fmt ` chunk's bytes.
+type Edit = Box<dyn Fn(&mut Vec<u8>)>;
+
+/// Bits per sample of a format.
+fn bits(format: WavFormat) -> u16 {
+    match format {
+        WavFormat::Pcm16 => 16,
+        WavFormat::Pcm24 => 24,
+        WavFormat::Float32 => 32,
+    }
+}
+
+/// The WAVs the forgery tests edit: the test signal in every format, on
+/// one channel and on two (volts per full scale 150 V).
+fn every_layout() -> Vec<(String, Vec<u8>)> {
+    let (two, _, _) = two_channel_signal();
+    let mut out = Vec::new();
+    for format in [WavFormat::Pcm16, WavFormat::Pcm24, WavFormat::Float32] {
+        for (channels, signal) in [(1, test_signal()), (2, two.clone())] {
+            let options = WavOptions { format, volts_per_full_scale: 150.0 };
+            out.push((format!("{format:?}, {channels} channel(s)"), encode_wav(&signal, &options, "t").unwrap().bytes));
+        }
+    }
+    out
+}
+
+/// Issue 35: the scale chunk's hash covered the samples, not the `fmt `
+/// chunk, so a 2-byte edit of the format tag (float32 relabelled as
+/// integer PCM, PCM16 as float) passed the reader, and any other program
+/// then played the bit patterns as noise up to 52 % of full scale. Every
+/// field of `fmt ` (format tag, channels, rate, byte rate, block align,
+/// bits; valid bits, channel mask and subformat GUID of the extensible
+/// format) is compared with what the scale chunk states, and the chunk
+/// hashes it: each forgery below, its hashes recomputed, is refused, also
+/// when the scale chunk's own `fmt` fields are forged to match; a file as
+/// written reads with hound as the scale chunk says.
+#[test]
+fn wav_format_fields_are_covered_by_the_scale_chunk() {
+    use forge_wav::{forge, put_u16, put_u32};
+    for (layout, bytes) in every_layout() {
+        let (scale, volts, _) = decode_drive_wav_channels(&bytes).unwrap();
+        let spec = hound::WavReader::new(std::io::Cursor::new(&bytes)).unwrap().spec();
+        let float = scale.sample_format == WavFormat::Float32;
+        assert_eq!(
+            (spec.sample_format == hound::SampleFormat::Float, spec.bits_per_sample, spec.sample_rate, spec.channels),
+            (float, bits(scale.sample_format), scale.sample_rate_hz, if scale.channel_2.is_some() { 2 } else { 1 }),
+            "{layout}"
+        );
+        assert_eq!(volts.len(), scale.n_samples);
+        let extensible = scale.sample_format != WavFormat::Pcm16;
+        let mut edits: Vec<(&str, Edit)> = vec![
+            ("format tag: integer PCM", Box::new(|f| put_u16(f, 0, 1))),
+            ("format tag: IEEE float", Box::new(|f| put_u16(f, 0, 3))),
+            (
+                "channels",
+                Box::new(|f| {
+                    let channels = u16::from_le_bytes([f[2], f[3]]);
+                    put_u16(f, 2, 3 - channels)
+                }),
+            ),
+            ("sample rate", Box::new(|f| put_u32(f, 4, 48_000))),
+            ("byte rate", Box::new(|f| put_u32(f, 8, 1))),
+            ("block align", Box::new(|f| put_u16(f, 12, 1))),
+            ("bits per sample", Box::new(|f| put_u16(f, 14, 8))),
+        ];
+        if extensible {
+            edits.push(("format tag: extensible as PCM", Box::new(|f| put_u16(f, 0, 1))));
+            edits.push(("valid bits", Box::new(|f| put_u16(f, 18, 20))));
+            edits.push(("channel mask", Box::new(|f| put_u32(f, 20, 4))));
+            edits.push(("subformat: float as integer", Box::new(|f| f[24] ^= 2)));
+        }
+        let fmt = forge_wav::parts(&bytes).fmt;
+        for (what, edit) in &edits {
+            let mut edited = fmt.clone();
+            edit(&mut edited);
+            if edited == fmt {
+                continue; // the value already there (tag 1 of a PCM16 file)
+            }
+            let forged = forge(&bytes, |p| p.fmt = edited.clone());
+            let e = decode_drive_wav_channels(&forged).map(|_| ()).unwrap_err();
+            assert!(e.contains("fmt chunk"), "{layout}, {what}: {e}");
+            // The scale chunk's own statement of the fields, forged to
+            // match, does not help: they are not the format's.
+            let forged = forge(&bytes, |p| {
+                p.fmt = edited.clone();
+                if let Ok(fields) = haptex_core::signal::FmtFields::parse(&p.fmt) {
+                    p.scale["fmt"] = serde_json::to_value(fields).unwrap();
+                }
+            });
+            let e = decode_drive_wav_channels(&forged).map(|_| ()).unwrap_err();
+            assert!(e.contains("fmt"), "{layout}, {what}: {e}");
+        }
+        // The format tag's low byte edited in place, hashes not recomputed.
+        let mut tampered = bytes.clone();
+        let fmt_at = 20; // after the RIFF header (12 bytes) and the fmt chunk's (8)
+        tampered[fmt_at] ^= 1;
+        let e = decode_drive_wav_channels(&tampered).unwrap_err();
+        assert!(e.contains("fmt chunk"), "{layout}: {e}");
+    }
+}
+
+/// The scale chunk's version: a version-1 chunk (haptex before the `fmt `
+/// fields were hashed) still reads, with its `fmt ` chunk checked field by
+/// field, so its format tag cannot be edited either; a version from the
+/// future, or a version-2 chunk without its `fmt` fields, is refused.
+#[test]
+fn scale_chunk_versions_are_read_in_the_safe_direction() {
+    use forge_wav::{forge, put_u16};
+    for (layout, bytes) in every_layout() {
+        let (_, volts, _) = decode_drive_wav_channels(&bytes).unwrap();
+        let version_1 = |p: &mut forge_wav::Parts| {
+            let object = p.scale.as_object_mut().unwrap();
+            for key in ["version", "fmt", "fmt_sha256"] {
+                assert!(object.remove(key).is_some(), "{layout}: the chunk has no {key}");
+            }
+        };
+        let old = forge(&bytes, version_1);
+        let (scale, old_volts, _) = decode_drive_wav_channels(&old).unwrap();
+        assert_eq!((scale.version, old_volts), (None, volts.clone()), "{layout}");
+        let relabelled = forge(&bytes, |p| {
+            version_1(p);
+            let tag = if p.fmt[0] == 1 { 3 } else { 1 };
+            put_u16(&mut p.fmt, 0, tag);
+        });
+        let e = decode_drive_wav_channels(&relabelled).unwrap_err();
+        assert!(e.contains("fmt chunk") && e.contains("format tag"), "{layout}: {e}");
+        let future = forge(&bytes, |p| p.scale["version"] = 3.into());
+        let e = decode_drive_wav_channels(&future).unwrap_err();
+        assert!(e.contains("version 3") && e.contains("newer haptex"), "{layout}: {e}");
+        let half = forge(&bytes, |p| {
+            p.scale.as_object_mut().unwrap().remove("fmt");
+        });
+        assert!(decode_drive_wav_channels(&half).unwrap_err().contains("not consistent"), "{layout}");
+    }
+}
+
+/// Issue 35: a forged float WAV with NaN, an infinity or 50.0 in channel
+/// 1 (hashes recomputed) passed the reader ("peak inf V", "peak 7071 V"):
+/// only channel 2 was range-checked. Every sample of every channel must
+/// be finite and within full scale (a PCM16 -32768 too, which haptex never
+/// writes); the sample rate at least 100 Hz (0 Hz passed as "0 Hz (inf
+/// s)"); the RIFF size the file's. Each forgery's hashes are recomputed.
+#[test]
+fn every_channel_of_every_sample_is_checked() {
+    use forge_wav::{forge, put_u32};
+    for (layout, bytes) in every_layout() {
+        let (scale, _, _) = decode_drive_wav_channels(&bytes).unwrap();
+        let width = usize::from(bits(scale.sample_format) / 8);
+        let channels = if scale.channel_2.is_some() { 2 } else { 1 };
+        let codes: Vec<Vec<u8>> = match scale.sample_format {
+            WavFormat::Float32 => [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 50.0, -1.0001]
+                .iter()
+                .map(|v| v.to_le_bytes().to_vec())
+                .collect(),
+            WavFormat::Pcm16 => vec![i16::MIN.to_le_bytes().to_vec()],
+            WavFormat::Pcm24 => vec![vec![0x00, 0x00, 0x80]],
+        };
+        for code in &codes {
+            for channel in 0..channels {
+                for sample in [0, scale.n_samples / 2, scale.n_samples - 1] {
+                    let forged = forge(&bytes, |p| {
+                        let at = (sample * channels + channel) * width;
+                        p.data[at..at + width].copy_from_slice(code);
+                    });
+                    let e = decode_drive_wav_channels(&forged).map(|_| ()).unwrap_err();
+                    assert!(
+                        e.contains(&format!("channel {}'s sample {sample}", channel + 1)),
+                        "{layout}, code {code:?} at channel {}, sample {sample}: {e}",
+                        channel + 1
+                    );
+                }
+            }
+        }
+        // A rate of 0 Hz (or 99), stated consistently by both chunks.
+        for rate in [0u32, 99] {
+            let forged = forge(&bytes, |p| {
+                let block = u32::from(u16::from_le_bytes([p.fmt[12], p.fmt[13]]));
+                put_u32(&mut p.fmt, 4, rate);
+                put_u32(&mut p.fmt, 8, rate * block);
+                p.scale["sample_rate_hz"] = rate.into();
+                if let Some(fields) = p.scale.get_mut("fmt") {
+                    fields["sample_rate_hz"] = rate.into();
+                    fields["byte_rate"] = (rate * block).into();
+                }
+            });
+            let e = decode_drive_wav_channels(&forged).map(|_| ()).unwrap_err();
+            assert!(e.contains(&format!("{rate} Hz")) && e.contains("below"), "{layout}, {rate} Hz: {e}");
+        }
+        // The RIFF size: longer or shorter than the file.
+        for delta in [2i64, -2] {
+            let mut lying = bytes.clone();
+            let riff = (lying.len() as i64 - 8 + delta) as u32;
+            lying[4..8].copy_from_slice(&riff.to_le_bytes());
+            let e = decode_drive_wav_channels(&lying).map(|_| ()).unwrap_err();
+            assert!(e.contains("RIFF header"), "{layout}, {delta}: {e}");
+        }
+        // The data chunk's size beyond the file.
+        let data_at = find(&bytes, b"data").unwrap();
+        let mut lying = bytes.clone();
+        lying[data_at + 4..data_at + 8].copy_from_slice(&(bytes.len() as u32).to_le_bytes());
+        assert!(decode_drive_wav_channels(&lying).is_err(), "{layout}");
+    }
+}
+
+/// Errors of the reader say "cannot read", not "cannot encode".
+#[test]
+fn reading_errors_say_cannot_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("x.wav");
+    std::fs::write(&path, b"RIFF").unwrap();
+    let e = read_drive_wav(&path).unwrap_err().to_string();
+    assert!(e.starts_with("cannot read the WAV file") && e.contains("x.wav"), "{e}");
 }

@@ -65,6 +65,7 @@ fn malformed_files_name_line_and_column() {
             assert!(message.contains(&format!("line {line}")), "{message}");
         }
         assert!(message.contains(fragment), "{text:?}: {message}");
+        assert_eq!(haptex_core::num::unreadable_number(&message), None, "{message}");
     }
 }
 
@@ -80,9 +81,10 @@ fn derived_friction_must_be_finite_and_in_range() {
             "x_mm,ft_n,fn_n\n0,1,1\n1,0.5,1e-5\n",
             3,
             "fn_n",
-            "mu = ft_n / fn_n = 0.5 / 0.00001 = 49999.99999999999 is not a friction",
+            // 49999.99999999999 to the last bit: shown as the number it rounds to.
+            "mu = ft_n / fn_n = 0.5 / 0.00001 = 50000 is not a friction",
         ),
-        ("x_mm,mu\n0,1\n1,1e308\n", 3, "mu", "mu must be from -1000 to 1000, got 1e308"),
+        ("x_mm,mu\n0,1\n1,1e308\n", 3, "mu", "mu must be from 0 to 1000, got 1e308"),
         ("x_mm,mu\n-1e300,1\n1e300,1\n", 2, "x_mm", "x_mm must be from -1000000 to 1000000 mm, got -1e300"),
         ("x_mm,mu,fn_n\n0,1,1\n1,1,1e300\n", 3, "fn_n", "fn_n must be from 1e-6 to 100 N, got 1e300"),
     ];
@@ -95,6 +97,7 @@ fn derived_friction_must_be_finite_and_in_range() {
         let message = err.to_string();
         assert!(message.contains(fragment), "{text:?}: {message}");
         assert!(message.len() < 300, "{message}");
+        assert_eq!(haptex_core::num::unreadable_number(&message), None, "{message}");
     }
     // In memory, the same checks.
     assert!(FrictionProfile::from_forces(vec![0.0, 1.0], &[1.0, 0.5], vec![1.0, 5e-324]).is_err());
@@ -107,6 +110,37 @@ fn derived_friction_must_be_finite_and_in_range() {
 /// 100 times the linear reader's time on a slow machine and a tenth of the
 /// old quadratic one's, so this fails on a return to quadratic cost, not on
 /// a busy machine.
+/// Issue 35: friction coefficients below zero (mu = -1) were accepted by
+/// profiles and library imports. A friction coefficient is >= 0
+/// (`ranges::MU`, with the reason): every reader and constructor refuses a
+/// negative one through that range, naming the row and column; a negative
+/// ft_n in a profile (a force signed along +x, whose sign only a stroke's
+/// direction gives meaning) is refused at ft_n, saying so; zero is a
+/// friction coefficient.
+#[test]
+fn friction_coefficients_below_zero_are_refused() {
+    use haptex_core::map::{FrictionMap, MapGrid};
+    use haptex_core::ranges;
+    assert_eq!(ranges::MU.min, 0.0);
+    for (text, line, column, message) in [
+        ("x_mm,mu\n0,0.5\n1,-1\n", 3, "mu", "mu must be from 0 to 1000, got -1"),
+        ("x_mm,mu\n0,-5e-324\n1,1\n", 2, "mu", "got -5e-324"),
+        ("x_mm,mu,voltage_v\n0,-0.1,70\n1,1.2,99\n", 2, "mu", "mu must be from 0"),
+        ("x_mm,ft_n,fn_n\n0,0.1,0.5\n1,-0.2,0.5\n", 3, "ft_n", "ft_n = -0.2 N is negative"),
+    ] {
+        let e = read(text).unwrap_err().to_string();
+        assert!(e.contains(&format!("p.csv, line {line}, column '{column}'")) && e.contains(message), "{text:?}: {e}");
+    }
+    assert!(read("x_mm,mu\n0,0\n1,0\n").is_ok());
+    let e = read("x_mm,ft_n,fn_n\n0,-0.1,0.5\n1,-0.2,0.5\n").unwrap_err().to_string();
+    assert!(e.contains("sliding direction") && e.contains("recording"), "{e}");
+    assert!(FrictionProfile::new(vec![0.0, 1.0], vec![0.5, -1.0]).is_err());
+    assert!(FrictionProfile::from_forces(vec![0.0, 1.0], &[0.1, -0.1], vec![0.5, 0.5]).is_err());
+    let grid = MapGrid { nx: 2, ny: 2, x0_mm: 0.0, y0_mm: 0.0, dx_mm: 1.0, dy_mm: 1.0 };
+    let e = FrictionMap::new(grid, vec![0.5, 0.5, -1.0, 0.5], "m").unwrap_err().to_string();
+    assert!(e.contains("mu must be from 0"), "{e}");
+}
+
 #[test]
 fn wide_header_is_read_in_linear_time() {
     let names: Vec<String> = (0..100_000).map(|i| format!("c{i:08}")).collect();

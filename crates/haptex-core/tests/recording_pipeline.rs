@@ -247,3 +247,59 @@ fn invalid_config_is_rejected() {
     let config = ProcessingConfig { dx_mm: 0.0, ..ProcessingConfig::default() };
     assert!(process(&rec, &config).unwrap_err().to_string().contains("dx_mm"));
 }
+
+/// Issue 35: a signed Ft is handled where it belongs. ft_n is the force
+/// along +x; the pipeline turns it into friction by each segment's
+/// direction (mu = sign(direction) ft_n / fn_n), so a stroke out and back
+/// over a surface gives the same positive mu both ways. Where the true
+/// friction is zero (10 mm of a frictionless strip), noise and the
+/// filter's ringing at its edges average below zero at some nodes: those
+/// are set to zero and counted (`negative_nodes`), never passed through as
+/// negative friction. A force that opposes the motion throughout (a
+/// converter that flipped the sign) is refused, naming the segment.
+#[test]
+fn signed_ft_becomes_friction_by_the_sliding_direction() {
+    let strip = |x: f64| if (20.0..30.0).contains(&x) { 0.0 } else { 0.6 };
+    let path = Trajectory::starting_at(0.0).hold(0.15).move_to(50.0, 0.7).hold(0.1).move_to(0.0, 0.7).hold(0.15);
+    let press = PressProfile {
+        fn0_n: 0.5,
+        wobble: 0.05,
+        wobble_hz: 1.5,
+        wobble_phase: 0.3,
+        ramp_s: 0.08,
+        duration_s: path.duration_s(),
+    };
+    let fn_n = |t: f64| press.at(t);
+    let model = StrokeModel {
+        force_rate_hz: 20_000.0,
+        position_rate_hz: 400.0,
+        trajectory: &path,
+        mu: &strip,
+        fn_n: &fn_n,
+        stiction_speed_mm_s: 2.0,
+        force_noise_n: 0.005,
+        position_noise_mm: 0.01,
+        tones: &[],
+    };
+    let (force, position) = model.generate(&mut SplitMix64::new(35));
+    assert!(force.ft_n.iter().any(|&f| f < -0.2), "the backward stroke's ft_n is negative");
+    let rec = Recording::from_parts("signed", meta(), force.clone(), position.clone()).unwrap();
+    for direction in [DirectionFilter::Forward, DirectionFilter::Backward, DirectionFilter::Both] {
+        let p = process(&rec, &ProcessingConfig { direction, ..ProcessingConfig::default() }).unwrap();
+        let (x, mu) = (p.profile.x_mm(), p.profile.mu());
+        assert!(mu.iter().all(|&m| m >= 0.0), "{direction:?}: a negative friction coefficient");
+        assert!(p.negative_nodes > 0, "{direction:?}: the frictionless strip should average below zero somewhere");
+        for (x, m) in x.iter().zip(mu) {
+            if (22.0..28.0).contains(x) {
+                assert!(*m <= 0.01, "{direction:?}: mu({x}) = {m} on the frictionless strip");
+            } else if (3.0..18.0).contains(x) || (32.0..47.0).contains(x) {
+                assert!((m - 0.6).abs() <= 0.02, "{direction:?}: mu({x}) = {m}, expected 0.6");
+            }
+        }
+    }
+    // The converter's sign flipped: the force opposes the motion.
+    let flipped = haptex_core::recording::ForceStream { ft_n: force.ft_n.iter().map(|f| -f).collect(), ..force };
+    let rec = Recording::from_parts("flipped", meta(), flipped, position).unwrap();
+    let e = process(&rec, &ProcessingConfig::default()).unwrap_err().to_string();
+    assert!(e.contains("opposes the motion") && e.contains("flip its sign"), "{e}");
+}

@@ -64,11 +64,8 @@ impl Vibration {
             return invalid(format!("{} amplitudes for {} positions (at least 2)", amplitude_um.len(), x_mm.len()));
         }
         if let Some(i) = x_mm.windows(2).position(|w| !(w[0].is_finite() && w[1].is_finite() && w[1] > w[0])) {
-            return invalid(format!(
-                "positions must be finite and increasing: {} follows {}",
-                Num(x_mm[i + 1]),
-                Num(x_mm[i])
-            ));
+            let (next, previous) = haptex_core::num::distinct(x_mm[i + 1], x_mm[i]);
+            return invalid(format!("positions must be finite and increasing: {next} follows {previous}"));
         }
         if let Some(i) = amplitude_um.iter().position(|a| !(0.0..=device.a_max_um()).contains(a)) {
             return invalid(format!(

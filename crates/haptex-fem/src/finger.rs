@@ -193,7 +193,7 @@ fn in_range(field: &str, value: f64, range: (f64, f64), unit: &str) -> Result<()
         field: field.to_string(),
         message: format!(
             "= {}{unit} is outside the supported range {} .. {}{unit}",
-            Num(value),
+            haptex_core::num::against(value, &[range.0, range.1]),
             Num(range.0),
             Num(range.1)
         ),

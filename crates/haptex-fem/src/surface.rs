@@ -162,11 +162,10 @@ impl SurfaceShape {
         }
         if let Some(i) = x.windows(2).position(|w| w[1] <= w[0]) {
             return Err(table
-                .error_at(
-                    Some(i + 1),
-                    Some("x_mm"),
-                    format!("x must be strictly increasing: {} follows {}", Num(x[i + 1]), Num(x[i])),
-                )
+                .error_at(Some(i + 1), Some("x_mm"), {
+                    let (next, previous) = haptex_core::num::distinct(x[i + 1], x[i]);
+                    format!("x must be strictly increasing: {next} follows {previous}")
+                })
                 .into());
         }
         if let Some((i, message)) = Self::out_of_range_point(x, h) {

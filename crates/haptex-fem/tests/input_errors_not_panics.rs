@@ -233,7 +233,7 @@ fn settings_that_size_memory_or_loops_are_bounded() {
     let mut scenario = Scenario::paper(SurfaceShape::Bump { x0: 5.0, width: 1.5, height: 0.3 });
     scenario.step_mm = 1e-300;
     let err = scenario.slide_steps().unwrap_err().to_string();
-    assert!(err.contains("takes 9.999999999999999e300 steps; at most 1000000"), "{err}");
+    assert!(err.contains("takes 1e301 steps; at most 1000000"), "{err}");
 
     let scenario = Scenario::paper(SurfaceShape::Bump { x0: 5.0, width: 1e-3, height: 0.3 });
     let err = scenario.validate().unwrap_err().to_string();

@@ -677,8 +677,8 @@ async fn voltage_relative_bad_input_is_refused_naming_the_field() {
         (json!({ "profile": good, "relative": true, "flat_mu": "0.5" }), "flat_mu"),
         (json!({ "profile": good, "relative": "yes" }), "relative"),
         (json!({ "profile": good, "relative": 1 }), "relative"),
-        // A median that is no friction coefficient.
-        (json!({ "profile": profile_json(&[0.0, 1.0, 2.0], &[-0.1, -0.1, 0.3]), "relative": true }), "flat_mu"),
+        // A median that is no friction coefficient (zero).
+        (json!({ "profile": profile_json(&[0.0, 1.0, 2.0], &[0.0, 0.0, 0.3]), "relative": true }), "flat_mu"),
         // mu / flat_mu * mu_HD beyond the range of mu.
         (json!({ "profile": profile_json(&[0.0, 1.0], &[0.5, 900.0]), "relative": true, "flat_mu": 0.001 }), "flat_mu"),
         // The device is checked as without relative.

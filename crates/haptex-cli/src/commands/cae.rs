@@ -8,6 +8,7 @@ use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
 use haptex_core::cae::{Cae, CaeError, ModelMatrix, OptimizeOptions, OptimizerReport, Widths, optimize_widths};
 use haptex_core::io::{Table, write_csv_row};
+use haptex_core::num::Num;
 use serde::Serialize;
 
 use crate::args::{Output, positive};
@@ -39,8 +40,10 @@ struct ModelArgs {
     inputs: Vec<String>,
     /// Memory the leave-one-out may use, in MiB. Its N x N weight matrix
     /// grows with the square of the model's rows (2048 MiB: N up to about
-    /// 16 000); larger models are refused before any work.
-    #[arg(long, value_name = "MIB", default_value_t = 2048, value_parser = clap::value_parser!(u64).range(1..=1 << 24))]
+    /// 16 000); larger models are refused before any work. Within a larger
+    /// budget the system may still refuse the memory: that is an error
+    /// naming the matrix, never an abort.
+    #[arg(long, value_name = "MIB", default_value_t = 2048, value_parser = clap::value_parser!(u64).range(1..=u64::MAX >> 20))]
     memory_budget_mib: u64,
 }
 
@@ -153,8 +156,9 @@ fn predict(args: PredictArgs) -> anyhow::Result<()> {
     let matrix = args.model.read()?;
     let mut queries: Vec<(String, Vec<f64>)> = Vec::new();
     for (i, text) in args.at.iter().enumerate() {
-        let query = parse_at(text, matrix.inputs()).with_context(|| format!("--at {text:?} (query {})", i + 1))?;
-        queries.push((format!("--at {text}"), query));
+        let quoted = haptex_core::text::Quoted(text);
+        let query = parse_at(text, matrix.inputs()).with_context(|| format!("--at {quoted} (query {})", i + 1))?;
+        queries.push((format!("--at {quoted}"), query));
     }
     if let Some(path) = &args.at_file {
         let table = Table::read_file(path)?;
@@ -179,7 +183,8 @@ fn predict(args: PredictArgs) -> anyhow::Result<()> {
             if !args.quiet {
                 eprintln!(
                     "width: {} (the constant width with the smallest leave-one-out error, RMSE {})",
-                    optimum.widths.w_min, optimum.errors.rmse
+                    Num(optimum.widths.w_min),
+                    Num(optimum.errors.rmse)
                 );
             }
             optimum.widths
@@ -209,8 +214,8 @@ fn predict(args: PredictArgs) -> anyhow::Result<()> {
             "# haptex cae predict: model {}, inputs {}, widths w_min = {}, w_max = {} (normalized units)",
             matrix.source_name(),
             matrix.inputs().join(","),
-            widths.w_min,
-            widths.w_max
+            Num(widths.w_min),
+            Num(widths.w_max)
         )?;
         writeln!(w, "{}", matrix.outputs().join(","))?;
         for row in predictions.chunks_exact(matrix.m()) {

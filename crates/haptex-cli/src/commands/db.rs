@@ -8,6 +8,7 @@ use anyhow::{Context, bail};
 use clap::{Args, Subcommand, ValueEnum};
 use haptex_core::cae::{Cae, ModelMatrix};
 use haptex_core::database::{INPUTS, Metadata, Template, TemplateModel};
+use haptex_core::num::Num;
 use haptex_core::plot::{Figure, Panel};
 use haptex_fem::finger::FingerModel;
 use haptex_fem::sweep::{self, DatabaseSpec, Run};
@@ -374,11 +375,13 @@ fn loo(args: LooArgs) -> anyhow::Result<()> {
     output.write(|w| {
         writeln!(
             w,
-            "# haptex db loo: {} r_w={width} mm r_h={height} mm v={} mm/s ({case}); widths {} .. {}",
+            "# haptex db loo: {} r_w={} mm r_h={} mm v={} mm/s ({case}); widths {} .. {}",
             template.name(),
-            args.velocity,
-            widths.w_min,
-            widths.w_max
+            Num(width),
+            Num(height),
+            Num(args.velocity),
+            Num(widths.w_min),
+            Num(widths.w_max)
         )?;
         writeln!(w, "# RMS difference to FE: CAE leaving the case out {rms_loo:.6}, CAE full {rms_full:.6}")?;
         writeln!(w, "xi_mm,h_mm,mu_fe,mu_cae_loo,mu_cae_full")?;
@@ -389,9 +392,11 @@ fn loo(args: LooArgs) -> anyhow::Result<()> {
     })?;
     if let Some(path) = &args.png {
         let title = format!(
-            "{} r_w = {width} mm, r_h = {height} mm, v = {} mm/s: FE and CAE (paper Fig. 2a)",
+            "{} r_w = {} mm, r_h = {} mm, v = {} mm/s: FE and CAE (paper Fig. 2a)",
             template.name(),
-            args.velocity
+            Num(width),
+            Num(height),
+            Num(args.velocity)
         );
         let friction = Panel::new("x - x0 (mm)", "Ft/Fn").line("FE", &xi, &fe);
         let friction = if row.is_some() {

@@ -10,6 +10,7 @@ use haptex_core::FrictionProfile;
 use haptex_core::io::{FileSet, write_atomic, write_csv_row};
 use haptex_core::library::{Added, ImportId, Library, ProfileProvenance, StoredProfile, export_file};
 use haptex_core::name::{MAX_NAME_CHARS, check_name};
+use haptex_core::num::Num;
 use haptex_core::recording::format::METADATA_SUFFIX;
 use haptex_core::recording::synth::{DEMO_SEED, DEMO_STROKES_PER_MATERIAL, write_demo};
 use haptex_core::recording::{DirectionFilter, ProcessingConfig, Recording, process};
@@ -694,11 +695,11 @@ fn process_one(args: ProcessArgs) -> anyhow::Result<()> {
         "{}: {:.3} s of forces at {} Hz, position at {} Hz; anti-alias FIR {} taps ({} .. {} Hz, {} dB)",
         args.recording.display(),
         recording.duration_s(),
-        recording.force.rate_hz,
-        recording.position.rate_hz,
+        Num(recording.force.rate_hz),
+        Num(recording.position.rate_hz),
         processed.filter_taps,
-        config.passband_fraction * recording.position.rate_hz,
-        config.stopband_fraction * recording.position.rate_hz,
+        Num(config.passband_fraction * recording.position.rate_hz),
+        Num(config.stopband_fraction * recording.position.rate_hz),
         config.stopband_attenuation_db
     );
     for (k, (segment, used)) in processed.segments.iter().zip(&processed.used).enumerate() {
@@ -728,12 +729,19 @@ fn process_one(args: ProcessArgs) -> anyhow::Result<()> {
         p.len(),
         p.x_mm()[0],
         p.x_mm()[p.len() - 1],
-        config.dx_mm,
+        Num(config.dx_mm),
         processed.bridged_mm,
         processed.mean_mu,
         processed.mean_fn_n,
         processed.sliding_s
     );
+    if processed.negative_nodes > 0 {
+        eprintln!(
+            "warning: {} of the profile's nodes averaged a friction below zero (noise or a force offset where the \
+             friction is near zero) and are set to 0",
+            processed.negative_nodes
+        );
+    }
     if let Some(path) = &args.output {
         eprintln!("wrote {}", path.display());
     }

@@ -332,7 +332,12 @@ fn from_profile(a: FromProfileArgs) -> anyhow::Result<()> {
     let (x0, x1) = (profile.x_mm()[0], profile.x_mm()[profile.len() - 1]);
     let nx_float = ((x1 - x0) / a.dx_mm).floor() + 1.0;
     if nx_float > haptex_core::map::MAX_CELLS as f64 {
-        bail!("--dx-mm {} gives {} columns over the profile's {} mm: too many", Num(a.dx_mm), nx_float, Num(x1 - x0));
+        bail!(
+            "--dx-mm {} gives {} columns over the profile's {} mm: too many",
+            Num(a.dx_mm),
+            Num(nx_float),
+            Num(x1 - x0)
+        );
     }
     let grid =
         MapGrid { nx: nx_float as usize, ny: a.ny as usize, x0_mm: x0, y0_mm: a.y0_mm, dx_mm: a.dx_mm, dy_mm: a.dy_mm };
@@ -478,6 +483,8 @@ fn export_png(a: ExportPngArgs) -> anyhow::Result<()> {
     if clamped > 0 {
         eprintln!("warning: {clamped} cells outside black .. white are drawn as black or white");
     }
+    // A command to run: Num's 15 digits are far finer than the PNG's
+    // levels (1/65535 of the range at best), so it reads back the same map.
     let pixels = format!("--pixel-mm {} --pixel-mm-y {}", Num(grid.dx_mm), Num(grid.dy_mm));
     let (x0, y0) = (Num(grid.x0_mm), Num(grid.y0_mm));
     let read_back = if a.quantity == "h_mm" {

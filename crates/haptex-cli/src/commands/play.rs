@@ -65,8 +65,10 @@ const GENERATED_RATE_HZ: f64 = 1000.0;
 )]
 pub struct PlayArgs {
     /// Check a drive-signal WAV written by haptex instead of rendering one:
-    /// its samples against the scale chunk inside it, and its sidecar
-    /// (WAV.json, if present) against both. Exits non-zero on a mismatch.
+    /// its fmt chunk (every field) and samples against the scale chunk
+    /// inside it, every sample of every channel finite and within full
+    /// scale, and its sidecar (WAV.json, if present) against both. Exits
+    /// non-zero on a mismatch.
     #[arg(long, value_name = "WAV", exclusive = true)]
     check: Option<PathBuf>,
     /// Voltage profile CSV (`x_mm,mu,voltage_v` from `haptex voltage`, or
@@ -422,7 +424,18 @@ fn check(path: &Path, quiet: bool) -> anyhow::Result<()> {
                 Num(c2.a_max_um)
             );
         }
-        eprintln!("samples: SHA-256 {} matches the scale chunk", s.samples_sha256);
+        match &s.fmt_sha256 {
+            Some(hash) => eprintln!("fmt chunk: every field as the scale chunk states (SHA-256 {hash})"),
+            None => eprintln!(
+                "fmt chunk: every field as haptex writes it for this format (a version-1 scale chunk, written before \
+                 haptex hashed the fmt chunk; render the signal again for a version-{} chunk)",
+                haptex_core::signal::SCALE_CHUNK_VERSION
+            ),
+        }
+        eprintln!(
+            "samples: SHA-256 {} matches the scale chunk; every sample of every channel finite and within full scale",
+            s.samples_sha256
+        );
         match &wav.sidecar {
             Some(_) => eprintln!("sidecar {}: belongs to this WAV (same hash and scale)", sidecar_path(path).display()),
             None => eprintln!("sidecar {}: none (the WAV's own scale chunk is checked)", sidecar_path(path).display()),

@@ -271,7 +271,8 @@ fn force_comment(model: &ForceModel, device: &Device) -> Option<String> {
          Hz (play it with haptex play --carrier {shape} --carrier-hz {})",
         circuit.describe(&device.stack),
         device.force_gain,
-        Num(carrier.frequency_hz),
-        Num(carrier.frequency_hz)
+        // Read back by `haptex play`, which compares it exactly: in full.
+        haptex_core::num::Exact(carrier.frequency_hz),
+        haptex_core::num::Exact(carrier.frequency_hz)
     ))
 }

@@ -17,9 +17,17 @@ pub fn write(dir: &Path, name: &str, text: &str) -> String {
     path.to_str().unwrap().to_string()
 }
 
-/// The process's standard error as text.
+/// The process's standard error as text, checked to follow the rule for
+/// numbers shown to a person (`haptex_core::num`: no number of more than
+/// 15 significant digits, no run of hundreds of digits): every test that
+/// examines a message checks it.
+#[track_caller]
 pub fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
+    let text = String::from_utf8_lossy(&out.stderr).into_owned();
+    if let Some(number) = haptex_core::num::unreadable_number(&text) {
+        panic!("an unreadable number ({number}) in the messages: {text}");
+    }
+    text
 }
 
 /// Reads a `haptex serve` child's standard error until it says where it

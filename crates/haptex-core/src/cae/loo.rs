@@ -21,6 +21,7 @@ use super::nelder_mead::{self, Options};
 use super::predict::{LOG_WEIGHT_CUTOFF, exp_near_zero};
 use super::widths::transpose;
 use super::{CaeError, Density, Kernel, ModelMatrix, Normalization, Widths};
+use crate::buffer::{bytes_text, matrix_len, try_filled};
 use crate::num::Num;
 
 /// Leave-one-out evaluation over one model matrix, with its buffers.
@@ -87,6 +88,15 @@ impl<'a> Loo<'a> {
                 bytes_text(u128::from(budget_bytes))
             )));
         }
+        // The N x N weights first, fallibly: within a budget far above the
+        // machine's memory the system may still refuse them (12.8 GB for
+        // 40 000 rows aborted the process, exit 134).
+        let too_large = |e: crate::buffer::AllocationError| CaeError::TooLarge(e.to_string());
+        let square = || format!("the {n} x {n} weight matrix of the leave-one-out");
+        let weights =
+            try_filled(matrix_len::<f64>(n, n, square).map_err(too_large)?, 0.0, square).map_err(too_large)?;
+        let predictions =
+            try_filled(n * m, 0.0, || format!("the {n} x {m} leave-one-out predictions")).map_err(too_large)?;
         let norm = Normalization::fit(matrix.inputs_flat(), d)?;
         let bn = norm.normalize_rows(matrix.inputs_flat());
         Ok(Self {
@@ -97,8 +107,8 @@ impl<'a> Loo<'a> {
             density: None,
             w: vec![0.0; n * d],
             kernel: Kernel::zeros(n, d),
-            weights: vec![0.0; n * n],
-            predictions: vec![0.0; n * m],
+            weights,
+            predictions,
             evaluations: 0,
         })
     }
@@ -217,15 +227,6 @@ fn weight_row_lanes(kernel: &Kernel, x_t: &[f64], bi: &[f64], i: usize, row: &mu
 }
 
 /// A byte count for a message, in binary units: `11.9 GiB`, `512.0 MiB`.
-fn bytes_text(bytes: u128) -> String {
-    let b = bytes as f64;
-    if b >= (1u64 << 30) as f64 {
-        format!("{:.1} GiB", b / (1u64 << 30) as f64)
-    } else {
-        format!("{:.1} MiB", b / (1u64 << 20) as f64)
-    }
-}
-
 /// How to search for the widths.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OptimizeOptions {

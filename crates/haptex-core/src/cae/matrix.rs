@@ -116,8 +116,11 @@ impl ModelMatrix {
             }
         }
         let (d, m) = (inputs.len(), output_names.len());
-        let mut b = Vec::with_capacity(n * d);
-        let mut c = Vec::with_capacity(n * m);
+        let too_large = |e: crate::buffer::AllocationError| CaeError::TooLarge(e.to_string());
+        let mut b =
+            crate::buffer::try_with_capacity(n * d, || format!("the {n} x {d} model inputs")).map_err(too_large)?;
+        let mut c =
+            crate::buffer::try_with_capacity(n * m, || format!("the {n} x {m} model outputs")).map_err(too_large)?;
         for row in 0..n {
             b.extend(input_columns.iter().map(|col| col[row]));
             c.extend(output_columns.iter().map(|col| col[row]));

@@ -35,8 +35,8 @@ impl Normalization {
             return Err(CaeError::Invalid(format!(
                 "input {} spans {} .. {}: the range overflows a double",
                 l + 1,
-                min[l],
-                max[l]
+                crate::num::Num(min[l]),
+                crate::num::Num(max[l])
             )));
         }
         Ok(Self { min, range })

@@ -429,7 +429,11 @@ impl Cae {
         use rayon::prelude::*;
         let (d, m) = (self.matrix.d(), self.matrix.m());
         let q_total = self.query_count(queries)?;
-        let mut out = vec![0.0; q_total * m];
+        // Q x M outputs: two sizes from the input, allocated fallibly.
+        let what = || format!("the {q_total} x {m} predictions of the batch");
+        let too_large = |e: crate::buffer::AllocationError| CaeError::TooLarge(e.to_string());
+        let len = crate::buffer::matrix_len::<f64>(q_total, m, what).map_err(too_large)?;
+        let mut out = crate::buffer::try_filled(len, 0.0, what).map_err(too_large)?;
         let blocks: Vec<Vec<Diagnostics>> = queries
             .par_chunks(BATCH_BLOCK * d)
             .zip(out.par_chunks_mut(BATCH_BLOCK * m))

@@ -56,14 +56,18 @@ impl Widths {
             }
             if !(Self::SMALLEST..=Self::LARGEST).contains(&w) {
                 return Err(CaeError::Width(format!(
-                    "{name} = {w} is outside {} .. {} (normalized input units)",
-                    Self::SMALLEST,
-                    Self::LARGEST
+                    "{name} = {} is outside {} .. {} (normalized input units)",
+                    Num(w),
+                    Num(Self::SMALLEST),
+                    Num(Self::LARGEST)
                 )));
             }
         }
         if w_min > w_max {
-            return Err(CaeError::Width(format!("w_min = {w_min} is larger than w_max = {w_max}")));
+            return Err(CaeError::Width({
+                let (w_min, w_max) = crate::num::distinct(w_min, w_max);
+                format!("w_min = {w_min} is larger than w_max = {w_max}")
+            }));
         }
         Ok(Self { w_min, w_max })
     }

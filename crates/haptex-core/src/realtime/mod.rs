@@ -290,8 +290,12 @@ impl Output {
     /// above the amplifier range or the full scale.
     fn new(config: &RealtimeConfig, max_envelope_v: f64) -> Result<Self, SignalError> {
         let fs = config.sample_rate_hz as f64;
-        if config.sample_rate_hz < 100 {
-            return Err(SignalError::Settings(format!("sample rate {} Hz is below 100 Hz", config.sample_rate_hz)));
+        if config.sample_rate_hz < crate::signal::MIN_SAMPLE_RATE_HZ {
+            return Err(SignalError::Settings(format!(
+                "sample rate {} Hz is below {} Hz",
+                config.sample_rate_hz,
+                crate::signal::MIN_SAMPLE_RATE_HZ
+            )));
         }
         config.carrier.check(fs).map_err(SignalError::Settings)?;
         config.limits.check().map_err(SignalError::Settings)?;

@@ -24,7 +24,7 @@ use sha2::{Digest, Sha256};
 
 use super::error::{Place, RecordingError};
 use crate::io::{OutputDir, Table, WriteError, write_atomic, write_csv_row};
-use crate::num::Num;
+use crate::num::{Fixed, Num};
 use crate::text::Quoted;
 
 /// Value of the metadata's `format` field.
@@ -563,12 +563,10 @@ fn check_columns(
     }
     let t = columns[0];
     if let Some(i) = t.windows(2).position(|w| w[1] <= w[0]) {
-        return Err(RecordingError::invalid(
-            file,
-            place(i + 1),
-            Some("t_s"),
-            format!("time must increase strictly: {} s follows {} s", Num(t[i + 1]), Num(t[i])),
-        ));
+        return Err(RecordingError::invalid(file, place(i + 1), Some("t_s"), {
+            let (next, previous) = crate::num::distinct(t[i + 1], t[i]);
+            format!("time must increase strictly: {next} s follows {previous} s")
+        }));
     }
     Ok(())
 }
@@ -608,8 +606,10 @@ fn check_rate(meta_file: &str, field: &str, stream_file: &str, t: &[f64], rate_h
             meta_file,
             field,
             format!(
-                "declares {rate_hz} Hz, but the median sample interval of {stream_file} is {median:e} s ({:.6} Hz)",
-                1.0 / median
+                "declares {} Hz, but the median sample interval of {stream_file} is {} s ({} Hz)",
+                Num(rate_hz),
+                Num(median),
+                Fixed(1.0 / median, 6)
             ),
         ));
     }

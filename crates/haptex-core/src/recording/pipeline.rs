@@ -4,9 +4,12 @@
 //!    ([`super::filter`]);
 //! 2. finger velocity and sliding-phase detection ([`super::sliding`]);
 //! 3. mu = Ft / Fn on the sliding samples, eqs. (1) and (4)
-//!    ([`friction_coefficient`]);
+//!    ([`friction_coefficient`]), with Ft along the direction of motion;
 //! 4. time-to-location resampling onto a uniform x grid per segment, and
 //!    the segments combined into one profile per stroke ([`super::location`]);
+//!    a friction coefficient is >= 0 ([`crate::ranges::MU`]), so a node
+//!    whose mean is below zero is set to zero and counted (see
+//!    [`ProcessedStroke::negative_nodes`]);
 //! 5. Fn_RS = mean Fn while sliding ([`ProcessedStroke::mean_fn_n`]).
 //!
 //! All parameters are in [`ProcessingConfig`].
@@ -18,8 +21,12 @@ use super::filter::{LowPassFir, resample_filtered};
 use super::format::Recording;
 use super::location::{GridSeries, combine_segments, to_location_grid};
 use super::sliding::{Direction, DroppedRun, SlidingCriteria, SlidingSegment, detect_sliding_report, finger_velocity};
-use crate::num::Num;
+use crate::num::{Fixed, Num};
 use crate::profile::FrictionProfile;
+
+/// Most nodes of a stroke's location grid: 1e7 (1 km at 0.1 mm), checked
+/// before the grid is allocated.
+pub const MAX_GRID_NODES: usize = 10_000_000;
 
 /// Which sliding directions contribute to a stroke's profile.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -140,7 +147,8 @@ impl ProcessingConfig {
                 name: "stopband_fraction",
                 message: format!(
                     "need passband_fraction ({}) < stopband_fraction ({}) <= 1 (beyond 1 aliases reach the passband)",
-                    self.passband_fraction, self.stopband_fraction
+                    Num(self.passband_fraction),
+                    Num(self.stopband_fraction)
                 ),
             });
         }
@@ -200,6 +208,11 @@ pub struct ProcessedStroke {
     pub sliding_s: f64,
     /// Length of the profile bridged between segments, mm.
     pub bridged_mm: f64,
+    /// Nodes of the profile where the mean friction along the motion came
+    /// out below zero (sensor noise or a force offset where the friction
+    /// is near zero; a wholly reversed force is refused instead), set to
+    /// zero: a friction coefficient is >= 0.
+    pub negative_nodes: usize,
     /// Length of the anti-alias filter, taps.
     pub filter_taps: usize,
     /// The resampled signals and velocity at the position rate.
@@ -207,7 +220,12 @@ pub struct ProcessedStroke {
 }
 
 /// mu = Ft / Fn (paper eqs. 1 and 4), with Ft taken along the direction of
-/// motion: ft_n is the force along +x, so mu = sign(direction) ft_n / fn_n.
+/// motion: ft_n is the force the finger exerts on the surface along +x
+/// (positive while it slides towards +x, negative towards -x), so
+/// mu = sign(direction) ft_n / fn_n, positive while the friction opposes
+/// the motion whichever way the finger slides. The sign of ft_n is thus
+/// the sliding direction's, and stays here: the profile that leaves the
+/// pipeline holds friction coefficients, >= 0.
 pub fn friction_coefficient(ft_n: &[f64], fn_n: &[f64], direction: Direction) -> Vec<f64> {
     let s = direction.sign();
     ft_n.iter().zip(fn_n).map(|(t, n)| s * t / n).collect()
@@ -226,11 +244,11 @@ pub fn process(recording: &Recording, config: &ProcessingConfig) -> Result<Proce
         return Err(RecordingError::Processing {
             file,
             message: format!(
-                "too short: the anti-alias filter ({} taps, {:.4} s) needs {:.4} s of force data on each side of a \
-                 position sample",
+                "too short: the anti-alias filter ({} taps, {} s) needs {} s of force data on each side of a position \
+                 sample",
                 filter.taps().len(),
-                filter.taps().len() as f64 / force.rate_hz,
-                filter.half_len() as f64 / force.rate_hz
+                Fixed(filter.taps().len() as f64 / force.rate_hz, 4),
+                Fixed(filter.half_len() as f64 / force.rate_hz, 4)
             ),
         });
     }
@@ -257,6 +275,27 @@ pub fn process(recording: &Recording, config: &ProcessingConfig) -> Result<Proce
     }
 
     // Steps 3 and 4: mu per segment, onto the location grid, combined.
+    // The grid spans the used segments' x range: checked before any node
+    // is allocated (a dx of 1e-12 mm would ask for 1e17 of them).
+    let (x_low, x_high) = segments
+        .iter()
+        .zip(&used)
+        .filter(|(_, u)| **u)
+        .flat_map(|(s, _)| [s.x_start_mm, s.x_end_mm])
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+    let nodes = (x_high - x_low) / config.dx_mm;
+    if !nodes.is_finite() || nodes > MAX_GRID_NODES as f64 {
+        return Err(RecordingError::Config {
+            name: "dx_mm",
+            message: format!(
+                "{} mm over the sliding segments' {} mm is {} grid nodes, more than the {MAX_GRID_NODES} a profile \
+                 may have",
+                Num(config.dx_mm),
+                Num(x_high - x_low),
+                Num(nodes.ceil())
+            ),
+        });
+    }
     let mut grids: Vec<GridSeries> = Vec::new();
     for (segment, _) in segments.iter().zip(&used).filter(|(_, u)| **u) {
         let range = segment.start..segment.end;
@@ -266,10 +305,11 @@ pub fn process(recording: &Recording, config: &ProcessingConfig) -> Result<Proce
             return Err(RecordingError::Processing {
                 file,
                 message: format!(
-                    "the tangential force opposes the motion in the segment at t = {:.3} .. {:.3} s (mean Ft/Fn = \
-                     {mean:.3}): ft_n must be the force the finger exerts on the surface along +x; flip its sign in \
-                     the converter",
-                    segment.t_start_s, segment.t_end_s
+                    "the tangential force opposes the motion in the segment at t = {} .. {} s (mean Ft/Fn = {}): \
+                     ft_n must be the force the finger exerts on the surface along +x; flip its sign in the converter",
+                    Fixed(segment.t_start_s, 3),
+                    Fixed(segment.t_end_s, 3),
+                    Fixed(mean, 3)
                 ),
             });
         }
@@ -281,12 +321,20 @@ pub fn process(recording: &Recording, config: &ProcessingConfig) -> Result<Proce
     let combined = combine_segments(&grids, max_gap_nodes).filter(|c| c.series.len() >= 2).ok_or_else(|| {
         RecordingError::Processing {
             file: file.clone(),
-            message: format!("the sliding segments cover less than two {} mm grid cells", config.dx_mm),
+            message: format!("the sliding segments cover less than two {} mm grid cells", Num(config.dx_mm)),
         }
     })?;
     let bridged_mm = combined.bridged_nodes as f64 * config.dx_mm;
     let x_grid = combined.series.x_mm(config.dx_mm);
-    let [mu, fn_grid]: [Vec<f64>; 2] = combined.series.columns.try_into().expect("two grid columns");
+    let [mut mu, fn_grid]: [Vec<f64>; 2] = combined.series.columns.try_into().expect("two grid columns");
+    // A friction coefficient is >= 0: a node whose mean came out below
+    // zero (noise or a force offset around zero friction; a segment whose
+    // force opposes the motion on average was refused above) is zero.
+    let mut negative_nodes = 0;
+    for v in mu.iter_mut().filter(|v| **v < 0.0) {
+        *v = 0.0;
+        negative_nodes += 1;
+    }
 
     // Step 5: Fn_RS = mean Fn while sliding, over the location domain.
     let mean_fn_n = fn_grid.iter().sum::<f64>() / fn_grid.len() as f64;
@@ -304,6 +352,7 @@ pub fn process(recording: &Recording, config: &ProcessingConfig) -> Result<Proce
         mean_mu,
         sliding_s,
         bridged_mm,
+        negative_nodes,
         filter_taps: filter.taps().len(),
         series: PositionRateSeries { t_s, x_mm, v_mm_s, fn_n, ft_n },
     })

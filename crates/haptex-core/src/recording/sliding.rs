@@ -19,6 +19,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::num::{Fixed, Num};
+
 /// Direction of a sliding segment along x.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -153,9 +155,13 @@ pub fn detect_sliding_report(
             (0..n).filter(|&i| fn_n[i] >= criteria.min_fn_n).fold(0.0f64, |m, i| m.max(v_mm_s[i].abs()));
         let max_fn = fn_n.iter().fold(f64::NEG_INFINITY, |m, &f| m.max(f));
         return Err(format!(
-            "the finger never moved at >= {} mm/s while pressing with Fn >= {} N (largest speed {max_speed:.3} mm/s, \
-             largest speed in contact {max_speed_in_contact:.3} mm/s, largest Fn {max_fn:.4} N)",
-            criteria.min_speed_mm_s, criteria.min_fn_n
+            "the finger never moved at >= {} mm/s while pressing with Fn >= {} N (largest speed {} mm/s, largest \
+             speed in contact {} mm/s, largest Fn {} N)",
+            Num(criteria.min_speed_mm_s),
+            Num(criteria.min_fn_n),
+            Fixed(max_speed, 3),
+            Fixed(max_speed_in_contact, 3),
+            Fixed(max_fn, 4)
         ));
     }
     let mid = candidate_fn.len() / 2;
@@ -191,9 +197,9 @@ pub fn detect_sliding_report(
         };
         if end <= start + 1 {
             dropped.push(drop(format!(
-                "lasts {:.3} s, too short to keep anything after trimming trim_s = {} s at each end",
-                t_s[j - 1] - t_s[i],
-                criteria.trim_s
+                "lasts {} s, too short to keep anything after trimming trim_s = {} s at each end",
+                Fixed(t_s[j - 1] - t_s[i], 3),
+                Num(criteria.trim_s)
             )));
         } else {
             let segment = SlidingSegment {
@@ -209,15 +215,15 @@ pub fn detect_sliding_report(
             };
             if segment.duration_s() < criteria.min_duration_s {
                 dropped.push(drop(format!(
-                    "lasts {:.3} s after trimming, less than min_duration_s = {} s",
-                    segment.duration_s(),
-                    criteria.min_duration_s
+                    "lasts {} s after trimming, less than min_duration_s = {} s",
+                    Fixed(segment.duration_s(), 3),
+                    Num(criteria.min_duration_s)
                 )));
             } else if segment.length_mm() < criteria.min_length_mm {
                 dropped.push(drop(format!(
-                    "covers {:.3} mm after trimming, less than min_length_mm = {} mm",
-                    segment.length_mm(),
-                    criteria.min_length_mm
+                    "covers {} mm after trimming, less than min_length_mm = {} mm",
+                    Fixed(segment.length_mm(), 3),
+                    Num(criteria.min_length_mm)
                 )));
             } else {
                 segments.push(segment);
@@ -228,13 +234,14 @@ pub fn detect_sliding_report(
     if segments.is_empty() {
         let steady = sliding.iter().filter(|&&s| s).count();
         return Err(format!(
-            "{steady} samples move at >= {} mm/s with a steady normal force (Fn within {}% of {fn_ref:.4} N), but no \
-             run of them lasts {} s and covers {} mm after trimming {} s at each end",
-            criteria.min_speed_mm_s,
-            criteria.fn_tolerance * 100.0,
-            criteria.min_duration_s,
-            criteria.min_length_mm,
-            criteria.trim_s
+            "{steady} samples move at >= {} mm/s with a steady normal force (Fn within {}% of {} N), but no run of \
+             them lasts {} s and covers {} mm after trimming {} s at each end",
+            Num(criteria.min_speed_mm_s),
+            Num(criteria.fn_tolerance * 100.0),
+            Fixed(fn_ref, 4),
+            Num(criteria.min_duration_s),
+            Num(criteria.min_length_mm),
+            Num(criteria.trim_s)
         ));
     }
     Ok(SlidingReport { segments, dropped })

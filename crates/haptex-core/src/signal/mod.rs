@@ -31,13 +31,13 @@ pub use carrier::{Carrier, CarrierShape};
 pub use curve::{AmplitudeCurve, Extend, VoltageCurve};
 pub use safety::{ClipReport, EnvelopeLimiter, Limits};
 pub use wav::{
-    AmplitudeScale, DriveWav, EncodedWav, SCALE_CHUNK_ID, ScaleChunk, WavFormat, WavOptions, WavSidecar,
-    check_volts_per_full_scale, decode_drive_wav, decode_drive_wav_channels, encode_wav, read_drive_wav, sidecar_path,
-    write_wav,
+    AmplitudeScale, DriveWav, EncodedWav, FmtFields, SCALE_CHUNK_ID, SCALE_CHUNK_VERSION, ScaleChunk, WavFormat,
+    WavOptions, WavSidecar, check_volts_per_full_scale, decode_drive_wav, decode_drive_wav_channels, encode_wav,
+    read_drive_wav, sidecar_path, write_wav,
 };
 
 use crate::io::{WriteError, write_csv_row};
-use crate::num::Num;
+use crate::num::{Fixed, Num};
 use crate::plot::{Figure, Panel};
 use crate::trajectory::Trajectory;
 
@@ -45,28 +45,43 @@ use crate::trajectory::Trajectory;
 /// 1 GB of working memory). Longer drives belong to the real-time renderer.
 pub const MAX_SAMPLES: usize = 30_000_000;
 
+/// The lowest sample rate haptex renders, and reads a drive WAV at.
+pub const MIN_SAMPLE_RATE_HZ: u32 = 100;
+
 /// A drive signal cannot be rendered or written.
 #[derive(Debug, thiserror::Error)]
 pub enum SignalError {
     #[error("{0}")]
     Settings(String),
     #[error(
-        "{duration_s} s at {sample_rate_hz} Hz is {n_samples} samples, more than the {MAX_SAMPLES} an offline \
-         render allows (is the trajectory's t_s in seconds?)"
+        "{} s at {sample_rate_hz} Hz is {} samples, more than the {MAX_SAMPLES} an offline render allows (is the \
+         trajectory's t_s in seconds?)",
+        Num(*duration_s),
+        Num(*n_samples)
     )]
     TooLong { duration_s: f64, sample_rate_hz: u32, n_samples: f64 },
     #[error(
-        "refused: the drive's peak {amplitude_v:.3} V (first at t = {t_s:.6} s) exceeds the amplifier range \
-         {range_v} V; lower U_max to {max_u_v:.3} V RMS or less, or declare the amplifier's real range"
+        "refused: the drive's peak {} V (first at t = {} s) exceeds the amplifier range {} V; lower U_max to {} V \
+         RMS or less, or declare the amplifier's real range",
+        Fixed(*amplitude_v, 3),
+        Fixed(*t_s, 6),
+        Num(*range_v),
+        Fixed(*max_u_v, 3)
     )]
     ExceedsAmplifierRange { amplitude_v: f64, range_v: f64, t_s: f64, max_u_v: f64 },
     #[error(
-        "refused: the drive's peak {amplitude_v:.3} V exceeds the WAV full scale of {volts_per_full_scale} V \
-         (volts per full scale); raise it to at least {amplitude_v:.3} V or lower U_max"
+        "refused: the drive's peak {} V exceeds the WAV full scale of {} V (volts per full scale); raise it to at \
+         least {} V or lower U_max",
+        Fixed(*amplitude_v, 3),
+        Num(*volts_per_full_scale),
+        Fixed(*amplitude_v, 3)
     )]
     ExceedsFullScale { amplitude_v: f64, volts_per_full_scale: f64 },
     #[error("cannot encode the WAV file {path}: {message}")]
     Wav { path: String, message: String },
+    /// A drive WAV is refused by its reader ([`read_drive_wav`]).
+    #[error("cannot read the WAV file {path}: {message}")]
+    ReadWav { path: String, message: String },
     #[error(transparent)]
     Write(#[from] WriteError),
 }
@@ -89,8 +104,11 @@ impl RenderSettings {
 
     /// Checks the sample rate, carrier and limits.
     pub fn check(&self) -> Result<(), SignalError> {
-        if self.sample_rate_hz < 100 {
-            return Err(SignalError::Settings(format!("sample rate {} Hz is below 100 Hz", self.sample_rate_hz)));
+        if self.sample_rate_hz < MIN_SAMPLE_RATE_HZ {
+            return Err(SignalError::Settings(format!(
+                "sample rate {} Hz is below {MIN_SAMPLE_RATE_HZ} Hz",
+                self.sample_rate_hz
+            )));
         }
         self.carrier.check(self.sample_rate_hz as f64).map_err(SignalError::Settings)?;
         self.limits.check().map_err(SignalError::Settings)
@@ -163,7 +181,10 @@ impl fmt::Display for SignalReport {
         writeln!(
             f,
             "signal: {} samples at {} Hz, {:.4} s from t = {} s",
-            self.n_samples, self.sample_rate_hz, self.duration_s, self.start_s
+            self.n_samples,
+            self.sample_rate_hz,
+            self.duration_s,
+            Num(self.start_s)
         )?;
         match self.carrier.shape {
             CarrierShape::None => writeln!(f, "carrier: none (the drive is the RMS envelope itself)")?,
@@ -171,7 +192,7 @@ impl fmt::Display for SignalReport {
                 f,
                 "carrier: {} at {} Hz (peak = {:.4} x RMS)",
                 format!("{shape:?}").to_lowercase(),
-                self.carrier.frequency_hz,
+                Num(self.carrier.frequency_hz),
                 self.carrier.peak_per_rms()
             )?,
         }
@@ -184,7 +205,7 @@ impl fmt::Display for SignalReport {
         writeln!(
             f,
             "clamped at U_max = {} V: {} samples ({:.2}%), largest request {:.3} V",
-            self.limits.u_max_v,
+            Num(self.limits.u_max_v),
             c.clamped_samples,
             100.0 * c.clamped_fraction,
             c.requested_max_v
@@ -192,7 +213,8 @@ impl fmt::Display for SignalReport {
         if let Some(slew) = self.limits.slew_v_per_s {
             writeln!(
                 f,
-                "slew limit {slew} V/s: {} samples changed ({:.2}%), largest change {:.3} V",
+                "slew limit {} V/s: {} samples changed ({:.2}%), largest change {:.3} V",
+                Num(slew),
                 c.slew_limited_samples,
                 100.0 * c.slew_limited_fraction,
                 c.slew_max_deviation_v
@@ -365,7 +387,9 @@ pub fn render(
             Extend::Repeat => "the profile repeats",
         };
         format!(
-            "the finger is outside the profile ({x0} .. {x1} mm) for {:.2}% of the time: {what}",
+            "the finger is outside the profile ({} .. {} mm) for {:.2}% of the time: {what}",
+            Num(x0),
+            Num(x1),
             100.0 * outside as f64 / n as f64
         )
     });
@@ -499,7 +523,7 @@ fn finish(
         warnings.push(format!(
             "the profile asks for up to {:.3} V RMS: clamped at U_max = {} V for {:.2}% of the time",
             clip.requested_max_v,
-            settings.limits.u_max_v,
+            Num(settings.limits.u_max_v),
             100.0 * clip.clamped_fraction
         ));
     }

@@ -6,8 +6,7 @@
 //! in volts, scaled by the chunk's top-level `volts_per_full_scale`) and
 //! channel 2 (the ultrasonic amplitude envelope in um, scaled by the
 //! chunk's `channel_2` [`AmplitudeScale`], full scale = a_max). A
-//! one-channel WAV has no `channel_2` and is byte-identical to the format
-//! before two channels existed.
+//! one-channel WAV has no `channel_2`.
 //!
 //! Scale: a sample value v (an integer code, or a float) stands for
 //! v / full_scale * volts_per_full_scale volts at the amplifier output,
@@ -16,12 +15,31 @@
 //! A signal whose peak exceeds the full scale is refused, never clipped.
 //!
 //! The scale travels inside the WAV: a `hptx` chunk after the samples
-//! holds a JSON [`ScaleChunk`] with the volts per full scale and the
-//! SHA-256 of the sample bytes. Audio tools skip the chunk; haptex's reader
-//! ([`read_drive_wav`]) refuses a WAV without it, a WAV whose samples do not
-//! match its hash, and a sidecar that does not belong to the WAV (another
-//! hash or another scale), so that samples are never paired with the wrong
-//! scale, even after a run killed between writing the WAV and its sidecar.
+//! holds a JSON [`ScaleChunk`] with the volts per full scale, every field
+//! of the `fmt ` chunk ([`FmtFields`]: how any audio program reads the
+//! samples) and the SHA-256 of the `fmt ` chunk and of the sample bytes.
+//! Audio tools skip the chunk; haptex's reader ([`read_drive_wav`])
+//! refuses a WAV without it, a WAV whose `fmt ` chunk or samples do not
+//! match it, any sample of any channel that is not finite or beyond full
+//! scale, and a sidecar that does not belong to the WAV (another hash or
+//! another scale), so that samples are never paired with the wrong scale,
+//! even after a run killed between writing the WAV and its sidecar.
+//!
+//! The hashes carry no secret: anyone can edit a file and recompute them.
+//! What the reader guarantees of a file it accepts, forged or not, is that
+//! its `fmt ` chunk describes the samples exactly as the scale chunk says
+//! (so that no other program reads them as another format) and that every
+//! sample of every channel stands for at most the stated full scale.
+//!
+//! Versions of the chunk: version 2 (`"version": 2`, this one) states the
+//! `fmt ` fields and hashes them. Version 1 (no `version` field, haptex
+//! before issue 35) hashed the samples only; it is still read, with the
+//! same checks except the `fmt ` hash, which it does not have: its `fmt `
+//! chunk must be, field by field, the one haptex writes for the chunk's
+//! format, channels and rate (the only one haptex ever wrote), so an
+//! edited format tag is refused in either version. A version above 2 is
+//! refused (a newer haptex's file, whose checks this one cannot make), as
+//! a version-1 reader refuses a version-2 chunk (an unknown field).
 
 use std::io::{Cursor, Read};
 use std::path::{Path, PathBuf};
@@ -46,6 +64,16 @@ pub enum WavFormat {
 }
 
 impl WavFormat {
+    /// The format's name in files and on the command line: pcm16, pcm24,
+    /// float32.
+    pub fn name(self) -> &'static str {
+        match self {
+            WavFormat::Pcm16 => "pcm16",
+            WavFormat::Pcm24 => "pcm24",
+            WavFormat::Float32 => "float32",
+        }
+    }
+
     /// The value that stands for `volts_per_full_scale`: 32767, 8388607 or 1.
     pub fn full_scale(self) -> f64 {
         match self {
@@ -88,11 +116,174 @@ pub struct WavOptions {
 /// The id of the WAV chunk that carries the scale.
 pub const SCALE_CHUNK_ID: [u8; 4] = *b"hptx";
 
+/// The version of the scale chunk this haptex writes (see the module
+/// documentation; version 1 had no `version` field).
+pub const SCALE_CHUNK_VERSION: u32 = 2;
+
+/// The `wFormatTag` values haptex writes: WAVE_FORMAT_PCM (pcm16) and
+/// WAVE_FORMAT_EXTENSIBLE (pcm24, float32). WAVE_FORMAT_IEEE_FLOAT (3) is
+/// never written: haptex's float32 is extensible.
+const FORMAT_PCM: u16 = 1;
+const FORMAT_EXTENSIBLE: u16 = 0xFFFE;
+/// The SubFormat GUIDs of WAVE_FORMAT_EXTENSIBLE (KSDATAFORMAT_SUBTYPE_PCM
+/// and _IEEE_FLOAT), in the usual text form.
+const SUBTYPE_PCM: &str = "00000001-0000-0010-8000-00aa00389b71";
+const SUBTYPE_IEEE_FLOAT: &str = "00000003-0000-0010-8000-00aa00389b71";
+
+/// Every field of a WAV's `fmt ` chunk: what an audio program reads the
+/// samples by. haptex writes PCMWAVEFORMAT (16 bytes, format tag 1) for
+/// pcm16 and WAVE_FORMAT_EXTENSIBLE (40 bytes, format tag 0xFFFE, with
+/// valid bits, channel mask and subformat) for pcm24 and float32; the
+/// extensible fields are absent (`None`) for the former.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FmtFields {
+    /// wFormatTag: 1 (integer PCM), 3 (IEEE float) or 65534 (extensible).
+    pub format_tag: u16,
+    pub channels: u16,
+    pub sample_rate_hz: u32,
+    /// nAvgBytesPerSec = sample rate x block align.
+    pub byte_rate: u32,
+    /// nBlockAlign = channels x bytes per sample: the bytes of one frame.
+    pub block_align: u16,
+    /// wBitsPerSample (the container size for the extensible format).
+    pub bits_per_sample: u16,
+    /// wValidBitsPerSample (extensible only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub valid_bits_per_sample: Option<u16>,
+    /// dwChannelMask (extensible only): 1 for mono, 3 for two channels.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub channel_mask: Option<u32>,
+    /// SubFormat GUID (extensible only): integer PCM or IEEE float.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub subformat: Option<String>,
+}
+
+impl FmtFields {
+    /// The `fmt ` chunk haptex writes for `format` with `channels` at
+    /// `sample_rate_hz` (what hound writes for that spec); `None` if the
+    /// byte rate does not fit its 32 bits.
+    pub fn of(format: WavFormat, channels: u16, sample_rate_hz: u32) -> Option<Self> {
+        let width = format.bits() / 8;
+        let block_align = channels.checked_mul(width)?;
+        let byte_rate = sample_rate_hz.checked_mul(u32::from(block_align))?;
+        let extensible = format != WavFormat::Pcm16;
+        let subformat = match format {
+            WavFormat::Float32 => SUBTYPE_IEEE_FLOAT,
+            _ => SUBTYPE_PCM,
+        };
+        Some(Self {
+            format_tag: if extensible { FORMAT_EXTENSIBLE } else { FORMAT_PCM },
+            channels,
+            sample_rate_hz,
+            byte_rate,
+            block_align,
+            bits_per_sample: format.bits(),
+            valid_bits_per_sample: extensible.then_some(format.bits()),
+            channel_mask: extensible.then_some(if channels == 2 { 3 } else { 1 }),
+            subformat: extensible.then(|| subformat.to_string()),
+        })
+    }
+
+    /// Reads the fields of a `fmt ` chunk's content: the 16 bytes every
+    /// WAV has, and for WAVE_FORMAT_EXTENSIBLE the 22 bytes of its
+    /// extension (cbSize at least 22). Bytes beyond are not fields: the
+    /// reader compares the chunk's length with the one haptex writes
+    /// ([`FmtFields::byte_len`]).
+    pub fn parse(fmt: &[u8]) -> Result<Self, String> {
+        if fmt.len() < 16 {
+            return Err(format!("fmt chunk of {} bytes, shorter than the 16 of every WAV", fmt.len()));
+        }
+        let u16_at = |i: usize| u16::from_le_bytes([fmt[i], fmt[i + 1]]);
+        let u32_at = |i: usize| u32::from_le_bytes([fmt[i], fmt[i + 1], fmt[i + 2], fmt[i + 3]]);
+        let format_tag = u16_at(0);
+        let extensible = format_tag == FORMAT_EXTENSIBLE;
+        if extensible && (fmt.len() < 40 || u16_at(16) < 22) {
+            return Err(format!(
+                "fmt chunk of {} bytes with format tag {format_tag} (WAVE_FORMAT_EXTENSIBLE) and no complete \
+                 extension: it needs 40 bytes",
+                fmt.len()
+            ));
+        }
+        Ok(Self {
+            format_tag,
+            channels: u16_at(2),
+            sample_rate_hz: u32_at(4),
+            byte_rate: u32_at(8),
+            block_align: u16_at(12),
+            bits_per_sample: u16_at(14),
+            valid_bits_per_sample: extensible.then(|| u16_at(18)),
+            channel_mask: extensible.then(|| u32_at(20)),
+            subformat: extensible.then(|| guid_text(&fmt[24..40])),
+        })
+    }
+
+    /// The length of the `fmt ` chunk haptex writes with these fields: 16
+    /// bytes, or 40 for WAVE_FORMAT_EXTENSIBLE (cbSize = 22).
+    pub fn byte_len(&self) -> usize {
+        if self.format_tag == FORMAT_EXTENSIBLE { 40 } else { 16 }
+    }
+
+    /// Every field by name, as text, in the order of the chunk.
+    fn fields(&self) -> [(&'static str, String); 9] {
+        let opt = |v: Option<String>| v.unwrap_or_else(|| "absent".to_string());
+        [
+            ("format tag", self.format_tag.to_string()),
+            ("channels", self.channels.to_string()),
+            ("sample rate (Hz)", self.sample_rate_hz.to_string()),
+            ("byte rate", self.byte_rate.to_string()),
+            ("block align", self.block_align.to_string()),
+            ("bits per sample", self.bits_per_sample.to_string()),
+            ("valid bits per sample", opt(self.valid_bits_per_sample.map(|v| v.to_string()))),
+            ("channel mask", opt(self.channel_mask.map(|v| v.to_string()))),
+            // Text from the file: quoted (escaped, cut short).
+            ("subformat", opt(self.subformat.as_deref().map(|s| crate::text::Quoted(s).to_string()))),
+        ]
+    }
+
+    /// The first field where `self` (what a `fmt ` chunk says) differs
+    /// from `stated`, as `NAME A where STATED_BY says B`; every field is
+    /// compared.
+    fn first_difference(&self, stated: &FmtFields, stated_by: &str) -> Option<String> {
+        self.fields()
+            .into_iter()
+            .zip(stated.fields())
+            .find(|(a, b)| a.1 != b.1)
+            .map(|((name, a), (_, b))| format!("{name} {a} where {stated_by} says {b}"))
+    }
+
+    /// `format tag T, C channel(s), R Hz, B bits`, for messages.
+    fn summary(&self) -> String {
+        format!(
+            "format tag {}, {} channel(s), {} Hz, {} bits",
+            self.format_tag, self.channels, self.sample_rate_hz, self.bits_per_sample
+        )
+    }
+}
+
+/// A GUID's 16 bytes (Data1, Data2, Data3 little-endian, then Data4) in
+/// the usual text form.
+fn guid_text(b: &[u8]) -> String {
+    format!(
+        "{:08x}-{:04x}-{:04x}-{:02x}{:02x}-{}",
+        u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+        u16::from_le_bytes([b[4], b[5]]),
+        u16::from_le_bytes([b[6], b[7]]),
+        b[8],
+        b[9],
+        b[10..16].iter().map(|x| format!("{x:02x}")).collect::<String>()
+    )
+}
+
 /// The content of the `hptx` chunk (JSON): what a sample stands for, and
 /// the hash that ties the scale to these samples.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ScaleChunk {
+    /// The chunk's version: [`SCALE_CHUNK_VERSION`]; absent (`None`) in a
+    /// version-1 chunk.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub version: Option<u32>,
     /// Always "haptex drive signal".
     pub kind: String,
     pub sample_format: WavFormat,
@@ -104,6 +295,13 @@ pub struct ScaleChunk {
     pub n_samples: usize,
     /// Lowercase hex SHA-256 of the `data` chunk's bytes.
     pub samples_sha256: String,
+    /// Every field of the `fmt ` chunk, as written (version 2; absent
+    /// from a version-1 chunk).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fmt: Option<FmtFields>,
+    /// Lowercase hex SHA-256 of the `fmt ` chunk's bytes (version 2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fmt_sha256: Option<String>,
     /// volts = sample / full_scale_value * volts_per_full_scale.
     pub conversion: String,
     /// A two-channel WAV's second channel (the ultrasonic amplitude, in
@@ -168,6 +366,11 @@ pub struct WavSidecar {
     /// SHA-256 of the WAV's sample bytes, as in its `hptx` chunk: the
     /// sidecar belongs to the WAV whose samples have this hash.
     pub samples_sha256: String,
+    /// SHA-256 of the WAV's `fmt ` chunk, as in its `hptx` chunk (version
+    /// 2): the sidecar belongs to the WAV whose samples are read by this
+    /// format. Absent from the sidecar of a version-1 WAV.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fmt_sha256: Option<String>,
     pub voltage_convention: String,
     /// Render settings, safety report and peak of the signal.
     pub report: SignalReport,
@@ -319,11 +522,17 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
         }
         writer.finalize().map_err(wav_error)?;
     }
-    let data = data_chunk(&bytes).ok_or_else(|| SignalError::Wav {
-        path: label.to_string(),
-        message: "the encoder wrote no data chunk".into(),
-    })?;
+    let encoder_error = |message: &str| SignalError::Wav { path: label.to_string(), message: message.into() };
+    let data = find_chunk(&bytes, b"data").ok_or_else(|| encoder_error("the encoder wrote no data chunk"))?;
+    let fmt_range = find_chunk(&bytes, b"fmt ").ok_or_else(|| encoder_error("the encoder wrote no fmt chunk"))?;
+    // The fmt chunk as written must be the one the reader expects for this
+    // format (a guard against an encoder that writes another layout).
+    let fmt = FmtFields::parse(&bytes[fmt_range.clone()]).map_err(|m| encoder_error(&m))?;
+    if Some(&fmt) != FmtFields::of(format, channels, report.sample_rate_hz).as_ref() {
+        return Err(encoder_error("the encoder wrote another fmt chunk than haptex's reader expects"));
+    }
     let scale = ScaleChunk {
+        version: Some(SCALE_CHUNK_VERSION),
         kind: KIND.into(),
         sample_format: format,
         full_scale_value: full_scale,
@@ -331,6 +540,8 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
         sample_rate_hz: report.sample_rate_hz,
         n_samples: signal.len(),
         samples_sha256: sha256_hex(&bytes[data]),
+        fmt: Some(fmt),
+        fmt_sha256: Some(sha256_hex(&bytes[fmt_range])),
         conversion: CONVERSION.into(),
         channel_2: channel_2.map(|(_, c)| c),
     };
@@ -339,14 +550,14 @@ pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Re
     Ok(EncodedWav { bytes, scale })
 }
 
-/// The byte range of the `data` chunk's content in a RIFF/WAVE file.
-fn data_chunk(bytes: &[u8]) -> Option<std::ops::Range<usize>> {
+/// The byte range of the content of chunk `id` in a RIFF/WAVE file.
+fn find_chunk(bytes: &[u8], id: &[u8; 4]) -> Option<std::ops::Range<usize>> {
     let mut at = 12;
     while at + 8 <= bytes.len() {
         let size = u32::from_le_bytes(bytes[at + 4..at + 8].try_into().ok()?) as usize;
         let start = at + 8;
         let end = start.checked_add(size)?;
-        if &bytes[at..at + 4] == b"data" {
+        if &bytes[at..at + 4] == id {
             return (end <= bytes.len()).then_some(start..end);
         }
         at = end + (size & 1);
@@ -419,6 +630,7 @@ impl WavSidecar {
             volts_per_full_scale: scale.volts_per_full_scale,
             conversion: CONVERSION.into(),
             samples_sha256: scale.samples_sha256.clone(),
+            fmt_sha256: scale.fmt_sha256.clone(),
             voltage_convention: format!(
                 "the envelope U is the RMS voltage of eq. (8); the drive is U times a unit-RMS carrier, peak = {} x U{}",
                 report.carrier.peak_per_rms(),
@@ -464,7 +676,7 @@ impl DriveWav {
 /// error: a WAV is never read with the wrong scale.
 pub fn read_drive_wav(path: &Path) -> Result<DriveWav, SignalError> {
     let name = path.display().to_string();
-    let bad = |message: String| SignalError::Wav { path: name.clone(), message };
+    let bad = |message: String| SignalError::ReadWav { path: name.clone(), message };
     let metadata = std::fs::metadata(path).map_err(|e| bad(e.to_string()))?;
     if !metadata.is_file() {
         return Err(bad("not a regular file".into()));
@@ -472,7 +684,9 @@ pub fn read_drive_wav(path: &Path) -> Result<DriveWav, SignalError> {
     if metadata.len() > u64::from(u32::MAX) + 8 {
         return Err(bad(format!("{} bytes: larger than a WAV file can be (4 GiB)", metadata.len())));
     }
-    let mut bytes = Vec::with_capacity(metadata.len() as usize);
+    let mut bytes =
+        crate::buffer::try_with_capacity(metadata.len() as usize, || format!("its {} bytes", metadata.len()))
+            .map_err(|e| bad(e.to_string()))?;
     std::fs::File::open(path)
         .and_then(|f| f.take(metadata.len()).read_to_end(&mut bytes))
         .map_err(|e| bad(e.to_string()))?;
@@ -505,9 +719,18 @@ fn check_sidecar(sidecar: &WavSidecar, scale: &ScaleChunk) -> Result<(), String>
             sidecar.samples_sha256, scale.samples_sha256
         ));
     }
+    if sidecar.fmt_sha256 != scale.fmt_sha256 {
+        let show = |h: &Option<String>| h.clone().unwrap_or_else(|| "none (a version-1 file)".into());
+        return Err(format!(
+            "it is for a fmt chunk with SHA-256 {}, the WAV's is {}",
+            show(&sidecar.fmt_sha256),
+            show(&scale.fmt_sha256)
+        ));
+    }
     if sidecar.volts_per_full_scale.to_bits() != scale.volts_per_full_scale.to_bits()
         || sidecar.full_scale_value.to_bits() != scale.full_scale_value.to_bits()
         || sidecar.sample_format != scale.sample_format
+        || sidecar.bits_per_sample != scale.sample_format.bits()
     {
         return Err(format!(
             "it says {} V per full scale ({:?}), the WAV says {} V ({:?})",
@@ -568,13 +791,33 @@ pub fn decode_drive_wav(bytes: &[u8]) -> Result<(ScaleChunk, Vec<f64>), String> 
 
 /// Decodes a haptex drive-signal WAV as [`decode_drive_wav`], with
 /// channel 2 (the ultrasonic amplitude in um, by the chunk's `channel_2`
-/// scale) when the WAV has two channels. A WAV whose channel count does
-/// not match the chunk, or whose channel 2 stands for more than its
-/// a_max, is refused.
+/// scale) when the WAV has two channels. Checks, in order, and refuses
+/// the file at the first that fails:
+///
+/// 1. the RIFF header (its size is the file's), every chunk within the
+///    file, none twice;
+/// 2. the scale chunk: its version, kind, full scale and volts per full
+///    scale, a sample rate of at least [`super::MIN_SAMPLE_RATE_HZ`],
+///    channel 2's scale;
+/// 3. the `fmt ` chunk, field by field, against the one haptex writes for
+///    the chunk's format, channels and rate ([`FmtFields::of`]), and, in
+///    a version-2 chunk, against its `fmt` fields and `fmt_sha256`;
+/// 4. the samples' hash and count;
+/// 5. every sample of every channel: finite and within full scale
+///    (|code| <= `full_scale_value`; channel 2 also within 0, or -a_max
+///    on the plate's resonance, .. a_max).
 #[allow(clippy::type_complexity)]
 pub fn decode_drive_wav_channels(bytes: &[u8]) -> Result<(ScaleChunk, Vec<f64>, Option<Vec<f64>>), String> {
     if bytes.len() < 12 || &bytes[0..4] != b"RIFF" || &bytes[8..12] != b"WAVE" {
         return Err("not a WAV file (no RIFF/WAVE header)".into());
+    }
+    let riff_size = u32::from_le_bytes(bytes[4..8].try_into().expect("4 bytes")) as usize;
+    if riff_size.checked_add(8) != Some(bytes.len()) {
+        return Err(format!(
+            "the RIFF header says the file has {} bytes, it has {}: it was cut or extended after haptex wrote it",
+            riff_size as u64 + 8,
+            bytes.len()
+        ));
     }
     let mut fmt: Option<&[u8]> = None;
     let mut data: Option<&[u8]> = None;
@@ -609,21 +852,112 @@ pub fn decode_drive_wav_channels(bytes: &[u8]) -> Result<(ScaleChunk, Vec<f64>, 
         "no haptex scale chunk (hptx): not a haptex drive signal, or written before the scale travelled with the \
          samples; its volts per full scale cannot be checked, render it again",
     )?;
+
+    // 2. The scale chunk, on its own.
     let scale: ScaleChunk =
         serde_json::from_slice(scale_bytes).map_err(|e| format!("the haptex scale chunk is not valid: {e}"))?;
-    let expected_full_scale = scale.sample_format.full_scale();
+    match (scale.version, &scale.fmt, &scale.fmt_sha256) {
+        (None, None, None) | (Some(SCALE_CHUNK_VERSION), Some(_), Some(_)) => {}
+        (Some(v), _, _) if v > SCALE_CHUNK_VERSION => {
+            return Err(format!(
+                "the haptex scale chunk is version {v}, written by a newer haptex: this one cannot make its \
+                 checks; read it with that version"
+            ));
+        }
+        (v, f, h) => {
+            return Err(format!(
+                "the haptex scale chunk is not consistent: version {}, {} fmt fields, {} fmt hash (version 1 has \
+                 neither, version {SCALE_CHUNK_VERSION} both)",
+                v.map_or("1".to_string(), |v| v.to_string()),
+                if f.is_some() { "with" } else { "without" },
+                if h.is_some() { "with" } else { "without" },
+            ));
+        }
+    }
+    let format = scale.sample_format;
+    let full_scale = format.full_scale();
     if scale.kind != KIND
-        || scale.full_scale_value.to_bits() != expected_full_scale.to_bits()
+        || scale.full_scale_value.to_bits() != full_scale.to_bits()
+        || scale.conversion != CONVERSION
         || check_volts_per_full_scale(scale.volts_per_full_scale).is_err()
     {
         return Err(format!(
-            "the haptex scale chunk is not consistent (kind {:?}, full scale {} for {:?}, {} V per full scale)",
-            scale.kind,
+            "the haptex scale chunk is not consistent (kind {}, full scale {} for {:?}, {} V per full scale)",
+            crate::text::Quoted(&scale.kind),
             Num(scale.full_scale_value),
             scale.sample_format,
             Num(scale.volts_per_full_scale)
         ));
     }
+    if scale.sample_rate_hz < super::MIN_SAMPLE_RATE_HZ {
+        return Err(format!(
+            "the haptex scale chunk says {} Hz, below the {} Hz of any haptex drive signal",
+            scale.sample_rate_hz,
+            super::MIN_SAMPLE_RATE_HZ
+        ));
+    }
+    if let Some(c2) = &scale.channel_2
+        && (c2.quantity != if c2.resonance_hz.is_some() { DISPLACEMENT_QUANTITY } else { AMPLITUDE_QUANTITY }
+            || c2.resonance_hz.is_some_and(|f| super::plate_resonance(f, scale.sample_rate_hz).is_err())
+            || c2.unit != "um"
+            || c2.conversion != AMPLITUDE_CONVERSION
+            || c2.full_scale_value.to_bits() != full_scale.to_bits()
+            || crate::ranges::A_MAX_UM.check(c2.um_per_full_scale).is_err()
+            || crate::ranges::A_MAX_UM.check(c2.a_max_um).is_err()
+            || c2.a_max_um.to_bits() != c2.um_per_full_scale.to_bits())
+    {
+        return Err(format!(
+            "the haptex scale chunk's channel 2 is not consistent (quantity {}, unit {}, full scale {}, {} um per \
+             full scale, a_max {} um)",
+            crate::text::Quoted(&c2.quantity),
+            crate::text::Quoted(&c2.unit),
+            Num(c2.full_scale_value),
+            Num(c2.um_per_full_scale),
+            Num(c2.a_max_um)
+        ));
+    }
+
+    // 3. The fmt chunk: every field as haptex writes it for this format,
+    // channel count and rate, and as the chunk states it.
+    let channels: u16 = if scale.channel_2.is_some() { 2 } else { 1 };
+    let described = format!("{}, {channels} channel(s), {} Hz", format.name(), scale.sample_rate_hz);
+    let expected = FmtFields::of(format, channels, scale.sample_rate_hz)
+        .ok_or_else(|| format!("the haptex scale chunk's {described} do not fit a WAV's byte rate"))?;
+    if let Some(stated) = &scale.fmt
+        && let Some(difference) = stated.first_difference(&expected, "haptex's")
+    {
+        return Err(format!(
+            "the haptex scale chunk is not consistent: its fmt fields ({}) are not those of {described}: {difference}",
+            stated.summary()
+        ));
+    }
+    let actual = FmtFields::parse(fmt)?;
+    if let Some(difference) = actual.first_difference(&expected, "the scale chunk") {
+        return Err(format!(
+            "the fmt chunk ({}) does not match the scale chunk ({described}): {difference}; another program would \
+             read the samples as another format",
+            actual.summary()
+        ));
+    }
+    if fmt.len() != expected.byte_len() || (expected.byte_len() == 40 && fmt[16..18] != [22, 0]) {
+        return Err(format!(
+            "the fmt chunk has {} bytes (extension size {}), haptex writes {} for {described}",
+            fmt.len(),
+            fmt.get(16..18).map_or(0, |b| u16::from_le_bytes([b[0], b[1]])),
+            expected.byte_len()
+        ));
+    }
+    if let Some(stated) = &scale.fmt_sha256 {
+        let hash = sha256_hex(fmt);
+        if hash != *stated {
+            return Err(format!(
+                "the fmt chunk does not match the scale chunk (SHA-256 {hash}, the chunk says {stated}): the file \
+                 was changed after haptex wrote it"
+            ));
+        }
+    }
+
+    // 4. The samples: hash and count.
     let hash = sha256_hex(data);
     if hash != scale.samples_sha256 {
         return Err(format!(
@@ -632,71 +966,60 @@ pub fn decode_drive_wav_channels(bytes: &[u8]) -> Result<(ScaleChunk, Vec<f64>, 
             scale.samples_sha256
         ));
     }
-    if fmt.len() < 16 {
-        return Err("fmt chunk shorter than 16 bytes".into());
-    }
-    let u16_at = |i: usize| u16::from_le_bytes([fmt[i], fmt[i + 1]]);
-    let (channels, rate, bits) = (u16_at(2), u32::from_le_bytes(fmt[4..8].try_into().expect("4 bytes")), u16_at(14));
-    let format = scale.sample_format;
-    let expected_channels: u16 = if scale.channel_2.is_some() { 2 } else { 1 };
-    if channels != expected_channels || rate != scale.sample_rate_hz || bits != format.bits() {
-        return Err(format!(
-            "the fmt chunk ({channels} channels, {rate} Hz, {bits} bits) does not match the scale chunk \
-             ({expected_channels} channel(s), {} Hz, {:?})",
-            scale.sample_rate_hz, format
-        ));
-    }
-    if let Some(c2) = &scale.channel_2
-        && (c2.quantity != if c2.resonance_hz.is_some() { DISPLACEMENT_QUANTITY } else { AMPLITUDE_QUANTITY }
-            || c2.resonance_hz.is_some_and(|f| super::plate_resonance(f, scale.sample_rate_hz).is_err())
-            || c2.unit != "um"
-            || c2.conversion != AMPLITUDE_CONVERSION
-            || c2.full_scale_value.to_bits() != expected_full_scale.to_bits()
-            || crate::ranges::A_MAX_UM.check(c2.um_per_full_scale).is_err()
-            || crate::ranges::A_MAX_UM.check(c2.a_max_um).is_err()
-            || c2.a_max_um.to_bits() != c2.um_per_full_scale.to_bits())
-    {
-        return Err(format!(
-            "the haptex scale chunk's channel 2 is not consistent (quantity {:?}, unit {:?}, full scale {}, {} um \
-             per full scale, a_max {} um)",
-            c2.quantity,
-            c2.unit,
-            Num(c2.full_scale_value),
-            Num(c2.um_per_full_scale),
-            Num(c2.a_max_um)
-        ));
-    }
     let width = usize::from(format.bits() / 8);
-    let frame = width * usize::from(expected_channels);
+    let frame = width * usize::from(channels);
     if scale.n_samples.checked_mul(frame) != Some(data.len()) {
         return Err(format!(
-            "{} data bytes for {} frames of {expected_channels} sample(s) of {width} bytes",
+            "{} data bytes for {} frames of {channels} sample(s) of {width} bytes",
             data.len(),
             scale.n_samples
         ));
     }
+
+    // 5. Every sample of every channel: finite and within full scale.
     // volts = sample / full_scale_value * volts_per_full_scale, as written;
     // um = sample / full_scale_value * um_per_full_scale on channel 2.
-    let vpfs = scale.volts_per_full_scale;
     let sample = |s: &[u8]| match format {
         WavFormat::Pcm16 => f64::from(i16::from_le_bytes([s[0], s[1]])),
         WavFormat::Pcm24 => f64::from(i32::from_le_bytes([0, s[0], s[1], s[2]]) >> 8),
         WavFormat::Float32 => f64::from(f32::from_le_bytes([s[0], s[1], s[2], s[3]])),
     };
+    let within = |code: f64, i: usize, channel: usize| {
+        // NaN fails the comparison too.
+        if code.abs() <= full_scale {
+            Ok(code)
+        } else {
+            Err(format!(
+                "channel {channel}'s sample {i} is {}: {} the full scale +-{} of its scale chunk (haptex never \
+                 writes such a sample: the file was changed)",
+                Num(code),
+                if code.is_finite() { "beyond" } else { "not a finite value within" },
+                Num(full_scale)
+            ))
+        }
+    };
+    let vpfs = scale.volts_per_full_scale;
     let Some(c2) = &scale.channel_2 else {
-        let volts = data.chunks_exact(width).map(|s| sample(s) / expected_full_scale * vpfs).collect();
+        let volts = data
+            .chunks_exact(width)
+            .enumerate()
+            .map(|(i, s)| within(sample(s), i, 1).map(|code| code / full_scale * vpfs))
+            .collect::<Result<Vec<f64>, String>>()?;
         return Ok((scale, volts, None));
     };
     let upfs = c2.um_per_full_scale;
-    let volts: Vec<f64> = data.chunks_exact(frame).map(|f| sample(&f[..width]) / expected_full_scale * vpfs).collect();
-    let amplitude: Vec<f64> =
-        data.chunks_exact(frame).map(|f| sample(&f[width..]) / expected_full_scale * upfs).collect();
+    let mut volts = Vec::with_capacity(scale.n_samples);
+    let mut amplitude = Vec::with_capacity(scale.n_samples);
+    for (i, f) in data.chunks_exact(frame).enumerate() {
+        volts.push(within(sample(&f[..width]), i, 1)? / full_scale * vpfs);
+        amplitude.push(within(sample(&f[width..]), i, 2)? / full_scale * upfs);
+    }
     // No sample may stand for more than a_max (half a code of rounding
     // allowed), nor for a negative amplitude; a displacement on the
     // plate's resonance swings between -a_max and a_max.
     let tolerance = match format {
         WavFormat::Float32 => upfs * 1e-6,
-        _ => 0.5 * upfs / expected_full_scale,
+        _ => 0.5 * upfs / full_scale,
     };
     let low = if c2.resonance_hz.is_some() { -c2.a_max_um } else { 0.0 };
     if let Some(i) = amplitude.iter().position(|&a| !(a <= c2.a_max_um + tolerance && a >= low - tolerance)) {

@@ -378,7 +378,9 @@ fn signal_error(error: SignalError) -> ApiError {
         }
         SignalError::ExceedsFullScale { .. } => ApiError::bad_request(error.to_string(), Some("volts_per_full_scale")),
         SignalError::Settings(_) => ApiError::bad_request(error.to_string(), None),
-        SignalError::Wav { .. } | SignalError::Write(_) => ApiError::internal(error.to_string()),
+        SignalError::Wav { .. } | SignalError::ReadWav { .. } | SignalError::Write(_) => {
+            ApiError::internal(error.to_string())
+        }
     }
 }
 

@@ -73,6 +73,7 @@ impl Answer {
         let body = self.json();
         let message = body["error"].as_str().expect("an error message");
         assert!(!message.is_empty());
+        assert_readable(message);
         assert!(body.as_object().unwrap().contains_key("field"), "{body}");
         assert_eq!(body["field"].as_str(), field, "{body}");
         body
@@ -230,10 +231,24 @@ pub fn check_json_error(answer: &str, status: u16, field: Option<&str>) -> Resul
     if json["error"].as_str().is_none_or(str::is_empty) {
         return Err("no error message".into());
     }
+    if let Some(number) = json["error"].as_str().and_then(haptex_core::num::unreadable_number) {
+        return Err(format!("an unreadable number ({number}) in the message"));
+    }
     if json["field"].as_str() != field {
         return Err(format!("field {} instead of {field:?}", json["field"]));
     }
     Ok(())
+}
+
+/// Asserts that a message follows the rule for numbers shown to a person
+/// (`haptex_core::num`: no number of more than 15 significant digits, no
+/// run of hundreds of digits); [`Answer::error`] and
+/// [`check_json_error`] check every error message they see.
+#[track_caller]
+pub fn assert_readable(message: &str) {
+    if let Some(number) = haptex_core::num::unreadable_number(message) {
+        panic!("an unreadable number ({number}) in the message: {message}");
+    }
 }
 
 /// What `f` logs (info level and above) on this thread.
