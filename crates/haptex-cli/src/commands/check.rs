@@ -9,7 +9,7 @@ use haptex_core::electrovibration::{ContactArea, Device, Method, map_profile};
 use haptex_core::num::Num;
 use haptex_core::plot::{Figure, Panel};
 use haptex_core::ranges;
-use haptex_fem::render::{self, Check, CheckMetrics, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping};
+use haptex_fem::render::{self, Check, CheckMetrics, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping, TargetPart};
 use haptex_fem::scenario::Loading;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -140,6 +140,13 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
     scenario.velocity_mm_s = args.velocity;
     scenario.step_mm = args.step;
     settings.run_up_mm = args.run_up;
+    // What the FE check needs of the profile and the slide, before any
+    // run (the web API's check applies the same rule).
+    render::check_target(&target, &settings).map_err(|e| match e.part {
+        TargetPart::Positions => anyhow::anyhow!("{}: {e}", args.profile.display()),
+        TargetPart::Step => anyhow::anyhow!("--step {}: {e}", Num(args.step)),
+        TargetPart::RunUp => anyhow::anyhow!("--run-up {}: {e}", Num(args.run_up)),
+    })?;
 
     let bar = if args.quiet {
         ProgressBar::hidden()
