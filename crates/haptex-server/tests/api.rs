@@ -25,7 +25,7 @@ use serde_json::{Value, json};
 
 mod common;
 
-use common::{Answer, send_to, shipped_db, shipped_library, shipped_state};
+use common::{Answer, next_line, send_to, shipped_db, shipped_library, shipped_state};
 
 fn bump_csv() -> String {
     std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/examples/bump_friction.csv"))
@@ -1718,21 +1718,6 @@ async fn check_bad_input_is_refused_naming_the_field_before_any_fe_run() {
 fn set_field(mut body: Value, name: &str, value: Value) -> Value {
     body[name] = value;
     body
-}
-
-/// The next line of a streamed answer's body (None at its end).
-async fn next_line(body: &mut Body, pending: &mut Vec<u8>) -> Option<Value> {
-    use hyper::body::Body as _;
-    loop {
-        if let Some(end) = pending.iter().position(|&b| b == b'\n') {
-            let line: Vec<u8> = pending.drain(..=end).collect();
-            return Some(serde_json::from_slice(&line).unwrap());
-        }
-        let frame = std::future::poll_fn(|cx| std::pin::Pin::new(&mut *body).poll_frame(cx)).await?;
-        if let Ok(data) = frame.unwrap().into_data() {
-            pending.extend_from_slice(&data);
-        }
-    }
 }
 
 /// The FE slot is one: while a compensation runs (its first progress line

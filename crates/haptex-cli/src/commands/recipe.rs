@@ -28,7 +28,9 @@ enum RecipeCommand {
 /// process (no server is started). The recipe's haptex version and the
 /// SHA-256 of the texture library and FE database it was made with must
 /// be this haptex's and these files' (else nothing is written and the
-/// error names the recipe's field).
+/// error names the recipe's field). The files may hold 64 MiB together,
+/// checked on each play's request (duration x sample rate x channels)
+/// before anything is answered.
 #[derive(Debug, Args)]
 #[command(after_help = "Example:\n  haptex recipe run haptex-recipe.json -o replay/")]
 struct RunArgs {

@@ -205,15 +205,17 @@ async fn start(
     let bytes = body_bytes(body, limits.max_body_bytes)?;
     let job = work::cpu(&state, bytes.len(), move || Job::parse(mode, &bytes, &limits)).await?;
     let permit = work::fe_slot(&state).await?;
+    let heavy = work::heavy_slot(&state).await?;
     let (mut lines, response) = lines::stream();
-    tokio::task::spawn_blocking(move || {
+    work::spawn(move || {
         let result = std::panic::catch_unwind(AssertUnwindSafe(|| job.run(&mut lines)))
             .unwrap_or_else(|panic| Err(crate::error::panicked(&*panic)));
         lines.finish(result);
         // The slot is free before the stream ends: a client that has read
         // the whole answer can send the next request at once.
-        drop(permit);
+        drop((permit, heavy));
         drop(lines);
+        crate::memory::freed_large();
     });
     Ok(response)
 }
