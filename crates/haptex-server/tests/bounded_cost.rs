@@ -92,11 +92,12 @@ async fn heavy_work_takes_bounded_slots_and_beyond_its_queue_is_refused_at_once(
 /// with its duration, rate and channels). Each request's working memory
 /// is estimated from its parameters and refused beyond
 /// `max_request_memory_bytes` (413 naming the field) before anything is
-/// allocated: here the server's other limits (samples, pixels) are lifted
-/// so that only the budget stands between a tiny body and an allocation of
-/// terabytes (a play of 10^9 s: without the budget, generating its stroke
-/// alone would abort the process) or gigabytes (a PNG header claiming
-/// 8000 x 8000 pixels).
+/// allocated. The server's sample and pixel limits are lifted here, so
+/// that only the budget stands between a body of under 200 bytes and its
+/// cost: a JSON play of 10^7 samples (before: rendered and serialized,
+/// gigabytes), a stroke of 10^9 s and an image header claiming 8000 x
+/// 8000 pixels (before: left to the core's own caps, which refused them
+/// later, as 400s).
 #[tokio::test]
 async fn requests_over_their_memory_budget_are_refused_before_allocating() {
     let limits = Limits {
@@ -108,6 +109,10 @@ async fn requests_over_their_memory_budget_are_refused_before_allocating() {
     let router = app(AppState::new(None, limits).unwrap());
     let voltage = json!({ "x_mm": [0, 1000], "voltage_v": [0, 100] });
     for (body, field) in [
+        (
+            json!({ "voltage": voltage, "trajectory": { "t_s": [0, 208.4], "x_mm": [0, 1000] }, "format": "json" }),
+            "trajectory",
+        ),
         (json!({ "voltage": voltage, "stroke": { "velocity_mm_s": 1e-6 } }), "stroke"),
         (json!({ "voltage": voltage, "stroke": { "velocity_mm_s": 1e-6 }, "format": "json" }), "stroke"),
         (json!({ "voltage": voltage, "trajectory": { "t_s": [0, 1e6], "x_mm": [0, 1000] } }), "trajectory"),

@@ -48,45 +48,67 @@ fn streaming_routes() -> Vec<String> {
     routes
 }
 
-/// Positions: ordinary profiles (a few mm, evenly spaced), or hostile
-/// ones: a start (ordinary, or near the ends of the position range) and
-/// gaps from subnormal and sub-nanometre to ordinary.
+/// Positions: ordinary profiles (a few mm, evenly spaced); the same with
+/// one or two hostile gaps put in (subnormal, below the rounding of
+/// positions near 1 mm, around a nanometre), so that the rest of the
+/// profile is valid and the gap decides; or free-form hostile ones: a
+/// start near 0 or near the ends of the position range and hostile gaps.
 fn positions() -> impl Strategy<Value = Vec<f64>> {
-    let ordinary = (-50.0..50.0f64, 0.05..0.25f64, 2..8usize)
-        .prop_map(|(x0, dx, n)| (0..n).map(|i| x0 + dx * i as f64).collect::<Vec<f64>>());
-    let start = prop_oneof![
-        Just(0.0),
-        Just(1.0),
-        Just(-1.0),
-        Just(-0.5),
-        Just(1e6 - 3.0),
-        Just(-1e6),
-        Just(999_999.999_999_999_9),
-        -50.0..50.0f64,
-    ];
-    let gap = prop_oneof![
-        Just(5e-324),
-        Just(1e-300),
-        Just(1e-15),
-        Just(1e-10),
-        Just(9.99e-7),
-        Just(1e-6),
-        Just(1.000_001e-6),
-        Just(1e-4),
-        Just(0.004),
-        Just(0.005),
-        Just(0.0051),
-        Just(0.03),
-        0.05..0.25f64,
-    ];
-    let hostile = (start, proptest::collection::vec(gap, 1..10)).prop_map(|(x0, gaps)| {
+    let start = || {
+        prop_oneof![
+            Just(0.0),
+            Just(-1.0),
+            -1.0..1.0f64,
+            Just(1e6 - 3.0),
+            Just(-1e6),
+            Just(999_999.999_999_999_9),
+            -50.0..50.0f64,
+        ]
+    };
+    let hostile_gap = || {
+        prop_oneof![
+            Just(5e-324),
+            Just(1e-300),
+            Just(1e-17),
+            Just(1e-16),
+            Just(3e-16),
+            Just(1e-12),
+            Just(1e-10),
+            Just(9.99e-7),
+            Just(1e-6),
+            Just(1.000_001e-6),
+            Just(0.004),
+            Just(0.0051),
+        ]
+    };
+    let ordinary_gap = || 0.05..0.25f64;
+    let cumulative = |x0: f64, gaps: Vec<f64>| {
         let mut x = vec![x0];
         for g in gaps {
             x.push(x[x.len() - 1] + g);
         }
         x
-    });
-    prop_oneof![ordinary, hostile]
+    };
+    let ordinary =
+        (start(), proptest::collection::vec(ordinary_gap(), 1..7)).prop_map(move |(x0, g)| cumulative(x0, g));
+    let with_hostile = (
+        start(),
+        proptest::collection::vec(ordinary_gap(), 1..6),
+        hostile_gap(),
+        any::<usize>(),
+        any::<bool>(),
+        hostile_gap(),
+    )
+        .prop_map(move |(x0, mut gaps, h, at, two, h2)| {
+            gaps.insert(at % (gaps.len() + 1), h);
+            if two {
+                gaps.insert(at / 7 % (gaps.len() + 1), h2);
+            }
+            cumulative(x0, gaps)
+        });
+    let free_form = (start(), proptest::collection::vec(prop_oneof![hostile_gap(), ordinary_gap()], 1..6))
+        .prop_map(move |(x0, g)| cumulative(x0, g));
+    prop_oneof![1 => ordinary, 2 => with_hostile, 1 => free_form]
 }
 
 fn friction() -> impl Strategy<Value = f64> {
@@ -117,7 +139,7 @@ fn body(compensate: bool) -> impl Strategy<Value = Value> {
         ],
     );
     let relative = prop_oneof![3 => Just((false, None)), 1 => Just((true, None)), 1 => Just((true, Some(0.5))), 1 => Just((true, Some(1e-3)))];
-    let extra = (0..3usize, 1..=2u32, maybe(&[0.0, 1e-4, 1.0]));
+    let extra = (0..5usize, 1..=2u32, maybe(&[0.0, 1e-4, 1.0]));
     (profile, device, finger, relative, extra).prop_map(
         move |((x, mu), (mu_hd, u_max), (load, velocity, step), (relative, flat_mu), (kind, runs, tolerance))| {
             let mut body = json!({ "profile": { "x_mm": x, "mu": mu } });
@@ -148,8 +170,17 @@ fn body(compensate: bool) -> impl Strategy<Value = Value> {
                     body["tolerance"] = json!(t);
                 }
             } else if kind > 0 {
+                // The combined display: its strategies, a weight and a
+                // plate's a_max at the ends of their ranges.
                 body["display"] = json!("combined");
-                body["strategy"] = json!(["split", "bias"][kind - 1]);
+                body["strategy"] = json!(["split", "bias", "weighted", "weighted"][kind - 1]);
+                if kind == 3 {
+                    body["weight"] = json!(1e6);
+                }
+                if kind == 4 {
+                    body["weight"] = json!(0.0);
+                    body["a_max_um"] = json!(1e-3);
+                }
             }
             body
         },
