@@ -173,6 +173,7 @@ pub async fn serve(
     use hyper_util::rt::{TokioIo, TokioTimer};
 
     let limits = state.limits().clone();
+    let trimmer = tokio::spawn(memory::Trimmer::run(state.clone()));
     let router = app(state);
     let head = connection::HeadLimits { head_bytes: limits.head_buffer_bytes(), headers: 2 * limits.max_headers };
     let mut http = hyper::server::conn::http1::Builder::new();
@@ -187,7 +188,6 @@ pub async fn serve(
     // upgrades that the live page's WebSocket needs.)
     let (stop, stopped) = tokio::sync::watch::channel(false);
     let (open, mut closed) = tokio::sync::mpsc::channel::<()>(1);
-    let trimmer = tokio::spawn(memory::Trimmer::run());
     let mut shutdown = std::pin::pin!(shutdown);
     loop {
         let (stream, peer) = tokio::select! {

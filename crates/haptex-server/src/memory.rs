@@ -16,9 +16,11 @@
 //! [`configure`] (at the start of `haptex serve`) fixes that threshold at
 //! [`MMAP_THRESHOLD_BYTES`], so that every large block (sample vectors,
 //! maps, answers) is mapped and given back as soon as it is freed; and
-//! after heavy work or a large answer, a trim (`malloc_trim`) gives back
-//! the free pages of every arena within a second ([`Trimmer`]). Elsewhere
-//! than on glibc this module does nothing.
+//! once heavy work or a large answer has freed memory and no heavy work
+//! is running, a trim (`malloc_trim`) gives back the free pages of every
+//! arena, within a second ([`Trimmer`]: not while heavy work runs, since a
+//! trim holds each arena's lock while it walks it, and the memory is being
+//! reused then anyway). Elsewhere than on glibc this module does nothing.
 //!
 //! Measured with `scripts/load_health.py --pid` (12 clients, 30 s, on a
 //! shared 2-core machine; RSS at peak / 5 s after the load, idle 21 MiB):
@@ -59,18 +61,21 @@ pub(crate) fn freed_large() {
 
 static FREED: AtomicBool = AtomicBool::new(false);
 
-/// Gives the allocator's free pages back to the system every
-/// [`TRIM_EVERY`] when large amounts were freed since the last time.
+/// Gives the allocator's free pages back to the system: every
+/// [`TRIM_EVERY`], when large amounts were freed since the last time and
+/// no heavy work is running.
 pub(crate) struct Trimmer;
 
 impl Trimmer {
     /// Runs until the runtime stops (spawned by [`crate::serve`]).
-    pub(crate) async fn run() {
+    pub(crate) async fn run(state: crate::AppState) {
         let mut every = tokio::time::interval(TRIM_EVERY);
         every.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        let all_slots = state.limits().concurrent_heavy.max(1);
         loop {
             every.tick().await;
-            if FREED.swap(false, Ordering::AcqRel) {
+            let idle = state.heavy().available_permits() == all_slots;
+            if idle && FREED.swap(false, Ordering::AcqRel) {
                 // Off the async workers: a trim walks every arena.
                 let _ = crate::work::spawn(trim).await;
             }
