@@ -104,6 +104,45 @@ fn bad_display_and_check_input_is_refused_clearly() {
     }
 }
 
+/// Issue 35 ("No internal error reaches a client as a success"), the
+/// command line's part: what the FE check cannot run is refused before
+/// any FE run by the check's own rule (`render::check_target`, which the
+/// web API applies too), naming the file or the flag, not reported as a
+/// bug. Before: positions 0 and 1e-300 mm failed after the finger model
+/// was set up, with "positions must be strictly increasing: 1 follows 1"
+/// (both became 1 mm on the FE slide after its 1 mm run-up).
+#[test]
+fn check_refuses_what_the_finger_model_cannot_run_naming_the_file_or_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    std::fs::write(p("tiny-gap.csv"), "x_mm,mu\n0,0.6\n1e-300,0.7\n").unwrap();
+    std::fs::write(p("subnormal.csv"), "x_mm,mu\n0,0.6\n5e-324,0.7\n2,0.6\n").unwrap();
+    std::fs::write(p("short.csv"), "x_mm,mu\n0,0.6\n0.02,0.7\n").unwrap();
+    for (args, expected) in [
+        (vec!["check", "--profile", &p("tiny-gap.csv"), "-q"], vec![p("tiny-gap.csv"), "1e-6 mm".into()]),
+        (vec!["check", "--profile", &p("subnormal.csv"), "-q"], vec![p("subnormal.csv"), "1e-6 mm".into()]),
+        (
+            vec!["check", "--profile", &p("tiny-gap.csv"), "--display", "combined", "-q"],
+            vec![p("tiny-gap.csv"), "1e-6 mm".into()],
+        ),
+        (vec!["check", "--profile", &p("short.csv"), "-q"], vec!["--step 0.05".into(), "0.02 mm long".into()]),
+        (
+            vec!["check", "--profile", &p("short.csv"), "--step", "0.01", "--run-up", "500", "-q"],
+            vec!["--run-up 500".into()],
+        ),
+    ] {
+        let out = haptex(&args);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        let err = stderr(&out);
+        for e in expected {
+            assert!(err.contains(&e), "{args:?}: {e:?} not in {err}");
+        }
+        for wrong in ["a bug", "strictly increasing", "panicked", "finger model on the display"] {
+            assert!(!err.contains(wrong), "{args:?}: {err}");
+        }
+    }
+}
+
 #[test]
 fn voltage_compensate_writes_the_compensated_voltage_with_its_error() {
     let dir = tempfile::tempdir().unwrap();

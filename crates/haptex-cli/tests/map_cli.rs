@@ -109,6 +109,53 @@ fn image_pixels_land_on_their_cells() {
     }
 }
 
+/// Issue 35, "Bounded cost per request": an image's memory is checked on
+/// its header against `--memory-budget-mib` before anything is decoded.
+/// The issue's case: a 16-bit PNG of 8192 x 8192 black pixels (a file of
+/// a few hundred KB) took 1.06 GB and 7.8 s; it is refused at the default
+/// budget (512 MiB) naming the file, its size and the flag, and nothing is
+/// written. The budget is what decides: a 600 x 600 image passes the
+/// default and is refused under `--memory-budget-mib 1`.
+#[test]
+fn an_image_over_the_memory_budget_is_refused_before_decoding() {
+    let dir = tempfile::tempdir().unwrap();
+    let gray = |path: &std::path::Path, side: u32, depth: png::BitDepth| {
+        let mut enc = png::Encoder::new(std::fs::File::create(path).unwrap(), side, side);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(depth);
+        let mut w = enc.write_header().unwrap().into_stream_writer().unwrap();
+        let row = vec![0u8; side as usize * if depth == png::BitDepth::Sixteen { 2 } else { 1 }];
+        for _ in 0..side {
+            std::io::Write::write_all(&mut w, &row).unwrap();
+        }
+        w.finish().unwrap();
+    };
+    let big = dir.path().join("big.png");
+    gray(&big, 8192, png::BitDepth::Sixteen);
+    let small = dir.path().join("small.png");
+    gray(&small, 600, png::BitDepth::Eight);
+    let out = dir.path().join("m.npy");
+    let from_image = |image: &std::path::Path, budget: Option<&str>| {
+        let mut args = vec!["map", "from-image", image.to_str().unwrap(), "--mu-black", "0.4", "--mu-white", "1.2"];
+        args.extend(["--pixel-mm", "0.1", "-o", out.to_str().unwrap()]);
+        if let Some(b) = budget {
+            args.extend(["--memory-budget-mib", b]);
+        }
+        haptex(&args)
+    };
+    let refused = from_image(&big, None);
+    let e = stderr(&refused);
+    assert!(!refused.status.success(), "{e}");
+    assert!(e.contains("big.png") && e.contains("8192 x 8192") && e.contains("--memory-budget-mib 512"), "{e}");
+    assert!(!out.exists());
+    let e = stderr(&from_image(&small, Some("1")));
+    assert!(e.contains("small.png") && e.contains("600 x 600") && e.contains("--memory-budget-mib 1"), "{e}");
+    assert!(!out.exists());
+    let ok = from_image(&small, None);
+    assert!(ok.status.success(), "{}", stderr(&ok));
+    assert!(out.exists());
+}
+
 /// An NPY map without its sidecar, with another run's sidecar, a wrong
 /// extension, a bad path line: each refused with the file and the reason.
 #[test]

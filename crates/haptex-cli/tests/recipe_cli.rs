@@ -263,6 +263,43 @@ fn recipe_run_refuses_a_bad_recipe_naming_the_field() {
     }
 }
 
+/// Issue 35, "Bounded cost per request": a recipe's files may hold 64 MiB
+/// together, checked on each play's request (duration x sample rate x
+/// channels x bytes) before any download is answered. The issue's case: a
+/// 5 KB recipe of 32 plays took 738 MB and wrote 470 MB. Here 32 plays of
+/// 40 s each (1 920 001 samples, 3.7 MiB as PCM16): the 18th passes the
+/// budget, the error names it, nothing is rendered or written. The recipe
+/// pins the shipped data it replays against.
+#[test]
+fn a_recipe_over_its_memory_budget_is_refused_before_any_answer() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let library = haptex_core::io::sha256_file(&root.join("data/library/library.sqlite")).unwrap();
+    let database = haptex_server::state::database_sha256(&root.join("data/db")).unwrap();
+    let play = json!({
+        "voltage": { "x_mm": [0, 10], "voltage_v": [0, 100] },
+        "stroke": { "velocity_mm_s": 1, "strokes": 4 },
+    });
+    let downloads: Vec<Value> = (0..32)
+        .map(|i| json!({ "file": format!("stroke-{i}.wav"), "method": "POST", "path": "/api/play", "body": play }))
+        .collect();
+    let recipe = json!({
+        "format": "haptex-recipe/1", "haptex_version": env!("CARGO_PKG_VERSION"),
+        "library_sha256": library, "database_sha256": database, "downloads": downloads,
+    });
+    assert!(recipe.to_string().len() < 8192);
+    let (output, dir) = run_recipe(&recipe);
+    let e = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{e}");
+    assert!(e.contains("downloads[17]") && e.contains("64 MiB a recipe may write"), "{e}");
+    assert!(!dir.path().join("out").exists());
+    // Fewer of the same plays are answered and written.
+    let mut fewer = recipe.clone();
+    fewer["downloads"] = json!(recipe["downloads"].as_array().unwrap()[..2]);
+    let (output, dir) = run_recipe(&fewer);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(std::fs::metadata(dir.path().join("out/stroke-1.wav")).unwrap().len() > 3_800_000);
+}
+
 /// A file far larger than any recipe is refused by its size, before it is
 /// parsed, and nothing is written.
 #[test]

@@ -797,8 +797,35 @@ impl RegionFill {
 /// tighter bound than [`MAX_CELLS`] checks before
 /// [`FrictionMap::read_gray_png`] sizes any buffer by them.
 pub fn png_size(bytes: &[u8], source_name: &str) -> Result<(usize, usize), MapError> {
+    png_header(bytes, source_name).map(|h| (h.width, h.height))
+}
+
+/// What a PNG's header (IHDR) claims: size and bits per sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PngHeader {
+    pub width: usize,
+    pub height: usize,
+    /// Bits per sample (1, 2, 4, 8 or 16 in a valid PNG).
+    pub bit_depth: u8,
+}
+
+impl PngHeader {
+    /// The memory of a map read from this image, in bytes: the decoded
+    /// image (its rows, up to 2 bytes per gray pixel) and the map's values
+    /// (8 bytes a cell), what [`FrictionMap::read_gray_png`] holds at once
+    /// (besides the file's own bytes). A caller checks it against its
+    /// memory budget before decoding.
+    pub fn map_memory_bytes(&self) -> u64 {
+        let pixels = (self.width as u64).saturating_mul(self.height as u64);
+        pixels.saturating_mul(u64::from(self.bit_depth.div_ceil(8).max(1)) + 8)
+    }
+}
+
+/// The header of a PNG, read from its first chunk (IHDR) without decoding
+/// anything else (see [`png_size`]).
+pub fn png_header(bytes: &[u8], source_name: &str) -> Result<PngHeader, MapError> {
     const SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
-    if bytes.len() < 24 || &bytes[..8] != SIGNATURE || &bytes[12..16] != b"IHDR" {
+    if bytes.len() < 25 || &bytes[..8] != SIGNATURE || &bytes[12..16] != b"IHDR" {
         return Err(MapError::new(
             source_name,
             None,
@@ -806,7 +833,18 @@ pub fn png_size(bytes: &[u8], source_name: &str) -> Result<(usize, usize), MapEr
         ));
     }
     let be = |k: usize| u32::from_be_bytes([bytes[k], bytes[k + 1], bytes[k + 2], bytes[k + 3]]) as usize;
-    Ok((be(16), be(20)))
+    Ok(PngHeader { width: be(16), height: be(20), bit_depth: bytes[24] })
+}
+
+/// What the PNG decoder may allocate for itself (its line buffers and
+/// the chunks it keeps, such as text): 4 lines of the image at 2 bytes a
+/// pixel and 8 MiB. Its output, the image, is allocated by the caller,
+/// which checks its size first. Set before decoding starts, so that a
+/// small file claiming a huge image, or a huge text chunk, is refused
+/// rather than allocated.
+fn decoder_limits(bytes: &[u8]) -> png::Limits {
+    let width = png_size(bytes, "").map_or(0, |(w, _)| w);
+    png::Limits { bytes: width.saturating_mul(8).saturating_add(8 << 20) }
 }
 
 /// Decodes an 8- or 16-bit grayscale PNG into a grid of `value(g)` per
@@ -877,7 +915,7 @@ impl GrayImage {
         accept: impl FnOnce(png::ColorType, png::BitDepth) -> Result<u8, String>,
     ) -> Result<Self, MapError> {
         let err = |m: String| MapError::new(source_name, None, m);
-        let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+        let mut decoder = png::Decoder::new_with_limits(std::io::Cursor::new(bytes), decoder_limits(bytes));
         decoder.set_transformations(png::Transformations::IDENTITY);
         let mut reader = decoder.read_info().map_err(|e| err(format!("not a readable PNG: {e}")))?;
         let info = reader.info();

@@ -64,6 +64,10 @@ pub enum RenderError {
     Mapping(#[from] MappingError),
     #[error("the finger model on the display: {0}")]
     Simulation(#[from] SimulationError),
+    /// The target or the settings are not what a check can run
+    /// ([`check_target`]): the caller's input, with the part at fault.
+    #[error(transparent)]
+    Target(#[from] TargetError),
     #[error("{0}")]
     Invalid(String),
 }
@@ -71,6 +75,137 @@ pub enum RenderError {
 /// Limits of a check: a slide of at most this many FE steps (at the
 /// default 0.1 mm step, 10 m of profile; each step costs about 3 ms).
 pub const MAX_CHECK_STEPS: usize = 100_000;
+
+/// Most points of a target: the metrics average each point over the
+/// points within three contact lengths of it ([`metrics_in_band`]), up to
+/// n^2 work per FE run (4 x 10^8 at this limit, well under a second).
+pub const MAX_CHECK_POINTS: usize = 20_000;
+
+/// Closest two positions of a target may be, mm (1 nm): far below any
+/// detail a finger feels or the FE model resolves (its steps are at least
+/// microns), and far above the rounding of the slide's coordinates (the
+/// target is placed on the slide, from 0 to at most 10^4 mm, where one
+/// unit in the last place is below 2 x 10^-12 mm), so that no two
+/// positions become one on the way.
+pub const MIN_SPACING_MM: f64 = 1e-6;
+
+/// Longest run-up before the target, mm.
+pub const MAX_RUN_UP_MM: f64 = 100.0;
+
+/// The part of a check's input at fault (what a caller names: a file's
+/// positions, a flag, an API field).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TargetPart {
+    /// The target's positions (its span, its spacing, its number of points).
+    Positions,
+    /// The slide step.
+    Step,
+    /// The run-up before the target.
+    RunUp,
+}
+
+/// A target and settings a check cannot run ([`check_target`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{message}")]
+pub struct TargetError {
+    pub part: TargetPart,
+    pub message: String,
+}
+
+/// Checks what the FE check needs of a target and its settings, before
+/// any work: the one validation that `haptex check` and `POST
+/// /api/check` / `/api/compensate` share, so that every later step (eq.
+/// (8), the target placed on the slide, the FE slide itself, the metrics)
+/// only sees input it can run.
+///
+/// - at most [`MAX_CHECK_POINTS`] points, each at least
+///   [`MIN_SPACING_MM`] from the next (positions closer than that become
+///   one when the target is placed on the slide: 0 and 1e-300 mm are both
+///   1 mm after a 1 mm run-up);
+/// - a run-up from 0 to [`MAX_RUN_UP_MM`];
+/// - a slide step no longer than the target (the finger feels the voltage
+///   at its steps: a target shorter than one step lies between two of
+///   them and would not be felt at all);
+/// - a slide (the target's span and the run-up) within the scenario's
+///   limits ([`crate::scenario::limits::SLIDE_MM`]), in at most
+///   [`MAX_CHECK_STEPS`] steps.
+pub fn check_target(target: &FrictionProfile, settings: &RenderSettings) -> Result<(), TargetError> {
+    let err = |part, message: String| Err(TargetError { part, message });
+    let x = target.x_mm();
+    if x.len() > MAX_CHECK_POINTS {
+        return err(
+            TargetPart::Positions,
+            format!(
+                "the friction profile has {} points; the check takes at most {MAX_CHECK_POINTS} (resample it)",
+                x.len()
+            ),
+        );
+    }
+    if let Some(i) = x.windows(2).position(|w| w[1] - w[0] < MIN_SPACING_MM) {
+        return err(
+            TargetPart::Positions,
+            format!(
+                "the friction profile's positions x = {} mm and x = {} mm are {} mm apart: the check on the finger \
+                 model needs its positions at least {} mm (1 nm) apart (resample the profile)",
+                Num(x[i]),
+                Num(x[i + 1]),
+                Num(x[i + 1] - x[i]),
+                Num(MIN_SPACING_MM)
+            ),
+        );
+    }
+    let run_up = settings.run_up_mm;
+    if !(run_up.is_finite() && (0.0..=MAX_RUN_UP_MM).contains(&run_up)) {
+        return err(
+            TargetPart::RunUp,
+            format!("the run-up must be from 0 to {} mm, got {}", Num(MAX_RUN_UP_MM), Num(run_up)),
+        );
+    }
+    let step = settings.scenario.step_mm;
+    if !(step.is_finite() && step > 0.0) {
+        return err(TargetPart::Step, format!("the slide step must be a positive length, got {} mm", Num(step)));
+    }
+    let span = target.span_mm();
+    if span < step {
+        return err(
+            TargetPart::Step,
+            format!(
+                "the friction profile is {} mm long, shorter than one slide step of {} mm: the finger would feel \
+                 none of it (give a step of at most {} mm, or a longer profile)",
+                Num(span),
+                Num(step),
+                Num(span)
+            ),
+        );
+    }
+    let slide = span + run_up;
+    let (min_slide, max_slide) = crate::scenario::limits::SLIDE_MM;
+    if !(min_slide..=max_slide).contains(&slide) {
+        return err(
+            TargetPart::Positions,
+            format!(
+                "the slide over the friction profile and its run-up is {} mm: the finger model slides from {} to {} mm",
+                Num(slide),
+                Num(min_slide),
+                Num(max_slide)
+            ),
+        );
+    }
+    let steps = (slide / step).ceil();
+    if steps > MAX_CHECK_STEPS as f64 {
+        return err(
+            TargetPart::Step,
+            format!(
+                "the check slides {} mm in steps of {} mm: {} steps, at most {MAX_CHECK_STEPS}; check a shorter \
+                 profile or use a larger step",
+                Num(slide),
+                Num(step),
+                Num(steps)
+            ),
+        );
+    }
+    Ok(())
+}
 
 /// How a check is run.
 #[derive(Debug, Clone)]
@@ -170,20 +305,7 @@ pub fn eq8_voltage(target: &FrictionProfile, device: &Device) -> Result<Vec<f64>
 /// Checks the settings against the target before any FE run.
 fn validate(target: &FrictionProfile, settings: &RenderSettings) -> Result<(), RenderError> {
     settings.device.validate()?;
-    if !(settings.run_up_mm.is_finite() && (0.0..=100.0).contains(&settings.run_up_mm)) {
-        return Err(RenderError::Invalid(format!("run-up = {} mm must be from 0 to 100 mm", Num(settings.run_up_mm))));
-    }
-    let slide = target.span_mm() + settings.run_up_mm;
-    let steps = (slide / settings.scenario.step_mm).ceil();
-    if steps.is_nan() || steps > MAX_CHECK_STEPS as f64 {
-        return Err(RenderError::Invalid(format!(
-            "the check slides {} mm in steps of {} mm: {} steps, at most {MAX_CHECK_STEPS}; check a shorter \
-             profile or use a larger step",
-            Num(slide),
-            Num(settings.scenario.step_mm),
-            Num(steps)
-        )));
-    }
+    check_target(target, settings)?;
     Ok(())
 }
 

@@ -2,7 +2,7 @@
 //! under eq. (8)'s voltage, and the compensated voltage.
 
 use haptex_core::profile::FrictionProfile;
-use haptex_fem::render::{self, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping};
+use haptex_fem::render::{self, DEFAULT_LOAD_N_PER_MM, RenderError, RenderSettings, Stopping, TargetPart};
 use haptex_fem::scenario::{self, Scenario};
 use haptex_fem::surface::SurfaceShape;
 
@@ -92,6 +92,43 @@ fn bad_settings_are_refused_before_any_run() {
     assert!(render::compensate(&target, &s, stopping, &mut |_, _| {}).is_err());
     let e = render::check_voltage(&target, vec![150.0; x.len()], &s, &mut |_| {}).unwrap_err();
     assert!(e.to_string().contains("U_max"), "{e}");
+}
+
+/// Issue 35 ("No internal error reaches a client as a success"): what the
+/// check needs of its target is one rule, `check_target`, applied before
+/// any FE run, its error naming the part at fault. Positions closer than
+/// 1 nm became one when placed on the slide (0 and 1e-300 mm: both 1 mm
+/// after the run-up), which the voltage curve then refused as "positions
+/// must be strictly increasing: 1 follows 1", an internal error for the
+/// callers; a target shorter than a step, a run-up out of range, too many
+/// points are refused the same way; 1 nm apart is accepted.
+#[test]
+fn a_target_the_fe_slide_cannot_run_is_refused_before_any_run_naming_its_part() {
+    let s = settings();
+    let profile = |x: &[f64]| FrictionProfile::new(x.to_vec(), vec![0.6; x.len()]).unwrap();
+    let mut long_run_up = settings();
+    long_run_up.run_up_mm = 101.0;
+    let many: Vec<f64> = (0..=render::MAX_CHECK_POINTS).map(|i| 1e-3 * i as f64).collect();
+    for (x, settings, part) in [
+        (vec![0.0, 1e-300, 1.0], &s, TargetPart::Positions),
+        (vec![0.0, 5e-324], &s, TargetPart::Positions),
+        (vec![-1.0, 0.5, 0.5 + 1e-7], &s, TargetPart::Positions),
+        (vec![1e6 - 1.0, 1e6 - 1e-9, 1e6], &s, TargetPart::Positions),
+        (many, &s, TargetPart::Positions),
+        (vec![0.0, 0.01], &s, TargetPart::Step),
+        (vec![0.0, 1.0], &long_run_up, TargetPart::RunUp),
+    ] {
+        let target = profile(&x);
+        let e = render::check_target(&target, settings).unwrap_err();
+        assert_eq!(e.part, part, "{e}");
+        assert!(e.message.contains("the friction profile") || part == TargetPart::RunUp, "{e}");
+        // The check itself refuses it the same way, before any FE step.
+        match render::check(&target, settings, &mut |_| panic!("an FE run started")) {
+            Err(RenderError::Target(t)) => assert_eq!(t, e),
+            other => panic!("{:?}", other.map(|c| c.metrics)),
+        }
+    }
+    render::check_target(&profile(&[0.0, 0.5, 0.5 + 1e-6, 1.0]), &s).unwrap();
 }
 
 #[test]

@@ -647,13 +647,30 @@
       drawStrip();
       say(`${state.profile.label}: ${mode === 'compensate' ? 'compensated' : 'checked'} on the finger model.`);
     } catch (error) {
-      $('check-info').textContent = '';
+      // A refusal is said beside the buttons that asked, in the page's words.
+      $('check-info').textContent = error instanceof ApiError && error.status ? checkRefusal(error) : '';
       throw error;
     } finally {
       bar.hidden = true;
       $('run-check').disabled = !isCheckable();
       $('run-compensate').disabled = !isElectrovibration();
     }
+  }
+
+  /**
+   * A refusal of the check or the compensation as the check box says it:
+   * a busy server (503: its heavy slots are taken, before any FE run) or
+   * the part of the page at fault (the friction profile, the load, max
+   * runs), with the server's message.
+   */
+  function checkRefusal(error) {
+    if (error.status === 503) return `The server is busy: ${error.message}`;
+    const f = error.field || '';
+    const part = f.startsWith('profile.') ? 'Friction profile'
+      : f === 'load_n_per_mm' ? 'Load'
+        : f === 'max_runs' ? 'Max runs'
+          : f.startsWith('device.') ? 'Device' : null;
+    return part ? `${part}: ${error.message}` : error.message;
   }
 
   /** Shows the current check (plots, metrics, playback), or hides a stale one. */

@@ -132,5 +132,8 @@ impl HttpBody for Unsent {
 impl Drop for Unsent {
     fn drop(&mut self) {
         self.state.release_answer(self.bytes);
+        if self.bytes > self.state.limits().small_answer_bytes {
+            crate::memory::freed_large();
+        }
     }
 }

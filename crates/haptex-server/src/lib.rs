@@ -28,9 +28,11 @@
 //! - [`assets`]: the GUI, embedded in the binary (rust-embed), and the
 //!   security headers;
 //! - hardening: [`guard`] (head sizes, allowed hosts), `work` (CPU work
-//!   off the async workers, heavy requests in bounded slots), [`answers`]
-//!   (the memory of unread answers), `connection` (write timeout, hyper's
-//!   own answers made like ours), `access_log`;
+//!   off the async workers at a lower priority, heavy work in bounded
+//!   slots with admission control), [`answers`] (the memory of unread
+//!   answers), [`memory`] (freed memory given back to the system),
+//!   `connection` (write timeout, hyper's own answers made like ours),
+//!   `access_log`;
 //! - [`live`]: the page's live output (`haptex serve --live`): the
 //!   design a page sends, the WebSocket conversation, and the trait the
 //!   binary implements with its audio device;
@@ -50,6 +52,7 @@ pub mod guard;
 pub mod input;
 mod lines;
 pub mod live;
+pub mod memory;
 pub mod params;
 pub mod recipe;
 pub mod routes;
@@ -170,6 +173,7 @@ pub async fn serve(
     use hyper_util::rt::{TokioIo, TokioTimer};
 
     let limits = state.limits().clone();
+    let trimmer = tokio::spawn(memory::Trimmer::run(state.clone()));
     let router = app(state);
     let head = connection::HeadLimits { head_bytes: limits.head_buffer_bytes(), headers: 2 * limits.max_headers };
     let mut http = hyper::server::conn::http1::Builder::new();
@@ -230,6 +234,7 @@ pub async fn serve(
         });
     }
     drop(listener);
+    trimmer.abort();
     let _ = stop.send(true);
     drop(open);
     if tokio::time::timeout(limits.request_timeout, closed.recv()).await.is_err() {
@@ -242,6 +247,7 @@ pub async fn serve(
 /// then shuts down gracefully. `on_listening` is called with the bound
 /// address once the server accepts connections.
 pub fn run(config: Config, on_listening: impl FnOnce(SocketAddr)) -> Result<(), ServeError> {
+    memory::configure();
     let mut state = AppState::new(config.library.as_deref(), config.limits.clone())?
         .with_hosts(HostPolicy::new(&config.allowed_hosts)?)
         .with_access_log(config.access_log);

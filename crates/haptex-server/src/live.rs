@@ -353,16 +353,19 @@ async fn control(
             };
             close(session.take()).await;
             let opener = Arc::clone(output);
-            let opened = tokio::task::spawn_blocking(move || opener.open(design)).await;
+            // On a thread of its own at the default priority: the audio
+            // callback thread the output starts inherits its priority,
+            // which a work thread has lowered (`crate::work`).
+            let opened = crate::work::on_new_thread(move || opener.open(design)).await;
             *stamper = TouchStamper::default();
             match opened {
-                Ok(Ok(live)) => {
+                Some(Ok(live)) => {
                     let reply = json!({ "opened": { "output": output.info(), "peak_bound_v": live.peak_bound_v() } });
                     *session = Some(live);
                     Some(reply.to_string())
                 }
-                Ok(Err(message)) => Some(Refusal::new(message, "design").json()),
-                Err(_) => Some(Refusal::new("opening the output failed", "design").json()),
+                Some(Err(message)) => Some(Refusal::new(message, "design").json()),
+                None => Some(Refusal::new("opening the output failed", "design").json()),
             }
         }
         (None, Some(true)) => {

@@ -42,6 +42,15 @@ pub const FORMAT: &str = "haptex-recipe/1";
 /// At most this many downloads in one recipe.
 pub const MAX_DOWNLOADS: usize = 32;
 
+/// The most bytes a recipe's files may hold together (64 MiB; the page's
+/// recipe is a profile, its voltage as CSV and JSON, a stroke's WAV and
+/// its sidecar: a few MB). The recipe's memory budget: [`replay`] holds
+/// every file until the last is answered. Checked before any download is
+/// answered, on each play's answer estimated from its request (duration x
+/// sample rate x channels x bytes per sample), and again as each answer is
+/// read.
+pub const MAX_OUTPUT_BYTES: usize = 64 << 20;
+
 /// A design as the requests of its downloads (see the module docs).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -173,6 +182,41 @@ impl Recipe {
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Unpinned(pub Vec<String>);
 
+impl Recipe {
+    /// Checks the recipe's files against [`MAX_OUTPUT_BYTES`] before any
+    /// download is answered: each play's answer estimated from its request
+    /// (checked as `POST /api/play` checks it); the error names the first
+    /// download that passes the budget.
+    pub fn check_budget(&self, limits: &crate::Limits) -> Result<(), RecipeError> {
+        let mut total = 0.0;
+        for (i, d) in self.downloads.iter().enumerate() {
+            let (Some(body), Some("/api/play")) = (&d.body, d.path.split('?').next()) else { continue };
+            let bytes = serde_json::to_vec(body).map_err(|e| error(format!("downloads[{i}].body"), e.to_string()))?;
+            let answer = crate::api::play::answer_bytes(&bytes, limits).map_err(|e| {
+                let field = e
+                    .field
+                    .as_deref()
+                    .map_or_else(|| format!("downloads[{i}].body"), |f| format!("downloads[{i}].body.{f}"));
+                error(field, e.message)
+            })?;
+            total += answer;
+            if total > MAX_OUTPUT_BYTES as f64 {
+                return Err(error(
+                    format!("downloads[{i}]"),
+                    format!(
+                        "this play's answer of about {} MiB brings the recipe's files to about {} MiB, more than the \
+                         {} MiB a recipe may write",
+                        haptex_core::num::Num((answer / f64::from(1 << 20)).ceil()),
+                        haptex_core::num::Num((total / f64::from(1 << 20)).ceil()),
+                        MAX_OUTPUT_BYTES >> 20
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// The files of a recipe's downloads, each answered by the server's router
 /// (`crate::app`) as the page's download is: (file name, bytes). The
 /// recipe is checked first ([`Recipe::check`]).
@@ -183,9 +227,12 @@ pub async fn replay(state: AppState, recipe: &Recipe) -> Result<Vec<(String, Vec
 
 /// The files of a recipe's downloads without [`Recipe::check`]: the caller
 /// checked it (with `allow_unpinned`, and reports what was not pinned).
+/// The memory budget ([`Recipe::check_budget`]) is checked here, before
+/// the first download is answered, and each answer is read within what is
+/// left of it.
 pub async fn answers(state: AppState, recipe: &Recipe) -> Result<Vec<(String, Vec<u8>)>, RecipeError> {
-    // The server bounds its answers; this bounds what is read of one.
-    let max = 256 << 20;
+    recipe.check_budget(state.limits())?;
+    let mut remaining = MAX_OUTPUT_BYTES;
     let app = crate::app(state);
     let mut files = Vec::with_capacity(recipe.downloads.len());
     for (i, d) in recipe.downloads.iter().enumerate() {
@@ -201,9 +248,17 @@ pub async fn answers(state: AppState, recipe: &Recipe) -> Result<Vec<(String, Ve
         let request = request.body(body).map_err(|e| error(format!("downloads[{i}].path"), e.to_string()))?;
         let response = app.clone().oneshot(request).await.unwrap_or_else(|never| match never {});
         let status = response.status();
-        let bytes = axum::body::to_bytes(response.into_body(), max)
-            .await
-            .map_err(|e| error(format!("downloads[{i}]"), format!("reading the answer: {e}")))?;
+        let bytes = axum::body::to_bytes(response.into_body(), remaining).await.map_err(|e| {
+            error(
+                format!("downloads[{i}]"),
+                format!(
+                    "reading the answer: {e} (the recipe's files may hold {} MiB together; {} MiB were left for it)",
+                    MAX_OUTPUT_BYTES >> 20,
+                    remaining >> 20
+                ),
+            )
+        })?;
+        remaining -= bytes.len();
         if status != StatusCode::OK {
             return Err(error(
                 format!("downloads[{i}]"),

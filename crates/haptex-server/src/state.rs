@@ -54,9 +54,24 @@ pub struct Limits {
     /// A request body larger than this is heavy: its parsing and
     /// computation take one of [`Limits::concurrent_heavy`] slots.
     pub heavy_body_bytes: usize,
-    /// Heavy requests (bodies over `heavy_body_bytes`) processed at once;
-    /// others wait for a slot (within the request timeout).
+    /// Heavy work done at once, whatever its kind: the parsing of a body
+    /// over `heavy_body_bytes`, an FE run (check, compensation,
+    /// simulation), a drive-signal render, an image turned into a map.
+    /// Each holds a core (and up to `max_request_memory_bytes`) while it
+    /// runs; others wait for a slot.
     pub concurrent_heavy: usize,
+    /// Most heavy requests waiting for a slot; one more is answered 503
+    /// at once (admission control: under overload a client hears "busy"
+    /// rather than waiting behind a queue that only grows).
+    pub max_queued_heavy: usize,
+    /// Longest wait for a heavy slot; then 503.
+    #[serde(serialize_with = "seconds")]
+    pub heavy_wait: Duration,
+    /// The working memory one request may take (its buffers, its answer),
+    /// estimated from its parameters before the work starts: a play's
+    /// samples x channels x bytes per sample, a map's pixels x bytes per
+    /// pixel. A request over it is refused with 413 naming the field.
+    pub max_request_memory_bytes: usize,
     /// Most bytes of finished answers the server holds for their clients
     /// at once (answers not yet handed to the connection). An answer of
     /// more than `small_answer_bytes` that would pass it is refused with
@@ -101,9 +116,12 @@ impl Limits {
     /// 1 MiB bodies, 100 000 points, 2 000 000 WAV samples (41.7 s at
     /// 48 kHz), 200 000 JSON samples, 8 KiB request targets, 32 KiB and
     /// 100 header fields, 10 s per request, 10 s for headers, 10 s without
-    /// write progress, bodies over 64 KiB two at a time, 64 MiB of unsent
-    /// answers, 2 renders at once, 1 FE simulation at once (the other core
-    /// serves everything else) with a wait of up to 5 s for it; checks on
+    /// write progress, two heavy jobs at once (one per core of a 2-core
+    /// machine: bodies over 64 KiB, FE runs, renders, maps) with at most 4
+    /// waiting, each for at most 5 s, 96 MiB of working memory per request,
+    /// 64 MiB of unsent answers, 2 renders at once, 1 FE simulation at once
+    /// (the other core serves everything else) with a wait of up to 5 s
+    /// for it; checks on
     /// the finger model of up to 4000 points and 4000 FE steps (about 6 s);
     /// uploads of recordings of up to 64 MiB and 1000 files; images of up
     /// to 512 x 512 pixels turned into maps.
@@ -120,6 +138,9 @@ impl Limits {
         write_timeout: Duration::from_secs(10),
         heavy_body_bytes: 64 << 10,
         concurrent_heavy: 2,
+        max_queued_heavy: 4,
+        heavy_wait: Duration::from_secs(5),
+        max_request_memory_bytes: 96 << 20,
         max_unsent_answer_bytes: 64 << 20,
         small_answer_bytes: 64 << 10,
         concurrent_renders: 2,
@@ -159,6 +180,8 @@ pub struct AppState(Arc<Inner>);
 struct Inner {
     parts: Parts,
     heavy: Arc<Semaphore>,
+    /// Heavy requests waiting for a slot of `heavy`.
+    heavy_waiting: AtomicUsize,
     renders: Arc<Semaphore>,
     simulations: Arc<Semaphore>,
     /// Bytes of answers built and not yet handed to their connection.
@@ -258,7 +281,14 @@ impl AppState {
         let heavy = Arc::new(Semaphore::new(limits.concurrent_heavy.max(1)));
         let renders = Arc::new(Semaphore::new(limits.concurrent_renders.max(1)));
         let simulations = Arc::new(Semaphore::new(limits.concurrent_simulations));
-        Self(Arc::new(Inner { parts, heavy, renders, simulations, unsent_answer_bytes: AtomicUsize::new(0) }))
+        Self(Arc::new(Inner {
+            parts,
+            heavy,
+            heavy_waiting: AtomicUsize::new(0),
+            renders,
+            simulations,
+            unsent_answer_bytes: AtomicUsize::new(0),
+        }))
     }
 
     /// The live output, if the server has one (`haptex serve --live`).
@@ -321,10 +351,20 @@ impl AppState {
         self.0.parts.access_log
     }
 
-    /// Bounds the number of heavy requests (bodies over
-    /// [`Limits::heavy_body_bytes`]) processed at once.
+    /// Bounds the heavy work done at once ([`Limits::concurrent_heavy`]).
     pub fn heavy(&self) -> &Arc<Semaphore> {
         &self.0.heavy
+    }
+
+    /// Heavy requests waiting for a slot (the queue
+    /// [`Limits::max_queued_heavy`] bounds).
+    pub fn heavy_waiting(&self) -> usize {
+        self.0.heavy_waiting.load(Ordering::Acquire)
+    }
+
+    /// The counter of [`AppState::heavy_waiting`].
+    pub(crate) fn heavy_queue(&self) -> &AtomicUsize {
+        &self.0.heavy_waiting
     }
 
     /// Bounds the number of renders running at once.
@@ -480,7 +520,7 @@ impl LibraryPool {
         F: FnOnce(&Library) -> Result<T, ApiError> + Send + 'static,
     {
         let pool = Arc::clone(self);
-        tokio::task::spawn_blocking(move || {
+        crate::work::spawn(move || {
             let library = match pool.idle.lock().map(|mut idle| idle.pop()) {
                 Ok(Some(library)) => library,
                 _ => Library::open_read_only(&pool.path).map_err(ApiError::library)?,

@@ -1,28 +1,43 @@
-//! CPU work of a request, off the async workers.
+//! CPU work of a request, off the async workers, in bounded slots.
 //!
 //! The async workers only move bytes: they accept connections, read
 //! bodies, answer `/api/health` and write answers. Everything that costs
 //! CPU in proportion to the input (parsing a JSON or CSV body, checking a
 //! profile, the voltage mapping, a CAE prediction, rendering, building
-//! and serializing the answer) runs through [`cpu`] or [`blocking`] on
-//! tokio's blocking threads, so that:
+//! and serializing the answer) runs through [`cpu`], [`heavy`] or
+//! [`blocking`] on tokio's blocking threads, so that:
 //!
 //! - a worker is never held by one request: `/api/health` answers while
 //!   any request is being processed;
+//! - the workers come first: a thread doing a request's work runs at a
+//!   lower scheduling priority ([`WORK_NICENESS`] on Linux), so that when
+//!   the cores are busy with work, the kernel still runs a worker as soon
+//!   as it has something to do (a health check is answered within
+//!   milliseconds, not after the work's time slice);
 //! - the request timeout covers the work: the handler awaits the result,
 //!   so the timeout layer can answer 408 while the work is still running
 //!   (the work then finishes on its thread and its result is dropped; it
 //!   keeps its slot until then, so abandoned work still counts);
-//! - heavy requests (bodies over [`Limits::heavy_body_bytes`]) take one of
-//!   [`Limits::concurrent_heavy`] slots: N large uploads at once cannot
-//!   occupy more than that many cores, whatever N.
+//! - heavy work (an FE run, a render, an image turned into a map, a body
+//!   over [`Limits::heavy_body_bytes`]) takes one of
+//!   [`Limits::concurrent_heavy`] slots, whatever its kind: N heavy
+//!   requests at once cannot occupy more than that many cores, nor more
+//!   than that many times [`Limits::max_request_memory_bytes`], whatever
+//!   N. At most [`Limits::max_queued_heavy`] wait for a slot, each for at
+//!   most [`Limits::heavy_wait`]; beyond either the answer is 503 (busy,
+//!   try again), before any work and before a streamed answer starts.
 //!
 //! [`Limits::heavy_body_bytes`]: crate::Limits::heavy_body_bytes
 //! [`Limits::concurrent_heavy`]: crate::Limits::concurrent_heavy
+//! [`Limits::max_queued_heavy`]: crate::Limits::max_queued_heavy
+//! [`Limits::heavy_wait`]: crate::Limits::heavy_wait
+//! [`Limits::max_request_memory_bytes`]: crate::Limits::max_request_memory_bytes
 
 use std::sync::Arc;
+use std::sync::atomic::Ordering;
 
 use tokio::sync::{OwnedSemaphorePermit, Semaphore};
+use tokio::task::JoinHandle;
 
 use crate::error::ApiError;
 use crate::state::AppState;
@@ -34,8 +49,52 @@ where
     T: Send + 'static,
     F: FnOnce() -> Result<T, ApiError> + Send + 'static,
 {
-    let permit = if input_bytes > state.limits().heavy_body_bytes { Some(slot(state.heavy()).await?) } else { None };
-    blocking(permit, work).await
+    if input_bytes > state.limits().heavy_body_bytes { heavy(state, work).await } else { blocking(vec![], work).await }
+}
+
+/// Runs heavy `work` (whatever its input's size) on a blocking thread, in
+/// a heavy slot ([`heavy_slot`]).
+pub(crate) async fn heavy<T, F>(state: &AppState, work: F) -> Result<T, ApiError>
+where
+    T: Send + 'static,
+    F: FnOnce() -> Result<T, ApiError> + Send + 'static,
+{
+    let permit = heavy_slot(state).await?;
+    blocking(vec![permit], work).await
+}
+
+/// One of the [`Limits::concurrent_heavy`] slots of heavy work: at once
+/// when one is free; else a wait of up to [`Limits::heavy_wait`] if fewer
+/// than [`Limits::max_queued_heavy`] requests are waiting already; 503
+/// otherwise. Taken last, after any slot of a kind (an FE slot, a render
+/// slot), and never held while waiting for another, so that no two
+/// requests wait for each other.
+///
+/// [`Limits::concurrent_heavy`]: crate::Limits::concurrent_heavy
+/// [`Limits::heavy_wait`]: crate::Limits::heavy_wait
+/// [`Limits::max_queued_heavy`]: crate::Limits::max_queued_heavy
+pub(crate) async fn heavy_slot(state: &AppState) -> Result<OwnedSemaphorePermit, ApiError> {
+    if let Ok(permit) = Arc::clone(state.heavy()).try_acquire_owned() {
+        return Ok(permit);
+    }
+    let limits = state.limits();
+    let busy = || {
+        ApiError::unavailable(format!(
+            "the server is busy with other heavy requests (FE runs, renders, maps: {} at once, {} waiting); try \
+             again in a few seconds",
+            limits.concurrent_heavy, limits.max_queued_heavy
+        ))
+    };
+    let waiting = state.heavy_queue();
+    if waiting
+        .fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| (n < limits.max_queued_heavy).then_some(n + 1))
+        .is_err()
+    {
+        return Err(busy());
+    }
+    let permit = tokio::time::timeout(limits.heavy_wait, Arc::clone(state.heavy()).acquire_owned()).await;
+    waiting.fetch_sub(1, Ordering::AcqRel);
+    permit.map_err(|_| busy())?.map_err(|_| ApiError::unavailable("the server is shutting down"))
 }
 
 /// Waits up to [`Limits::simulation_wait`] for one of the
@@ -63,22 +122,115 @@ pub(crate) async fn slot(slots: &Arc<Semaphore>) -> Result<OwnedSemaphorePermit,
     Arc::clone(slots).acquire_owned().await.map_err(|_| ApiError::unavailable("the server is shutting down"))
 }
 
-/// Runs `work` on a blocking thread, holding `permit` (if any) until the
-/// work ends, even if the request was abandoned meanwhile. A panic in the
-/// work is resumed here, so that the panic layer answers it as any other
-/// (500, logged).
-pub(crate) async fn blocking<T, F>(permit: Option<OwnedSemaphorePermit>, work: F) -> Result<T, ApiError>
+/// Runs `work` on a blocking thread at the work's priority ([`spawn`]),
+/// holding `permits` until the work ends, even if the request was
+/// abandoned meanwhile. A panic in the work is resumed here, so that the
+/// panic layer answers it as any other (500, logged).
+pub(crate) async fn blocking<T, F>(permits: Vec<OwnedSemaphorePermit>, work: F) -> Result<T, ApiError>
 where
     T: Send + 'static,
     F: FnOnce() -> Result<T, ApiError> + Send + 'static,
 {
-    let task = tokio::task::spawn_blocking(move || {
-        let _permit = permit;
-        work()
+    let task = spawn(move || {
+        let heavy = !permits.is_empty();
+        let result = work();
+        drop(permits);
+        if heavy {
+            crate::memory::freed_large();
+        }
+        result
     });
     match task.await {
         Ok(result) => result,
         Err(e) if e.is_panic() => std::panic::resume_unwind(e.into_panic()),
         Err(_) => Err(ApiError::unavailable("the server is shutting down")),
+    }
+}
+
+/// The niceness of the threads doing a request's work (Linux: 0 is the
+/// default, 19 the lowest priority): 10 gives a waiting async worker
+/// about ten times the work's share of a core, so that it runs at once.
+pub const WORK_NICENESS: i32 = 10;
+
+/// `tokio::task::spawn_blocking`, the thread first lowered to
+/// [`WORK_NICENESS`]: every thread that does a request's work goes
+/// through here (the blocking threads serve nothing else).
+pub(crate) fn spawn<T, F>(work: F) -> JoinHandle<T>
+where
+    T: Send + 'static,
+    F: FnOnce() -> T + Send + 'static,
+{
+    tokio::task::spawn_blocking(move || {
+        lower_priority();
+        work()
+    })
+}
+
+/// Lowers the calling thread's scheduling priority to [`WORK_NICENESS`]
+/// (once per thread; a no-op where threads have no niceness of their own).
+fn lower_priority() {
+    #[cfg(target_os = "linux")]
+    {
+        thread_local! {
+            static LOWERED: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+        }
+        if !LOWERED.get() {
+            LOWERED.set(true);
+            // On Linux, PRIO_PROCESS with a thread id sets that thread's
+            // niceness only (setpriority(2), "BUGS"). Raising one's own
+            // niceness needs no privilege; a failure leaves the default.
+            // SAFETY: plain system calls on the calling thread, no memory passed.
+            let failed = unsafe {
+                let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+                libc::setpriority(libc::PRIO_PROCESS, tid, WORK_NICENESS) != 0
+            };
+            if failed {
+                tracing::debug!("cannot lower a work thread's priority: {}", std::io::Error::last_os_error());
+            }
+        }
+    }
+}
+
+/// Runs `f` on a new thread at the default priority (not on a work
+/// thread, whose lowered priority the threads `f` starts would inherit:
+/// an audio output's callback); None if it panicked or could not start.
+pub(crate) async fn on_new_thread<T, F>(f: F) -> Option<T>
+where
+    T: Send + 'static,
+    F: FnOnce() -> T + Send + 'static,
+{
+    let (tx, rx) = tokio::sync::oneshot::channel();
+    std::thread::Builder::new()
+        .name("haptex-output".into())
+        .spawn(move || {
+            let _ = tx.send(f());
+        })
+        .ok()?;
+    rx.await.ok()
+}
+
+#[cfg(all(test, target_os = "linux"))]
+mod tests {
+    use super::*;
+
+    /// The calling thread's niceness (0 is the default, 19 the lowest
+    /// priority).
+    fn niceness() -> i32 {
+        // SAFETY: plain system calls on the calling thread.
+        unsafe { libc::getpriority(libc::PRIO_PROCESS, libc::syscall(libc::SYS_gettid) as libc::id_t) }
+    }
+
+    /// A request's work runs below the async workers' priority, so that a
+    /// worker with a health check to answer runs before it (issue 35,
+    /// "Bounded cost per request"); a thread started for an audio output
+    /// does not inherit the lowered priority.
+    #[tokio::test]
+    async fn work_runs_below_the_async_workers_priority() {
+        let worker = niceness();
+        let work = spawn(niceness).await.unwrap();
+        assert!(work >= WORK_NICENESS.max(worker), "work at niceness {work}, the worker at {worker}");
+        // Again on the same (already lowered) thread.
+        assert_eq!(spawn(niceness).await.unwrap(), work);
+        assert_eq!(on_new_thread(niceness).await, Some(worker));
     }
 }

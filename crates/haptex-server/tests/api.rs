@@ -25,7 +25,7 @@ use serde_json::{Value, json};
 
 mod common;
 
-use common::{Answer, send_to, shipped_db, shipped_library, shipped_state};
+use common::{Answer, next_line, send_to, shipped_db, shipped_library, shipped_state};
 
 fn bump_csv() -> String {
     std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/examples/bump_friction.csv"))
@@ -307,6 +307,35 @@ async fn openapi_describes_every_route_and_the_parameter_ranges() {
     assert_eq!(calibration["maxLength"].as_u64(), Some(haptex_server::display::MAX_CALIBRATION_BYTES as u64));
     let u_max = DEVICE_PARAMS.iter().find(|p| p.name == "u_max_v").unwrap();
     assert_eq!(range(&play["u_max_v"]), (Some(u_max.min), Some(u_max.max)));
+    // Issue 35 ("Bounded cost per request"): every route that does heavy
+    // work (an FE run, a render, a map, a body over heavy_body_bytes)
+    // describes the busy 503 and the 413 of its limits and memory budget,
+    // and the limits object the fields that bound them.
+    for path in [
+        "/api/predict",
+        "/api/simulate",
+        "/api/check",
+        "/api/compensate",
+        "/api/voltage",
+        "/api/profile",
+        "/api/recordings",
+        "/api/play",
+        "/api/map",
+        "/api/map/path",
+    ] {
+        let responses = &doc["paths"][path]["post"]["responses"];
+        assert!(responses.get("503").is_some() && responses.get("413").is_some(), "{path}: {responses}");
+    }
+    let busy = doc["components"]["responses"]["Busy"]["description"].as_str().unwrap();
+    assert!(busy.contains("limits.concurrent_heavy") && busy.contains("limits.max_queued_heavy"), "{busy}");
+    let too_large = doc["components"]["responses"]["TooLarge"]["description"].as_str().unwrap();
+    assert!(too_large.contains("limits.max_request_memory_bytes"), "{too_large}");
+    let limits = &doc["paths"]["/api/config"]["get"]["responses"]["200"]["content"]["application/json"]["schema"]["properties"]
+        ["limits"]["properties"];
+    let served = serde_json::to_value(Limits::DEFAULT).unwrap();
+    for name in ["heavy_body_bytes", "concurrent_heavy", "max_queued_heavy", "heavy_wait", "max_request_memory_bytes"] {
+        assert!(limits.get(name).is_some() && served.get(name).is_some(), "limits.{name}");
+    }
     // Every route answers something other than 404 for its own path.
     for (method, path) in routes::list() {
         let uri = path.replace("{path}", "app.js").replace("{name}", "velvet");
@@ -1718,21 +1747,6 @@ async fn check_bad_input_is_refused_naming_the_field_before_any_fe_run() {
 fn set_field(mut body: Value, name: &str, value: Value) -> Value {
     body[name] = value;
     body
-}
-
-/// The next line of a streamed answer's body (None at its end).
-async fn next_line(body: &mut Body, pending: &mut Vec<u8>) -> Option<Value> {
-    use hyper::body::Body as _;
-    loop {
-        if let Some(end) = pending.iter().position(|&b| b == b'\n') {
-            let line: Vec<u8> = pending.drain(..=end).collect();
-            return Some(serde_json::from_slice(&line).unwrap());
-        }
-        let frame = std::future::poll_fn(|cx| std::pin::Pin::new(&mut *body).poll_frame(cx)).await?;
-        if let Ok(data) = frame.unwrap().into_data() {
-            pending.extend_from_slice(&data);
-        }
-    }
 }
 
 /// The FE slot is one: while a compensation runs (its first progress line

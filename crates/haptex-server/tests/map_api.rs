@@ -15,7 +15,7 @@ use serde_json::{Value, json};
 
 mod common;
 
-use common::{Answer, base64, send_to};
+use common::{Answer, base64, header_only_png, send_to};
 
 fn server() -> Router {
     app(AppState::new(None, Limits::DEFAULT).unwrap())
@@ -124,31 +124,6 @@ async fn a_path_is_sampled_as_haptex_map_sample_path_samples_it() {
     assert!(text.ends_with(&String::from_utf8(rows).unwrap()), "{text:.300}");
 }
 
-/// A PNG whose header claims `width` x `height` (CRC correct), with no
-/// image data: what a decompression bomb's header looks like.
-fn header_only(width: u32, height: u32) -> Vec<u8> {
-    let mut ihdr = b"IHDR".to_vec();
-    ihdr.extend_from_slice(&width.to_be_bytes());
-    ihdr.extend_from_slice(&height.to_be_bytes());
-    ihdr.extend_from_slice(&[8, 0, 0, 0, 0]);
-    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
-    png.extend_from_slice(&13u32.to_be_bytes());
-    png.extend_from_slice(&ihdr);
-    png.extend_from_slice(&crc32(&ihdr).to_be_bytes());
-    png
-}
-
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = 0xffff_ffffu32;
-    for &b in bytes {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 == 1 { (crc >> 1) ^ 0xedb8_8320 } else { crc >> 1 };
-        }
-    }
-    !crc
-}
-
 #[tokio::test]
 async fn bad_images_mappings_and_devices_are_refused_naming_the_field() {
     let png = image(6, 5, 8);
@@ -205,7 +180,7 @@ async fn bad_images_mappings_and_devices_are_refused_naming_the_field() {
         ),
         (
             "a header claiming 8000 x 8000",
-            with("image_png_base64", json!(base64(&header_only(8000, 8000)))),
+            with("image_png_base64", json!(base64(&header_only_png(8000, 8000)))),
             StatusCode::PAYLOAD_TOO_LARGE,
             "image_png_base64",
         ),
@@ -222,7 +197,7 @@ async fn bad_images_mappings_and_devices_are_refused_naming_the_field() {
     let huge = with("image_png_base64", json!("A".repeat(2 << 20)));
     post("/api/map", &huge).await.error(StatusCode::PAYLOAD_TOO_LARGE, Some("body"));
     // A header within the pixel limit but the data missing: the decoder's error.
-    let answer = post("/api/map", &with("image_png_base64", json!(base64(&header_only(20, 20))))).await;
+    let answer = post("/api/map", &with("image_png_base64", json!(base64(&header_only_png(20, 20))))).await;
     answer.error(bad, Some("image_png_base64"));
 }
 

@@ -9,7 +9,7 @@ use haptex_core::electrovibration::{ContactArea, Device, Method, map_profile};
 use haptex_core::num::Num;
 use haptex_core::plot::{Figure, Panel};
 use haptex_core::ranges;
-use haptex_fem::render::{self, Check, CheckMetrics, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping};
+use haptex_fem::render::{self, Check, CheckMetrics, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping, TargetPart};
 use haptex_fem::scenario::Loading;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -32,6 +32,10 @@ use crate::args::{
 /// contact survives, and the contact-area coefficient k as the FE finger
 /// sees it. With --compensate, U(x) is corrected run by run (in U^2, each
 /// trial clipped to [0, U_max]) until the felt friction stops improving.
+///
+/// Before any FE run the profile is checked for what the check needs (the
+/// web API's check applies the same rule): positions at least 1 nm apart,
+/// at most 20 000 points, at least one --step long; a run-up of 0 to 100 mm.
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:\n  haptex predict --surface bump --x0 5 --width 1.5 --height 0.3 -o bump.csv\n  \
                   haptex check --profile bump.csv --png check.png\n  \
@@ -70,10 +74,10 @@ pub struct CheckArgs {
     #[arg(long, default_value_t = 20.0, value_parser = positive)]
     velocity: f64,
     /// Slide per FE step in mm (the voltage is sampled at each step: use
-    /// a tenth of the finest detail).
+    /// a tenth of the finest detail); at most the profile's length.
     #[arg(long, default_value_t = 0.05, value_parser = positive)]
     step: f64,
-    /// Slide before the profile's first position, mm.
+    /// Slide before the profile's first position, mm (0 to 100).
     #[arg(long, default_value_t = 1.0)]
     run_up: f64,
     /// Tissue model.
@@ -140,6 +144,13 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
     scenario.velocity_mm_s = args.velocity;
     scenario.step_mm = args.step;
     settings.run_up_mm = args.run_up;
+    // What the FE check needs of the profile and the slide, before any
+    // run (the web API's check applies the same rule).
+    render::check_target(&target, &settings).map_err(|e| match e.part {
+        TargetPart::Positions => anyhow::anyhow!("{}: {e}", args.profile.display()),
+        TargetPart::Step => anyhow::anyhow!("--step {}: {e}", Num(args.step)),
+        TargetPart::RunUp => anyhow::anyhow!("--run-up {}: {e}", Num(args.run_up)),
+    })?;
 
     let bar = if args.quiet {
         ProgressBar::hidden()

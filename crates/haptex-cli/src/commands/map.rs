@@ -7,7 +7,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand, ValueEnum};
 use haptex_core::electrovibration::{ContactArea, Device, Method};
-use haptex_core::map::{FrictionMap, GrayMapping, MapGrid, VoltageMap, read_grid_csv, read_npy_pair, write_npy_pair};
+use haptex_core::map::{
+    FrictionMap, GrayMapping, MapGrid, VoltageMap, png_header, read_grid_csv, read_npy_pair, write_npy_pair,
+};
 use haptex_core::num::Num;
 use haptex_core::planar::PlanarTrajectory;
 use haptex_core::ranges;
@@ -191,6 +193,12 @@ struct FromImageArgs {
     /// Output map (.csv or .npy with its sidecar).
     #[arg(short, long, value_name = "MAP")]
     output: PathBuf,
+    /// Most memory the command may take, MiB: the file, the decoded image
+    /// (1 or 2 bytes a pixel) and the map (8 bytes a cell; 8 more for an
+    /// .npy output, written from memory), checked on the image's header
+    /// before anything is decoded (512 MiB: about 50 million pixels).
+    #[arg(long, value_name = "MIB", default_value_t = 512, value_parser = clap::value_parser!(u64).range(1..=1 << 24))]
+    memory_budget_mib: u64,
 }
 
 /// A map whose every row is a 1-D friction profile: the profile sampled
@@ -313,13 +321,24 @@ fn from_image(a: FromImageArgs) -> anyhow::Result<()> {
     let mapping = GrayMapping { mu_black: a.mu_black, mu_white: a.mu_white, gamma: a.gamma };
     let format = MapFormat::of(&a.output)?;
     let bytes = read_bounded(&a.image, 256 << 20)?;
-    let map = FrictionMap::read_gray_png(
-        &bytes,
-        &mapping,
-        a.pixels.spacing(),
-        a.pixels.origin(),
-        &a.image.display().to_string(),
-    )?;
+    let name = a.image.display().to_string();
+    let header = png_header(&bytes, &name)?;
+    let pixels = (header.width as u64).saturating_mul(header.height as u64);
+    let output = if format == MapFormat::Npy { pixels.saturating_mul(8) } else { 0 };
+    let memory = (bytes.len() as u64).saturating_add(header.map_memory_bytes()).saturating_add(output);
+    if memory > a.memory_budget_mib << 20 {
+        bail!(
+            "{name}: {} x {} pixels at {} bits take about {} MiB to read into a map{}, more than --memory-budget-mib \
+             {} (raise it, or give a smaller image)",
+            header.width,
+            header.height,
+            header.bit_depth,
+            memory.div_ceil(1 << 20),
+            if output > 0 { " and write as NPY" } else { "" },
+            a.memory_budget_mib
+        );
+    }
+    let map = FrictionMap::read_gray_png(&bytes, &mapping, a.pixels.spacing(), a.pixels.origin(), &name)?;
     write_friction_map(&map, &a.output, format)?;
     report_map(&map);
     eprintln!("wrote {}", a.output.display());

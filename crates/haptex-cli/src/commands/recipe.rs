@@ -33,7 +33,9 @@ enum RecipeCommand {
 /// error names the recipe's field). A recipe must pin every data set used
 /// here (library_sha256 when a library is found, database_sha256 when an
 /// FE database is): one without the field, or with null, is refused unless
-/// --allow-unpinned.
+/// --allow-unpinned. The files may hold 64 MiB together, checked on each
+/// play's request (duration x sample rate x channels) before anything is
+/// answered.
 #[derive(Debug, Args)]
 #[command(after_help = "Example:\n  haptex recipe run haptex-recipe.json -o replay/")]
 struct RunArgs {

@@ -14,8 +14,8 @@
 //! - `velocity_mm_s` ([`CHECK_VELOCITY_MM_S`], default 20);
 //! - `step_mm` ([`STEP_MM`]): the slide per FE step, where the voltage is
 //!   sampled; default 0.05 mm, or the finest multiple of 0.005 mm that
-//!   keeps the request within [`crate::Limits::max_check_steps`] (the
-//!   answer says which);
+//!   keeps the request within [`crate::Limits::max_check_steps`], and at
+//!   most the profile's length (the answer says which);
 //! - `/api/compensate` only: `max_runs` (1 ..= [`MAX_RUNS`], default 8,
 //!   eq. (8)'s run included) and `tolerance` ([`TOLERANCE`], default 1e-4
 //!   in mu).
@@ -39,6 +39,13 @@
 //! skin-display friction.
 //!
 //! # Bounds
+//!
+//! What the FE check needs of the profile is checked before the answer
+//! starts, by the check's own rule ([`render::check_target`], which
+//! `haptex check` applies too): positions at least
+//! [`render::MIN_SPACING_MM`] apart (closer ones become one when the
+//! profile is placed on the FE slide), a profile at least one slide step
+//! long; 400 naming `profile.x_mm` (or `step_mm`, when given).
 //!
 //! Every size the request controls is bounded before any FE run: at most
 //! [`crate::Limits::max_check_points`] points (the metrics cost up to n^2
@@ -94,7 +101,9 @@ use haptex_core::num::Num;
 use haptex_core::profile::FrictionProfile;
 use haptex_fem::contact::Electrostatic;
 use haptex_fem::display::MAX_PRESSURE_MPA;
-use haptex_fem::render::{self, Check, DEFAULT_LOAD_N_PER_MM, RenderError, RenderSettings, Stopping};
+use haptex_fem::render::{
+    self, Check, DEFAULT_LOAD_N_PER_MM, RenderError, RenderSettings, Stopping, TargetError, TargetPart,
+};
 use haptex_fem::scenario::Progress;
 use serde::Deserialize;
 use serde_json::{Value, json};
@@ -196,15 +205,17 @@ async fn start(
     let bytes = body_bytes(body, limits.max_body_bytes)?;
     let job = work::cpu(&state, bytes.len(), move || Job::parse(mode, &bytes, &limits)).await?;
     let permit = work::fe_slot(&state).await?;
+    let heavy = work::heavy_slot(&state).await?;
     let (mut lines, response) = lines::stream();
-    tokio::task::spawn_blocking(move || {
+    work::spawn(move || {
         let result = std::panic::catch_unwind(AssertUnwindSafe(|| job.run(&mut lines)))
             .unwrap_or_else(|panic| Err(crate::error::panicked(&*panic)));
         lines.finish(result);
         // The slot is free before the stream ends: a client that has read
         // the whole answer can send the next request at once.
-        drop(permit);
+        drop((permit, heavy));
         drop(lines);
+        crate::memory::freed_large();
     });
     Ok(response)
 }
@@ -328,6 +339,20 @@ impl Job {
         settings.scenario.velocity_mm_s = velocity;
         settings.scenario.step_mm = step_mm;
         settings.run_up_mm = RUN_UP_MM;
+        if target.span_mm() < STEP_MM.min {
+            return Err(ApiError::bad_request(
+                format!(
+                    "the friction profile is {} mm long: the check on the finger model needs at least {} mm, its \
+                     finest slide step",
+                    Num(target.span_mm()),
+                    Num(STEP_MM.min)
+                ),
+                Some("profile.x_mm"),
+            ));
+        }
+        // What the FE check needs of the profile (its spacing, its span
+        // against the step, the slide), as `haptex check` checks it.
+        render::check_target(&target, &settings).map_err(|e| target_error(e, step.is_some()))?;
         Ok(Self { mode, request, mapped, target, settings, stopping, combined })
     }
 
@@ -541,6 +566,18 @@ fn load_of(settings: &RenderSettings) -> f64 {
     }
 }
 
+/// A target the FE check cannot run, naming the request's field: the
+/// profile's positions, or the step when one was given (an automatic
+/// step is chosen from the profile, so the profile is at fault then).
+fn target_error(error: TargetError, step_given: bool) -> ApiError {
+    let field = match error.part {
+        TargetPart::Step if step_given => "step_mm",
+        TargetPart::Positions | TargetPart::Step => "profile.x_mm",
+        TargetPart::RunUp => return ApiError::internal(format!("the check's run-up is invalid (a bug): {error}")),
+    };
+    ApiError::bad_request(error.message, Some(field))
+}
+
 /// An error of the FE runs: the FE model could not run the case (422,
 /// its message), or a bug (the request was checked before).
 fn fe_error(error: RenderError) -> ApiError {
@@ -594,7 +631,21 @@ fn slide_step(span_mm: f64, runs: usize, given: Option<f64>, budget: usize) -> R
     }
     let first = (DEFAULT_STEP_MM / STEP_GRID_MM).round() as u32;
     let last = (STEP_MM.max / STEP_GRID_MM).round() as u32;
-    (first..=last).map(|k| f64::from(k) * STEP_GRID_MM).find(|&step| steps(step) <= budget as f64).ok_or_else(too_long)
+    let step = (first..=last)
+        .map(|k| f64::from(k) * STEP_GRID_MM)
+        .find(|&step| steps(step) <= budget as f64)
+        .ok_or_else(too_long)?;
+    // A profile shorter than that step: the longest grid step within it
+    // (the finger feels the voltage at its steps), at least the finest.
+    let mut within = (span_mm / STEP_GRID_MM).floor().max(1.0);
+    while within > 1.0 && within * STEP_GRID_MM > span_mm {
+        within -= 1.0;
+    }
+    let step = step.min(within * STEP_GRID_MM);
+    if steps(step) > budget as f64 {
+        return Err(too_long());
+    }
+    Ok(step)
 }
 
 #[cfg(test)]
@@ -627,5 +678,11 @@ mod tests {
         assert_eq!((e.status, e.field.as_deref()), (StatusCode::PAYLOAD_TOO_LARGE, Some("profile.x_mm")), "{e}");
         assert!(e.message.contains("at most 249 mm"), "{e}");
         assert_eq!(slide_step(249.0, 8, None, 4000).unwrap(), 0.5);
+        // A profile shorter than the default step: the longest grid step
+        // within it, at least the finest.
+        assert_eq!(slide_step(0.03, 1, None, 4000).unwrap(), 0.03);
+        assert_eq!(slide_step(0.0349, 8, None, 4000).unwrap(), 0.03);
+        assert_eq!(slide_step(0.007, 8, None, 4000).unwrap(), 0.005);
+        assert_eq!(slide_step(0.001, 1, None, 4000).unwrap(), 0.005);
     }
 }

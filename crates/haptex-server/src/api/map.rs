@@ -45,6 +45,12 @@ use crate::work;
 /// The name errors about the image give as their field.
 const IMAGE: &str = "image_png_base64";
 
+/// The working memory of a map per pixel, bytes (the request's memory
+/// budget, [`crate::Limits::max_request_memory_bytes`]): the decoded
+/// image (up to 2 bytes), the friction and voltage maps (8 bytes each)
+/// and the answer's two numbers as text (up to 25 bytes each).
+const MEMORY_PER_PIXEL: usize = 2 + 8 + 8 + 2 * 25;
+
 /// The body of both routes.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -129,12 +135,12 @@ pub async fn post(
     Query::parse(raw_query.as_deref())?.finish()?;
     body_kind(&headers, &[BodyKind::Json])?;
     let bytes = body_bytes(body, limits.max_body_bytes)?;
-    work::cpu(&state, bytes.len(), move || {
+    work::heavy(&state, move || {
         let body: MapBody = parse_json(&bytes)?;
         if body.path.is_some() {
             return Err(ApiError::bad_request("a path is sampled by POST /api/map/path", Some("path")));
         }
-        let b = build(body, limits.max_map_pixels)?;
+        let b = build(body, &limits)?;
         let answer = MapAnswer {
             parameters: b.request.values(),
             method: b.method,
@@ -165,7 +171,7 @@ pub async fn path(
     query.finish()?;
     body_kind(&headers, &[BodyKind::Json])?;
     let bytes = body_bytes(body, limits.max_body_bytes)?;
-    work::cpu(&state, bytes.len(), move || {
+    work::heavy(&state, move || {
         let mut body: MapBody = parse_json(&bytes)?;
         let path = body
             .path
@@ -178,7 +184,7 @@ pub async fn path(
             }
             other => ApiError::bad_request(other.to_string(), Some("path")),
         })?;
-        let b = build(body, limits.max_map_pixels)?;
+        let b = build(body, &limits)?;
         let v = &b.voltage;
         // What `haptex map sample-path` computes.
         let u = path.sample(&v.grid, &v.voltage_v);
@@ -217,14 +223,28 @@ pub async fn path(
 /// The image decoded with its mapping and the voltage map of it: the
 /// core's `FrictionMap::read_gray_png` and `FrictionMap::voltages`, what
 /// `haptex map from-image` and `haptex map voltage` call.
-fn build(body: MapBody, max_pixels: usize) -> Result<Built, ApiError> {
+fn build(body: MapBody, limits: &crate::Limits) -> Result<Built, ApiError> {
     let png = decode_base64(&body.image_png_base64)
         .map_err(|m| ApiError::bad_request(format!("not base64: {m}"), Some(IMAGE)))?;
     let (width, height) = png_size(&png, IMAGE).map_err(|e| ApiError::bad_request(e.to_string(), Some(IMAGE)))?;
-    if width.saturating_mul(height) > max_pixels {
+    let (max_pixels, pixels) = (limits.max_map_pixels, width.saturating_mul(height));
+    if pixels > max_pixels {
         return Err(ApiError::too_large(
             format!(
                 "{width} x {height} pixels: at most {max_pixels} pixels here (use haptex map from-image for larger)"
+            ),
+            Some(IMAGE),
+        ));
+    }
+    // The request's memory budget, before anything is decoded.
+    let memory = pixels.saturating_mul(MEMORY_PER_PIXEL);
+    if memory > limits.max_request_memory_bytes {
+        return Err(ApiError::too_large(
+            format!(
+                "{width} x {height} pixels take about {} MiB to map and answer, more than the {} MiB a request may \
+                 take",
+                memory.div_ceil(1 << 20),
+                limits.max_request_memory_bytes >> 20
             ),
             Some(IMAGE),
         ));

@@ -153,7 +153,8 @@ pub async fn post(
         }));
     }
     let permit = work::slot(state.renders()).await?;
-    work::blocking(Some(permit), move || job.run()).await
+    let heavy = work::heavy_slot(&state).await?;
+    work::blocking(vec![permit, heavy], move || job.run()).await
 }
 
 /// A checked request: everything the render needs.
@@ -275,26 +276,30 @@ impl Job {
             extend: body.outside.unwrap_or_default(),
         };
         settings.check().map_err(|e| ApiError::bad_request(e.to_string(), Some("carrier")))?;
-        let max_samples = match format {
-            PlayFormat::Wav | PlayFormat::Sidecar => limits.max_wav_samples,
-            PlayFormat::Json => limits.max_json_samples,
-        };
-        let (field, trajectory) =
-            trajectory(body.trajectory, body.stroke, &curve, sample_rate_hz, max_samples, limits)?;
-        let samples = trajectory.duration_s() * f64::from(sample_rate_hz) + 1.0;
-        if samples > max_samples as f64 {
-            return Err(ApiError::too_large(
-                format!(
-                    "{} s at {sample_rate_hz} Hz is {} samples, more than the {max_samples} a {} answer may have",
-                    Num(trajectory.duration_s()),
-                    Num(samples.round()),
-                    if format == PlayFormat::Json { "JSON" } else { "WAV" }
-                ),
-                Some(field),
-            ));
-        }
         let wav = WavOptions { format: body.wav_format.unwrap_or(WavFormat::Pcm16), volts_per_full_scale };
+        let budget = Budget {
+            sample_rate_hz,
+            channels: if ultrasonic.is_some() { 2 } else { 1 },
+            format,
+            wav_format: wav.format,
+            limits,
+        };
+        let (field, trajectory) = trajectory(body.trajectory, body.stroke, &curve, &budget, limits)?;
+        budget.check(trajectory.duration_s(), field)?;
         Ok(Self { curve, ultrasonic, trajectory, settings, format, wav, design })
+    }
+
+    /// The bytes of this request's answer, estimated before any of it is
+    /// made (a recipe's budget of output bytes): a WAV's header and
+    /// samples, a sidecar's JSON, or the JSON answer's numbers as text.
+    fn answer_bytes(&self) -> f64 {
+        let channels = if self.ultrasonic.is_some() { 2 } else { 1 };
+        let samples = samples(self.trajectory.duration_s(), self.settings.sample_rate_hz);
+        match self.format {
+            PlayFormat::Wav => 4096.0 + samples * (channels * wav_sample_bytes(self.wav.format)) as f64,
+            PlayFormat::Sidecar => 16384.0,
+            PlayFormat::Json => 4096.0 + samples * ((3 + channels) * 25) as f64,
+        }
     }
 
     /// Renders the drive and builds the answer.
@@ -323,13 +328,100 @@ impl Job {
     }
 }
 
+/// The samples of a render `duration_s` long at `rate_hz` (both ends).
+fn samples(duration_s: f64, rate_hz: u32) -> f64 {
+    (duration_s * f64::from(rate_hz)).floor() + 1.0
+}
+
+/// What a render may cost: at most the samples of its answer's format
+/// ([`crate::Limits::max_wav_samples`], `max_json_samples`), and at most
+/// the request's memory budget
+/// ([`crate::Limits::max_request_memory_bytes`]), both checked on the
+/// duration before anything is generated or rendered.
+struct Budget<'a> {
+    sample_rate_hz: u32,
+    channels: usize,
+    format: PlayFormat,
+    wav_format: WavFormat,
+    limits: &'a crate::Limits,
+}
+
+impl Budget<'_> {
+    /// Refuses (413 naming `field`) a render `duration_s` long beyond the
+    /// samples or the memory a request may take.
+    fn check(&self, duration_s: f64, field: &str) -> Result<(), ApiError> {
+        let rate = self.sample_rate_hz;
+        let samples = samples(duration_s, rate);
+        let (max_samples, answer) = match self.format {
+            PlayFormat::Wav | PlayFormat::Sidecar => (self.limits.max_wav_samples, "a WAV"),
+            PlayFormat::Json => (self.limits.max_json_samples, "JSON"),
+        };
+        if samples > max_samples as f64 {
+            return Err(ApiError::too_large(
+                format!(
+                    "{} s at {rate} Hz is {} samples, more than the {max_samples} {answer} answer may have",
+                    Num(duration_s),
+                    Num(samples)
+                ),
+                Some(field),
+            ));
+        }
+        let memory = samples * self.memory_per_sample() as f64;
+        let max = self.limits.max_request_memory_bytes;
+        if memory > max as f64 {
+            return Err(ApiError::too_large(
+                format!(
+                    "{} s at {rate} Hz on {} channel(s) as {answer}: about {} MiB to render and answer, more than the \
+                     {} MiB a request may take; play a shorter trajectory or at a lower sample rate",
+                    Num(duration_s),
+                    self.channels,
+                    Num((memory / f64::from(1 << 20)).ceil()),
+                    max >> 20
+                ),
+                Some(field),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The working memory of the render and its answer per sample, bytes:
+    /// the render's vectors (position, envelope, drive, and channel 2's
+    /// amplitude: 8 bytes each) and the answer: the WAV's samples
+    /// (channels x 2, 3 or 4 bytes; the sidecar hashes the same WAV), or
+    /// the JSON's arrays (the times and the render's vectors, each number
+    /// 8 bytes, then a JSON value of 32 bytes, then up to 25 bytes of
+    /// text).
+    fn memory_per_sample(&self) -> usize {
+        let vectors = 2 + self.channels;
+        match self.format {
+            PlayFormat::Wav | PlayFormat::Sidecar => 8 * vectors + self.channels * wav_sample_bytes(self.wav_format),
+            PlayFormat::Json => 8 * vectors + (1 + vectors) * (8 + 32 + 25),
+        }
+    }
+}
+
+/// The bytes of one sample of one channel of a WAV.
+fn wav_sample_bytes(format: WavFormat) -> usize {
+    match format {
+        WavFormat::Pcm16 => 2,
+        WavFormat::Pcm24 => 3,
+        WavFormat::Float32 => 4,
+    }
+}
+
+/// The bytes of the answer `POST /api/play` would give to `body`, checked
+/// as the route checks it (its errors), estimated before anything is
+/// rendered: what a recipe's budget adds up ([`crate::recipe`]).
+pub(crate) fn answer_bytes(body: &[u8], limits: &crate::Limits) -> Result<f64, ApiError> {
+    Ok(Job::parse(body, limits)?.answer_bytes())
+}
+
 /// The trajectory to render, and the request field it came from.
 fn trajectory(
     given: Option<TrajectoryJson>,
     stroke: Option<StrokeJson>,
     curve: &VoltageCurve,
-    sample_rate_hz: u32,
-    max_samples: usize,
+    budget: &Budget,
     limits: &crate::Limits,
 ) -> Result<(&'static str, Trajectory), ApiError> {
     match (given, stroke) {
@@ -348,13 +440,7 @@ fn trajectory(
             let to = fields::check(ranges::POSITION_MM, s.to_mm.unwrap_or(x1), "stroke.to_mm")?;
             // Refuse before generating: the render is at least this long.
             let duration_s = (to - from).abs() / velocity * f64::from(strokes);
-            let samples = duration_s * f64::from(sample_rate_hz.max(STROKE_RATE_HZ as u32)) + 1.0;
-            if samples > max_samples as f64 {
-                return Err(ApiError::too_large(
-                    format!("a {} s stroke at {sample_rate_hz} Hz is more than {max_samples} samples", Num(duration_s)),
-                    Some("stroke"),
-                ));
-            }
+            budget.check(duration_s, "stroke")?;
             let generated = if strokes == 1 {
                 Trajectory::constant_velocity(from, to, velocity, STROKE_RATE_HZ)
             } else {

@@ -68,7 +68,8 @@ pub async fn post(
     );
 
     let permit = work::fe_slot(&state).await?;
-    work::blocking(Some(permit), move || answer(call, &spec)).await
+    let heavy = work::heavy_slot(&state).await?;
+    work::blocking(vec![permit, heavy], move || answer(call, &spec)).await
 }
 
 /// Runs the FE model for `call` and builds the answer (on a blocking
