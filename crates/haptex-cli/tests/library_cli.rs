@@ -412,24 +412,35 @@ fn directory_walk_enters_each_directory_once() {
     assert!(text.contains("1 materials, 1 strokes") || text.contains("1 material, 1 stroke"), "{text}");
 }
 
-/// Issue 35: `library import --profile` accepted mu = -1. A friction
-/// coefficient is >= 0 (`haptex_core::ranges::MU`); the import refuses a
-/// negative one, and a negative ft_n, naming file, line and column, and
-/// creates no library.
+/// Issue 35: a profile's mu below zero is the surface pushing the finger
+/// along (`haptex_core::ranges::MU`, which the FE finger's own profiles
+/// reach on steep downslopes): `library import --profile` keeps it, in both
+/// the mu and the force form; beyond +-1000 it refuses, naming file, line
+/// and column, and creates no library.
 #[test]
-fn friction_coefficients_below_zero_are_refused() {
+fn friction_below_zero_is_kept_and_beyond_the_range_refused() {
     let dir = tempfile::tempdir().unwrap();
     let db = dir.path().join("lib.sqlite");
-    for (text, fragment) in [
-        ("x_mm,mu\n0,0.5\n1,-1\n", "line 3, column 'mu': mu must be from 0 to 1000, got -1"),
-        ("x_mm,ft_n,fn_n\n0,0.2,0.5\n1,-0.2,0.5\n", "line 3, column 'ft_n': ft_n = -0.2 N is negative"),
-    ] {
-        let profile = dir.path().join("neg.csv");
+    for (k, text) in ["x_mm,mu\n0,0.5\n1,-0.2\n", "x_mm,ft_n,fn_n\n0,0.2,0.5\n1,-0.1,0.5\n"].iter().enumerate() {
+        let profile = dir.path().join(format!("neg{k}.csv"));
         std::fs::write(&profile, text).unwrap();
-        let args = ["library", "import", "--db", s(&db), "--profile", s(&profile), "--material", "m", "--measured"];
+        let material = format!("m{k}");
+        let args =
+            ["library", "import", "--db", s(&db), "--profile", s(&profile), "--material", &material, "--measured"];
+        let out = haptex(&args);
+        assert!(out.status.success(), "{text:?}: {}", stderr(&out));
+    }
+    let other = dir.path().join("other.sqlite");
+    for (text, fragment) in [
+        ("x_mm,mu\n0,0.5\n1,-1000.5\n", "line 3, column 'mu': mu must be from -1000 to 1000, got -1000.5"),
+        ("x_mm,ft_n,fn_n\n0,0.2,0.5\n1,-90,0.01\n", "line 3, column 'fn_n'"),
+    ] {
+        let profile = dir.path().join("far.csv");
+        std::fs::write(&profile, text).unwrap();
+        let args = ["library", "import", "--db", s(&other), "--profile", s(&profile), "--material", "m", "--measured"];
         let out = haptex(&args);
         assert!(!out.status.success(), "{text:?}");
         assert!(stderr(&out).contains(fragment), "{text:?}: {}", stderr(&out));
-        assert!(!db.exists(), "a refused import created the library");
+        assert!(!other.exists(), "a refused import created the library");
     }
 }

@@ -379,27 +379,12 @@ pub(crate) fn validate(x_mm: &[f64], columns: &[(&'static str, &[f64])]) -> Resu
 
 /// mu = ft / fn (paper eq. 4) from checked forces, itself checked: a tiny
 /// fn (5e-324 N) makes an infinite or absurd mu, refused at its row and
-/// blamed on fn_n; a negative ft (a force along -x, which only a stroke's
-/// direction can turn into friction) is refused at its row and blamed on
-/// ft_n ([`crate::ranges::MU`]).
+/// blamed on fn_n. A negative ft (the surface pushing the finger along, on
+/// a steep downslope) gives a negative mu, kept ([`crate::ranges::MU`]).
 fn mu_from_forces(ft_n: &[f64], fn_n: &[f64]) -> Result<Vec<f64>, Violation> {
     let mu: Vec<f64> = ft_n.iter().zip(fn_n).map(|(t, n)| t / n).collect();
     check_values("mu", &mu).map_err(|(i, _, _)| {
         let i = i.unwrap_or(0);
-        if ft_n[i] < 0.0 {
-            return (
-                Some(i),
-                "ft_n",
-                format!(
-                    "ft_n = {} N is negative: a friction profile's ft_n is the friction force along the sliding \
-                     direction, so that mu = ft_n / fn_n >= 0 (mu must be {}); a force signed along +x is a \
-                     recording's (NAME.recording.json, haptex library import), whose pipeline takes each stroke's \
-                     direction into account",
-                    Num(ft_n[i]),
-                    crate::ranges::MU.describe()
-                ),
-            );
-        }
         (
             Some(i),
             "fn_n",

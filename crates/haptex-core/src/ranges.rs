@@ -85,17 +85,24 @@ pub const HEIGHT_MM: Range = range("h_mm", -1e3, 1e3, "mm");
 /// Positions along the surface (profiles, voltage curves, trajectories,
 /// stroke ends): +-1 km.
 pub const POSITION_MM: Range = range("x_mm", -1e6, 1e6, "mm");
-/// Friction coefficients, given or derived (mu = ft/fn): >= 0. A friction
-/// coefficient is the magnitude of the friction force over the normal
-/// force (Coulomb); the friction force's direction is the sliding
-/// direction's, not the coefficient's. A negative mu would stand for a
-/// surface that pushes the finger along, which eq. (8) would render as a
-/// negative electrostatic force, which no display can produce. The sign
-/// of a recorded force belongs to the recordings pipeline, which knows the
-/// direction of each stroke ([`crate::recording::pipeline`]: mu =
-/// sign(direction) ft_n / fn_n); a profile's `ft_n` is the friction force
-/// along the sliding direction, so its mu = ft_n / fn_n is >= 0 too.
-pub const MU: Range = range("mu", 0.0, 1e3, "");
+/// Friction of a profile or map, given or derived: mu = Ft / Fn, the
+/// tangential over the normal force on the finger (paper eq. 4), with Ft
+/// along the sliding direction. This is the friction a force sensor under
+/// the surface measures, not a Coulomb coefficient: over relief it holds
+/// the slope's share of the contact force, and on a downslope steeper than
+/// the skin's own friction (tan(slope) > mu_skin) the surface pushes the
+/// finger along and mu < 0. The FE finger computes such values (the
+/// shipped sine database reaches -0.030; `haptex simulate --surface sine
+/// --width 0.5 --height 0.5` -0.026), so refusing them would refuse the
+/// model's own profiles.
+/// eq. (8) renders any target below mu_HD, negative ones included, as
+/// U = 0 and counts it in the unrenderable fraction. The Coulomb
+/// coefficients (mu_HD, flat_mu, the FE's skin friction) are positive by
+/// their own ranges. +-1000 keeps every span and ratio finite. The sign
+/// of a recorded force along +x belongs to the recordings pipeline, which
+/// knows each stroke's direction ([`crate::recording::pipeline`]:
+/// mu = sign(direction) ft_n / fn_n).
+pub const MU: Range = range("mu", -1e3, 1e3, "");
 /// Tangential (friction) force.
 pub const FT_N: Range = range("ft_n", -100.0, 100.0, "N");
 /// Normal force of a profile, and the exploration force of eq. (8).
@@ -214,14 +221,14 @@ mod tests {
         }
         assert_eq!(U_MAX_V.check(1e308).unwrap_err().to_string(), "u_max_v must be from 0.001 to 10000 V, got 1e308");
         assert_eq!(FN_N.check(5e-324).unwrap_err().to_string(), "fn_n must be from 1e-6 to 100 N, got 5e-324");
-        assert_eq!(MU.check(-1.0).unwrap_err().to_string(), "mu must be from 0 to 1000, got -1");
-        assert_eq!(MU.check(0.0), Ok(0.0));
+        assert_eq!(MU.check(-1e3 - 0.1).unwrap_err().to_string(), "mu must be from -1000 to 1000, got -1000.1");
+        assert_eq!(MU.check(-0.2), Ok(-0.2));
         // A value that rounds to its bound at 15 digits is shown in full.
         assert_eq!(
             MU.check(1000.0000000000001).unwrap_err().to_string(),
-            "mu must be from 0 to 1000, got 1000.0000000000001"
+            "mu must be from -1000 to 1000, got 1000.0000000000001"
         );
-        assert_eq!(MU.check(0.1 + 1e3).unwrap_err().to_string(), "mu must be from 0 to 1000, got 1000.1");
+        assert_eq!(MU.check(0.1 + 1e3).unwrap_err().to_string(), "mu must be from -1000 to 1000, got 1000.1");
         let names: std::collections::HashSet<_> = ALL.iter().map(|r| r.name).collect();
         assert_eq!(names.len(), ALL.len());
     }

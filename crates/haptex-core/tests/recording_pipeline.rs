@@ -254,8 +254,11 @@ fn invalid_config_is_rejected() {
 /// over a surface gives the same positive mu both ways. Where the true
 /// friction is zero (10 mm of a frictionless strip), noise and the
 /// filter's ringing at its edges average below zero at some nodes: those
-/// are set to zero and counted (`negative_nodes`), never passed through as
-/// negative friction. A force that opposes the motion throughout (a
+/// are kept as measured and counted (`negative_nodes`); they stay within
+/// the low-pass filter's ringing at the 0.6 step (at most the Gibbs
+/// overshoot, 9% of the step: 0.054) plus the noise (0.005 N over 0.5 N,
+/// 0.01 per sample before averaging): -0.065 (measured -0.040), while a
+/// direction taken the wrong way round would give -0.6. A force that opposes the motion throughout (a
 /// converter that flipped the sign) is refused, naming the segment.
 #[test]
 fn signed_ft_becomes_friction_by_the_sliding_direction() {
@@ -287,8 +290,10 @@ fn signed_ft_becomes_friction_by_the_sliding_direction() {
     for direction in [DirectionFilter::Forward, DirectionFilter::Backward, DirectionFilter::Both] {
         let p = process(&rec, &ProcessingConfig { direction, ..ProcessingConfig::default() }).unwrap();
         let (x, mu) = (p.profile.x_mm(), p.profile.mu());
-        assert!(mu.iter().all(|&m| m >= 0.0), "{direction:?}: a negative friction coefficient");
+        let lowest = mu.iter().copied().fold(f64::INFINITY, f64::min);
+        assert!(lowest >= -0.065, "{direction:?}: lowest mu {lowest}: beyond ringing and noise, a wrong sign");
         assert!(p.negative_nodes > 0, "{direction:?}: the frictionless strip should average below zero somewhere");
+        assert_eq!(p.negative_nodes, mu.iter().filter(|&&m| m < 0.0).count(), "{direction:?}");
         for (x, m) in x.iter().zip(mu) {
             if (22.0..28.0).contains(x) {
                 assert!(*m <= 0.01, "{direction:?}: mu({x}) = {m} on the frictionless strip");

@@ -53,6 +53,7 @@ mod tests {
         assert_eq!(e.message, "fn_n must be from 1e-6 to 100 N, got 5e-324");
         assert!(check(ranges::MU, f64::NAN, "mu").is_err() && check(ranges::MU, f64::INFINITY, "mu").is_err());
         assert_eq!(check(ranges::MU, 1e3, "mu").unwrap(), 1e3);
-        assert!(check(ranges::MU, -1.0, "mu").is_err());
+        assert_eq!(check(ranges::MU, -1e3, "mu").unwrap(), -1e3);
+        assert!(check(ranges::MU, -1000.5, "mu").is_err());
     }
 }

@@ -534,7 +534,7 @@ fn route_cases(valid: &Valid) -> Vec<Case> {
             let prefix = if valid.route.1 == "/api/voltage" { "profile." } else { "" };
             let at = |name: &str| format!("{prefix}{name}");
             // Arrays: extreme values out of range, wrong types, too many.
-            for (name, min, max) in [("x_mm", -1e6, 1e6), ("mu", 0.0, 1e3)] {
+            for (name, min, max) in [("x_mm", -1e6, 1e6), ("mu", -1e3, 1e3)] {
                 number_cases(valid, &body, &format!("{}[1]", at(name)), min, max, &mut cases);
             }
             let forces = |ft: Value, fn_n: Value| {
@@ -810,8 +810,8 @@ fn route_cases(valid: &Valid) -> Vec<Case> {
         }
         "/api/map" | "/api/map/path" => {
             for (path, min, max) in [
-                ("mu_black", 0.0, 1e3),
-                ("mu_white", 0.0, 1e3),
+                ("mu_black", -1e3, 1e3),
+                ("mu_white", -1e3, 1e3),
                 ("gamma", 0.05, 20.0),
                 ("pixel_mm", 5e-324, 1e5),
                 ("x0_mm", -1e6, 1e6),

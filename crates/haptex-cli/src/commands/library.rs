@@ -737,8 +737,9 @@ fn process_one(args: ProcessArgs) -> anyhow::Result<()> {
     );
     if processed.negative_nodes > 0 {
         eprintln!(
-            "warning: {} of the profile's nodes averaged a friction below zero (noise or a force offset where the \
-             friction is near zero) and are set to 0",
+            "note: {} of the profile's nodes average a friction below zero, kept as measured: the surface pushes \
+             the finger along there (a downslope steeper than the skin's friction), or the force sensor's noise or \
+             zero offset shows where the friction is near zero",
             processed.negative_nodes
         );
     }

@@ -7,8 +7,7 @@
 //!    ([`friction_coefficient`]), with Ft along the direction of motion;
 //! 4. time-to-location resampling onto a uniform x grid per segment, and
 //!    the segments combined into one profile per stroke ([`super::location`]);
-//!    a friction coefficient is >= 0 ([`crate::ranges::MU`]), so a node
-//!    whose mean is below zero is set to zero and counted (see
+//!    a node whose mean is below zero is kept as measured and counted (see
 //!    [`ProcessedStroke::negative_nodes`]);
 //! 5. Fn_RS = mean Fn while sliding ([`ProcessedStroke::mean_fn_n`]).
 //!
@@ -209,9 +208,12 @@ pub struct ProcessedStroke {
     /// Length of the profile bridged between segments, mm.
     pub bridged_mm: f64,
     /// Nodes of the profile where the mean friction along the motion came
-    /// out below zero (sensor noise or a force offset where the friction
-    /// is near zero; a wholly reversed force is refused instead), set to
-    /// zero: a friction coefficient is >= 0.
+    /// out below zero: the surface pushed the finger along (a downslope
+    /// steeper than the skin's friction, [`crate::ranges::MU`]), or sensor
+    /// noise or a force offset where the friction is near zero. Kept as
+    /// measured and counted, so that `library process` can say so; a
+    /// segment whose force opposes the motion on average is refused
+    /// instead (a converter's flipped sign).
     pub negative_nodes: usize,
     /// Length of the anti-alias filter, taps.
     pub filter_taps: usize,
@@ -225,7 +227,8 @@ pub struct ProcessedStroke {
 /// mu = sign(direction) ft_n / fn_n, positive while the friction opposes
 /// the motion whichever way the finger slides. The sign of ft_n is thus
 /// the sliding direction's, and stays here: the profile that leaves the
-/// pipeline holds friction coefficients, >= 0.
+/// pipeline holds the friction along the motion (negative only where the
+/// surface pushed the finger along).
 pub fn friction_coefficient(ft_n: &[f64], fn_n: &[f64], direction: Direction) -> Vec<f64> {
     let s = direction.sign();
     ft_n.iter().zip(fn_n).map(|(t, n)| s * t / n).collect()
@@ -326,15 +329,11 @@ pub fn process(recording: &Recording, config: &ProcessingConfig) -> Result<Proce
     })?;
     let bridged_mm = combined.bridged_nodes as f64 * config.dx_mm;
     let x_grid = combined.series.x_mm(config.dx_mm);
-    let [mut mu, fn_grid]: [Vec<f64>; 2] = combined.series.columns.try_into().expect("two grid columns");
-    // A friction coefficient is >= 0: a node whose mean came out below
-    // zero (noise or a force offset around zero friction; a segment whose
-    // force opposes the motion on average was refused above) is zero.
-    let mut negative_nodes = 0;
-    for v in mu.iter_mut().filter(|v| **v < 0.0) {
-        *v = 0.0;
-        negative_nodes += 1;
-    }
+    let [mu, fn_grid]: [Vec<f64>; 2] = combined.series.columns.try_into().expect("two grid columns");
+    // A node whose mean came out below zero is kept as measured (see
+    // `negative_nodes`); a segment whose force opposes the motion on
+    // average was refused above.
+    let negative_nodes = mu.iter().filter(|v| **v < 0.0).count();
 
     // Step 5: Fn_RS = mean Fn while sliding, over the location domain.
     let mean_fn_n = fn_grid.iter().sum::<f64>() / fn_grid.len() as f64;
