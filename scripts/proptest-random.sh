@@ -24,8 +24,13 @@ for ((round = 1; round <= rounds; round++)); do
     seed=${SEED:-$(od -An -N8 -tu8 /dev/urandom | tr -d ' ')}
     echo "scripts/proptest-random.sh: round $round of $rounds, PROPTEST_RNG_SEED=$seed" >&2
     export PROPTEST_RNG_SEED=$seed
+    # tells deterministic_suite.rs that this seed replaces the committed one on purpose
+    export HAPTEX_PROPTEST_EXPLORING=1
     cargo test --profile ci --locked -p haptex-core
     cargo test --profile ci --locked -p haptex-fem --lib --test finger_model_fuzz --test height_profile_fuzz
     cargo test --profile ci --locked -p haptex-server --lib
+    # the streaming routes' property test (each case an FE check; more with
+    # HAPTEX_STREAM_CASES)
+    cargo test --profile ci --locked -p haptex-server --test streams
     [ -z "${SEED:-}" ] || break
 done
