@@ -11,8 +11,9 @@
 # with numpy, scipy, statsmodels and websockets:
 #   sudo apt-get install hyperfine wrk time jackd2 libasound2-plugins libasound2-dev
 #   python3 -m pip install numpy scipy statsmodels websockets
-# Usage: scripts/bench-all.sh [OUT]   (default: bench-runs/DATE; about 20 min
-# on 2 cores, most of it the criterion benches and the database build)
+# Usage: scripts/bench-all.sh [OUT]   (default: bench-runs/DATE; about 35 min
+# on 2 cores, most of it the criterion benches, the database build and the FE
+# robustness matrix)
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 cd "$ROOT"
@@ -154,6 +155,21 @@ step 44-check-api python3 scripts/time_check_api.py -n 7
 kill $SERVE
 wait $SERVE 2>/dev/null || true
 SERVE=
+# /api/health while 12 clients send FE checks, maps and plays (issue 35):
+# a fresh server each time, so that its RSS before, at peak and after is
+# this load's.
+for run in 1 2 3; do
+    "$HAPTEX" serve > "$WORK/serve-health.log" 2>&1 &
+    SERVE=$!
+    for _ in $(seq 100); do curl -s -o /dev/null http://127.0.0.1:8080/api/health && break; sleep 0.1; done
+    step "45-health-under-load-$run" python3 scripts/load_health.py --pid $SERVE
+    kill $SERVE
+    wait $SERVE 2>/dev/null || true
+    SERVE=
+done
+# The FE's hardest inputs, one run each with its time (the robustness
+# matrix, 100 runs on the suite's two test threads; issue 35's per-run goal).
+step 46-fe-robustness-matrix cargo test --profile ci -p haptex-fem --test robustness_matrix -- --nocapture
 
 # Live output on a paced device (JACK's dummy driver). The peer scripts
 # above rebuilt haptex without the live feature.
