@@ -21,7 +21,7 @@
 //!
 //! Completion: the whole slide, finite Ft/Fn, Fn > 0 and global
 //! equilibrium (contact force = driven-set reaction) to 1e-6 at every step.
-//! All 100 runs complete (10 tests; 531 s on 2 cores as 7 tests on 2026-11-28, Zen 3, the runs 713 s
+//! All 100 runs complete (11 tests; 531 s on 2 cores as 7 tests on 2026-11-28, Zen 3, the runs 713 s
 //! together, per-run times in BENCHMARKS.md). The last 9 to do so, the half-disc on the
 //! sharpest corner (bump: fine mesh, penalty 1000; edge: a quarter step,
 //! visco-elastic; sine: penalty 1000, half and a quarter step, and the
