@@ -25,8 +25,10 @@ use std::io::Write;
 
 use serde::Serialize;
 
-use crate::electrovibration::{Device, ElectroError, Regions, force_ratio_for, format_ranges, min_max};
-use crate::num::{Fixed, Num};
+use crate::electrovibration::{
+    Device, ElectroError, Regions, force_ratio_for, format_ranges, min_max, write_profile_line,
+};
+use crate::num::Num;
 use crate::profile::FrictionProfile;
 use crate::ranges::{self, RangeError};
 use crate::relative::{FlatMu, Relative, RelativeError};
@@ -436,15 +438,7 @@ impl fmt::Display for DisplaySummary {
         if let Some(relative) = &self.relative {
             writeln!(f, "{}", relative.describe())?;
         }
-        writeln!(
-            f,
-            "profile: {} points, x {} .. {} mm, mu {} .. {}",
-            self.n_points,
-            Num(self.x_min_mm),
-            Num(self.x_max_mm),
-            Fixed(self.mu_min, 4),
-            Fixed(self.mu_max, 4)
-        )?;
+        write_profile_line(f, self.n_points, [self.x_min_mm, self.x_max_mm], [self.mu_min, self.mu_max])?;
         if let Some(ev) = &self.electrovibration {
             write!(
                 f,

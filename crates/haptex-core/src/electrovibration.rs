@@ -348,21 +348,32 @@ pub struct VoltageSummary {
     pub warnings: Vec<String>,
 }
 
+/// The "profile: N points, x .. mm, mu .." line of a design's summary
+/// (this one and the display summaries of [`crate::combined`]).
+pub(crate) fn write_profile_line(
+    f: &mut fmt::Formatter<'_>,
+    n_points: usize,
+    [x_min_mm, x_max_mm]: [f64; 2],
+    [mu_min, mu_max]: [f64; 2],
+) -> fmt::Result {
+    writeln!(
+        f,
+        "profile: {} points, x {} .. {} mm, mu {} .. {}",
+        n_points,
+        Num(x_min_mm),
+        Num(x_max_mm),
+        Fixed(mu_min, 4),
+        Fixed(mu_max, 4)
+    )
+}
+
 impl fmt::Display for VoltageSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "method: {}", self.method)?;
         if let Some(relative) = &self.relative {
             writeln!(f, "{}", relative.describe())?;
         }
-        writeln!(
-            f,
-            "profile: {} points, x {} .. {} mm, mu {} .. {}",
-            self.n_points,
-            Num(self.x_min_mm),
-            Num(self.x_max_mm),
-            Fixed(self.mu_min, 4),
-            Fixed(self.mu_max, 4)
-        )?;
+        write_profile_line(f, self.n_points, [self.x_min_mm, self.x_max_mm], [self.mu_min, self.mu_max])?;
         if let (Some(mu_hd), Some(ratio)) = (self.mu_hd, self.fe_over_fn_per_v2) {
             write!(f, "device: mu_HD = {}, Fe/Fn = {ratio:.5e} U^2 (U in V)", Num(mu_hd))?;
             if let Some(fn_n) = self.fn_n {

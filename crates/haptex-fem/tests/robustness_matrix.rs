@@ -251,7 +251,7 @@ fn finger_issue_bump_every_setting() {
 /// notes on agreement), the finger.
 #[test]
 fn finger_sharp_corners_every_setting() {
-    assert_none(sharp_corner_failures(Body::Finger, &[SHARP_BUMP, SHARP_EDGE, SHARP_SINE], &every_setting()));
+    assert_none(failures(Body::Finger, &[SHARP_BUMP, SHARP_EDGE, SHARP_SINE], &every_setting()));
 }
 
 // The half-disc's sharp corners are the matrix's longest runs (the sine at
@@ -262,26 +262,26 @@ fn finger_sharp_corners_every_setting() {
 /// The same, the half-disc, over the sharp bump.
 #[test]
 fn half_disc_sharp_bump_every_setting() {
-    assert_none(sharp_corner_failures(Body::HalfDisc, &[SHARP_BUMP], &every_setting()));
+    assert_none(failures(Body::HalfDisc, &[SHARP_BUMP], &every_setting()));
 }
 
 /// The same, the half-disc, over the sharp edge.
 #[test]
 fn half_disc_sharp_edge_every_setting() {
-    assert_none(sharp_corner_failures(Body::HalfDisc, &[SHARP_EDGE], &every_setting()));
+    assert_none(failures(Body::HalfDisc, &[SHARP_EDGE], &every_setting()));
 }
 
 /// The same, the half-disc, over the sharp sine at the fine mesh.
 #[test]
 fn half_disc_sharp_sine_fine_mesh() {
-    assert_none(sharp_corner_failures(Body::HalfDisc, &[SHARP_SINE], &[Variant::Fine]));
+    assert_none(failures(Body::HalfDisc, &[SHARP_SINE], &[Variant::Fine]));
 }
 
 /// The same, the half-disc, over the sharp sine at every other setting.
 #[test]
 fn half_disc_sharp_sine_every_other_setting() {
     let others: Vec<Variant> = every_setting().into_iter().filter(|v| *v != Variant::Fine).collect();
-    assert_none(sharp_corner_failures(Body::HalfDisc, &[SHARP_SINE], &others));
+    assert_none(failures(Body::HalfDisc, &[SHARP_SINE], &others));
 }
 
 /// The default and every one-factor variant.
@@ -289,8 +289,8 @@ fn every_setting() -> Vec<Variant> {
     std::iter::once(Variant::Default).chain(VARIANTS).collect()
 }
 
-/// Runs the sharp corners at the given variants; returns the failures.
-fn sharp_corner_failures(body: Body, surfaces: &[SurfaceShape], variants: &[Variant]) -> Vec<String> {
+/// Runs each surface at each variant; returns the failures.
+fn failures(body: Body, surfaces: &[SurfaceShape], variants: &[Variant]) -> Vec<String> {
     let mut failures = Vec::new();
     for surface in surfaces {
         for &variant in variants {
@@ -316,5 +316,5 @@ fn extreme_combinations_complete_half_disc() {
 
 fn extreme_combination_failures(body: Body) -> Vec<String> {
     let variants = [Variant::FinePenalty1000QuarterStep, Variant::CoarsePenalty50Viscoelastic];
-    sharp_corner_failures(body, &[ISSUE_BUMP, SHARP_SINE], &variants)
+    failures(body, &[ISSUE_BUMP, SHARP_SINE], &variants)
 }

@@ -735,12 +735,12 @@ fn process_one(args: ProcessArgs) -> anyhow::Result<()> {
         processed.mean_fn_n,
         processed.sliding_s
     );
-    if processed.negative_nodes > 0 {
+    if processed.negative_nodes() > 0 {
         eprintln!(
             "note: {} of the profile's nodes average a friction below zero, kept as measured: the surface pushes \
              the finger along there (a downslope steeper than the skin's friction), or the force sensor's noise or \
              zero offset shows where the friction is near zero",
-            processed.negative_nodes
+            processed.negative_nodes()
         );
     }
     if let Some(path) = &args.output {

@@ -207,6 +207,13 @@ pub struct ProcessedStroke {
     pub sliding_s: f64,
     /// Length of the profile bridged between segments, mm.
     pub bridged_mm: f64,
+    /// Length of the anti-alias filter, taps.
+    pub filter_taps: usize,
+    /// The resampled signals and velocity at the position rate.
+    pub series: PositionRateSeries,
+}
+
+impl ProcessedStroke {
     /// Nodes of the profile where the mean friction along the motion came
     /// out below zero: the surface pushed the finger along (a downslope
     /// steeper than the skin's friction, [`crate::ranges::MU`]), or sensor
@@ -214,11 +221,9 @@ pub struct ProcessedStroke {
     /// measured and counted, so that `library process` can say so; a
     /// segment whose force opposes the motion on average is refused
     /// instead (a converter's flipped sign).
-    pub negative_nodes: usize,
-    /// Length of the anti-alias filter, taps.
-    pub filter_taps: usize,
-    /// The resampled signals and velocity at the position rate.
-    pub series: PositionRateSeries,
+    pub fn negative_nodes(&self) -> usize {
+        self.profile.mu().iter().filter(|m| **m < 0.0).count()
+    }
 }
 
 /// mu = Ft / Fn (paper eqs. 1 and 4), with Ft taken along the direction of
@@ -331,10 +336,8 @@ pub fn process(recording: &Recording, config: &ProcessingConfig) -> Result<Proce
     let x_grid = combined.series.x_mm(config.dx_mm);
     let [mu, fn_grid]: [Vec<f64>; 2] = combined.series.columns.try_into().expect("two grid columns");
     // A node whose mean came out below zero is kept as measured (see
-    // `negative_nodes`); a segment whose force opposes the motion on
-    // average was refused above.
-    let negative_nodes = mu.iter().filter(|v| **v < 0.0).count();
-
+    // `ProcessedStroke::negative_nodes`); a segment whose force opposes the
+    // motion on average was refused above.
     // Step 5: Fn_RS = mean Fn while sliding, over the location domain.
     let mean_fn_n = fn_grid.iter().sum::<f64>() / fn_grid.len() as f64;
     let mean_mu = mu.iter().sum::<f64>() / mu.len() as f64;
@@ -351,7 +354,6 @@ pub fn process(recording: &Recording, config: &ProcessingConfig) -> Result<Proce
         mean_mu,
         sliding_s,
         bridged_mm,
-        negative_nodes,
         filter_taps: filter.taps().len(),
         series: PositionRateSeries { t_s, x_mm, v_mm_s, fn_n, ft_n },
     })
