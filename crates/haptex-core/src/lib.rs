@@ -7,6 +7,7 @@
 
 pub mod buffer;
 pub mod cae;
+pub mod calibration;
 pub mod combined;
 pub mod database;
 pub mod electrovibration;

@@ -73,7 +73,7 @@ impl Range {
     }
 }
 
-const fn range(name: &'static str, min: f64, max: f64, unit: &'static str) -> Range {
+pub const fn range(name: &'static str, min: f64, max: f64, unit: &'static str) -> Range {
     Range { name, min, max, unit }
 }
 

@@ -265,6 +265,12 @@ impl UltrasonicDevice {
         Self::new(ReductionCurve::Parametric(Exponential::LITERATURE), a_max_um)
     }
 
+    /// A device with a parametric curve (a calibration's fit, valid up to
+    /// its `a_valid_um`) and a_max = `a_max_um` (default: that limit).
+    pub fn parametric(curve: Exponential, a_max_um: Option<f64>) -> Result<Self, UltrasonicError> {
+        Self::new(ReductionCurve::Parametric(curve), a_max_um)
+    }
+
     /// A calibrated device with a_max = `a_max_um` (default: the
     /// calibration's last amplitude).
     pub fn calibrated(calibration: Calibration, a_max_um: Option<f64>) -> Result<Self, UltrasonicError> {

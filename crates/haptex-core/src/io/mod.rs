@@ -11,7 +11,7 @@ mod table;
 pub use atomic::{OutputTarget, WriteError, fault_point, remove_stale_temporaries, temporary_prefix_of, write_atomic};
 pub use bounded::{BoundedReadError, read_file_bounded};
 pub use fileset::{FileSet, MemberError, MemberHashes, OutputDir, sha256_file, sha256_hex, verify_members};
-pub use table::{MAX_LINE_BYTES, Table, TableError, TableErrorKind};
+pub use table::{Category, MAX_LINE_BYTES, Table, TableError, TableErrorKind};
 
 use std::io::Write;
 

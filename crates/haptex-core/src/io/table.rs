@@ -35,8 +35,19 @@ pub enum TableErrorKind {
     NonFinite { text: String },
     #[error("line longer than {limit} bytes (a haptex CSV line is a header or a row of numbers; is this a CSV file?)")]
     LineTooLong { limit: usize },
+    #[error("expected one of {expected}, found {text:?}")]
+    NotAWord { text: String, expected: String },
     #[error("{0}")]
     Invalid(String),
+}
+
+/// A column of words rather than numbers (a categorical column, such as a
+/// carrier's shape): each field must be one of `words` (ASCII case is
+/// ignored), and the table stores its index in `words` as the number.
+#[derive(Debug, Clone, Copy)]
+pub struct Category<'a> {
+    pub column: &'a str,
+    pub words: &'a [&'a str],
 }
 
 /// A table error with its location: source, line and column.
@@ -100,6 +111,17 @@ impl Table {
     /// Time and memory are linear in the input; a line longer than
     /// [`MAX_LINE_BYTES`] is an error.
     pub fn read<R: Read>(reader: R, source_name: &str) -> Result<Self, TableError> {
+        Self::read_with_categories(reader, source_name, &[])
+    }
+
+    /// [`Table::read`] with some columns holding words ([`Category`]): a
+    /// word is stored as its index in the category's list, a field that is
+    /// none of them is an error naming the line, the column and the words.
+    pub fn read_with_categories<R: Read>(
+        reader: R,
+        source_name: &str,
+        categories: &[Category<'_>],
+    ) -> Result<Self, TableError> {
         let error = |line: Option<u64>, column: Option<String>, kind| TableError {
             source_name: source_name.to_string(),
             line,
@@ -145,6 +167,9 @@ impl Table {
             columns.push(name.to_string());
         }
 
+        // Per column, the category it holds, if any.
+        let coded: Vec<Option<&Category<'_>>> =
+            columns.iter().map(|name| categories.iter().find(|c| c.column == name)).collect();
         // Comments after the header are skipped, not kept.
         let comments = lines.comments.take().unwrap_or_default();
         let mut data: Vec<Vec<f64>> = vec![Vec::new(); columns.len()];
@@ -153,8 +178,11 @@ impl Table {
             let mut found = 0;
             for field in row.split(|&b| b == b',') {
                 if found < columns.len() {
-                    let value = parse_number(field)
-                        .map_err(|kind| error(Some(line), Some(column_label(&columns[found])), kind))?;
+                    let value = match coded[found] {
+                        Some(category) => parse_word(field, category),
+                        None => parse_number(field),
+                    }
+                    .map_err(|kind| error(Some(line), Some(column_label(&columns[found])), kind))?;
                     data[found].push(value);
                 }
                 found += 1;
@@ -363,6 +391,13 @@ fn parse_number(field: &[u8]) -> Result<f64, TableErrorKind> {
     if value.is_finite() { Ok(value) } else { Err(TableErrorKind::NonFinite { text: quote(text) }) }
 }
 
+fn parse_word(field: &[u8], category: &Category<'_>) -> Result<f64, TableErrorKind> {
+    let text = unquote(std::str::from_utf8(field).unwrap_or(""));
+    category.words.iter().position(|w| w.eq_ignore_ascii_case(text)).map(|i| i as f64).ok_or_else(|| {
+        TableErrorKind::NotAWord { text: quote(&String::from_utf8_lossy(field)), expected: category.words.join(", ") }
+    })
+}
+
 /// A column name as an error names it: whole if short, else its first 40
 /// characters and its length (an error never carries a megabyte), with
 /// control characters escaped.
@@ -411,6 +446,23 @@ mod tests {
         // short one kept.
         let long = format!("# {}\n# short\nx\n1\n", "a".repeat(MAX_LEADING_COMMENT_BYTES));
         assert_eq!(read(&long).unwrap().comments(), ["# short"]);
+    }
+
+    #[test]
+    fn a_category_column_holds_the_index_of_its_word() {
+        let carrier = Category { column: "carrier", words: &["sine", "square", "none"] };
+        let t =
+            Table::read_with_categories("v,carrier\n1, Square\n2,\"none\"\n3,sine\n".as_bytes(), "m.csv", &[carrier])
+                .unwrap();
+        assert_eq!(t.column("carrier").unwrap(), [1.0, 2.0, 0.0]);
+        let e =
+            Table::read_with_categories("v,carrier\n1,sine\n2,triangle\n".as_bytes(), "m.csv", &[carrier]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "m.csv, line 3, column 'carrier': expected one of sine, square, none, found \"triangle\""
+        );
+        // Without the category the same file is a number error.
+        assert!(matches!(read("v,carrier\n1,sine\n").unwrap_err().kind, TableErrorKind::NotANumber { .. }));
     }
 
     #[test]
