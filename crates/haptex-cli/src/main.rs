@@ -34,6 +34,7 @@ enum Command {
     ForceCurve(commands::force_curve::ForceCurveArgs),
     Map(commands::map::MapArgs),
     Recipe(commands::recipe::RecipeArgs),
+    Calibrate(commands::calibrate::CalibrateArgs),
 }
 
 fn main() -> ExitCode {
@@ -52,6 +53,7 @@ fn main() -> ExitCode {
         Command::ForceCurve(args) => commands::force_curve::run(args),
         Command::Map(args) => commands::map::run(args),
         Command::Recipe(args) => commands::recipe::run(args),
+        Command::Calibrate(args) => commands::calibrate::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

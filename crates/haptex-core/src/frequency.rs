@@ -160,8 +160,9 @@ impl FingerCircuit {
     }
 }
 
-/// Three significant digits, for a corner frequency in a message.
-fn round3(x: f64) -> f64 {
+/// Three significant digits, for a fitted or derived constant in a
+/// message (a corner frequency, an interval's ends).
+pub fn round3(x: f64) -> f64 {
     if x == 0.0 || !x.is_finite() {
         return x;
     }

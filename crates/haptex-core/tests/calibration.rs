@@ -264,8 +264,37 @@ fn measurement_errors_name_the_line_and_the_column() {
 fn written_measurements_read_back_the_same() {
     let s = measure(&paper_truth(), &Protocol::default(), &Noise::default(), 11);
     let mut bytes = Vec::new();
-    haptex_core::calibration::virtual_device::write_csv(&s.measurements, &mut bytes).unwrap();
+    haptex_core::calibration::virtual_device::write_csv(&s.measurements, &[], &mut bytes).unwrap();
     let back = Measurements::from_bytes(&bytes, "back.csv").unwrap();
     assert_eq!(back.rows(), s.measurements.rows());
     assert_eq!(back.sha256().len(), 64);
+}
+
+/// data/examples/calibration-measurements.csv is the virtual device's
+/// output, byte for byte (HAPTEX_REGENERATE=1 rewrites it), and its fit
+/// holds the example's truth.
+#[test]
+fn shipped_example_measurements_are_the_virtual_devices_and_their_fit_holds_the_truth() {
+    use haptex_core::calibration::virtual_device::{example_csv, example_truth};
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/examples/calibration-measurements.csv");
+    let bytes = example_csv();
+    if std::env::var_os("HAPTEX_REGENERATE").is_some() {
+        std::fs::write(&path, &bytes).unwrap();
+    }
+    let shipped = std::fs::read(&path).unwrap();
+    assert!(shipped == bytes, "{} differs from the virtual device's output: regenerate it", path.display());
+    let m = Measurements::from_bytes(&shipped, "example").unwrap();
+    let cal = calibrate(&m, Settings::default());
+    let truth = example_truth();
+    let circuit = cal.force.as_ref().unwrap().circuit.as_ref().unwrap();
+    assert!(circuit.c_per_v2.identified && circuit.c_per_v2.covers(truth.c_per_v2), "{:?}", circuit.c_per_v2);
+    // This seed's rho_sc interval (1.05e5 .. 1.38e5 ohm m) misses the
+    // truth, as one 95% interval in twenty does (the coverage test above
+    // measures how often); docs/calibration.md shows it. Its estimate is
+    // within 25%.
+    let rho = circuit.rho_sc_ohm_m;
+    assert!(rho.identified && (rho.value / 1e5 - 1.0).abs() < 0.25, "{rho:?}");
+    assert!(circuit.gap_um.identified && circuit.gap_um.covers(0.1), "{:?}", circuit.gap_um);
+    assert!(circuit.mu_hd.covers(0.6), "{:?}", circuit.mu_hd);
 }

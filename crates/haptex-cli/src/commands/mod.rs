@@ -1,6 +1,7 @@
 //! One module per `haptex` subcommand.
 
 pub mod cae;
+pub mod calibrate;
 pub mod check;
 pub mod db;
 pub mod force_curve;

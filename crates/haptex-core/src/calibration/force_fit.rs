@@ -29,9 +29,9 @@
 
 use crate::calibration::least_squares::{self, Fit, Problem};
 use crate::calibration::measurements::Measurements;
-use crate::calibration::{Estimate, Goodness, LEVEL, Outlier, goodness, outliers};
+use crate::calibration::{Estimate, Goodness, LEVEL, Outlier, Posterior, goodness, outliers};
 use crate::electrovibration::{EPS0_F_PER_M, LayerStack};
-use crate::frequency::FingerCircuit;
+use crate::frequency::{FingerCircuit, round3};
 use crate::num::Num;
 use crate::signal::{Carrier, CarrierShape};
 
@@ -51,6 +51,8 @@ pub struct CarrierFit {
 pub struct Eq3Fit {
     pub mu_hd: Estimate,
     pub carriers: Vec<CarrierFit>,
+    /// theta = [mu_HD, c of each carrier in `carriers`' order].
+    pub posterior: Posterior,
     pub goodness: Goodness,
     pub outliers: Vec<Outlier>,
 }
@@ -66,6 +68,8 @@ pub struct CircuitFit {
     pub gap_um: Estimate,
     /// The corner 1 / (2 pi tau) at the estimate, Hz.
     pub corner_hz: f64,
+    /// theta = [mu_HD, ln c, log10 rho_sc, g in um].
+    pub posterior: Posterior,
     pub goodness: Goodness,
     pub outliers: Vec<Outlier>,
 }
@@ -187,8 +191,13 @@ pub fn fit(m: &Measurements, stack: &LayerStack) -> Option<ForceFit> {
         }
         carrier_fits.push(CarrierFit { carrier: *carrier, c_per_v2: c, rows: in_group.len(), max_voltage_v });
     }
-    let eq3_fit =
-        Eq3Fit { mu_hd, carriers: carrier_fits, goodness: eq3_goodness, outliers: outliers(&eq3, &y, &rows, m) };
+    let eq3_fit = Eq3Fit {
+        mu_hd,
+        carriers: carrier_fits,
+        posterior: Posterior::of(&eq3),
+        goodness: eq3_goodness,
+        outliers: outliers(&eq3, &y, &rows, m),
+    };
     // The circuit, from three or more frequencies (a direct drive is 0 Hz).
     let mut frequencies: Vec<f64> = carriers.iter().map(frequency_of).collect();
     frequencies.sort_by(f64::total_cmp);
@@ -212,6 +221,7 @@ fn empty_eq3() -> Eq3Fit {
     Eq3Fit {
         mu_hd: Estimate::unidentified(f64::NAN),
         carriers: Vec::new(),
+        posterior: Posterior::default(),
         goodness: Goodness::default(),
         outliers: Vec::new(),
     }
@@ -372,16 +382,49 @@ fn fit_circuit(
         ));
     }
     let outliers = outliers(&fit, y, rows, m);
-    Some(CircuitFit { mu_hd, c_per_v2: c, rho_sc_ohm_m: rho_sc, gap_um: gap, corner_hz, goodness, outliers })
+    Some(CircuitFit {
+        mu_hd,
+        c_per_v2: c,
+        rho_sc_ohm_m: rho_sc,
+        gap_um: gap,
+        corner_hz,
+        posterior: Posterior::of(&fit),
+        goodness,
+        outliers,
+    })
 }
 
-/// Three significant digits.
-pub(crate) fn round3(x: f64) -> f64 {
-    if x == 0.0 || !x.is_finite() {
-        return x;
+impl Eq3Fit {
+    /// The fitted mu at RMS voltage `u_v` on carrier number `k`, with its
+    /// 95% band: [value, low, high].
+    pub fn curve(&self, k: usize, u_v: f64) -> [f64; 3] {
+        self.posterior.band(&|t| t[0] * (1.0 + t[1 + k] * u_v * u_v))
     }
-    let scale = 10f64.powi(2 - x.abs().log10().floor() as i32);
-    (x * scale).round() / scale
+
+    /// The friction's rise mu / mu_HD - 1 = c U^2 on carrier number `k`,
+    /// with its 95% band.
+    pub fn rise(&self, k: usize, u_v: f64) -> [f64; 3] {
+        self.posterior.band(&|t| t[1 + k] * u_v * u_v)
+    }
+}
+
+impl CircuitFit {
+    /// The fitted mu at RMS voltage `u_v` on `carrier`, with its 95% band.
+    pub fn curve(&self, stack: &LayerStack, carrier: &Carrier, u_v: f64) -> [f64; 3] {
+        self.posterior.band(&|t| {
+            let circuit = FingerCircuit { rho_sc_ohm_m: 10f64.powf(t[2]), gap_um: t[3].max(0.0) };
+            t[0] * (1.0 + t[1].exp() * circuit.carrier_gain(stack, carrier) * u_v * u_v)
+        })
+    }
+
+    /// The friction's rise mu / mu_HD - 1 = c G U^2 on `carrier`, with its
+    /// 95% band.
+    pub fn rise(&self, stack: &LayerStack, carrier: &Carrier, u_v: f64) -> [f64; 3] {
+        self.posterior.band(&|t| {
+            let circuit = FingerCircuit { rho_sc_ohm_m: 10f64.powf(t[2]), gap_um: t[3].max(0.0) };
+            t[1].exp() * circuit.carrier_gain(stack, carrier) * u_v * u_v
+        })
+    }
 }
 
 /// The contact-area coefficient k (mm^2/N) that gives force coefficient

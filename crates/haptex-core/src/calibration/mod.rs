@@ -49,6 +49,45 @@ impl Estimate {
     }
 }
 
+/// A fit's estimate and covariance, kept to draw the model's band.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Posterior {
+    pub theta: Vec<f64>,
+    /// p x p, row by row.
+    pub covariance: Vec<f64>,
+    /// Degrees of freedom of the t quantile.
+    pub df: f64,
+}
+
+impl Posterior {
+    pub(crate) fn of(fit: &Fit) -> Self {
+        Self { theta: fit.theta.clone(), covariance: fit.covariance.clone(), df: fit.df }
+    }
+
+    /// A function of the parameters with its 95% interval by the delta
+    /// method (forward-difference gradient): [value, low, high].
+    pub fn band(&self, f: &dyn Fn(&[f64]) -> f64) -> [f64; 3] {
+        let p = self.theta.len();
+        let value = f(&self.theta);
+        let mut grad = vec![0.0; p];
+        let mut t = self.theta.clone();
+        for j in 0..p {
+            let h = 1e-6 * self.theta[j].abs().max(1e-6);
+            t[j] = self.theta[j] + h;
+            grad[j] = (f(&t) - value) / h;
+            t[j] = self.theta[j];
+        }
+        let mut var = 0.0;
+        for a in 0..p {
+            for b in 0..p {
+                var += grad[a] * grad[b] * self.covariance[a * p + b];
+            }
+        }
+        let hw = distributions::t_quantile(LEVEL, self.df) * var.max(0.0).sqrt();
+        [value, value - hw, value + hw]
+    }
+}
+
 /// How well a model fits.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Goodness {

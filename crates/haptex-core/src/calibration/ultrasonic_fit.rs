@@ -18,7 +18,8 @@
 
 use crate::calibration::least_squares::{self, Problem};
 use crate::calibration::measurements::Measurements;
-use crate::calibration::{Estimate, Goodness, LEVEL, Outlier, distributions, goodness, outliers};
+use crate::calibration::{Estimate, Goodness, LEVEL, Outlier, Posterior, distributions, goodness, outliers};
+use crate::frequency::round3;
 use crate::num::Num;
 
 /// Which form of rho(a).
@@ -35,6 +36,8 @@ pub struct ExponentialFit {
     pub mu_hd: Estimate,
     pub rho_inf: Estimate,
     pub a_c_um: Estimate,
+    /// theta = [mu_HD, rho_inf, ln a_c].
+    pub posterior: Posterior,
     pub goodness: Goodness,
     pub outliers: Vec<Outlier>,
 }
@@ -176,7 +179,14 @@ pub fn fit(m: &Measurements, choice: Choice) -> Option<UltrasonicFit> {
                 let hw = distributions::t_quantile(LEVEL, f.df) * var.max(0.0).sqrt();
                 let rho_min = Estimate { value, interval: [value - hw, value + hw], identified: rho_inf.identified };
                 Some((
-                    ExponentialFit { mu_hd, rho_inf, a_c_um: a_c, goodness: g, outliers: outliers(&f, &y, &rows, m) },
+                    ExponentialFit {
+                        mu_hd,
+                        rho_inf,
+                        a_c_um: a_c,
+                        posterior: Posterior::of(&f),
+                        goodness: g,
+                        outliers: outliers(&f, &y, &rows, m),
+                    },
                     rho_min,
                 ))
             }
@@ -217,6 +227,13 @@ pub fn fit(m: &Measurements, choice: Choice) -> Option<UltrasonicFit> {
     Some(UltrasonicFit { exponential: exponential.map(|(e, _)| e), table, chosen, a_max_um, rho_min, verdicts })
 }
 
+impl ExponentialFit {
+    /// The fitted rho(a) at `a_um`, with its 95% band.
+    pub fn curve(&self, a_um: f64) -> [f64; 3] {
+        self.posterior.band(&|t| t[1] + (1.0 - t[1]) * (-a_um / t[2].exp()).exp())
+    }
+}
+
 /// The table from the means per amplitude: pool adjacent violators of a
 /// non-increasing order (weights: counts), keep each block's first
 /// amplitude, divide by the block at rest.
@@ -249,8 +266,4 @@ fn isotonic_table(levels: &[f64], means: &[f64], se: &[f64], count: &[usize]) ->
             TablePoint { amplitude_um: levels[l], rho, interval: [rho - half, rho + half] }
         })
         .collect()
-}
-
-fn round3(x: f64) -> f64 {
-    crate::calibration::force_fit::round3(x)
 }

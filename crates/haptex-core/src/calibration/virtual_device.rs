@@ -187,8 +187,12 @@ pub fn measure(truth: &Truth, protocol: &Protocol, noise: &Noise, seed: u64) -> 
     Synthetic { measurements: Measurements::from_rows(rows, "virtual device"), finger_factors }
 }
 
-/// Writes measurements in the file format (for the shipped example).
-pub fn write_csv(m: &Measurements, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+/// Writes measurements in the file format (for the shipped example),
+/// after `comments` (each written as a `# ` line).
+pub fn write_csv(m: &Measurements, comments: &[String], w: &mut dyn std::io::Write) -> std::io::Result<()> {
+    for c in comments {
+        writeln!(w, "# {c}")?;
+    }
     writeln!(w, "voltage_v,carrier,carrier_hz,amplitude_um,mu,velocity_mm_s,finger,repetition")?;
     for r in m.rows() {
         let (shape, hz) = r.carrier.map_or(("none", 0.0), |c| (c.shape.name(), c.frequency_hz));
@@ -210,4 +214,47 @@ pub fn write_csv(m: &Measurements, w: &mut dyn std::io::Write) -> std::io::Resul
         )?;
     }
     Ok(())
+}
+
+/// The virtual device of the shipped example (data/examples/
+/// calibration-measurements.csv): the paper's stack and k = 200 mm^2/N,
+/// mu_HD = 0.6, rho_sc = 1e5 ohm m (corner 109 Hz), a 0.1 um gap, and a
+/// plate with rho_inf = 0.1, a_c = 0.7 um.
+pub fn example_truth() -> Truth {
+    let stack = LayerStack::PAPER;
+    Truth {
+        mu_hd: 0.6,
+        c_per_v2: crate::electrovibration::EPS0_F_PER_M * 200.0 * 1e-6 / (2.0 * stack.gap_factor_m2()),
+        circuit: Some(FingerCircuit { rho_sc_ohm_m: 1e5, gap_um: 0.1 }),
+        stack,
+        ultrasonic: Some(Exponential { rho_inf: 0.1, a_c_um: 0.7, a_valid_um: 2.5 }),
+    }
+}
+
+/// The seed of the shipped example.
+pub const EXAMPLE_SEED: u64 = 2026;
+
+/// The shipped example's text, byte for byte: the default protocol and
+/// noise on [`example_truth`], with its provenance in comment lines.
+pub fn example_csv() -> Vec<u8> {
+    let truth = example_truth();
+    let s = measure(&truth, &Protocol::default(), &Noise::default(), EXAMPLE_SEED);
+    let comments = vec![
+        "SYNTHETIC measurements: made by haptex's virtual device (crates/haptex-core/src/calibration/virtual_device.rs), \
+         not measured on a display"
+            .to_string(),
+        format!(
+            "truth: mu_HD = 0.6; c = {} 1/V^2 (k = 200 mm^2/N on the paper's stack); rho_sc = 1e5 ohm m; air gap 0.1 um; \
+             ultrasonic rho_inf = 0.1, a_c = 0.7 um",
+            crate::num::Num(truth.c_per_v2)
+        ),
+        format!(
+            "protocol: 4 fingers x 3 repetitions; 0 to 100 V on sine 10 Hz to 3 kHz and a direct drive; 0 to 2.5 um at 0 V; \
+             noise: 5 mN sensor, 10% finger, 2% stroke (seed {EXAMPLE_SEED})"
+        ),
+        "regenerate: HAPTEX_REGENERATE=1 cargo test -p haptex-core --test calibration shipped_example".to_string(),
+    ];
+    let mut bytes = Vec::new();
+    write_csv(&s.measurements, &comments, &mut bytes).expect("writing to memory");
+    bytes
 }

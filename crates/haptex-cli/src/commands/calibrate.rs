@@ -1,0 +1,355 @@
+//! `haptex calibrate`: the display's constants from measurements made on
+//! it, with their intervals, and the device file the design commands take.
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+use haptex_core::calibration::device_file::DeviceFile;
+use haptex_core::calibration::force_fit::{self, carrier_name};
+use haptex_core::calibration::measurements::Measurements;
+use haptex_core::calibration::ultrasonic_fit::Choice;
+use haptex_core::calibration::{Calibration, Estimate, Goodness, Settings, calibrate};
+use haptex_core::electrovibration::Device;
+use haptex_core::frequency::round3;
+use haptex_core::num::Num;
+use haptex_core::plot::{Figure, Panel, Series, Shape};
+use haptex_core::ranges;
+
+use crate::args::{LayerStackArgs, in_range};
+
+/// Fit the display's models to measurements made on it: mu_HD and the
+/// force coefficient c of eq. (3)/(8) per carrier, the circuit model's
+/// rho_sc and air gap g across carriers, and the ultrasonic plate's
+/// rho(a), each with its 95% interval and a verdict on what the
+/// measurements cannot identify (docs/calibration.md).
+///
+/// The measurements are steady sliding segments (or their samples) under
+/// constant drives: `voltage_v,carrier,carrier_hz,amplitude_um,ft_n,fn_n`
+/// (or `mu`), optional `velocity_mm_s,finger,repetition`. Only identified
+/// constants go into the device file (-o), which `voltage`, `check`,
+/// `play`, `live`, `map` and `serve` take with --device.
+#[derive(Debug, Args)]
+#[command(after_help = "Example:\n  haptex calibrate --measurements data/examples/calibration-measurements.csv \
+                  -o my-display.toml --png fit.png\n  \
+                  haptex voltage --profile data/examples/bump.csv --device my-display.toml -o U.csv")]
+pub struct CalibrateArgs {
+    /// Measurements CSV (docs/calibration.md, "Measurements").
+    #[arg(long, value_name = "M.csv")]
+    measurements: PathBuf,
+    /// The device file to write (TOML).
+    #[arg(short, long, value_name = "DEVICE.toml")]
+    output: Option<PathBuf>,
+    /// The display's highest voltage, U_max in V RMS (stated, not measured;
+    /// written into the device file).
+    #[arg(long, default_value_t = Device::PAPER.u_max_v, value_parser = in_range(ranges::U_MAX_V))]
+    u_max: f64,
+    /// The layer stack assumed: friction data measure only k over the
+    /// stack's product, so the stack is stated, not fitted.
+    #[command(flatten)]
+    stack: LayerStackArgs,
+    /// The form of the ultrasonic plate's rho(a): the exponential when the
+    /// data identify it (auto), or always the monotone table.
+    #[arg(long, value_enum, default_value_t = UltrasonicModel::Auto)]
+    ultrasonic_model: UltrasonicModel,
+    /// PNG: the data with the fitted models and their 95% bands, and the
+    /// residuals.
+    #[arg(long, value_name = "F.png")]
+    png: Option<PathBuf>,
+    /// No report on stderr.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum UltrasonicModel {
+    Auto,
+    Exponential,
+    Table,
+}
+
+pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
+    let m = Measurements::read_file(&args.measurements)?;
+    let settings = Settings {
+        stack: args.stack.stack(),
+        ultrasonic: match args.ultrasonic_model {
+            UltrasonicModel::Auto => Choice::Auto,
+            UltrasonicModel::Exponential => Choice::Exponential,
+            UltrasonicModel::Table => Choice::Table,
+        },
+    };
+    settings.stack.validate()?;
+    let cal = calibrate(&m, settings);
+    if cal.force.is_none() && cal.ultrasonic.is_none() {
+        anyhow::bail!("{}: no row measures the electrostatic force or the vibration", args.measurements.display());
+    }
+    let mut file = DeviceFile::from_calibration(&cal, &m, args.u_max);
+    let report = report(&cal, &m, &file);
+    if let Some(path) = &args.output {
+        file.path = path.display().to_string();
+        if file.electrovibration.is_none() && file.ultrasonic.is_none() {
+            if !args.quiet {
+                eprint!("{report}");
+            }
+            anyhow::bail!(
+                "{}: the measurements identify no constant of the display (see the verdicts above): no device file \
+                 written",
+                path.display()
+            );
+        }
+        let text = file.to_toml();
+        haptex_core::io::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+    }
+    if let Some(path) = &args.png {
+        figure(&cal, &m).write_png(path)?;
+    }
+    if !args.quiet {
+        eprint!("{report}");
+        for (label, path) in [("device file", &args.output), ("PNG", &args.png)] {
+            if let Some(p) = path {
+                eprintln!("{label}: {}", p.display());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// "0.601 (95%: 0.583 .. 0.619)", or the interval and "not identified".
+fn estimate(e: &Estimate, unit: &str) -> String {
+    let r = round3;
+    let unit = if unit.is_empty() { String::new() } else { format!(" {unit}") };
+    if e.identified {
+        format!("{}{unit} (95%: {} .. {})", Num(r(e.value)), Num(r(e.interval[0])), Num(r(e.interval[1])))
+    } else {
+        format!("not identified (95% interval {} .. {}{unit})", Num(r(e.interval[0])), Num(r(e.interval[1])))
+    }
+}
+
+fn goodness_line(g: &Goodness) -> String {
+    let r = round3;
+    let mut s = format!(
+        "{} rows; RMS residual {}, robust noise {}, R^2 {}",
+        g.rows,
+        Num(r(g.rms)),
+        Num(r(g.scale)),
+        Num((g.r2 * 1e4).round() / 1e4)
+    );
+    if let Some(l) = g.lack_of_fit {
+        s += &format!("; lack of fit F = {} on ({}, {}), p = {}", Num(r(l.f)), l.df1, l.df2, Num(r(l.p)));
+    }
+    if !g.converged {
+        s += "; the fit did not converge";
+    }
+    s
+}
+
+fn report(cal: &Calibration, m: &Measurements, file: &DeviceFile) -> String {
+    let mut out = format!(
+        "haptex calibrate: {} ({} rows, sha256 {})\n",
+        m.source_name(),
+        m.rows().len(),
+        &m.sha256()[..m.sha256().len().min(12)]
+    );
+    let stack = &cal.settings.stack;
+    if let Some(f) = &cal.force {
+        let g = &f.eq3.goodness;
+        if let Some(level) = g.cluster_level {
+            out += &format!("intervals rest on {}\n", level.describe(g.clusters));
+        }
+        out += &format!("eq. (3)/(8), c per carrier: mu_HD = {}\n", estimate(&f.eq3.mu_hd, ""));
+        for c in &f.eq3.carriers {
+            out += &format!(
+                "  {}: c = {}; k = {} mm^2/N with the stack assumed; {} rows up to {} V\n",
+                carrier_name(&c.carrier),
+                estimate(&c.c_per_v2, "1/V^2"),
+                Num(round3(force_fit::equivalent_k_mm2_per_n(c.c_per_v2.value, stack))),
+                c.rows,
+                Num(c.max_voltage_v)
+            );
+        }
+        out += &format!("  fit: {}\n", goodness_line(&f.eq3.goodness));
+        if let Some(c) = &f.circuit {
+            out += "circuit model across carriers:\n";
+            out += &format!("  mu_HD = {}\n", estimate(&c.mu_hd, ""));
+            out += &format!("  c (eq. 3's coefficient) = {}\n", estimate(&c.c_per_v2, "1/V^2"));
+            out +=
+                &format!("  rho_sc = {}; corner {} Hz\n", estimate(&c.rho_sc_ohm_m, "ohm m"), Num(round3(c.corner_hz)));
+            out += &format!("  air gap g = {}\n", estimate(&c.gap_um, "um"));
+            out += &format!("  fit: {}\n", goodness_line(&c.goodness));
+        }
+        let c = file.electrovibration.as_ref().and_then(|e| {
+            e.circuit.as_ref().map(|c| c.c_per_v2.value).or(e.carriers.first().map(|c| c.c_per_v2.value))
+        });
+        if let Some(c) = c {
+            out += &format!(
+                "friction measures c = eps0 k / (2 (d_sc/eps_sc + d_i/eps_i)(d_sc + d_i)): the product k / stack = \
+                 2 c / eps0 = {} 1/N; k, eps_sc, d_sc, eps_i and d_i are not separable from friction (the stack \
+                 is assumed: eps_sc {}, d_sc {} mm, eps_i {}, d_i {} mm)\n",
+                Num(round3(force_fit::k_over_stack_per_n(c))),
+                Num(stack.eps_sc),
+                Num(stack.d_sc_mm),
+                Num(stack.eps_i),
+                Num(stack.d_i_mm)
+            );
+        }
+        let outliers = f.circuit.as_ref().map_or(&f.eq3.outliers, |c| &c.outliers);
+        if !outliers.is_empty() {
+            let lines: Vec<String> = outliers.iter().take(20).map(|o| o.line.to_string()).collect();
+            out += &format!(
+                "{} measurement(s) more than 3 robust SD from the model, down-weighted (kept): line{} {}{}\n",
+                outliers.len(),
+                if outliers.len() == 1 { "" } else { "s" },
+                lines.join(", "),
+                if outliers.len() > 20 { ", ..." } else { "" }
+            );
+        }
+    }
+    if let Some(u) = &cal.ultrasonic {
+        out += "ultrasonic plate, rho(a) = mu(a) / mu(0):\n";
+        if let Some(e) = &u.exponential {
+            out += &format!(
+                "  exponential: rho_inf = {}, a_c = {}\n  fit: {}\n",
+                estimate(&e.rho_inf, ""),
+                estimate(&e.a_c_um, "um"),
+                goodness_line(&e.goodness)
+            );
+        }
+        if u.table.len() >= 2 {
+            let points: Vec<String> =
+                u.table.iter().map(|p| format!("{} um: {}", Num(p.amplitude_um), Num(round3(p.rho)))).collect();
+            out += &format!("  monotone table: {}\n", points.join("; "));
+        }
+        out += &format!(
+            "  rho_min = rho(a_max = {} um) = {}; the device file uses the {}\n",
+            Num(u.a_max_um),
+            estimate(&u.rho_min, ""),
+            if u.chosen == Choice::Exponential { "exponential" } else { "table" }
+        );
+    }
+    if !cal.verdicts.is_empty() {
+        out += "what the measurements cannot tell:\n";
+        for v in &cal.verdicts {
+            out += &format!("  - {v}\n");
+        }
+    }
+    if let Some(e) = &file.electrovibration {
+        out += &format!("device file model: {} (mu_HD {})\n", e.model, Num(round3(e.mu_hd.value)));
+    }
+    out
+}
+
+const PALETTE: [(u8, u8, u8); 8] = [
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (214, 39, 40),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (127, 127, 127),
+];
+
+fn lighter(c: (u8, u8, u8)) -> (u8, u8, u8) {
+    let l = |v: u8| (v as u16 + (255 - v as u16) * 3 / 4) as u8;
+    (l(c.0), l(c.1), l(c.2))
+}
+
+/// A band as a filled polygon.
+fn band(x: &[f64], lo: &[f64], hi: &[f64], color: (u8, u8, u8)) -> Shape {
+    let mut points: Vec<(f64, f64)> = x.iter().zip(hi).map(|(a, b)| (*a, *b)).collect();
+    points.extend(x.iter().zip(lo).rev().map(|(a, b)| (*a, *b)));
+    Shape { points, fill: Some(lighter(color)), stroke: None }
+}
+
+fn figure(cal: &Calibration, m: &Measurements) -> Figure {
+    let mut figure = Figure::new(format!("haptex calibrate: {}", m.source_name()));
+    let rows = m.rows();
+    if let Some(f) = &cal.force {
+        let circuit = f.circuit.as_ref().filter(|c| c.rho_sc_ohm_m.identified && c.gap_um.identified);
+        let title = if circuit.is_some() { "circuit model, 95% band" } else { "eq. (3) per carrier, 95% band" };
+        let mut panel = Panel::new("U (V RMS)", "mu / mu(0 V) - 1").title(title);
+        // Each finger's friction at 0 V: the rise is drawn against it, so
+        // that the fingers' own friction does not hide the voltage's effect.
+        let mut rest: Vec<(u64, f64, usize)> = Vec::new();
+        for r in rows.iter().filter(|r| r.voltage_v == 0.0 && r.amplitude_um == 0.0) {
+            match rest.iter_mut().find(|e| e.0 == r.finger) {
+                Some(e) => {
+                    e.1 += r.mu;
+                    e.2 += 1;
+                }
+                None => rest.push((r.finger, r.mu, 1)),
+            }
+        }
+        let rest_of = |finger: u64| rest.iter().find(|e| e.0 == finger).map(|e| e.1 / e.2 as f64);
+        let mut residuals = Panel::new("fitted mu", "measured - fitted").title("residuals");
+        for (k, c) in f.eq3.carriers.iter().enumerate() {
+            let color = PALETTE[k % PALETTE.len()];
+            let in_carrier = |i: &usize| {
+                let r = &rows[*i];
+                r.amplitude_um == 0.0
+                    && r.carrier.is_some_and(|rc| {
+                        rc.shape == c.carrier.shape
+                            && (rc.shape == haptex_core::signal::CarrierShape::None
+                                || rc.frequency_hz == c.carrier.frequency_hz)
+                    })
+            };
+            let idx: Vec<usize> = (0..rows.len()).filter(in_carrier).collect();
+            let u: Vec<f64> = idx.iter().map(|&i| rows[i].voltage_v).collect();
+            let mu: Vec<f64> = idx.iter().map(|&i| rows[i].mu).collect();
+            let (ru, rise): (Vec<f64>, Vec<f64>) = idx
+                .iter()
+                .filter_map(|&i| rest_of(rows[i].finger).map(|m0| (rows[i].voltage_v, rows[i].mu / m0 - 1.0)))
+                .unzip();
+            let curve = |v: f64| match circuit {
+                Some(ci) => ci.curve(&cal.settings.stack, &c.carrier, v),
+                None => f.eq3.curve(k, v),
+            };
+            let rise_curve = |v: f64| match circuit {
+                Some(ci) => ci.rise(&cal.settings.stack, &c.carrier, v),
+                None => f.eq3.rise(k, v),
+            };
+            let grid: Vec<f64> = (0..=60).map(|i| c.max_voltage_v * i as f64 / 60.0).collect();
+            let bands: Vec<[f64; 3]> = grid.iter().map(|&v| rise_curve(v)).collect();
+            let (mid, lo, hi): (Vec<f64>, Vec<f64>, Vec<f64>) = (
+                bands.iter().map(|b| b[0]).collect(),
+                bands.iter().map(|b| b[1]).collect(),
+                bands.iter().map(|b| b[2]).collect(),
+            );
+            panel = panel
+                .shape(band(&grid, &lo, &hi, color))
+                .series(Series::points("", &ru, &rise).color(color))
+                .series(Series::line(carrier_name(&c.carrier), &grid, &mid).color(color));
+            let fitted: Vec<f64> = u.iter().map(|&v| curve(v)[0]).collect();
+            let res: Vec<f64> = mu.iter().zip(&fitted).map(|(a, b)| a - b).collect();
+            residuals = residuals.series(Series::points(carrier_name(&c.carrier), &fitted, &res).color(color));
+        }
+        figure = figure.panel(panel).panel(residuals);
+    }
+    if let Some(u) = &cal.ultrasonic
+        && u.table.len() >= 2
+    {
+        let rest: Vec<f64> =
+            rows.iter().filter(|r| r.voltage_v == 0.0 && r.amplitude_um == 0.0).map(|r| r.mu).collect();
+        let mu0 = rest.iter().sum::<f64>() / rest.len().max(1) as f64;
+        let idx: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].voltage_v == 0.0).collect();
+        let a: Vec<f64> = idx.iter().map(|&i| rows[i].amplitude_um).collect();
+        let rho: Vec<f64> = idx.iter().map(|&i| rows[i].mu / mu0).collect();
+        let mut panel = Panel::new("a (um, peak)", "rho = mu(a) / mu(0)")
+            .title("ultrasonic plate")
+            .series(Series::points("measured / mean at rest", &a, &rho).color(PALETTE[7]));
+        let ta: Vec<f64> = u.table.iter().map(|p| p.amplitude_um).collect();
+        let tr: Vec<f64> = u.table.iter().map(|p| p.rho).collect();
+        panel = panel.series(Series::line("monotone table", &ta, &tr).color(PALETTE[1]));
+        if let Some(e) = &u.exponential {
+            let grid: Vec<f64> = (0..=60).map(|i| u.a_max_um * i as f64 / 60.0).collect();
+            let bands: Vec<[f64; 3]> = grid.iter().map(|&x| e.curve(x)).collect();
+            let lo: Vec<f64> = bands.iter().map(|b| b[1]).collect();
+            let hi: Vec<f64> = bands.iter().map(|b| b[2]).collect();
+            let mid: Vec<f64> = bands.iter().map(|b| b[0]).collect();
+            panel = panel
+                .shape(band(&grid, &lo, &hi, PALETTE[0]))
+                .series(Series::line("exponential, 95% band", &grid, &mid).color(PALETTE[0]));
+        }
+        figure = figure.panel(panel);
+    }
+    figure
+}
