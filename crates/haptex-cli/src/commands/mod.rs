@@ -2,6 +2,7 @@
 
 pub mod cae;
 pub mod check;
+pub mod compensate;
 pub mod db;
 pub mod force_curve;
 pub mod library;
