@@ -684,6 +684,13 @@ pub fn iterate(
             previous.rms_error, previous.iteration
         ));
     }
+    if noise_floor == 0.0 {
+        warnings.push(
+            "the strokes agree exactly (the same stroke given twice?): the noise floor is 0, so the stop rule \
+             cannot tell noise from error"
+                .to_string(),
+        );
+    }
     let at_floor = rms_error <= STOP_FACTOR * noise_floor;
     let kept = if at_floor {
         Some(Kept::AtNoiseFloor)
@@ -753,7 +760,8 @@ pub fn estimate_lag(x: &[f64], y: &[f64], command: &[f64], renderable: &[bool]) 
     let mut best = (f64::NEG_INFINITY, 0.0);
     let shifts = std::iter::once(0).chain((1..=40).flat_map(|k| [k, -k]));
     for k in shifts {
-        let d = MAX_LAG_MM * f64::from(k) / 40.0;
+        // k / 200 (not k 0.2 / 40): the shift of k steps to rounding.
+        let d = f64::from(k) / (40.0 / MAX_LAG_MM);
         let mut cursor = WalkingCursor::default();
         let (mut s, mut sy, mut sm, mut syy, mut smm, mut sym) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
         for i in (0..n).filter(|&i| renderable[i]) {
