@@ -13,6 +13,7 @@ pub mod database;
 pub mod electrovibration;
 pub mod frequency;
 pub mod height;
+pub mod ilc;
 pub mod io;
 pub mod library;
 pub mod live;

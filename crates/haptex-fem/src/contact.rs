@@ -93,14 +93,28 @@ impl ContactLaw {
 /// The gap is the vertical distance of the skin above the display (0
 /// where it penetrates) and the traction acts vertically: the law is for a
 /// flat display.
+///
+/// A display may also keep an air gap g_0 where the skin touches it (a
+/// film, the roughness of the stratum corneum's surface; Shultz et al.
+/// find such a gap of the order of a micron): the traction at geometric
+/// gap g is then that of the gap max(g, 0) + g_0, so that in contact
+///
+///   p_e = eps0 U^2 / (2 (a + g_0)(b + g_0)),
+///
+/// lower than eq. (3)'s by a b / ((a + g_0)(b + g_0)) (0.69 at g_0 =
+/// 0.1 um with the paper's layers). Eq. (8) knows no such gap: a display
+/// that has one renders less than its design (the measured compensation's
+/// virtual device, docs/measured-compensation.md).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Electrostatic {
-    /// Traction at zero gap, MPa: eps0 U^2 / (2 a b).
+    /// Traction at zero gap with no air gap, MPa: eps0 U^2 / (2 a b).
     pub pressure_mpa: f64,
     /// a = d_sc/eps_sc + d_i/eps_i, mm.
     pub electric_mm: f64,
     /// b = d_sc + d_i, mm.
     pub thickness_mm: f64,
+    /// The air gap g_0 in contact, mm (0: none).
+    pub air_gap_mm: f64,
 }
 
 impl Electrostatic {
@@ -118,13 +132,19 @@ impl Electrostatic {
         // eps0 U^2 / (2 a b) with a, b in m gives Pa; 1e-6 MPa per Pa.
         let pa =
             haptex_core::electrovibration::EPS0_F_PER_M * u_v * u_v / (2.0 * electric_mm * 1e-3 * thickness_mm * 1e-3);
-        Self { pressure_mpa: pa * 1e-6, electric_mm, thickness_mm }
+        Self { pressure_mpa: pa * 1e-6, electric_mm, thickness_mm, air_gap_mm: 0.0 }
+    }
+
+    /// The same law with an air gap of `air_gap_mm` in contact (>= 0).
+    pub fn with_air_gap(self, air_gap_mm: f64) -> Self {
+        Self { air_gap_mm, ..self }
     }
 
     /// Traction (MPa, attractive) and its derivative with respect to the
-    /// gap (MPa/mm) at gap `gap_mm` (<= 0: in contact, the traction of g = 0).
+    /// gap (MPa/mm) at gap `gap_mm` (<= 0: in contact, the traction of g = 0),
+    /// the air gap added.
     pub fn traction(&self, gap_mm: f64) -> (f64, f64) {
-        let g = gap_mm.max(0.0);
+        let g = gap_mm.max(0.0) + self.air_gap_mm;
         let (a, b) = (self.electric_mm, self.thickness_mm);
         let p = self.pressure_mpa * a * b / ((a + g) * (b + g));
         let dp = if gap_mm > 0.0 { -p * (1.0 / (a + g) + 1.0 / (b + g)) } else { 0.0 };

@@ -35,6 +35,10 @@ pub struct Display {
     pub stack: LayerStack,
     /// The ultrasonic vibration, if any.
     pub vibration: Option<Vibration>,
+    /// An air gap between skin and display where they touch, um (0: none;
+    /// [`Electrostatic`]): the traction at geometric gap g is that of
+    /// max(g, 0) + the air gap. Eq. (8) assumes none.
+    pub air_gap_um: f64,
 }
 
 /// An ultrasonic plate's vibration that follows the finger: amplitude
@@ -109,6 +113,8 @@ pub enum DisplayError {
     TooStrong { voltage_v: f64, x_mm: f64, pressure_mpa: f64 },
     #[error("display vibration: {0}")]
     Vibration(String),
+    #[error("the air gap must be a finite length >= 0, got {} um", Num(*.0))]
+    AirGap(f64),
 }
 
 /// Largest electrostatic traction at contact accepted (MPa): ten times the
@@ -120,6 +126,9 @@ impl Display {
     /// than [`MAX_PRESSURE_MPA`].
     pub fn validate(&self) -> Result<(), DisplayError> {
         self.stack.validate()?;
+        if !(self.air_gap_um.is_finite() && self.air_gap_um >= 0.0) {
+            return Err(DisplayError::AirGap(self.air_gap_um));
+        }
         for (&x_mm, &voltage_v) in self.voltage.x_mm().iter().zip(self.voltage.voltage_v()) {
             let pressure_mpa = Electrostatic::new(&self.stack, voltage_v).pressure_mpa;
             if pressure_mpa.is_nan() || pressure_mpa > MAX_PRESSURE_MPA {
@@ -136,7 +145,7 @@ impl Display {
 
     /// The electrostatic law with the finger at `x_mm`.
     pub fn electrostatic_at(&self, x_mm: f64) -> Electrostatic {
-        Electrostatic::new(&self.stack, self.voltage_at(x_mm))
+        Electrostatic::new(&self.stack, self.voltage_at(x_mm)).with_air_gap(self.air_gap_um * 1e-3)
     }
 
     /// The skin-display friction coefficient with the finger at `x_mm`:

@@ -219,6 +219,10 @@ pub struct RenderSettings {
     /// Slide before the target's first position (mm), so that the finger
     /// is in steady sliding when it reaches it.
     pub run_up_mm: f64,
+    /// The display's air gap where the skin touches it, um
+    /// ([`Display::air_gap_um`]); 0, as eq. (8) assumes, unless a virtual
+    /// device is to differ from its design.
+    pub air_gap_um: f64,
 }
 
 impl RenderSettings {
@@ -228,7 +232,7 @@ impl RenderSettings {
     pub fn new(mu_hd: f64, load_n_per_mm: f64) -> Self {
         let mut scenario = Scenario::paper(SurfaceShape::Flat);
         scenario.loading = crate::scenario::Loading::Load(load_n_per_mm);
-        Self { device: Device { mu_hd, ..Device::PAPER }, scenario, run_up_mm: 1.0 }
+        Self { device: Device { mu_hd, ..Device::PAPER }, scenario, run_up_mm: 1.0, air_gap_um: 0.0 }
     }
 }
 
@@ -345,7 +349,13 @@ pub fn feel_display(
     scenario.surface = SurfaceShape::Flat;
     scenario.mu_skin = Some(settings.device.mu_hd);
     scenario.slide_mm = x[x.len() - 1] - start;
-    scenario.display = Some(Display { voltage, extend: Extend::Hold, stack: settings.device.stack, vibration });
+    scenario.display = Some(Display {
+        voltage,
+        extend: Extend::Hold,
+        stack: settings.device.stack,
+        vibration,
+        air_gap_um: settings.air_gap_um,
+    });
     let result = scenario::run(&scenario, progress)?;
     let rows: Vec<_> = result.history.iter().filter(|r| r.slide_mm > 0.0).collect();
     let slide: Vec<f64> = rows.iter().map(|r| r.slide_mm).collect();

@@ -15,6 +15,7 @@ fn display(x_mm: Vec<f64>, voltage_v: Vec<f64>) -> Display {
         extend: Extend::Hold,
         stack: LayerStack::PAPER,
         vibration: None,
+        air_gap_um: 0.0,
     }
 }
 
@@ -120,6 +121,34 @@ fn gap_law_limits() {
         let fd = (e.traction(gap + h).0 - e.traction(gap - h).0) / (2.0 * h);
         assert!((e.traction(gap).1 / fd - 1.0).abs() < 1e-6, "gap {gap}");
     }
+}
+
+#[test]
+fn an_air_gap_lowers_the_contact_traction_as_the_series_law_says() {
+    // A 0.1 um air gap in series with the layers (the law's closed form,
+    // Electrostatic's docs): in contact the traction is eq. (3)'s times
+    // a b / ((a + g0)(b + g0)) = 0.6883 with the paper's layers (a = 0.2212
+    // um, b = 201 um), to rounding (1e-12); above the skin it is the law's
+    // at g + g0; the derivative stays the law's (central difference, 1e-6).
+    let stack = LayerStack::PAPER;
+    let bare = Electrostatic::new(&stack, 100.0);
+    let gapped = bare.with_air_gap(1e-4);
+    let (a, b, g0) = (bare.electric_mm, bare.thickness_mm, 1e-4);
+    let factor = a * b / ((a + g0) * (b + g0));
+    assert!((factor - 0.6883).abs() < 1e-4, "{factor}");
+    for gap in [-0.01, 0.0] {
+        assert!((gapped.traction(gap).0 / bare.traction(0.0).0 - factor).abs() < 1e-12);
+    }
+    for gap in [1e-5, 2e-4, 3e-3] {
+        assert!((gapped.traction(gap).0 / bare.traction(gap + g0).0 - 1.0).abs() < 1e-12);
+        let h = 1e-4 * gap;
+        let fd = (gapped.traction(gap + h).0 - gapped.traction(gap - h).0) / (2.0 * h);
+        assert!((gapped.traction(gap).1 / fd - 1.0).abs() < 1e-6, "gap {gap}");
+    }
+    // The display passes its gap (in um) to the law it applies.
+    let display = Display { air_gap_um: 0.1, ..constant(100.0) };
+    assert_eq!(display.electrostatic_at(0.5), gapped);
+    assert!(Display { air_gap_um: -1.0, ..constant(100.0) }.validate().is_err());
 }
 
 #[test]

@@ -3,6 +3,7 @@
 pub mod cae;
 pub mod calibrate;
 pub mod check;
+pub mod compensate;
 pub mod db;
 pub mod force_curve;
 pub mod library;

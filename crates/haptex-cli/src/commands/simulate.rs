@@ -164,7 +164,7 @@ fn parse_display(args: &SimulateArgs) -> anyhow::Result<Option<Display>> {
         (None, Some(u)) => VoltageCurve::new(vec![0.0, 1.0], vec![u, u])?,
         (None, None) => anyhow::bail!("--surface display needs --voltage U.csv or --constant-voltage V"),
     };
-    Ok(Some(Display { voltage, extend: Extend::Hold, stack: args.stack.stack(), vibration: None }))
+    Ok(Some(Display { voltage, extend: Extend::Hold, stack: args.stack.stack(), vibration: None, air_gap_um: 0.0 }))
 }
 
 pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
