@@ -292,6 +292,10 @@ fn measurement_errors_name_the_line_and_the_column() {
     assert!(
         read("voltage_v,carrier,carrier_hz,mu\n-1,sine,100,0.5\n").starts_with("m.csv, line 2, column 'voltage_v'")
     );
+    // Each carrier is a parameter of the per-carrier fit: at most 32.
+    let many: String = (0..40).map(|i| format!("50,sine,{},0.6\n", 100 + i)).collect();
+    let e = read(&format!("voltage_v,carrier,carrier_hz,mu\n{many}"));
+    assert!(e.starts_with("m.csv, line 34, column 'carrier_hz': more than 32 distinct carriers"), "{e}");
 }
 
 /// The file format round-trips through the virtual device's writer.

@@ -91,8 +91,8 @@ fn electro_rows(m: &Measurements) -> Vec<usize> {
 }
 
 /// A carrier as a key: shape and frequency (0 for a direct drive).
-fn same(a: &Carrier, b: &Carrier) -> bool {
-    a.shape == b.shape && (a.shape == CarrierShape::None || a.frequency_hz == b.frequency_hz)
+fn carrier_key(c: &Carrier) -> (u8, u64) {
+    (c.shape as u8, frequency_of(c).to_bits())
 }
 
 /// Fits eq. (3) per carrier and, with three or more carrier frequencies,
@@ -106,11 +106,12 @@ pub fn fit(m: &Measurements, stack: &LayerStack) -> Option<ForceFit> {
     let data = m.rows();
     // The carriers, in the order met; each row under voltage belongs to one.
     let mut carriers: Vec<Carrier> = Vec::new();
+    let mut index: std::collections::HashMap<(u8, u64), usize> = std::collections::HashMap::new();
     let mut group = vec![usize::MAX; rows.len()];
     for (k, &i) in rows.iter().enumerate() {
         if data[i].voltage_v > 0.0 {
             let c = data[i].carrier.expect("a row under voltage has a carrier (checked on reading)");
-            let g = carriers.iter().position(|x| same(x, &c)).unwrap_or_else(|| {
+            let g = *index.entry(carrier_key(&c)).or_insert_with(|| {
                 carriers.push(c);
                 carriers.len() - 1
             });
@@ -246,16 +247,14 @@ pub fn carrier_name(c: &Carrier) -> String {
 /// A key per row for the lack-of-fit test: rows with the same voltage,
 /// carrier and amplitude are replicates.
 pub(crate) fn settings_key(rows: &[usize], m: &Measurements) -> Vec<usize> {
-    let mut keys: Vec<(u64, u8, u64, u64)> = Vec::new();
+    let mut keys: std::collections::HashMap<(u64, u8, u64, u64), usize> = std::collections::HashMap::new();
     rows.iter()
         .map(|&i| {
             let r = &m.rows()[i];
             let (shape, f) = r.carrier.map_or((3, 0.0), |c| (c.shape as u8, frequency_of(&c)));
             let key = (r.voltage_v.to_bits(), shape, f.to_bits(), r.amplitude_um.to_bits());
-            keys.iter().position(|k| *k == key).unwrap_or_else(|| {
-                keys.push(key);
-                keys.len() - 1
-            })
+            let next = keys.len();
+            *keys.entry(key).or_insert(next)
         })
         .collect()
 }

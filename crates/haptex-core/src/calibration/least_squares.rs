@@ -114,7 +114,7 @@ pub fn fit(problem: &Problem<'_>, model: &dyn Fn(&[f64], &mut [f64])) -> Result<
     // Outer loop: Huber weights from the current residuals; inner: LM on
     // the weighted sum of squares.
     let mut scale = robust_scale(&r);
-    for outer in 0..50 {
+    for outer in 0..30 {
         if outer > 0 {
             scale = robust_scale(&r);
         }
@@ -124,7 +124,7 @@ pub fn fit(problem: &Problem<'_>, model: &dyn Fn(&[f64], &mut [f64])) -> Result<
         }
         let theta_before = theta.clone();
         let mut cost = weighted_cost(&r, &weights);
-        for _ in 0..100 {
+        for _ in 0..50 {
             jacobian(&theta, &pred, problem, model, &mut jac);
             let (a, g) = normal_equations(&jac, &r, &weights, p, |_| 1.0);
             let mut improved = false;
@@ -187,12 +187,13 @@ pub fn fit(problem: &Problem<'_>, model: &dyn Fn(&[f64], &mut [f64])) -> Result<
         }
     }
     let mut meat = vec![0.0; p * p];
-    let mut clusters = 0;
+    let mut present = vec![false; g_count];
+    for &c in problem.cluster {
+        present[c] = true;
+    }
+    let clusters = present.iter().filter(|&&p| p).count();
     for c in 0..g_count {
         let u = &score[c * p..(c + 1) * p];
-        if u.iter().any(|&v| v != 0.0) || problem.cluster.contains(&c) {
-            clusters += 1;
-        }
         for a in 0..p {
             for b in 0..p {
                 meat[a * p + b] += u[a] * u[b];

@@ -39,6 +39,11 @@ pub const MAX_ROWS: usize = 1_000_000;
 /// fields).
 pub const MAX_FILE_BYTES: u64 = 128 << 20;
 
+/// The most distinct carriers (shape and frequency) a file may drive the
+/// display with: each is a parameter of the per-carrier fit, whose cost
+/// grows as their square; a protocol needs a handful (docs/calibration.md).
+pub const MAX_CARRIERS: usize = 32;
+
 /// The carrier words of the `carrier` column, in the order the table
 /// codes them.
 const CARRIERS: [&str; 3] = ["sine", "square", "none"];
@@ -170,6 +175,7 @@ impl Measurements {
         let shape = table.column("carrier");
         let hz = table.column("carrier_hz");
         let mut rows = Vec::with_capacity(n);
+        let mut distinct_carriers: std::collections::HashSet<(u8, u64)> = std::collections::HashSet::new();
         for i in 0..n {
             let carrier = match shape {
                 None if voltage[i] > 0.0 => {
@@ -204,6 +210,23 @@ impl Measurements {
                     Some(Carrier { shape, frequency_hz })
                 }
             };
+            if let Some(c) = carrier
+                && voltage[i] > 0.0
+            {
+                distinct_carriers.insert((c.shape as u8, c.frequency_hz.to_bits()));
+                if distinct_carriers.len() > MAX_CARRIERS {
+                    return Err(table
+                        .error_at(
+                            Some(i),
+                            Some("carrier_hz"),
+                            format!(
+                                "more than {MAX_CARRIERS} distinct carriers (shape and frequency): a calibration \
+                                 measures a handful; round the frequencies to those played"
+                            ),
+                        )
+                        .into());
+                }
+            }
             if voltage[i] > 0.0 && amplitude[i] > 0.0 {
                 return Err(table
                     .error_at(
