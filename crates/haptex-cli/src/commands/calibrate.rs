@@ -33,9 +33,14 @@ use crate::args::{LayerStackArgs, in_range};
                   -o my-display.toml --png fit.png\n  \
                   haptex voltage --profile data/examples/bump.csv --device my-display.toml -o U.csv")]
 pub struct CalibrateArgs {
-    /// Measurements CSV (docs/calibration.md, "Measurements").
-    #[arg(long, value_name = "M.csv")]
-    measurements: PathBuf,
+    /// Measurements CSV (docs/calibration.md, "The measurements file").
+    #[arg(long, value_name = "M.csv", required_unless_present = "recordings", conflicts_with = "recordings")]
+    measurements: Option<PathBuf>,
+    /// Or recorded strokes: a manifest (TOML) listing each recording with
+    /// the constant drive it was made under (docs/calibration.md,
+    /// "From recorded strokes"); each sliding segment is one measurement.
+    #[arg(long, value_name = "MANIFEST.toml")]
+    recordings: Option<PathBuf>,
     /// The device file to write (TOML).
     #[arg(short, long, value_name = "DEVICE.toml")]
     output: Option<PathBuf>,
@@ -68,7 +73,11 @@ enum UltrasonicModel {
 }
 
 pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
-    let m = Measurements::read_file(&args.measurements)?;
+    let (m, source) = match (&args.measurements, &args.recordings) {
+        (Some(path), _) => (Measurements::read_file(path)?, path),
+        (None, Some(manifest)) => (haptex_core::calibration::from_recordings::read_manifest(manifest)?, manifest),
+        (None, None) => anyhow::bail!("give --measurements or --recordings"),
+    };
     let settings = Settings {
         stack: args.stack.stack(),
         ultrasonic: match args.ultrasonic_model {
@@ -80,7 +89,7 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
     settings.stack.validate()?;
     let cal = calibrate(&m, settings);
     if cal.force.is_none() && cal.ultrasonic.is_none() {
-        anyhow::bail!("{}: no row measures the electrostatic force or the vibration", args.measurements.display());
+        anyhow::bail!("{}: no row measures the electrostatic force or the vibration", source.display());
     }
     let mut file = DeviceFile::from_calibration(&cal, &m, args.u_max);
     let report = report(&cal, &m, &file);

@@ -271,6 +271,33 @@ impl Measurements {
         }
     }
 
+    /// Measurements made from recorded strokes
+    /// ([`crate::calibration::from_recordings`]): `lines[i]` is the number
+    /// of the manifest's stroke row i came from, `sha256` the manifest's.
+    pub(crate) fn from_segments(
+        rows: Vec<Measurement>,
+        lines: Vec<u64>,
+        source_name: &str,
+        sha256: String,
+        has_finger: bool,
+    ) -> Result<Self, MeasurementsError> {
+        let error = |message: String| MeasurementsError::File { path: source_name.to_string(), message };
+        if rows.is_empty() {
+            return Err(error("no sliding segment in any recording".into()));
+        }
+        let mut carriers = std::collections::HashSet::new();
+        for (r, line) in rows.iter().zip(&lines) {
+            ranges::MU.check(r.mu).map_err(|e| error(format!("stroke {line}: {e}")))?;
+            if let Some(c) = r.carrier.filter(|_| r.voltage_v > 0.0) {
+                carriers.insert((c.shape as u8, c.frequency_hz.to_bits()));
+            }
+        }
+        if carriers.len() > MAX_CARRIERS {
+            return Err(error(format!("more than {MAX_CARRIERS} distinct carriers (shape and frequency)")));
+        }
+        Ok(Self { rows, lines, source_name: source_name.to_string(), sha256, has_finger, has_repetition: true })
+    }
+
     pub fn rows(&self) -> &[Measurement] {
         &self.rows
     }

@@ -3,6 +3,8 @@
 //!
 //! - [`measurements`]: the measurements format (constant drive, steady
 //!   sliding: friction per segment or sample);
+//! - [`from_recordings`]: measurements from recorded strokes (the
+//!   recording format) and a manifest of the drive each was made under;
 //! - [`force_fit`]: eq. (3)/(8) per carrier (mu_HD and c) and the circuit
 //!   model across carriers (rho_sc, the air gap g, c);
 //! - [`ultrasonic_fit`]: the ultrasonic plate's rho(a), parametric or a
@@ -17,6 +19,7 @@
 pub mod device_file;
 pub mod distributions;
 pub mod force_fit;
+pub mod from_recordings;
 pub mod least_squares;
 pub mod measurements;
 pub mod ultrasonic_fit;
