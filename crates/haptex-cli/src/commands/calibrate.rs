@@ -89,7 +89,10 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
     settings.stack.validate()?;
     let cal = calibrate(&m, settings);
     if cal.force.is_none() && cal.ultrasonic.is_none() {
-        anyhow::bail!("{}: no row measures the electrostatic force or the vibration", source.display());
+        anyhow::bail!(
+            "{}: no row has a voltage or a vibration: the friction at rest alone calibrates nothing",
+            source.display()
+        );
     }
     let mut file = DeviceFile::from_calibration(&cal, &m, args.u_max);
     let report = report(&cal, &m, &file);
@@ -175,7 +178,9 @@ fn report(cal: &Calibration, m: &Measurements, file: &DeviceFile) -> String {
                 Num(c.max_voltage_v)
             );
         }
-        out += &format!("  fit: {}\n", goodness_line(&f.eq3.goodness));
+        if f.eq3.goodness.rows > 0 {
+            out += &format!("  fit: {}\n", goodness_line(&f.eq3.goodness));
+        }
         if let Some(c) = &f.circuit {
             out += "circuit model across carriers:\n";
             out += &format!("  mu_HD = {}\n", estimate(&c.mu_hd, ""));
@@ -227,12 +232,14 @@ fn report(cal: &Calibration, m: &Measurements, file: &DeviceFile) -> String {
                 u.table.iter().map(|p| format!("{} um: {}", Num(p.amplitude_um), Num(round3(p.rho)))).collect();
             out += &format!("  monotone table: {}\n", points.join("; "));
         }
-        out += &format!(
-            "  rho_min = rho(a_max = {} um) = {}; the device file uses the {}\n",
-            Num(u.a_max_um),
-            estimate(&u.rho_min, ""),
-            if u.chosen == Choice::Exponential { "exponential" } else { "table" }
-        );
+        if u.table.len() >= 2 {
+            out += &format!(
+                "  rho_min = rho(a_max = {} um) = {}; the device file uses the {}\n",
+                Num(u.a_max_um),
+                estimate(&u.rho_min, ""),
+                if u.chosen == Choice::Exponential { "exponential" } else { "table" }
+            );
+        }
     }
     if !cal.verdicts.is_empty() {
         out += "what the measurements cannot tell:\n";

@@ -99,7 +99,7 @@ fn carrier_key(c: &Carrier) -> (u8, u64) {
 /// the circuit model. `None` when no row measures the force.
 pub fn fit(m: &Measurements, stack: &LayerStack) -> Option<ForceFit> {
     let rows = electro_rows(m);
-    if rows.is_empty() {
+    if !rows.iter().any(|&i| m.rows()[i].voltage_v > 0.0) {
         return None;
     }
     let mut verdicts = Vec::new();

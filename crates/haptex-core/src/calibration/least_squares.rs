@@ -30,7 +30,11 @@ pub const HUBER_K: f64 = 1.345;
 /// A fit that cannot be made.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FitError {
-    #[error("{rows} measurements for {parameters} parameters: a fit needs more measurements than parameters")]
+    #[error(
+        "{rows} measurement{} for {parameters} parameter{}: a fit needs more measurements than parameters",
+        if *rows == 1 { "" } else { "s" },
+        if *parameters == 1 { "" } else { "s" }
+    )]
     TooFewRows { rows: usize, parameters: usize },
     #[error("the model is not finite at the starting parameters")]
     NotFinite,
