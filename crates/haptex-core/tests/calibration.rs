@@ -337,3 +337,56 @@ fn shipped_example_measurements_are_the_virtual_devices_and_their_fit_holds_the_
     assert!(circuit.gap_um.identified && circuit.gap_um.covers(0.1), "{:?}", circuit.gap_um);
     assert!(circuit.mu_hd.covers(0.6), "{:?}", circuit.mu_hd);
 }
+
+mod arbitrary_input {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+        /// Any bytes: read or refused with a located error, never a panic.
+        #[test]
+        fn any_bytes_are_read_or_refused(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
+            let _ = Measurements::from_bytes(&bytes, "fuzz.csv");
+        }
+
+        /// Any valid rows, however degenerate (equal values, zeros, huge
+        /// voltages, one carrier or many): a calibration and its device
+        /// file, never a panic, and every written constant finite.
+        #[test]
+        fn any_valid_rows_calibrate_without_panic(
+            rows in proptest::collection::vec(
+                (0usize..4, prop_oneof![Just(0.0), 0.0..1e4f64], 0usize..3, prop_oneof![Just(0.0), 0.0..5.0f64],
+                 prop_oneof![Just(0.5), 0.0..3.0f64], 0u64..3),
+                1..60,
+            )
+        ) {
+            use haptex_core::calibration::measurements::Measurement;
+            let shapes = [CarrierShape::Sine, CarrierShape::Square, CarrierShape::None];
+            let m: Vec<Measurement> = rows
+                .iter()
+                .map(|&(f, u, shape, a, mu, finger)| {
+                    let (u, a) = if u > 0.0 && a > 0.0 { (u, 0.0) } else { (u, a) };
+                    Measurement {
+                        voltage_v: u,
+                        carrier: Some(Carrier { shape: shapes[shape], frequency_hz: [10.0, 100.0, 1000.0, 3000.0][f] }),
+                        amplitude_um: a,
+                        mu,
+                        velocity_mm_s: None,
+                        finger,
+                        repetition: 0,
+                    }
+                })
+                .collect();
+            let m = Measurements::from_rows(m, "arbitrary");
+            let cal = calibrate(&m, Settings::default());
+            let file = DeviceFile::from_calibration(&cal, &m, 100.0);
+            let text = file.to_toml();
+            if file.electrovibration.is_some() || file.ultrasonic.is_some() {
+                let read = DeviceFile::from_toml(&text, "arbitrary.toml");
+                prop_assert!(read.is_ok(), "{:?}\n{text}", read.err());
+            }
+        }
+    }
+}

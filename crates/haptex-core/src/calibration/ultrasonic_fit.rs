@@ -9,8 +9,10 @@
 //! (isotonic regression; Barlow et al. 1972, Statistical Inference under
 //! Order Restrictions), divided by the mean at rest. A pooled block keeps
 //! its first amplitude, so the table decreases strictly (as
-//! `ultrasonic::Calibration` requires). rho_min is rho at the largest
-//! amplitude measured (a_max), with its interval.
+//! `ultrasonic::Calibration` requires), and a flat tail ends the table
+//! at its first amplitude (beyond it the friction fell no further). rho_min
+//! is rho at a_max (the largest amplitude measured, or the table's last),
+//! with its interval.
 //!
 //! `Auto` takes the parametric form when the data identify both of its
 //! constants and the lack-of-fit test does not reject it (p >= 0.01),
@@ -215,6 +217,12 @@ pub fn fit(m: &Measurements, choice: Choice) -> Option<UltrasonicFit> {
             Choice::Table
         }
         Choice::Table => Choice::Table,
+    };
+    // The table ends where the friction last fell: a pooled (flat) tail
+    // lowers it no further, so a_max is the tail's first amplitude.
+    let a_max_um = match (chosen, table.last()) {
+        (Choice::Table, Some(last)) if table.len() >= 2 => last.amplitude_um,
+        _ => a_max_um,
     };
     let rho_min = match (&exponential, chosen) {
         (Some((_, r)), Choice::Exponential) => *r,
