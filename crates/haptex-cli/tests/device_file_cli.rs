@@ -426,7 +426,7 @@ fn serve_with_a_device_file_makes_it_the_default_device() {
         .unwrap();
     let mut stderr = BufReader::new(child.stderr.take().unwrap());
     let (port, seen) = common::listening_port(&mut stderr);
-    let answers = (|| {
+    let answers = {
         let config = http_get(port, "/api/config");
         let body = http_post(
             port,
@@ -439,7 +439,7 @@ fn serve_with_a_device_file_makes_it_the_default_device() {
             r#"{"profile":{"x_mm":[0,1,2],"mu":[0.6,0.9,1.2]},"device":{"mu_hd":0.5}}"#,
         );
         (config, body, explicit)
-    })();
+    };
     let _ = Command::new("kill").args(["-TERM", &child.id().to_string()]).status();
     let _ = child.wait();
     let (config, designed, explicit) = answers;

@@ -333,8 +333,9 @@ pub fn run(mut args: PlayArgs) -> anyhow::Result<()> {
             modulate_at_resonance(&mut signal, f)
                 .with_context(|| format!("--plate-resonance-hz for {}", profile.display()))?;
         }
-        let design = Design { device_file: device_file.as_ref(), stated: None };
-        return write_signal(&args, format, &output, output_path, profile, json!({ "file": name }), &signal, design);
+        let provenance =
+            Provenance { trajectory: json!({ "file": name }), device_file: device_file.as_ref(), stated: None };
+        return write_signal(&args, format, &output, output_path, profile, &signal, provenance);
     }
     let (curve, amplitude, comments) = read_curve(profile)?;
     if let Some(file) = &device_file {
@@ -355,18 +356,20 @@ pub fn run(mut args: PlayArgs) -> anyhow::Result<()> {
     }
 
     let stated = comments.iter().find(|c| c.contains(crate::args::DEVICE_SHA256_MARK)).cloned();
-    let design = Design { device_file: device_file.as_ref(), stated };
-    write_signal(&args, format, &output, output_path, profile, trajectory_source, &signal, design)
+    let provenance = Provenance { trajectory: trajectory_source, device_file: device_file.as_ref(), stated };
+    write_signal(&args, format, &output, output_path, profile, &signal, provenance)
 }
 
-/// Which device file a played design was made with: the one given
-/// (--device), and the profile's own comment saying so.
-struct Design<'a> {
+/// Where a played signal came from: its trajectory (a JSON description),
+/// the device file given (--device), and the design's own comment naming
+/// the device file it was made with.
+struct Provenance<'a> {
+    trajectory: serde_json::Value,
     device_file: Option<&'a crate::args::DesignDevice>,
     stated: Option<String>,
 }
 
-impl Design<'_> {
+impl Provenance<'_> {
     /// The line the signal's CSV starts with (without `# `).
     fn comment(&self) -> Option<String> {
         match (self.device_file, &self.stated) {
@@ -385,12 +388,12 @@ fn write_signal(
     output: &Output,
     output_path: &Path,
     profile: &Path,
-    trajectory_source: serde_json::Value,
     signal: &haptex_core::signal::DriveSignal,
-    design: Design,
+    provenance: Provenance,
 ) -> anyhow::Result<()> {
     let mut written = Vec::new();
-    let comment = design.comment();
+    let comment = provenance.comment();
+    let trajectory_source = &provenance.trajectory;
     let write_csv = |w: &mut dyn std::io::Write| {
         if let Some(c) = &comment {
             writeln!(w, "# {c}")?;
@@ -415,9 +418,9 @@ fn write_signal(
                 "haptex_version": env!("CARGO_PKG_VERSION"),
             });
             // The device file played on, or the one the design says it was made with.
-            if let Some(file) = design.device_file {
+            if let Some(file) = provenance.device_file {
                 source["device_file"] = file.provenance();
-            } else if let Some(stated) = &design.stated {
+            } else if let Some(stated) = &provenance.stated {
                 source["design_device_file"] = json!(stated);
             }
             let sidecar = write_wav(path, signal, &options, source)?;
@@ -451,7 +454,7 @@ fn write_signal(
         written.push(path.display().to_string());
     }
     if let Some(path) = &args.png {
-        let title = format!("haptex play: {}, {}", file_name(profile), describe(&trajectory_source));
+        let title = format!("haptex play: {}, {}", file_name(profile), describe(trajectory_source));
         signal.figure(&title).write_png(path)?;
         written.push(path.display().to_string());
     }
