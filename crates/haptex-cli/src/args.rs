@@ -198,12 +198,12 @@ pub struct ForceModelArgs {
     /// Circuit model: air gap between skin and display, g in um (0: none).
     #[arg(long, value_parser = in_range(ranges::GAP_UM))]
     pub gap_um: Option<f64>,
-    /// Circuit model: the carrier the design will be played with (as
-    /// `haptex play --carrier`). Default sine.
+    /// Circuit model or --device: the carrier the design will be played
+    /// with (as `haptex play --carrier`). Default sine.
     #[arg(long, value_enum)]
     pub carrier: Option<CarrierArg>,
-    /// Circuit model: the carrier frequency in Hz (as `haptex play
-    /// --carrier-hz`). Default 1000.
+    /// Circuit model or --device: the carrier frequency in Hz (as
+    /// `haptex play --carrier-hz`). Default 1000.
     #[arg(long, value_name = "F", value_parser = in_range(ranges::CARRIER_HZ))]
     pub carrier_hz: Option<f64>,
 }
@@ -254,8 +254,9 @@ impl ForceModelArgs {
             ] {
                 if given {
                     anyhow::bail!(
-                        "{flag} is for the frequency-dependent force model: give --force-model circuit (eq. 3, the \
-                         default, does not depend on the carrier)"
+                        "{flag} is for the frequency-dependent force model: give --force-model circuit, or a \
+                         device file (--device FILE) measured on that carrier (eq. 3, the default, does not depend on \
+                         the carrier)"
                     );
                 }
             }
