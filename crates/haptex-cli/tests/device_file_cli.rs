@@ -503,3 +503,31 @@ fn a_recipe_made_with_a_device_file_replays_only_with_a_file_of_its_sha256() {
     ]);
     assert!(err.contains("device_file_sha256: missing"), "{err}");
 }
+
+/// `haptex check --device F` (one FE run, coarse mesh): eq. (8) with the
+/// file's constants, the voltage within its U_max; the check's CSV, the
+/// voltage written from it (which `haptex play` then takes with the file)
+/// and the header name the file; a circuit-model file is refused.
+#[test]
+fn check_with_a_device_file_names_it_and_keeps_within_its_u_max() {
+    let dir = tempfile::tempdir().unwrap();
+    let (f, file) = eq3_file(dir.path(), 50.0);
+    let sha = haptex_core::io::sha256_file(Path::new(&f)).unwrap();
+    let mu_hd = file.electrovibration.as_ref().unwrap().mu_hd.value;
+    let points: String = (0..=20)
+        .map(|i| format!("{},{}\n", 0.1 * i as f64, mu_hd * if (5..15).contains(&i) { 1.15 } else { 1.0 }))
+        .collect();
+    let target = write(dir.path(), "target.csv", &format!("x_mm,mu\n{points}"));
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let args = ["check", "--profile", &target, "--device", &f, "--mesh", "coarse", "--step", "0.1", "--run-up", "0.5"];
+    let err = ok(&[&args[..], &["-o", &path("c.csv"), "--voltage-out", &path("u.csv"), "-q"]].concat());
+    let check = std::fs::read_to_string(path("c.csv")).unwrap();
+    assert!(check.contains(&format!("device file {f}")) && check.contains(&sha), "{check}\n{err}");
+    let u = std::fs::read_to_string(path("u.csv")).unwrap();
+    assert!(u.contains(&sha) && u.contains("designed for the carrier: sine 1000 Hz"), "{u}");
+    assert!(rows(&check).iter().all(|r| r[2] <= 50.0));
+    ok(&["play", "--profile", &path("u.csv"), "--device", &f, "--velocity", "20", "-o", &path("u.wav")]);
+    let (c, _) = device_file(dir.path(), "circuit.toml", None, 100.0);
+    let err = refused(&[&args[..3], &["--device", &c]].concat());
+    assert!(err.contains("is of the circuit model"), "{err}");
+}
