@@ -4,6 +4,7 @@ use std::io::Write;
 use std::path::{Component, Path, PathBuf};
 
 use anyhow::Context;
+use haptex_core::calibration::force_fit::carrier_name;
 use haptex_core::electrovibration::LayerStack;
 use haptex_core::ranges;
 
@@ -197,14 +198,41 @@ pub struct ForceModelArgs {
     /// Circuit model: air gap between skin and display, g in um (0: none).
     #[arg(long, value_parser = in_range(ranges::GAP_UM))]
     pub gap_um: Option<f64>,
-    /// Circuit model: the carrier the design will be played with (as
-    /// `haptex play --carrier`). Default sine.
+    /// Circuit model or --device: the carrier the design will be played
+    /// with (as `haptex play --carrier`). Default sine.
     #[arg(long, value_enum)]
     pub carrier: Option<CarrierArg>,
-    /// Circuit model: the carrier frequency in Hz (as `haptex play
-    /// --carrier-hz`). Default 1000.
+    /// Circuit model or --device: the carrier frequency in Hz (as
+    /// `haptex play --carrier-hz`). Default 1000.
     #[arg(long, value_name = "F", value_parser = in_range(ranges::CARRIER_HZ))]
     pub carrier_hz: Option<f64>,
+}
+
+impl ForceModelArgs {
+    /// The carrier the design will be played on: --carrier and
+    /// --carrier-hz, default a 1 kHz sine.
+    pub fn carrier(&self) -> haptex_core::signal::Carrier {
+        carrier_of(self.carrier, self.carrier_hz)
+    }
+}
+
+/// The carrier of `--carrier` and `--carrier-hz` given as options:
+/// default a 1 kHz sine.
+pub fn carrier_of(shape: Option<CarrierArg>, frequency_hz: Option<f64>) -> haptex_core::signal::Carrier {
+    use haptex_core::signal::Carrier;
+    Carrier {
+        shape: shape.unwrap_or(CarrierArg::Sine).shape(),
+        frequency_hz: frequency_hz.unwrap_or(Carrier::DEFAULT.frequency_hz),
+    }
+}
+
+/// `designed for the carrier: SHAPE F Hz (play it with ...)`: the comment
+/// of a design whose force depends on the carrier, as `haptex play` reads
+/// it back (the frequency in full: it compares exactly).
+pub fn carrier_note(carrier: &haptex_core::signal::Carrier) -> String {
+    let shape = carrier.shape.name();
+    let f = haptex_core::num::Exact(carrier.frequency_hz);
+    format!("designed for the carrier: {shape} {f} Hz (play it with haptex play --carrier {shape} --carrier-hz {f})")
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, clap::ValueEnum)]
@@ -217,7 +245,6 @@ impl ForceModelArgs {
     /// The force model the flags give, refusing circuit flags with eq. (3).
     pub fn model(&self) -> anyhow::Result<haptex_core::frequency::ForceModel> {
         use haptex_core::frequency::{FingerCircuit, ForceModel};
-        use haptex_core::signal::Carrier;
         if self.force_model == ForceModelArg::Eq3 {
             for (given, flag) in [
                 (self.rho_sc_ohm_m.is_some(), "--rho-sc-ohm-m"),
@@ -227,8 +254,9 @@ impl ForceModelArgs {
             ] {
                 if given {
                     anyhow::bail!(
-                        "{flag} is for the frequency-dependent force model: give --force-model circuit (eq. 3, the \
-                         default, does not depend on the carrier)"
+                        "{flag} is for the frequency-dependent force model: give --force-model circuit, or a \
+                         device file (--device FILE) measured on that carrier (eq. 3, the default, does not depend on \
+                         the carrier)"
                     );
                 }
             }
@@ -242,11 +270,7 @@ impl ForceModelArgs {
         };
         let circuit = FingerCircuit { rho_sc_ohm_m, gap_um };
         circuit.validate()?;
-        let carrier = Carrier {
-            shape: self.carrier.unwrap_or(CarrierArg::Sine).shape(),
-            frequency_hz: self.carrier_hz.unwrap_or(Carrier::DEFAULT.frequency_hz),
-        };
-        Ok(ForceModel::Circuit { circuit, carrier })
+        Ok(ForceModel::Circuit { circuit, carrier: self.carrier() })
     }
 }
 
@@ -314,10 +338,16 @@ impl DisplayArgs {
         Ok(())
     }
 
-    /// The ultrasonic plate: the calibration given, or the literature
-    /// default (a placeholder).
-    pub fn ultrasonic(&self) -> anyhow::Result<haptex_core::ultrasonic::UltrasonicDevice> {
+    /// The ultrasonic plate: the device file's (a_max at most its own),
+    /// the calibration given, or the literature default (a placeholder).
+    pub fn ultrasonic(
+        &self,
+        device_file: Option<&DesignDevice>,
+    ) -> anyhow::Result<haptex_core::ultrasonic::UltrasonicDevice> {
         use haptex_core::ultrasonic::{Calibration, UltrasonicDevice};
+        if let Some(file) = device_file {
+            return file.ultrasonic(self.a_max_um);
+        }
         Ok(match &self.ultrasonic_calibration {
             Some(path) => UltrasonicDevice::calibrated(Calibration::read_csv_file(path)?, self.a_max_um)?,
             None => UltrasonicDevice::literature_default(self.a_max_um)?,
@@ -350,5 +380,207 @@ pub fn finger_model(path: Option<&Path>) -> anyhow::Result<haptex_fem::finger::F
     Ok(match path {
         Some(path) => haptex_fem::finger::FingerModel::read(path)?,
         None => haptex_fem::finger::FingerModel::default_model(),
+    })
+}
+
+/// A calibrated display's device file (`--device FILE`, written by
+/// `haptex calibrate`; docs/file-formats.md, "Device file"), on `haptex
+/// voltage`, `check`, `play` and `map voltage`. `--device-file` is the
+/// same flag under the name `haptex live` and `haptex serve` give it
+/// (their `--device` is the audio output).
+#[derive(Debug, Clone, clap::Args)]
+pub struct DeviceFileArgs {
+    /// The display's device file (TOML, `haptex calibrate`): mu_HD, the
+    /// layer stack, the force coefficient (eq. 3 on each measured carrier,
+    /// or the circuit model on any carrier) and U_max come from it, so the
+    /// flags that set them are refused with it. --u-max may lower U_max
+    /// (a lower limit is safe), never raise it. Every output says which
+    /// device file (and its SHA-256) designed it.
+    #[arg(long = "device", visible_alias = "device-file", id = "device_file", value_name = "FILE")]
+    pub device_file: Option<PathBuf>,
+}
+
+impl DeviceFileArgs {
+    /// The device file, read and checked, if one was given.
+    pub fn read(&self) -> anyhow::Result<Option<DesignDevice>> {
+        self.device_file.as_deref().map(DesignDevice::read).transpose()
+    }
+}
+
+/// For a command's `mut_args`: the arguments named `names` (what a device
+/// file sets) conflict with `--device`, each refused by its own name.
+pub fn set_by_device_file(names: &'static [&'static str]) -> impl FnMut(clap::Arg) -> clap::Arg {
+    move |arg| {
+        if names.contains(&arg.get_id().as_str()) { arg.conflicts_with("device_file") } else { arg }
+    }
+}
+
+/// `--device-file FILE`: [`DeviceFileArgs`] for `haptex live` and `haptex
+/// serve`, whose `--device` names the audio output.
+#[derive(Debug, Clone, PartialEq, clap::Args)]
+pub struct DeviceFileLongArgs {
+    /// The display's device file (TOML, `haptex calibrate`; as --device
+    /// FILE of `haptex voltage`, `check`, `play` and `map voltage`).
+    #[arg(long = "device-file", id = "device_file", value_name = "FILE")]
+    pub device_file: Option<PathBuf>,
+}
+
+impl DeviceFileLongArgs {
+    /// The device file, read and checked, if one was given.
+    pub fn read(&self) -> anyhow::Result<Option<DesignDevice>> {
+        self.device_file.as_deref().map(DesignDevice::read).transpose()
+    }
+}
+
+/// A device file read for a design: its constants and the SHA-256 of its
+/// bytes, which every output designed with it records.
+#[derive(Debug, Clone)]
+pub struct DesignDevice {
+    pub file: haptex_core::calibration::device_file::DeviceFile,
+    /// SHA-256 of the file's bytes (hex).
+    pub sha256: String,
+}
+
+/// The words of the comment line a design made with a device file
+/// carries, before the file's SHA-256 (read back by `haptex play` and
+/// `haptex live`).
+pub const DEVICE_SHA256_MARK: &str = "device file sha256 ";
+
+impl DesignDevice {
+    /// Reads and checks the device file at `path`; the hash is of the bytes
+    /// parsed.
+    pub fn read(path: &Path) -> anyhow::Result<Self> {
+        use haptex_core::calibration::device_file::{DeviceFile, MAX_FILE_BYTES};
+        let name = path.display().to_string();
+        let bytes = haptex_core::io::read_file_bounded(path, MAX_FILE_BYTES)
+            .map_err(|e| anyhow::anyhow!("device file {name}: {e}"))?;
+        let text =
+            std::str::from_utf8(&bytes).map_err(|_| anyhow::anyhow!("{name}: not UTF-8 text, not a device file"))?;
+        let file = DeviceFile::from_toml(text, &name)?;
+        Ok(Self { file, sha256: haptex_core::io::sha256_hex(&bytes) })
+    }
+
+    /// The electrovibration device for a design played on `carrier`, with
+    /// U_max the file's or the lower `--u-max` given.
+    pub fn device(
+        &self,
+        carrier: &haptex_core::signal::Carrier,
+        u_max_given: Option<f64>,
+    ) -> anyhow::Result<haptex_core::electrovibration::Device> {
+        let mut device = self.file.device(carrier)?;
+        device.u_max_v = self.u_max_v(u_max_given)?;
+        Ok(device)
+    }
+
+    /// U_max: the file's, or a lower `--u-max`; a higher one is refused
+    /// (the amplifier gives no more than the file states).
+    pub fn u_max_v(&self, given: Option<f64>) -> anyhow::Result<f64> {
+        let stated = self.file.u_max_v;
+        match given {
+            Some(u) if u > stated => anyhow::bail!(
+                "--u-max {} is above the U_max = {} V RMS of device file {}: the display gives at most that; give \
+                 at most {} (a lower U_max is allowed), or drop --u-max",
+                haptex_core::num::Num(u),
+                haptex_core::num::Num(stated),
+                self.file.path,
+                haptex_core::num::Num(stated)
+            ),
+            Some(u) => Ok(u),
+            None => Ok(stated),
+        }
+    }
+
+    /// The file's ultrasonic plate, a_max the file's or a lower
+    /// `--a-max-um` (a higher one is refused).
+    pub fn ultrasonic(&self, a_max_given: Option<f64>) -> anyhow::Result<haptex_core::ultrasonic::UltrasonicDevice> {
+        let path = &self.file.path;
+        let Some(section) = &self.file.ultrasonic else {
+            anyhow::bail!(
+                "device file {path} has no ultrasonic plate (its measurements did not calibrate rho(a)): design for \
+                 --display electrovibration, or calibrate the plate"
+            );
+        };
+        let mut file = self.file.clone();
+        if let Some(a) = a_max_given {
+            if a > section.a_max_um {
+                anyhow::bail!(
+                    "--a-max-um {} is above the a_max = {} um of device file {path}: give at most that, or drop \
+                     --a-max-um",
+                    haptex_core::num::Num(a),
+                    haptex_core::num::Num(section.a_max_um)
+                );
+            }
+            if let Some(u) = file.ultrasonic.as_mut() {
+                u.a_max_um = a;
+            }
+        }
+        let device = file.ultrasonic_device().map_err(|e| anyhow::anyhow!("device file {path}: {e}"))?;
+        device.ok_or_else(|| anyhow::anyhow!("device file {path} has no ultrasonic plate"))
+    }
+
+    /// The comment every output designed with the file carries (without
+    /// `# `): what the file is, and the SHA-256 of its bytes.
+    pub fn comment(&self) -> String {
+        format!("designed with {}; {DEVICE_SHA256_MARK}{}", self.file.describe(), self.sha256)
+    }
+
+    /// The file as a JSON provenance record (WAV and NPY sidecars).
+    pub fn provenance(&self) -> serde_json::Value {
+        serde_json::json!({
+            "path": self.file.path,
+            "sha256": self.sha256,
+            "describe": self.file.describe(),
+        })
+    }
+
+    /// The web application's default device (`haptex serve --device-file`,
+    /// `haptex recipe run`): the file's device on the default carrier (sine
+    /// 1000 Hz, the page's playback default), the circuit model's gain on
+    /// it folded into k (the API's device has no gain: Fe is proportional
+    /// to k G either way).
+    pub fn server_default(&self) -> anyhow::Result<haptex_server::params::DefaultDevice> {
+        use haptex_core::signal::Carrier;
+        use haptex_server::params::{DefaultDevice, DeviceFileSource};
+        let carrier = Carrier::DEFAULT;
+        let mut device = self.file.device(&carrier)?;
+        device.contact.k_mm2_per_n = ranges::K_MM2_PER_N
+            .check(device.contact.k_mm2_per_n * device.force_gain)
+            .map_err(|e| anyhow::anyhow!("device file {}: k G on {}: {e}", self.file.path, carrier_name(&carrier)))?;
+        device.force_gain = 1.0;
+        Ok(DefaultDevice {
+            device,
+            file: Some(DeviceFileSource {
+                path: self.file.path.clone(),
+                sha256: self.sha256.clone(),
+                describe: self.file.describe(),
+                carrier: carrier_name(&carrier),
+            }),
+        })
+    }
+
+    /// Refuses a design whose comments say it was made with another device
+    /// file (another SHA-256) than this one.
+    pub fn check_design(&self, comments: &[String], design: &Path) -> anyhow::Result<()> {
+        if let Some(stated) = stated_device_sha256(comments)
+            && stated != self.sha256
+        {
+            anyhow::bail!(
+                "{} was designed with a device file of SHA-256 {stated}, and device file {} has SHA-256 {}: design it \
+                 again with this device file, or play it with the one it was designed with",
+                design.display(),
+                self.file.path,
+                self.sha256
+            );
+        }
+        Ok(())
+    }
+}
+
+/// The SHA-256 of the device file a design's comment says it was made
+/// with (`...; device file sha256 HEX`).
+pub fn stated_device_sha256(comments: &[String]) -> Option<String> {
+    comments.iter().find_map(|line| {
+        let (_, rest) = line.split_once(DEVICE_SHA256_MARK)?;
+        Some(rest.split_whitespace().next().unwrap_or("").to_string())
     })
 }

@@ -514,6 +514,10 @@ pub struct NpySidecar {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub u_max_v: Option<f64>,
     pub npy_sha256: String,
+    /// The device file a voltage map was designed with: what it is and
+    /// its SHA-256 (`designed with device file ...; device file sha256 ...`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub device_file: Option<String>,
 }
 
 /// The sidecar path of an NPY map: `MAP.npy` -> `MAP.npy.json`.
@@ -533,6 +537,19 @@ pub fn write_npy_pair(
     quantity: &str,
     u_max_v: Option<f64>,
 ) -> Result<(), crate::io::WriteError> {
+    write_npy_pair_designed(path, grid, values, quantity, u_max_v, None)
+}
+
+/// [`write_npy_pair`] for a voltage map designed with a device file: the
+/// sidecar names it (`device_file`, the design's comment line).
+pub fn write_npy_pair_designed(
+    path: &std::path::Path,
+    grid: &MapGrid,
+    values: &[f64],
+    quantity: &str,
+    u_max_v: Option<f64>,
+    device_file: Option<String>,
+) -> Result<(), crate::io::WriteError> {
     let sidecar_path = npy_sidecar_path(path);
     match std::fs::remove_file(&sidecar_path) {
         Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
@@ -543,8 +560,13 @@ pub fn write_npy_pair(
     let mut bytes = Vec::new();
     write_npy_f64(&mut bytes, grid.ny, grid.nx, values).map_err(|e| crate::io::WriteError::new(path, e))?;
     crate::io::write_atomic(path, |w| w.write_all(&bytes))?;
-    let sidecar =
-        NpySidecar { grid: *grid, quantity: quantity.to_string(), u_max_v, npy_sha256: crate::io::sha256_hex(&bytes) };
+    let sidecar = NpySidecar {
+        grid: *grid,
+        quantity: quantity.to_string(),
+        u_max_v,
+        npy_sha256: crate::io::sha256_hex(&bytes),
+        device_file,
+    };
     crate::io::write_atomic(&sidecar_path, |w| {
         serde_json::to_writer_pretty(&mut *w, &sidecar).map_err(std::io::Error::from)?;
         w.write_all(b"\n")

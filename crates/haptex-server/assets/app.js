@@ -1989,6 +1989,11 @@
     // CSV's and the sidecar's recipe), and a replay refuses an unpinned one.
     if (data.library_sha256) r.library_sha256 = data.library_sha256;
     if (data.database_sha256) r.database_sha256 = data.database_sha256;
+    // The device file the parameters started from (haptex serve --device-file).
+    if (data.device_file_sha256) {
+      r.device_file = data.device_file;
+      r.device_file_sha256 = data.device_file_sha256;
+    }
     return r;
   }
 

@@ -105,6 +105,9 @@ pub struct Config {
     /// The audio output the page plays designs on live (`haptex serve
     /// --live`); `None`: no live mode.
     pub live: Option<Arc<dyn live::LiveOutput>>,
+    /// The device requests start from: the paper's, or a device file's
+    /// (`haptex serve --device-file`).
+    pub default_device: params::DefaultDevice,
 }
 
 impl Config {
@@ -250,7 +253,8 @@ pub fn run(config: Config, on_listening: impl FnOnce(SocketAddr)) -> Result<(), 
     memory::configure();
     let mut state = AppState::new(config.library.as_deref(), config.limits.clone())?
         .with_hosts(HostPolicy::new(&config.allowed_hosts)?)
-        .with_access_log(config.access_log);
+        .with_access_log(config.access_log)
+        .with_default_device(config.default_device.clone());
     if config.writable {
         state = state.with_writable_library()?;
     }

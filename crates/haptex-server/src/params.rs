@@ -124,6 +124,41 @@ pub fn spec(name: &str) -> Option<&'static ParamSpec> {
     DEVICE_PARAMS.iter().find(|p| p.name == name)
 }
 
+/// The device a request's parameters start from: the paper's (Fig. 2),
+/// or a calibrated display's device file (`haptex serve --device-file`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DefaultDevice {
+    pub device: Device,
+    /// The device file it is, if any.
+    pub file: Option<DeviceFileSource>,
+}
+
+impl DefaultDevice {
+    /// The paper's device, no device file.
+    pub const PAPER: Self = Self { device: Device::PAPER, file: None };
+}
+
+/// The device file a server's default device comes from: what `GET
+/// /api/config` shows, recipes pin and outputs designed with it name.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DeviceFileSource {
+    pub path: String,
+    /// SHA-256 of the file's bytes (hex).
+    pub sha256: String,
+    /// One line: the file, its model, its measurements and their date.
+    pub describe: String,
+    /// The carrier its force coefficient is for (`sine 1000 Hz`); the
+    /// circuit model's gain on it is folded into k.
+    pub carrier: String,
+}
+
+impl DeviceFileSource {
+    /// The comment line (without `# `) of an output designed with it.
+    pub fn comment(&self) -> String {
+        format!("designed with {}; device file sha256 {}", self.describe, self.sha256)
+    }
+}
+
 /// The device and normal force a request asks for.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct DeviceRequest {
@@ -137,7 +172,22 @@ impl DeviceRequest {
     /// paper's defaults. Unknown names, names given twice and values out
     /// of [min, max] are errors naming `prefix` + the parameter.
     pub fn from_pairs<'a>(pairs: impl IntoIterator<Item = (&'a str, f64)>, prefix: &str) -> Result<Self, ApiError> {
+        Self::from_pairs_over(pairs, prefix, &Device::PAPER)
+    }
+
+    /// [`DeviceRequest::from_pairs`] with the missing parameters taken
+    /// from `base` (the server's default device).
+    pub fn from_pairs_over<'a>(
+        pairs: impl IntoIterator<Item = (&'a str, f64)>,
+        prefix: &str,
+        base: &Device,
+    ) -> Result<Self, ApiError> {
         let mut values: Vec<Option<f64>> = DEVICE_PARAMS.iter().map(|p| p.default).collect();
+        for (name, value) in Self::device_values(base) {
+            if let Some(i) = DEVICE_PARAMS.iter().position(|p| p.name == name) {
+                values[i] = Some(value);
+            }
+        }
         let mut given = vec![false; DEVICE_PARAMS.len()];
         for (name, value) in pairs {
             let field = format!("{prefix}{name}");
@@ -165,7 +215,7 @@ impl DeviceRequest {
             contact: ContactArea { k_mm2_per_n: get("k_mm2_per_n"), exponent: get("area_exponent") },
             mu_hd: get("mu_hd"),
             u_max_v: get("u_max_v"),
-            force_gain: 1.0,
+            force_gain: base.force_gain,
         };
         let fn_n = values[DEVICE_PARAMS.iter().position(|p| p.name == "fn_n").expect("fn_n")];
         Ok(Self { device, fn_n })
@@ -175,8 +225,16 @@ impl DeviceRequest {
 impl DeviceRequest {
     /// Every parameter by name, defaults included (`fn_n` when given).
     pub fn values(&self) -> BTreeMap<&'static str, f64> {
-        let d = &self.device;
-        let mut map = BTreeMap::from([
+        let mut map = Self::device_values(&self.device);
+        if let Some(f) = self.fn_n {
+            map.insert("fn_n", f);
+        }
+        map
+    }
+
+    /// A device's parameters by name.
+    fn device_values(d: &Device) -> BTreeMap<&'static str, f64> {
+        BTreeMap::from([
             ("mu_hd", d.mu_hd),
             ("u_max_v", d.u_max_v),
             ("eps_sc", d.stack.eps_sc),
@@ -185,12 +243,15 @@ impl DeviceRequest {
             ("d_i_mm", d.stack.d_i_mm),
             ("k_mm2_per_n", d.contact.k_mm2_per_n),
             ("area_exponent", d.contact.exponent),
-        ]);
-        if let Some(f) = self.fn_n {
-            map.insert("fn_n", f);
-        }
-        map
+        ])
     }
+}
+
+/// The parameter table with the defaults of `base` (the server's default
+/// device), as `GET /api/config` shows it.
+pub fn params_over(base: &Device) -> Vec<ParamSpec> {
+    let values = DeviceRequest::device_values(base);
+    DEVICE_PARAMS.iter().map(|p| ParamSpec { default: values.get(p.name).copied().or(p.default), ..*p }).collect()
 }
 
 /// Checks min <= value <= max (and finite); the error names `field`.

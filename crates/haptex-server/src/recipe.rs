@@ -61,6 +61,13 @@ pub struct Recipe {
     pub library_sha256: Option<String>,
     #[serde(default)]
     pub database_sha256: Option<String>,
+    /// The device file the server's default device came from (`haptex
+    /// serve --device-file`): its path as served, and the SHA-256 of its
+    /// bytes. A replay needs a device file of that SHA-256.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub device_file: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub device_file_sha256: Option<String>,
     /// Provenance as the page states it (not used to compute anything).
     #[serde(default)]
     pub source: Value,
@@ -173,7 +180,38 @@ impl Recipe {
                 }
             }
         }
+        self.check_device_file(state)?;
         Ok(unpinned)
+    }
+
+    /// The device file: a recipe made with one replays only with a file
+    /// of the same SHA-256 (the designs' defaults are its constants), and
+    /// one made without only without.
+    fn check_device_file(&self, state: &AppState) -> Result<(), RecipeError> {
+        let have = state.default_device().file.as_ref();
+        match (&self.device_file_sha256, have) {
+            (None, None) => Ok(()),
+            (Some(want), Some(have)) if *want == have.sha256 => Ok(()),
+            (Some(want), have) => Err(error(
+                "device_file_sha256",
+                format!(
+                    "the recipe was made with device file {} of SHA-256 {want}, {}: replay it with that file (haptex \
+                     recipe run --device-file FILE)",
+                    self.device_file.as_deref().unwrap_or("(path not recorded)"),
+                    match have {
+                        Some(have) => format!("and {} has SHA-256 {}", have.path, have.sha256),
+                        None => "and no device file is given".to_string(),
+                    }
+                ),
+            )),
+            (None, Some(have)) => Err(error(
+                "device_file_sha256",
+                format!(
+                    "missing: the recipe was made without a device file, and {} is given; replay it without one",
+                    have.path
+                ),
+            )),
+        }
     }
 }
 

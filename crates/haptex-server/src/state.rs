@@ -209,6 +209,8 @@ struct Parts {
     access_log: bool,
     /// The live output (`haptex serve --live`).
     live: Option<Arc<LiveHub>>,
+    /// The device requests start from (`haptex serve --device-file`).
+    default_device: crate::params::DefaultDevice,
 }
 
 impl AppState {
@@ -224,6 +226,7 @@ impl AppState {
             hosts: HostPolicy::default(),
             access_log: false,
             live: None,
+            default_device: crate::params::DefaultDevice::PAPER,
         }))
     }
 
@@ -273,6 +276,18 @@ impl AppState {
     /// (`haptex serve --live`; [`crate::live`]).
     pub fn with_live_output(self, output: Arc<dyn LiveOutput>) -> Self {
         Self::build(Parts { live: Some(Arc::new(LiveHub::new(output))), ..self.parts() })
+    }
+
+    /// This state, its requests' device parameters starting from
+    /// `device` (a device file's: `haptex serve --device-file`) instead of
+    /// the paper's.
+    pub fn with_default_device(self, device: crate::params::DefaultDevice) -> Self {
+        Self::build(Parts { default_device: device, ..self.parts() })
+    }
+
+    /// The device requests start from.
+    pub fn default_device(&self) -> &crate::params::DefaultDevice {
+        &self.0.parts.default_device
     }
 
     /// The state of these parts, with fresh slots and counters for its limits.

@@ -14,8 +14,8 @@ use haptex_fem::scenario::Loading;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::{
-    DisplayArg, DisplayArgs, LayerStackArgs, MaterialArg, MeshArg, finger_model, in_range, non_negative, positive,
-    read_profile,
+    CarrierArg, DesignDevice, DeviceFileArgs, DisplayArg, DisplayArgs, LayerStackArgs, MaterialArg, MeshArg,
+    finger_model, in_range, non_negative, positive, read_profile,
 };
 
 /// Check a friction profile on the finger model: slide the FE finger on the
@@ -39,7 +39,13 @@ use crate::args::{
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:\n  haptex predict --surface bump --x0 5 --width 1.5 --height 0.3 -o bump.csv\n  \
                   haptex check --profile bump.csv --png check.png\n  \
-                  haptex check --profile bump.csv --compensate --voltage-out u-compensated.csv")]
+                  haptex check --profile bump.csv --compensate --voltage-out u-compensated.csv\n\n\
+                  With a device file (`haptex calibrate`, eq3 model): eq. (8) takes its mu_HD, k for the carrier \
+                  (default sine 1000 Hz) and U_max, and the FE display its layer stack:\n  \
+                  haptex check --profile bump.csv --device my-display.toml --carrier-hz 300 -o check.csv \
+                  --voltage-out u300.csv",
+    mut_args = crate::args::set_by_device_file(&["mu_hd", "eps_sc", "eps_i", "d_sc_mm", "d_i_mm", "k_mm2_per_n", "fe_k", "ultrasonic_calibration"])
+)]
 pub struct CheckArgs {
     /// Target friction profile CSV (`x_mm,mu` or `x_mm,ft_n,fn_n`), or `-` for stdin.
     #[arg(long, value_name = "P.csv")]
@@ -49,9 +55,10 @@ pub struct CheckArgs {
     /// friction, 0.5, the flat-surface value of the FE profiles).
     #[arg(long, value_parser = in_range(ranges::MU_HD))]
     mu_hd: Option<f64>,
-    /// Highest voltage the display can apply, U_max in V RMS.
-    #[arg(long, default_value_t = Device::PAPER.u_max_v, value_parser = in_range(ranges::U_MAX_V))]
-    u_max: f64,
+    /// Highest voltage the display can apply, U_max in V RMS. Default 100,
+    /// or the device file's (which --u-max may lower, not raise).
+    #[arg(long, value_parser = in_range(ranges::U_MAX_V))]
+    u_max: Option<f64>,
     /// Contact-area coefficient k of eq. (8) in mm^2/N (A = k Fn).
     #[arg(long, default_value_t = ContactArea::PAPER.k_mm2_per_n, value_parser = in_range(ranges::K_MM2_PER_N))]
     k_mm2_per_n: f64,
@@ -119,20 +126,33 @@ pub struct CheckArgs {
     /// reduced coefficient mu_HD rho(a(x_f)), docs/display.md).
     #[command(flatten)]
     display: DisplayArgs,
+    #[command(flatten)]
+    device_file: DeviceFileArgs,
+    /// With --device: the carrier the design will be played on (the
+    /// device file's c is measured per carrier). Default sine.
+    #[arg(long, value_enum, requires = "device_file")]
+    carrier: Option<CarrierArg>,
+    /// With --device: the carrier frequency in Hz. Default 1000.
+    #[arg(long, value_name = "F", value_parser = in_range(ranges::CARRIER_HZ), requires = "device_file")]
+    carrier_hz: Option<f64>,
 }
 
 pub fn run(args: CheckArgs) -> anyhow::Result<()> {
     let target = read_profile(&args.profile)?;
     let model = finger_model(args.finger.as_deref())?;
-    let mu_hd = args.mu_hd.unwrap_or(model.contact.mu_skin);
-    let mut settings = RenderSettings::new(mu_hd, args.load.unwrap_or(DEFAULT_LOAD_N_PER_MM));
-    settings.device = Device {
-        stack: args.stack.stack(),
-        contact: ContactArea { k_mm2_per_n: args.k_mm2_per_n, exponent: 1.0 },
-        mu_hd,
-        u_max_v: args.u_max,
-        force_gain: 1.0,
+    let device_file = args.device_file.read()?;
+    let device = match &device_file {
+        Some(file) => file_device(file, &args)?,
+        None => Device {
+            stack: args.stack.stack(),
+            contact: ContactArea { k_mm2_per_n: args.k_mm2_per_n, exponent: 1.0 },
+            mu_hd: args.mu_hd.unwrap_or(model.contact.mu_skin),
+            u_max_v: args.u_max.unwrap_or(Device::PAPER.u_max_v),
+            force_gain: 1.0,
+        },
     };
+    let mut settings = RenderSettings::new(device.mu_hd, args.load.unwrap_or(DEFAULT_LOAD_N_PER_MM));
+    settings.device = device;
     settings.device.validate()?;
     let scenario = &mut settings.scenario;
     scenario.model = model;
@@ -168,9 +188,9 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
         bar.set_position(p.step as u64);
         bar.set_message(format!("FE run {}, x = {:.2} mm", run + 1, p.slide_mm));
     };
-    let mut lines = Vec::new();
+    let mut lines: Vec<String> = device_file.iter().map(DesignDevice::comment).collect();
     if args.display.display != DisplayArg::Electrovibration {
-        return run_display(&args, &target, &settings, &mut report, &bar);
+        return run_display(&args, &target, &settings, device_file.as_ref(), &mut report, &bar);
     }
     args.display.refuse_display_flags()?;
     if args.fe_k {
@@ -204,11 +224,15 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
     let m = check.metrics;
     lines.extend(describe(&m, &settings));
     let header = format!(
-        "haptex check: {} on the FE finger ({}, load {}), voltage {label}",
+        "haptex check: {} on the FE finger ({}, load {}), voltage {label}{}",
         args.profile.display(),
         if settings.scenario.viscoelastic { "visco-elastic" } else { "elastic" },
-        loading_text(settings.scenario.loading)
+        loading_text(settings.scenario.loading),
+        device_file.as_ref().map_or(String::new(), |f| format!(", device file {}", f.file.path))
     );
+    // What a voltage profile written from the check states for `haptex
+    // play`: the device file and the carrier it was designed for.
+    let design_notes = design_notes(device_file.as_ref(), &args);
     if let Some(path) = &args.output {
         haptex_core::io::write_atomic(path, |w| {
             writeln!(w, "# {header}")?;
@@ -236,6 +260,9 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
             .with_voltages(check.voltage_v.clone())?;
         haptex_core::io::write_atomic(path, |w| {
             writeln!(w, "# {header}; felt-friction RMS error {} over the renderable region", Num(m.rms_error))?;
+            for note in &design_notes {
+                writeln!(w, "# {note}")?;
+            }
             profile.write_csv(w)
         })?;
     }
@@ -261,6 +288,7 @@ fn run_display(
     args: &CheckArgs,
     target: &haptex_core::profile::FrictionProfile,
     settings: &RenderSettings,
+    device_file: Option<&DesignDevice>,
     report: &mut dyn FnMut(usize, haptex_fem::scenario::Progress),
     bar: &ProgressBar,
 ) -> anyhow::Result<()> {
@@ -276,14 +304,14 @@ fn run_display(
             anyhow::bail!("{flag} is for the electrovibration display; it is not done for --display combined yet");
         }
     }
-    let ultrasonic = args.display.ultrasonic()?;
+    let ultrasonic = args.display.ultrasonic(device_file)?;
     let strategy = args.display.strategy()?.expect("a combined display has a strategy");
     let check = render::check_combined(target, settings, &ultrasonic, strategy, &mut |p| report(0, p))?;
     bar.finish_and_clear();
     let m = check.metrics;
     let amplitude = check.amplitude_um.as_deref().expect("a combined check has amplitudes");
     let header = format!(
-        "haptex check: {} on the FE finger, combined display ({} strategy{}; plate: {}), load {}",
+        "haptex check: {} on the FE finger, combined display ({} strategy{}; plate: {}), load {}{}",
         args.profile.display(),
         strategy.kind(),
         match strategy {
@@ -291,9 +319,12 @@ fn run_display(
             _ => String::new(),
         },
         ultrasonic.describe(),
-        loading_text(settings.scenario.loading)
+        loading_text(settings.scenario.loading),
+        device_file.map_or(String::new(), |f| format!(", device file {}", f.file.path))
     );
-    let lines = [
+    let design_notes = design_notes(device_file, args);
+    let lines: Vec<String> = device_file.iter().map(|f| f.comment()).chain([
+
         format!(
             "felt friction against the target over the combined display's band: RMS error {:.3e}, max {:.3e}, lag {:.3} mm",
             m.rms_error, m.max_error, m.lag_mm
@@ -303,7 +334,8 @@ fn run_display(
             100.0 * m.not_renderable_fraction,
             100.0 * m.clipped_fraction
         ),
-    ];
+    ])
+    .collect();
     if let Some(path) = &args.output {
         haptex_core::io::write_atomic(path, |w| {
             writeln!(w, "# {header}")?;
@@ -329,7 +361,12 @@ fn run_display(
         {
             anyhow::bail!("internal: the design written differs from the one checked");
         }
-        haptex_core::io::write_atomic(path, |w| design.write_csv(w))?;
+        haptex_core::io::write_atomic(path, |w| {
+            for note in &design_notes {
+                writeln!(w, "# {note}")?;
+            }
+            design.write_csv(w)
+        })?;
     }
     if let Some(path) = &args.png {
         let x = check.target.x_mm();
@@ -355,6 +392,40 @@ fn run_display(
         }
     }
     Ok(())
+}
+
+/// The device of a check made with a device file: eq. (8) with the file's
+/// mu_HD, U_max and k for the carrier. The FE display applies eq. (3)'s
+/// attraction over its own contact, so a circuit-model file (whose force
+/// on a carrier is eq. (3)'s times the circuit's gain) is refused rather
+/// than checked on a display it does not describe.
+fn file_device(file: &DesignDevice, args: &CheckArgs) -> anyhow::Result<Device> {
+    let carrier = carrier(args);
+    let device = file.device(&carrier, args.u_max)?;
+    if file.file.electrovibration.as_ref().is_some_and(|e| e.circuit.is_some()) {
+        anyhow::bail!(
+            "device file {} is of the circuit model (its force on {} is eq. (3)'s times a gain of {:.4}): the FE \
+             display applies eq. (3)'s attraction without that gain, so the check would not be of this display; \
+             design with `haptex voltage --device` and play it, or check with an eq3 device file",
+            file.file.path,
+            haptex_core::calibration::force_fit::carrier_name(&carrier),
+            device.force_gain
+        );
+    }
+    Ok(device)
+}
+
+/// The carrier of --carrier and --carrier-hz (default sine 1000 Hz).
+fn carrier(args: &CheckArgs) -> haptex_core::signal::Carrier {
+    crate::args::carrier_of(args.carrier, args.carrier_hz)
+}
+
+/// The comments of a voltage written from a check with a device file: the
+/// file, and the carrier it is designed for (`haptex play` refuses
+/// another).
+fn design_notes(device_file: Option<&DesignDevice>, args: &CheckArgs) -> Vec<String> {
+    let Some(file) = device_file else { return Vec::new() };
+    vec![file.comment(), crate::args::carrier_note(&carrier(args))]
 }
 
 /// The finger's loading as the header says it.

@@ -228,8 +228,17 @@ struct FromProfileArgs {
 
 /// Eq. (8) (or eq. 9) applied to every cell of a friction map; the
 /// device limits reported as fractions of the area.
+///
+/// With --device FILE (a device file of `haptex calibrate`), mu_HD, the
+/// stack, k (or the circuit's gain) and U_max are the file's, for the
+/// carrier of --carrier and --carrier-hz (default sine 1000 Hz); the map
+/// (CSV comment, NPY sidecar) names the file and its SHA-256.
 #[derive(Debug, Args)]
-#[command(allow_negative_numbers = true)]
+#[command(
+    allow_negative_numbers = true,
+    after_help = "Example:\n  haptex map voltage --map friction.npy --device my-display.toml --carrier-hz 300 -o u.npy",
+    mut_args = crate::args::set_by_device_file(&["mu_hd", "eps_sc", "eps_i", "d_sc_mm", "d_i_mm", "k_mm2_per_n", "ultrasonic_calibration"])
+)]
 struct MapVoltageArgs {
     /// The friction map (.csv or .npy).
     #[arg(long, value_name = "MAP")]
@@ -244,11 +253,21 @@ struct MapVoltageArgs {
     /// Contact-area coefficient k in mm^2/N (A = k Fn).
     #[arg(long, default_value_t = ContactArea::PAPER.k_mm2_per_n, value_parser = in_range(ranges::K_MM2_PER_N))]
     k_mm2_per_n: f64,
-    /// Highest voltage the display can apply, U_max in V RMS.
-    #[arg(long, default_value_t = Device::PAPER.u_max_v, value_parser = in_range(ranges::U_MAX_V))]
-    u_max: f64,
+    /// Highest voltage the display can apply, U_max in V RMS. Default 100,
+    /// or the device file's (which --u-max may lower, not raise).
+    #[arg(long, value_parser = in_range(ranges::U_MAX_V))]
+    u_max: Option<f64>,
     #[command(flatten)]
     display: crate::args::DisplayArgs,
+    #[command(flatten)]
+    device_file: crate::args::DeviceFileArgs,
+    /// With --device: the carrier the map will be played on (the device
+    /// file's force coefficient is per carrier). Default sine.
+    #[arg(long, value_enum, requires = "device_file")]
+    carrier: Option<crate::args::CarrierArg>,
+    /// With --device: the carrier frequency in Hz. Default 1000.
+    #[arg(long, value_name = "F", value_parser = in_range(ranges::CARRIER_HZ), requires = "device_file")]
+    carrier_hz: Option<f64>,
     /// Output voltage map (.csv or .npy with its sidecar; an ultrasonic or
     /// combined display's map is CSV, one column per channel).
     #[arg(short, long, value_name = "OUT")]
@@ -370,25 +389,49 @@ fn from_profile(a: FromProfileArgs) -> anyhow::Result<()> {
 fn voltage(a: MapVoltageArgs) -> anyhow::Result<()> {
     let format = MapFormat::of(&a.output)?;
     let map = read_friction_map(&a.map)?;
-    let device = Device {
-        stack: a.stack.stack(),
-        contact: ContactArea { k_mm2_per_n: a.k_mm2_per_n, exponent: 1.0 },
-        mu_hd: a.mu_hd,
-        u_max_v: a.u_max,
-        force_gain: 1.0,
+    let device_file = a.device_file.read()?;
+    let carrier = crate::args::carrier_of(a.carrier, a.carrier_hz);
+    let device = match &device_file {
+        Some(file) => file.device(&carrier, a.u_max)?,
+        None => Device {
+            stack: a.stack.stack(),
+            contact: ContactArea { k_mm2_per_n: a.k_mm2_per_n, exponent: 1.0 },
+            mu_hd: a.mu_hd,
+            u_max_v: a.u_max.unwrap_or(Device::PAPER.u_max_v),
+            force_gain: 1.0,
+        },
     };
+    // The device file and the carrier the map is designed for, in its
+    // comments (CSV) or sidecar (NPY).
+    let notes: Vec<String> =
+        device_file.iter().flat_map(|f| [f.comment(), crate::args::carrier_note(&carrier)]).collect();
     let method = match a.method {
         MethodArg::Physical => Method::Physical,
         MethodArg::Normalized => Method::Normalized,
     };
     if a.display.display != crate::args::DisplayArg::Electrovibration {
-        return display_map(&a, &map, &device, method, format);
+        return display_map(&a, &map, &device, method, format, device_file.as_ref(), &notes);
     }
     a.display.refuse_display_flags()?;
     let v = map.voltages(&device, method)?;
     match format {
-        MapFormat::Csv => haptex_core::io::write_atomic(&a.output, |w| v.write_csv(w))?,
-        MapFormat::Npy => write_npy_pair(&a.output, &v.grid, &v.voltage_v, "voltage_v", Some(v.u_max_v))?,
+        MapFormat::Csv => haptex_core::io::write_atomic(&a.output, |w| {
+            for note in &notes {
+                writeln!(w, "# {note}")?;
+            }
+            v.write_csv(w)
+        })?,
+        MapFormat::Npy => haptex_core::map::write_npy_pair_designed(
+            &a.output,
+            &v.grid,
+            &v.voltage_v,
+            "voltage_v",
+            Some(v.u_max_v),
+            (!notes.is_empty()).then(|| notes.join("; ")),
+        )?,
+    }
+    for note in &notes {
+        eprintln!("{note}");
     }
     let (lo, hi) = min_max(&v.voltage_v);
     eprintln!("method: {method}");
@@ -419,6 +462,8 @@ fn display_map(
     device: &Device,
     method: Method,
     format: MapFormat,
+    device_file: Option<&crate::args::DesignDevice>,
+    notes: &[String],
 ) -> anyhow::Result<()> {
     use haptex_core::combined::Channels;
     if method != Method::Physical {
@@ -430,13 +475,21 @@ fn display_map(
             a.output.display()
         );
     }
-    let ultrasonic = a.display.ultrasonic()?;
+    let ultrasonic = a.display.ultrasonic(device_file)?;
     let channels = match a.display.strategy()? {
         Some(strategy) => Channels::Combined(&ultrasonic, strategy),
         None => Channels::Ultrasonic(&ultrasonic),
     };
     let d = map.display_channels(device, channels)?;
-    haptex_core::io::write_atomic(&a.output, |w| d.write_csv(w))?;
+    haptex_core::io::write_atomic(&a.output, |w| {
+        for note in notes {
+            writeln!(w, "# {note}")?;
+        }
+        d.write_csv(w)
+    })?;
+    for note in notes {
+        eprintln!("{note}");
+    }
     eprintln!(
         "display map: {} x {} cells; band mu {:.4} .. {:.4}; below it (plate at a_max = {} um): {:.2}% of the area, \
          above it (clipped): {:.2}%",

@@ -61,7 +61,12 @@ const GENERATED_RATE_HZ: f64 = 1000.0;
         haptex play --check bump.wav\n  \
         haptex voltage --profile data/examples/bump_friction.csv --display combined -o bump_ua.csv\n  \
         haptex play --profile bump_ua.csv --velocity 40 -o bump2.wav\n  \
-        haptex play --profile bump_ua.csv --velocity 40 --sample-rate 192000 --plate-resonance-hz 40000 -o plate.wav"
+        haptex play --profile bump_ua.csv --velocity 40 --sample-rate 192000 --plate-resonance-hz 40000 -o plate.wav\n\n\
+        With a device file (`haptex calibrate`): U_max is the file's (--u-max may lower it), the carrier must be \
+        one the file gives the force for, a design made with another device file is refused, and the sidecar and \
+        CSV name the file and its SHA-256:\n  \
+        haptex voltage --profile data/examples/bump_friction.csv --device my-display.toml -o u.csv\n  \
+        haptex play --profile u.csv --device my-display.toml --velocity 50 -o u.wav"
 )]
 pub struct PlayArgs {
     /// Check a drive-signal WAV written by haptex instead of rendering one:
@@ -99,6 +104,8 @@ pub struct PlayArgs {
     to_mm: Option<f64>,
     #[command(flatten)]
     drive: DriveArgs,
+    #[command(flatten)]
+    device_file: crate::args::DeviceFileArgs,
     /// Play channel 2 as the plate's displacement a(t) sin(2 pi F t) at
     /// its resonance F in Hz, for an amplifier that drives the plate
     /// directly, instead of the amplitude envelope a(t) a resonant driver
@@ -151,9 +158,11 @@ pub struct DriveArgs {
     /// that is refused, and without such a comment it is required.
     #[arg(long, value_name = "UM", value_parser = in_range(ranges::A_MAX_UM))]
     a_max_um: Option<f64>,
-    /// Highest envelope in V RMS: higher requests are clamped (and reported).
-    #[arg(long, value_name = "V", default_value_t = Limits::DEFAULT.u_max_v, value_parser = in_range(ranges::U_MAX_V))]
-    u_max: f64,
+    /// Highest envelope in V RMS: higher requests are clamped (and
+    /// reported). Default 100, or the device file's U_max (which --u-max
+    /// may lower, not raise).
+    #[arg(long, value_name = "V", value_parser = in_range(ranges::U_MAX_V))]
+    u_max: Option<f64>,
     /// Largest rate of change of the envelope in V/s (default: no limit).
     /// The envelope then also fades in from 0 V at the start.
     #[arg(long, value_name = "V_PER_S", value_parser = in_range(ranges::SLEW_V_PER_S))]
@@ -179,7 +188,7 @@ impl DriveArgs {
             sample_rate_hz,
             carrier: Carrier { shape: self.carrier.shape(), frequency_hz: self.carrier_hz },
             limits: Limits {
-                u_max_v: self.u_max,
+                u_max_v: self.u_max(),
                 slew_v_per_s: self.slew_v_per_s,
                 amplifier_range_v: self.amp_range_v,
             },
@@ -200,7 +209,31 @@ impl DriveArgs {
     /// Volts at the amplifier output per full-scale sample: as given, or
     /// sqrt(2) x U_max (the peak of a sine at U_max).
     pub fn volts_per_full_scale(&self) -> f64 {
-        self.volts_per_full_scale.unwrap_or(std::f64::consts::SQRT_2 * self.u_max)
+        self.volts_per_full_scale.unwrap_or(std::f64::consts::SQRT_2 * self.u_max())
+    }
+
+    /// The envelope's limit U_max in V RMS: --u-max, else 100 (or the
+    /// device file's, once [`DriveArgs::use_device_file`] set it).
+    pub fn u_max(&self) -> f64 {
+        self.u_max.unwrap_or(Limits::DEFAULT.u_max_v)
+    }
+
+    /// Plays a design on the display of a device file: U_max the file's
+    /// (or a lower --u-max; a higher one is refused), the carrier one the
+    /// file gives the force for (an eq3 file: a carrier it was measured
+    /// on), and the design one made with this file if it says which
+    /// (`comments`, from `profile`).
+    pub fn use_device_file(
+        &mut self,
+        file: &crate::args::DesignDevice,
+        comments: &[String],
+        profile: &Path,
+    ) -> anyhow::Result<()> {
+        self.u_max = Some(file.u_max_v(self.u_max)?);
+        if file.file.electrovibration.is_some() {
+            file.file.device(&Carrier { shape: self.carrier.shape(), frequency_hz: self.carrier_hz })?;
+        }
+        file.check_design(comments, profile)
     }
 
     /// Channel 2's a_max for the profile read from `profile`: --a-max-um
@@ -255,10 +288,11 @@ enum FormatArg {
     Csv,
 }
 
-pub fn run(args: PlayArgs) -> anyhow::Result<()> {
+pub fn run(mut args: PlayArgs) -> anyhow::Result<()> {
     if let Some(wav) = &args.check {
         return check(wav, args.quiet);
     }
+    let device_file = args.device_file.read()?;
     let (Some(profile), Some(output_path)) = (args.profile.as_ref().or(args.voltage_map.as_ref()), &args.output) else {
         bail!("give --profile U.csv (or --voltage-map MAP) and -o OUT (or --check WAV)");
     };
@@ -285,6 +319,9 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
     haptex_core::io::OutputTarget::of(output_path)?;
 
     if args.voltage_map.is_some() {
+        if let Some(file) = &device_file {
+            args.drive.use_device_file(file, &[], profile)?;
+        }
         let map = super::map::read_voltage_map(profile)?;
         let path_file = args.trajectory.as_ref().context("--voltage-map needs --trajectory T.csv (t_s,x_mm,y_mm)")?;
         let name = path_file.display().to_string();
@@ -296,9 +333,14 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
             modulate_at_resonance(&mut signal, f)
                 .with_context(|| format!("--plate-resonance-hz for {}", profile.display()))?;
         }
-        return write_signal(&args, format, &output, output_path, profile, json!({ "file": name }), &signal);
+        let provenance =
+            Provenance { trajectory: json!({ "file": name }), device_file: device_file.as_ref(), stated: None };
+        return write_signal(&args, format, &output, output_path, profile, &signal, provenance);
     }
     let (curve, amplitude, comments) = read_curve(profile)?;
+    if let Some(file) = &device_file {
+        args.drive.use_device_file(file, &comments, profile)?;
+    }
     let stated_a_max = if amplitude.is_some() { stated_a_max(&comments) } else { None };
     let a_max_um = args.drive.a_max_um(profile, amplitude.as_ref(), stated_a_max)?;
     let (trajectory, trajectory_source) = trajectory(&args, &curve)?;
@@ -313,7 +355,29 @@ pub fn run(args: PlayArgs) -> anyhow::Result<()> {
             .with_context(|| format!("--plate-resonance-hz for {}", profile.display()))?;
     }
 
-    write_signal(&args, format, &output, output_path, profile, trajectory_source, &signal)
+    let stated = comments.iter().find(|c| c.contains(crate::args::DEVICE_SHA256_MARK)).cloned();
+    let provenance = Provenance { trajectory: trajectory_source, device_file: device_file.as_ref(), stated };
+    write_signal(&args, format, &output, output_path, profile, &signal, provenance)
+}
+
+/// Where a played signal came from: its trajectory (a JSON description),
+/// the device file given (--device), and the design's own comment naming
+/// the device file it was made with.
+struct Provenance<'a> {
+    trajectory: serde_json::Value,
+    device_file: Option<&'a crate::args::DesignDevice>,
+    stated: Option<String>,
+}
+
+impl Provenance<'_> {
+    /// The line the signal's CSV starts with (without `# `).
+    fn comment(&self) -> Option<String> {
+        match (self.device_file, &self.stated) {
+            (Some(file), _) => Some(format!("played on the display of {}", file.comment())),
+            (None, Some(stated)) => Some(format!("the design says: {stated}")),
+            (None, None) => None,
+        }
+    }
 }
 
 /// Writes the rendered signal (WAV with its scale and sidecar, or CSV;
@@ -324,10 +388,18 @@ fn write_signal(
     output: &Output,
     output_path: &Path,
     profile: &Path,
-    trajectory_source: serde_json::Value,
     signal: &haptex_core::signal::DriveSignal,
+    provenance: Provenance,
 ) -> anyhow::Result<()> {
     let mut written = Vec::new();
+    let comment = provenance.comment();
+    let trajectory_source = &provenance.trajectory;
+    let write_csv = |w: &mut dyn std::io::Write| {
+        if let Some(c) = &comment {
+            writeln!(w, "# {c}")?;
+        }
+        signal.write_csv(w)
+    };
     match format {
         FormatArg::Wav => {
             let path = output_path;
@@ -339,12 +411,18 @@ fn write_signal(
                 },
                 volts_per_full_scale: args.drive.volts_per_full_scale(),
             };
-            let source = json!({
+            let mut source = json!({
                 "profile": profile.display().to_string(),
                 "trajectory": trajectory_source,
                 "command": std::env::args().collect::<Vec<_>>().join(" "),
                 "haptex_version": env!("CARGO_PKG_VERSION"),
             });
+            // The device file played on, or the one the design says it was made with.
+            if let Some(file) = provenance.device_file {
+                source["device_file"] = file.provenance();
+            } else if let Some(stated) = &provenance.stated {
+                source["design_device_file"] = json!(stated);
+            }
             let sidecar = write_wav(path, signal, &options, source)?;
             let channel_2 = match &sidecar.channel_2 {
                 Some(c) => format!("; channel 2: {} um per full scale", Num(c.um_per_full_scale)),
@@ -365,18 +443,18 @@ fn write_signal(
             }
         }
         FormatArg::Csv => {
-            output.write(|w| signal.write_csv(w))?;
+            output.write(write_csv)?;
             if let Some(path) = output.path() {
                 written.push(path.display().to_string());
             }
         }
     }
     if let Some(path) = &args.csv {
-        haptex_core::io::write_atomic(path, |w| signal.write_csv(w))?;
+        haptex_core::io::write_atomic(path, write_csv)?;
         written.push(path.display().to_string());
     }
     if let Some(path) = &args.png {
-        let title = format!("haptex play: {}, {}", file_name(profile), describe(&trajectory_source));
+        let title = format!("haptex play: {}, {}", file_name(profile), describe(trajectory_source));
         signal.figure(&title).write_png(path)?;
         written.push(path.display().to_string());
     }

@@ -33,7 +33,9 @@ enum RecipeCommand {
 /// error names the recipe's field). A recipe must pin every data set used
 /// here (library_sha256 when a library is found, database_sha256 when an
 /// FE database is): one without the field, or with null, is refused unless
-/// --allow-unpinned. The files may hold 64 MiB together, checked on each
+/// --allow-unpinned. A recipe made with a device file (`haptex serve
+/// --device-file`) replays only with a file of its SHA-256 (the path it
+/// records, or --device-file). The files may hold 64 MiB together, checked on each
 /// play's request (duration x sample rate x channels) before anything is
 /// answered.
 #[derive(Debug, Args)]
@@ -57,6 +59,11 @@ struct RunArgs {
     /// differ from the ones the recipe was made from.
     #[arg(long)]
     allow_unpinned: bool,
+    /// The device file the recipe was made with (`haptex serve
+    /// --device-file`; default: the path the recipe records). Its SHA-256
+    /// must be the recipe's `device_file_sha256`.
+    #[arg(long, value_name = "FILE")]
+    device_file: Option<PathBuf>,
 }
 
 pub fn run(args: RecipeArgs) -> anyhow::Result<()> {
@@ -76,6 +83,18 @@ pub fn run(args: RecipeArgs) -> anyhow::Result<()> {
     let db = args.db.unwrap_or_else(super::db::default_db);
     let state = AppState::new(library.is_file().then_some(library.as_path()), Limits::DEFAULT)?;
     let state = if db.join("metadata.json").is_file() { state.with_database(&db)? } else { state };
+    // The device file: as given, else where the recipe says it was, when it pins one.
+    let device_file = args
+        .device_file
+        .or_else(|| recipe.device_file_sha256.as_ref().and_then(|_| recipe.device_file.as_ref().map(PathBuf::from)));
+    let state = match device_file {
+        Some(path) => {
+            let file = crate::args::DesignDevice::read(&path)
+                .with_context(|| format!("{}: the device file it was made with", args.file.display()))?;
+            state.with_default_device(file.server_default()?)
+        }
+        None => state,
+    };
     let unpinned = recipe
         .check(&state, args.allow_unpinned)
         .with_context(|| format!("{}: cannot replay it", args.file.display()))?;

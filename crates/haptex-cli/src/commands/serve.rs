@@ -35,7 +35,8 @@ use haptex_server::{Config, Limits};
     haptex serve --library my-lab.sqlite --addr 127.0.0.1:9000\n  \
     haptex serve --library my-lab.sqlite --writable   (recordings uploaded in the GUI are added to it)\n  \
     haptex serve --db my-db/   (a database built by `haptex db build --out my-db`)\n  \
-    haptex serve --live --device hw:CARD=USB,DEV=0 --buffer-frames 128   (the page's live panel plays on the interface)")]
+    haptex serve --live --device hw:CARD=USB,DEV=0 --buffer-frames 128   (the page's live panel plays on the interface)\n  \
+    haptex serve --device-file my-display.toml   (the page's device starts from the calibrated display's constants)")]
 pub struct ServeArgs {
     /// Address and port to listen on (0.0.0.0:PORT: every interface).
     #[arg(long, value_name = "IP:PORT", default_value = Config::DEFAULT_ADDR)]
@@ -70,6 +71,13 @@ pub struct ServeArgs {
     live: bool,
     #[command(flatten, next_help_heading = "Live output (with --live)")]
     output: super::live::OutputArgs,
+    /// The display's device file (`haptex calibrate`): the page's device
+    /// fields and the API's default device start from its constants (for
+    /// the default carrier, sine 1000 Hz); a request giving a constant
+    /// still uses it. Recipes pin its SHA-256, and the voltage CSVs of its
+    /// design name it.
+    #[command(flatten)]
+    device_file: crate::args::DeviceFileLongArgs,
 }
 
 pub fn run(args: ServeArgs) -> anyhow::Result<()> {
@@ -88,6 +96,11 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
             db.display()
         );
     }
+    let device_file = args.device_file.read()?;
+    let default_device = match &device_file {
+        Some(file) => file.server_default()?,
+        None => haptex_server::params::DefaultDevice::PAPER,
+    };
     let live = live_output(args.live, args.output)?;
     let config = Config {
         addr: args.addr,
@@ -98,6 +111,7 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
         allowed_hosts: args.allow_host,
         access_log: args.access_log,
         live: live.clone(),
+        default_device,
     };
     haptex_server::run(config, |addr| {
         eprintln!(
@@ -106,6 +120,9 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
             if args.writable { "writable: uploaded recordings are added to it" } else { "read-only" },
             db.display()
         );
+        if let Some(file) = &device_file {
+            eprintln!("default device: {}", file.comment());
+        }
         if let Some(output) = &live {
             let info = output.info();
             eprintln!(

@@ -13,7 +13,10 @@ use haptex_core::ranges;
 use haptex_core::relative::FlatMu;
 use haptex_fem::render::{self, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping};
 
-use crate::args::{DisplayArg, DisplayArgs, ForceModelArgs, LayerStackArgs, Output, in_range, read_profile};
+use crate::args::{
+    DesignDevice, DeviceFileArgs, DisplayArg, DisplayArgs, ForceModelArgs, LayerStackArgs, Output, carrier_note,
+    in_range, read_profile,
+};
 use haptex_core::frequency::ForceModel;
 
 /// Compute the voltage an electrovibration display must apply to reproduce a
@@ -43,7 +46,16 @@ use haptex_core::frequency::ForceModel;
                   haptex predict --surface bump --x0 5 --width 1.3 --height 0.27 | haptex voltage --profile - \
                   --relative --flat-mu 0.5\n  \
                   haptex voltage --profile data/examples/bump_friction.csv --display combined --strategy split \
-                  --ultrasonic-calibration data/examples/ultrasonic_calibration.csv -o drive.csv"
+                  --ultrasonic-calibration data/examples/ultrasonic_calibration.csv -o drive.csv\n\n\
+                  With a device file (`haptex calibrate`): mu_HD, the stack, k (or the circuit) and U_max are the \
+                  file's; give the carrier it will be played on (default sine 1000 Hz):\n  \
+                  haptex voltage --profile data/examples/bump_friction.csv --device my-display.toml -o u.csv\n  \
+                  haptex voltage --profile data/examples/bump_friction.csv --device my-display.toml --carrier sine \
+                  --carrier-hz 300 --u-max 80 -o u300.csv   (--u-max may lower the file's U_max)\n  \
+                  haptex play --profile u300.csv --device my-display.toml --carrier sine --carrier-hz 300 --velocity 50 \
+                  -o u300.wav",
+    mut_args = crate::args::set_by_device_file(&["mu_hd", "eps_sc", "eps_i", "d_sc_mm", "d_i_mm", "k_mm2_per_n", "area_exponent", "force_model",
+               "rho_sc_ohm_m", "gap_um", "ultrasonic_calibration"])
 )]
 pub struct VoltageArgs {
     /// Friction profile CSV (`x_mm,mu` or `x_mm,ft_n,fn_n`), or `-` for stdin.
@@ -79,9 +91,10 @@ pub struct VoltageArgs {
     #[arg(long, value_parser = in_range(ranges::FN_N))]
     fn_n: Option<f64>,
     /// Highest voltage the display can apply, U_max in V RMS: the clip level
-    /// (physical) or the full scale (normalized).
-    #[arg(long, default_value_t = Device::PAPER.u_max_v, value_parser = in_range(ranges::U_MAX_V))]
-    u_max: f64,
+    /// (physical) or the full scale (normalized). Default 100, or the
+    /// device file's (which --u-max may lower, not raise).
+    #[arg(long, value_parser = in_range(ranges::U_MAX_V))]
+    u_max: Option<f64>,
     /// Output format (default: json if OUT ends in .json, else csv).
     #[arg(long, value_enum)]
     format: Option<Format>,
@@ -92,6 +105,8 @@ pub struct VoltageArgs {
     display: DisplayArgs,
     #[command(flatten)]
     force: ForceModelArgs,
+    #[command(flatten)]
+    device_file: DeviceFileArgs,
     /// Compensate the voltage on the FE finger model (physical method):
     /// eq. (8)'s voltage corrected run by run until the friction the
     /// finger feels on the display matches the profile (see `haptex
@@ -123,20 +138,28 @@ enum Format {
 
 pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
     let profile = read_profile(&args.profile)?;
-    let force_model = args.force.model()?;
-    let stack = args.stack.stack();
-    let device = Device {
-        stack,
-        contact: ContactArea { k_mm2_per_n: args.k_mm2_per_n, exponent: args.area_exponent },
-        mu_hd: args.mu_hd,
-        u_max_v: args.u_max,
-        force_gain: force_model.gain(&stack),
+    let device_file = args.device_file.read()?;
+    let (device, notes, circuit) = match &device_file {
+        Some(file) => device_file_design(file, &args)?,
+        None => {
+            let force_model = args.force.model()?;
+            let stack = args.stack.stack();
+            let device = Device {
+                stack,
+                contact: ContactArea { k_mm2_per_n: args.k_mm2_per_n, exponent: args.area_exponent },
+                mu_hd: args.mu_hd,
+                u_max_v: args.u_max.unwrap_or(Device::PAPER.u_max_v),
+                force_gain: force_model.gain(&stack),
+            };
+            let notes: Vec<String> = force_comment(&force_model, &device).into_iter().collect();
+            let circuit = !notes.is_empty();
+            (device, notes, circuit)
+        }
     };
-    let force_comment = force_comment(&force_model, &device);
-    if force_comment.is_some() && args.compensate {
+    if circuit && args.compensate {
         anyhow::bail!(
             "--compensate runs the FE finger with eq. (3)'s attraction: it cannot compensate a --force-model circuit \
-             design; drop one of them"
+             design (nor one of a device file of the circuit model); drop one of them"
         );
     }
     let method = match args.method {
@@ -144,7 +167,7 @@ pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
         MethodArg::Normalized => Method::Normalized,
     };
     if args.display.display != DisplayArg::Electrovibration {
-        return run_display(args, &profile, &device, method, force_comment);
+        return run_display(args, &profile, &device, method, notes, device_file.as_ref());
     }
     args.display.refuse_display_flags()?;
     let mut voltage = if args.relative {
@@ -167,7 +190,7 @@ pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
         let c = render::compensate(&target, &settings, stopping, &mut |_, _| {})?;
         let (eq8, best) = (&c.trials[0].metrics, c.best());
         comment = Some(format!(
-            "# compensated on the FE finger (load {} N/mm, visco-elastic, default mesh): felt-friction RMS error {:.3e} \
+            "compensated on the FE finger (load {} N/mm, visco-elastic, default mesh): felt-friction RMS error {:.3e} \
              over the renderable region after {} FE runs (eq. 8: {:.3e})",
             Num(args.load.unwrap_or(DEFAULT_LOAD_N_PER_MM)),
             best.metrics.rms_error,
@@ -177,19 +200,16 @@ pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
         voltage = voltage.with_voltages(best.voltage_v.clone())?;
     }
     let output = Output::new(args.output);
-    write_output(&output, args.format, &voltage, |w| {
-        for c in comment.iter().chain(&force_comment) {
-            writeln!(w, "{c}")?;
+    write_output(&output, args.format, &voltage, device_file.as_ref().map(|f| (f, &notes[..])), |w| {
+        for c in comment.iter().chain(&notes) {
+            writeln!(w, "# {c}")?;
         }
         voltage.write_csv(w)
     })?;
     if !args.quiet {
         eprint!("{}", voltage.summary);
-        if let Some(c) = &force_comment {
-            eprintln!("{}", c.trim_start_matches("# "));
-        }
-        if let Some(c) = &comment {
-            eprintln!("{}", c.trim_start_matches("# "));
+        for c in notes.iter().chain(&comment) {
+            eprintln!("{c}");
         }
         if let Some(path) = output.path() {
             eprintln!("wrote {}", path.display());
@@ -204,7 +224,8 @@ fn run_display(
     profile: &FrictionProfile,
     device: &Device,
     method: Method,
-    force_comment: Option<String>,
+    notes: Vec<String>,
+    device_file: Option<&DesignDevice>,
 ) -> anyhow::Result<()> {
     if method != Method::Physical {
         anyhow::bail!("--method normalized (eq. 9) is for the electrovibration display: drop it with --display");
@@ -212,7 +233,7 @@ fn run_display(
     if args.compensate {
         anyhow::bail!("--compensate is for the electrovibration display: drop it with --display");
     }
-    let ultrasonic = args.display.ultrasonic()?;
+    let ultrasonic = args.display.ultrasonic(device_file)?;
     let channels = match args.display.strategy()? {
         Some(strategy) => Channels::Combined(&ultrasonic, strategy),
         None => Channels::Ultrasonic(&ultrasonic),
@@ -220,16 +241,16 @@ fn run_display(
     let flat = args.relative.then(|| args.flat_mu.map_or(FlatMu::Median, FlatMu::Given));
     let design = map_display(profile, device, channels, args.fn_n, flat)?;
     let output = Output::new(args.output);
-    write_output(&output, args.format, &design, |w| {
-        if let Some(c) = &force_comment {
-            writeln!(w, "{c}")?;
+    write_output(&output, args.format, &design, device_file.map(|f| (f, &notes[..])), |w| {
+        for c in &notes {
+            writeln!(w, "# {c}")?;
         }
         design.write_csv(w)
     })?;
     if !args.quiet {
         eprint!("{}", design.summary);
-        if let Some(c) = &force_comment {
-            eprintln!("{}", c.trim_start_matches("# "));
+        for c in &notes {
+            eprintln!("{c}");
         }
         if let Some(path) = output.path() {
             eprintln!("wrote {}", path.display());
@@ -240,22 +261,65 @@ fn run_display(
 
 /// Writes `value` as CSV (by `csv`) or JSON, as --format or the output's
 /// extension says (default CSV).
+/// A design made with a device file records it in the JSON too
+/// (`device_file`: path, SHA-256, what it is; `notes`: the CSV's comments).
 fn write_output<T: serde::Serialize>(
     output: &Output,
     format: Option<Format>,
     value: &T,
+    device_file: Option<(&DesignDevice, &[String])>,
     csv: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
 ) -> anyhow::Result<()> {
     let format = format.unwrap_or(match output.path().and_then(|p| p.extension()) {
         Some(ext) if ext.eq_ignore_ascii_case("json") => Format::Json,
         _ => Format::Csv,
     });
+    let json = match (format, device_file) {
+        (Format::Json, Some((file, notes))) => {
+            let mut json = serde_json::to_value(value)?;
+            if let Some(object) = json.as_object_mut() {
+                object.insert("device_file".into(), file.provenance());
+                object.insert("notes".into(), serde_json::json!(notes));
+            }
+            Some(json)
+        }
+        _ => None,
+    };
     output.write(|w| match format {
         Format::Csv => csv(w),
-        Format::Json => {
-            serde_json::to_writer(&mut *w, value).map_err(std::io::Error::from).and_then(|()| w.write_all(b"\n"))
+        Format::Json => match &json {
+            Some(json) => serde_json::to_writer(&mut *w, json),
+            None => serde_json::to_writer(&mut *w, value),
         }
+        .map_err(std::io::Error::from)
+        .and_then(|()| w.write_all(b"\n")),
     })
+}
+
+/// The device of a design made with a device file, for the carrier it
+/// will be played on (--carrier, --carrier-hz; default sine 1000 Hz): the
+/// comments that say so (the file, its SHA-256, the force coefficient's
+/// origin and the carrier, in the words `haptex play` reads), and whether
+/// the force is the circuit model's.
+fn device_file_design(file: &DesignDevice, args: &VoltageArgs) -> anyhow::Result<(Device, Vec<String>, bool)> {
+    let carrier = args.force.carrier();
+    let device = file.device(&carrier, args.u_max)?;
+    let circuit = file.file.electrovibration.as_ref().is_some_and(|e| e.circuit.is_some());
+    let force = if circuit {
+        format!(
+            "force model: the device file's circuit; Fe = G Fe_eq3 with G = {:.6} for this carrier",
+            device.force_gain
+        )
+    } else {
+        format!(
+            "force model: eq. (3) with the device file's c measured on {} (k = {} mm^2/N with its stack)",
+            haptex_core::calibration::force_fit::carrier_name(&carrier),
+            Num(device.contact.k_mm2_per_n)
+        )
+    };
+    let notes =
+        vec![file.comment(), format!("{force}; U_max = {} V RMS; {}", Num(device.u_max_v), carrier_note(&carrier))];
+    Ok((device, notes, circuit))
 }
 
 /// The file comment of a frequency-dependent design: the circuit, its gain
@@ -265,14 +329,10 @@ fn force_comment(model: &ForceModel, device: &Device) -> Option<String> {
     let ForceModel::Circuit { circuit, carrier } = model else {
         return None;
     };
-    let shape = carrier.shape.name();
     Some(format!(
-        "# force model: circuit ({}); Fe = G Fe_eq3 with G = {:.6} for this carrier; designed for the carrier: {shape} {} \
-         Hz (play it with haptex play --carrier {shape} --carrier-hz {})",
+        "force model: circuit ({}); Fe = G Fe_eq3 with G = {:.6} for this carrier; {}",
         circuit.describe(&device.stack),
         device.force_gain,
-        // Read back by `haptex play`, which compares it exactly: in full.
-        haptex_core::num::Exact(carrier.frequency_hz),
-        haptex_core::num::Exact(carrier.frequency_hz)
+        carrier_note(carrier)
     ))
 }

@@ -203,7 +203,8 @@ async fn start(
     Query::parse(raw_query.as_deref())?.finish()?;
     body_kind(&headers, &[BodyKind::Json])?;
     let bytes = body_bytes(body, limits.max_body_bytes)?;
-    let job = work::cpu(&state, bytes.len(), move || Job::parse(mode, &bytes, &limits)).await?;
+    let base = state.default_device().device;
+    let job = work::cpu(&state, bytes.len(), move || Job::parse(mode, &bytes, &limits, &base)).await?;
     let permit = work::fe_slot(&state).await?;
     let heavy = work::heavy_slot(&state).await?;
     let (mut lines, response) = lines::stream();
@@ -237,7 +238,12 @@ struct Job {
 impl Job {
     /// Parses and checks the body: every field in its range, the work
     /// within the limits.
-    fn parse(mode: Mode, bytes: &[u8], limits: &crate::Limits) -> Result<Self, ApiError> {
+    fn parse(
+        mode: Mode,
+        bytes: &[u8],
+        limits: &crate::Limits,
+        base: &haptex_core::electrovibration::Device,
+    ) -> Result<Self, ApiError> {
         let body: CheckBody = parse_json(bytes)?;
         if body.method.is_some_and(|m| m != Method::Physical) {
             return Err(ApiError::bad_request(
@@ -246,7 +252,7 @@ impl Job {
                 Some("method"),
             ));
         }
-        let request = DeviceRequest::from_pairs(body.device.iter(), "device.")?;
+        let request = DeviceRequest::from_pairs_over(body.device.iter(), "device.", base)?;
         let device = &request.device;
         if !device.contact.is_linear() {
             return Err(ApiError::bad_request(

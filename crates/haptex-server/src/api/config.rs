@@ -11,7 +11,6 @@ use serde_json::{Value, json};
 
 use crate::error::ApiError;
 use crate::input::Query;
-use crate::params::DEVICE_PARAMS;
 use crate::state::AppState;
 
 pub async fn get(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -> Result<Json<Value>, ApiError> {
@@ -20,11 +19,18 @@ pub async fn get(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -
     Ok(Json(json!({
         "version": env!("CARGO_PKG_VERSION"),
         // What a recipe records of the data it was made with (haptex recipe run checks them).
-        "data": { "library_sha256": state.library_sha256(), "database_sha256": state.database_sha256() },
+        "data": {
+            "library_sha256": state.library_sha256(),
+            "database_sha256": state.database_sha256(),
+            "device_file": state.default_device().file.as_ref().map(|f| &f.path),
+            "device_file_sha256": state.default_device().file.as_ref().map(|f| &f.sha256),
+        },
+        // The device the parameters start from: the paper's, or a device file's (haptex serve --device-file).
+        "device_file": state.default_device().file,
         "sources": state.sources(),
         // Whether POST /api/recordings may add recordings to the library (haptex serve --writable).
         "library_writable": state.library_writable(),
-        "device_params": DEVICE_PARAMS,
+        "device_params": crate::params::params_over(&state.default_device().device),
         "explanations": crate::explain::EXPLANATIONS,
         "methods": [
             { "id": "physical", "label": "physical (eq. 8)", "description": "the voltage that reproduces the reference friction force; clipped at U_max, 0 V where mu_RS < mu_HD" },

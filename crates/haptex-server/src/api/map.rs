@@ -132,6 +132,7 @@ pub async fn post(
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Response, ApiError> {
     let limits = state.limits().clone();
+    let base = state.default_device().device;
     Query::parse(raw_query.as_deref())?.finish()?;
     body_kind(&headers, &[BodyKind::Json])?;
     let bytes = body_bytes(body, limits.max_body_bytes)?;
@@ -140,7 +141,7 @@ pub async fn post(
         if body.path.is_some() {
             return Err(ApiError::bad_request("a path is sampled by POST /api/map/path", Some("path")));
         }
-        let b = build(body, &limits)?;
+        let b = build(body, &limits, &base)?;
         let answer = MapAnswer {
             parameters: b.request.values(),
             method: b.method,
@@ -166,6 +167,7 @@ pub async fn path(
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Response, ApiError> {
     let limits = state.limits().clone();
+    let base = state.default_device().device;
     let mut query = Query::parse(raw_query.as_deref())?;
     let format = query.take_format(&["json", "csv"])?;
     query.finish()?;
@@ -184,7 +186,7 @@ pub async fn path(
             }
             other => ApiError::bad_request(other.to_string(), Some("path")),
         })?;
-        let b = build(body, &limits)?;
+        let b = build(body, &limits, &base)?;
         let v = &b.voltage;
         // What `haptex map sample-path` computes.
         let u = path.sample(&v.grid, &v.voltage_v);
@@ -223,7 +225,11 @@ pub async fn path(
 /// The image decoded with its mapping and the voltage map of it: the
 /// core's `FrictionMap::read_gray_png` and `FrictionMap::voltages`, what
 /// `haptex map from-image` and `haptex map voltage` call.
-fn build(body: MapBody, limits: &crate::Limits) -> Result<Built, ApiError> {
+fn build(
+    body: MapBody,
+    limits: &crate::Limits,
+    base: &haptex_core::electrovibration::Device,
+) -> Result<Built, ApiError> {
     let png = decode_base64(&body.image_png_base64)
         .map_err(|m| ApiError::bad_request(format!("not base64: {m}"), Some(IMAGE)))?;
     let (width, height) = png_size(&png, IMAGE).map_err(|e| ApiError::bad_request(e.to_string(), Some(IMAGE)))?;
@@ -252,7 +258,7 @@ fn build(body: MapBody, limits: &crate::Limits) -> Result<Built, ApiError> {
     let mapping = GrayMapping { mu_black: body.mu_black, mu_white: body.mu_white, gamma: body.gamma.unwrap_or(1.0) };
     let spacing = (body.pixel_mm, body.pixel_mm_y.unwrap_or(body.pixel_mm));
     let origin = (body.x0_mm.unwrap_or(0.0), body.y0_mm.unwrap_or(0.0));
-    let request = DeviceRequest::from_pairs(body.device.iter(), "device.")?;
+    let request = DeviceRequest::from_pairs_over(body.device.iter(), "device.", base)?;
     let method = body.method.unwrap_or(Method::Physical);
     if method == Method::Physical && request.device.contact.exponent != 1.0 {
         return Err(ApiError::bad_request(

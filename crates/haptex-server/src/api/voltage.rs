@@ -108,7 +108,17 @@ fn recipe_json(state: &AppState, source: &serde_json::Value, settings: &serde_js
         "settings": settings,
         "library_sha256": state.library_sha256(),
         "database_sha256": state.database_sha256(),
+        "device_file_sha256": state.default_device().file.as_ref().map(|f| &f.sha256),
     })
+}
+
+/// The comment line naming the server's device file (`haptex serve
+/// --device-file`), for a design whose device is the file's: every
+/// parameter as the file gives it (a request that changes one is not the
+/// file's design, and is not labelled with it).
+fn device_file_comment(base: &crate::params::DefaultDevice, request: &DeviceRequest) -> Option<String> {
+    let file = base.file.as_ref()?;
+    (request.device == base.device).then(|| format!("# {}\n", file.comment()))
 }
 
 /// The recipe of a CSV answer as `#` comment lines: the haptex version, the
@@ -133,6 +143,9 @@ fn recipe_comments(
     }
     if let Some(hash) = state.database_sha256() {
         text.push_str(&format!("# database_sha256: {hash}\n"));
+    }
+    if let Some(file) = &state.default_device().file {
+        text.push_str(&format!("# device_file: {} sha256 {}\n", file.path, file.sha256));
     }
     text
 }
@@ -230,6 +243,7 @@ pub async fn post(
     let kind = body_kind(&headers, &[BodyKind::Json, BodyKind::Csv])?;
     let bytes = body_bytes(body, limits.max_body_bytes)?;
     let app = state.clone();
+    let base = state.default_device().clone();
     work::cpu(&state, bytes.len(), move || {
         // The recipe's source and settings for the CSV's comments (JSON body with `source` only).
         let mut recipe: Option<(serde_json::Value, serde_json::Value)> = None;
@@ -257,7 +271,7 @@ pub async fn post(
                     });
                     recipe = Some((source.clone(), settings));
                 }
-                let request = DeviceRequest::from_pairs(body.device.iter(), "device.")?;
+                let request = DeviceRequest::from_pairs_over(body.device.iter(), "device.", &base.device)?;
                 let relative = relative_request(body.relative, body.flat_mu)?;
                 let display = DisplayRequest {
                     display: body.display,
@@ -287,7 +301,8 @@ pub async fn post(
                     let value = parse_number(&text, &name)?;
                     pairs.push((name, value));
                 }
-                let request = DeviceRequest::from_pairs(pairs.iter().map(|(k, v)| (k.as_str(), *v)), "")?;
+                let request =
+                    DeviceRequest::from_pairs_over(pairs.iter().map(|(k, v)| (k.as_str(), *v)), "", &base.device)?;
                 let profile = profile_from_csv(&bytes, limits.max_points)?;
                 (profile, method, request, relative, display, "")
             }
@@ -303,8 +318,11 @@ pub async fn post(
             let designed = compute_display(&profile, &request, relative, &design, prefix)?;
             let mut answer = DisplayAnswer::new(&request, &design, &designed);
             answer.recipe = recipe.as_ref().map(|(source, settings)| recipe_json(&app, source, settings));
-            let comments =
+            let mut comments =
                 recipe.map(|(source, settings)| recipe_comments(&app, &source, &settings, &answer.parameters));
+            if let Some(line) = device_file_comment(&base, &request) {
+                comments = Some(format!("{line}{}", comments.unwrap_or_default()));
+            }
             return Ok(match format {
                 "csv" => super::csv_response(
                     super::to_csv(|w| {
@@ -319,7 +337,11 @@ pub async fn post(
         let method = method.unwrap_or(Method::Physical);
         let voltage = compute(&profile, method, &request, relative, prefix)?;
         let json_recipe = recipe.as_ref().map(|(source, settings)| recipe_json(&app, source, settings));
-        let comments = recipe.map(|(source, settings)| recipe_comments(&app, &source, &settings, &request.values()));
+        let mut comments =
+            recipe.map(|(source, settings)| recipe_comments(&app, &source, &settings, &request.values()));
+        if let Some(line) = device_file_comment(&base, &request) {
+            comments = Some(format!("{line}{}", comments.unwrap_or_default()));
+        }
         Ok(match format {
             "csv" => super::csv_response(
                 super::to_csv(|w| {

@@ -54,7 +54,11 @@ use super::play::DriveArgs;
         haptex live --profile bump_u.csv --touch-log finger.csv --device hw:CARD=USB,DEV=0 --buffer-frames 256\n  \
         haptex live --profile bump_u.csv --ws 0.0.0.0:8090   (then open http://THIS-HOST:8090/ on the tablet)\n  \
         haptex live --voltage-map texture-u.npy --touch-log path.csv   (path.csv: t_s,x_mm,y_mm)\n  \
-        my_touch_reader | haptex live --profile bump_u.csv --stdin --volts-per-full-scale 200"
+        my_touch_reader | haptex live --profile bump_u.csv --stdin --volts-per-full-scale 200\n\n\
+        With a device file (`haptex calibrate`; --device-file, since --device is the audio output): U_max is \
+        the file's (--u-max may lower it), the carrier one it gives the force for, and a design made with another \
+        device file is refused, all before the audio output is opened:\n  \
+        haptex live --profile u.csv --device-file my-display.toml --touch-log finger.csv"
 )]
 pub struct LiveArgs {
     /// List the output devices (name to give --device, and description), then exit.
@@ -86,6 +90,8 @@ pub struct LiveArgs {
     ws: Option<String>,
     #[command(flatten)]
     output: OutputArgs,
+    #[command(flatten)]
+    device_file: crate::args::DeviceFileLongArgs,
     /// Also write the run's figures (device, latency, peak, CPU) as JSON.
     #[arg(long, value_name = "FILE.json")]
     json: Option<PathBuf>,
@@ -155,8 +161,25 @@ impl OutputArgs {
     }
 }
 
+/// Applies --device-file to the drive (U_max, carrier, the design's own
+/// device file) before anything is opened; says so on stderr.
+fn use_device_file(args: &mut LiveArgs) -> anyhow::Result<()> {
+    let Some(file) = args.device_file.read()? else { return Ok(()) };
+    let comments = match &args.profile {
+        Some(profile) if profile.as_os_str() != "-" => super::play::read_curve(profile)?.2,
+        _ => Vec::new(),
+    };
+    let design = args.profile.as_ref().or(args.voltage_map.as_ref()).cloned().unwrap_or_default();
+    args.output.drive.use_device_file(&file, &comments, &design)?;
+    if !args.quiet {
+        eprintln!("playing on the display of {}", file.comment());
+    }
+    Ok(())
+}
+
 #[cfg(not(feature = "live"))]
-pub fn run(_args: LiveArgs) -> anyhow::Result<()> {
+pub fn run(mut args: LiveArgs) -> anyhow::Result<()> {
+    use_device_file(&mut args)?;
     anyhow::bail!(
         "this haptex was built without audio output (the `live` cargo feature): build it with \
          `cargo build --release -p haptex-cli --features live` (cpal; on Linux its ALSA backend needs \
@@ -165,7 +188,8 @@ pub fn run(_args: LiveArgs) -> anyhow::Result<()> {
 }
 
 #[cfg(feature = "live")]
-pub fn run(args: LiveArgs) -> anyhow::Result<()> {
+pub fn run(mut args: LiveArgs) -> anyhow::Result<()> {
+    use_device_file(&mut args)?;
     device::run(args)
 }
 
