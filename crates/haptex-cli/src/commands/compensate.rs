@@ -118,7 +118,7 @@ pub fn run(args: CompensateArgs) -> anyhow::Result<()> {
             args.display.refuse_display_flags()?;
             None
         }
-        DisplayArg::Combined => Some(args.display.ultrasonic()?),
+        DisplayArg::Combined => Some(args.display.ultrasonic(None)?),
         DisplayArg::Ultrasonic => anyhow::bail!(
             "compensate iterates an electrovibration or a combined display's design; for the plate alone give \
              --display combined"
