@@ -246,16 +246,16 @@ pub fn carrier_name(c: &Carrier) -> String {
 /// A key per row for the lack-of-fit test: rows with the same voltage,
 /// carrier and amplitude are replicates.
 pub(crate) fn settings_key(rows: &[usize], m: &Measurements) -> Vec<usize> {
-    let mut keys: Vec<(u64, u8, u64, u64)> = Vec::new();
+    // A map, not a search of the keys so far: linear in the rows however
+    // many distinct settings there are (sample-level data can have one per row).
+    let mut keys: std::collections::HashMap<(u64, u8, u64, u64), usize> = std::collections::HashMap::new();
     rows.iter()
         .map(|&i| {
             let r = &m.rows()[i];
             let (shape, f) = r.carrier.map_or((3, 0.0), |c| (c.shape as u8, frequency_of(&c)));
             let key = (r.voltage_v.to_bits(), shape, f.to_bits(), r.amplitude_um.to_bits());
-            keys.iter().position(|k| *k == key).unwrap_or_else(|| {
-                keys.push(key);
-                keys.len() - 1
-            })
+            let next = keys.len();
+            *keys.entry(key).or_insert(next)
         })
         .collect()
 }

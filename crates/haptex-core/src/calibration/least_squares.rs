@@ -186,11 +186,15 @@ pub fn fit(problem: &Problem<'_>, model: &dyn Fn(&[f64], &mut [f64])) -> Result<
             score[c * p + j] += psi * jac[i * p + j];
         }
     }
+    let mut present = vec![false; g_count];
+    for &c in problem.cluster {
+        present[c] = true;
+    }
     let mut meat = vec![0.0; p * p];
     let mut clusters = 0;
     for c in 0..g_count {
         let u = &score[c * p..(c + 1) * p];
-        if u.iter().any(|&v| v != 0.0) || problem.cluster.contains(&c) {
+        if u.iter().any(|&v| v != 0.0) || present[c] {
             clusters += 1;
         }
         for a in 0..p {

@@ -35,6 +35,12 @@ use crate::signal::{Carrier, CarrierShape};
 /// s, as samples): bounds the fit's memory and time, both linear in it.
 pub const MAX_ROWS: usize = 1_000_000;
 
+/// The most distinct carriers (shape and frequency) under voltage: eq.
+/// (3) fits one force coefficient per carrier, so the fit's parameters, and
+/// its cost (the covariance is their square, its inverse their cube), grow
+/// with them. A protocol measures a handful (the shipped one seven).
+pub const MAX_CARRIERS: usize = 64;
+
 /// The largest measurements file read, in bytes (a million rows of nine
 /// fields).
 pub const MAX_FILE_BYTES: u64 = 128 << 20;
@@ -170,6 +176,7 @@ impl Measurements {
         let shape = table.column("carrier");
         let hz = table.column("carrier_hz");
         let mut rows = Vec::with_capacity(n);
+        let mut carriers = std::collections::HashSet::new();
         for i in 0..n {
             let carrier = match shape {
                 None if voltage[i] > 0.0 => {
@@ -204,6 +211,21 @@ impl Measurements {
                     Some(Carrier { shape, frequency_hz })
                 }
             };
+            if let Some(c) = carrier.filter(|_| voltage[i] > 0.0)
+                && carriers.insert((c.shape as u8, c.frequency_hz.to_bits()))
+                && carriers.len() > MAX_CARRIERS
+            {
+                return Err(table
+                    .error_at(
+                        Some(i),
+                        Some("carrier_hz"),
+                        format!(
+                            "more than {MAX_CARRIERS} distinct carriers: eq. (3) fits one force coefficient per \
+                             carrier; measure a few carrier frequencies (three or more for the circuit model)"
+                        ),
+                    )
+                    .into());
+            }
             if voltage[i] > 0.0 && amplitude[i] > 0.0 {
                 return Err(table
                     .error_at(
