@@ -43,8 +43,10 @@ use haptex_core::num::Num;
 use haptex_core::profile::FrictionProfile;
 use haptex_core::ranges;
 use haptex_core::relative::{FlatMu, RelativeError};
+use haptex_core::signal::Carrier;
 use serde::{Deserialize, Serialize};
 
+use crate::device_file::RequestDeviceFile;
 use crate::display::{DisplayDesign, DisplayName, DisplayRequest, StrategyName};
 use crate::error::ApiError;
 use crate::input::{
@@ -93,6 +95,14 @@ struct VoltageBody {
     /// with the recipe in `#` comments ([`recipe_comments`]).
     #[serde(default)]
     source: Option<serde_json::Value>,
+    /// A calibrated display's device file, its TOML text
+    /// ([`crate::device_file`]): the device constants come from it.
+    #[serde(default)]
+    device_file: Option<String>,
+    /// The carrier the design will be played on, for the device file's
+    /// force coefficient (default a 1 kHz sine; with `device_file` only).
+    #[serde(default)]
+    carrier: Option<Carrier>,
 }
 
 /// The longest `source` accepted, serialized (one comment line).
@@ -178,12 +188,15 @@ pub(crate) struct VoltageAnswer<'a> {
     /// The recipe (a request with `source` only): [`recipe_json`].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub recipe: Option<serde_json::Value>,
+    /// The device file that designed it (a request with `device_file`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub device_file: Option<serde_json::Value>,
 }
 
 impl<'a> VoltageAnswer<'a> {
     pub fn new(parameters: BTreeMap<&'static str, f64>, voltage: &'a VoltageProfile) -> Self {
         let page_warnings = voltage.summary.warnings.iter().map(|w| crate::explain::for_page(w)).collect();
-        VoltageAnswer { parameters, voltage, page_warnings, recipe: None }
+        VoltageAnswer { parameters, voltage, page_warnings, recipe: None, device_file: None }
     }
 }
 
@@ -200,6 +213,9 @@ pub(crate) struct DisplayAnswer<'a> {
     /// The recipe (a request with `source` only): [`recipe_json`].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub recipe: Option<serde_json::Value>,
+    /// The device file that designed it (a request with `device_file`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub device_file: Option<serde_json::Value>,
 }
 
 impl<'a> DisplayAnswer<'a> {
@@ -214,7 +230,7 @@ impl<'a> DisplayAnswer<'a> {
             parameters.insert("weight", weight);
         }
         let page_warnings = display.summary.warnings.iter().map(|w| crate::explain::for_page(w)).collect();
-        DisplayAnswer { parameters, display, page_warnings, recipe: None }
+        DisplayAnswer { parameters, display, page_warnings, recipe: None, device_file: None }
     }
 }
 
@@ -233,7 +249,7 @@ pub async fn post(
     work::cpu(&state, bytes.len(), move || {
         // The recipe's source and settings for the CSV's comments (JSON body with `source` only).
         let mut recipe: Option<(serde_json::Value, serde_json::Value)> = None;
-        let (profile, method, request, relative, display, prefix) = match kind {
+        let (profile, method, request, relative, display, prefix, device_file) = match kind {
             BodyKind::Json => {
                 query.finish()?;
                 let body: VoltageBody = parse_json(&bytes)?;
@@ -254,10 +270,14 @@ pub async fn post(
                         "a_max_um": body.a_max_um,
                         "ultrasonic_calibration_sha256":
                             body.ultrasonic_calibration.as_deref().map(|t| haptex_core::io::sha256_hex(t.as_bytes())),
+                        "device_file_sha256":
+                            body.device_file.as_deref().map(|t| haptex_core::io::sha256_hex(t.as_bytes())),
+                        "carrier": body.carrier,
                     });
                     recipe = Some((source.clone(), settings));
                 }
-                let request = DeviceRequest::from_pairs(body.device.iter(), "device.")?;
+                let (request, device_file) =
+                    crate::device_file::resolve(&body.device, body.device_file.as_deref(), body.carrier, "device.")?;
                 let relative = relative_request(body.relative, body.flat_mu)?;
                 let display = DisplayRequest {
                     display: body.display,
@@ -267,7 +287,7 @@ pub async fn post(
                     ultrasonic_calibration: body.ultrasonic_calibration,
                 };
                 let profile = body.profile.into_profile("profile.", limits.max_points)?;
-                (profile, body.method, request, relative, display, "device.")
+                (profile, body.method, request, relative, display, "device.", device_file)
             }
             BodyKind::Csv => {
                 let method = query.take("method").map(|m| parse_method(&m, "method")).transpose()?;
@@ -289,10 +309,13 @@ pub async fn post(
                 }
                 let request = DeviceRequest::from_pairs(pairs.iter().map(|(k, v)| (k.as_str(), *v)), "")?;
                 let profile = profile_from_csv(&bytes, limits.max_points)?;
-                (profile, method, request, relative, display, "")
+                (profile, method, request, relative, display, "", None)
             }
         };
-        if let Some(design) = display.design()? {
+        let provenance = device_file.as_ref().map(RequestDeviceFile::provenance);
+        let file_comment = device_file.as_ref().map(|f| format!("# {}\n", f.comment())).unwrap_or_default();
+        if let Some(mut design) = display.design()? {
+            crate::device_file::use_plate(device_file.as_ref(), &display, &mut design)?;
             if method == Some(Method::Normalized) {
                 return Err(ApiError::bad_request(
                     "the method normalized (eq. 9) is the electrovibration display's pattern: an ultrasonic or \
@@ -303,12 +326,14 @@ pub async fn post(
             let designed = compute_display(&profile, &request, relative, &design, prefix)?;
             let mut answer = DisplayAnswer::new(&request, &design, &designed);
             answer.recipe = recipe.as_ref().map(|(source, settings)| recipe_json(&app, source, settings));
+            answer.device_file = provenance;
             let comments =
                 recipe.map(|(source, settings)| recipe_comments(&app, &source, &settings, &answer.parameters));
             return Ok(match format {
                 "csv" => super::csv_response(
                     super::to_csv(|w| {
                         w.write_all(comments.unwrap_or_default().as_bytes())?;
+                        w.write_all(file_comment.as_bytes())?;
                         designed.write_csv(w)
                     })?,
                     "display.csv",
@@ -324,6 +349,7 @@ pub async fn post(
             "csv" => super::csv_response(
                 super::to_csv(|w| {
                     w.write_all(comments.unwrap_or_default().as_bytes())?;
+                    w.write_all(file_comment.as_bytes())?;
                     voltage.write_csv(w)
                 })?,
                 "voltage.csv",
@@ -331,6 +357,7 @@ pub async fn post(
             _ => {
                 let mut answer = VoltageAnswer::new(request.values(), &voltage);
                 answer.recipe = json_recipe;
+                answer.device_file = provenance;
                 Json(answer).into_response()
             }
         })
