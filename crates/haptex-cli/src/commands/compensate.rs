@@ -2,7 +2,6 @@
 //! on it, by iterative learning control (haptex_core::ilc;
 //! docs/measured-compensation.md).
 
-use std::io::Write;
 use std::path::PathBuf;
 
 use clap::Args;
