@@ -147,7 +147,7 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
         .await?;
 
     // 2. The shipped example: the fit drawn beside the panel.
-    upload(client, "yd-measurements", &[example.clone()]).await?;
+    upload(client, "yd-measurements", std::slice::from_ref(&example)).await?;
     wait_for(client, "Number(document.body.dataset.ydFits || 0) >= 1", "the fit").await?;
     let hidden = script(client, "return document.getElementById('yd-measurements-error').hidden;").await?;
     if hidden != Value::Bool(true) {
