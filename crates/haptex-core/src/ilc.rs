@@ -738,6 +738,70 @@ pub fn iterate(
     })
 }
 
+/// The next design as CSV, as `haptex compensate` writes it: the history
+/// lines (`# ilc iteration k: ...`, oldest first; `history` ends with this
+/// step's entry), then the design as `haptex voltage` writes it (the
+/// target, its summary, the next drive). Every sample is checked against
+/// U_max and a_max first ([`check_limits`]): nothing above them is written.
+pub fn next_design_csv(
+    design: &Design,
+    step: &Step,
+    history: &[HistoryEntry],
+    model: &DisplayModel,
+) -> Result<Vec<u8>, IlcError> {
+    use std::io::Write;
+    let x = design.target.x_mm();
+    check_limits(x, &step.next, model)?;
+    let io = |e: std::io::Error| IlcError::Invalid(format!("cannot write the design: {e}"));
+    let mut out: Vec<u8> = Vec::new();
+    for entry in history {
+        writeln!(out, "# {}", entry.comment()).map_err(io)?;
+    }
+    let device = model.device();
+    match *model {
+        DisplayModel::Combined { ultrasonic, strategy, .. } => {
+            let mut profile = crate::combined::map_display(
+                &design.target,
+                device,
+                crate::combined::Channels::Combined(ultrasonic, strategy),
+                None,
+                None,
+            )?;
+            let Drive { voltage_v, amplitude_um } = step.next.clone();
+            let min_max =
+                |v: &[f64]| v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+            if let Some(ev) = &mut profile.summary.electrovibration {
+                (ev.voltage_min_v, ev.voltage_max_v) = min_max(&voltage_v);
+            }
+            if let (Some(us), Some(a)) = (&mut profile.summary.ultrasonic, &amplitude_um) {
+                (us.amplitude_min_um, us.amplitude_max_um) = min_max(a);
+            }
+            profile.voltage_v = Some(voltage_v);
+            profile.amplitude_um = amplitude_um;
+            profile.write_csv(&mut out).map_err(io)?;
+        }
+        DisplayModel::Electrovibration(_) => {
+            let profile = map_profile(&design.target, device, Method::Physical, None)?
+                .with_voltages(step.next.voltage_v.clone())?;
+            profile.write_csv(&mut out).map_err(io)?;
+        }
+    }
+    Ok(out)
+}
+
+/// The history as the report CSV of `haptex compensate --report`:
+/// `iteration,rms_error,noise_floor,max_error,lag_mm,strokes,limited_by`.
+pub fn report_csv(history: &[HistoryEntry]) -> String {
+    let mut out = String::from("iteration,rms_error,noise_floor,max_error,lag_mm,strokes,limited_by\n");
+    for e in history {
+        out += &format!(
+            "{},{},{},{},{},{},{}\n",
+            e.iteration, e.rms_error, e.noise_floor, e.max_error, e.lag_mm, e.strokes, e.limited_by
+        );
+    }
+    out
+}
+
 /// The length each sample stands for (trapezoid weights).
 fn trapezoid_weights(x: &[f64]) -> Vec<f64> {
     let n = x.len();

@@ -229,6 +229,11 @@ impl Exponential {
     ///   published fit: it puts rho(1 um) = 0.399 and rho(2.3 um) = 0.145.
     pub const LITERATURE: Self = Self { rho_inf: 0.05, a_c_um: 1.0, a_valid_um: 2.3 };
 
+    /// Whether this is the literature default (a placeholder), not a fit.
+    pub fn is_literature(&self) -> bool {
+        self.rho_inf == Self::LITERATURE.rho_inf && self.a_c_um == Self::LITERATURE.a_c_um
+    }
+
     fn rho(&self, a_um: f64) -> f64 {
         self.rho_inf + (1.0 - self.rho_inf) * (-a_um / self.a_c_um).exp()
     }
@@ -354,7 +359,9 @@ impl UltrasonicDevice {
     pub fn model(&self) -> UltrasonicModel {
         let (source, calibration_file, parameters) = match &self.curve {
             ReductionCurve::Calibrated(c) => (ModelSource::Calibration, Some(c.source_name.clone()), None),
-            ReductionCurve::Parametric(e) => (ModelSource::LiteratureDefault, None, Some(*e)),
+            ReductionCurve::Parametric(e) if e.is_literature() => (ModelSource::LiteratureDefault, None, Some(*e)),
+            // An exponential fitted to the plate's own measurements (a device file).
+            ReductionCurve::Parametric(e) => (ModelSource::Calibration, Some("fitted exponential".into()), Some(*e)),
         };
         UltrasonicModel {
             source,
@@ -375,6 +382,14 @@ impl UltrasonicDevice {
                 c.source_name,
                 c.amplitude_um.len(),
                 Num(c.amplitude_um[c.amplitude_um.len() - 1])
+            ),
+            ReductionCurve::Parametric(e) if !e.is_literature() => format!(
+                "exponential fitted to this plate's measurements: rho(a) = {} + {} exp(-a / {} um), valid up to {} \
+                 um; {limits}",
+                Num(e.rho_inf),
+                Num(1.0 - e.rho_inf),
+                Num(e.a_c_um),
+                Num(e.a_valid_um)
             ),
             ReductionCurve::Parametric(e) => format!(
                 "literature default, not a calibration of this device: rho(a) = {} + {} exp(-a / {} um), valid up \

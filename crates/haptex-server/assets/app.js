@@ -49,6 +49,7 @@
     carrierHz: 1000,
     both: false,           // eq. (8) and eq. (9) together (Fig. 2b): the companion drawn dashed
     pins: [],              // pinned designs, overlaid on the plots (pinDesign)
+    deviceFile: null,      // a device file used for designs: {name, text} (display-calibration.js, "Your display")
     updates: 0,
   };
   const plots = { height: null, friction: null, voltage: null, amplitude: null, check: null, checkVoltage: null,
@@ -133,6 +134,9 @@
 
   function showError(error) {
     document.querySelectorAll('[aria-invalid="true"]').forEach((el) => el.removeAttribute('aria-invalid'));
+    // A panel that owns the field shows the error beside its control (display-calibration.js).
+    if (error instanceof ApiError && error.field &&
+        !document.dispatchEvent(new CustomEvent('haptex:error', { detail: error, cancelable: true }))) return;
     if (error instanceof ApiError) {
       const name = error.field ? error.field.replace(/^device\./, '') : null;
       const input = name ? document.querySelector(`[data-param="${name}"], [data-field="${name}"]`) : null;
@@ -1095,6 +1099,12 @@
     const profile = { x_mm: p.x_mm, mu: p.mu };
     if (p.fn_n) profile.fn_n = p.fn_n;
     const body = { profile, method, device: state.device };
+    if (state.deviceFile) {
+      // The file's constants (the device fields show them), for the playback carrier.
+      body.device = {};
+      body.device_file = state.deviceFile.text;
+      body.carrier = { shape: 'sine', frequency_hz: state.carrierHz };
+    }
     if (state.relative) {
       body.relative = true;
       const flat = $('flat-mu').value.trim();
@@ -1136,6 +1146,7 @@
     showStroke();
     showCheck();
     drawStrip();
+    document.dispatchEvent(new CustomEvent('haptex:voltage', { detail: answer }));
     state.updates += 1;
     document.body.dataset.updates = String(state.updates);
     document.body.dataset.state = 'ready';
@@ -2250,6 +2261,9 @@
       showError(error);
     }
   }
+
+  // For the page's other modules (display-calibration.js).
+  Object.assign(window.haptex, { api, postJson, ApiError, fmt, scheduleVoltage, voltageBody });
 
   document.addEventListener('DOMContentLoaded', start);
 }());

@@ -44,6 +44,7 @@ pub mod answers;
 mod api;
 pub mod assets;
 mod connection;
+pub mod device_file;
 pub mod display;
 pub mod error;
 pub mod explain;

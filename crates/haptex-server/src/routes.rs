@@ -56,6 +56,8 @@ pub fn table() -> Vec<Endpoint> {
         endpoint(Method::POST, "/api/map/path", api::map::path),
         endpoint(Method::GET, "/api/live", api::live::get),
         endpoint(Method::GET, "/api/live/ws", api::live::socket),
+        endpoint(Method::POST, "/api/calibrate", api::calibrate::post),
+        endpoint(Method::POST, "/api/compensate/measured", api::measured::post),
     ]
 }
 

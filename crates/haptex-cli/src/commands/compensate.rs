@@ -2,14 +2,11 @@
 //! on it, by iterative learning control (haptex_core::ilc;
 //! docs/measured-compensation.md).
 
-use std::io::Write;
 use std::path::PathBuf;
 
-use anyhow::Context;
 use clap::Args;
-use haptex_core::combined::{Channels, map_display};
-use haptex_core::electrovibration::{ContactArea, Device, Method, map_profile};
-use haptex_core::ilc::{self, Design, DisplayModel, Drive, HistoryEntry, Kept, Limit, Settings, Step, Stroke};
+use haptex_core::electrovibration::{ContactArea, Device};
+use haptex_core::ilc::{self, Design, DisplayModel, Kept, Limit, Settings, Step, Stroke};
 use haptex_core::io::Table;
 use haptex_core::num::Num;
 use haptex_core::plot::{Figure, Panel};
@@ -139,8 +136,8 @@ pub fn run(args: CompensateArgs) -> anyhow::Result<()> {
     history.push(step.entry);
 
     // Every output is made in memory first: an error in any leaves none written.
-    let design_bytes = design_csv(&design, &step, &history, &model, ultrasonic.as_ref(), strategy)?;
-    let report_bytes = args.report.as_ref().map(|_| report_csv(&history));
+    let design_bytes = ilc::next_design_csv(&design, &step, &history, &model)?;
+    let report_bytes = args.report.as_ref().map(|_| ilc::report_csv(&history).into_bytes());
     let png_bytes = match &args.png {
         Some(_) => Some(figure(&args, &design, &step).to_png()?),
         None => None,
@@ -158,62 +155,6 @@ pub fn run(args: CompensateArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
-}
-
-/// The next design as CSV: the history lines, then the design as `haptex
-/// voltage` writes it (target and summary of the target, the next drive).
-fn design_csv(
-    design: &Design,
-    step: &Step,
-    history: &[HistoryEntry],
-    model: &DisplayModel,
-    ultrasonic: Option<&haptex_core::ultrasonic::UltrasonicDevice>,
-    strategy: Option<haptex_core::combined::Strategy>,
-) -> anyhow::Result<Vec<u8>> {
-    let x = design.target.x_mm();
-    // No sample above U_max or a_max is ever written.
-    ilc::check_limits(x, &step.next, model)?;
-    let mut out: Vec<u8> = Vec::new();
-    for entry in history {
-        writeln!(out, "# {}", entry.comment())?;
-    }
-    let device = model.device();
-    match (ultrasonic, strategy) {
-        (Some(ultrasonic), Some(strategy)) => {
-            let mut profile =
-                map_display(&design.target, device, Channels::Combined(ultrasonic, strategy), None, None)?;
-            let Drive { voltage_v, amplitude_um } = step.next.clone();
-            let min_max =
-                |v: &[f64]| v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
-            if let Some(ev) = &mut profile.summary.electrovibration {
-                (ev.voltage_min_v, ev.voltage_max_v) = min_max(&voltage_v);
-            }
-            if let (Some(us), Some(a)) = (&mut profile.summary.ultrasonic, &amplitude_um) {
-                (us.amplitude_min_um, us.amplitude_max_um) = min_max(a);
-            }
-            profile.voltage_v = Some(voltage_v);
-            profile.amplitude_um = amplitude_um;
-            profile.write_csv(&mut out)?;
-        }
-        _ => {
-            let profile = map_profile(&design.target, device, Method::Physical, None)?
-                .with_voltages(step.next.voltage_v.clone())
-                .context("internal: the next design's voltage")?;
-            profile.write_csv(&mut out)?;
-        }
-    }
-    Ok(out)
-}
-
-fn report_csv(history: &[HistoryEntry]) -> Vec<u8> {
-    let mut out = String::from("iteration,rms_error,noise_floor,max_error,lag_mm,strokes,limited_by\n");
-    for e in history {
-        out += &format!(
-            "{},{},{},{},{},{},{}\n",
-            e.iteration, e.rms_error, e.noise_floor, e.max_error, e.lag_mm, e.strokes, e.limited_by
-        );
-    }
-    out.into_bytes()
 }
 
 fn figure(args: &CompensateArgs, design: &Design, step: &Step) -> Figure {

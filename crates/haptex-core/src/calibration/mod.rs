@@ -11,11 +11,13 @@
 //!   monotone (isotonic) table, and rho_min;
 //! - [`least_squares`] and [`distributions`]: the robust fit, its
 //!   cluster-robust intervals and the t and F distributions they use;
+//! - [`curves`]: the data and fitted curves with their bands, to plot;
 //! - [`device_file`]: the device file (TOML) every design command takes
 //!   with `--device`;
 //! - [`virtual_device`]: synthetic measurements from known constants, the
 //!   test bench that stands in for hardware.
 
+pub mod curves;
 pub mod device_file;
 pub mod distributions;
 pub mod force_fit;

@@ -1,11 +1,13 @@
 //! Handlers, one module per resource.
 
+pub mod calibrate;
 pub mod check;
 pub mod config;
 pub mod health;
 pub mod live;
 pub mod map;
 pub mod materials;
+pub mod measured;
 pub mod model;
 pub mod openapi;
 pub mod play;

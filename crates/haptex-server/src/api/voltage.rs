@@ -43,8 +43,10 @@ use haptex_core::num::Num;
 use haptex_core::profile::FrictionProfile;
 use haptex_core::ranges;
 use haptex_core::relative::{FlatMu, RelativeError};
+use haptex_core::signal::Carrier;
 use serde::{Deserialize, Serialize};
 
+use crate::device_file::RequestDeviceFile;
 use crate::display::{DisplayDesign, DisplayName, DisplayRequest, StrategyName};
 use crate::error::ApiError;
 use crate::input::{
@@ -93,6 +95,14 @@ struct VoltageBody {
     /// with the recipe in `#` comments ([`recipe_comments`]).
     #[serde(default)]
     source: Option<serde_json::Value>,
+    /// A calibrated display's device file, its TOML text
+    /// ([`crate::device_file`]): the device constants come from it.
+    #[serde(default)]
+    device_file: Option<String>,
+    /// The carrier the design will be played on, for the device file's
+    /// force coefficient (default a 1 kHz sine; with `device_file` only).
+    #[serde(default)]
+    carrier: Option<Carrier>,
 }
 
 /// The longest `source` accepted, serialized (one comment line).
@@ -191,12 +201,15 @@ pub(crate) struct VoltageAnswer<'a> {
     /// The recipe (a request with `source` only): [`recipe_json`].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub recipe: Option<serde_json::Value>,
+    /// The device file that designed it (a request with `device_file`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub device_file: Option<serde_json::Value>,
 }
 
 impl<'a> VoltageAnswer<'a> {
     pub fn new(parameters: BTreeMap<&'static str, f64>, voltage: &'a VoltageProfile) -> Self {
         let page_warnings = voltage.summary.warnings.iter().map(|w| crate::explain::for_page(w)).collect();
-        VoltageAnswer { parameters, voltage, page_warnings, recipe: None }
+        VoltageAnswer { parameters, voltage, page_warnings, recipe: None, device_file: None }
     }
 }
 
@@ -213,6 +226,9 @@ pub(crate) struct DisplayAnswer<'a> {
     /// The recipe (a request with `source` only): [`recipe_json`].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub recipe: Option<serde_json::Value>,
+    /// The device file that designed it (a request with `device_file`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub device_file: Option<serde_json::Value>,
 }
 
 impl<'a> DisplayAnswer<'a> {
@@ -227,7 +243,7 @@ impl<'a> DisplayAnswer<'a> {
             parameters.insert("weight", weight);
         }
         let page_warnings = display.summary.warnings.iter().map(|w| crate::explain::for_page(w)).collect();
-        DisplayAnswer { parameters, display, page_warnings, recipe: None }
+        DisplayAnswer { parameters, display, page_warnings, recipe: None, device_file: None }
     }
 }
 
@@ -247,7 +263,7 @@ pub async fn post(
     work::cpu(&state, bytes.len(), move || {
         // The recipe's source and settings for the CSV's comments (JSON body with `source` only).
         let mut recipe: Option<(serde_json::Value, serde_json::Value)> = None;
-        let (profile, method, request, relative, display, prefix) = match kind {
+        let (profile, method, request, relative, display, prefix, device_file) = match kind {
             BodyKind::Json => {
                 query.finish()?;
                 let body: VoltageBody = parse_json(&bytes)?;
@@ -268,10 +284,20 @@ pub async fn post(
                         "a_max_um": body.a_max_um,
                         "ultrasonic_calibration_sha256":
                             body.ultrasonic_calibration.as_deref().map(|t| haptex_core::io::sha256_hex(t.as_bytes())),
+                        "device_file_sha256":
+                            body.device_file.as_deref().map(|t| haptex_core::io::sha256_hex(t.as_bytes())),
+                        "carrier": body.carrier,
                     });
                     recipe = Some((source.clone(), settings));
                 }
-                let request = DeviceRequest::from_pairs_over(body.device.iter(), "device.", &base.device)?;
+                // A device file in the request sets the constants; without
+                // one, the server's own default device (`serve
+                // --device-file`) fills what the request leaves out.
+                let (request, device_file) = if body.device_file.is_some() || body.carrier.is_some() {
+                    crate::device_file::resolve(&body.device, body.device_file.as_deref(), body.carrier, "device.")?
+                } else {
+                    (DeviceRequest::from_pairs_over(body.device.iter(), "device.", &base.device)?, None)
+                };
                 let relative = relative_request(body.relative, body.flat_mu)?;
                 let display = DisplayRequest {
                     display: body.display,
@@ -281,7 +307,7 @@ pub async fn post(
                     ultrasonic_calibration: body.ultrasonic_calibration,
                 };
                 let profile = body.profile.into_profile("profile.", limits.max_points)?;
-                (profile, body.method, request, relative, display, "device.")
+                (profile, body.method, request, relative, display, "device.", device_file)
             }
             BodyKind::Csv => {
                 let method = query.take("method").map(|m| parse_method(&m, "method")).transpose()?;
@@ -304,10 +330,13 @@ pub async fn post(
                 let request =
                     DeviceRequest::from_pairs_over(pairs.iter().map(|(k, v)| (k.as_str(), *v)), "", &base.device)?;
                 let profile = profile_from_csv(&bytes, limits.max_points)?;
-                (profile, method, request, relative, display, "")
+                (profile, method, request, relative, display, "", None)
             }
         };
-        if let Some(design) = display.design()? {
+        let provenance = device_file.as_ref().map(RequestDeviceFile::provenance);
+        let file_comment = device_file.as_ref().map(|f| format!("# {}\n", f.comment())).unwrap_or_default();
+        if let Some(mut design) = display.design()? {
+            crate::device_file::use_plate(device_file.as_ref(), &display, &mut design)?;
             if method == Some(Method::Normalized) {
                 return Err(ApiError::bad_request(
                     "the method normalized (eq. 9) is the electrovibration display's pattern: an ultrasonic or \
@@ -318,15 +347,17 @@ pub async fn post(
             let designed = compute_display(&profile, &request, relative, &design, prefix)?;
             let mut answer = DisplayAnswer::new(&request, &design, &designed);
             answer.recipe = recipe.as_ref().map(|(source, settings)| recipe_json(&app, source, settings));
+            answer.device_file = provenance;
             let mut comments =
                 recipe.map(|(source, settings)| recipe_comments(&app, &source, &settings, &answer.parameters));
-            if let Some(line) = device_file_comment(&base, &request) {
+            if let Some(line) = device_file_comment(&base, &request).filter(|_| device_file.is_none()) {
                 comments = Some(format!("{line}{}", comments.unwrap_or_default()));
             }
             return Ok(match format {
                 "csv" => super::csv_response(
                     super::to_csv(|w| {
                         w.write_all(comments.unwrap_or_default().as_bytes())?;
+                        w.write_all(file_comment.as_bytes())?;
                         designed.write_csv(w)
                     })?,
                     "display.csv",
@@ -339,13 +370,14 @@ pub async fn post(
         let json_recipe = recipe.as_ref().map(|(source, settings)| recipe_json(&app, source, settings));
         let mut comments =
             recipe.map(|(source, settings)| recipe_comments(&app, &source, &settings, &request.values()));
-        if let Some(line) = device_file_comment(&base, &request) {
+        if let Some(line) = device_file_comment(&base, &request).filter(|_| device_file.is_none()) {
             comments = Some(format!("{line}{}", comments.unwrap_or_default()));
         }
         Ok(match format {
             "csv" => super::csv_response(
                 super::to_csv(|w| {
                     w.write_all(comments.unwrap_or_default().as_bytes())?;
+                    w.write_all(file_comment.as_bytes())?;
                     voltage.write_csv(w)
                 })?,
                 "voltage.csv",
@@ -353,6 +385,7 @@ pub async fn post(
             _ => {
                 let mut answer = VoltageAnswer::new(request.values(), &voltage);
                 answer.recipe = json_recipe;
+                answer.device_file = provenance;
                 Json(answer).into_response()
             }
         })

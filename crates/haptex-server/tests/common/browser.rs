@@ -1,0 +1,143 @@
+//! Headless Chromium through chromedriver for the browser tests that are
+//! not browser.rs (which keeps its own copy of this setup; moving it here
+//! is a follow-up): the tools, chromedriver on a free port, the session,
+//! scripts and waits.
+
+use std::net::TcpListener as StdListener;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use axum::http::Method;
+use fantoccini::wd::WebDriverCompatibleCommand;
+use fantoccini::{Client, ClientBuilder};
+use serde_json::{Value, json};
+
+pub const WAIT: Duration = Duration::from_secs(20);
+
+pub type Check<T> = Result<T, String>;
+
+/// The tool at `variable` or `default`; None (the test says it is skipped)
+/// with HAPTEX_BROWSER_TEST=skip.
+pub fn tools() -> Option<(PathBuf, PathBuf)> {
+    if std::env::var("HAPTEX_BROWSER_TEST").as_deref() == Ok("skip") {
+        eprintln!("SKIPPED: HAPTEX_BROWSER_TEST=skip: the GUI was not tested in a browser");
+        return None;
+    }
+    let tool = |variable: &str, default: &str| {
+        let path = std::env::var_os(variable).map(PathBuf::from).unwrap_or_else(|| PathBuf::from(default));
+        assert!(
+            path.is_file(),
+            "{} not found: install Debian's chromium and chromium-driver (bash scripts/test.sh does), set \
+             {variable}, or set HAPTEX_BROWSER_TEST=skip to skip the browser test",
+            path.display()
+        );
+        path
+    };
+    Some((tool("HAPTEX_CHROMIUM", "/usr/bin/chromium"), tool("HAPTEX_CHROMEDRIVER", "/usr/bin/chromedriver")))
+}
+
+/// chromedriver on a free loopback port, killed when dropped.
+pub struct Driver {
+    child: Child,
+    port: u16,
+    pub log_path: PathBuf,
+}
+
+impl Driver {
+    pub fn start(chromedriver: &Path, scratch: &Path) -> Self {
+        let port = StdListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+        let log_path = scratch.join("chromedriver.log");
+        let child = Command::new(chromedriver)
+            .arg(format!("--port={port}"))
+            .arg(format!("--log-path={}", log_path.display()))
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap_or_else(|e| panic!("cannot start {}: {e}", chromedriver.display()));
+        let driver = Self { child, port, log_path };
+        let start = Instant::now();
+        while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
+            assert!(start.elapsed() < WAIT, "chromedriver did not listen on port {port} within {WAIT:?}");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        driver
+    }
+
+    /// A session of headless Chromium, 1280 x 1000.
+    pub async fn connect(&self, chromium: &Path, scratch: &Path) -> Client {
+        let profile = scratch.join("chromium-profile");
+        let capabilities = json!({
+            "browserName": "chrome",
+            "goog:chromeOptions": {
+                "binary": chromium,
+                "args": [
+                    "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+                    "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-dev-shm-usage",
+                    format!("--user-data-dir={}", profile.display()), "--window-size=1280,1000",
+                ],
+            },
+            "goog:loggingPrefs": { "browser": "ALL" },
+        });
+        let Value::Object(capabilities) = capabilities else { unreachable!() };
+        let connector = hyper_util::client::legacy::connect::HttpConnector::new();
+        ClientBuilder::new(connector)
+            .capabilities(capabilities)
+            .connect(&format!("http://127.0.0.1:{}", self.port))
+            .await
+            .expect("a WebDriver session with chromedriver")
+    }
+}
+
+impl Drop for Driver {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// chromedriver's browser console log (entries since the last call).
+#[derive(Debug)]
+struct BrowserLog;
+
+impl WebDriverCompatibleCommand for BrowserLog {
+    fn endpoint(&self, base_url: &url::Url, session_id: Option<&str>) -> Result<url::Url, url::ParseError> {
+        base_url.join(&format!("session/{}/se/log", session_id.unwrap_or_default()))
+    }
+
+    fn method_and_body(&self, _: &url::Url) -> (Method, Option<String>) {
+        (Method::POST, Some(r#"{"type": "browser"}"#.to_string()))
+    }
+}
+
+/// Console messages at level SEVERE since the last call.
+pub async fn console_errors(client: &Client) -> Check<Vec<String>> {
+    let entries = client.issue_cmd(BrowserLog).await.map_err(|e| e.to_string())?;
+    Ok(entries
+        .as_array()
+        .map(|a| a.as_slice())
+        .unwrap_or_default()
+        .iter()
+        .filter(|e| e["level"] == "SEVERE")
+        .map(|e| e["message"].as_str().unwrap_or_default().to_string())
+        .collect())
+}
+
+pub async fn script(client: &Client, code: &str) -> Check<Value> {
+    client.execute(code, vec![]).await.map_err(|e| format!("{code}: {e}"))
+}
+
+/// Waits until `code` (a JS expression) is truthy.
+pub async fn wait_for(client: &Client, code: &str, what: &str) -> Check<()> {
+    let start = Instant::now();
+    loop {
+        if script(client, &format!("return Boolean({code});")).await? == Value::Bool(true) {
+            return Ok(());
+        }
+        if start.elapsed() > WAIT {
+            let message = script(client, "return document.getElementById('message').textContent;").await?;
+            return Err(format!("timed out waiting for {what} ({code}); the page says: {message}"));
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+}
