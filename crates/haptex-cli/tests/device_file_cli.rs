@@ -531,3 +531,49 @@ fn check_with_a_device_file_names_it_and_keeps_within_its_u_max() {
     let err = refused(&[&args[..3], &["--device", &c]].concat());
     assert!(err.contains("is of the circuit model"), "{err}");
 }
+
+/// `compensate --device F`: the design's constants come from the file (the
+/// flags it sets are refused), the next design names the file and keeps
+/// within its U_max, and a design made with another file is refused.
+#[test]
+fn compensate_with_a_device_file_names_it_and_refuses_another_files_design() {
+    let dir = tempfile::tempdir().unwrap();
+    let (f, file) = eq3_file(dir.path(), 100.0);
+    let (g, _) = device_file(dir.path(), "other.toml", Some(vec![sine(1000.0)]), 90.0);
+    let p = profile(dir.path());
+    let u0 = dir.path().join("u0.csv");
+    ok(&["voltage", "--profile", &p, "--device", &f, "-o", u0.to_str().unwrap()]);
+    // Strokes: the target felt 10% high inside the band, with 1% noise
+    // that differs between the three strokes.
+    let mu_hd = file.electrovibration.as_ref().unwrap().mu_hd.value;
+    let mut strokes = Vec::new();
+    for s in 0..3 {
+        let rows: String = (0..=400)
+            .map(|i| {
+                let x = i as f64 * 0.025;
+                let target = 0.55 + 1.05 * (x / 10.0);
+                let felt = if target > mu_hd { mu_hd + 1.1 * (target - mu_hd) } else { mu_hd };
+                let noise = 1.0 + 0.01 * (((i * 31 + s * 17) % 13) as f64 / 6.0 - 1.0);
+                format!("{x},{},0.5\n", felt * 0.5 * noise)
+            })
+            .collect();
+        strokes.push(write(dir.path(), &format!("s{s}.csv"), &format!("x_mm,ft_n,fn_n\n{rows}")));
+    }
+    let u1 = dir.path().join("u1.csv");
+    let mut args = vec!["compensate", "--design", u0.to_str().unwrap(), "--device", &f, "-o", u1.to_str().unwrap()];
+    args.push("--measured");
+    args.extend(strokes.iter().map(String::as_str));
+    ok(&args);
+    let text = std::fs::read_to_string(&u1).unwrap();
+    assert!(comments(&text).iter().any(|c| c.contains("device file sha256")), "{text}");
+    let u_col = rows(&text).iter().map(|r| r[2]).fold(0.0, f64::max);
+    assert!(u_col <= 100.0, "{u_col}");
+    let mut refused_args = args.clone();
+    refused_args[4] = &g;
+    let err = refused(&refused_args);
+    assert!(err.contains("was designed with a device file of SHA-256"), "{err}");
+    let mut with_mu = args.clone();
+    with_mu.extend(["--mu-hd", "0.5"]);
+    let err = refused(&with_mu);
+    assert!(err.contains("--mu-hd") && err.contains("--device"), "{err}");
+}

@@ -11,8 +11,9 @@ use haptex_core::io::Table;
 use haptex_core::num::Num;
 use haptex_core::plot::{Figure, Panel};
 use haptex_core::ranges;
+use haptex_core::signal::{Carrier, CarrierShape};
 
-use crate::args::{DisplayArg, DisplayArgs, LayerStackArgs, in_range, positive};
+use crate::args::{DesignDevice, DeviceFileArgs, DisplayArg, DisplayArgs, LayerStackArgs, in_range, positive};
 
 /// Compute the next design of a friction display from strokes measured on
 /// the last one (iterative learning control).
@@ -36,7 +37,13 @@ use crate::args::{DisplayArg, DisplayArgs, LayerStackArgs, in_range, positive};
 #[command(after_help = "Examples:\n  haptex voltage --profile target.csv --mu-hd 0.5 -o u0.csv\n  \
                   haptex compensate --design u0.csv --measured s1.csv s2.csv s3.csv s4.csv --mu-hd 0.5 -o u1.csv \
                   --report r.csv --png u1.png\n  \
-                  haptex compensate --design u1.csv --measured t1.csv t2.csv t3.csv t4.csv --mu-hd 0.5 -o u2.csv")]
+                  haptex compensate --design u1.csv --measured t1.csv t2.csv t3.csv t4.csv --mu-hd 0.5 -o u2.csv\n\n\
+                  With a device file (`haptex calibrate`): mu_HD, the stack, k (or the circuit, on the carrier the \
+                  design states) and U_max are the file's; a design made with another device file is refused:\n  \
+                  haptex compensate --design u0.csv --measured s1.csv s2.csv s3.csv --device my-display.toml -o u1.csv",
+    mut_args = crate::args::set_by_device_file(&["mu_hd", "eps_sc", "eps_i", "d_sc_mm", "d_i_mm", "k_mm2_per_n",
+               "ultrasonic_calibration"])
+)]
 pub struct CompensateArgs {
     /// The design played: `x_mm,mu,voltage_v` (mu the target), with
     /// `amplitude_um` for a combined display; its `# ilc iteration` lines
@@ -74,9 +81,10 @@ pub struct CompensateArgs {
     /// Friction coefficient of the finger on the display with no drive, mu_HD.
     #[arg(long, default_value_t = Device::PAPER.mu_hd, value_parser = in_range(ranges::MU_HD))]
     mu_hd: f64,
-    /// Highest voltage the display can apply, U_max in V RMS.
-    #[arg(long, default_value_t = Device::PAPER.u_max_v, value_parser = in_range(ranges::U_MAX_V))]
-    u_max: f64,
+    /// Highest voltage the display can apply, U_max in V RMS (default 100;
+    /// with --device the file's, which this may lower, never raise).
+    #[arg(long, value_parser = in_range(ranges::U_MAX_V))]
+    u_max: Option<f64>,
     /// Contact-area coefficient k of eq. (8) in mm^2/N (A = k Fn).
     #[arg(long, default_value_t = ContactArea::PAPER.k_mm2_per_n, value_parser = in_range(ranges::K_MM2_PER_N))]
     k_mm2_per_n: f64,
@@ -84,6 +92,8 @@ pub struct CompensateArgs {
     stack: LayerStackArgs,
     #[command(flatten)]
     display: DisplayArgs,
+    #[command(flatten)]
+    device_file: DeviceFileArgs,
     /// No summary on stderr.
     #[arg(short, long)]
     quiet: bool,
@@ -94,14 +104,34 @@ fn learning_gain(text: &str) -> Result<f64, String> {
     if value > 0.0 && value <= 1.0 { Ok(value) } else { Err(format!("must be in (0, 1], got {text}")) }
 }
 
-/// The display's constants as the flags give them (the one place a
-/// device is built here).
-fn device(args: &CompensateArgs) -> anyhow::Result<Device> {
+/// The display's constants as the flags give them, or as the device file
+/// gives them for the carrier the design states (default sine 1000 Hz):
+/// the one place a device is built here.
+fn device(args: &CompensateArgs, file: Option<&DesignDevice>, comments: &[String]) -> anyhow::Result<Device> {
+    if let Some(file) = file {
+        file.check_design(comments, &args.design)?;
+        let carrier = match crate::commands::play::stated_carrier(comments) {
+            None => Carrier::DEFAULT,
+            Some(Ok((shape, f))) => Carrier {
+                shape: match shape.as_str() {
+                    "square" => CarrierShape::Square,
+                    "none" => CarrierShape::None,
+                    _ => CarrierShape::Sine,
+                },
+                frequency_hz: f,
+            },
+            Some(Err(text)) => anyhow::bail!(
+                "{}: cannot read the design carrier in its comment ('designed for the carrier: {text}')",
+                args.design.display()
+            ),
+        };
+        return file.device(&carrier, args.u_max);
+    }
     let device = Device {
         stack: args.stack.stack(),
         contact: ContactArea { k_mm2_per_n: args.k_mm2_per_n, exponent: 1.0 },
         mu_hd: args.mu_hd,
-        u_max_v: args.u_max,
+        u_max_v: args.u_max.unwrap_or(Device::PAPER.u_max_v),
         force_gain: 1.0,
     };
     device.validate()?;
@@ -109,13 +139,15 @@ fn device(args: &CompensateArgs) -> anyhow::Result<Device> {
 }
 
 pub fn run(args: CompensateArgs) -> anyhow::Result<()> {
-    let device = device(&args)?;
+    let file = args.device_file.read()?;
+    let table = Table::read_file(&args.design)?;
+    let device = device(&args, file.as_ref(), table.comments())?;
     let ultrasonic = match args.display.display {
         DisplayArg::Electrovibration => {
             args.display.refuse_display_flags()?;
             None
         }
-        DisplayArg::Combined => Some(args.display.ultrasonic(None)?),
+        DisplayArg::Combined => Some(args.display.ultrasonic(file.as_ref())?),
         DisplayArg::Ultrasonic => anyhow::bail!(
             "compensate iterates an electrovibration or a combined display's design; for the plate alone give \
              --display combined"
@@ -126,7 +158,6 @@ pub fn run(args: CompensateArgs) -> anyhow::Result<()> {
         (Some(ultrasonic), Some(strategy)) => DisplayModel::Combined { device, ultrasonic, strategy },
         _ => DisplayModel::Electrovibration(device),
     };
-    let table = Table::read_file(&args.design)?;
     let design = Design::from_table(&table, &model)?;
     let strokes = args.measured.iter().map(|p| Stroke::read_file(p)).collect::<Result<Vec<_>, _>>()?;
     let settings =
@@ -136,7 +167,17 @@ pub fn run(args: CompensateArgs) -> anyhow::Result<()> {
     history.push(step.entry);
 
     // Every output is made in memory first: an error in any leaves none written.
-    let design_bytes = ilc::next_design_csv(&design, &step, &history, &model)?;
+    let mut design_bytes = ilc::next_design_csv(&design, &step, &history, &model)?;
+    if let Some(file) = &file {
+        // The next design names the device file it was made with, and the
+        // carrier its force coefficient is for (read back by `play`).
+        let carrier_line = table.comments().iter().find(|l| l.contains("designed for the carrier: ")).cloned();
+        let mut head = format!("# {}\n", file.comment());
+        if let Some(line) = carrier_line {
+            head += &format!("{line}\n");
+        }
+        design_bytes.splice(0..0, head.into_bytes());
+    }
     let report_bytes = args.report.as_ref().map(|_| ilc::report_csv(&history).into_bytes());
     let png_bytes = match &args.png {
         Some(_) => Some(figure(&args, &design, &step).to_png()?),

@@ -552,7 +552,7 @@ pub(crate) fn stated_a_max(comments: &[String]) -> Option<f64> {
 /// (`designed for the carrier: SHAPE F Hz`, as `haptex voltage
 /// --force-model circuit` writes): the shape word and the frequency, or
 /// the unreadable text itself as an error.
-fn stated_carrier(comments: &[String]) -> Option<Result<(String, f64), String>> {
+pub(crate) fn stated_carrier(comments: &[String]) -> Option<Result<(String, f64), String>> {
     let rest = comments.iter().find_map(|l| l.split_once("designed for the carrier: ").map(|(_, r)| r.to_owned()))?;
     let mut words = rest.split_whitespace();
     let parsed = match (words.next(), words.next().and_then(|f| f.parse::<f64>().ok()), words.next()) {
