@@ -8,7 +8,7 @@ use haptex_core::calibration::device_file::DeviceFile;
 use haptex_core::calibration::force_fit::{self, carrier_name};
 use haptex_core::calibration::measurements::Measurements;
 use haptex_core::calibration::ultrasonic_fit::Choice;
-use haptex_core::calibration::{Calibration, Estimate, Goodness, Settings, calibrate};
+use haptex_core::calibration::{Calibration, Estimate, Goodness, Settings, calibrate, curves};
 use haptex_core::electrovibration::Device;
 use haptex_core::frequency::round3;
 use haptex_core::num::Num;
@@ -278,92 +278,31 @@ fn band(x: &[f64], lo: &[f64], hi: &[f64], color: (u8, u8, u8)) -> Shape {
 
 fn figure(cal: &Calibration, m: &Measurements) -> Figure {
     let mut figure = Figure::new(format!("haptex calibrate: {}", m.source_name()));
-    let rows = m.rows();
-    if let Some(f) = &cal.force {
-        let circuit = f.circuit.as_ref().filter(|c| c.rho_sc_ohm_m.identified && c.gap_um.identified);
-        let title = if circuit.is_some() { "circuit model, 95% band" } else { "eq. (3) per carrier, 95% band" };
+    if let Some(f) = curves::force(cal, m) {
+        let title = if f.model == "circuit" { "circuit model, 95% band" } else { "eq. (3) per carrier, 95% band" };
         let mut panel = Panel::new("U (V RMS)", "mu / mu(0 V) - 1").title(title);
-        // Each finger's friction at 0 V: the rise is drawn against it, so
-        // that the fingers' own friction does not hide the voltage's effect.
-        let mut rest: Vec<(u64, f64, usize)> = Vec::new();
-        for r in rows.iter().filter(|r| r.voltage_v == 0.0 && r.amplitude_um == 0.0) {
-            match rest.iter_mut().find(|e| e.0 == r.finger) {
-                Some(e) => {
-                    e.1 += r.mu;
-                    e.2 += 1;
-                }
-                None => rest.push((r.finger, r.mu, 1)),
-            }
-        }
-        let rest_of = |finger: u64| rest.iter().find(|e| e.0 == finger).map(|e| e.1 / e.2 as f64);
         let mut residuals = Panel::new("fitted mu", "measured - fitted").title("residuals");
-        for (k, c) in f.eq3.carriers.iter().enumerate() {
+        for (k, c) in f.carriers.iter().enumerate() {
             let color = PALETTE[k % PALETTE.len()];
-            let in_carrier = |i: &usize| {
-                let r = &rows[*i];
-                r.amplitude_um == 0.0
-                    && r.carrier.is_some_and(|rc| {
-                        rc.shape == c.carrier.shape
-                            && (rc.shape == haptex_core::signal::CarrierShape::None
-                                || rc.frequency_hz == c.carrier.frequency_hz)
-                    })
-            };
-            let idx: Vec<usize> = (0..rows.len()).filter(in_carrier).collect();
-            let u: Vec<f64> = idx.iter().map(|&i| rows[i].voltage_v).collect();
-            let mu: Vec<f64> = idx.iter().map(|&i| rows[i].mu).collect();
-            let (ru, rise): (Vec<f64>, Vec<f64>) = idx
-                .iter()
-                .filter_map(|&i| rest_of(rows[i].finger).map(|m0| (rows[i].voltage_v, rows[i].mu / m0 - 1.0)))
-                .unzip();
-            let curve = |v: f64| match circuit {
-                Some(ci) => ci.curve(&cal.settings.stack, &c.carrier, v),
-                None => f.eq3.curve(k, v),
-            };
-            let rise_curve = |v: f64| match circuit {
-                Some(ci) => ci.rise(&cal.settings.stack, &c.carrier, v),
-                None => f.eq3.rise(k, v),
-            };
-            let grid: Vec<f64> = (0..=60).map(|i| c.max_voltage_v * i as f64 / 60.0).collect();
-            let bands: Vec<[f64; 3]> = grid.iter().map(|&v| rise_curve(v)).collect();
-            let (mid, lo, hi): (Vec<f64>, Vec<f64>, Vec<f64>) = (
-                bands.iter().map(|b| b[0]).collect(),
-                bands.iter().map(|b| b[1]).collect(),
-                bands.iter().map(|b| b[2]).collect(),
-            );
+            let column = |j: usize| -> Vec<f64> { c.rise.iter().map(|b| b[j]).collect() };
             panel = panel
-                .shape(band(&grid, &lo, &hi, color))
-                .series(Series::points("", &ru, &rise).color(color))
-                .series(Series::line(carrier_name(&c.carrier), &grid, &mid).color(color));
-            let fitted: Vec<f64> = u.iter().map(|&v| curve(v)[0]).collect();
-            let res: Vec<f64> = mu.iter().zip(&fitted).map(|(a, b)| a - b).collect();
-            residuals = residuals.series(Series::points(carrier_name(&c.carrier), &fitted, &res).color(color));
+                .shape(band(&c.grid_u_v, &column(1), &column(2), color))
+                .series(Series::points("", &c.data_u_v, &c.data_rise).color(color))
+                .series(Series::line(c.name.clone(), &c.grid_u_v, &column(0)).color(color));
+            residuals = residuals.series(Series::points(c.name.clone(), &c.fitted, &c.residual).color(color));
         }
         figure = figure.panel(panel).panel(residuals);
     }
-    if let Some(u) = &cal.ultrasonic
-        && u.table.len() >= 2
-    {
-        let rest: Vec<f64> =
-            rows.iter().filter(|r| r.voltage_v == 0.0 && r.amplitude_um == 0.0).map(|r| r.mu).collect();
-        let mu0 = rest.iter().sum::<f64>() / rest.len().max(1) as f64;
-        let idx: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].voltage_v == 0.0).collect();
-        let a: Vec<f64> = idx.iter().map(|&i| rows[i].amplitude_um).collect();
-        let rho: Vec<f64> = idx.iter().map(|&i| rows[i].mu / mu0).collect();
+    if let Some(u) = curves::ultrasonic(cal, m) {
         let mut panel = Panel::new("a (um, peak)", "rho = mu(a) / mu(0)")
             .title("ultrasonic plate")
-            .series(Series::points("measured / mean at rest", &a, &rho).color(PALETTE[7]));
-        let ta: Vec<f64> = u.table.iter().map(|p| p.amplitude_um).collect();
-        let tr: Vec<f64> = u.table.iter().map(|p| p.rho).collect();
-        panel = panel.series(Series::line("monotone table", &ta, &tr).color(PALETTE[1]));
+            .series(Series::points("measured / mean at rest", &u.data_amplitude_um, &u.data_rho).color(PALETTE[7]))
+            .series(Series::line("monotone table", &u.table_amplitude_um, &u.table_rho).color(PALETTE[1]));
         if let Some(e) = &u.exponential {
-            let grid: Vec<f64> = (0..=60).map(|i| u.a_max_um * i as f64 / 60.0).collect();
-            let bands: Vec<[f64; 3]> = grid.iter().map(|&x| e.curve(x)).collect();
-            let lo: Vec<f64> = bands.iter().map(|b| b[1]).collect();
-            let hi: Vec<f64> = bands.iter().map(|b| b[2]).collect();
-            let mid: Vec<f64> = bands.iter().map(|b| b[0]).collect();
+            let column = |j: usize| -> Vec<f64> { e.iter().map(|b| b[j]).collect() };
             panel = panel
-                .shape(band(&grid, &lo, &hi, PALETTE[0]))
-                .series(Series::line("exponential, 95% band", &grid, &mid).color(PALETTE[0]));
+                .shape(band(&u.grid_amplitude_um, &column(1), &column(2), PALETTE[0]))
+                .series(Series::line("exponential, 95% band", &u.grid_amplitude_um, &column(0)).color(PALETTE[0]));
         }
         figure = figure.panel(panel);
     }
