@@ -300,6 +300,18 @@ fn valid_requests() -> Vec<Valid> {
             content_type: Some("multipart/form-data; boundary=adversarial-0f3c"),
             body: upload_form("synthetic", &tile_s1()),
         },
+        Valid {
+            route: ("POST", "/api/calibrate"),
+            target: "/api/calibrate",
+            content_type: json_ct,
+            body: calibrate_body().to_string().into_bytes(),
+        },
+        Valid {
+            route: ("POST", "/api/compensate/measured"),
+            target: "/api/compensate/measured",
+            content_type: json_ct,
+            body: measured_body().to_string().into_bytes(),
+        },
         Valid { route: ("GET", "/map"), target: "/map", content_type: None, body: vec![] },
         Valid {
             route: ("POST", "/api/map"),
@@ -399,7 +411,7 @@ fn generic_cases(valid: &Valid) -> Vec<Case> {
             c.body = b"zz\r\nabc\r\n0\r\n\r\n".to_vec();
         }));
     } else if method == "POST" {
-        let json_only = valid.route.1 != "/api/voltage" && valid.route.1 != "/api/profile";
+        let json_only = !["/api/voltage", "/api/profile", "/api/calibrate"].contains(&valid.route.1);
         cases.push(valid.case("no Content-Type", 415, Some("content-type"), |c| c.headers.clear()));
         for ct in ["text/plain", "application/xml", "multipart/form-data; boundary=x", "application/json\u{1}"] {
             let status_field = if ct.contains('\u{1}') { (400, "request") } else { (415, "content-type") };
@@ -1030,9 +1042,65 @@ fn route_cases(valid: &Valid) -> Vec<Case> {
                 body(upload_form("synthetic", &[("x.csv".into(), b"t_s\n".to_vec())])),
             ));
         }
+        "/api/calibrate" => {
+            number_cases(valid, &body, "u_max_v", 1e-3, 1e4, &mut cases);
+            for (what, measurements) in [
+                ("measurements without rows", json!("voltage_v,mu\n")),
+                ("hostile measurements", json!(hostile(10_000))),
+                ("measurements as a number", json!(3)),
+                ("a voltage without a carrier", json!("voltage_v,mu\n0,0.5\n50,0.6\n")),
+            ] {
+                cases.push(valid.json(what, &set(&body, "measurements", measurements), 400, "measurements"));
+            }
+            cases.push(valid.case("a CSV body of a profile", 400, Some("measurements"), |c| {
+                c.headers = vec![("Content-Type".into(), "text/csv".into())];
+                c.body = b"x_mm,mu\n0,1\n1,1\n".to_vec();
+            }));
+        }
+        "/api/compensate/measured" => {
+            number_cases(valid, &body, "gain", 5e-324, 1.0, &mut cases);
+            let one = set(&body, "strokes", json!([body["strokes"][0].clone()]));
+            cases.push(valid.json("one stroke", &one, 400, "strokes"));
+            cases.push(valid.json("a hostile design", &set(&body, "design", json!(hostile(10_000))), 400, "design"));
+            let stroke = json!([{ "csv": hostile(5000) }, body["strokes"][1].clone()]);
+            cases.push(valid.json("a hostile stroke", &set(&body, "strokes", stroke), 400, "strokes[0]"));
+        }
         _ => {}
     }
     cases
+}
+
+/// A small calibration: 0 to 100 V on a 1 kHz sine, three repetitions.
+fn calibrate_body() -> Value {
+    let mut csv = String::from("voltage_v,carrier,carrier_hz,mu,repetition\n");
+    for r in 1..=3 {
+        for (k, u) in [0.0f64, 25.0, 50.0, 75.0, 100.0].iter().enumerate() {
+            let mu = 0.5 * (1.0 + 2e-5 * u * u) * (1.0 + 0.004 * (((k + r) % 3) as f64 - 1.0));
+            csv += &format!("{u},sine,1000,{mu},{r}\n");
+        }
+    }
+    json!({ "measurements": csv, "u_max_v": 100 })
+}
+
+/// A design (mu_HD 0.5, eq. 8 of the paper's device) and two strokes felt
+/// 5% high.
+fn measured_body() -> Value {
+    let mut design = String::from("x_mm,mu,voltage_v\n");
+    let mut strokes = [String::from("x_mm,ft_n,fn_n\n"), String::from("x_mm,ft_n,fn_n\n")];
+    for i in 0..=40 {
+        let x = i as f64 * 0.25;
+        let mu = 0.55 + 0.01 * i as f64;
+        let u = ((mu / 0.5 - 1.0) / 2e-5f64).sqrt().min(100.0);
+        design += &format!("{x},{mu},{u}\n");
+        for (s, stroke) in strokes.iter_mut().enumerate() {
+            *stroke += &format!("{x},{},0.5\n", 0.5 * mu * (1.05 + 0.002 * s as f64));
+        }
+    }
+    json!({
+        "design": design,
+        "strokes": [{ "name": "s1.csv", "csv": strokes[0] }, { "name": "s2.csv", "csv": strokes[1] }],
+        "device": { "mu_hd": 0.5 },
+    })
 }
 
 /// Sends every case on its own connection, two clients at a time, while

@@ -171,9 +171,14 @@ async fn a_bad_measurements_csv_is_refused_naming_its_line_and_column() {
         many += &format!("50,sine,{},0.6\n", 100 + k);
     }
     let e = post("/api/calibrate", "text/csv", many).await.error(StatusCode::BAD_REQUEST, Some("measurements"));
-    assert_eq!((e["line"].as_u64(), e["column"].as_str()), (Some(67), Some("carrier_hz")), "{e}");
-    // Rows that identify nothing: an answer with the verdicts, and no device file.
-    let none = "voltage_v,mu\n0,0.5\n0,0.51\n";
+    assert_eq!((e["line"].as_u64(), e["column"].as_str()), (Some(35), Some("carrier_hz")), "{e}");
+    // Rows at rest only: refused, saying why.
+    let rest = "voltage_v,mu\n0,0.5\n0,0.51\n";
+    let e = post("/api/calibrate", "text/csv", rest).await.error(StatusCode::BAD_REQUEST, Some("measurements"));
+    assert!(e["error"].as_str().unwrap().contains("the friction at rest alone calibrates nothing"), "{e}");
+    // Rows that identify nothing (one voltage): an answer with the
+    // verdicts, and no device file.
+    let none = "voltage_v,carrier,carrier_hz,mu\n50,sine,1000,0.6\n50,sine,1000,0.61\n50,sine,1000,0.6\n";
     let a = post("/api/calibrate", "text/csv", none).await;
     a.ok();
     let a = a.json();

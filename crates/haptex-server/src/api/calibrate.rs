@@ -178,7 +178,10 @@ fn fit(text: &[u8], options: &Options) -> Result<Value, ApiError> {
     let cal = calibrate(&m, options.settings);
     if cal.force.is_none() && cal.ultrasonic.is_none() {
         return Err(ApiError::bad_request(
-            format!("{}: no row measures the electrostatic force or the vibration", options.name),
+            format!(
+                "{}: no row has a voltage or a vibration: the friction at rest alone calibrates nothing",
+                options.name
+            ),
             Some(FIELD),
         ));
     }
