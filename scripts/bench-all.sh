@@ -170,6 +170,8 @@ done
 # The FE's hardest inputs, one run each with its time (the robustness
 # matrix, 100 runs on the suite's two test threads; issue 35's per-run goal).
 step 46-fe-robustness-matrix cargo test --profile ci -p haptex-fem --test robustness_matrix -- --nocapture
+# A calibration of 10 120 measurements with all its intervals (issue 36; target 2 s).
+step 47-calibration cargo bench -p haptex-core --bench calibration
 
 # Live output on a paced device (JACK's dummy driver). The peer scripts
 # above rebuilt haptex without the live feature.
