@@ -41,7 +41,7 @@ static FONT_TTF: &[u8] = include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/..
 const FAMILY: &str = "sans-serif";
 
 /// Line colours, in series order (the Tableau 10 palette).
-const PALETTE: [(u8, u8, u8); 10] = [
+pub const PALETTE: [(u8, u8, u8); 10] = [
     (31, 119, 180),
     (255, 127, 14),
     (44, 160, 44),

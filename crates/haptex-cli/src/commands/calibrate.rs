@@ -12,7 +12,7 @@ use haptex_core::calibration::{Calibration, Estimate, Goodness, Settings, calibr
 use haptex_core::electrovibration::Device;
 use haptex_core::frequency::round3;
 use haptex_core::num::Num;
-use haptex_core::plot::{Figure, Panel, Series, Shape};
+use haptex_core::plot::{Figure, PALETTE, Panel, Series, Shape};
 use haptex_core::ranges;
 
 use crate::args::{LayerStackArgs, in_range};
@@ -252,17 +252,6 @@ fn report(cal: &Calibration, m: &Measurements, file: &DeviceFile) -> String {
     }
     out
 }
-
-const PALETTE: [(u8, u8, u8); 8] = [
-    (31, 119, 180),
-    (255, 127, 14),
-    (44, 160, 44),
-    (214, 39, 40),
-    (148, 103, 189),
-    (140, 86, 75),
-    (227, 119, 194),
-    (127, 127, 127),
-];
 
 fn lighter(c: (u8, u8, u8)) -> (u8, u8, u8) {
     let l = |v: u8| (v as u16 + (255 - v as u16) * 3 / 4) as u8;

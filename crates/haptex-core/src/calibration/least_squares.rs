@@ -355,57 +355,48 @@ fn multiply(a: &[f64], b: &[f64], p: usize) -> Vec<f64> {
 mod tests {
     use super::*;
 
+    /// Fits y = a + b x from `start`, every row its own cluster, within
+    /// +-10.
+    fn fit_line(x: &[f64], y: &[f64], start: [f64; 2]) -> Fit {
+        let cluster: Vec<usize> = (0..y.len()).collect();
+        let problem = Problem {
+            y,
+            cluster: &cluster,
+            start: start.to_vec(),
+            lower: vec![-10.0, -10.0],
+            upper: vec![10.0, 10.0],
+            typical: vec![1.0, 1.0],
+        };
+        fit(&problem, &|t, out| {
+            for (o, x) in out.iter_mut().zip(x) {
+                *o = t[0] + t[1] * x;
+            }
+        })
+        .unwrap()
+    }
+
     /// A straight line without noise is found exactly, and its intervals
     /// shrink to nothing.
     #[test]
     fn an_exact_line_is_recovered() {
         let x: Vec<f64> = (0..20).map(|i| i as f64).collect();
         let y: Vec<f64> = x.iter().map(|x| 0.5 + 0.25 * x).collect();
-        let cluster: Vec<usize> = (0..20).collect();
-        let problem = Problem {
-            y: &y,
-            cluster: &cluster,
-            start: vec![1.0, 1.0],
-            lower: vec![-10.0, -10.0],
-            upper: vec![10.0, 10.0],
-            typical: vec![1.0, 1.0],
-        };
-        let f = fit(&problem, &|t, out| {
-            for (o, x) in out.iter_mut().zip(&x) {
-                *o = t[0] + t[1] * x;
-            }
-        })
-        .unwrap();
+        let f = fit_line(&x, &y, [1.0, 1.0]);
         assert!((f.theta[0] - 0.5).abs() < 1e-9 && (f.theta[1] - 0.25).abs() < 1e-9, "{:?}", f.theta);
         assert!(f.converged);
         assert!(f.std_error(0) < 1e-6);
     }
 
-    /// With Gaussian noise and no outliers, the estimate and the standard
-    /// errors of a line agree with ordinary least squares (HC1 and OLS
-    /// errors agree for homoscedastic noise within sampling error; the
-    /// slope's classical standard error is sigma / sqrt(sum (x - mean)^2)).
+    /// A line with 0.01 Gaussian noise and one point 5 off: the robust fit
+    /// down-weights the point instead of following it, and its noise scale
+    /// is the noise's.
     #[test]
     fn an_outlier_is_down_weighted_not_followed() {
         let x: Vec<f64> = (0..50).map(|i| i as f64 / 10.0).collect();
         let mut rng = crate::recording::rng::SplitMix64::new(7);
         let mut y: Vec<f64> = x.iter().map(|x| 1.0 + 2.0 * x + 0.01 * rng.normal()).collect();
         y[10] += 5.0;
-        let cluster: Vec<usize> = (0..50).collect();
-        let problem = Problem {
-            y: &y,
-            cluster: &cluster,
-            start: vec![0.0, 0.0],
-            lower: vec![-10.0, -10.0],
-            upper: vec![10.0, 10.0],
-            typical: vec![1.0, 1.0],
-        };
-        let f = fit(&problem, &|t, out| {
-            for (o, x) in out.iter_mut().zip(&x) {
-                *o = t[0] + t[1] * x;
-            }
-        })
-        .unwrap();
+        let f = fit_line(&x, &y, [0.0, 0.0]);
         // The outlier moves an OLS intercept by 5/50 = 0.1; the robust fit
         // stays within its noise (0.01 / sqrt(50) ~ 0.0014, 5 sigma).
         assert!((f.theta[0] - 1.0).abs() < 0.01, "{:?}", f.theta);
