@@ -66,8 +66,8 @@ pub const EXPLANATIONS: &[Explanation] = &[
         unit: "",
         meaning: "friction coefficient of the finger on the display with no voltage; eq. (8) raises friction above it",
         typical: typical(0.4, 1.0),
-        source: "dry skin on glass: 0.4 to 0.8, typically 0.5 (Derler & Gerhardt 2012, as cited in physics.md \
-                 section 2, marked 'verify' there); 1 in the paper's Fig. 2, where mu_HD stands for the \
+        source: "dry skin on glass: 0.4 to 0.8, typically 0.5 (Derler & Gerhardt 2012, as cited in \
+                 haptex's physics notes, section 2, marked 'verify' there); 1 in the paper's Fig. 2, where mu_HD stands for the \
                  surface's flat friction of a relative profile",
         accepted: accepted(ranges::MU_HD),
     },
@@ -78,7 +78,7 @@ pub const EXPLANATIONS: &[Explanation] = &[
         unit: "V",
         meaning: "highest RMS voltage the display applies: the clip level of eq. (8), the full scale of eq. (9)",
         typical: None,
-        source: "100 V in the paper's Fig. 2; no typical range sourced (the paper and physics.md give none)",
+        source: "100 V in the paper's Fig. 2; no typical range sourced (the paper and haptex's physics notes give none)",
         accepted: accepted(ranges::U_MAX_V),
     },
     Explanation {
@@ -88,7 +88,7 @@ pub const EXPLANATIONS: &[Explanation] = &[
         unit: "",
         meaning: "relative permittivity of the stratum corneum, the skin's outer layer (eq. 3)",
         typical: None,
-        source: "1650 in the paper's Fig. 2; no typical range sourced (the paper and physics.md give none)",
+        source: "1650 in the paper's Fig. 2; no typical range sourced (the paper and haptex's physics notes give none)",
         accepted: accepted(ranges::EPS_SC),
     },
     Explanation {
@@ -98,7 +98,7 @@ pub const EXPLANATIONS: &[Explanation] = &[
         unit: "",
         meaning: "relative permittivity of the display's insulator (eq. 3)",
         typical: None,
-        source: "10 in the paper's Fig. 2; no typical range sourced (the paper and physics.md give none)",
+        source: "10 in the paper's Fig. 2; no typical range sourced (the paper and haptex's physics notes give none)",
         accepted: accepted(ranges::EPS_I),
     },
     Explanation {
@@ -108,8 +108,8 @@ pub const EXPLANATIONS: &[Explanation] = &[
         unit: "mm",
         meaning: "thickness of the stratum corneum, the skin's outer dielectric layer (eq. 3)",
         typical: typical(0.2, 0.3),
-        source: "stratum corneum 0.2 to 0.3 mm at the finger pad (physics.md section 2, marked 'verify' \
-                 there); 0.2 mm in the paper's Fig. 2",
+        source: "stratum corneum 0.2 to 0.3 mm at the finger pad (haptex's physics notes, section 2, \
+                 marked 'verify' there); 0.2 mm in the paper's Fig. 2",
         accepted: accepted(ranges::D_SC_MM),
     },
     Explanation {
@@ -119,7 +119,7 @@ pub const EXPLANATIONS: &[Explanation] = &[
         unit: "mm",
         meaning: "thickness of the display's insulator (eq. 3)",
         typical: None,
-        source: "0.001 mm in the paper's Fig. 2; no typical range sourced (the paper and physics.md give none)",
+        source: "0.001 mm in the paper's Fig. 2; no typical range sourced (the paper and haptex's physics notes give none)",
         accepted: accepted(ranges::D_I_MM),
     },
     Explanation {
@@ -129,7 +129,7 @@ pub const EXPLANATIONS: &[Explanation] = &[
         unit: "mm^2/N",
         meaning: "contact-area coefficient of A = k Fn^n: the finger's contact area per newton of load",
         typical: None,
-        source: "200 mm^2/N in the paper's Fig. 2; no typical range sourced (the paper and physics.md give none)",
+        source: "200 mm^2/N in the paper's Fig. 2; no typical range sourced (the paper and haptex's physics notes give none)",
         accepted: accepted(ranges::K_MM2_PER_N),
     },
     Explanation {
@@ -140,7 +140,7 @@ pub const EXPLANATIONS: &[Explanation] = &[
         meaning: "contact-area exponent of A = k Fn^n; 1 is the paper's linear law, below 1 eq. (8) needs Fn",
         typical: typical(0.3, 1.0),
         source: "1 in the paper (valid below about 0.5 N); 0.3 to 0.7 for higher loads (Adams et al. 2013, as \
-                 cited in physics.md section 1, marked 'verify' there)",
+                 cited in haptex's physics notes, section 1, marked 'verify' there)",
         accepted: accepted(ranges::AREA_EXPONENT),
     },
     Explanation {
@@ -150,7 +150,7 @@ pub const EXPLANATIONS: &[Explanation] = &[
         unit: "N",
         meaning: "normal force the finger explores with; used only when n is not 1 (default: the profile's mean)",
         typical: typical(0.1, 1.0),
-        source: "exploration force 0.1 to 1 N (physics.md section 2)",
+        source: "exploration force 0.1 to 1 N (haptex's physics notes, section 2)",
         accepted: accepted(ranges::FN_N),
     },
     Explanation {
@@ -161,8 +161,8 @@ pub const EXPLANATIONS: &[Explanation] = &[
         meaning: "friction of the reference surface where it is flat; a relative profile is mu / mu_flat * mu_HD",
         typical: typical(0.1, 0.8),
         source: "mean kinetic friction 0.108 (wax paper) to 0.797 (sandpaper) of a tool on materials (Culbertson \
-                 et al. 2014, physics.md section 5) and 0.4 to 0.8 for skin on glass (physics.md section 2); \
-                 0.5 (mu_skin) for the FE database's templates (data/db/metadata.json)",
+                 et al. 2014, haptex's physics notes, section 5) and 0.4 to 0.8 for skin on glass (haptex's physics notes, section 2); \
+                 0.5, the skin friction of the FE database's templates (the database's metadata)",
         accepted: accepted(ranges::FLAT_MU),
     },
     Explanation {
@@ -172,9 +172,9 @@ pub const EXPLANATIONS: &[Explanation] = &[
         unit: "N/mm",
         meaning: "normal load of the FE finger on the display per mm of finger width (the 2D model is per mm)",
         typical: typical(0.0067, 0.05),
-        source: "exploration force 0.1 to 1 N (physics.md section 2) over a 15 mm wide pad, capped at 0.05 \
-                 N/mm where the FE finger's contact nears the end of its contact region (haptex's measurement, \
-                 crates/haptex-server/src/fields.rs)",
+        source: "exploration force 0.1 to 1 N (haptex's physics notes, section 2) over a 15 mm wide pad, capped at 0.05 \
+                 N/mm where the FE finger's contact nears the end of its contact region (haptex's measurement with its \
+                 FE finger)",
         accepted: accepted(fields::LOAD_N_PER_MM),
     },
     Explanation {
@@ -185,9 +185,9 @@ pub const EXPLANATIONS: &[Explanation] = &[
         meaning: "highest vibration amplitude (peak) of the ultrasonic plate: the clip level of a(x) and the full \
                   scale of the drive's channel 2",
         typical: typical(1.0, 2.3),
-        source: "typical plates: 27 to 60 kHz resonance, 1 to 2.3 um amplitude (physics.md, 'Ultrasonic friction \
-                 reduction', from Wiertlewski et al. 2016, Vezzoli et al. 2017 and Sednaoui et al. 2017); default: \
-                 the calibration's last amplitude, or 2.3 um, the literature default's validity limit",
+        source: "typical plates: 27 to 60 kHz resonance, 1 to 2.3 µm amplitude (haptex's physics notes, \
+                 'Ultrasonic friction reduction', from Wiertlewski et al. 2016, Vezzoli et al. 2017 and Sednaoui et al. 2017); default: \
+                 the calibration's last amplitude, or 2.3 µm, the literature default's validity limit",
         accepted: accepted(ranges::A_MAX_UM),
     },
     Explanation {
@@ -198,7 +198,7 @@ pub const EXPLANATIONS: &[Explanation] = &[
         meaning: "weighted strategy: the cost of the vibration leaving its bias level against the voltage's share \
                   of U_max; 0 is split, large approaches bias",
         typical: None,
-        source: "haptex's cost (physics.md, 'The combined display'); default 1 weighs full voltage against the \
+        source: "haptex's cost (physics notes, 'The combined display'); default 1 weighs full voltage against the \
                  vibration fully off; no typical range sourced (a design choice, not a measured quantity)",
         accepted: accepted(ranges::STRATEGY_WEIGHT),
     },
@@ -209,7 +209,7 @@ pub const EXPLANATIONS: &[Explanation] = &[
         unit: "mm/s",
         meaning: "speed of the finger along the profile, which turns U(x) into U(t) for the stroke and audio",
         typical: typical(10.0, 200.0),
-        source: "exploration velocity 10 to 200 mm/s (physics.md section 2)",
+        source: "exploration velocity 10 to 200 mm/s (haptex's physics notes, section 2)",
         accepted: accepted(ranges::VELOCITY_MM_S),
     },
     Explanation {
@@ -219,7 +219,7 @@ pub const EXPLANATIONS: &[Explanation] = &[
         unit: "Hz",
         meaning: "frequency of the sine carrier whose RMS amplitude is U; the force ripples at twice it",
         typical: None,
-        source: "no typical range sourced (the paper and physics.md give none)",
+        source: "no typical range sourced (the paper and haptex's physics notes give none)",
         accepted: accepted(ranges::CARRIER_HZ),
     },
 ];
