@@ -886,7 +886,14 @@ pub(crate) fn read_gray_grid(
             (png::ColorType::Grayscale, png::BitDepth::Sixteen) => Ok(16),
             (png::ColorType::Grayscale, other) => Err(format!("bit depth {other:?}: expected 8 or 16 bit grayscale")),
             (color, _) => {
-                Err(format!("color type {color:?}: the image must be grayscale (8 or 16 bit), convert it first"))
+                let what = match color {
+                    png::ColorType::Rgb => "an RGB colour image",
+                    png::ColorType::Rgba => "an RGB colour image with transparency",
+                    png::ColorType::Indexed => "a palette (indexed colour) image",
+                    png::ColorType::GrayscaleAlpha => "a grayscale image with transparency",
+                    png::ColorType::Grayscale => "a grayscale image",
+                };
+                Err(format!("{what}: the image must be plain grayscale (8 or 16 bit), convert it first"))
             }
         })?;
     let grid = MapGrid {
