@@ -13,9 +13,10 @@
 //!    `format` (400, for a route with [`Route::FORMATS`]), then any
 //!    parameter left (400 naming it), unless the handler reads the rest
 //!    ([`Rest::Handler`]);
-//! 2. the body's kind by `Content-Type` (415, field `content-type`);
-//! 3. what the route needs of the server ([`Route::available`]: 404 when
-//!    the server has no FE database, for the template routes);
+//! 2. what the route needs of the server ([`Route::available`]: 404 when
+//!    the server has no FE database, for the template routes), right
+//!    after the query, as the routes of the texture library check theirs;
+//! 3. the body's kind by `Content-Type` (415, field `content-type`);
 //! 4. the body: empty (400, field `body`), over
 //!    [`Limits::max_body_bytes`] (413, field `body`);
 //! 5. the slot of its work ([`Slot`]): a heavy slot for a heavy route or a
@@ -55,7 +56,7 @@ pub(crate) trait Route: 'static {
     /// The slot of the route's work.
     const WORK: Work = Work::BySize;
 
-    /// What the route needs of the server, checked after the body's kind.
+    /// What the route needs of the server, checked after the query.
     fn available(_state: &AppState) -> Result<(), ApiError> {
         Ok(())
     }
@@ -107,8 +108,8 @@ impl<R: Route> FromRequest<AppState> for Preamble<R> {
         let kind = body_kind(request.headers(), R::BODY);
         let body = Bytes::from_request(request, state).await;
         let (query, format) = query?;
-        let kind = kind?;
         R::available(state)?;
+        let kind = kind?;
         let bytes = body_bytes(body, state.limits().max_body_bytes)?;
         let slot = match R::WORK {
             Work::BySize => Slot::for_input(state, bytes.len()).await?,
