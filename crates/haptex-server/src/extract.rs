@@ -26,13 +26,18 @@
 //! The body is read (up to the limit) before these checks, as axum's body
 //! extractors read it before a handler runs.
 //!
+//! [`NoQuery`] is the preamble of a route without a body and without
+//! parameters (400 naming the first parameter given), and [`Query`] the
+//! query of a route that takes parameters of its own.
+//!
 //! [`Limits::max_body_bytes`]: crate::Limits::max_body_bytes
 //! [`Limits::heavy_body_bytes`]: crate::Limits::heavy_body_bytes
 
 use std::marker::PhantomData;
 
 use axum::body::Bytes;
-use axum::extract::{FromRequest, Request};
+use axum::extract::{FromRequest, FromRequestParts, Request};
+use axum::http::request::Parts;
 
 use crate::error::ApiError;
 use crate::input::{BodyKind, Query, body_bytes, body_kind};
@@ -128,4 +133,26 @@ fn query<R: Route>(raw: Option<&str>) -> Result<(Query, &'static str), ApiError>
         std::mem::take(&mut query).finish()?;
     }
     Ok((query, format))
+}
+
+/// A route that takes no query parameter: 400 naming the first given.
+pub(crate) struct NoQuery;
+
+impl<S: Send + Sync> FromRequestParts<S> for NoQuery {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(parts: &mut Parts, state: &S) -> Result<Self, ApiError> {
+        Query::from_request_parts(parts, state).await?.finish()?;
+        Ok(Self)
+    }
+}
+
+/// The query string as parameters (400 when malformed or a parameter is
+/// given twice); the handler takes its own and refuses the rest.
+impl<S: Send + Sync> FromRequestParts<S> for Query {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(parts: &mut Parts, _state: &S) -> Result<Self, ApiError> {
+        Query::parse(parts.uri.query())
+    }
 }
