@@ -19,6 +19,8 @@
 //! - [`params`]: device parameters with the paper's defaults and their
 //!   accepted ranges; [`fields`]: the ranges of every other number;
 //! - [`input`]: request bodies (JSON or `text/csv`) and query strings;
+//!   `extract`: the preamble every handler starts from (query, body kind,
+//!   bounded body, the slot of its work) as axum extractors;
 //! - [`display`]: the friction display a request designs for
 //!   (electrovibration, ultrasonic, combined) and its checks;
 //! - [`state`]: shared state ([`AppState`]: the FE database, the texture
@@ -48,6 +50,7 @@ pub mod device_file;
 pub mod display;
 pub mod error;
 pub mod explain;
+mod extract;
 pub mod fields;
 pub mod guard;
 pub mod input;

@@ -4,7 +4,7 @@
 //! bodies, answer `/api/health` and write answers. Everything that costs
 //! CPU in proportion to the input (parsing a JSON or CSV body, checking a
 //! profile, the voltage mapping, a CAE prediction, rendering, building
-//! and serializing the answer) runs through [`cpu`], [`heavy`] or
+//! and serializing the answer) runs through [`Slot::run`], [`cpu`] or
 //! [`blocking`] on tokio's blocking threads, so that:
 //!
 //! - a worker is never held by one request: `/api/health` answers while
@@ -42,6 +42,36 @@ use tokio::task::JoinHandle;
 use crate::error::ApiError;
 use crate::state::AppState;
 
+/// The slot of a request's work, taken before the work starts: a heavy
+/// slot ([`heavy_slot`]) or none; [`Slot::run`] runs the work in it.
+#[derive(Debug)]
+pub(crate) struct Slot(Option<OwnedSemaphorePermit>);
+
+impl Slot {
+    /// The slot of work on an input of `input_bytes`: heavy if the input
+    /// is over [`Limits::heavy_body_bytes`].
+    ///
+    /// [`Limits::heavy_body_bytes`]: crate::Limits::heavy_body_bytes
+    pub async fn for_input(state: &AppState, input_bytes: usize) -> Result<Self, ApiError> {
+        if input_bytes > state.limits().heavy_body_bytes { Self::heavy(state).await } else { Ok(Self(None)) }
+    }
+
+    /// A heavy slot, whatever the input's size.
+    pub async fn heavy(state: &AppState) -> Result<Self, ApiError> {
+        Ok(Self(Some(heavy_slot(state).await?)))
+    }
+
+    /// Runs `work` on a blocking thread ([`blocking`]), holding the slot
+    /// until the work ends.
+    pub async fn run<T, F>(self, work: F) -> Result<T, ApiError>
+    where
+        T: Send + 'static,
+        F: FnOnce() -> Result<T, ApiError> + Send + 'static,
+    {
+        blocking(self.0.into_iter().collect(), work).await
+    }
+}
+
 /// Runs `work` for a request whose input is `input_bytes` long: on a
 /// blocking thread, in a heavy slot if the input is large.
 pub(crate) async fn cpu<T, F>(state: &AppState, input_bytes: usize, work: F) -> Result<T, ApiError>
@@ -49,18 +79,7 @@ where
     T: Send + 'static,
     F: FnOnce() -> Result<T, ApiError> + Send + 'static,
 {
-    if input_bytes > state.limits().heavy_body_bytes { heavy(state, work).await } else { blocking(vec![], work).await }
-}
-
-/// Runs heavy `work` (whatever its input's size) on a blocking thread, in
-/// a heavy slot ([`heavy_slot`]).
-pub(crate) async fn heavy<T, F>(state: &AppState, work: F) -> Result<T, ApiError>
-where
-    T: Send + 'static,
-    F: FnOnce() -> Result<T, ApiError> + Send + 'static,
-{
-    let permit = heavy_slot(state).await?;
-    blocking(vec![permit], work).await
+    Slot::for_input(state, input_bytes).await?.run(work).await
 }
 
 /// One of the [`Limits::concurrent_heavy`] slots of heavy work: at once

@@ -21,10 +21,6 @@
 //! constant.
 
 use axum::Json;
-use axum::body::Bytes;
-use axum::extract::rejection::BytesRejection;
-use axum::extract::{RawQuery, State};
-use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 use haptex_core::calibration::device_file::DeviceFile;
 use haptex_core::calibration::force_fit::{carrier_name, equivalent_k_mm2_per_n};
@@ -36,10 +32,9 @@ use serde::Deserialize;
 use serde_json::{Value, json};
 
 use crate::error::{ApiError, quote};
-use crate::input::{BodyKind, Query, body_bytes, body_kind, parse_json, parse_number};
+use crate::extract::{Preamble, Rest, Route, Work};
+use crate::input::{BodyKind, parse_json, parse_number};
 use crate::params::{check_range, spec};
-use crate::state::AppState;
-use crate::work;
 
 /// The field of the measurements (JSON) and the name errors use when none
 /// is given.
@@ -134,16 +129,19 @@ fn options(
     Ok(Options { name, u_max_v, settings: Settings { stack: s, ultrasonic } })
 }
 
-pub async fn post(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    RawQuery(raw_query): RawQuery,
-    body: Result<Bytes, BytesRejection>,
-) -> Result<Response, ApiError> {
-    let mut query = Query::parse(raw_query.as_deref())?;
-    let kind = body_kind(&headers, &[BodyKind::Csv, BodyKind::Json])?;
-    let bytes = body_bytes(body, state.limits().max_body_bytes)?;
-    work::heavy(&state, move || {
+/// The route: a measurements CSV with its options in the query (which the
+/// handler reads), or a JSON body and no query; heavy work.
+pub(crate) struct Calibrate;
+
+impl Route for Calibrate {
+    const BODY: &'static [BodyKind] = &[BodyKind::Csv, BodyKind::Json];
+    const REST: Rest = Rest::Handler;
+    const WORK: Work = Work::Heavy;
+}
+
+pub async fn post(call: Preamble<Calibrate>) -> Result<Response, ApiError> {
+    let Preamble { mut query, kind, bytes, slot, .. } = call;
+    slot.run(move || {
         let (text, options) = match kind {
             BodyKind::Json => {
                 query.finish()?;

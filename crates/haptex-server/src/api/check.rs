@@ -91,10 +91,7 @@
 use std::panic::AssertUnwindSafe;
 use std::time::Instant;
 
-use axum::body::Bytes;
-use axum::extract::rejection::BytesRejection;
-use axum::extract::{RawQuery, State};
-use axum::http::{HeaderMap, StatusCode};
+use axum::http::StatusCode;
 use axum::response::Response;
 use haptex_core::electrovibration::{Method, VoltageProfile};
 use haptex_core::num::Num;
@@ -110,11 +107,11 @@ use serde_json::{Value, json};
 
 use crate::display::{DisplayDesign, DisplayName, DisplayRequest, StrategyName};
 use crate::error::ApiError;
+use crate::extract::{Preamble, Route};
 use crate::fields::{self, CHECK_VELOCITY_MM_S, LOAD_N_PER_MM, MAX_RUNS, STEP_MM, TOLERANCE};
-use crate::input::{BodyKind, Pairs, ProfileJson, Query, body_bytes, body_kind, check_points, parse_json};
+use crate::input::{BodyKind, Pairs, ProfileJson, check_points, parse_json};
 use crate::lines::{self, Lines};
 use crate::params::DeviceRequest;
-use crate::state::AppState;
 use crate::work;
 
 /// The default step, mm (`haptex check`'s).
@@ -172,39 +169,28 @@ struct CheckBody {
     ultrasonic_calibration: Option<String>,
 }
 
-pub async fn check(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    RawQuery(raw_query): RawQuery,
-    body: Result<Bytes, BytesRejection>,
-) -> Result<Response, ApiError> {
-    start(Mode::Check, state, headers, raw_query, body).await
+/// The routes: a JSON body, no query.
+pub(crate) struct Checked;
+
+impl Route for Checked {
+    const BODY: &'static [BodyKind] = &[BodyKind::Json];
 }
 
-pub async fn compensate(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    RawQuery(raw_query): RawQuery,
-    body: Result<Bytes, BytesRejection>,
-) -> Result<Response, ApiError> {
-    start(Mode::Compensate, state, headers, raw_query, body).await
+pub async fn check(call: Preamble<Checked>) -> Result<Response, ApiError> {
+    start(Mode::Check, call).await
 }
 
-/// Checks the request, takes an FE slot and starts the work, whose lines
+pub async fn compensate(call: Preamble<Checked>) -> Result<Response, ApiError> {
+    start(Mode::Compensate, call).await
+}
+
+/// Checks the body, takes an FE slot and starts the work, whose lines
 /// the answer streams.
-async fn start(
-    mode: Mode,
-    state: AppState,
-    headers: HeaderMap,
-    raw_query: Option<String>,
-    body: Result<Bytes, BytesRejection>,
-) -> Result<Response, ApiError> {
+async fn start(mode: Mode, call: Preamble<Checked>) -> Result<Response, ApiError> {
+    let Preamble { state, bytes, slot, .. } = call;
     let limits = state.limits().clone();
-    Query::parse(raw_query.as_deref())?.finish()?;
-    body_kind(&headers, &[BodyKind::Json])?;
-    let bytes = body_bytes(body, limits.max_body_bytes)?;
     let base = state.default_device().device;
-    let job = work::cpu(&state, bytes.len(), move || Job::parse(mode, &bytes, &limits, &base)).await?;
+    let job = slot.run(move || Job::parse(mode, &bytes, &limits, &base)).await?;
     let permit = work::fe_slot(&state).await?;
     let heavy = work::heavy_slot(&state).await?;
     let (mut lines, response) = lines::stream();

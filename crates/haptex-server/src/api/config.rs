@@ -5,16 +5,15 @@
 //! the defaults of the check on the finger model and the limits.
 
 use axum::Json;
-use axum::extract::{RawQuery, State};
+use axum::extract::State;
 use haptex_core::signal::{Carrier, RenderSettings};
 use serde_json::{Value, json};
 
 use crate::error::ApiError;
-use crate::input::Query;
+use crate::extract::NoQuery;
 use crate::state::AppState;
 
-pub async fn get(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -> Result<Json<Value>, ApiError> {
-    Query::parse(raw_query.as_deref())?.finish()?;
+pub async fn get(State(state): State<AppState>, _: NoQuery) -> Result<Json<Value>, ApiError> {
     let play = RenderSettings::DEFAULT;
     Ok(Json(json!({
         "version": env!("CARGO_PKG_VERSION"),

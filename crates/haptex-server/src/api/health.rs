@@ -1,15 +1,14 @@
 //! `GET /api/health`: the server is up.
 
 use axum::Json;
-use axum::extract::{RawQuery, State};
+use axum::extract::State;
 use serde_json::{Value, json};
 
 use crate::error::ApiError;
-use crate::input::Query;
+use crate::extract::NoQuery;
 use crate::state::AppState;
 
-pub async fn get(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -> Result<Json<Value>, ApiError> {
-    Query::parse(raw_query.as_deref())?.finish()?;
+pub async fn get(State(state): State<AppState>, _: NoQuery) -> Result<Json<Value>, ApiError> {
     Ok(Json(json!({
         "status": "ok",
         "version": env!("CARGO_PKG_VERSION"),

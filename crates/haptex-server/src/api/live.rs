@@ -10,19 +10,18 @@
 //! are not browsers, are let in: the host check of every request applies).
 
 use axum::Json;
+use axum::extract::State;
 use axum::extract::ws::WebSocketUpgrade;
 use axum::extract::ws::rejection::WebSocketUpgradeRejection;
-use axum::extract::{RawQuery, State};
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde_json::{Value, json};
 
 use crate::error::{ApiError, quote};
-use crate::input::Query;
+use crate::extract::NoQuery;
 use crate::state::AppState;
 
-pub async fn get(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -> Result<Json<Value>, ApiError> {
-    Query::parse(raw_query.as_deref())?.finish()?;
+pub async fn get(State(state): State<AppState>, _: NoQuery) -> Result<Json<Value>, ApiError> {
     Ok(Json(match state.live() {
         Some(hub) => json!({ "available": true, "output": hub.info() }),
         None => json!({ "available": false, "output": null }),
@@ -32,10 +31,9 @@ pub async fn get(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -
 pub async fn socket(
     State(state): State<AppState>,
     headers: HeaderMap,
-    RawQuery(raw_query): RawQuery,
+    _: NoQuery,
     upgrade: Result<WebSocketUpgrade, WebSocketUpgradeRejection>,
 ) -> Result<Response, ApiError> {
-    Query::parse(raw_query.as_deref())?.finish()?;
     let hub = state.live().ok_or_else(|| {
         ApiError::not_found("this server has no live output: start it with haptex serve --live (docs/live.md)", None)
     })?;

@@ -25,10 +25,6 @@
 use std::collections::BTreeMap;
 
 use axum::Json;
-use axum::body::Bytes;
-use axum::extract::rejection::BytesRejection;
-use axum::extract::{RawQuery, State};
-use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 use haptex_core::electrovibration::Method;
 use haptex_core::map::{FrictionMap, GrayMapping, MapError, MapGrid, VoltageMap, png_size};
@@ -37,10 +33,9 @@ use haptex_core::trajectory::TrajectoryError;
 use serde::{Deserialize, Serialize};
 
 use crate::error::ApiError;
-use crate::input::{BodyKind, Pairs, Query, body_bytes, body_kind, check_points, parse_json};
+use crate::extract::{JSON_OR_CSV, Preamble, Route, Work};
+use crate::input::{BodyKind, Pairs, check_points, parse_json};
 use crate::params::DeviceRequest;
-use crate::state::AppState;
-use crate::work;
 
 /// The name errors about the image give as their field.
 const IMAGE: &str = "image_png_base64";
@@ -124,19 +119,29 @@ struct PathAnswer<'a> {
     outside: usize,
 }
 
+/// `POST /api/map`: a JSON body, no query, heavy work.
+pub(crate) struct Map;
+
+impl Route for Map {
+    const BODY: &'static [BodyKind] = &[BodyKind::Json];
+    const WORK: Work = Work::Heavy;
+}
+
+/// `POST /api/map/path`: as [`Map`], answered as JSON or CSV.
+pub(crate) struct MapPath;
+
+impl Route for MapPath {
+    const BODY: &'static [BodyKind] = &[BodyKind::Json];
+    const FORMATS: &'static [&'static str] = JSON_OR_CSV;
+    const WORK: Work = Work::Heavy;
+}
+
 /// `POST /api/map`.
-pub async fn post(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    RawQuery(raw_query): RawQuery,
-    body: Result<Bytes, BytesRejection>,
-) -> Result<Response, ApiError> {
+pub async fn post(call: Preamble<Map>) -> Result<Response, ApiError> {
+    let Preamble { state, bytes, slot, .. } = call;
     let limits = state.limits().clone();
     let base = state.default_device().device;
-    Query::parse(raw_query.as_deref())?.finish()?;
-    body_kind(&headers, &[BodyKind::Json])?;
-    let bytes = body_bytes(body, limits.max_body_bytes)?;
-    work::heavy(&state, move || {
+    slot.run(move || {
         let body: MapBody = parse_json(&bytes)?;
         if body.path.is_some() {
             return Err(ApiError::bad_request("a path is sampled by POST /api/map/path", Some("path")));
@@ -160,20 +165,11 @@ pub async fn post(
 }
 
 /// `POST /api/map/path`.
-pub async fn path(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    RawQuery(raw_query): RawQuery,
-    body: Result<Bytes, BytesRejection>,
-) -> Result<Response, ApiError> {
+pub async fn path(call: Preamble<MapPath>) -> Result<Response, ApiError> {
+    let Preamble { state, format, bytes, slot, .. } = call;
     let limits = state.limits().clone();
     let base = state.default_device().device;
-    let mut query = Query::parse(raw_query.as_deref())?;
-    let format = query.take_format(&["json", "csv"])?;
-    query.finish()?;
-    body_kind(&headers, &[BodyKind::Json])?;
-    let bytes = body_bytes(body, limits.max_body_bytes)?;
-    work::heavy(&state, move || {
+    slot.run(move || {
         let mut body: MapBody = parse_json(&bytes)?;
         let path = body
             .path

@@ -7,17 +7,17 @@
 
 use axum::Json;
 use axum::extract::rejection::PathRejection;
-use axum::extract::{Path, RawQuery, State};
+use axum::extract::{Path, State};
 use axum::response::{IntoResponse, Response};
 use haptex_core::library::SampledProfile;
 use serde_json::{Value, json};
 
 use crate::error::ApiError;
+use crate::extract::NoQuery;
 use crate::input::Query;
 use crate::state::AppState;
 
-pub async fn list(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -> Result<Json<Value>, ApiError> {
-    Query::parse(raw_query.as_deref())?.finish()?;
+pub async fn list(State(state): State<AppState>, _: NoQuery) -> Result<Json<Value>, ApiError> {
     let pool = state.library()?;
     let file = pool.path().file_name().map(|n| n.to_string_lossy().into_owned());
     let materials = pool.with(|library| library.materials().map_err(ApiError::library)).await?;
@@ -27,10 +27,10 @@ pub async fn list(State(state): State<AppState>, RawQuery(raw_query): RawQuery) 
 pub async fn sample(
     State(state): State<AppState>,
     name: Result<Path<String>, PathRejection>,
-    RawQuery(raw_query): RawQuery,
+    query: Result<Query, ApiError>,
 ) -> Result<Response, ApiError> {
     let Path(name) = name.map_err(|e| ApiError::bad_request(e.body_text(), Some("name")))?;
-    let mut query = Query::parse(raw_query.as_deref())?;
+    let mut query = query?;
     let seed = query.take_u64("seed")?;
     let format = query.take_format(&["json", "csv"])?;
     query.finish()?;

@@ -23,10 +23,6 @@
 //! column and the stroke's file name), the device's fields, `gain` ...
 
 use axum::Json;
-use axum::body::Bytes;
-use axum::extract::rejection::BytesRejection;
-use axum::extract::{RawQuery, State};
-use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 use haptex_core::ilc::{self, Design, DisplayModel, IlcError, Kept, Settings, Stroke};
 use haptex_core::io::{Table, TableError};
@@ -38,9 +34,8 @@ use serde_json::{Value, json};
 
 use crate::display::{DisplayName, DisplayRequest, StrategyName};
 use crate::error::ApiError;
-use crate::input::{BodyKind, Pairs, Query, body_bytes, body_kind, check_points, parse_json};
-use crate::state::AppState;
-use crate::work;
+use crate::extract::{Preamble, Route};
+use crate::input::{BodyKind, Pairs, check_points, parse_json};
 
 /// Most strokes in one request.
 pub const MAX_STROKES: usize = 100;
@@ -86,17 +81,17 @@ struct MeasuredBody {
     max_iterations: Option<usize>,
 }
 
-pub async fn post(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    RawQuery(raw_query): RawQuery,
-    body: Result<Bytes, BytesRejection>,
-) -> Result<Response, ApiError> {
-    Query::parse(raw_query.as_deref())?.finish()?;
-    body_kind(&headers, &[BodyKind::Json])?;
+/// The route: a JSON body, no query.
+pub(crate) struct Measured;
+
+impl Route for Measured {
+    const BODY: &'static [BodyKind] = &[BodyKind::Json];
+}
+
+pub async fn post(call: Preamble<Measured>) -> Result<Response, ApiError> {
+    let Preamble { state, bytes, slot, .. } = call;
     let max_points = state.limits().max_points;
-    let bytes = body_bytes(body, state.limits().max_body_bytes)?;
-    work::cpu(&state, bytes.len(), move || {
+    slot.run(move || {
         let body: MeasuredBody = parse_json(&bytes)?;
         Ok(Json(iterate(body, max_points)?).into_response())
     })

@@ -21,19 +21,32 @@ pub mod voltage;
 use std::sync::Arc;
 
 use axum::body::Bytes;
-use axum::extract::rejection::BytesRejection;
-use axum::http::{HeaderMap, HeaderValue, header};
+use axum::http::{HeaderValue, header};
 use axum::response::{IntoResponse, Response};
 use haptex_core::database::TemplateModel;
 
 use crate::ApiError;
-use crate::input::{BodyKind, Query, body_bytes, body_kind};
+use crate::extract::{JSON_OR_CSV, Preamble, Route};
+use crate::input::BodyKind;
 use crate::state::AppState;
 use crate::templates::{TemplateQuery, TemplateSet};
 
-/// What the template routes (`predict`, `simulate`) start from: the
-/// answer format (`?format=json|csv`, nothing else in the query) and the
-/// JSON body checked against the server's templates.
+/// The template routes (`predict`, `simulate`): the answer format
+/// (`?format=json|csv`, nothing else in the query), a JSON body, and a
+/// server with an FE database.
+pub(crate) struct Template;
+
+impl Route for Template {
+    const BODY: &'static [BodyKind] = &[BodyKind::Json];
+    const FORMATS: &'static [&'static str] = JSON_OR_CSV;
+
+    fn available(state: &AppState) -> Result<(), ApiError> {
+        state.templates().map(drop)
+    }
+}
+
+/// What the template routes start from: the answer format and the JSON
+/// body checked against the server's templates.
 pub(crate) struct TemplateCall {
     pub format: &'static str,
     pub set: Arc<TemplateSet>,
@@ -45,23 +58,14 @@ pub(crate) struct TemplateCall {
 pub(crate) struct TemplateBody {
     format: &'static str,
     set: Arc<TemplateSet>,
-    pub bytes: Bytes,
+    bytes: Bytes,
 }
 
 impl TemplateCall {
-    pub fn start(
-        state: &AppState,
-        headers: &HeaderMap,
-        raw_query: Option<&str>,
-        body: Result<Bytes, BytesRejection>,
-    ) -> Result<TemplateBody, ApiError> {
-        let mut query = Query::parse(raw_query)?;
-        let format = query.take_format(&["json", "csv"])?;
-        query.finish()?;
-        body_kind(headers, &[BodyKind::Json])?;
-        let set = Arc::clone(state.templates()?);
-        let bytes = body_bytes(body, state.limits().max_body_bytes)?;
-        Ok(TemplateBody { format, set, bytes })
+    /// The body of a checked request, with the server's templates.
+    pub fn start(call: &Preamble<Template>) -> Result<TemplateBody, ApiError> {
+        let set = Arc::clone(call.state.templates()?);
+        Ok(TemplateBody { format: call.format, set, bytes: call.bytes.clone() })
     }
 
     /// The requested template's model (present: the request was checked

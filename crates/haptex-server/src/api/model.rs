@@ -7,19 +7,17 @@
 //! leave-one-out errors are `GET /api/templates`'.
 
 use axum::Json;
-use axum::extract::RawQuery;
 use haptex_core::electrovibration::Device;
 use haptex_fem::finger::{DEFAULT_MODEL_TOML, FingerModel};
 use serde_json::{Value, json};
 
 use crate::error::ApiError;
-use crate::input::Query;
+use crate::extract::NoQuery;
 
 /// The file the shipped finger model is read from.
 pub const FINGER_FILE: &str = "data/finger/finger-2d.toml";
 
-pub async fn get(RawQuery(raw_query): RawQuery) -> Result<Json<Value>, ApiError> {
-    Query::parse(raw_query.as_deref())?.finish()?;
+pub async fn get(_: NoQuery) -> Result<Json<Value>, ApiError> {
     let paper = Device::PAPER;
     // Fe/Fn per V^2 with the linear contact law (Fn cancels): eq. (8) is
     // then U = sqrt((mu_RS/mu_HD - 1) / ratio).

@@ -2,17 +2,15 @@
 //! (hand-written, `src/openapi.json`; a test checks it lists exactly the
 //! routes of [`crate::routes::table`]).
 
-use axum::extract::RawQuery;
 use axum::http::{HeaderValue, header};
 use axum::response::IntoResponse;
 
 use crate::error::ApiError;
-use crate::input::Query;
+use crate::extract::NoQuery;
 
 /// The OpenAPI document.
 pub const OPENAPI_JSON: &str = include_str!("../openapi.json");
 
-pub async fn get(RawQuery(raw_query): RawQuery) -> Result<impl IntoResponse, ApiError> {
-    Query::parse(raw_query.as_deref())?.finish()?;
+pub async fn get(_: NoQuery) -> Result<impl IntoResponse, ApiError> {
     Ok(([(header::CONTENT_TYPE, HeaderValue::from_static("application/json"))], OPENAPI_JSON))
 }

@@ -21,10 +21,7 @@
 //! chunk holds both channels' scales, as the command line's file does).
 
 use axum::Json;
-use axum::body::Bytes;
-use axum::extract::rejection::BytesRejection;
-use axum::extract::{RawQuery, State};
-use axum::http::{HeaderMap, HeaderName, HeaderValue, header};
+use axum::http::{HeaderName, HeaderValue, header};
 use axum::response::{IntoResponse, Response};
 use haptex_core::num::Num;
 use haptex_core::profile::ProfileError;
@@ -37,10 +34,10 @@ use serde::Deserialize;
 use serde_json::json;
 
 use crate::error::ApiError;
+use crate::extract::{Preamble, Route};
 use crate::fields;
-use crate::input::{BodyKind, Query, TrajectoryJson, body_bytes, body_kind, check_points, parse_json};
+use crate::input::{BodyKind, TrajectoryJson, check_points, parse_json};
 use crate::params::{check_range, spec};
-use crate::state::AppState;
 use crate::work;
 use haptex_core::ranges;
 
@@ -133,17 +130,17 @@ enum PlayFormat {
     Sidecar,
 }
 
-pub async fn post(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    RawQuery(raw_query): RawQuery,
-    body: Result<Bytes, BytesRejection>,
-) -> Result<Response, ApiError> {
+/// The route: a JSON body (the answer's format is in it), no query.
+pub(crate) struct Play;
+
+impl Route for Play {
+    const BODY: &'static [BodyKind] = &[BodyKind::Json];
+}
+
+pub async fn post(call: Preamble<Play>) -> Result<Response, ApiError> {
+    let Preamble { state, bytes, slot, .. } = call;
     let limits = state.limits().clone();
-    Query::parse(raw_query.as_deref())?.finish()?;
-    body_kind(&headers, &[BodyKind::Json])?;
-    let bytes = body_bytes(body, limits.max_body_bytes)?;
-    let mut job = work::cpu(&state, bytes.len(), move || Job::parse(&bytes, &limits)).await?;
+    let mut job = slot.run(move || Job::parse(&bytes, &limits)).await?;
     if let Some(design) = job.design.take() {
         // The recipe's part the request cannot state: the data this server serves.
         job.design = Some(json!({

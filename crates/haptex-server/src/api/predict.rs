@@ -19,29 +19,20 @@
 //! database's SHA-256 in a last comment line (the download's recipe).
 
 use axum::Json;
-use axum::body::Bytes;
-use axum::extract::rejection::BytesRejection;
-use axum::extract::{RawQuery, State};
-use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 use haptex_core::database::Prediction;
 use haptex_core::profile::FrictionProfile;
 use serde_json::json;
 
 use crate::error::ApiError;
-use crate::state::AppState;
+use crate::extract::Preamble;
 use crate::templates::{TemplateQuery, TemplateSet};
-use crate::work;
 
-pub async fn post(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    RawQuery(raw_query): RawQuery,
-    body: Result<Bytes, BytesRejection>,
-) -> Result<Response, ApiError> {
-    let body = super::TemplateCall::start(&state, &headers, raw_query.as_deref(), body)?;
+pub async fn post(call: Preamble<super::Template>) -> Result<Response, ApiError> {
+    let body = super::TemplateCall::start(&call)?;
+    let Preamble { state, slot, .. } = call;
     let database_sha256 = state.database_sha256().map(str::to_owned);
-    work::cpu(&state, body.bytes.len(), move || {
+    slot.run(move || {
         let call = body.parse()?;
         let (format, set, request) = (call.format, &call.set, call.request);
         let TemplateQuery { template, x0_mm: x0, query } = request;

@@ -5,35 +5,29 @@
 //! as a CSV download.
 
 use axum::Json;
-use axum::body::Bytes;
-use axum::extract::rejection::BytesRejection;
-use axum::extract::{RawQuery, State};
-use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 use haptex_core::profile::FrictionProfile;
 use serde_json::json;
 
 use crate::error::ApiError;
-use crate::input::{BodyKind, ProfileJson, Query, body_bytes, body_kind, parse_json, profile_from_csv};
-use crate::state::AppState;
-use crate::work;
+use crate::extract::{JSON_OR_CSV, Preamble, Route};
+use crate::input::{BodyKind, ProfileJson, parse_json, profile_from_csv};
 
-pub async fn post(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    RawQuery(raw_query): RawQuery,
-    body: Result<Bytes, BytesRejection>,
-) -> Result<Response, ApiError> {
-    let limits = state.limits().clone();
-    let mut query = Query::parse(raw_query.as_deref())?;
-    let format = query.take_format(&["json", "csv"])?;
-    query.finish()?;
-    let kind = body_kind(&headers, &[BodyKind::Json, BodyKind::Csv])?;
-    let bytes = body_bytes(body, limits.max_body_bytes)?;
-    work::cpu(&state, bytes.len(), move || {
+/// The route: a JSON or CSV profile, answered as JSON or CSV.
+pub(crate) struct Profile;
+
+impl Route for Profile {
+    const BODY: &'static [BodyKind] = &[BodyKind::Json, BodyKind::Csv];
+    const FORMATS: &'static [&'static str] = JSON_OR_CSV;
+}
+
+pub async fn post(call: Preamble<Profile>) -> Result<Response, ApiError> {
+    let Preamble { state, format, kind, bytes, slot, .. } = call;
+    let max_points = state.limits().max_points;
+    slot.run(move || {
         let profile = match kind {
-            BodyKind::Json => parse_json::<ProfileJson>(&bytes)?.into_profile("", limits.max_points)?,
-            BodyKind::Csv => profile_from_csv(&bytes, limits.max_points)?,
+            BodyKind::Json => parse_json::<ProfileJson>(&bytes)?.into_profile("", max_points)?,
+            BodyKind::Csv => profile_from_csv(&bytes, max_points)?,
         };
         Ok(match format {
             "csv" => {

@@ -48,7 +48,7 @@ use std::sync::Arc;
 
 use axum::Json;
 use axum::body::Body;
-use axum::extract::{RawQuery, State};
+use axum::extract::State;
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use haptex_core::library::{Added, LibraryError};
@@ -57,7 +57,7 @@ use haptex_core::recording::{Place, ProcessedStroke, ProcessingConfig, Recording
 use serde_json::{Value, json};
 
 use crate::error::{ApiError, quote};
-use crate::input::Query;
+use crate::extract::NoQuery;
 use crate::state::{AppState, Limits};
 use crate::work;
 
@@ -73,10 +73,9 @@ const FILES: &str = "files";
 pub async fn post(
     State(state): State<AppState>,
     headers: HeaderMap,
-    RawQuery(raw_query): RawQuery,
+    _: NoQuery,
     body: Body,
 ) -> Result<Response, ApiError> {
-    Query::parse(raw_query.as_deref())?.finish()?;
     let pool = Arc::clone(state.library()?);
     if !pool.writable() {
         return Err(ApiError::new(

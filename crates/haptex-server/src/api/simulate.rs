@@ -19,10 +19,7 @@
 use std::time::Instant;
 
 use axum::Json;
-use axum::body::Bytes;
-use axum::extract::rejection::BytesRejection;
-use axum::extract::{RawQuery, State};
-use axum::http::{HeaderMap, StatusCode};
+use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use haptex_core::num::Num;
 use haptex_core::profile::FrictionProfile;
@@ -30,39 +27,14 @@ use haptex_fem::sweep::{DatabaseSpec, Run};
 use serde_json::json;
 
 use crate::error::ApiError;
-use crate::state::AppState;
+use crate::extract::Preamble;
 use crate::templates::{TemplateQuery, TemplateSet};
 use crate::work;
 
-pub async fn post(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    RawQuery(raw_query): RawQuery,
-    body: Result<Bytes, BytesRejection>,
-) -> Result<Response, ApiError> {
-    let body = super::TemplateCall::start(&state, &headers, raw_query.as_deref(), body)?;
-    let call = work::cpu(&state, body.bytes.len(), move || {
-        let call = body.parse()?;
-        for (range, value) in TemplateSet::ranges(call.model()?).iter().zip(call.request.query) {
-            if !range.simulates(value) {
-                return Err(ApiError::bad_request(
-                    format!(
-                        "{} = {} {}: the FE model runs on demand for {} .. {} {} (from the database's smallest \
-                         value, which the mesh resolves, to the slider's end); use POST /api/predict beyond",
-                        range.name,
-                        Num(value),
-                        range.unit,
-                        Num(range.simulate[0]),
-                        Num(range.simulate[1]),
-                        range.unit
-                    ),
-                    Some(range.name),
-                ));
-            }
-        }
-        Ok(call)
-    })
-    .await?;
+pub async fn post(call: Preamble<super::Template>) -> Result<Response, ApiError> {
+    let body = super::TemplateCall::start(&call)?;
+    let Preamble { state, slot, .. } = call;
+    let call = slot.run(move || simulable(body.parse()?)).await?;
     let spec = std::sync::Arc::clone(
         call.set.fe().map_err(|why| ApiError::not_found(format!("FE simulation is not available: {why}"), None))?,
     );
@@ -70,6 +42,29 @@ pub async fn post(
     let permit = work::fe_slot(&state).await?;
     let heavy = work::heavy_slot(&state).await?;
     work::blocking(vec![permit, heavy], move || answer(call, &spec)).await
+}
+
+/// The request, if the FE model runs on demand for its parameters: each
+/// within its `simulate` range.
+fn simulable(call: super::TemplateCall) -> Result<super::TemplateCall, ApiError> {
+    for (range, value) in TemplateSet::ranges(call.model()?).iter().zip(call.request.query) {
+        if !range.simulates(value) {
+            return Err(ApiError::bad_request(
+                format!(
+                    "{} = {} {}: the FE model runs on demand for {} .. {} {} (from the database's smallest \
+                     value, which the mesh resolves, to the slider's end); use POST /api/predict beyond",
+                    range.name,
+                    Num(value),
+                    range.unit,
+                    Num(range.simulate[0]),
+                    Num(range.simulate[1]),
+                    range.unit
+                ),
+                Some(range.name),
+            ));
+        }
+    }
+    Ok(call)
 }
 
 /// Runs the FE model for `call` and builds the answer (on a blocking

@@ -6,12 +6,12 @@
 //! every database run shares.
 
 use axum::Json;
-use axum::extract::{RawQuery, State};
+use axum::extract::State;
 use haptex_core::database::Template;
 use serde_json::{Value, json};
 
 use crate::error::ApiError;
-use crate::input::Query;
+use crate::extract::NoQuery;
 use crate::state::AppState;
 use crate::templates::{DEFAULT_X0_MM, MAX_ABS_X0_MM, TemplateSet};
 
@@ -24,8 +24,7 @@ pub(crate) fn formula(template: Template) -> &'static str {
     }
 }
 
-pub async fn get(State(state): State<AppState>, RawQuery(raw_query): RawQuery) -> Result<Json<Value>, ApiError> {
-    Query::parse(raw_query.as_deref())?.finish()?;
+pub async fn get(State(state): State<AppState>, _: NoQuery) -> Result<Json<Value>, ApiError> {
     let set = state.templates()?;
     let metadata = set.metadata();
     let templates: Vec<Value> = set

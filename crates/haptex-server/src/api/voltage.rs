@@ -32,10 +32,6 @@
 use std::collections::BTreeMap;
 
 use axum::Json;
-use axum::body::Bytes;
-use axum::extract::rejection::BytesRejection;
-use axum::extract::{RawQuery, State};
-use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 use haptex_core::combined::{Channels, DisplayError, DisplayProfile, Strategy, map_display};
 use haptex_core::electrovibration::{ElectroError, Method, Regions, VoltageProfile, map_profile, map_profile_relative};
@@ -49,12 +45,10 @@ use serde::{Deserialize, Serialize};
 use crate::device_file::RequestDeviceFile;
 use crate::display::{DisplayDesign, DisplayName, DisplayRequest, StrategyName};
 use crate::error::ApiError;
-use crate::input::{
-    BodyKind, Pairs, ProfileJson, Query, body_bytes, body_kind, parse_json, parse_number, profile_from_csv,
-};
+use crate::extract::{JSON_OR_CSV, Preamble, Rest, Route};
+use crate::input::{BodyKind, Pairs, ProfileJson, parse_json, parse_number, profile_from_csv};
 use crate::params::{DEVICE_PARAMS, DeviceRequest, parse_method};
 use crate::state::AppState;
-use crate::work;
 
 /// The JSON body.
 #[derive(Debug, Deserialize)]
@@ -247,20 +241,22 @@ impl<'a> DisplayAnswer<'a> {
     }
 }
 
-pub async fn post(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    RawQuery(raw_query): RawQuery,
-    body: Result<Bytes, BytesRejection>,
-) -> Result<Response, ApiError> {
-    let limits = state.limits().clone();
-    let mut query = Query::parse(raw_query.as_deref())?;
-    let format = query.take_format(&["json", "csv"])?;
-    let kind = body_kind(&headers, &[BodyKind::Json, BodyKind::Csv])?;
-    let bytes = body_bytes(body, limits.max_body_bytes)?;
-    let app = state.clone();
-    let base = state.default_device().clone();
-    work::cpu(&state, bytes.len(), move || {
+/// The route: a JSON body, or a CSV profile with the settings in the
+/// query (which the handler reads: with a JSON body, after the body's
+/// kind and size, the query has `format` only).
+pub(crate) struct Voltage;
+
+impl Route for Voltage {
+    const BODY: &'static [BodyKind] = &[BodyKind::Json, BodyKind::Csv];
+    const FORMATS: &'static [&'static str] = JSON_OR_CSV;
+    const REST: Rest = Rest::Handler;
+}
+
+pub async fn post(call: Preamble<Voltage>) -> Result<Response, ApiError> {
+    let Preamble { state: app, format, mut query, kind, bytes, slot, .. } = call;
+    let limits = app.limits().clone();
+    let base = app.default_device().clone();
+    slot.run(move || {
         // The recipe's source and settings for the CSV's comments (JSON body with `source` only).
         let mut recipe: Option<(serde_json::Value, serde_json::Value)> = None;
         let (profile, method, request, relative, display, prefix, device_file) = match kind {
