@@ -8,6 +8,7 @@ import { ApiError } from './api.js';
 import { emit } from './hub.js';
 import { showError } from './messages.js';
 import { state } from './state.js';
+import { dataRows } from './validation.js';
 
 const scheduleVoltage = () => emit('schedule-voltage');
 
@@ -129,8 +130,7 @@ export async function readCalibration() {
     throw new ApiError(`${file.name} is ${file.size} bytes, more than the limit of ${max}`, 'ultrasonic_calibration', 0);
   }
   const text = await file.text();
-  const rows = text.split(/\r?\n/).filter((l) => l.trim() !== '' && !l.trim().startsWith('#')).length - 1;
-  state.calibration = { name: file.name, text, rows };
+  state.calibration = { name: file.name, text, rows: dataRows(text) };
   showDisplayControls();
   scheduleVoltage();
 }

@@ -4,7 +4,7 @@
 // source), which turns to the warning style outside the typical range.
 
 import { $ } from './dom.js';
-import { fmt } from './format.js';
+import { deviceFrom, parseNumber, typicalNote } from './validation.js';
 
 /** Removes every field's error outline (aria-invalid). */
 export function clearInvalid() {
@@ -18,8 +18,7 @@ export function fieldInput(name) {
 
 /** The number typed in field `id`, or null when it is empty (NaN when it is not a number). */
 export function numberIn(id) {
-  const text = $(id).value.trim();
-  return text === '' ? null : Number(text);
+  return parseNumber($(id).value);
 }
 
 /**
@@ -32,7 +31,6 @@ export function numberIn(id) {
 export function explain(e) {
   const input = fieldInput(e.field);
   if (!input) return;
-  const unit = e.unit ? ` ${e.unit}` : '';
   const note = document.createElement('p');
   note.className = 'explain';
   note.id = `explain-${e.field}`;
@@ -47,14 +45,10 @@ export function explain(e) {
   input.setAttribute('aria-describedby', note.id);
   input.insertAdjacentElement('afterend', note);
   const show = () => {
-    const text = input.value.trim();
-    const v = text === '' ? NaN : Number(text);
-    const outside = e.typical !== null && Number.isFinite(v) && (v < e.typical.min || v > e.typical.max);
-    head.textContent = `${e.symbol}${e.unit ? ` (${e.unit})` : ' (no unit)'}: ${e.meaning}. `;
-    range.textContent = e.typical === null
-      ? 'No typical range sourced.'
-      : `${outside ? 'Outside the typical range' : 'Typical'} ${fmt(e.typical.min)} .. ${fmt(e.typical.max)}${unit}` +
-        `${outside ? ` (accepted ${fmt(e.accepted.min)} .. ${fmt(e.accepted.max)}${unit})` : ''}.`;
+    const typical = typicalNote(e, input.value);
+    const { outside } = typical;
+    head.textContent = typical.head;
+    range.textContent = typical.range;
     note.classList.toggle('outside', outside);
     input.classList.toggle('outside', outside);
   };
@@ -68,10 +62,5 @@ export function explain(e) {
  * out (they take the server's default).
  */
 export function readDevice() {
-  const device = {};
-  document.querySelectorAll('[data-param]').forEach((input) => {
-    const text = input.value.trim();
-    if (text !== '') device[input.dataset.param] = Number(text);
-  });
-  return device;
+  return deviceFrom(Array.from(document.querySelectorAll('[data-param]'), (input) => [input.dataset.param, input.value]));
 }

@@ -10,7 +10,7 @@ import { fmt } from './format.js';
 import { live } from './live.js';
 import { showError } from './messages.js';
 import { loadModel } from './model.js';
-import { fromBase64Url } from './recipe-link.js';
+import { isRecipeHash, recipeFromHash } from './recipe-link.js';
 import { openRecipe } from './recipes.js';
 import { voltageBody } from './requests.js';
 import { SOURCES, fillMaterials, loadSource, selectSource } from './sources.js';
@@ -40,12 +40,12 @@ export async function start() {
     loadModel().catch((error) => { $('model-body').textContent = `The model could not be loaded: ${error.message}`; });
     selectSource(sources[0].id);
     if (!state.profile && state.source === 'upload') document.body.dataset.state = 'ready';
-    if (location.hash.startsWith('#recipe=')) {
+    if (isRecipeHash(location.hash)) {
       // A link's recipe that cannot be opened is reported once the
       // first source is drawn (its message would hide it); the page works on.
       let opened = null;
       try {
-        opened = JSON.parse(fromBase64Url(location.hash.slice('#recipe='.length)));
+        opened = recipeFromHash(location.hash);
       } catch (error) {
         state.pendingError = new ApiError(`the link's recipe cannot be read (${error.message})`, 'recipe', 0);
       }

@@ -31,24 +31,39 @@ export function withPins(pins, series, data, pick) {
   };
 }
 
+/** The width of the plot in holder `id`: the holder's (or its parent's), at least 240 px. */
 export function plotWidth(id) {
   return Math.max(240, $(id).clientWidth || $(id).parentElement.clientWidth);
 }
 
+/** The plots' height: 190 px on a phone-sized window, else 240. */
 export function plotHeight() {
   return window.innerWidth < 600 ? 190 : 240;
 }
 
-export function makePlot(id, series, data) {
-  const options = {
-    width: plotWidth(id),
-    height: plotHeight(),
+/**
+ * The options of a line plot over a numeric x (not time): its size, the x
+ * axis label `x` (also the x series' name), the y axis label `y` (none
+ * when undefined), the series, a live legend unless `live` is false, and
+ * any other uPlot option (`cursor`, `hooks`, ...) as given. Pure.
+ */
+export function lineOptions({ width, height, x, y, series, live = true, ...more }) {
+  return {
+    width,
+    height,
     scales: { x: { time: false } },
-    axes: [{ label: 'x (mm)' }, {}],
-    legend: { live: true },
-    cursor: { drag: { x: true, y: false } },
-    series: [{ label: 'x (mm)' }, ...series],
+    axes: [{ label: x }, y === undefined ? {} : { label: y }],
+    legend: { live },
+    ...more,
+    series: [{ label: x }, ...series],
   };
+}
+
+/** A plot of `series` over x (mm) in the holder `id`, zoomed by dragging along x, its legend keyboard-toggled. */
+export function makePlot(id, series, data) {
+  const options = lineOptions({
+    width: plotWidth(id), height: plotHeight(), x: 'x (mm)', series, cursor: { drag: { x: true, y: false } },
+  });
   const plot = new uPlot(options, data, $(id));
   keyboardLegend(plot);
   return plot;
@@ -112,6 +127,15 @@ export function describePlot(id, series, data) {
   }
   const caption = box.parentElement.querySelector('figcaption');
   if (caption) box.setAttribute('aria-label', caption.textContent.trim());
+  note.textContent = plotSummary(series, data);
+}
+
+/**
+ * A plot's description, pure: the x range (mm), then each series' minimum
+ * and maximum with their x (the first where several are equal), or its
+ * value "throughout" when constant; series without a value are left out.
+ */
+export function plotSummary(series, data) {
   const x = data[0];
   const parts = [`x from ${fmt(x[0])} to ${fmt(x[x.length - 1])} mm`];
   series.forEach((s, i) => {
@@ -128,7 +152,7 @@ export function describePlot(id, series, data) {
       ? `${s.label}: ${fmt(ys[lo])} throughout`
       : `${s.label}: min ${fmt(ys[lo])} at x = ${fmt(x[lo])} mm, max ${fmt(ys[hi])} at x = ${fmt(x[hi])} mm`);
   });
-  note.textContent = `${parts.join('; ')}.`;
+  return `${parts.join('; ')}.`;
 }
 
 /** Resizes the plots of `plots` (key: plot) drawn in the holders `ids` (key: element id) to their holders. */

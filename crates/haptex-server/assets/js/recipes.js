@@ -8,11 +8,11 @@ import { ApiError, postJson } from './api.js';
 import { setBoth, setDisplay, setMethod, setRelative, showDisplayControls } from './displays.js';
 import { downloadSpec, offerDownload } from './downloads.js';
 import { readDevice } from './fields.js';
-import { fmt } from './format.js';
 import { say } from './messages.js';
-import { toBase64Url } from './recipe-link.js';
+import { recipeHash, recipeSourceText } from './recipe-link.js';
 import { dropPendingLoad, showSourcePanel } from './sources.js';
 import { state } from './state.js';
+import { dataRows } from './validation.js';
 import { updateVoltage } from './voltage.js';
 
 /** The downloads a recipe replays: each the API request that answers it. */
@@ -47,7 +47,7 @@ export function recipe(kinds = RECIPE_KINDS) {
 
 /** A link that opens this design (its voltage request) in the page. */
 export function shareLink() {
-  const link = `${location.origin}${location.pathname}#recipe=${toBase64Url(JSON.stringify(recipe(['voltage-csv'])))}`;
+  const link = `${location.origin}${location.pathname}${recipeHash(recipe(['voltage-csv']))}`;
   const a = $('share-link');
   a.href = link;
   a.hidden = false;
@@ -74,10 +74,7 @@ export async function openRecipe(r) {
   // The server checks the profile (points, ranges) as for an upload.
   const checked = await (await postJson('/api/profile', p)).json();
   const source = r.source || {};
-  const what = source.kind === 'template'
-    ? `${source.surface} r_w ${fmt(source.width_mm)} mm, r_h ${fmt(source.height_mm)} mm, ${fmt(source.velocity_mm_s)} mm/s`
-    : source.kind === 'library' ? `${source.material}, stroke seed ${source.seed}`
-      : source.kind === 'upload' ? source.file : 'a profile';
+  const what = recipeSourceText(source);
   const profileBody = { x_mm: p.x_mm, mu: p.mu };
   if (p.fn_n) profileBody.fn_n = p.fn_n;
   const profile = {
@@ -113,8 +110,7 @@ export async function openRecipe(r) {
   $('weight').value = body.weight === undefined ? '' : String(body.weight);
   $('a-max').value = body.a_max_um === undefined ? '' : String(body.a_max_um);
   state.calibration = body.ultrasonic_calibration
-    ? { name: 'the recipe\'s calibration', text: body.ultrasonic_calibration,
-      rows: body.ultrasonic_calibration.split(/\r?\n/).filter((l) => l.trim() && !l.trim().startsWith('#')).length - 1 }
+    ? { name: 'the recipe\'s calibration', text: body.ultrasonic_calibration, rows: dataRows(body.ultrasonic_calibration) }
     : null;
   showDisplayControls();
   await updateVoltage();

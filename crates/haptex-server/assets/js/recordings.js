@@ -6,6 +6,7 @@
 import { $ } from './dom.js';
 import { ApiError, api } from './api.js';
 import { fmt } from './format.js';
+import { lineOptions } from './plots.js';
 import { fillMaterials, loadSource } from './sources.js';
 import { plots, state } from './state.js';
 
@@ -108,16 +109,14 @@ function showRecordingReport(r) {
     paint(r.dropped, 'rgba(120, 120, 120, 0.22)');
     ctx.restore();
   };
-  const options = {
+  const options = lineOptions({
     width: Math.max(240, $('recordings-report').clientWidth || 320),
     height: 180,
-    scales: { x: { time: false } },
-    axes: [{ label: 't (s)' }, { label: 'N' }],
-    legend: { live: false },
-    series: [{ label: 't (s)' },
-      { label: 'Fn (N)', stroke: '#1f5fa8', width: 1 },
-      { label: 'Ft (N)', stroke: '#b3261e', width: 1 }],
+    x: 't (s)',
+    y: 'N',
+    live: false,
+    series: [{ label: 'Fn (N)', stroke: '#1f5fa8', width: 1 }, { label: 'Ft (N)', stroke: '#b3261e', width: 1 }],
     hooks: { drawClear: [bands] },
-  };
+  });
   plots.recordings.push(new uPlot(options, [f.t_s, f.fn_n, f.ft_n], holder));
 }

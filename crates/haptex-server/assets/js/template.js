@@ -9,6 +9,7 @@ import { fmt } from './format.js';
 import { emit } from './hub.js';
 import { showError } from './messages.js';
 import { state } from './state.js';
+import { databaseNote, parseNumber } from './validation.js';
 
 /** The POST /api/predict body from the template controls. */
 export function templateBody() {
@@ -57,11 +58,9 @@ function buildTemplateSliders() {
       const v = Number(input.value);
       state.template[p.name] = v;
       out.value = `${fmt(v)} ${p.unit}`;
-      const outside = v < p.database[0] || v > p.database[1];
+      const { outside, text } = databaseNote(p, v);
       wrap.classList.toggle('outside', outside);
-      note.textContent = outside
-        ? `outside the FE database (${fmt(p.database[0])} .. ${fmt(p.database[1])} ${p.unit}): extrapolation`
-        : `FE database: ${fmt(p.database[0])} .. ${fmt(p.database[1])} ${p.unit}`;
+      note.textContent = text;
     };
     input.addEventListener('input', () => { show(); scheduleTemplate(); });
     show();
@@ -96,9 +95,9 @@ export function buildTemplateControls(templates, load) {
   });
   $('run-fe').addEventListener('click', () => runFe().catch(showError));
   $('x0').addEventListener('input', () => {
-    const text = $('x0').value.trim();
-    if (text === '' || !Number.isFinite(Number(text))) return;
-    state.template.x0_mm = Number(text);
+    const x0 = parseNumber($('x0').value);
+    if (x0 === null || !Number.isFinite(x0)) return;
+    state.template.x0_mm = x0;
     scheduleTemplate();
   });
 }
