@@ -46,8 +46,8 @@ export async function uploadRecordings() {
   await loadSource();
 }
 
-export /** A refused upload, said under the recordings' controls. */
-function showRecordingsError(error) {
+/** A refused upload, said under the recordings' controls. */
+export function showRecordingsError(error) {
   const info = $('recordings-info');
   info.classList.add('error');
   const at = error instanceof ApiError && error.field && !error.message.includes(error.field)

@@ -18,8 +18,8 @@ import { showRelative, showSummary } from './summary.js';
 let voltageTimer = null;
 let voltageRequest = 0;
 
-export /** Asks for the voltage of the design shown in 60 ms (the latest of the changes in that time). */
-function scheduleVoltage() {
+/** Asks for the voltage of the design shown in 60 ms (the latest of the changes in that time). */
+export function scheduleVoltage() {
   clearTimeout(voltageTimer);
   voltageTimer = setTimeout(() => updateVoltage().catch(showError), 60);
 }
