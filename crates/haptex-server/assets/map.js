@@ -6,8 +6,16 @@
 // sent with the image to POST /api/map/path, whose U(t) (haptex map
 // sample-path) is plotted below and offered as CSV with the path itself.
 // The server keeps nothing: every request carries the image.
+// It is a module sharing the main page's (js/): the audio output, the
+// heat colours, the number format, the bilinear sampling, the plot
+// options and the fields' error outline.
 
 import { createAudio } from './js/audio.js';
+import { heatColour as colour } from './js/colours.js';
+import { clearInvalid } from './js/fields.js';
+import { fmtPlain as fmt, pct } from './js/format.js';
+import { bilinear } from './js/interpolate.js';
+import { lineOptions } from './js/plots.js';
 
 const $ = (id) => document.getElementById(id);
 /** Most samples of a drawn path (the server takes up to its max_points). */
@@ -70,10 +78,6 @@ function controlOf(field) {
   return $(name);
 }
 
-function clearInvalid() {
-  document.querySelectorAll('[aria-invalid="true"]').forEach((e) => e.removeAttribute('aria-invalid'));
-}
-
 async function post(url, body) {
   const response = await fetch(url, {
     method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body),
@@ -109,7 +113,6 @@ async function build() {
   const g = answer.grid;
   say(`${state.imageName}: ${g.nx} x ${g.ny} pixels (${answer.bits} bit), ` +
     `${fmt(g.nx * g.dx_mm)} x ${fmt(g.ny * g.dy_mm)} mm.`);
-  const pct = (f) => `${(100 * f).toFixed(2)}%`;
   $('map-summary').textContent = answer.method === 'physical'
     ? `eq. (8): ${pct(answer.not_renderable_fraction)} of the area below mu_HD (0 V, not renderable), ` +
       `${pct(answer.clipped_fraction)} clipped at U_max = ${fmt(answer.u_max_v)} V.`
@@ -134,45 +137,14 @@ async function samplePath() {
   bump();
 }
 
-function fmt(v) {
-  return Number.isFinite(v) ? String(Number(v.toPrecision(4))) : String(v);
-}
-
 // ------------------------------------------------------------ sampling
 
-/** The cell index and fraction along one axis, ends held (the core's `axis`). */
-function axis(v, v0, d, n) {
-  const s = (v - v0) / d;
-  if (Number.isNaN(s) || s <= 0) return [0, 0];
-  if (s >= n - 1) return [n - 1, 0];
-  const i = Math.floor(s);
-  return [i, s - i];
-}
-
-/** `values` at (x, y), bilinear, the edge held: MapGrid::sample's arithmetic. */
+/** `values` of the map at (x, y), bilinear, the edge held: MapGrid::sample's arithmetic. */
 function sample(values, x, y) {
-  const g = state.map.grid;
-  const [i, tx] = axis(x, g.x0_mm, g.dx_mm, g.nx);
-  const [j, ty] = axis(y, g.y0_mm, g.dy_mm, g.ny);
-  const row = (r) => {
-    const a = values[r * g.nx + i];
-    return tx === 0 ? a : a + tx * (values[r * g.nx + i + 1] - a);
-  };
-  const r0 = row(j);
-  return ty === 0 ? r0 : r0 + ty * (row(j + 1) - r0);
+  return bilinear(state.map.grid, values, x, y);
 }
 
 // ------------------------------------------------------------- drawing
-
-/** Colour of t in [0, 1] (dark blue to yellow, perceptually ordered). */
-const STOPS = [[13, 8, 135], [84, 2, 163], [139, 10, 165], [185, 50, 137], [219, 92, 104], [244, 136, 73],
-  [254, 188, 43], [240, 249, 33]];
-function colour(t) {
-  const s = Math.min(Math.max(t, 0), 1) * (STOPS.length - 1);
-  const k = Math.min(Math.floor(s), STOPS.length - 2);
-  const f = s - k;
-  return STOPS[k].map((c, m) => Math.round(c + f * (STOPS[k + 1][m] - c)));
-}
 
 /** The values shown, their range and their unit. */
 function shown() {
@@ -313,14 +285,9 @@ function drawPathPlot() {
   const width = Math.max(holder.clientWidth, 200);
   const data = [a.t_s, a.voltage_v];
   if (plots.path) plots.path.destroy();
-  plots.path = new uPlot({
-    width,
-    height: 220,
-    scales: { x: { time: false } },
-    axes: [{ label: 't (s)' }, { label: 'U (V RMS)' }],
-    legend: { live: true },
-    series: [{ label: 't (s)' }, { label: 'U (V RMS)', stroke: '#1f5fa8', width: 1.5 }],
-  }, data, holder);
+  plots.path = new uPlot(lineOptions({
+    width, height: 220, x: 't (s)', y: 'U (V RMS)', series: [{ label: 'U (V RMS)', stroke: '#1f5fa8', width: 1.5 }],
+  }), data, holder);
   holder.setAttribute('aria-label', `voltage along the path: ${a.t_s.length} samples over ` +
     `${fmt(a.t_s[a.t_s.length - 1] - a.t_s[0])} s, U from ${fmt(Math.min(...a.voltage_v))} to ` +
     `${fmt(Math.max(...a.voltage_v))} V RMS`);

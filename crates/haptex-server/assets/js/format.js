@@ -1,17 +1,26 @@
 // Number and text formatting shared by the pages: numbers in 4
-// significant digits, percentages, safe file names, and the model
-// section's tables. Pure but for table(), which builds (does not insert)
-// an element.
+// significant digits (the main page's fmt, the map page's fmtPlain),
+// percentages, safe file names, and the model section's tables. Pure but
+// for table(), which builds (does not insert) an element.
 
-export /** A number in 4 significant digits (exponential below 1e-3 and from 1e5), '–' for none. */
-function fmt(v) {
+/** A number in 4 significant digits (exponential below 1e-3 and from 1e5), '–' for none. */
+export function fmt(v) {
   if (v === null || v === undefined) return '–';
   const a = Math.abs(v);
   return a !== 0 && (a < 1e-3 || a >= 1e5) ? v.toExponential(3) : String(Number(v.toPrecision(4)));
 }
 
-export /** A fraction as a percentage with two decimals. */
-function pct(fraction) {
+/**
+ * A number in 4 significant digits, never exponential; a non-finite value
+ * (NaN, an infinity, null, undefined) as JavaScript writes it. The map
+ * page's format.
+ */
+export function fmtPlain(v) {
+  return Number.isFinite(v) ? String(Number(v.toPrecision(4))) : String(v);
+}
+
+/** A fraction as a percentage with two decimals. */
+export function pct(fraction) {
   return `${(100 * fraction).toFixed(2)}%`;
 }
 

@@ -51,3 +51,17 @@ test('safeName: letters, digits, dot, underscore and hyphen only; no leading dot
   assert.equal(long.length, 200);
   assert.ok(/^[A-Za-z0-9._-]+$/.test(safeName('日本語 ✓.csv')));
 });
+
+test('fmtPlain (the map page): 4 significant digits, never exponential', async () => {
+  const { fmtPlain } = await import('../format.js');
+  assert.equal(fmtPlain(51.2), '51.2');
+  assert.equal(fmtPlain(1.23456), '1.235');
+  assert.equal(fmtPlain(0), '0');
+  assert.equal(fmtPlain(-12.345), '-12.35');
+  assert.equal(fmtPlain(1e-4), '0.0001');
+  assert.equal(fmtPlain(123456), '123500');
+  assert.equal(fmtPlain(NaN), 'NaN');
+  assert.equal(fmtPlain(-Infinity), '-Infinity');
+  assert.equal(fmtPlain(null), 'null');
+  assert.equal(fmtPlain(undefined), 'undefined');
+});
