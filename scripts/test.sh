@@ -98,4 +98,21 @@ cargo clippy --workspace --all-targets --locked -- -D warnings
 if [ "${#LIVE_FEATURE[@]}" -gt 0 ]; then
     cargo clippy --workspace --all-targets --locked "${LIVE_FEATURE[@]}" -- -D warnings
 fi
+# The web GUI's pure JavaScript modules (format, validation, recipe links,
+# interpolation, ...) have unit tests run by Node's built-in test runner
+# (node:test, Node 18 or later; no npm package): Debian's nodejs, installed
+# as root when missing. Without it they are skipped, and this says so.
+if ! command -v node >/dev/null 2>&1 && can_apt; then
+    echo "scripts/test.sh: installing nodejs for the web GUI's JavaScript unit tests" >&2
+    apt_install --no-install-recommends nodejs || true
+fi
+NODE_MAJOR=$(node -p 'process.versions.node.split(".")[0]' 2>/dev/null || echo 0)
+if [ "$NODE_MAJOR" -ge 18 ]; then
+    node --test crates/haptex-server/assets/js/test/*.test.mjs
+else
+    echo "scripts/test.sh: SKIPPING the web GUI's JavaScript unit tests (crates/haptex-server/assets/js/test):" \
+        "they need Node.js 18 or later (node --test), which is missing and could not be installed" \
+        "(as root: apt-get install nodejs)." >&2
+fi
+
 cargo test --workspace --profile ci --locked --no-fail-fast "${LIVE_FEATURE[@]}" "$@"

@@ -1,0 +1,212 @@
+// The check on the finger model and the compensation (POST /api/check,
+// /api/compensate, streamed with their progress): the request for the
+// design shown, whether the last result is still current, its plots and
+// error figures, and the voltage played (the compensated one when chosen).
+
+import { $ } from './dom.js';
+import { ApiError, postStream } from './api.js';
+import { checkRefusal, checkTrial } from './answers.js';
+import { isCheckable, isElectrovibration } from './displays.js';
+import { numberIn, readDevice } from './fields.js';
+import { fmt, pct } from './format.js';
+import { emit, on } from './hub.js';
+import { say } from './messages.js';
+import { constant, replot, withPins } from './plots.js';
+import { voltageBody } from './requests.js';
+import { plots, state } from './state.js';
+
+/**
+ * The POST /api/check body for the profile shown: the voltage request
+ * (eq. 8: the check has a force to compare only for the physical method)
+ * and the finger's load; a template's sliding velocity, the velocity its
+ * profile was computed at.
+ */
+export function checkBody() {
+  // The combined display's design is checked with its plate and strategy.
+  const body = voltageBody('physical', state.display === 'combined');
+  delete body.method;
+  const load = numberIn('check-load');
+  if (load !== null) body.load_n_per_mm = load;
+  if (state.source === 'template' && state.template.velocity_mm_s) body.velocity_mm_s = state.template.velocity_mm_s;
+  return body;
+}
+
+/** The last check, when it is for the profile, device, display and load shown. */
+export function currentCheck() {
+  if (!isCheckable()) return null;
+  const c = state.check;
+  return c && state.profile && state.drawn === state.profile && c.key === JSON.stringify(checkBody()) ? c : null;
+}
+
+/** The compensated voltage (as POST /api/voltage answers it), when it is current. */
+export function currentCompensated() {
+  const c = currentCheck();
+  return c && c.mode === 'compensate' ? c.result.voltage : null;
+}
+
+/** Runs the check (`mode` check) or the compensation, showing its progress. */
+export async function runCheck(mode) {
+  if (!state.profile) throw new ApiError('no profile to check yet', null, 0);
+  const body = checkBody();
+  const key = JSON.stringify(body);
+  if (mode === 'compensate') {
+    const runs = numberIn('check-runs');
+    if (runs !== null) body.max_runs = runs;
+  }
+  const buttons = [$('run-check'), $('run-compensate')];
+  buttons.forEach((b) => { b.disabled = true; });
+  const bar = $('check-progress');
+  bar.hidden = false;
+  bar.value = 0;
+  const progress = { lines: 0, maxRun: 0 };
+  state.checkProgress = progress;
+  const what = mode === 'compensate' ? 'Compensating' : 'Checking';
+  $('check-info').textContent = `${what} on the finger model: waiting for the FE model…`;
+  const started = performance.now();
+  try {
+    const result = await postStream(`/api/${mode}`, body, (p) => {
+      progress.lines += 1;
+      progress.maxRun = Math.max(progress.maxRun, p.run);
+      const runs = mode === 'compensate' ? p.max_runs : 1;
+      bar.value = Math.min(1, ((p.run - 1) + p.step / p.steps) / runs);
+      $('check-info').textContent = (mode === 'compensate' ? `${what}: FE run ${p.run} of at most ${p.max_runs}` : what) +
+        `, step ${p.step} of ${p.steps} (x = ${p.x_mm.toFixed(2)} mm)…`;
+    });
+    state.check = { key, mode, result };
+    const seconds = (performance.now() - started) / 1000;
+    $('check-info').textContent = `${mode === 'compensate' ? 'Compensated' : 'Checked'} in ${seconds.toFixed(2)} s ` +
+      `(${result.fe_runs} FE run${result.fe_runs > 1 ? 's' : ''}, ${result.fe_seconds.toFixed(2)} s; ` +
+      `steps of ${fmt(result.settings.step_mm)} mm).`;
+    if (mode === 'compensate') $('play-compensated').checked = true;
+    showCheck();
+    emit('draw-strip');
+    say(`${state.profile.label}: ${mode === 'compensate' ? 'compensated' : 'checked'} on the finger model.`);
+  } catch (error) {
+    // A refusal is said beside the buttons that asked, in the page's words.
+    $('check-info').textContent = error instanceof ApiError && error.status ? checkRefusal(error) : '';
+    throw error;
+  } finally {
+    bar.hidden = true;
+    $('run-check').disabled = !isCheckable();
+    $('run-compensate').disabled = !isElectrovibration();
+  }
+}
+
+/** Shows the current check (plots, metrics, playback), or hides a stale one. */
+export function showCheck() {
+  const c = currentCheck();
+  const box = $('check-results');
+  const compensated = currentCompensated();
+  $('play-compensated').disabled = !compensated;
+  if (!compensated) $('play-compensated').checked = false;
+  document.querySelector('[data-download="compensated-csv"]').disabled = !compensated;
+  $('feel-source').textContent = played() === state.voltage ? '' : ' (compensated voltage)';
+  if (!c) {
+    box.hidden = true;
+    return;
+  }
+  box.hidden = false;
+  const r = c.result;
+  const x = r.x_mm;
+  const comp = r.compensated;
+  const first = checkTrial(r);
+  const frictionSeries = [
+    { label: 'target', stroke: '#1f5fa8', width: 1.5 },
+    { label: `felt, ${first.name}`, stroke: '#b3261e', dash: [5, 3], width: 1.5 },
+  ];
+  const frictionData = [x, r.target_mu, first.felt_mu];
+  const voltageSeries = [{ label: r.eq8 ? 'U eq. (8)' : 'U(x), combined', stroke: '#b3261e', width: 1.5 }];
+  const voltageData = [x, first.voltage_v];
+  if (comp) {
+    frictionSeries.push({ label: 'felt, compensated', stroke: '#2e7d32', width: 1.5 });
+    frictionData.push(comp.felt_mu);
+    voltageSeries.push({ label: 'U compensated', stroke: '#2e7d32', width: 1.5 });
+    voltageData.push(comp.voltage_v);
+  }
+  frictionSeries.push({ label: 'mu_HD', stroke: '#888', dash: [6, 4], width: 1 });
+  frictionData.push(constant(x, r.settings.mu_hd));
+  voltageSeries.push({ label: 'U_max', stroke: '#888', dash: [6, 4], width: 1 });
+  const summary = r.voltage.summary;
+  voltageData.push(constant(x, summary.u_max_v ?? summary.electrovibration.u_max_v));
+  const felt = withPins(state.pins, frictionSeries, frictionData,
+    (p) => ({ x: p.felt ? p.felt.x_mm : null, lines: p.felt ? [{ label: p.felt.label, data: p.felt.mu }] : [] }));
+  plots.check = replot(plots.check, 'check-plot', felt.series, felt.data);
+  plots.checkVoltage = replot(plots.checkVoltage, 'check-voltage-plot', voltageSeries, voltageData);
+  showCheckMetrics(r);
+}
+
+/** The error figures of eq. (8) (or the combined design) and the compensated voltage, side by side. */
+function showCheckMetrics(r) {
+  const box = $('check-summary');
+  box.textContent = '';
+  const first = checkTrial(r);
+  const columns = [[first.name, first.metrics]];
+  if (r.compensated) columns.push([`compensated (run ${r.compensated.trial})`, r.compensated.metrics]);
+  const rows = [
+    ['RMS error', (m) => fmt(m.rms_error)],
+    ['max error', (m) => fmt(m.max_error)],
+    ['lag', (m) => `${fmt(m.lag_mm)} mm`],
+    ['detail kept', (m) => (m.detail_retained === null ? '–' : pct(m.detail_retained))],
+    ['k_FE', (m) => `${fmt(m.k_fe_mm2_per_n)} mm²/N`],
+  ];
+  const table = document.createElement('table');
+  table.className = 'metrics';
+  table.id = 'check-metrics';
+  const head = table.insertRow();
+  ['', ...columns.map((c) => c[0])].forEach((text) => {
+    const th = document.createElement('th');
+    th.textContent = text;
+    head.append(th);
+  });
+  rows.forEach(([label, value]) => {
+    const row = table.insertRow();
+    const th = document.createElement('th');
+    th.textContent = label;
+    row.append(th);
+    columns.forEach(([, m]) => { row.insertCell().textContent = value(m); });
+  });
+  const m = first.metrics;
+  const title = document.createElement('div');
+  const regions = document.createElement('div');
+  const finger = `load ${fmt(r.settings.load_n_per_mm)} N/mm, ${fmt(r.settings.velocity_mm_s)} mm/s`;
+  if (!r.eq8) {
+    // The combined display: the plate vibrating with a(x) under U(x).
+    const band = r.voltage.summary.band_mu;
+    title.textContent = `Felt against the target over the combined display's band (mu ${fmt(band[0])} .. ` +
+      `${fmt(band[1])}), the plate vibrating with a(x) (${r.settings.strategy}) under U(x):`;
+    regions.textContent = `below the band: ${pct(m.not_renderable_fraction)} of the length · above it: ` +
+      `${pct(m.clipped_fraction)} · ${finger}`;
+    box.append(title, table, regions);
+    return;
+  }
+  title.textContent = 'Felt against the target over the renderable region (mu_HD ≤ target ≤ mu at U_max):';
+  regions.textContent = `not renderable (target < mu_HD = ${fmt(r.settings.mu_hd)}): ${pct(m.not_renderable_fraction)} ` +
+    `of the length · above mu at U_max: ${pct(m.clipped_fraction)} · ${finger}`;
+  const k = document.createElement('div');
+  k.textContent = `eq. (8) used k = ${fmt(r.parameters.k_mm2_per_n)} mm²/N; the FE finger's contact length per ` +
+    `normal force is k_FE = ${fmt(m.k_fe_mm2_per_n)} mm²/N (per mm of width, docs/display.md) `;
+  const useK = document.createElement('button');
+  useK.type = 'button';
+  useK.className = 'small';
+  useK.id = 'use-fe-k';
+  useK.textContent = 'use k_FE in eq. (8)';
+  useK.addEventListener('click', () => {
+    $('param-k_mm2_per_n').value = String(Number(m.k_fe_mm2_per_n.toPrecision(4)));
+    state.device = readDevice();
+    emit('schedule-voltage');
+  });
+  k.append(useK);
+  box.append(title, table, regions, k);
+}
+
+/**
+ * The voltage the feel strip, the audio and the stroke WAV play: the
+ * compensated one when it is current and chosen, else the one plotted.
+ * Its samples always come with their own summary (U_max, the scale).
+ */
+export function played() {
+  const compensated = currentCompensated();
+  return compensated && $('play-compensated').checked ? compensated : state.voltage;
+}
+
+on('show-check', showCheck);

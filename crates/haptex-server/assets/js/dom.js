@@ -1,0 +1,3 @@
+// The pages' DOM shorthand: $(id) is document.getElementById(id).
+
+export const $ = (id) => document.getElementById(id);
