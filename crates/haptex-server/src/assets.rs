@@ -18,6 +18,10 @@ use crate::input::Query;
 
 #[derive(RustEmbed)]
 #[folder = "assets/"]
+// The front-end's unit tests (node --test) and the package.json that tells
+// Node the modules are ES modules are for the test suite, not the page.
+#[exclude = "js/test/*"]
+#[exclude = "js/package.json"]
 struct Assets;
 
 /// The Content-Security-Policy of every response. uPlot draws on canvas
