@@ -237,7 +237,7 @@ async fn first_screen(client: &Client) -> Check<()> {
         ));
     }
     let why = text_of(client, "design-why").await?;
-    if !why.contains("electrovibration") {
+    if !why.to_lowercase().contains("electrovibration") {
         return Err(format!("the sentence above the plots does not say which display: {why:?}"));
     }
     wholly_in_view(client, "design-why").await?;
@@ -352,7 +352,7 @@ async fn check_and_compensate(client: &Client) -> Check<()> {
     must_see(client, "check-info", "check with load 5 N/mm").await?;
     must_see(client, "check-load-error", "check with load 5 N/mm").await?;
     let said = text_of(client, "check-info").await?;
-    if !said.contains("load") || said.contains("load_n_per_mm") {
+    if !said.to_lowercase().contains("load") || said.contains("load_n_per_mm") {
         return Err(format!("the check's refusal beside its button: {said:?}"));
     }
     type_into(client, "check-load", &default_load).await?;

@@ -10,7 +10,8 @@ import { isCheckable, isElectrovibration } from './displays.js';
 import { numberIn, readDevice } from './fields.js';
 import { fmt, pct } from './format.js';
 import { emit, on } from './hub.js';
-import { say } from './messages.js';
+import { showError } from './messages.js';
+import { DESIGN_FIELDS, blocked, bringIntoView, setStatus } from './feedback.js';
 import { constant, replot, withPins } from './plots.js';
 import { voltageBody } from './requests.js';
 import { plots, state } from './state.js';
@@ -46,7 +47,15 @@ export function currentCompensated() {
 
 /** Runs the check (`mode` check) or the compensation, showing its progress. */
 export async function runCheck(mode) {
+  const info = $('check-info');
   if (!state.profile) throw new ApiError('no profile to check yet', null, 0);
+  // A field refused as typed stops the run here, said beside the buttons.
+  const refused = blocked(`${DESIGN_FIELDS}, #check-box`);
+  if (refused.length) {
+    setStatus(info, `Not run: ${refused.map((r) => r.text).join('; ')}.`, true);
+    bringIntoView(info);
+    return;
+  }
   const body = checkBody();
   const key = JSON.stringify(body);
   if (mode === 'compensate') {
@@ -61,7 +70,8 @@ export async function runCheck(mode) {
   const progress = { lines: 0, maxRun: 0 };
   state.checkProgress = progress;
   const what = mode === 'compensate' ? 'Compensating' : 'Checking';
-  $('check-info').textContent = `${what} on the finger model: waiting for the FE model…`;
+  delete info.dataset.result;
+  setStatus(info, `${what} on the finger model: waiting for the FE model…`);
   const started = performance.now();
   try {
     const result = await postStream(`/api/${mode}`, body, (p) => {
@@ -69,22 +79,25 @@ export async function runCheck(mode) {
       progress.maxRun = Math.max(progress.maxRun, p.run);
       const runs = mode === 'compensate' ? p.max_runs : 1;
       bar.value = Math.min(1, ((p.run - 1) + p.step / p.steps) / runs);
-      $('check-info').textContent = (mode === 'compensate' ? `${what}: FE run ${p.run} of at most ${p.max_runs}` : what) +
+      info.textContent = (mode === 'compensate' ? `${what}: FE run ${p.run} of at most ${p.max_runs}` : what) +
         `, step ${p.step} of ${p.steps} (x = ${p.x_mm.toFixed(2)} mm)…`;
     });
     state.check = { key, mode, result };
     const seconds = (performance.now() - started) / 1000;
-    $('check-info').textContent = `${mode === 'compensate' ? 'Compensated' : 'Checked'} in ${seconds.toFixed(2)} s ` +
+    setStatus(info, `${mode === 'compensate' ? 'Compensated' : 'Checked'} in ${seconds.toFixed(2)} s ` +
       `(${result.fe_runs} FE run${result.fe_runs > 1 ? 's' : ''}, ${result.fe_seconds.toFixed(2)} s; ` +
-      `steps of ${fmt(result.settings.step_mm)} mm).`;
+      `steps of ${fmt(result.settings.step_mm)} mm).`);
+    info.dataset.result = key;
     if (mode === 'compensate') $('play-compensated').checked = true;
     showCheck();
     emit('draw-strip');
-    say(`${state.profile.label}: ${mode === 'compensate' ? 'compensated' : 'checked'} on the finger model.`);
+    // The results, brought into view (the results column on a desktop, up the page on a phone).
+    bringIntoView($('check-summary'));
   } catch (error) {
-    // A refusal is said beside the buttons that asked, in the page's words.
-    $('check-info').textContent = error instanceof ApiError && error.status ? checkRefusal(error) : '';
-    throw error;
+    // A refusal is said beside the buttons that asked (and beside its field), in the page's words.
+    info.textContent = '';
+    if (error instanceof ApiError && error.status === 503) setStatus(info, checkRefusal(error), true);
+    else showError(error, { status: info });
   } finally {
     bar.hidden = true;
     $('run-check').disabled = !isCheckable();
@@ -103,9 +116,16 @@ export function showCheck() {
   $('feel-source').textContent = played() === state.voltage ? '' : ' (compensated voltage)';
   if (!c) {
     box.hidden = true;
+    // The note about results no longer shown goes with them.
+    const info = $('check-info');
+    if (info.dataset.result) {
+      info.textContent = '';
+      delete info.dataset.result;
+    }
     return;
   }
   box.hidden = false;
+  showCaveat(c.result);
   const r = c.result;
   const x = r.x_mm;
   const comp = r.compensated;
@@ -133,6 +153,26 @@ export function showCheck() {
   plots.check = replot(plots.check, 'check-plot', felt.series, felt.data);
   plots.checkVoltage = replot(plots.checkVoltage, 'check-voltage-plot', voltageSeries, voltageData);
   showCheckMetrics(r);
+}
+
+/**
+ * Where the check agrees by construction, says so beside its figure: on
+ * the combined display the plate's part is, in the model, the friction
+ * coefficient mu_HD rho(a) on a pad that slips throughout, so the finger
+ * feels it exactly (docs/display.md); only the voltage's part is tested.
+ */
+function showCaveat(r) {
+  const note = $('check-caveat');
+  if (r.eq8) {
+    note.hidden = true;
+    note.textContent = '';
+    return;
+  }
+  note.hidden = false;
+  note.textContent = 'Where the plate alone renders the target (U = 0 V), the felt friction agrees by construction: ' +
+    'the model takes the plate\'s effect as the friction coefficient μ_HD ρ(a) of a pad that slips throughout (no ' +
+    'squeeze film is simulated), so an error near zero there confirms the design is applied consistently, not the ' +
+    'plate\'s physics. The voltage\'s part, above μ_HD, is a real test of eq. (8) on the finger.';
 }
 
 /** The error figures of eq. (8) (or the combined design) and the compensated voltage, side by side. */
@@ -184,7 +224,7 @@ function showCheckMetrics(r) {
     `of the length · above mu at U_max: ${pct(m.clipped_fraction)} · ${finger}`;
   const k = document.createElement('div');
   k.textContent = `eq. (8) used k = ${fmt(r.parameters.k_mm2_per_n)} mm²/N; the FE finger's contact length per ` +
-    `normal force is k_FE = ${fmt(m.k_fe_mm2_per_n)} mm²/N (per mm of width, docs/display.md) `;
+    `normal force is k_FE = ${fmt(m.k_fe_mm2_per_n)} mm²/N (per mm of width: the FE finger is two-dimensional) `;
   const useK = document.createElement('button');
   useK.type = 'button';
   useK.className = 'small';

@@ -8,11 +8,13 @@ import { runCheck, showCheck } from './check.js';
 import { buildDisplayControls } from './displays.js';
 import { download } from './downloads.js';
 import { explain, readDevice } from './fields.js';
+import { setupFieldChecks, validateField } from './feedback.js';
+import { prettySymbol } from './validation.js';
 import { showError } from './messages.js';
 import { pinDesign, unpinAll } from './pins.js';
 import { openRecipe } from './recipes.js';
 import { showRecordingsError, uploadRecordings } from './recordings.js';
-import { SOURCES, applySourceMapping, loadSource, selectSource } from './sources.js';
+import { SOURCES, applySourceMapping, loadSource, selectSource, showUploadError } from './sources.js';
 import { state } from './state.js';
 import { audio, drawStrip, showStroke } from './strip.js';
 import { scheduleVoltage } from './voltage.js';
@@ -41,7 +43,10 @@ export function buildControls(config) {
     methodBox.append(label);
   });
 
-  buildDisplayControls(config, () => { if (state.source) applySourceMapping(state.source); });
+  buildDisplayControls(config, () => {
+    state.displayChosen = true; // from now on the sources keep the user's display
+    if (state.source) applySourceMapping(state.source);
+  });
 
   $('relative').addEventListener('change', () => {
     state.relative = $('relative').checked;
@@ -58,9 +63,9 @@ export function buildControls(config) {
     const wrap = document.createElement('div');
     const label = document.createElement('label');
     label.htmlFor = `param-${p.name}`;
-    label.title = `${p.description} (API field ${p.name})`;
+    label.title = p.description;
     const explained = (config.explanations || []).find((e) => e.field === p.name);
-    label.textContent = (explained ? explained.symbol : p.name) + ' ';
+    label.textContent = `${prettySymbol(explained ? explained.symbol : p.name)} `;
     const unit = document.createElement('span');
     unit.className = 'unit';
     unit.textContent = p.unit ? `(${p.unit})` : '';
@@ -68,6 +73,8 @@ export function buildControls(config) {
     const input = document.createElement('input');
     Object.assign(input, { type: 'number', id: `param-${p.name}`, step: 'any', min: p.min, max: p.max });
     input.dataset.param = p.name;
+    input.dataset.label = prettySymbol(explained ? explained.symbol : p.name);
+    input.dataset.unit = p.unit || '';
     input.placeholder = p.default === null ? 'optional' : String(p.default);
     if (p.default !== null) input.value = String(p.default);
     input.addEventListener('input', () => { state.device = readDevice(); scheduleVoltage(); });
@@ -89,8 +96,11 @@ export function buildControls(config) {
   state.carrierHz = config.play.carrier.frequency_hz;
   $('velocity').addEventListener('input', () => { state.velocity = Number($('velocity').value); showStroke(); });
   $('carrier').addEventListener('input', () => {
+    // Checked as typed (feedback.js): a refused frequency is not played, and the downloads say why.
+    if (validateField($('carrier'))) return;
     const f = Number($('carrier').value);
-    if (f > 0) { state.carrierHz = f; audio.setFrequency(f); }
+    state.carrierHz = f;
+    audio.setFrequency(f);
   });
   showStroke();
 
@@ -98,7 +108,7 @@ export function buildControls(config) {
   $('seed').addEventListener('change', () => loadSource().catch(showError));
   $('another-stroke').addEventListener('click', () => loadSource({ newSeed: true }).catch(showError));
   $('upload-recordings').addEventListener('click', () => uploadRecordings().catch(showRecordingsError));
-  $('upload').addEventListener('change', () => loadSource().catch(showError));
+  $('upload').addEventListener('change', () => loadSource().catch((error) => showUploadError(error)));
   $('recipe-file').addEventListener('change', async () => {
     const file = $('recipe-file').files[0];
     if (!file) return;
@@ -119,12 +129,15 @@ export function buildControls(config) {
   $('check-load').value = String(config.check.load_n_per_mm);
   $('check-runs').value = String(config.check.max_runs);
   $('check-load').addEventListener('input', () => { showCheck(); drawStrip(); });
-  $('run-check').addEventListener('click', () => runCheck('check').catch(showError));
-  $('run-compensate').addEventListener('click', () => runCheck('compensate').catch(showError));
+  const checkStatus = { status: $('check-info') };
+  $('run-check').addEventListener('click', () => runCheck('check').catch((e) => showError(e, checkStatus)));
+  $('run-compensate').addEventListener('click', () => runCheck('compensate').catch((e) => showError(e, checkStatus)));
   $('play-compensated').addEventListener('change', () => { showCheck(); drawStrip(); });
 
+  const downloadStatus = { status: $('download-info') };
   document.querySelectorAll('[data-download]').forEach((b) =>
-    b.addEventListener('click', () => download(b.dataset.download).catch(showError)));
+    b.addEventListener('click', () => download(b.dataset.download).catch((e) => showError(e, downloadStatus))));
 
   (config.explanations || []).forEach(explain);
+  setupFieldChecks();
 }

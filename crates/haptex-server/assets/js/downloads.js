@@ -4,11 +4,11 @@
 // (the compensated voltage's CSV, the recipe).
 
 import { $ } from './dom.js';
+import { DESIGN_FIELDS, blocked, setStatus } from './feedback.js';
 import { ApiError, api, postJson } from './api.js';
 import { uMaxOf } from './answers.js';
 import { currentCheck, played } from './check.js';
 import { isElectrovibration } from './displays.js';
-import { say } from './messages.js';
 import { voltageBody } from './requests.js';
 import { state } from './state.js';
 
@@ -76,6 +76,9 @@ async function fetchSpec(spec) {
 /** Downloads `kind`: the server's answer to its request, or a file the page makes (a check's CSV, a recipe). */
 export async function download(kind) {
   if (!state.profile || !state.voltage) throw new ApiError('nothing to download yet', null, 0);
+  // A field refused as typed (red, beside it) stops the download, said beside the buttons.
+  const refused = blocked(`${DESIGN_FIELDS}, #play-box`);
+  if (refused.length) throw new ApiError(`Not downloaded: ${refused.map((r) => r.text).join('; ')}.`, null, 0);
   let file;
   if (kind === 'compensated-csv') {
     const c = currentCheck();
@@ -95,5 +98,5 @@ export async function download(kind) {
   link.dataset.kind = kind;
   link.dataset.count = String(Number(link.dataset.count || 0) + 1);
   link.click();
-  say(`Downloaded ${file.name} (${file.blob.size} bytes).`);
+  setStatus($('download-info'), `Downloaded ${file.name} (${file.blob.size} bytes).`);
 }

@@ -6,11 +6,6 @@
 import { $ } from './dom.js';
 import { deviceFrom, parseNumber, typicalNote } from './validation.js';
 
-/** Removes every field's error outline (aria-invalid). */
-export function clearInvalid() {
-  document.querySelectorAll('[aria-invalid="true"]').forEach((el) => el.removeAttribute('aria-invalid'));
-}
-
 /** The control of an API field name (a device parameter or another field), or null. */
 export function fieldInput(name) {
   return document.querySelector(`[data-param="${name}"], [data-field="${name}"]`);

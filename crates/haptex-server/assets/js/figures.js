@@ -56,7 +56,9 @@ export function draw() {
     : '';
   const h = state.drawn && state.drawn.h_mm;
   if (h && h.length === x.length) {
-    plots.height = replot(plots.height, 'height-plot', [{ label: 'h (mm)', stroke: '#444', width: 1.5, fill: 'rgba(0,0,0,0.06)' }], [x, h]);
+    const height = withPins(state.pins, [{ label: 'h (mm)', stroke: '#444', width: 1.5, fill: 'rgba(0,0,0,0.06)' }],
+      [x, h], (p) => ({ x: p.x_mm, lines: p.h ? [{ label: 'h', data: p.h }] : [] }));
+    plots.height = replot(plots.height, 'height-plot', height.series, height.data);
   } else if (plots.height) {
     plots.height.destroy();
     plots.height = null;

@@ -69,6 +69,8 @@ export function pinDesign() {
     mu: v.mu,
     voltages,
     amplitude: v.amplitude_um || null,
+    // A template's surface, drawn on the h(x) plot with the next designs'.
+    h: state.drawn && state.drawn.h_mm && state.drawn.h_mm.length === v.x_mm.length ? state.drawn.h_mm : null,
     felt,
   });
   showPins();

@@ -36,9 +36,17 @@ export function plotWidth(id) {
   return Math.max(240, $(id).clientWidth || $(id).parentElement.clientWidth);
 }
 
-/** The plots' height: 190 px on a phone-sized window, else 240. */
-export function plotHeight() {
-  return window.innerWidth < 600 ? 190 : 240;
+/**
+ * The height of the plot in holder `id` for a window of `width` x `height`
+ * px: on a phone 190 px (the surface's 110); on a desktop the surface's
+ * 120 px and the others what lets the surface, the friction and the
+ * voltage fit the window together (160 to 240 px), so that the first
+ * screen shows the design whole.
+ */
+export function plotHeight(id, width = window.innerWidth, height = window.innerHeight) {
+  if (width < 600) return id === 'height-plot' ? 110 : 190;
+  if (id === 'height-plot') return 120;
+  return Math.max(160, Math.min(240, Math.floor((height - 480) / 2)));
 }
 
 /**
@@ -62,7 +70,7 @@ export function lineOptions({ width, height, x, y, series, live = true, ...more 
 /** A plot of `series` over x (mm) in the holder `id`, zoomed by dragging along x, its legend keyboard-toggled. */
 export function makePlot(id, series, data) {
   const options = lineOptions({
-    width: plotWidth(id), height: plotHeight(), x: 'x (mm)', series, cursor: { drag: { x: true, y: false } },
+    width: plotWidth(id), height: plotHeight(id), x: 'x (mm)', series, cursor: { drag: { x: true, y: false } },
   });
   const plot = new uPlot(options, data, $(id));
   keyboardLegend(plot);
@@ -159,6 +167,6 @@ export function plotSummary(series, data) {
 export function resizePlots(plots, ids) {
   Object.entries(ids).forEach(([k, id]) => {
     const plot = plots[k];
-    if (plot) plot.setSize({ width: plotWidth(id), height: plotHeight() });
+    if (plot) plot.setSize({ width: plotWidth(id), height: plotHeight(id) });
   });
 }

@@ -6,7 +6,9 @@
 
 import { $ } from './dom.js';
 import { ApiError, api, postJson } from './api.js';
-import { isElectrovibration, setBoth, setMethod, setRelative } from './displays.js';
+import { isElectrovibration, setBoth, setDisplay, setMethod, setRelative } from './displays.js';
+import { bringIntoView, clearFieldError, setFieldError } from './feedback.js';
+import { inPageWords } from './validation.js';
 import { clearPlots } from './figures.js';
 import { fmt, safeName } from './format.js';
 import { say, showError } from './messages.js';
@@ -45,6 +47,12 @@ export const SOURCES = {
         line.textContent = `Extrapolation: ${w}`;
         info.append(line);
       });
+      if (answer.extrapolation) {
+        const line = document.createElement('div');
+        line.textContent = 'Outside the database the estimate leans on the nearest members only and can be jagged ' +
+          'or wrong: check it with the FE model (the button below).';
+        info.append(line);
+      }
       const p = answer.parameters;
       showFe();
       return {
@@ -106,9 +114,11 @@ export const SOURCES = {
       const file = $('upload').files[0];
       if (!file) return null; // nothing to show until a file is chosen
       const text = await file.text();
+      $('upload-info').textContent = `Reading ${file.name}…`;
       const profile = await (await api('/api/profile', {
         method: 'POST', headers: { 'Content-Type': 'text/csv' }, body: text,
       })).json();
+      clearFieldError($('upload'));
       $('upload-info').textContent = `${file.name}: ${profile.n_points} points, x ${fmt(profile.x_min_mm)} .. ` +
         `${fmt(profile.x_max_mm)} mm, mu ${fmt(profile.mu_min)} .. ${fmt(profile.mu_max)}` +
         (profile.fn_n ? ' (with fn_n)' : '');
@@ -127,6 +137,68 @@ export const SOURCES = {
   },
 };
 
+/**
+ * An upload refused: the error under its file field, in the page's words
+ * (the file's name for what the server calls the request body), and the
+ * status under the field saying the file was not read.
+ */
+export function showUploadError(error) {
+  const input = $('upload');
+  const file = input.files[0];
+  const name = file ? file.name : 'the file';
+  const text = error instanceof ApiError
+    ? inPageWords(error.message, { field: error.field, file: name })
+    : String(error && error.message ? error.message : error);
+  setFieldError(input, text);
+  $('upload-info').textContent = `${name} was not read: its error is above. Fix the file and choose it again.`;
+  bringIntoView($('upload-error'));
+  say('');
+}
+
+/** The smallest and largest of `values` (a loop: a profile may be too long to spread into Math.min). */
+function extent(values) {
+  let lo = Infinity;
+  let hi = -Infinity;
+  for (const v of values) {
+    if (v < lo) lo = v;
+    if (v > hi) hi = v;
+  }
+  return [lo, hi];
+}
+
+/** The display's own friction, mu_HD, of the design: typed, or the server's default. */
+export function muHd() {
+  if (state.device.mu_hd !== undefined) return state.device.mu_hd;
+  const p = state.config.device_params.find((d) => d.name === 'mu_hd');
+  return p ? p.default : 1;
+}
+
+/**
+ * The display a source's profile opens on until the user chooses one: the
+ * templates the paper's Fig. 2 view (electrovibration, relative, eq. 8
+ * beside eq. 9); a material or an uploaded profile the display whose band
+ * holds it: electrovibration when it lies above the display's own friction
+ * mu_HD (the voltage raises friction), ultrasonic when it lies below (the
+ * plate lowers it), combined when it spans mu_HD.
+ */
+export function defaultDisplay(id, profile) {
+  if (SOURCES[id].fig2) return 'electrovibration';
+  const [lo, hi] = extent(profile.mu);
+  const m = muHd();
+  if (lo >= m) return 'electrovibration';
+  if (hi <= m) return 'ultrasonic';
+  return 'combined';
+}
+
+/** Opens the profile of source `id` on its default display, unless the user chose one. */
+function openOnDefault(id, profile) {
+  if (!profile || state.displayChosen) return;
+  const display = defaultDisplay(id, profile);
+  if (display === state.display) return;
+  setDisplay(display);
+  applySourceMapping(id);
+}
+
 let loadRequest = 0;
 
 /** Drops a profile still loading (a recipe's profile replaces it). */
@@ -143,6 +215,7 @@ export async function loadSource(options) {
   if (id !== loadRequest) return; // a newer profile is on its way
   state.profiles[sourceId] = profile;
   state.profile = profile;
+  openOnDefault(sourceId, profile);
   if (!profile) {
     clearPlots();
     say('Choose a profile file (CSV).');
@@ -179,6 +252,7 @@ export function selectSource(id) {
   loadRequest += 1; // a profile still loading for the previous source is dropped
   applySourceMapping(id);
   state.profile = state.profiles[id] || null;
+  openOnDefault(id, state.profile);
   if (state.profile) {
     updateVoltage().catch(showError);
   } else {

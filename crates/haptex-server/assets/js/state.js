@@ -18,11 +18,13 @@ export const state = {
   drawn: null,           // the profile whose voltage is drawn
   method: 'physical',
   relative: false,       // map the profile relative to its flat-surface friction (Fig. 2)
-  // The friction display designed for (GET /api/config, displays). The
-  // page opens on the combined display, so that the library's materials
-  // and the templates render with their physical values (docs/web.md,
-  // "Defaults"); the API's default stays electrovibration, the paper's.
-  display: 'combined',
+  // The friction display designed for (GET /api/config, displays). Each
+  // source opens on its own until the user chooses one (displayChosen):
+  // the templates on the paper's Fig. 2 view (electrovibration, relative,
+  // eq. 8 beside eq. 9), a material or an upload on the display whose band
+  // holds it (sources.js, defaultDisplay; docs/web.md, "Defaults").
+  display: 'electrovibration',
+  displayChosen: false,
   strategy: 'split',     // the combined display's strategy
   calibration: null,     // the ultrasonic calibration file chosen: {name, text}
   device: {},            // parameter name -> number (only valid ones)

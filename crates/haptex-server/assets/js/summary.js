@@ -23,9 +23,9 @@ export function showRelative() {
   const origin = r.flat_mu_source === 'median'
     ? 'the median of the profile, an estimate: give it when it is known'
     : state.source === 'template' && state.templates && r.flat_mu === state.templates.fe.mu_skin
-      ? 'the FE skin friction mu_skin: Ft/Fn on a flat surface'
+      ? 'the FE finger\'s skin friction, Ft/Fn on a flat surface'
       : 'given';
-  note.textContent = `mu = mu_profile / ${fmt(r.flat_mu)} · ${fmt(r.mu_hd)} (mu_flat: ${origin}).`;
+  note.textContent = `μ = μ of the profile / ${fmt(r.flat_mu)} · ${fmt(r.mu_hd)} (μ_flat: ${origin}).`;
 }
 
 /** The warnings of the answer as the page names its controls (page_warnings). */

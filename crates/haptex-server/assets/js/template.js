@@ -9,6 +9,7 @@ import { fmt } from './format.js';
 import { emit } from './hub.js';
 import { showError } from './messages.js';
 import { state } from './state.js';
+import { validateField } from './feedback.js';
 import { databaseNote, parseNumber } from './validation.js';
 
 /** The POST /api/predict body from the template controls. */
@@ -87,6 +88,7 @@ export function buildTemplateControls(templates, load) {
   state.template.surface = templates.templates[0].name;
   state.template.x0_mm = templates.x0_mm.default;
   $('x0').value = String(templates.x0_mm.default);
+  if (templates.x0_mm.accepted) [$('x0').min, $('x0').max] = templates.x0_mm.accepted.map(String);
   buildTemplateSliders();
   select.addEventListener('change', () => {
     state.template.surface = select.value;
@@ -95,8 +97,9 @@ export function buildTemplateControls(templates, load) {
   });
   $('run-fe').addEventListener('click', () => runFe().catch(showError));
   $('x0').addEventListener('input', () => {
+    // Checked as typed (feedback.js): a refused x0 is said beside the field and not sent.
+    if (validateField($('x0'))) return;
     const x0 = parseNumber($('x0').value);
-    if (x0 === null || !Number.isFinite(x0)) return;
     state.template.x0_mm = x0;
     scheduleTemplate();
   });

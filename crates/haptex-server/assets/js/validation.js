@@ -67,3 +67,60 @@ export function databaseNote(p, v) {
 export function dataRows(text) {
   return text.split(/\r?\n/).filter((l) => l.trim() !== '' && !l.trim().startsWith('#')).length - 1;
 }
+
+/**
+ * What is wrong with the text typed in a numeric field, in the page's
+ * words, or null when nothing is: `rule` is {label, unit, min, max,
+ * integer, optional, badInput} (`badInput`: the browser could not read the
+ * text as a number, as <input type=number> says of letters). A blank field
+ * is refused unless `optional` (it then takes the server's default).
+ */
+export function refusal(text, rule) {
+  const { label, unit = '', min = -Infinity, max = Infinity, integer = false, optional = false, badInput = false } = rule;
+  const u = unit ? ` ${unit}` : '';
+  if (badInput) return `${label}: not a number`;
+  const v = parseNumber(text);
+  if (v === null) return optional ? null : `${label} is needed`;
+  if (!Number.isFinite(v)) return `${label}: "${String(text).trim()}" is not a number`;
+  if (integer && !Number.isInteger(v)) return `${label} must be a whole number, got ${fmt(v)}`;
+  if (v < min || v > max) {
+    const range = Number.isFinite(min) && Number.isFinite(max)
+      ? `from ${fmt(min)} to ${fmt(max)}${u}`
+      : Number.isFinite(min) ? `at least ${fmt(min)}${u}` : `at most ${fmt(max)}${u}`;
+    return `${label} must be ${range}, got ${String(text).trim()}`;
+  }
+  return null;
+}
+
+/**
+ * A symbol as the page writes it: the Greek letters of the paper's
+ * symbols (mu_HD -> μ_HD, rho_min -> ρ_min, eps_sc -> ε_sc), the rest as is.
+ */
+export function prettySymbol(symbol) {
+  return String(symbol).replace(/^mu(?=_|$)/, 'μ').replace(/^rho(?=_|$)/, 'ρ').replace(/^eps(?=_|$)/, 'ε');
+}
+
+/**
+ * A message of the server in the page's words: `field` is the API's name
+ * of the field at fault (e.g. device.mu_hd), `label` the name the page
+ * shows for it, `file` the name of the file the request carried (what the
+ * server calls the request body). The field's prefix goes, the API's name
+ * becomes the label, "(field x)" notes go.
+ */
+export function inPageWords(message, { field = null, label = null, file = null } = {}) {
+  let text = String(message);
+  const names = field ? [field, field.split('.').pop()] : [];
+  names.forEach((name) => {
+    if (text.startsWith(`${name}: `)) text = text.slice(name.length + 2);
+  });
+  text = text.replace(/\s*\(field [^)]*\)/g, '');
+  if (file) text = text.replace(/\b(the )?request body\b/g, file);
+  else text = text.replace(/\bthe request body\b/g, 'the request').replace(/\brequest body\b/g, 'the request');
+  if (label) {
+    names.forEach((name) => {
+      const escaped = name.replace(/[.*+?^${}()|[\]\\]/g, '\\$&');
+      text = text.replace(new RegExp(`(^|[^A-Za-z0-9_.])${escaped}(?![A-Za-z0-9_])`, 'g'), `$1${label}`);
+    });
+  }
+  return text;
+}

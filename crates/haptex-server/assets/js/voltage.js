@@ -6,7 +6,7 @@ import { postJson } from './api.js';
 import { otherMethod } from './answers.js';
 import { showCheck } from './check.js';
 import { isElectrovibration } from './displays.js';
-import { clearInvalid } from './fields.js';
+import { DESIGN_FIELDS, blocked, clearServerErrors } from './feedback.js';
 import { draw } from './figures.js';
 import { on } from './hub.js';
 import { say, showError } from './messages.js';
@@ -14,6 +14,7 @@ import { voltageBody } from './requests.js';
 import { state } from './state.js';
 import { drawStrip, showStroke } from './strip.js';
 import { showRelative, showSummary } from './summary.js';
+import { showWhy } from './why.js';
 
 let voltageTimer = null;
 let voltageRequest = 0;
@@ -30,6 +31,11 @@ export function scheduleVoltage() {
  */
 export async function updateVoltage() {
   if (!state.profile) return;
+  // A field refused as typed (red, beside it) blocks the design: nothing is sent.
+  if (blocked(DESIGN_FIELDS).length) {
+    voltageRequest += 1; // an answer still on its way is stale too
+    return;
+  }
   const id = ++voltageRequest;
   const both = state.both && isElectrovibration();
   const [answer, companion] = await Promise.all([
@@ -40,10 +46,11 @@ export async function updateVoltage() {
   state.voltage = answer;
   state.companion = companion;
   state.drawn = state.profile;
-  clearInvalid();
+  clearServerErrors();
   draw();
   showSummary();
   showRelative();
+  showWhy();
   showStroke();
   showCheck();
   drawStrip();
