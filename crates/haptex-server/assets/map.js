@@ -7,15 +7,20 @@
 // sample-path) is plotted below and offered as CSV with the path itself.
 // The server keeps nothing: every request carries the image.
 // It is a module sharing the main page's (js/): the audio output, the
-// heat colours, the number format, the bilinear sampling, the plot
-// options and the fields' error outline.
+// heat colours, the number format, the bilinear sampling and the plot
+// options. Every field is checked as typed (js/map-fields.js, against the
+// server's ranges): a refused value is said in red under its control and
+// blocks the request, an unusual one in amber; the server's errors land
+// under the control they concern, in the page's words; only an error of
+// no field goes to the header line. On a phone the result of an action is
+// scrolled into view and announced.
 
 import { createAudio } from './js/audio.js';
 import { heatColour as colour } from './js/colours.js';
-import { clearInvalid } from './js/fields.js';
 import { fmtPlain as fmt, pct } from './js/format.js';
 import { bilinear } from './js/interpolate.js';
 import { lineOptions } from './js/plots.js';
+import { FIELDS, checkExtent, checkField, pageError, withConfig } from './js/map-fields.js';
 
 const $ = (id) => document.getElementById(id);
 /** Most samples of a drawn path (the server takes up to its max_points). */
@@ -24,8 +29,12 @@ const MAX_PATH_POINTS = 20000;
 const KEY_SPEED_MM_S = 20;
 const BAR_WIDTH = 64;
 
+/** The numeric fields, with the device ranges of GET /api/config once read. */
+let fields = FIELDS;
+
 const state = {
   image: null, // base64 of the chosen PNG
+  size: null, // [width, height] of the chosen PNG, from its header
   imageName: null,
   map: null, // the answer of POST /api/map
   request: null, // the settings the map was made with
@@ -40,7 +49,7 @@ const plots = { path: null };
 let carrierHz = 1000;
 // The browser's audio output (audio.js): U / U_max at the reading.
 const audio = createAudio(() => carrierHz, (text) => say(text, true));
-window.haptexMap = { state, plots, sample, audio };
+window.haptexMap = { state, plots, sample, audio, validate: () => validateAll() };
 
 function say(text, error) {
   const m = $('message');
@@ -54,9 +63,105 @@ function bump() {
 
 // ------------------------------------------------------------ requests
 
-/** The body of POST /api/map from the controls (the image as chosen). */
+// ------------------------------------------------------------- fields
+
+/** Whether the layout is one column (a phone): results are then scrolled to. */
+const narrow = () => window.matchMedia('(max-width: 899px)').matches;
+
+/** The notes under a control: its error (red) and its warning (amber). */
+function notesOf(id) {
+  const input = $(id);
+  let error = $(`${id}-error`);
+  if (!error) {
+    error = document.createElement('p');
+    error.id = `${id}-error`;
+    error.className = 'field-error';
+    error.setAttribute('role', 'alert');
+    error.hidden = true;
+    input.insertAdjacentElement('afterend', error);
+  }
+  let warning = $(`${id}-warning`);
+  if (!warning && id !== 'image') {
+    warning = document.createElement('p');
+    warning.id = `${id}-warning`;
+    warning.className = 'field-warning';
+    warning.hidden = true;
+    error.insertAdjacentElement('afterend', warning);
+  }
+  return { input, error, warning };
+}
+
+/** Shows `level` ('ok', 'warning', 'error') with `text` under control `id`. */
+function mark(id, level, text) {
+  const { input, error, warning } = notesOf(id);
+  error.hidden = level !== 'error';
+  error.textContent = level === 'error' ? text : '';
+  if (warning) {
+    warning.hidden = level !== 'warning';
+    warning.textContent = level === 'warning' ? text : '';
+  }
+  if (level === 'error') input.setAttribute('aria-invalid', 'true'); else input.removeAttribute('aria-invalid');
+  input.classList.toggle('outside', level === 'warning');
+  const described = [level === 'error' && error.id, level === 'warning' && warning && warning.id,
+    id === 'image' && 'image-status'].filter(Boolean);
+  if (described.length) input.setAttribute('aria-describedby', described.join(' '));
+  else input.removeAttribute('aria-describedby');
+}
+
+/** The numbers typed (the fields that hold one). */
+function typedValues() {
+  const values = {};
+  Object.keys(fields).forEach((id) => {
+    const text = $(id).value.trim();
+    if (/^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$/.test(text)) values[id] = Number(text);
+  });
+  return values;
+}
+
+/** The band of the last eq. (8) map, while its device is the one typed. */
+function bandTyped(values) {
+  const m = state.map;
+  if (!m || !m.band_mu || !state.request) return null;
+  const d = state.request.device;
+  return d.mu_hd === values.mu_hd && d.u_max_v === values.u_max_v ? m.band_mu : null;
+}
+
+/**
+ * Checks every field as typed and shows the result under each; true when
+ * none is refused (the request may be sent).
+ */
+function validateAll() {
+  const values = typedValues();
+  const context = { values, method: $('method').value, band: bandTyped(values) };
+  let ok = true;
+  Object.keys(fields).forEach((id) => {
+    const r = checkField(fields, id, $(id).value, context);
+    mark(id, r.level, r.text);
+    if (r.level === 'error') ok = false;
+  });
+  if (ok && state.size) {
+    const far = checkExtent(fields, values, state.size[0], state.size[1]);
+    if (far) { mark(far.id, 'error', far.text); ok = false; }
+  }
+  return ok;
+}
+
+/** The first control with a refused value, or null. */
+const firstRefused = () => Object.keys(fields).map($).find((e) => e.getAttribute('aria-invalid') === 'true') || null;
+
+/** Brings `element` into view when it is not (smoothly off: tests read the geometry at once). */
+function bringIntoView(element, block = 'nearest') {
+  const r = element.getBoundingClientRect();
+  if (r.bottom <= 0 || r.top >= window.innerHeight || r.top < 0 || r.bottom > window.innerHeight) {
+    element.scrollIntoView({ block, inline: 'nearest' });
+  }
+}
+
+// ------------------------------------------------------------ requests
+
+/** The body of POST /api/map from the controls (the image as chosen); the fields were validated. */
 function mapBody() {
-  const number = (id) => Number($(id).value);
+  const number = (id) => Number($(id).value.trim());
   return {
     image_png_base64: state.image,
     mu_black: number('mu_black'),
@@ -70,55 +175,132 @@ function mapBody() {
   };
 }
 
-/** The control a server error's field names, if the page has one. */
-function controlOf(field) {
-  if (!field) return null;
-  const name = field.replace(/^device\./, '').replace(/^pixel_mm_y$/, 'pixel_mm');
-  if (name === 'image_png_base64') return $('image');
-  return $(name);
-}
-
 async function post(url, body) {
   const response = await fetch(url, {
     method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body),
   });
   if (!response.ok) {
-    let error = { error: `${response.status} ${response.statusText}`, field: null };
+    let error = { error: `the server answered ${response.status} ${response.statusText}`, field: null };
     try { error = await response.json(); } catch (_) { /* not JSON */ }
-    const e = new Error(error.error + (error.field ? ` (field ${error.field})` : ''));
-    e.field = error.field;
+    const e = new Error(error.error);
+    e.api = error;
     throw e;
   }
   return response;
 }
 
+/** Hides the notes an earlier action left (the header line, the button's, the path's). */
+function clearActionNotes() {
+  say('');
+  ['build-error', 'path-error'].forEach((id) => { $(id).hidden = true; $(id).textContent = ''; });
+}
+
+/**
+ * A failed request, said where it belongs: under the control its field
+ * concerns (in the page's words), under the path plot for a path, in the
+ * header line only for an error of no field; brought into view.
+ */
 function showError(e) {
-  clearInvalid();
-  const control = controlOf(e.field);
-  if (control) control.setAttribute('aria-invalid', 'true');
-  say(e.message, true);
+  const api = e.api || { error: e.message || String(e), field: null };
+  const { control, text } = pageError(fields, api, state.imageName);
+  let shown;
+  if (control === 'image') {
+    mark('image', 'error', text);
+    $('image-status').textContent = `${state.imageName || 'The image'}: not mapped (see below).`;
+    state.map = null;
+    clearMap();
+    shown = $('image-error');
+  } else if (control === 'path') {
+    $('path-error').textContent = text;
+    $('path-error').hidden = false;
+    shown = $('path-error');
+  } else if (control && $(control)) {
+    mark(control, 'error', text);
+    shown = $(`${control}-error`);
+  } else {
+    say(text, true);
+    shown = $('message');
+  }
+  document.body.dataset.state = state.map ? 'ready' : 'empty';
   document.body.dataset.error = String(Number(document.body.dataset.error || 0) + 1);
+  bringIntoView(shown, 'center');
   bump();
 }
 
-async function build() {
-  if (!state.image) { say('Choose a grayscale PNG first.', true); return; }
+/** Says why the map was not made, under the button and the control at fault. */
+function refuseBuild(text) {
+  const note = $('build-error');
+  note.textContent = text;
+  note.hidden = false;
+  document.body.dataset.refused = String(Number(document.body.dataset.refused || 0) + 1);
+  bringIntoView(note);
+  bump();
+}
+
+function clearMap() {
+  const canvas = $('map-canvas');
+  canvas.getContext('2d').clearRect(0, 0, canvas.width, canvas.height);
+  $('colour-bar').getContext('2d').clearRect(0, 0, $('colour-bar').width, $('colour-bar').height);
+  $('map-summary').textContent = '';
+  $('map-title').textContent = 'Map';
+  $('fit-band').disabled = true;
+}
+
+/**
+ * Maps the image with the fields (POST /api/map). `from` is the control
+ * that asked: the button, the file field or a field edit; a refused field
+ * blocks the request (said under it and, from the button, under the
+ * button too).
+ */
+async function build(from = 'button', edited = null) {
+  clearActionNotes();
+  const ok = validateAll();
+  if (!state.image) {
+    if (from === 'button') {
+      mark('image', 'error', 'Choose a grayscale PNG first: the map is made from it.');
+      refuseBuild('Not mapped: no image chosen yet (see the file field).');
+    }
+    return;
+  }
+  if (!ok) {
+    const bad = firstRefused();
+    const label = bad ? document.querySelector(`label[for="${bad.id}"]`).textContent.replace(/\s+/g, ' ').trim() : '';
+    if (from === 'upload') $('image-status').textContent = `${state.imageName}: not mapped yet, a field is refused.`;
+    if (from === 'button') refuseBuild(`Not mapped: ${label} is refused (see the note under it).`);
+    else if (bad) { bringIntoView($(`${bad.id}-error`)); bump(); }
+    return;
+  }
   const body = mapBody();
-  say('Mapping the image…');
   document.body.dataset.state = 'loading';
+  $('map-summary').textContent = 'Mapping the image…';
   const answer = await (await post('/api/map', body)).json();
-  clearInvalid();
   state.map = answer;
   state.request = body;
+  mark('image', 'ok', '');
   const g = answer.grid;
-  say(`${state.imageName}: ${g.nx} x ${g.ny} pixels (${answer.bits} bit), ` +
-    `${fmt(g.nx * g.dx_mm)} x ${fmt(g.ny * g.dy_mm)} mm.`);
-  $('map-summary').textContent = answer.method === 'physical'
-    ? `eq. (8): ${pct(answer.not_renderable_fraction)} of the area below mu_HD (0 V, not renderable), ` +
-      `${pct(answer.clipped_fraction)} clipped at U_max = ${fmt(answer.u_max_v)} V.`
-    : `eq. (9): the lowest mu at 0 V, the highest at U_max = ${fmt(answer.u_max_v)} V.`;
+  $('image-status').textContent = `${state.imageName}: ${g.nx} x ${g.ny} pixels (${answer.bits} bit), ` +
+    `${fmt(g.nx * g.dx_mm)} x ${fmt(g.ny * g.dy_mm)} mm.`;
+  validateAll(); // the band's warnings, now that it is known
+  const summary = $('map-summary');
+  if (answer.method === 'physical') {
+    const [lo, hi] = answer.band_mu;
+    summary.textContent = `Eq. (8): the display renders μ from ${fmt(lo)} (μ_HD, 0 V) to ${fmt(hi)} ` +
+      `(U_max = ${fmt(answer.u_max_v)} V). ${pct(answer.not_renderable_fraction)} of the image is below μ_HD ` +
+      `(0 V, not rendered), ${pct(answer.clipped_fraction)} is clipped at U_max.`;
+    summary.classList.toggle('warning', answer.not_renderable_fraction + answer.clipped_fraction > 0.25);
+  } else {
+    summary.textContent = `Eq. (9): the lowest μ of the image at 0 V, the highest at U_max = ${fmt(answer.u_max_v)} V ` +
+      '(the pattern only, not the friction itself).';
+    summary.classList.remove('warning');
+  }
+  $('fit-band').disabled = !answer.band_mu;
   drawMap();
   document.body.dataset.state = 'ready';
+  document.body.dataset.builds = String(Number(document.body.dataset.builds || 0) + 1);
+  // On a phone the map is above the controls: bring it (and its summary)
+  // into view, unless the field just edited has a note to read.
+  const noted = edited && ($(`${edited}-warning`) || {}).hidden === false;
+  if (narrow() && !noted) bringIntoView($('map-figure'), 'start');
   bump();
   if (state.path) await samplePath();
 }
@@ -133,6 +315,7 @@ async function samplePath() {
     `U ${fmt(Math.min(...u))} .. ${fmt(Math.max(...u))} V RMS` +
     (answer.outside ? `; ${answer.outside} samples outside the map (the edge's voltage held)` : '');
   ['download-path', 'download-voltage', 'clear-path'].forEach((id) => { $(id).disabled = false; });
+  $('path-error').hidden = true;
   document.body.dataset.path = String(Number(document.body.dataset.path || 0) + 1);
   bump();
 }
@@ -152,7 +335,7 @@ function shown() {
   if (state.show === 'friction') {
     const lo = Math.min(m.mapping.mu_black, m.mapping.mu_white);
     const hi = Math.max(m.mapping.mu_black, m.mapping.mu_white);
-    return { values: m.mu, lo, hi, label: 'mu', unit: '' };
+    return { values: m.mu, lo, hi, label: 'μ', unit: '' };
   }
   return { values: m.voltage_v, lo: 0, hi: m.u_max_v, label: 'U', unit: 'V RMS' };
 }
@@ -228,7 +411,7 @@ function drawMap() {
   b.fillText(s.unit ? `${s.label} (${s.unit})` : s.label, 0, 0);
   bar.setAttribute('aria-label', `colour bar: ${s.label} from ${fmt(s.lo)} (dark) to ${fmt(s.hi)} (bright)` +
     (s.unit ? ` ${s.unit}` : ''));
-  $('map-title').textContent = state.show === 'friction' ? 'Friction map mu(x, y)' : 'Voltage map U(x, y)';
+  $('map-title').textContent = state.show === 'friction' ? 'Friction map μ(x, y)' : 'Voltage map U(x, y)';
 }
 
 /** Canvas position (CSS px) of the map point (x, y): cell centres at the grid points. */
@@ -308,7 +491,7 @@ function readPoint(x, y, input) {
   const mu = sample(state.map.mu, x, y);
   const u = sample(state.map.voltage_v, x, y);
   const readout = $('map-readout');
-  readout.textContent = `x = ${x.toFixed(3)} mm, y = ${y.toFixed(3)} mm, mu = ${mu.toFixed(3)}, ` +
+  readout.textContent = `x = ${x.toFixed(3)} mm, y = ${y.toFixed(3)} mm, μ = ${mu.toFixed(3)}, ` +
     `U = ${u.toFixed(1)} V RMS`;
   Object.assign(readout.dataset, { xMm: String(x), yMm: String(y), mu: String(mu), voltageV: String(u), input });
   $('map-canvas').setAttribute('aria-description', readout.textContent);
@@ -449,30 +632,69 @@ function readImage(file) {
   });
 }
 
+/** The size a PNG's header (IHDR) claims, or null when the bytes are no PNG. */
+function pngSize(base64) {
+  let head = '';
+  try { head = atob(base64.slice(0, 44)); } catch (_) { return null; }
+  if (head.length < 24 || head.slice(1, 4) !== 'PNG' || head.slice(12, 16) !== 'IHDR') return null;
+  const be = (k) => ((head.charCodeAt(k) << 24) >>> 0) + (head.charCodeAt(k + 1) << 16) +
+    (head.charCodeAt(k + 2) << 8) + head.charCodeAt(k + 3);
+  return [be(16), be(20)];
+}
+
 async function init() {
   try {
     const config = await (await fetch('/api/config')).json();
     const n = config.limits && config.limits.max_map_pixels;
     if (config.play && config.play.carrier) carrierHz = config.play.carrier.frequency_hz;
     if (n) $('max-pixels').textContent = `${n} (${Math.floor(Math.sqrt(n))} x ${Math.floor(Math.sqrt(n))})`;
-  } catch (_) { /* the default text stays */ }
+    fields = withConfig(FIELDS, config);
+  } catch (_) { /* the default text and ranges stay */ }
+  Object.keys(fields).forEach((id) => notesOf(id));
+  notesOf('image');
   $('image').addEventListener('change', async () => {
     const file = $('image').files[0];
     if (!file) return;
-    state.image = await readImage(file);
+    clearActionNotes();
+    mark('image', 'ok', '');
     state.imageName = file.name;
+    $('image-status').textContent = `${file.name}: reading…`;
+    try {
+      state.image = await readImage(file);
+    } catch (e) {
+      state.image = null;
+      showError({ api: { error: `cannot read the file: ${e.message}`, field: 'image_png_base64' } });
+      return;
+    }
+    state.size = pngSize(state.image);
     state.path = null;
     state.sampled = null;
-    build().catch(showError);
+    build('upload').catch(showError);
   });
   let timer = null;
-  document.querySelectorAll('#controls input[type=number], #controls select').forEach((e) => {
-    e.addEventListener('change', () => {
+  Object.keys(fields).forEach((id) => {
+    // As typed: the note under the field; on change (Enter or leaving it): a new map.
+    $(id).addEventListener('input', () => { validateAll(); bump(); });
+    $(id).addEventListener('change', () => {
       clearTimeout(timer);
-      timer = setTimeout(() => { if (state.image) build().catch(showError); }, 50);
+      timer = setTimeout(() => build('field', id).catch(showError), 50);
     });
   });
-  $('build').addEventListener('click', () => build().catch(showError));
+  $('method').addEventListener('change', () => {
+    clearTimeout(timer);
+    timer = setTimeout(() => build('field').catch(showError), 50);
+  });
+  $('build').addEventListener('click', () => build('button').catch(showError));
+  // Black at the band's bottom (mu_HD, 0 V), white at its top (U_max), four decimals inside it.
+  $('fit-band').addEventListener('click', () => {
+    const band = state.map && state.map.band_mu;
+    if (!band) return;
+    $('mu_black').value = String(Math.ceil(band[0] * 1e4) / 1e4);
+    $('mu_white').value = String(Math.floor(band[1] * 1e4) / 1e4);
+    build('button').catch(showError);
+  });
+  $('fit-band').disabled = true;
+  validateAll();
   $('show').addEventListener('change', () => { state.show = $('show').value; drawMap(); bump(); });
   $('download-path').addEventListener('click', () => {
     if (state.path) offer(new Blob([pathCsv()], { type: 'text/csv' }), 'map-path.csv', 'path-csv');

@@ -2315,7 +2315,7 @@ async fn map_view(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     show_map(client, "friction").await?;
     let title = wd!(wd!(client.find(Locator::Id("map-title"))).text());
     let bar = script(client, "return document.getElementById('colour-bar').getAttribute('aria-label');").await?;
-    if !title.contains("Friction") || !bar.as_str().unwrap_or_default().contains("mu from 0.95") {
+    if !title.contains("Friction") || !bar.as_str().unwrap_or_default().contains("μ from 0.95") {
         return fail(format!("the friction view: title {title:?}, colour bar {bar}"));
     }
     show_map(client, "voltage").await?;

@@ -26,7 +26,7 @@ use std::collections::BTreeMap;
 
 use axum::Json;
 use axum::response::{IntoResponse, Response};
-use haptex_core::electrovibration::Method;
+use haptex_core::electrovibration::{Method, PhysicalMapping};
 use haptex_core::map::{FrictionMap, GrayMapping, MapError, MapGrid, VoltageMap, png_size};
 use haptex_core::planar::PlanarTrajectory;
 use haptex_core::trajectory::TrajectoryError;
@@ -104,6 +104,10 @@ struct MapAnswer<'a> {
     u_max_v: f64,
     not_renderable_fraction: f64,
     clipped_fraction: f64,
+    /// Eq. (8) only: the friction the display renders, [mu_HD, mu at
+    /// U_max]; below it 0 V (not rendered), above it clipped at U_max.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    band_mu: Option<[f64; 2]>,
 }
 
 #[derive(Serialize)]
@@ -158,6 +162,10 @@ pub async fn post(call: Preamble<Map>) -> Result<Response, ApiError> {
             u_max_v: b.voltage.u_max_v,
             not_renderable_fraction: b.voltage.not_renderable_fraction,
             clipped_fraction: b.voltage.clipped_fraction,
+            band_mu: (b.method == Method::Physical).then(|| {
+                let d = &b.request.device;
+                [d.mu_hd, PhysicalMapping::new(d.mu_hd, d.force_ratio_per_v2(1.0), d.u_max_v).mu_clip]
+            }),
         };
         Ok(Json(answer).into_response())
     })
@@ -227,8 +235,8 @@ fn build(
     base: &haptex_core::electrovibration::Device,
 ) -> Result<Built, ApiError> {
     let png = decode_base64(&body.image_png_base64)
-        .map_err(|m| ApiError::bad_request(format!("not base64: {m}"), Some(IMAGE)))?;
-    let (width, height) = png_size(&png, IMAGE).map_err(|e| ApiError::bad_request(e.to_string(), Some(IMAGE)))?;
+        .map_err(|m| ApiError::bad_request(format!("the image is not base64 text: {m}"), Some(IMAGE)))?;
+    let (width, height) = png_size(&png, IMAGE).map_err(|e| ApiError::bad_request(e.message, Some(IMAGE)))?;
     let (max_pixels, pixels) = (limits.max_map_pixels, width.saturating_mul(height));
     if pixels > max_pixels {
         return Err(ApiError::too_large(
@@ -254,7 +262,7 @@ fn build(
     let mapping = GrayMapping { mu_black: body.mu_black, mu_white: body.mu_white, gamma: body.gamma.unwrap_or(1.0) };
     let spacing = (body.pixel_mm, body.pixel_mm_y.unwrap_or(body.pixel_mm));
     let origin = (body.x0_mm.unwrap_or(0.0), body.y0_mm.unwrap_or(0.0));
-    let request = DeviceRequest::from_pairs_over(body.device.iter(), "device.", base)?;
+    let request = DeviceRequest::from_pairs_over(body.device.iter(), "device.", base).map_err(device_words)?;
     let method = body.method.unwrap_or(Method::Physical);
     if method == Method::Physical && request.device.contact.exponent != 1.0 {
         return Err(ApiError::bad_request(
@@ -272,16 +280,59 @@ fn build(
     Ok(Built { request, method, mapping, friction, voltage, bits })
 }
 
-/// A core map error with the request field it is about.
+/// A core map error with the request field it is about, in words: the
+/// core names the grid's and the mapping's fields as its files do
+/// (`dx_mm`, `mu`) after the source (here the image's field); the answer
+/// names the request field in `field` and says the field's name in the
+/// message as a person reads it ("pixel size must be a positive number of
+/// mm, got -5"), not the image's field nor a column name.
 fn map_error(e: MapError, pixel_y_given: bool) -> ApiError {
-    let field = match (e.source_name.as_str(), e.place.as_deref()) {
-        ("device", _) => "device".to_string(),
-        (_, Some(place @ ("mu_black" | "mu_white" | "gamma" | "x0_mm" | "y0_mm"))) => place.to_string(),
-        (_, Some("dx_mm" | "x_mm")) => "pixel_mm".to_string(),
-        (_, Some("dy_mm" | "y_mm")) => (if pixel_y_given { "pixel_mm_y" } else { "pixel_mm" }).to_string(),
-        _ => IMAGE.to_string(),
+    let place = e.place.as_deref();
+    let (field, name) = match (e.source_name.as_str(), place) {
+        ("device", _) => ("device", None),
+        (_, Some("mu_black")) => ("mu_black", Some("mu of black")),
+        (_, Some("mu_white")) => ("mu_white", Some("mu of white")),
+        (_, Some("gamma")) => ("gamma", Some("gamma")),
+        (_, Some("x0_mm")) => ("x0_mm", Some("x of the first column")),
+        (_, Some("y0_mm")) => ("y0_mm", Some("y of the bottom row")),
+        (_, Some("dx_mm")) => ("pixel_mm", Some("pixel size")),
+        (_, Some("x_mm")) => ("pixel_mm", Some("the last column's x")),
+        (_, Some("dy_mm")) if pixel_y_given => ("pixel_mm_y", Some("pixel height")),
+        (_, Some("dy_mm")) => ("pixel_mm", Some("pixel size")),
+        (_, Some("y_mm")) if pixel_y_given => ("pixel_mm_y", Some("the top row's y")),
+        (_, Some("y_mm")) => ("pixel_mm", Some("the top row's y")),
+        _ => (IMAGE, None),
     };
-    ApiError::bad_request(e.to_string(), Some(&field))
+    let message = match name {
+        Some(name) => named(name, &e.message),
+        None => e.message,
+    };
+    ApiError::bad_request(message, Some(field))
+}
+
+/// `message` about the field a person calls `name`: the core's own subject
+/// ("spacing", a range's column name such as `mu` or `x_mm`) replaced by
+/// the name, so that the sentence says what it is about.
+fn named(name: &str, message: &str) -> String {
+    let rest = ["spacing ", "mu ", "x_mm ", "y_mm "]
+        .iter()
+        .find_map(|subject| message.strip_prefix(subject).filter(|r| r.starts_with("must ")))
+        .unwrap_or(message);
+    let rest = rest.replace("mu_black", "mu of black");
+    if rest.starts_with("must ") { format!("{name} {rest}") } else { format!("{name}: {rest}") }
+}
+
+/// A device parameter's refusal with the parameter's symbol (`mu_HD`,
+/// `U_max`, as the paper writes them) where the message begins with its
+/// API name (`mu_hd must be ...`); the field stays the API's path.
+fn device_words(mut e: ApiError) -> ApiError {
+    let name = e.field.as_deref().and_then(|f| f.strip_prefix("device.")).unwrap_or_default();
+    if let Some(x) = crate::explain::EXPLANATIONS.iter().find(|x| x.field == name)
+        && let Some(rest) = e.message.strip_prefix(name).filter(|r| r.starts_with(' '))
+    {
+        e.message = format!("{}{rest}", x.symbol);
+    }
+    e
 }
 
 /// Standard base64 (RFC 4648, `+` and `/`), padding optional, no
@@ -298,7 +349,76 @@ fn decode_base64(text: &str) -> Result<Vec<u8>, String> {
 
 #[cfg(test)]
 mod tests {
-    use super::decode_base64;
+    use haptex_core::map::MapError;
+
+    use super::{decode_base64, device_words, map_error};
+    use crate::error::ApiError;
+
+    #[test]
+    fn map_errors_name_the_field_in_words_not_the_image() {
+        let e = |place: &str, message: &str| MapError {
+            source_name: "image_png_base64".into(),
+            place: Some(place.into()),
+            message: message.into(),
+        };
+        for (place, message, y_given, field, words) in [
+            (
+                "dx_mm",
+                "spacing must be a positive number of mm, got -5",
+                false,
+                "pixel_mm",
+                "pixel size must be a positive number of mm, got -5",
+            ),
+            (
+                "dy_mm",
+                "spacing must be a positive number of mm, got 0",
+                true,
+                "pixel_mm_y",
+                "pixel height must be a positive number of mm, got 0",
+            ),
+            (
+                "mu_black",
+                "mu must be from -1000 to 1000, got 1e9",
+                false,
+                "mu_black",
+                "mu of black must be from -1000 to 1000, got 1e9",
+            ),
+            ("mu_white", "must differ from mu_black", false, "mu_white", "mu of white must differ from mu of black"),
+            (
+                "x0_mm",
+                "x_mm must be from -1e6 to 1e6 mm, got -5e6",
+                false,
+                "x0_mm",
+                "x of the first column must be from -1e6 to 1e6 mm, got -5e6",
+            ),
+            (
+                "x_mm",
+                "x_mm must be from -1e6 to 1e6 mm, got 2e6",
+                false,
+                "pixel_mm",
+                "the last column's x must be from -1e6 to 1e6 mm, got 2e6",
+            ),
+        ] {
+            let a = map_error(e(place, message), y_given);
+            assert_eq!((a.field.as_deref(), a.message.as_str()), (Some(field), words));
+        }
+        let image =
+            MapError { source_name: "image_png_base64".into(), place: None, message: "an RGB colour image".into() };
+        let a = map_error(image, false);
+        assert_eq!((a.field.as_deref(), a.message.as_str()), (Some("image_png_base64"), "an RGB colour image"));
+    }
+
+    #[test]
+    fn device_refusals_say_the_papers_symbol() {
+        let a = device_words(ApiError::bad_request("mu_hd must be from 0.001 to 10, got -1", Some("device.mu_hd")));
+        assert_eq!(
+            (a.field.as_deref(), a.message.as_str()),
+            (Some("device.mu_hd"), "mu_HD must be from 0.001 to 10, got -1")
+        );
+        let a =
+            device_words(ApiError::bad_request("u_max_v must be from 0.001 to 10000 V, got 0", Some("device.u_max_v")));
+        assert_eq!(a.message, "U_max must be from 0.001 to 10000 V, got 0");
+    }
 
     #[test]
     fn base64_decodes_the_rfc_4648_vectors_and_refuses_others() {
