@@ -1288,10 +1288,9 @@ async fn display_selector(client: &Client, scratch: &Path) -> Check<()> {
         "the bad calibration refused",
     )
     .await?;
-    let message = wd!(wd!(client.find(Locator::Id("message"))).text());
-    if !message.starts_with("Ultrasonic calibration (Display): bad-plate.csv, line 4, column 'amplitude_um'")
-        || message.contains("--")
-    {
+    // Beside the file field (issue 37), naming the file, its line and column.
+    let message = wd!(wd!(client.find(Locator::Id("calibration-error"))).text());
+    if !message.starts_with("bad-plate.csv, line 4, column 'amplitude_um'") || message.contains("--") {
         return fail(format!("a bad calibration is reported as {message:?}"));
     }
     let logged = console_errors(client).await?;
@@ -1828,7 +1827,7 @@ async fn recipes(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     wait_for(
         client,
         "document.body.dataset.state === 'ready' && \
-         document.getElementById('message').textContent.startsWith(\"recipe: the link's recipe cannot be read\")",
+         document.getElementById('message').textContent.startsWith(\"The link's recipe cannot be read\")",
         "a bad recipe link reported",
     )
     .await?;

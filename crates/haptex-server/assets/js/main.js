@@ -47,7 +47,8 @@ export async function start() {
       try {
         opened = recipeFromHash(location.hash);
       } catch (error) {
-        state.pendingError = new ApiError(`the link's recipe cannot be read (${error.message})`, 'recipe', 0);
+        // A link belongs to no field of the page: said in the header.
+        state.pendingError = new ApiError(`The link's recipe cannot be read (${error.message})`, null, 0);
       }
       if (opened) await openRecipe(opened).catch((error) => { state.pendingError = error; });
     }
