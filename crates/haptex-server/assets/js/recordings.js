@@ -4,6 +4,7 @@
 // a stroke of the first material uploaded is shown.
 
 import { $ } from './dom.js';
+import { inPageWords } from './validation.js';
 import { ApiError, api } from './api.js';
 import { fmt } from './format.js';
 import { lineOptions } from './plots.js';
@@ -50,9 +51,11 @@ export async function uploadRecordings() {
 export function showRecordingsError(error) {
   const info = $('recordings-info');
   info.classList.add('error');
-  const at = error instanceof ApiError && error.field && !error.message.includes(error.field)
-    ? ` (${error.field === 'provenance' ? 'The data are' : error.field})` : '';
-  info.textContent = `Not added: ${error.message}${at}`;
+  // In the page's words: the field of the choice by its label, serde's backticks as quotes.
+  const message = error instanceof ApiError ? inPageWords(error.message) : String(error.message || error);
+  const at = error instanceof ApiError && error.field === 'provenance' && !message.includes('provenance')
+    ? ' (The data are)' : '';
+  info.textContent = `Not added: ${message}${at}`;
   document.body.dataset.recordingsError = String(Number(document.body.dataset.recordingsError || 0) + 1);
 }
 

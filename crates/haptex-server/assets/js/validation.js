@@ -116,6 +116,11 @@ export function inPageWords(message, { field = null, label = null, file = null }
   text = text.replace(/\s*\(field [^)]*\)/g, '');
   if (file) text = text.replace(/\b(the )?request body\b/g, file);
   else text = text.replace(/\bthe request body\b/g, 'the request').replace(/\brequest body\b/g, 'the request');
+  // serde's words for a file's fields: "unknown field `x`, expected one of `a`, `b`".
+  text = text.replace(/unknown field `([^`]*)`, expected one of ((?:`[^`]*`(?:, | or )?)+)/g,
+    (_, name, list) => `unknown field "${name}" (the fields are ${list.replace(/`/g, '')})`);
+  text = text.replace(/unknown field `([^`]*)`, expected `([^`]*)`/g, 'unknown field "$1" (the field is $2)');
+  text = text.replace(/`([^`]*)`/g, '"$1"');
   if (label) {
     names.forEach((name) => {
       const escaped = name.replace(/[.*+?^${}()|[\]\\]/g, '\\$&');

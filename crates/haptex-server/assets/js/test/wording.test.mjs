@@ -61,3 +61,10 @@ test('inPageWords: the request body is the file the user chose, or the request',
   assert.equal(inPageWords('body: the request body is empty', { field: 'body' }), 'the request is empty');
   assert.equal(inPageWords('no field here'), 'no field here');
 });
+
+test("inPageWords: serde's backticks become quotes, its list of fields plain words", () => {
+  assert.equal(inPageWords('s.recording.json: invalid metadata: unknown field `not`, expected one of `format`, `material`, `participant` at line 3 column 7'),
+    's.recording.json: invalid metadata: unknown field "not" (the fields are format, material, participant) at line 3 column 7');
+  assert.equal(inPageWords('unknown field `x`, expected `y`'), 'unknown field "x" (the field is y)');
+  assert.equal(inPageWords('missing field `participant` at line 2'), 'missing field "participant" at line 2');
+});
