@@ -101,6 +101,7 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
         step!("upload error", upload_error(client, scratch));
         step!("combined check caveat", combined_check_caveat(client));
         step!("page words", page_words(client));
+        step!("pins and extrapolation", pins_and_extrapolation(client));
         // A refusal the server answers is logged by Chromium itself ("Failed
         // to load resource"): not an error of the page's script.
         let errors: Vec<String> =
@@ -325,6 +326,18 @@ async fn flagged_as_typed(client: &Client) -> Check<()> {
             }
         }
     }
+    // The outline of a refused max runs goes once the value is fixed.
+    type_into(client, "check-runs", "0").await?;
+    wait_for(
+        client,
+        "document.getElementById('check-runs').getAttribute('aria-invalid') === 'true'",
+        "max runs 0 refused",
+    )
+    .await?;
+    must_see(client, "check-runs-error", "max runs = 0").await?;
+    type_into(client, "check-runs", "3").await?;
+    wait_for(client, "!document.getElementById('check-runs').hasAttribute('aria-invalid')", "max runs 3 accepted")
+        .await?;
     let n = updates(client).await?;
     type_into(client, "carrier", "1000").await?;
     type_into(client, "x0", "5").await?;
@@ -451,8 +464,10 @@ async fn combined_check_caveat(client: &Client) -> Check<()> {
 
 /// The paper's symbols, written with an underscore for a subscript: the
 /// only snake_case-looking words the page may show outside code samples.
+/// (f_c, the carrier frequency, is the symbol docs/physics.md gives it.)
 const PAPER_SYMBOLS: &[&str] = &[
     "mu_flat", "rho_min", "rho_inf", "rho_sc", "r_w", "r_h", "a_max", "a_c", "eps_sc", "eps_i", "d_sc", "d_i", "eps_0",
+    "f_c",
 ];
 
 /// Step 7: the page's visible text (outside code samples) in its own words.
@@ -500,6 +515,31 @@ async fn page_words(client: &Client) -> Check<()> {
     let live = script(client, "return document.getElementById('live-toggle').checkVisibility();").await?;
     if live == Value::Bool(true) {
         return Err("a \"Go live\" button is shown although the server runs without --live".into());
+    }
+    Ok(())
+}
+
+/// Smaller findings: a pinned design's surface is drawn on the h(x) plot
+/// with the next design's; a template extrapolated beyond the FE database
+/// says that its estimate can be jagged and offers the FE run.
+async fn pins_and_extrapolation(client: &Client) -> Check<()> {
+    click(client, "#pin-design").await?;
+    wait_for(client, "window.haptex.state.pins.length === 1", "a pinned design").await?;
+    let n = updates(client).await?;
+    script(
+        client,
+        "const s = document.getElementById('template-height_mm'); s.value = 0.54; \
+         s.dispatchEvent(new Event('input', {bubbles: true})); return true;",
+    )
+    .await?;
+    wait_for(client, &format!("Number(document.body.dataset.updates) > {n}"), "r_h = 0.54 mm designed").await?;
+    let labels = script(client, "return window.haptex.plots.height.series.slice(1).map(s => s.label);").await?;
+    if labels.as_array().map(Vec::len) != Some(2) {
+        return Err(format!("the h(x) plot does not draw the pinned surface beside the new one: {labels}"));
+    }
+    let info = text_of(client, "template-info").await?;
+    if !info.contains("jagged") || !info.contains("FE model") {
+        return Err(format!("an extrapolated template's estimate comes without a word: {info:?}"));
     }
     Ok(())
 }
