@@ -368,7 +368,7 @@ async fn labels(client: &Client, name: &str) -> Check<Vec<String>> {
 }
 
 /// Whether the friction plot draws the FE model's profile.
-const FE_DRAWN: &str = "window.haptex.plots.friction.series.some(s => s.label === 'mu FE model')";
+const FE_DRAWN: &str = "window.haptex.plots.friction.series.some(s => s.label === 'μ FE model')";
 
 /// The profile relative to its flat value as the server makes it (paper
 /// Fig. 2a): mu / mu_flat * mu_HD.
@@ -724,7 +724,7 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     click_slider(client, "template-width_mm", 0.995).await?;
     wait_update(client, n, "the voltage at the slider's end").await?;
     wait_for(client, "window.haptex.state.drawn.extrapolation === true", "the extrapolated profile drawn").await?;
-    if labels(client, "friction").await?.iter().any(|l| l == "mu FE model") {
+    if labels(client, "friction").await?.iter().any(|l| l == "μ FE model") {
         return fail("the FE profile of the previous width is still drawn");
     }
     let flagged = script(
@@ -929,9 +929,9 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     // x samples: one x axis, each design's own points.
     let upload_pin = pin(client).await?;
     show_template(client).await?;
-    let pinned = series_of(client, "friction", &format!("{upload_pin} mu")).await?;
+    let pinned = series_of(client, "friction", &format!("{upload_pin} μ")).await?;
     let template_x = numbers(&script(client, "return window.haptex.state.voltage.x_mm;").await?)?;
-    let current = series_of(client, "friction", "mu_RS / mu_flat · mu_HD").await?;
+    let current = series_of(client, "friction", "μ_RS / μ_flat · μ_HD").await?;
     if pinned.0 != x || pinned.1 != mu || current.0 != template_x {
         return fail(format!("the pinned upload over the template: {pinned:?} on the template's x"));
     }
@@ -1203,7 +1203,7 @@ async fn display_selector(client: &Client, scratch: &Path) -> Check<()> {
     let shown = labels(client, "friction").await?;
     let band = core.summary.band_mu;
     let at = |label: &str| shown.iter().position(|l| l == label).map(|i| &friction[i + 1]);
-    match (at("band min (mu_HD rho_min)"), at("band max (mu at U_max)")) {
+    match (at("band min (μ_HD ρ_min)"), at("band max (μ at U_max)")) {
         (Some(lo), Some(hi)) if lo.iter().all(|m| *m == band[0]) && hi.iter().all(|m| *m == band[1]) => {}
         _ => return fail(format!("combined: the friction plot's series {shown:?} do not draw the band {band:?}")),
     }
@@ -1347,7 +1347,7 @@ async fn display_selector(client: &Client, scratch: &Path) -> Check<()> {
          && document.getElementById('strategy-row').hidden;",
     )
     .await?;
-    if hidden != Value::Bool(true) || !labels(client, "friction").await?.iter().any(|l| l == "band max (mu_HD)") {
+    if hidden != Value::Bool(true) || !labels(client, "friction").await?.iter().any(|l| l == "band max (μ_HD)") {
         return fail("ultrasonic: a voltage plot or the strategy is still shown, or the band's top is not mu_HD");
     }
     // Back to electrovibration: the one-channel page.
@@ -1565,7 +1565,7 @@ async fn compare_designs(client: &Client, x: &[f64]) -> Check<()> {
         let predicted = if width == 1.3 { default.clone() } else { predicted_bump(client, width).await? };
         let (eq8, eq9) = core_relative_voltages(x, &predicted, 0.5);
         let prefix = name.map(|p| format!("{p} ")).unwrap_or_default();
-        let mu_label = name.map(|p| format!("{p} mu")).unwrap_or_else(|| "mu_RS / mu_flat · mu_HD".into());
+        let mu_label = name.map(|p| format!("{p} μ")).unwrap_or_else(|| "μ_RS / μ_flat · μ_HD".into());
         let friction = series_of(client, "friction", &mu_label).await?;
         let v8 = series_of(client, "voltage", &format!("{prefix}U eq. (8)")).await?;
         let v9 = series_of(client, "voltage", &format!("{prefix}U eq. (9)")).await?;
@@ -1577,7 +1577,7 @@ async fn compare_designs(client: &Client, x: &[f64]) -> Check<()> {
     let legend = wd!(wd!(client.find(Locator::Css("#friction-plot .u-legend"))).text());
     let list = wd!(wd!(client.find(Locator::Id("pins"))).text());
     for p in [&p1, &p2] {
-        if !legend.contains(&format!("{p} mu")) {
+        if !legend.contains(&format!("{p} μ")) {
             return fail(format!("the friction plot's legend does not name {p}: {legend:?}"));
         }
     }
@@ -1606,7 +1606,7 @@ async fn compare_designs(client: &Client, x: &[f64]) -> Check<()> {
     let p4 = pin(client).await?;
     let shown = labels(client, "friction").await?;
     for p in [&p1, &p2, &p3, &p4] {
-        if !shown.contains(&format!("{p} mu")) {
+        if !shown.contains(&format!("{p} μ")) {
             return fail(format!("with four pins the friction plot shows {shown:?}"));
         }
     }

@@ -143,7 +143,7 @@ export function showCheck() {
     voltageSeries.push({ label: 'U compensated', stroke: '#2e7d32', width: 1.5 });
     voltageData.push(comp.voltage_v);
   }
-  frictionSeries.push({ label: 'mu_HD', stroke: '#888', dash: [6, 4], width: 1 });
+  frictionSeries.push({ label: 'μ_HD', stroke: '#888', dash: [6, 4], width: 1 });
   frictionData.push(constant(x, r.settings.mu_hd));
   voltageSeries.push({ label: 'U_max', stroke: '#888', dash: [6, 4], width: 1 });
   const summary = r.voltage.summary;

@@ -109,7 +109,7 @@ export function showDisplayControls() {
   $('run-compensate').disabled = !ev;
   $('both-methods').disabled = !ev;
   $('display-info').textContent = ev
-    ? 'Electrovibration only raises friction above mu_HD.'
+    ? 'Electrovibration only raises friction above μ_HD.'
     : 'Method: physical (eq. 9 is the electrovibration display\'s pattern); the compensation on the finger model ' +
       'is for the electrovibration display' +
       (isCheckable() ? '; the check applies this design to the finger on the vibrating plate.' : ', its check ' +

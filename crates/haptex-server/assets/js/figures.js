@@ -21,26 +21,26 @@ export function draw() {
   const x = v.x_mm;
   const r = s.relative;
   const frictionData = [x, v.mu];
-  const frictionSeries = [{ label: r ? 'mu_RS / mu_flat · mu_HD' : 'mu_RS', stroke: '#1f5fa8', width: 1.5 }];
+  const frictionSeries = [{ label: r ? 'μ_RS / μ_flat · μ_HD' : 'μ_RS', stroke: '#1f5fa8', width: 1.5 }];
   if (s.display) {
     // The renderable band of the display (summary.band_mu).
     frictionData.push(constant(x, s.mu_hd), constant(x, s.band_mu[0]), constant(x, s.band_mu[1]));
     frictionSeries.push(
-      { label: 'mu_HD', stroke: '#888', dash: [6, 4], width: 1 },
-      { label: 'band min (mu_HD rho_min)', stroke: '#00838f', dash: [2, 4], width: 1.5 },
-      { label: s.electrovibration ? 'band max (mu at U_max)' : 'band max (mu_HD)', stroke: '#c77700',
+      { label: 'μ_HD', stroke: '#888', dash: [6, 4], width: 1 },
+      { label: 'band min (μ_HD ρ_min)', stroke: '#00838f', dash: [2, 4], width: 1.5 },
+      { label: s.electrovibration ? 'band max (μ at U_max)' : 'band max (μ_HD)', stroke: '#c77700',
         dash: [2, 4], width: 1.5 });
   } else if (s.method === 'physical') {
     frictionData.push(constant(x, s.mu_hd), constant(x, s.mu_at_u_max));
     frictionSeries.push(
-      { label: 'mu_HD', stroke: '#888', dash: [6, 4], width: 1 },
-      { label: 'mu at U_max', stroke: '#c77700', dash: [2, 4], width: 1 });
+      { label: 'μ_HD', stroke: '#888', dash: [6, 4], width: 1 },
+      { label: 'μ at U_max', stroke: '#c77700', dash: [2, 4], width: 1 });
   }
   const fe = currentFe();
   if (fe && fe.mu.length === x.length) {
     // On the plotted scale: relative like the profile when it is.
     frictionData.push(r ? fe.mu.map((m) => m / r.flat_mu * r.mu_hd) : fe.mu);
-    frictionSeries.push({ label: 'mu FE model', stroke: '#2e7d32', dash: [5, 3], width: 1.5 });
+    frictionSeries.push({ label: 'μ FE model', stroke: '#2e7d32', dash: [5, 3], width: 1.5 });
   }
   const voltageData = [x, v.voltage_v];
   const voltageSeries = [{ label: s.display ? 'U(x)' : `U ${equation(s)}`, stroke: '#b3261e', width: 1.5 }];
@@ -64,7 +64,7 @@ export function draw() {
     plots.height = null;
   }
   const friction = withPins(state.pins, frictionSeries, frictionData,
-    (p) => ({ x: p.x_mm, lines: [{ label: 'mu', data: p.mu }] }));
+    (p) => ({ x: p.x_mm, lines: [{ label: 'μ', data: p.mu }] }));
   plots.friction = replot(plots.friction, 'friction-plot', friction.series, friction.data);
   // The ultrasonic display alone has no voltage (a pinned design may have).
   const voltage = v.voltage_v
