@@ -246,7 +246,8 @@ async function openLink(pairs) {
   applyControls(design);
   const profile = await openDesignSource(design);
   if (!profile) return;
-  profile.label = `recipe: ${profile.label}`;
+  const what = profile.label;
+  profile.label = `recipe: ${what}`;
   const notes = [];
   if (pins.haptex && pins.haptex !== state.config.version) {
     notes.push(`the link was made by haptex ${pins.haptex}, this is ${state.config.version}`);
@@ -257,7 +258,7 @@ async function openLink(pairs) {
       `SHA-256 ${pins.data}…, this server's is ${data ? `${data.slice(0, DATA_PIN)}…` : 'none'}`);
   }
   await updateVoltage();
-  say(`Opened the link's design: ${profile.label}.` +
+  say(`Opened the link's design: ${what}.` +
     (notes.length ? ` Note: ${notes.join('; ')}: the profile may differ from the one the link was made with.` : ''));
 }
 
@@ -299,6 +300,7 @@ export async function openRecipe(r) {
     : null;
   showDisplayControls();
   let profile = null;
+  let what = '';
   if (design.source === 'template' || design.source === 'library') {
     profile = await openDesignSource(design);
     if (!profile) return;
@@ -307,12 +309,16 @@ export async function openRecipe(r) {
         '(other data or another haptex): the recipe\'s own profile is shown as your profile.';
       profile = null;
     } else {
-      profile.label = `recipe: ${profile.label}`;
+      what = profile.label;
+      profile.label = `recipe: ${what}`;
     }
   }
-  if (!profile) profile = await openData(r, body);
+  if (!profile) {
+    profile = await openData(r, body);
+    what = profile.label.replace(/^recipe: /, '');
+  }
   await updateVoltage();
-  say(`Opened the recipe: ${profile.label}.${note}`);
+  say(`Opened the recipe: ${what}.${note}`);
 }
 
 /** Opens the link in the address's hash (#recipe=, #design=), reporting what cannot be read or opened. */
