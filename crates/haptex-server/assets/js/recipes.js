@@ -243,6 +243,11 @@ function checked(pairs, what, withData) {
  */
 async function openLink(pairs) {
   const { design, pins } = checked(pairs, "the link's design", false);
+  // A design link holds no file: a calibration or a device file the page
+  // uses (a link pasted into the open page) is not the link's.
+  if (state.deviceFile && $('yd-stop')) $('yd-stop').click();
+  state.calibration = null;
+  $('calibration').value = '';
   applyControls(design);
   const profile = await openDesignSource(design);
   if (!profile) return;
