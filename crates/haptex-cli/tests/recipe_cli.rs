@@ -167,7 +167,7 @@ fn recipe_run_reproduces_each_kind_of_download_byte_for_byte() {
     let (wav, sidecar) = strokes(&voltage);
     let mut source = template.clone();
     source["kind"] = json!("template");
-    let r = recipe(
+    let mut r = recipe(
         &config,
         source,
         vec![
@@ -178,6 +178,12 @@ fn recipe_run_reproduces_each_kind_of_download_byte_for_byte() {
             ("stroke-50mm_s.wav.json", "POST", "/api/play", Some(sidecar)),
         ],
     );
+    // The page's design, as the GUI records it (the page reopens the
+    // template from it; the replay does not read it).
+    r["page"] = json!({ "source": "template", "template": template, "method": "physical", "relative": true,
+        "flat_mu": 0.5, "both": true, "display": "electrovibration", "strategy": "split", "weight": null,
+        "a_max_um": null, "device": { "mu_hd": 1, "u_max_v": 100, "fn_n": null },
+        "play": { "velocity_mm_s": 50, "carrier_hz": 1000 } });
     replays_byte_for_byte(&server, &r);
 
     // The same recipe made with another FE database is refused, naming the field, nothing written.

@@ -10,6 +10,7 @@
 //!   "haptex_version": "0.1.0",
 //!   "library_sha256": "…", "database_sha256": "…",
 //!   "source": { "kind": "template", … },
+//!   "page": { "source": "template", "template": { … }, "method": "normalized", … },
 //!   "downloads": [
 //!     { "file": "voltage.csv", "method": "POST", "path": "/api/voltage?format=csv", "body": { … } },
 //!     …
@@ -18,7 +19,8 @@
 //! ```
 //!
 //! `source` is the provenance as the page states it (the template's
-//! parameters, the material and stroke seed, the file name); the requests
+//! parameters, the material and stroke seed, the file name), `page` the
+//! page's controls (how the page reopens the design); the requests
 //! carry everything the answers are computed from (the profile's points
 //! included). [`replay`] answers each request with this server's own
 //! router, in process: the code that builds a download in the browser and
@@ -71,6 +73,14 @@ pub struct Recipe {
     /// Provenance as the page states it (not used to compute anything).
     #[serde(default)]
     pub source: Value,
+    /// The page's design: its controls (the source and its parameters,
+    /// method and mapping, display, device, playback), so that the page
+    /// reopens the recipe as it was designed (a template with its sliders,
+    /// eq. 8 beside eq. 9); docs/web.md, "Recipes". Not used to compute
+    /// anything: the replay answers the downloads' requests alone. A JSON
+    /// object when present (recipes of older pages have none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub page: Option<serde_json::Map<String, Value>>,
     pub downloads: Vec<Download>,
 }
 
@@ -306,4 +316,33 @@ pub async fn answers(state: AppState, recipe: &Recipe) -> Result<Vec<(String, Ve
         files.push((d.file.clone(), bytes.to_vec()));
     }
     Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn recipe_with(page: &str) -> String {
+        format!(
+            r#"{{"format": "haptex-recipe/1", "haptex_version": "0.1.0", "source": {{"kind": "template"}},{page}
+                "downloads": [{{"file": "voltage.csv", "method": "POST", "path": "/api/voltage?format=csv", "body": {{}}}}]}}"#
+        )
+    }
+
+    /// The page's design is kept as written (the page reads it), recipes of
+    /// older pages have none, and anything but an object is refused.
+    #[test]
+    fn the_page_object_is_optional_and_an_object() {
+        let r = Recipe::parse(&recipe_with(r#" "page": {"source": "template", "both": true},"#)).unwrap();
+        let page = r.page.as_ref().unwrap();
+        assert_eq!((page["source"].as_str(), page["both"].as_bool()), (Some("template"), Some(true)));
+        let again = serde_json::to_value(&r).unwrap();
+        assert_eq!(again["page"]["both"], Value::Bool(true));
+        let old = Recipe::parse(&recipe_with("")).unwrap();
+        assert!(old.page.is_none() && serde_json::to_value(&old).unwrap().get("page").is_none());
+        let e = Recipe::parse(&recipe_with(r#" "page": [1],"#)).unwrap_err();
+        assert_eq!(e.field, "recipe");
+        assert!(e.message.contains("invalid type"), "{e}");
+        assert!(Recipe::parse(&recipe_with(r#" "pages": {},"#)).unwrap_err().message.contains("unknown field"));
+    }
 }

@@ -72,9 +72,10 @@
 //!     actions, Chromium with the touch events API);
 //! 14. recipes: the *recipe* download of a library stroke, replayed by
 //!     `haptex_server::recipe::replay` (what `haptex recipe run` runs),
-//!     gives the page's voltage CSV byte for byte; its link (#recipe=)
-//!     opened in a fresh page and the file opened in the page plot the
-//!     replayed voltage and friction, value for value.
+//!     gives the page's voltage CSV byte for byte; its link (#design=, the
+//!     design's parameters), a link of an older page (#recipe=, the whole
+//!     recipe) and the file opened in the page reopen the library source
+//!     and plot the replayed voltage and friction, value for value.
 //! 15. recordings uploaded in the browser (issue 17): the read-only
 //!     server shows no upload panel; a second server on a writable copy of
 //!     the shipped library does: recordings chosen in the file input with
@@ -1748,9 +1749,10 @@ async fn strip_keyboard(client: &Client) -> Check<()> {
 /// SHA-256; replayed by `haptex_server::recipe::replay` (what `haptex
 /// recipe run` calls; crates/haptex-cli/tests/recipe_cli.rs runs the
 /// binary) its voltage CSV is the page's download byte for byte; the
-/// design's link (#recipe=...) opened in a fresh page plots the replayed
-/// voltage and friction, value for value, and so does the recipe file
-/// opened with *Open a recipe*.
+/// design's link (#design=..., its parameters) opened in a fresh page
+/// reopens the library source and plots the replayed voltage and friction,
+/// value for value, and so do a link of an older page (#recipe=..., the
+/// whole recipe) and the recipe file opened with *Open a recipe*.
 async fn recipes(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     // From the template source (show_library switches to the library).
     let n = updates(client).await?;
@@ -1794,12 +1796,21 @@ async fn recipes(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     let table = Table::read(replayed.1.as_slice(), "replayed voltage.csv").map_err(|e| e.to_string())?;
     let (mu, voltage) =
         (table.column("mu").ok_or("mu")?.to_vec(), table.column("voltage_v").ok_or("voltage_v")?.to_vec());
+    // The link carries the design's parameters (material, stroke seed,
+    // controls), not the stroke's data.
     let link = script(client, "return document.getElementById('share-link').href;").await?;
     let link = link.as_str().ok_or("no share link")?.to_string();
-    if !link.starts_with(base) || !link.contains("#recipe=") {
+    if !link.starts_with(base)
+        || !link.contains("#design=1&")
+        || !link.contains("library.material=latex")
+        || link.len() > 1024
+    {
         return fail(format!("the design's link: {link}"));
     }
-    // The link in a fresh page, then the recipe file opened in the page.
+    if recipe.page.as_ref().and_then(|p| p.get("source")) != Some(&json!("library")) {
+        return fail(format!("the recipe's page: {recipe_text}"));
+    }
+    // The link in a fresh page: the library source, the stroke the replay has.
     wd!(client.goto("about:blank"));
     wd!(client.goto(&link));
     let opened = "document.body.dataset.state === 'ready' && window.haptex.state.drawn \
@@ -1808,6 +1819,21 @@ async fn recipes(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     if plotted(client, "voltage").await?[1] != voltage || plotted(client, "friction").await?[1] != mu {
         return fail("the link's design is not the replayed voltage and friction");
     }
+    if script(client, "return window.haptex.state.source;").await? != "library" {
+        return fail("the link's library design does not reopen the library source");
+    }
+    // A link of an older page: the whole recipe, without its page, as base64url.
+    let mut older: Value = serde_json::from_str(&recipe_text).map_err(|e| e.to_string())?;
+    older.as_object_mut().ok_or("the recipe is not an object")?.remove("page");
+    use base64::Engine as _;
+    let older = base64::engine::general_purpose::URL_SAFE_NO_PAD.encode(older.to_string());
+    wd!(client.goto("about:blank"));
+    wd!(client.goto(&format!("{base}#recipe={older}")));
+    wait_for(client, opened, "an older page's recipe link drawn").await?;
+    if plotted(client, "voltage").await?[1] != voltage || plotted(client, "friction").await?[1] != mu {
+        return fail("an older page's recipe link is not the replayed voltage and friction");
+    }
+    // Then the recipe file opened in the page.
     wd!(client.goto("about:blank"));
     wd!(client.goto(base));
     wait_for(client, "document.body.dataset.state === 'ready'", "the page again").await?;

@@ -200,6 +200,8 @@ function openOnDefault(id, profile) {
 }
 
 let loadRequest = 0;
+/** Settles when the last profile asked for is loaded or refused (openSource waits for it). */
+let settled = Promise.resolve();
 
 /** Drops a profile still loading (a recipe's profile replaces it). */
 export function dropPendingLoad() {
@@ -211,7 +213,9 @@ export async function loadSource(options) {
   const id = ++loadRequest;
   const sourceId = state.source;
   say('Loading the profile…');
-  const profile = await SOURCES[sourceId].load(options);
+  const loading = SOURCES[sourceId].load(options);
+  settled = loading.catch(() => {});
+  const profile = await loading;
   if (id !== loadRequest) return; // a newer profile is on its way
   state.profiles[sourceId] = profile;
   state.profile = profile;
@@ -222,6 +226,30 @@ export async function loadSource(options) {
     return;
   }
   await updateVoltage();
+}
+
+/**
+ * Opens source `id` as a recipe or a link sets it (recipes.js): its radio
+ * button and panel, and its profile loaded from its controls as they are
+ * (the mapping is the recipe's: none applied here), once a profile still
+ * loading has settled (its notes would replace this one's). Returns the
+ * profile, now the page's (null when a newer load took over).
+ */
+export async function openSource(id) {
+  const input = document.querySelector(`input[name='source'][value='${id}']`);
+  if (!input) throw new ApiError(`this server offers no ${id} source`, 'recipe', 0);
+  const id0 = ++loadRequest; // a profile still loading is dropped
+  await settled;
+  input.checked = true;
+  state.source = id;
+  showSourcePanel(id);
+  const loading = SOURCES[id].load();
+  settled = loading.catch(() => {});
+  const profile = await loading;
+  if (id0 !== loadRequest) return null;
+  state.profiles[id] = profile;
+  state.profile = profile;
+  return profile;
 }
 
 /** Shows the panel of source `id` (and the height plot for templates). */

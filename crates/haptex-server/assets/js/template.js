@@ -70,6 +70,20 @@ function buildTemplateSliders() {
   });
 }
 
+/**
+ * Sets the template controls as a recipe or a link gives them (recipes.js):
+ * the surface, x0 and the slider values in `values` ({surface, x0_mm,
+ * width_mm, ...}, checked already; those left out stay), without loading
+ * the profile. The sliders are built again for the surface.
+ */
+export function setTemplate(values) {
+  clearTimeout(templateTimer);
+  Object.assign(state.template, values);
+  $('surface').value = state.template.surface;
+  $('x0').value = String(state.template.x0_mm);
+  buildTemplateSliders();
+}
+
 /** The surface selector, the sliders, x0 and the FE button; `load()` loads the template profile again. */
 export function buildTemplateControls(templates, load) {
   reload = load;
