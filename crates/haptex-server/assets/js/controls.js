@@ -8,11 +8,11 @@ import { runCheck, showCheck } from './check.js';
 import { buildDisplayControls } from './displays.js';
 import { download } from './downloads.js';
 import { explain, readDevice } from './fields.js';
-import { setupFieldChecks, validateField } from './feedback.js';
+import { setStatus, setupFieldChecks, validateField } from './feedback.js';
 import { prettySymbol } from './validation.js';
 import { showError } from './messages.js';
 import { pinDesign, unpinAll } from './pins.js';
-import { openRecipe } from './recipes.js';
+import { openRecipe, shareLink } from './recipes.js';
 import { showRecordingsError, uploadRecordings } from './recordings.js';
 import { SOURCES, applySourceMapping, loadSource, selectSource, showUploadError } from './sources.js';
 import { state } from './state.js';
@@ -135,6 +135,14 @@ export function buildControls(config) {
   $('play-compensated').addEventListener('change', () => { showCheck(); drawStrip(); });
 
   const downloadStatus = { status: $('download-info') };
+  $('make-link').addEventListener('click', () => {
+    try {
+      shareLink();
+      setStatus($('download-info'), 'The link below opens this design: copy it, or bookmark it.');
+    } catch (error) {
+      showError(error, downloadStatus);
+    }
+  });
   document.querySelectorAll('[data-download]').forEach((b) =>
     b.addEventListener('click', () => download(b.dataset.download).catch((e) => showError(e, downloadStatus))));
 

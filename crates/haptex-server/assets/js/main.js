@@ -11,7 +11,7 @@ import { live } from './live.js';
 import { showError } from './messages.js';
 import { loadModel } from './model.js';
 import { isRecipeHash, recipeFromHash } from './recipe-link.js';
-import { openRecipe } from './recipes.js';
+import { linkError, openRecipe } from './recipes.js';
 import { voltageBody } from './requests.js';
 import { SOURCES, fillMaterials, loadSource, selectSource } from './sources.js';
 import { state } from './state.js';
@@ -50,7 +50,7 @@ export async function start() {
         // A link belongs to no field of the page: said in the header.
         state.pendingError = new ApiError(`The link's recipe cannot be read (${error.message})`, null, 0);
       }
-      if (opened) await openRecipe(opened).catch((error) => { state.pendingError = error; });
+      if (opened) await openRecipe(opened).catch((error) => { state.pendingError = linkError(error); });
     }
   } catch (error) {
     document.body.dataset.state = 'error';

@@ -326,20 +326,29 @@ export async function openRecipe(r) {
   say(`Opened the recipe: ${what}.${note}`);
 }
 
+/**
+ * An error of opening a link, which belongs to no field of the page (the
+ * recipe file field is for files): said in the header.
+ */
+export function linkError(error) {
+  if (!(error instanceof ApiError) || error.field !== 'recipe') return error;
+  return new ApiError(error.message.charAt(0).toUpperCase() + error.message.slice(1), null, error.status);
+}
+
 /** Opens the link in the address's hash (#recipe=, #design=), reporting what cannot be read or opened. */
 async function openHash() {
   let opened;
   try {
     opened = recipeFromHash(location.hash);
   } catch (error) {
-    throw new ApiError(`the link's recipe cannot be read (${error.message})`, 'recipe', 0);
+    throw new ApiError(`The link's recipe cannot be read (${error.message})`, null, 0);
   }
   await openRecipe(opened);
 }
 
 // A link pasted into the page's address bar changes only the hash: opened too.
 window.addEventListener('hashchange', () => {
-  if (isRecipeHash(location.hash)) openHash().catch(showError);
+  if (isRecipeHash(location.hash)) openHash().catch((error) => showError(linkError(error)));
 });
 
 // The recipe download: the recipe of the design shown, and its link shown.
