@@ -38,15 +38,15 @@ export function plotWidth(id) {
 
 /**
  * The height of the plot in holder `id` for a window of `width` x `height`
- * px: on a phone 190 px (the surface's 110); on a desktop the surface's
- * 120 px and the others what lets the surface, the friction and the
+ * px: on a phone 190 px (the surface's 140); on a desktop the surface's
+ * 150 px and the others what lets the surface, the friction and the
  * voltage fit the window together (160 to 240 px), so that the first
  * screen shows the design whole.
  */
 export function plotHeight(id, width = window.innerWidth, height = window.innerHeight) {
-  if (width < 600) return id === 'height-plot' ? 110 : 190;
-  if (id === 'height-plot') return 120;
-  return Math.max(160, Math.min(240, Math.floor((height - 480) / 2)));
+  if (width < 600) return id === 'height-plot' ? 140 : 190;
+  if (id === 'height-plot') return 150;
+  return Math.max(160, Math.min(240, Math.floor((height - 510) / 2)));
 }
 
 /**

@@ -3,6 +3,9 @@
 //! is a follow-up): the tools, chromedriver on a free port, the session,
 //! scripts and waits.
 
+// Each browser test uses the part of this module it needs.
+#![allow(dead_code)]
+
 use std::net::TcpListener as StdListener;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -137,6 +140,31 @@ pub async fn wait_for(client: &Client, code: &str, what: &str) -> Check<()> {
         if start.elapsed() > WAIT {
             let message = script(client, "return document.getElementById('message').textContent;").await?;
             return Err(format!("timed out waiting for {what} ({code}); the page says: {message}"));
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+}
+
+/// Sizes the window so that its viewport (innerWidth x innerHeight) is
+/// `width` x `height`: headless Chromium's window includes a frame.
+pub async fn set_viewport(client: &Client, width: u32, height: u32) -> Check<()> {
+    client.set_window_size(width, height).await.map_err(|e| e.to_string())?;
+    let frame =
+        script(client, "return [window.outerWidth - window.innerWidth, window.outerHeight - window.innerHeight];")
+            .await?;
+    let dx = frame[0].as_u64().unwrap_or(0) as u32;
+    let dy = frame[1].as_u64().unwrap_or(0) as u32;
+    client.set_window_size(width + dx, height + dy).await.map_err(|e| e.to_string())?;
+    let start = Instant::now();
+    loop {
+        let inner =
+            script(client, "return [window.innerWidth, window.innerHeight, window.outerWidth, window.outerHeight];")
+                .await?;
+        if inner[0] == width && inner[1] == height {
+            return Ok(());
+        }
+        if start.elapsed() > WAIT {
+            return Err(format!("the window did not reach a {width} x {height} viewport: [inner, outer] = {inner}"));
         }
         tokio::time::sleep(Duration::from_millis(50)).await;
     }

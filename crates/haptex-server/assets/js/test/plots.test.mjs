@@ -45,10 +45,10 @@ test('withPins: without pins (or pins with nothing for this plot) the current de
 
 test('plotHeight: the surface, friction and voltage fit a 900 px desktop window; a phone keeps its sizes', async () => {
   const { plotHeight } = await import('../plots.js');
-  assert.equal(plotHeight('height-plot', 1366, 900), 120);
-  assert.equal(plotHeight('friction-plot', 1366, 900), 210);
+  assert.equal(plotHeight('height-plot', 1366, 900), 150);
+  assert.equal(plotHeight('friction-plot', 1366, 900), 195);
   assert.equal(plotHeight('friction-plot', 1920, 1200), 240);
   assert.equal(plotHeight('friction-plot', 1280, 700), 160);
   assert.equal(plotHeight('voltage-plot', 390, 844), 190);
-  assert.equal(plotHeight('height-plot', 390, 844), 110);
+  assert.equal(plotHeight('height-plot', 390, 844), 140);
 });
