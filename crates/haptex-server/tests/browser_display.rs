@@ -24,7 +24,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use browser::{Check, Driver, console_errors, script, wait_for};
+use browser::{Check, console_errors, script, wait_for};
 use fantoccini::{Client, Locator};
 use haptex_core::calibration::device_file::DeviceFile;
 use haptex_core::io::Table;
@@ -32,25 +32,7 @@ use serde_json::Value;
 
 #[test]
 fn your_display_in_headless_chromium() {
-    let Some((chromium, chromedriver)) = browser::tools() else { return };
-    let scratch = tempfile::tempdir().unwrap();
-    let runtime = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
-    runtime.block_on(async {
-        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-        let addr = listener.local_addr().unwrap();
-        let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
-        tokio::spawn(haptex_server::serve(listener, common::shipped_state(), async {
-            let _ = stopped.await;
-        }));
-        let driver = Driver::start(&chromedriver, scratch.path());
-        let client = driver.connect(&chromium, scratch.path()).await;
-        let result = exercise(&client, &format!("http://{addr}/"), scratch.path()).await;
-        let _ = client.close().await;
-        let _ = stop.send(());
-        if let Err(message) = result {
-            panic!("{message}\nchromedriver log: {}", driver.log_path.display());
-        }
-    });
+    browser::run(common::shipped_state(), exercise);
 }
 
 macro_rules! wd {

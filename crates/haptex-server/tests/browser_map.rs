@@ -35,7 +35,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use browser::{Check, Driver, console_errors, script, wait_for};
+use browser::{Check, console_errors, script, wait_for};
 use fantoccini::{Client, Locator};
 use haptex_core::electrovibration::{Device, Method};
 use haptex_core::map::{FrictionMap, GrayMapping, MapGrid};
@@ -43,33 +43,14 @@ use serde_json::Value;
 
 #[test]
 fn the_map_page_in_headless_chromium() {
-    let Some((chromium, chromedriver)) = browser::tools() else { return };
-    let scratch = tempfile::tempdir().unwrap();
-    let runtime = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
-    runtime.block_on(async {
-        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-        let addr = listener.local_addr().unwrap();
-        let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
-        tokio::spawn(haptex_server::serve(listener, common::shipped_state(), async {
-            let _ = stopped.await;
-        }));
-        let driver = Driver::start(&chromedriver, scratch.path());
-        let client = driver.connect(&chromium, scratch.path()).await;
-        let files = Files::write(scratch.path());
-        let mut result = Ok(());
+    browser::run(common::shipped_state(), async |client: &Client, base: &str, scratch: &Path| {
+        let files = Files::write(scratch);
         for (width, height) in [(1366, 900), (390, 844)] {
-            result = exercise(&client, &format!("http://{addr}/map"), &files, width, height)
+            exercise(client, &format!("{base}map"), &files, width, height)
                 .await
-                .map_err(|e| format!("at {width} x {height}: {e}"));
-            if result.is_err() {
-                break;
-            }
+                .map_err(|e| format!("at {width} x {height}: {e}"))?;
         }
-        let _ = client.close().await;
-        let _ = stop.send(());
-        if let Err(message) = result {
-            panic!("{message}\nchromedriver log: {}", driver.log_path.display());
-        }
+        Ok(())
     });
 }
 

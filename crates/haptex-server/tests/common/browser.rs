@@ -1,7 +1,8 @@
-//! Headless Chromium through chromedriver for the browser tests that are
-//! not browser.rs (which keeps its own copy of this setup; moving it here
-//! is a follow-up): the tools, chromedriver on a free port, the session,
-//! scripts and waits.
+//! Headless Chromium through chromedriver for the browser tests: the
+//! tools, chromedriver on a free port, the session, a run against a server
+//! in process (`run`), scripts, waits and the viewport. browser.rs keeps
+//! its own copy of most of this (moving it here is a follow-up) and takes
+//! `set_viewport` from here.
 
 // Each browser test uses the part of this module it needs.
 #![allow(dead_code)]
@@ -168,4 +169,31 @@ pub async fn set_viewport(client: &Client, width: u32, height: u32) -> Check<()>
         }
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
+}
+
+/// Runs `exercise` in one headless Chromium session against a server on
+/// `state`, in process on a loopback port: its arguments are the client,
+/// the server's URL (ending in `/`) and a scratch folder. Panics with the
+/// exercise's error and chromedriver's log; skipped, saying so, with
+/// HAPTEX_BROWSER_TEST=skip.
+pub fn run(state: haptex_server::AppState, exercise: impl AsyncFnOnce(&Client, &str, &Path) -> Check<()>) {
+    let Some((chromium, chromedriver)) = tools() else { return };
+    let scratch = tempfile::tempdir().unwrap();
+    let runtime = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
+    runtime.block_on(async {
+        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let addr = listener.local_addr().unwrap();
+        let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+        tokio::spawn(haptex_server::serve(listener, state, async {
+            let _ = stopped.await;
+        }));
+        let driver = Driver::start(&chromedriver, scratch.path());
+        let client = driver.connect(&chromium, scratch.path()).await;
+        let result = exercise(&client, &format!("http://{addr}/"), scratch.path()).await;
+        let _ = client.close().await;
+        let _ = stop.send(());
+        if let Err(message) = result {
+            panic!("{message}\nchromedriver log: {}", driver.log_path.display());
+        }
+    });
 }
