@@ -240,42 +240,12 @@ async fn posts(client: &Client) -> Check<u64> {
     Ok(script(client, "return window.mapPosts || 0;").await?.as_u64().unwrap_or(0))
 }
 
-/// The paper's symbols as the page may write them with an underscore.
-const PAPER_SYMBOLS: &[&str] = &["mu_flat", "rho_min", "a_max"];
-
 /// Step 5: the visible text (outside code samples) in the page's words.
 async fn page_words(client: &Client, when: &str) -> Check<()> {
-    let texts = script(
-        client,
-        "const out = []; const walk = document.createTreeWalker(document.body, NodeFilter.SHOW_TEXT); \
-         for (let n = walk.nextNode(); n; n = walk.nextNode()) { \
-           const p = n.parentElement; if (!p || p.closest('code, pre, script, style')) continue; \
-           if (!p.checkVisibility()) continue; \
-           const t = n.textContent.trim(); if (t) out.push(t); } \
-         return out;",
-    )
-    .await?;
-    let snake = |w: &str| {
-        let w = w.trim_matches(|c: char| !c.is_alphanumeric() && c != '_');
-        w.contains('_')
-            && w.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
-            && !PAPER_SYMBOLS.contains(&w)
-    };
-    for t in texts.as_array().ok_or("no texts")?.iter().filter_map(Value::as_str) {
-        for w in t.split(|c: char| {
-            c.is_whitespace() || matches!(c, ',' | ';' | '(' | ')' | ':' | '=' | '/' | '\'' | '"' | '“' | '”')
-        }) {
-            if snake(w) {
-                return Err(format!("{when}: the page shows the identifier {w:?} in {t:?}"));
-            }
-        }
-        for phrase in ["device.", "image_png_base64", "request body", "(field", "path.", "body:"] {
-            if t.contains(phrase) {
-                return Err(format!("{when}: the page shows {phrase:?} in {t:?}"));
-            }
-        }
+    match browser::code_like_text(client).await? {
+        Some(found) => Err(format!("{when}: the page shows {found}")),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 async fn exercise(client: &Client, url: &str, files: &Files, width: u32, height: u32) -> Check<()> {

@@ -452,55 +452,10 @@ async fn combined_check_caveat(client: &Client) -> Check<()> {
     Ok(())
 }
 
-/// The paper's symbols, written with an underscore for a subscript: the
-/// only snake_case-looking words the page may show outside code samples.
-/// (f_c, the carrier frequency, is the symbol docs/physics.md gives it.)
-const PAPER_SYMBOLS: &[&str] = &[
-    "mu_flat", "rho_min", "rho_inf", "rho_sc", "r_w", "r_h", "a_max", "a_c", "eps_sc", "eps_i", "d_sc", "d_i", "eps_0",
-    "f_c",
-];
-
 /// Step 7: the page's visible text (outside code samples) in its own words.
 async fn page_words(client: &Client) -> Check<()> {
-    let texts = script(
-        client,
-        "const out = []; const walk = document.createTreeWalker(document.body, NodeFilter.SHOW_TEXT); \
-         for (let n = walk.nextNode(); n; n = walk.nextNode()) { \
-           const p = n.parentElement; if (!p || p.closest('code, pre, script, style, .sr-only')) continue; \
-           if (!p.checkVisibility()) continue; \
-           const t = n.textContent.trim(); if (t) out.push(t); } \
-         document.querySelectorAll('input[placeholder]').forEach(i => { if (i.checkVisibility()) out.push(i.placeholder); }); \
-         return out;",
-    )
-    .await?;
-    let snake = |w: &str| {
-        let w = w.trim_matches(|c: char| !c.is_alphanumeric() && c != '_');
-        w.contains('_')
-            && w.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
-            && !PAPER_SYMBOLS.contains(&w)
-    };
-    for t in texts.as_array().ok_or("no texts")?.iter().filter_map(Value::as_str) {
-        for w in
-            t.split(|c: char| c.is_whitespace() || matches!(c, ',' | ';' | '(' | ')' | ':' | '=' | '/' | '\'' | '"'))
-        {
-            if snake(w) {
-                return Err(format!("the page shows the identifier {w:?} in {t:?}"));
-            }
-        }
-        for phrase in ["device.", "request body", "image_png_base64"] {
-            if t.contains(phrase) {
-                return Err(format!("the page shows {phrase:?} in {t:?}"));
-            }
-        }
-        // Sources are cited by name, not by a path in the repository.
-        for w in t.split_whitespace() {
-            let w = w.trim_matches(|c: char| !c.is_alphanumeric());
-            if [".md", ".rs", ".toml"].iter().any(|e| w.ends_with(e))
-                || ["crates/", "docs/", "data/", "src/"].iter().any(|d| w.starts_with(d))
-            {
-                return Err(format!("the page shows the repository path {w:?} in {t:?}"));
-            }
-        }
+    if let Some(found) = browser::code_like_text(client).await? {
+        return Err(format!("the page shows {found}"));
     }
     let live = script(client, "return document.getElementById('live-toggle').checkVisibility();").await?;
     if live == Value::Bool(true) {

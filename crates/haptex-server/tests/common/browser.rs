@@ -197,3 +197,58 @@ pub fn run(state: haptex_server::AppState, exercise: impl AsyncFnOnce(&Client, &
         }
     });
 }
+
+/// The paper's symbols written with an underscore for a subscript (f_c,
+/// the carrier frequency, as docs/physics.md writes it): the only
+/// snake_case-looking words a page may show outside code samples.
+pub const PAPER_SYMBOLS: &[&str] = &[
+    "mu_flat", "rho_min", "rho_inf", "rho_sc", "r_w", "r_h", "a_max", "a_c", "eps_sc", "eps_i", "d_sc", "d_i", "eps_0",
+    "f_c",
+];
+
+/// The first code-like word of the page's visible text (outside code
+/// samples, screen-reader-only text and scripts; placeholders included),
+/// with the text it is in: a snake_case identifier other than the paper's
+/// symbols, an API field path or wording, or a path in the repository
+/// (sources are cited by name). None when there is none.
+pub async fn code_like_text(client: &Client) -> Check<Option<String>> {
+    let texts = script(
+        client,
+        "const out = []; const walk = document.createTreeWalker(document.body, NodeFilter.SHOW_TEXT); \
+         for (let n = walk.nextNode(); n; n = walk.nextNode()) { \
+           const p = n.parentElement; if (!p || p.closest('code, pre, script, style, .sr-only')) continue; \
+           if (!p.checkVisibility()) continue; \
+           const t = n.textContent.trim(); if (t) out.push(t); } \
+         document.querySelectorAll('input[placeholder]').forEach(i => { if (i.checkVisibility()) out.push(i.placeholder); }); \
+         return out;",
+    )
+    .await?;
+    let snake = |w: &str| {
+        w.contains('_')
+            && w.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+            && !PAPER_SYMBOLS.contains(&w)
+    };
+    for t in texts.as_array().ok_or("no texts")?.iter().filter_map(Value::as_str) {
+        let words = t.split(|c: char| {
+            c.is_whitespace() || matches!(c, ',' | ';' | '(' | ')' | ':' | '=' | '/' | '\'' | '"' | '“' | '”')
+        });
+        for w in words.map(|w| w.trim_matches(|c: char| !c.is_alphanumeric() && c != '_')) {
+            if snake(w) {
+                return Ok(Some(format!("the identifier {w:?} in {t:?}")));
+            }
+        }
+        for phrase in ["device.", "image_png_base64", "request body", "(field", "body:"] {
+            if t.contains(phrase) {
+                return Ok(Some(format!("{phrase:?} in {t:?}")));
+            }
+        }
+        for w in t.split_whitespace().map(|w| w.trim_matches(|c: char| !c.is_alphanumeric())) {
+            if [".md", ".rs", ".toml"].iter().any(|e| w.ends_with(e))
+                || ["crates/", "docs/", "data/", "src/"].iter().any(|d| w.starts_with(d))
+            {
+                return Ok(Some(format!("the repository path {w:?} in {t:?}")));
+            }
+        }
+    }
+    Ok(None)
+}
