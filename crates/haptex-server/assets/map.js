@@ -16,13 +16,14 @@
 // scrolled into view and announced.
 
 import { createAudio } from './js/audio.js';
+import { $ } from './js/dom.js';
+import { errorNote } from './js/feedback.js';
 import { heatColour as colour } from './js/colours.js';
 import { fmtPlain as fmt, pct } from './js/format.js';
 import { bilinear } from './js/interpolate.js';
 import { lineOptions } from './js/plots.js';
 import { FIELDS, checkExtent, checkField, pageError, withConfig } from './js/map-fields.js';
 
-const $ = (id) => document.getElementById(id);
 /** Most samples of a drawn path (the server takes up to its max_points). */
 const MAX_PATH_POINTS = 20000;
 /** The finger speed of a path drawn with the keyboard, mm/s (the templates' sliding velocity). */
@@ -71,15 +72,7 @@ const narrow = () => window.matchMedia('(max-width: 899px)').matches;
 /** The notes under a control: its error (red) and its warning (amber). */
 function notesOf(id) {
   const input = $(id);
-  let error = $(`${id}-error`);
-  if (!error) {
-    error = document.createElement('p');
-    error.id = `${id}-error`;
-    error.className = 'field-error';
-    error.setAttribute('role', 'alert');
-    error.hidden = true;
-    input.insertAdjacentElement('afterend', error);
-  }
+  const error = errorNote(input);
   let warning = $(`${id}-warning`);
   if (!warning && id !== 'image') {
     warning = document.createElement('p');
@@ -91,7 +84,7 @@ function notesOf(id) {
   return { input, error, warning };
 }
 
-/** Shows `level` ('ok', 'warning', 'error') with `text` under control `id`. */
+/** Shows `level` ('ok', 'warning', 'error') with `text` under control `id` (its aria-describedby set here). */
 function mark(id, level, text) {
   const { input, error, warning } = notesOf(id);
   error.hidden = level !== 'error';

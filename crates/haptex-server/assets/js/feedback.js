@@ -34,8 +34,8 @@ function fieldUnit(input) {
   return unit ? unit.textContent.replace(/[()]/g, '').replace(/,.*$/, '').trim() : '';
 }
 
-/** The element under `input` that holds its error (made on first use). */
-function errorNote(input) {
+/** The element under `input` that holds its error (made on first use; the map page's fields too). */
+export function errorNote(input) {
   const id = `${input.id}-error`;
   let note = $(id);
   if (!note) {
