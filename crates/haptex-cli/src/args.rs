@@ -226,14 +226,7 @@ pub fn carrier_of(shape: Option<CarrierArg>, frequency_hz: Option<f64>) -> hapte
     }
 }
 
-/// `designed for the carrier: SHAPE F Hz (play it with ...)`: the comment
-/// of a design whose force depends on the carrier, as `haptex play` reads
-/// it back (the frequency in full: it compares exactly).
-pub fn carrier_note(carrier: &haptex_core::signal::Carrier) -> String {
-    let shape = carrier.shape.name();
-    let f = haptex_core::num::Exact(carrier.frequency_hz);
-    format!("designed for the carrier: {shape} {f} Hz (play it with haptex play --carrier {shape} --carrier-hz {f})")
-}
+pub use haptex_core::frequency::carrier_note;
 
 #[derive(Debug, Clone, Copy, PartialEq, clap::ValueEnum)]
 pub enum ForceModelArg {

@@ -222,6 +222,31 @@ impl ForceModel {
             ForceModel::Circuit { circuit, carrier } => circuit.carrier_gain(stack, carrier),
         }
     }
+
+    /// The file comment of a design made with this model on `device` (its
+    /// gain already in `device.force_gain`): the circuit, its gain and the
+    /// carrier it was designed for, in the words `haptex play` reads
+    /// ([`carrier_note`]). None for eq. (3), which needs none.
+    pub fn design_comment(&self, device: &crate::electrovibration::Device) -> Option<String> {
+        let ForceModel::Circuit { circuit, carrier } = self else {
+            return None;
+        };
+        Some(format!(
+            "force model: circuit ({}); Fe = G Fe_eq3 with G = {:.6} for this carrier; {}",
+            circuit.describe(&device.stack),
+            device.force_gain,
+            carrier_note(carrier)
+        ))
+    }
+}
+
+/// `designed for the carrier: SHAPE F Hz (play it with ...)`: the comment
+/// of a design whose force depends on the carrier, as `haptex play` reads
+/// it back (the frequency in full: it compares exactly).
+pub fn carrier_note(carrier: &Carrier) -> String {
+    let shape = carrier.shape.name();
+    let f = crate::num::Exact(carrier.frequency_hz);
+    format!("designed for the carrier: {shape} {f} Hz (play it with haptex play --carrier {shape} --carrier-hz {f})")
 }
 
 /// The sum over a square wave's odd harmonics k of (8 / (pi k)^2) G(k f):

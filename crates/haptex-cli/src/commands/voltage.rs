@@ -17,7 +17,6 @@ use crate::args::{
     DesignDevice, DeviceFileArgs, DisplayArg, DisplayArgs, ForceModelArgs, LayerStackArgs, Output, carrier_note,
     in_range, read_profile,
 };
-use haptex_core::frequency::ForceModel;
 
 /// Compute the voltage an electrovibration display must apply to reproduce a
 /// friction profile.
@@ -151,7 +150,7 @@ pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
                 u_max_v: args.u_max.unwrap_or(Device::PAPER.u_max_v),
                 force_gain: force_model.gain(&stack),
             };
-            let notes: Vec<String> = force_comment(&force_model, &device).into_iter().collect();
+            let notes: Vec<String> = force_model.design_comment(&device).into_iter().collect();
             let circuit = !notes.is_empty();
             (device, notes, circuit)
         }
@@ -320,19 +319,4 @@ fn device_file_design(file: &DesignDevice, args: &VoltageArgs) -> anyhow::Result
     let notes =
         vec![file.comment(), format!("{force}; U_max = {} V RMS; {}", Num(device.u_max_v), carrier_note(&carrier))];
     Ok((device, notes, circuit))
-}
-
-/// The file comment of a frequency-dependent design: the circuit, its gain
-/// and the carrier it was designed for, in the words `haptex play` reads
-/// (`designed for the carrier: SHAPE F Hz`). None for eq. (3).
-fn force_comment(model: &ForceModel, device: &Device) -> Option<String> {
-    let ForceModel::Circuit { circuit, carrier } = model else {
-        return None;
-    };
-    Some(format!(
-        "force model: circuit ({}); Fe = G Fe_eq3 with G = {:.6} for this carrier; {}",
-        circuit.describe(&device.stack),
-        device.force_gain,
-        carrier_note(carrier)
-    ))
 }

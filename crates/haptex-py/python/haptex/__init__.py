@@ -1,0 +1,40 @@
+"""haptex from Python: surface haptic drive signals with NumPy arrays.
+
+The functions are the ``haptex`` command line's commands, their keyword
+arguments its flags, their numbers its numbers (the same library computes
+both). Units are in every name: positions in mm, forces in N, voltages in
+V RMS, amplitudes in um peak, velocities in mm/s.
+
+>>> import haptex
+>>> bump = haptex.Profile.read_csv("data/examples/bump_friction.csv")
+>>> design = haptex.voltage(bump)
+>>> design.voltage_v.max()  # V RMS
+100.0
+
+Errors are haptex.HaptexError, and a ValueError (bad input) or an OSError
+(a file) as well, with the command line's message. See docs/python.md.
+"""
+
+from ._errors import (
+    CancelledError,
+    ComputationError,
+    HaptexError,
+    HaptexOSError,
+    InvalidInputError,
+)
+from ._types import Regions, Summary
+from ._haptex import Design, Profile, __version__, voltage
+
+__all__ = [
+    "CancelledError",
+    "ComputationError",
+    "Design",
+    "HaptexError",
+    "HaptexOSError",
+    "InvalidInputError",
+    "Profile",
+    "Regions",
+    "Summary",
+    "__version__",
+    "voltage",
+]

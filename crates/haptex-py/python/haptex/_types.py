@@ -1,0 +1,60 @@
+"""The records haptex returns besides arrays: plain dataclasses."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Dict, List, Optional, Tuple
+
+__all__ = ["Regions", "Summary"]
+
+
+@dataclass(frozen=True)
+class Regions:
+    """Part of a profile's length where a condition holds.
+
+    length_mm: total length in mm; fraction: that length over the profile's
+    span (0..1); ranges_mm: the intervals (start, end) in mm, in order.
+    """
+
+    length_mm: float
+    fraction: float
+    ranges_mm: List[Tuple[float, float]]
+
+
+@dataclass(frozen=True)
+class Summary:
+    """What a design did, and where the display could not follow.
+
+    display: "electrovibration", "ultrasonic" or "combined".
+    method: "physical (eq. 8)" or "normalized (eq. 9)".
+    n_points, x_range_mm (mm), mu_range: the profile mapped (relative
+      values when the design was made relative).
+    band_mu: the renderable band of felt friction (low, high): for
+      electrovibration (mu_HD, the mu at U_max); None for eq. (9).
+    above_band: where the target is above the band. Electrovibration: U is
+      clipped to U_max there. Ultrasonic: mu > mu_HD, a = 0.
+    below_band: where the target is below the band. Electrovibration:
+      mu < mu_HD, not renderable, U = 0 V. Ultrasonic: a = a_max.
+    u_max_v: U_max in V RMS (None without electrovibration); a_max_um: the
+      plate's a_max in um (None without an ultrasonic plate).
+    warnings: the warnings `haptex voltage` prints.
+    text: the summary `haptex voltage` prints on stderr.
+    details: the summary as `haptex voltage --format json` writes it.
+    """
+
+    display: str
+    method: str
+    n_points: int
+    x_range_mm: Tuple[float, float]
+    mu_range: Tuple[float, float]
+    band_mu: Optional[Tuple[float, float]]
+    above_band: Regions
+    below_band: Regions
+    u_max_v: Optional[float]
+    a_max_um: Optional[float]
+    warnings: List[str]
+    text: str = field(repr=False)
+    details: Dict[str, Any] = field(repr=False)
+
+    def __str__(self) -> str:
+        return self.text

@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# The Python package's tests (crates/haptex-py): builds the wheel with
+# maturin, installs it into a fresh virtual environment and runs the pytest
+# suite in crates/haptex-py/pytests, whose parity tests run the command
+# line beside each function. scripts/test.sh runs this after cargo test
+# (which builds target/ci/haptex); alone, it builds that binary first.
+# Arguments go to pytest.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PYTHON=${PYTHON:-python3}
+MATURIN_VERSION=1.16.0
+
+if ! "$PYTHON" -c 'import sys; assert sys.version_info >= (3, 9)' 2>/dev/null; then
+    echo "scripts/test-python.sh: the Python package needs CPython 3.9 or later as $PYTHON" >&2
+    exit 1
+fi
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/haptex-python.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+# maturin in a venv of its own, so that the test environment holds only the
+# wheel and what the tests import.
+"$PYTHON" -m venv "$work/tools"
+"$work/tools/bin/pip" install --quiet --disable-pip-version-check "maturin==$MATURIN_VERSION"
+"$PYTHON" -m venv "$work/env"
+"$work/env/bin/pip" install --quiet --disable-pip-version-check -r crates/haptex-py/pytests/requirements.txt
+
+# The ci profile of scripts/test.sh: the wheel reuses what cargo test built.
+cargo build --profile ci --locked -p haptex-cli --bin haptex
+"$work/tools/bin/maturin" build --quiet --profile ci --locked -m crates/haptex-py/Cargo.toml -o "$work/wheels"
+"$work/env/bin/pip" install --quiet --disable-pip-version-check --no-deps "$work"/wheels/haptex-*.whl
+
+# From outside the source tree: `import haptex` is the installed wheel.
+HAPTEX_BIN="$PWD/target/ci/haptex" "$work/env/bin/python" -m pytest -q -p no:cacheprovider \
+    --rootdir crates/haptex-py/pytests crates/haptex-py/pytests "$@"
