@@ -308,6 +308,19 @@ impl Metadata {
         Ok(metadata)
     }
 
+    /// Per template: rows, widths and leave-one-out errors, with when and
+    /// how the database was built (`haptex db loo --json`).
+    pub fn loo_summary(&self) -> serde_json::Value {
+        serde_json::json!({
+            "created": self.created,
+            "haptex_version": self.haptex_version,
+            "build_wall_time_s": self.build_wall_time_s,
+            "cpu_time_s": self.cpu_time_s,
+            "inputs": INPUTS,
+            "templates": self.templates,
+        })
+    }
+
     pub fn entry(&self, template: Template) -> Option<&TemplateEntry> {
         self.templates.iter().find(|e| e.template == template)
     }
@@ -451,6 +464,34 @@ impl TemplateModel {
                 100.0 * entry.loo_rmse_relative_to_range
             ),
         }
+    }
+
+    /// Writes a prediction as `haptex predict` does: comments saying what
+    /// was predicted, where it comes from ([`Self::describe`]), the
+    /// database's flat-surface friction and the warning if any, then
+    /// `x_mm,mu` in full precision.
+    pub fn write_prediction_csv(
+        &self,
+        w: &mut dyn std::io::Write,
+        metadata: &Metadata,
+        x0_mm: f64,
+        query: &[f64; 3],
+        prediction: &Prediction,
+    ) -> std::io::Result<()> {
+        let entry = metadata.entry(self.template).ok_or_else(|| {
+            std::io::Error::other(format!("the database's metadata has no {} entry", self.template.name()))
+        })?;
+        writeln!(w, "# haptex predict: {}", self.template.describe_query(x0_mm, query))?;
+        writeln!(w, "# {}", self.describe(query, prediction, entry))?;
+        writeln!(w, "# {}", metadata.fe.flat_mu_comment())?;
+        if let Some(warning) = self.warning(query, prediction.fe_row, &prediction.diagnostics) {
+            writeln!(w, "# warning: {warning}")?;
+        }
+        writeln!(w, "x_mm,mu")?;
+        for (x, mu) in prediction.x_mm.iter().zip(&prediction.mu) {
+            crate::io::write_csv_row(w, &[*x, *mu])?;
+        }
+        Ok(())
     }
 
     /// The warning for a query (r_w, r_h, velocity) and its prediction, if

@@ -23,6 +23,7 @@ pub mod finite_solver;
 pub mod hyperelastic;
 pub mod lanes;
 pub mod linalg;
+pub mod loo_case;
 pub mod material;
 pub mod mesh;
 pub mod output;

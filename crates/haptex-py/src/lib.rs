@@ -8,7 +8,9 @@
 
 use pyo3::prelude::*;
 
+mod cae;
 mod convert;
+mod database;
 mod design;
 mod errors;
 mod profile;
@@ -19,5 +21,28 @@ fn _haptex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<profile::Profile>()?;
     m.add_class::<design::Design>()?;
     m.add_function(wrap_pyfunction!(design::voltage, m)?)?;
+    m.add_class::<cae::Cae>()?;
+    m.add_function(wrap_pyfunction!(cae::cae_loo, m)?)?;
+    m.add_class::<database::Database>()?;
+    m.add_class::<database::Prediction>()?;
+    m.add_class::<database::LooCase>()?;
+    m.add_function(wrap_pyfunction!(predict, m)?)?;
     Ok(())
+}
+
+/// The friction profile of a bump, edge or sine from the shipped FE
+/// database (`haptex predict`): haptex.Database(db).predict(...), the
+/// database opened for this call. Keep a haptex.Database to predict many.
+#[pyfunction]
+#[pyo3(signature = (surface, x0, width, height, velocity = 20.0, db = None))]
+fn predict(
+    py: Python<'_>,
+    surface: &str,
+    x0: f64,
+    width: f64,
+    height: f64,
+    velocity: f64,
+    db: Option<&Bound<'_, PyAny>>,
+) -> PyResult<database::Prediction> {
+    database::Database::open(db)?.predict_one(py, surface, x0, width, height, velocity)
 }

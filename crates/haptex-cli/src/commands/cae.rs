@@ -6,10 +6,9 @@ use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
-use haptex_core::cae::{Cae, CaeError, ModelMatrix, OptimizeOptions, OptimizerReport, Widths, optimize_widths};
+use haptex_core::cae::{Cae, CaeError, ModelMatrix, OptimizeOptions, Widths, optimize_widths};
 use haptex_core::io::{Table, write_csv_row};
 use haptex_core::num::Num;
-use serde::Serialize;
 
 use crate::args::{Output, positive};
 
@@ -239,23 +238,6 @@ fn predict(args: PredictArgs) -> anyhow::Result<()> {
 }
 
 /// The JSON `haptex cae loo` prints.
-#[derive(Serialize)]
-struct LooJson<'a> {
-    model: &'a str,
-    n: usize,
-    d: usize,
-    m: usize,
-    inputs: &'a [String],
-    constant_inputs: Vec<&'a str>,
-    outputs: &'a [String],
-    constant: bool,
-    w_min: f64,
-    w_max: f64,
-    rmse: f64,
-    rmse_per_output: &'a [f64],
-    optimizer: Option<&'a OptimizerReport>,
-}
-
 fn loo(args: LooArgs) -> anyhow::Result<()> {
     let matrix = args.model.read()?;
     let (widths, errors, report) = match args.widths.get()? {
@@ -275,22 +257,7 @@ fn loo(args: LooArgs) -> anyhow::Result<()> {
             (optimum.widths, optimum.errors, Some(optimum.report))
         }
     };
-    let norm = haptex_core::cae::Normalization::fit(matrix.inputs_flat(), matrix.d())?;
-    let json = LooJson {
-        model: matrix.source_name(),
-        n: matrix.n(),
-        d: matrix.d(),
-        m: matrix.m(),
-        inputs: matrix.inputs(),
-        constant_inputs: norm.constant_inputs().into_iter().map(|l| matrix.inputs()[l].as_str()).collect(),
-        outputs: matrix.outputs(),
-        constant: widths.is_constant(),
-        w_min: widths.w_min,
-        w_max: widths.w_max,
-        rmse: errors.rmse,
-        rmse_per_output: &errors.rmse_per_output,
-        optimizer: report.as_ref(),
-    };
+    let json = haptex_core::cae::LooReport::new(&matrix, widths, &errors, report.as_ref())?;
     if let Some(report) = &report
         && report.at_bound
     {

@@ -6,11 +6,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand, ValueEnum};
-use haptex_core::cae::{Cae, ModelMatrix};
-use haptex_core::database::{INPUTS, Metadata, Template, TemplateModel};
+use haptex_core::database::{Metadata, Template, TemplateModel};
 use haptex_core::num::Num;
 use haptex_core::plot::{Figure, Panel};
 use haptex_fem::finger::FingerModel;
+use haptex_fem::loo_case::LooCase;
 use haptex_fem::sweep::{self, DatabaseSpec, Run};
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -326,7 +326,7 @@ fn loo(args: LooArgs) -> anyhow::Result<()> {
     let dir = args.db.clone().unwrap_or_else(default_db);
     let metadata = Metadata::read(&dir)?;
     let Some(surface) = args.surface else {
-        let summary = summary_json(&metadata);
+        let summary = metadata.loo_summary();
         if args.json {
             println!("{}", serde_json::to_string_pretty(&summary)?);
         } else {
@@ -338,58 +338,18 @@ fn loo(args: LooArgs) -> anyhow::Result<()> {
     let (width, height) = (args.width.expect("clap requires it"), args.height.expect("clap requires it"));
     let model = TemplateModel::load_with(&dir, &metadata, template)?;
     let query = [width, height, args.velocity];
-    let matrix = model.cae.matrix();
-    let widths = model.cae.widths();
     let run = Run { template, width_mm: width, height_mm: height, velocity_mm_s: args.velocity };
-    let full = model.cae.predict(&query)?.0;
     let row = model.exact_row(&query);
-    let (fe, left_out, case) = match row {
-        Some(row) => {
-            // The case left out: the CAE over the other rows (renormalized,
-            // widths as in the metadata), which never sees the case.
-            let left_out = Cae::new(without_row(matrix, row)?, widths)?.predict(&query)?.0;
-            (
-                matrix.output_row(row).to_vec(),
-                left_out,
-                format!("row {} of {}", row + 1, dir.join(template.file_name()).display()),
-            )
-        }
-        None => {
-            // Not a database case: simulate it with the database's FE
-            // settings; the database never saw it, so both estimates agree.
-            if !args.quiet {
-                eprintln!("not a case of the database: simulating it with the database's FE settings");
-            }
-            let spec = DatabaseSpec::from_metadata(&metadata)?;
-            let fe = spec.simulate(&run).context("simulating the case")?;
-            (fe, full.clone(), "not in the database, FE simulated now".to_string())
-        }
-    };
-    let xi = model.positions().to_vec();
-    let shape = run.surface(0.0);
-    let h: Vec<f64> = xi.iter().map(|&x| shape.height(x)).collect();
-    let rms = |a: &[f64]| (a.iter().zip(&fe).map(|(p, f)| (p - f) * (p - f)).sum::<f64>() / fe.len() as f64).sqrt();
-    let (rms_loo, rms_full) = (rms(&left_out), rms(&full));
-
-    let output = Output::new(args.output.clone());
-    output.write(|w| {
-        writeln!(
-            w,
-            "# haptex db loo: {} r_w={} mm r_h={} mm v={} mm/s ({case}); widths {} .. {}",
-            template.name(),
-            Num(width),
-            Num(height),
-            Num(args.velocity),
-            Num(widths.w_min),
-            Num(widths.w_max)
-        )?;
-        writeln!(w, "# RMS difference to FE: CAE leaving the case out {rms_loo:.6}, CAE full {rms_full:.6}")?;
-        writeln!(w, "xi_mm,h_mm,mu_fe,mu_cae_loo,mu_cae_full")?;
-        for i in 0..xi.len() {
-            haptex_core::io::write_csv_row(w, &[xi[i], h[i], fe[i], left_out[i], full[i]])?;
-        }
-        Ok(())
-    })?;
+    if row.is_none() && !args.quiet {
+        // Not a database case: simulated with the database's FE settings;
+        // the database never saw it, so both estimates agree.
+        eprintln!("not a case of the database: simulating it with the database's FE settings");
+    }
+    let case = LooCase::compute(&dir, &metadata, &model, run);
+    let case = if row.is_none() { case.context("simulating the case")? } else { case? };
+    let (xi, h, fe, left_out, full) = (&case.xi_mm, &case.h_mm, &case.mu_fe, &case.mu_cae_loo, &case.mu_cae_full);
+    let (rms_loo, rms_full) = (case.rms_loo, case.rms_full);
+    Output::new(args.output.clone()).write(|w| case.write_csv(w))?;
     if let Some(path) = &args.png {
         let title = format!(
             "{} r_w = {} mm, r_h = {} mm, v = {} mm/s: FE and CAE (paper Fig. 2a)",
@@ -398,58 +358,34 @@ fn loo(args: LooArgs) -> anyhow::Result<()> {
             Num(height),
             Num(args.velocity)
         );
-        let friction = Panel::new("x - x0 (mm)", "Ft/Fn").line("FE", &xi, &fe);
+        let friction = Panel::new("x - x0 (mm)", "Ft/Fn").line("FE", xi, fe);
         let friction = if row.is_some() {
-            friction.line(format!("CAE, case left out (RMS {rms_loo:.4})"), &xi, &left_out).line(
+            friction.line(format!("CAE, case left out (RMS {rms_loo:.4})"), xi, left_out).line(
                 format!("CAE, full database (RMS {rms_full:.4})"),
-                &xi,
-                &full,
+                xi,
+                full,
             )
         } else {
-            friction.line(format!("CAE, case not in the database (RMS {rms_full:.4})"), &xi, &full)
+            friction.line(format!("CAE, case not in the database (RMS {rms_full:.4})"), xi, full)
         };
         Figure::new(title)
             .size(900, 260)
-            .panel(Panel::new("x - x0 (mm)", "height (mm)").line("surface", &xi, &h))
+            .panel(Panel::new("x - x0 (mm)", "height (mm)").line("surface", xi, h))
             .panel(friction)
             .write_png(path)
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     if !args.quiet {
         eprintln!(
-            "{} r_w = {width} mm, r_h = {height} mm, v = {} mm/s ({case}): RMS difference to FE {rms_loo:.4} \
+            "{} r_w = {width} mm, r_h = {height} mm, v = {} mm/s ({}): RMS difference to FE {rms_loo:.4} \
              leaving the case out, {rms_full:.4} over the whole database",
             template.name(),
-            args.velocity
+            args.velocity,
+            case.source
         );
     }
     if args.json {
-        eprintln!("{}", serde_json::to_string_pretty(&summary_json(&metadata))?);
+        eprintln!("{}", serde_json::to_string_pretty(&metadata.loo_summary())?);
     }
     Ok(())
-}
-
-/// Per template: rows, widths and LOO errors, from the metadata.
-fn summary_json(metadata: &Metadata) -> serde_json::Value {
-    serde_json::json!({
-        "created": metadata.created,
-        "haptex_version": metadata.haptex_version,
-        "build_wall_time_s": metadata.build_wall_time_s,
-        "cpu_time_s": metadata.cpu_time_s,
-        "inputs": INPUTS,
-        "templates": metadata.templates,
-    })
-}
-
-/// A model matrix without row `row`: the database the left-out case's
-/// estimate is made from.
-fn without_row(matrix: &ModelMatrix, row: usize) -> anyhow::Result<ModelMatrix> {
-    let (d, m) = (matrix.d(), matrix.m());
-    let mut b = Vec::with_capacity((matrix.n() - 1) * d);
-    let mut c = Vec::with_capacity((matrix.n() - 1) * m);
-    for n in (0..matrix.n()).filter(|&n| n != row) {
-        b.extend_from_slice(matrix.input_row(n));
-        c.extend_from_slice(matrix.output_row(n));
-    }
-    Ok(ModelMatrix::new(matrix.inputs().to_vec(), matrix.outputs().to_vec(), b, c)?)
 }

@@ -83,19 +83,8 @@ pub fn run(args: PredictArgs) -> anyhow::Result<()> {
     let entry = metadata.entry(template).expect("the model was loaded from this entry");
     let source = model.describe(&query, &prediction, entry);
     let warning = model.warning(&query, prediction.fe_row, &prediction.diagnostics);
-    Output::new(args.output.clone()).write(|w| {
-        writeln!(w, "# haptex predict: {}", template.describe_query(args.x0, &query))?;
-        writeln!(w, "# {source}")?;
-        writeln!(w, "# {}", metadata.fe.flat_mu_comment())?;
-        if let Some(warning) = &warning {
-            writeln!(w, "# warning: {warning}")?;
-        }
-        writeln!(w, "x_mm,mu")?;
-        for (x, mu) in prediction.x_mm.iter().zip(&prediction.mu) {
-            haptex_core::io::write_csv_row(w, &[*x, *mu])?;
-        }
-        Ok(())
-    })?;
+    Output::new(args.output.clone())
+        .write(|w| model.write_prediction_csv(w, &metadata, args.x0, &query, &prediction))?;
     if !args.quiet {
         eprintln!("{source}");
         if let Some(warning) = warning {

@@ -259,6 +259,54 @@ pub struct ScanPoint {
     pub rmse: f64,
 }
 
+/// The leave-one-out figures of a model matrix at some widths, as `haptex
+/// cae loo` writes them (JSON).
+#[derive(Debug, Clone, Serialize)]
+pub struct LooReport<'a> {
+    pub model: &'a str,
+    pub n: usize,
+    pub d: usize,
+    pub m: usize,
+    pub inputs: &'a [String],
+    /// The inputs with one value over all rows (left out of the distances).
+    pub constant_inputs: Vec<&'a str>,
+    pub outputs: &'a [String],
+    pub constant: bool,
+    pub w_min: f64,
+    pub w_max: f64,
+    pub rmse: f64,
+    pub rmse_per_output: &'a [f64],
+    /// What the width search did (None for widths given).
+    pub optimizer: Option<&'a OptimizerReport>,
+}
+
+impl<'a> LooReport<'a> {
+    /// The report of `errors` at `widths` over `matrix`.
+    pub fn new(
+        matrix: &'a ModelMatrix,
+        widths: Widths,
+        errors: &'a LooErrors,
+        optimizer: Option<&'a OptimizerReport>,
+    ) -> Result<Self, CaeError> {
+        let norm = Normalization::fit(matrix.inputs_flat(), matrix.d())?;
+        Ok(Self {
+            model: matrix.source_name(),
+            n: matrix.n(),
+            d: matrix.d(),
+            m: matrix.m(),
+            inputs: matrix.inputs(),
+            constant_inputs: norm.constant_inputs().into_iter().map(|l| matrix.inputs()[l].as_str()).collect(),
+            outputs: matrix.outputs(),
+            constant: widths.is_constant(),
+            w_min: widths.w_min,
+            w_max: widths.w_max,
+            rmse: errors.rmse,
+            rmse_per_output: &errors.rmse_per_output,
+            optimizer,
+        })
+    }
+}
+
 /// What the width search did.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct OptimizerReport {

@@ -201,6 +201,19 @@ impl ModelMatrix {
     pub fn line_of_row(&self, n: usize) -> Option<u64> {
         self.lines.as_ref().map(|l| l[n])
     }
+
+    /// The matrix without row `row`: the database a left-out case's
+    /// estimate is made from (`haptex db loo`).
+    pub fn without_row(&self, row: usize) -> Result<Self, CaeError> {
+        let (n_rows, d, m) = (self.n(), self.d(), self.m());
+        let mut b = Vec::with_capacity((n_rows - 1) * d);
+        let mut c = Vec::with_capacity((n_rows - 1) * m);
+        for n in (0..n_rows).filter(|&n| n != row) {
+            b.extend_from_slice(self.input_row(n));
+            c.extend_from_slice(self.output_row(n));
+        }
+        Self::new(self.inputs.clone(), self.outputs.clone(), b, c)
+    }
 }
 
 #[cfg(test)]

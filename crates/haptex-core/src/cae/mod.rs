@@ -33,7 +33,7 @@ mod prune;
 mod widths;
 
 pub use loo::{
-    DEFAULT_LOO_MEMORY_BYTES, Loo, LooErrors, OptimizeOptions, OptimizerReport, ScanPoint, WidthOptimum,
+    DEFAULT_LOO_MEMORY_BYTES, Loo, LooErrors, LooReport, OptimizeOptions, OptimizerReport, ScanPoint, WidthOptimum,
     optimize_widths,
 };
 pub use matrix::ModelMatrix;

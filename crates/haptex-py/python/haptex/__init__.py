@@ -18,23 +18,42 @@ Errors are haptex.HaptexError, and a ValueError (bad input) or an OSError
 from ._errors import (
     CancelledError,
     ComputationError,
+    ExtrapolationWarning,
     HaptexError,
     HaptexOSError,
     InvalidInputError,
 )
 from ._types import Regions, Summary
-from ._haptex import Design, Profile, __version__, voltage
+from ._haptex import (
+    Cae,
+    Database,
+    Design,
+    LooCase,
+    Prediction,
+    Profile,
+    __version__,
+    cae_loo,
+    predict,
+    voltage,
+)
 
 __all__ = [
+    "Cae",
     "CancelledError",
     "ComputationError",
+    "Database",
     "Design",
+    "ExtrapolationWarning",
     "HaptexError",
     "HaptexOSError",
     "InvalidInputError",
+    "LooCase",
+    "Prediction",
     "Profile",
     "Regions",
     "Summary",
     "__version__",
+    "cae_loo",
+    "predict",
     "voltage",
 ]

@@ -13,6 +13,7 @@ __all__ = [
     "HaptexOSError",
     "ComputationError",
     "CancelledError",
+    "ExtrapolationWarning",
 ]
 
 
@@ -38,3 +39,9 @@ class ComputationError(HaptexError, RuntimeError):
 
 class CancelledError(HaptexError):
     """Long work stopped because its progress callback returned False."""
+
+
+class ExtrapolationWarning(UserWarning):
+    """A prediction far from every case of the model matrix or database
+    (paper footnote 6: extreme extrapolation may give erroneous values);
+    the message says which inputs and the nearest case."""
