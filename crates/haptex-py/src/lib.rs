@@ -23,6 +23,8 @@ fn _haptex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(design::voltage, m)?)?;
     m.add_class::<cae::Cae>()?;
     m.add_function(wrap_pyfunction!(cae::cae_loo, m)?)?;
+    m.add_function(wrap_pyfunction!(cae::_bench_rust_predict, m)?)?;
+    m.add_function(wrap_pyfunction!(cae::_bench_rust_predict_batch, m)?)?;
     m.add_class::<database::Database>()?;
     m.add_class::<database::Prediction>()?;
     m.add_class::<database::LooCase>()?;

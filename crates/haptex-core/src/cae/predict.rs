@@ -352,6 +352,18 @@ impl Cae {
         let c = self.matrix.outputs_flat();
         for (block, out_block) in queries.chunks(BATCH_BLOCK * d).zip(out.chunks_mut(BATCH_BLOCK * m)) {
             let q_block = block.len() / d;
+            if q_block == 1 {
+                // A block of one query: eq. (11) summed over the rows it uses
+                // ([`Cae::predict_into`], the same bits): a product would pack
+                // all N x M outputs for one row of weights.
+                let index = diagnostics.len();
+                let diag = self.predict_into(block, &mut scratch.one, out_block).map_err(|e| match e {
+                    CaeError::Query(message) => CaeError::BatchQuery { index, message },
+                    other => other,
+                })?;
+                diagnostics.push(diag);
+                continue;
+            }
             let mut rows_used = 0;
             for (b, w_row) in block.chunks_exact(d).zip(scratch.weights.chunks_exact_mut(n)) {
                 let (diag, sum) = self.weights(b, &mut scratch.one, Listing::Rows).map_err(|e| match e {
