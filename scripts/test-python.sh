@@ -25,10 +25,15 @@ trap 'rm -rf "$work"' EXIT
 "$work/env/bin/pip" install --quiet --disable-pip-version-check -r crates/haptex-py/pytests/requirements.txt
 
 # The ci profile of scripts/test.sh: the wheel reuses what cargo test built.
-cargo build --profile ci --locked -p haptex-cli --bin haptex
+# HAPTEX_BIN given (scripts/test.sh: the binary its cargo test built, with
+# its features) is the command line the parity tests run; else it is built.
+if [ -z "${HAPTEX_BIN:-}" ]; then
+    cargo build --profile ci --locked -p haptex-cli --bin haptex
+    HAPTEX_BIN="$PWD/target/ci/haptex"
+fi
 "$work/tools/bin/maturin" build --quiet --profile ci --locked -m crates/haptex-py/Cargo.toml -o "$work/wheels"
 "$work/env/bin/pip" install --quiet --disable-pip-version-check --no-deps "$work"/wheels/haptex-*.whl
 
 # From outside the source tree: `import haptex` is the installed wheel.
-HAPTEX_BIN="$PWD/target/ci/haptex" "$work/env/bin/python" -m pytest -q -p no:cacheprovider \
+HAPTEX_BIN="$HAPTEX_BIN" "$work/env/bin/python" -m pytest -q -p no:cacheprovider \
     --rootdir crates/haptex-py/pytests crates/haptex-py/pytests "$@"

@@ -115,4 +115,25 @@ else
         "(as root: apt-get install nodejs)." >&2
 fi
 
-cargo test --workspace --profile ci --locked --no-fail-fast "${LIVE_FEATURE[@]}" "$@"
+status=0
+cargo test --workspace --profile ci --locked --no-fail-fast "${LIVE_FEATURE[@]}" "$@" || status=$?
+
+# The Python package (crates/haptex-py): its wheel built by maturin,
+# installed into a fresh virtual environment, and its pytest suite (parity
+# with the command line just built, Hypothesis properties, the
+# docs/python.md example): scripts/test-python.sh. It needs CPython 3.9+
+# with the venv module (Debian: python3-venv), installed as root when
+# missing; the packages come from PyPI.
+if ! python3 -c 'import ensurepip, venv' >/dev/null 2>&1 && can_apt; then
+    echo "scripts/test.sh: installing python3-venv for the Python package's tests" >&2
+    apt_install --no-install-recommends python3 python3-venv || true
+fi
+if python3 -c 'import ensurepip, venv, sys; assert sys.version_info >= (3, 9)' >/dev/null 2>&1; then
+    HAPTEX_BIN="$PWD/target/ci/haptex" bash scripts/test-python.sh || status=$?
+else
+    echo "scripts/test.sh: FAILING: the Python package's tests (scripts/test-python.sh) need CPython 3.9 or" \
+        "later with the venv module, which is missing and could not be installed (as root: apt-get install" \
+        "python3 python3-venv)." >&2
+    status=1
+fi
+exit "$status"

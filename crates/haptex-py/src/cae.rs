@@ -2,8 +2,7 @@
 //! any model matrix, as `haptex cae predict` and `haptex cae loo` use it.
 
 use haptex_core::cae::{
-    Cae as CoreCae, CaeError, Diagnostics, LooReport, ModelMatrix, OptimizeOptions, Scratch, Widths,
-    optimize_widths,
+    Cae as CoreCae, CaeError, Diagnostics, LooReport, ModelMatrix, OptimizeOptions, Scratch, Widths, optimize_widths,
 };
 use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;

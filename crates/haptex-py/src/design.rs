@@ -349,7 +349,8 @@ impl DisplayChoice<'_> {
 
 /// Designs the drive of a display for a friction profile (`haptex voltage`).
 ///
-/// profile: a haptex.Profile, a path to a profile CSV, or (x_mm, mu).
+/// profile: a haptex.Profile, a path to a profile CSV, (x_mm, mu), or an
+///   object with x_mm and mu arrays (a haptex.Prediction).
 /// method: "physical" (eq. 8: reproduces the friction force) or
 ///   "normalized" (eq. 9: the pattern only, min mu -> 0 V, max mu -> U_max).
 /// relative: map mu / mu_flat * mu_HD (the paper's Fig. 2), mu_flat being

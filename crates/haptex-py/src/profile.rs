@@ -95,11 +95,19 @@ pub fn profile_arg(arg: &str, value: &Bound<'_, PyAny>) -> PyResult<FrictionProf
     if let Ok((x, mu)) = value.extract::<(Floats<'_>, Floats<'_>)>() {
         return FrictionProfile::new(to_vec(&x), to_vec(&mu)).or_raise();
     }
+    // Anything with x_mm and mu arrays: a haptex.Prediction, a Design, a
+    // simulation's result.
+    if let (Ok(x), Ok(mu)) = (value.getattr("x_mm"), value.getattr("mu"))
+        && let (Ok(x), Ok(mu)) = (x.extract::<Floats<'_>>(), mu.extract::<Floats<'_>>())
+    {
+        return FrictionProfile::new(to_vec(&x), to_vec(&mu)).or_raise();
+    }
     if value.extract::<PathBuf>().is_ok() {
         return FrictionProfile::read_csv_file(&input_path(arg, value)?).or_raise();
     }
     Err(input(format!(
-        "{arg} must be a haptex.Profile, a path to a profile CSV or a pair (x_mm, mu) of arrays, got {}",
+        "{arg} must be a haptex.Profile, a path to a profile CSV, a pair (x_mm, mu) of arrays or an object with \
+         x_mm and mu arrays (a haptex.Prediction), got {}",
         type_name(value)
     )))
 }
