@@ -11,6 +11,8 @@ use pyo3::prelude::*;
 mod convert;
 mod design;
 mod errors;
+mod library;
+mod playback;
 mod profile;
 
 #[pymodule]
@@ -19,5 +21,8 @@ fn _haptex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<profile::Profile>()?;
     m.add_class::<design::Design>()?;
     m.add_function(wrap_pyfunction!(design::voltage, m)?)?;
+    m.add_class::<playback::Signal>()?;
+    m.add_function(wrap_pyfunction!(playback::play, m)?)?;
+    m.add_class::<library::Library>()?;
     Ok(())
 }

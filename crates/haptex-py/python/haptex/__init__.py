@@ -22,19 +22,23 @@ from ._errors import (
     HaptexOSError,
     InvalidInputError,
 )
-from ._types import Regions, Summary
-from ._haptex import Design, Profile, __version__, voltage
+from ._types import LibrarySample, Regions, Summary
+from ._haptex import Design, DriveSignal, Library, Profile, __version__, play, voltage
 
 __all__ = [
     "CancelledError",
     "ComputationError",
     "Design",
+    "DriveSignal",
     "HaptexError",
     "HaptexOSError",
     "InvalidInputError",
+    "Library",
+    "LibrarySample",
     "Profile",
     "Regions",
     "Summary",
     "__version__",
+    "play",
     "voltage",
 ]
