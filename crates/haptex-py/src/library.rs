@@ -310,7 +310,8 @@ impl Library {
         let added = py
             .detach(|| -> Result<Added, haptex_core::library::LibraryError> {
                 let mut library = CoreLibrary::open(&db)?;
-                let run = library.begin_import("haptex.Library.import_profile (Python)", &ProcessingConfig::default())?;
+                let run =
+                    library.begin_import("haptex.Library.import_profile (Python)", &ProcessingConfig::default())?;
                 let added = library.add_profile(run, material, description, &profile, &provenance)?;
                 library.finish_import(run)?;
                 library.settle()?;

@@ -9,8 +9,8 @@ use haptex_core::io::Table;
 use haptex_core::ranges;
 use haptex_core::signal::play::{PlayProfile, generate_trajectory, sidecar_source};
 use haptex_core::signal::{
-    AmplitudeCurve, DriveSignal, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions,
-    check_full_scale, encode_wav, modulate_at_resonance, write_wav,
+    AmplitudeCurve, DriveSignal, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions, check_full_scale,
+    encode_wav, modulate_at_resonance, write_wav,
 };
 use haptex_core::trajectory::Trajectory;
 use numpy::PyArray1;
@@ -90,7 +90,12 @@ impl Signal {
     /// wav_format: "pcm16", "pcm24" or "float32". Returns the sidecar as a
     /// dict. The sidecar's source.command says it came from Python.
     #[pyo3(signature = (path, *, wav_format = "pcm16"))]
-    fn write_wav<'py>(&self, py: Python<'py>, path: &Bound<'_, PyAny>, wav_format: &str) -> PyResult<Bound<'py, PyAny>> {
+    fn write_wav<'py>(
+        &self,
+        py: Python<'py>,
+        path: &Bound<'_, PyAny>,
+        wav_format: &str,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let path = crate::convert::path("path", path)?;
         let options = self.options(wav_format)?;
         let sidecar = py.detach(|| write_wav(&path, &self.signal, &options, self.source.clone())).or_raise()?;

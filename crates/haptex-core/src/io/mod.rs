@@ -54,4 +54,3 @@ fn normalize(path: &Path) -> PathBuf {
     }
     out
 }
-

@@ -35,8 +35,8 @@ use sha2::{Digest, Sha256};
 
 use crate::name::{NameError, check_name};
 use crate::profile::FrictionProfile;
-use crate::recording::rng::SplitMix64;
 use crate::recording::format::METADATA_SUFFIX;
+use crate::recording::rng::SplitMix64;
 use crate::recording::{ProcessedStroke, ProcessingConfig, Recording, RecordingError, process};
 use crate::text::Quoted;
 
@@ -248,7 +248,8 @@ pub struct ProfileProvenance {
 pub fn collect_recordings(inputs: &[PathBuf]) -> std::io::Result<Vec<PathBuf>> {
     use std::collections::HashSet;
     use std::io::{Error, ErrorKind};
-    let cannot_read = |dir: &Path, e: Error| Error::new(e.kind(), format!("cannot read directory {}: {e}", dir.display()));
+    let cannot_read =
+        |dir: &Path, e: Error| Error::new(e.kind(), format!("cannot read directory {}: {e}", dir.display()));
     /// Walks `dir` depth first, entering each real directory once (a
     /// symbolic link back up the tree would otherwise make the walk
     /// endless, or exponential with two such links).
