@@ -105,6 +105,32 @@ def test_wav_and_sidecar_are_the_command_lines(cli, tmp_path, designs, key, wav_
     cli.run("play", "--check", py_wav)
 
 
+def test_read_wav_checks_as_the_command_line_does(cli, tmp_path, designs):
+    signal = haptex.play(designs["ua"], velocity=60.0)
+    wav = tmp_path / "p.wav"
+    signal.write_wav(wav, wav_format="pcm24")
+    back = haptex.read_wav(wav)
+    assert back["scale"]["volts_per_full_scale"] == signal.volts_per_full_scale
+    assert back["sidecar"]["samples_sha256"] == back["scale"]["samples_sha256"]
+    # Within half a code of the rendered samples, never beyond full scale.
+    step_v = signal.volts_per_full_scale / 8388607
+    assert np.abs(back["volts"] - signal.signal_v).max() <= 0.5 * step_v * (1 + 1e-9)
+    assert np.abs(back["volts"]).max() <= signal.volts_per_full_scale
+    step_um = signal.um_per_full_scale / 8388607
+    assert np.abs(back["amplitude_um"] - signal.amplitude_um).max() <= 0.5 * step_um * (1 + 1e-9)
+    # A sample changed after writing: refused, with the command line's message.
+    data = bytearray(wav.read_bytes())
+    at = data.index(b"data") + 8 + 3 * 1000
+    data[at] ^= 0x01
+    wav.write_bytes(bytes(data))
+    message = cli.error("play", "--check", wav)
+    with pytest.raises(haptex.InvalidInputError) as caught:
+        haptex.read_wav(wav)
+    assert str(caught.value) == message
+    with pytest.raises(haptex.HaptexOSError):
+        haptex.read_wav(tmp_path / "nope.wav")
+
+
 def test_a_design_object_plays_as_its_file(cli, tmp_path, designs):
     for key, kwargs in (("u", {}), ("ua", {"display": "combined"})):
         from_file = haptex.play(designs[key], velocity=50.0)

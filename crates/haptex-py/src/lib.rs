@@ -23,6 +23,7 @@ fn _haptex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(design::voltage, m)?)?;
     m.add_class::<playback::Signal>()?;
     m.add_function(wrap_pyfunction!(playback::play, m)?)?;
+    m.add_function(wrap_pyfunction!(playback::read_wav, m)?)?;
     m.add_class::<library::Library>()?;
     Ok(())
 }

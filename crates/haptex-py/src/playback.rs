@@ -10,12 +10,12 @@ use haptex_core::ranges;
 use haptex_core::signal::play::{PlayProfile, generate_trajectory, sidecar_source};
 use haptex_core::signal::{
     AmplitudeCurve, DriveSignal, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions, check_full_scale,
-    encode_wav, modulate_at_resonance, write_wav,
+    encode_wav, modulate_at_resonance, read_drive_wav, write_wav,
 };
 use haptex_core::trajectory::Trajectory;
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::PyBytes;
+use pyo3::types::{PyBytes, PyDict};
 use serde_json::json;
 
 use crate::convert::{Floats, array, choice, input_path, json_object, ranged, ranged_opt, to_vec, type_name};
@@ -383,6 +383,29 @@ pub fn play(
         source,
         signal,
     })
+}
+
+/// Reads a drive-signal WAV written by haptex and checks it, as `haptex
+/// play --check WAV` does: the fmt chunk and samples against the scale
+/// chunk inside it, every sample of every channel finite and within full
+/// scale, and the sidecar PATH.json (if present) against both. Raises
+/// haptex.InvalidInputError on any mismatch (with the command line's
+/// message), haptex.HaptexOSError when the file cannot be read.
+///
+/// Returns a dict: volts (channel 1 in V at the amplifier output),
+/// amplitude_um (channel 2 in um, or None), scale (the scale chunk: sample
+/// format, volts_per_full_scale, sample rate, hashes, channel_2), sidecar
+/// (the sidecar, or None).
+#[pyfunction]
+pub fn read_wav<'py>(py: Python<'py>, path: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyDict>> {
+    let path = input_path("path", path)?;
+    let wav = py.detach(|| read_drive_wav(&path)).or_raise()?;
+    let out = PyDict::new(py);
+    out.set_item("volts", array(py, wav.volts))?;
+    out.set_item("amplitude_um", wav.amplitude_um.map(|a| array(py, a)))?;
+    out.set_item("scale", json_object(py, &wav.scale)?)?;
+    out.set_item("sidecar", wav.sidecar.as_ref().map(|s| json_object(py, s)).transpose()?)?;
+    Ok(out)
 }
 
 /// What a design made with a device file says of it (`haptex voltage

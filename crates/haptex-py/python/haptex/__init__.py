@@ -23,7 +23,7 @@ from ._errors import (
     InvalidInputError,
 )
 from ._types import LibrarySample, Regions, Summary
-from ._haptex import Design, DriveSignal, Library, Profile, __version__, play, voltage
+from ._haptex import Design, DriveSignal, Library, Profile, __version__, play, read_wav, voltage
 
 __all__ = [
     "CancelledError",
@@ -40,5 +40,6 @@ __all__ = [
     "Summary",
     "__version__",
     "play",
+    "read_wav",
     "voltage",
 ]

@@ -71,6 +71,8 @@ def play(
     sample_rate: int = 48000,
 ) -> DriveSignal: ...
 
+def read_wav(path: _Path) -> Dict[str, Any]: ...
+
 class Library:
     """A texture library (haptex library): materials, strokes, profiles."""
 
