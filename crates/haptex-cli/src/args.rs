@@ -1,7 +1,7 @@
 //! Flag value parsers and output helpers shared by the subcommands.
 
 use std::io::Write;
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use haptex_core::calibration::force_fit::carrier_name;
@@ -82,29 +82,7 @@ pub fn read_profile(path: &Path) -> anyhow::Result<haptex_core::FrictionProfile>
     })
 }
 
-/// A shipped data file or directory: the path in environment variable
-/// `env_var` if set, else `relative` (e.g. `data/db`) in this source tree.
-pub fn shipped_data(env_var: &str, relative: &str) -> PathBuf {
-    if let Some(path) = std::env::var_os(env_var) {
-        return PathBuf::from(path);
-    }
-    normalize(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(relative))
-}
-
-/// Removes `.` and `..` components lexically (for readable messages).
-fn normalize(path: &Path) -> PathBuf {
-    let mut out = PathBuf::new();
-    for component in path.components() {
-        match component {
-            Component::ParentDir if out.file_name().is_some() => {
-                out.pop();
-            }
-            Component::CurDir => {}
-            other => out.push(other),
-        }
-    }
-    out
-}
+pub use haptex_core::io::shipped_data;
 
 /// The dielectric layers of eq. (3), as flags (defaults: the paper's Fig. 2).
 #[derive(Debug, Clone, clap::Args)]
@@ -437,7 +415,7 @@ pub struct DesignDevice {
 /// The words of the comment line a design made with a device file
 /// carries, before the file's SHA-256 (read back by `haptex play` and
 /// `haptex live`).
-pub const DEVICE_SHA256_MARK: &str = "device file sha256 ";
+pub const DEVICE_SHA256_MARK: &str = haptex_core::signal::play::DEVICE_SHA256_MARK;
 
 impl DesignDevice {
     /// Reads and checks the device file at `path`; the hash is of the bytes

@@ -78,14 +78,3 @@ pub fn json_object<'py, T: serde::Serialize>(py: Python<'py>, value: &T) -> PyRe
     let text = serde_json::to_string(value).map_err(|e| input(format!("internal: {e}")))?;
     py.import("json")?.call_method1("loads", (PyString::new(py, &text),))
 }
-
-/// A shipped data file or directory: the path in environment variable
-/// `env_var` if set, else `relative` (e.g. `data/db`) in the checkout this
-/// package was built from, as the command line finds it.
-pub fn shipped_data(env_var: &str, relative: &str) -> PathBuf {
-    if let Some(path) = std::env::var_os(env_var) {
-        return PathBuf::from(path);
-    }
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    root.parent().and_then(std::path::Path::parent).unwrap_or(root).join(relative)
-}

@@ -17,7 +17,7 @@ use crate::errors::{Kind, OrRaise, input, raise};
 /// The shipped database directory: $HAPTEX_DB, else data/db of the
 /// checkout this package was built from (as the command line finds it).
 fn default_db() -> PathBuf {
-    crate::convert::shipped_data("HAPTEX_DB", "data/db")
+    haptex_core::io::shipped_data("HAPTEX_DB", "data/db")
 }
 
 fn template_of(surface: &str) -> PyResult<Template> {

@@ -13,6 +13,8 @@ mod convert;
 mod database;
 mod design;
 mod errors;
+mod library;
+mod playback;
 mod profile;
 
 #[pymodule]
@@ -29,6 +31,10 @@ fn _haptex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<database::Prediction>()?;
     m.add_class::<database::LooCase>()?;
     m.add_function(wrap_pyfunction!(predict, m)?)?;
+    m.add_class::<playback::Signal>()?;
+    m.add_function(wrap_pyfunction!(playback::play, m)?)?;
+    m.add_function(wrap_pyfunction!(playback::read_wav, m)?)?;
+    m.add_class::<library::Library>()?;
     Ok(())
 }
 

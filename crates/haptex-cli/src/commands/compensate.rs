@@ -110,7 +110,7 @@ fn learning_gain(text: &str) -> Result<f64, String> {
 fn device(args: &CompensateArgs, file: Option<&DesignDevice>, comments: &[String]) -> anyhow::Result<Device> {
     if let Some(file) = file {
         file.check_design(comments, &args.design)?;
-        let carrier = match crate::commands::play::stated_carrier(comments) {
+        let carrier = match haptex_core::signal::play::stated_carrier(comments) {
             None => Carrier::DEFAULT,
             Some(Ok((shape, f))) => Carrier {
                 shape: match shape.as_str() {

@@ -1,14 +1,13 @@
 //! `haptex library`: recorded finger strokes -> friction profiles, and the
 //! texture library they are kept in (paper section 2.4).
 
-use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand, ValueEnum};
 use haptex_core::FrictionProfile;
 use haptex_core::io::{FileSet, write_atomic, write_csv_row};
-use haptex_core::library::{Added, ImportId, Library, ProfileProvenance, StoredProfile, export_file};
+use haptex_core::library::{Added, Library, ProfileProvenance, StoredProfile, collect_recordings, export_file};
 use haptex_core::name::{MAX_NAME_CHARS, check_name};
 use haptex_core::num::Num;
 use haptex_core::recording::format::METADATA_SUFFIX;
@@ -18,9 +17,6 @@ use haptex_core::text::{Quoted, QuotedUpTo};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::{Output, positive};
-
-/// Where the shipped library is, relative to the repository root.
-const SHIPPED_LIBRARY: &str = "data/library/library.sqlite";
 
 /// Manage the texture library: import recorded finger strokes (processed to
 /// friction profiles) and user profiles, list materials, sample a random
@@ -307,7 +303,7 @@ pub fn run(args: LibraryArgs) -> anyhow::Result<()> {
 
 /// $HAPTEX_LIBRARY, else the shipped library of this source tree.
 pub(crate) fn default_db() -> PathBuf {
-    crate::args::shipped_data("HAPTEX_LIBRARY", SHIPPED_LIBRARY)
+    haptex_core::library::default_library_path()
 }
 
 pub(crate) fn open_read_only(db: &Path) -> anyhow::Result<Library> {
@@ -380,12 +376,12 @@ fn import(db: &Path, args: ImportArgs) -> anyhow::Result<()> {
     let (mut new, mut duplicate, mut failed) = (0usize, 0usize, 0usize);
     for file in &files {
         bar.set_message(file.display().to_string());
-        match import_one(&mut library, run, file, &config) {
+        match library.import_recording(run, file, &config) {
             Ok(Added::New(_)) => new += 1,
             Ok(Added::Duplicate(_)) => duplicate += 1,
             Err(e) => {
                 failed += 1;
-                bar.suspend(|| eprintln!("error: {e:#}"));
+                bar.suspend(|| eprintln!("error: {:#}", anyhow::Error::from(e)));
             }
         }
         bar.inc(1);
@@ -404,56 +400,6 @@ fn import(db: &Path, args: ImportArgs) -> anyhow::Result<()> {
         bail!("{failed} of {} recordings could not be imported (see the errors above)", files.len());
     }
     Ok(())
-}
-
-fn import_one(library: &mut Library, run: ImportId, file: &Path, config: &ProcessingConfig) -> anyhow::Result<Added> {
-    let recording = Recording::load(file)?;
-    if let Some(id) = library.find_content(recording.sha256.as_deref().expect("loaded recordings have a hash"))? {
-        return Ok(Added::Duplicate(id));
-    }
-    let processed = process(&recording, config)?;
-    Ok(library.add_recording(run, &recording, &processed, config)?)
-}
-
-/// Recording metadata files: the files given, and every *.recording.json
-/// below the directories given, sorted.
-fn collect_recordings(inputs: &[PathBuf]) -> anyhow::Result<Vec<PathBuf>> {
-    /// Walks `dir` depth first, entering each real directory once (a
-    /// symbolic link back up the tree would otherwise make the walk
-    /// endless, or exponential with two such links).
-    fn walk(dir: &Path, out: &mut Vec<PathBuf>, seen: &mut HashSet<PathBuf>) -> anyhow::Result<()> {
-        let real = std::fs::canonicalize(dir).with_context(|| format!("cannot read directory {}", dir.display()))?;
-        if !seen.insert(real) {
-            return Ok(());
-        }
-        let entries = std::fs::read_dir(dir).with_context(|| format!("cannot read directory {}", dir.display()))?;
-        for entry in entries {
-            let path = entry.with_context(|| format!("cannot read directory {}", dir.display()))?.path();
-            if path.is_dir() {
-                walk(&path, out, seen)?;
-            } else if path.to_string_lossy().ends_with(METADATA_SUFFIX) {
-                out.push(path);
-            }
-        }
-        Ok(())
-    }
-    let mut files = Vec::new();
-    let mut seen = HashSet::new();
-    for input in inputs {
-        if input.is_dir() {
-            let before = files.len();
-            walk(input, &mut files, &mut seen)?;
-            files[before..].sort();
-            if files.len() == before {
-                bail!("{}: no recordings (*{METADATA_SUFFIX}) in this directory", input.display());
-            }
-        } else if input.is_file() {
-            files.push(input.clone());
-        } else {
-            bail!("{}: no such file or directory", input.display());
-        }
-    }
-    Ok(files)
 }
 
 fn list(db: &Path, args: ListArgs) -> anyhow::Result<()> {

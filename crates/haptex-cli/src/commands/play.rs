@@ -9,17 +9,15 @@ use clap::{Args, ValueEnum};
 use haptex_core::io::Table;
 use haptex_core::num::Num;
 use haptex_core::ranges;
+use haptex_core::signal::play::{PlayProfile, generate_trajectory, resolve_a_max_um, sidecar_source};
 use haptex_core::signal::{
     AmplitudeCurve, Carrier, Extend, Limits, RenderSettings, VoltageCurve, WavFormat, WavOptions,
-    modulate_at_resonance, read_drive_wav, render, render_two_channel, sidecar_path, write_wav,
+    modulate_at_resonance, read_drive_wav, sidecar_path, write_wav,
 };
 use haptex_core::trajectory::Trajectory;
 use serde_json::json;
 
 use crate::args::{CarrierArg, Output, in_range, positive};
-
-/// Rate at which generated trajectories are sampled (linear in between).
-const GENERATED_RATE_HZ: f64 = 1000.0;
 
 /// Turn a voltage profile U(x) and a finger trajectory x(t) into the drive
 /// signal of an electrovibration display.
@@ -245,26 +243,7 @@ impl DriveArgs {
         amplitude: Option<&AmplitudeCurve>,
         stated_a_max: Option<f64>,
     ) -> anyhow::Result<Option<f64>> {
-        Ok(match (amplitude, self.a_max_um, stated_a_max) {
-            (None, Some(_), _) => {
-                bail!("--a-max-um is for a profile with an amplitude_um column; {} has none", profile.display())
-            }
-            (None, None, _) => None,
-            (Some(_), Some(given), Some(stated)) if given > stated => bail!(
-                "--a-max-um {} is above the a_max = {} um {} states it was designed for: give at most that",
-                Num(given),
-                Num(stated),
-                profile.display()
-            ),
-            (Some(_), Some(given), _) => Some(given),
-            (Some(_), None, Some(stated)) => Some(stated),
-            (Some(_), None, None) => bail!(
-                "{} has an amplitude_um column (a combined or ultrasonic display's profile) but no header comment \
-                 stating its a_max: give --a-max-um, the largest amplitude of the plate, to drive channel 2 (the \
-                 ultrasonic amplitude) with it as limit and full scale",
-                profile.display()
-            ),
-        })
+        Ok(resolve_a_max_um(&profile.display().to_string(), amplitude.is_some(), self.a_max_um, stated_a_max)?)
     }
 }
 
@@ -337,25 +316,21 @@ pub fn run(mut args: PlayArgs) -> anyhow::Result<()> {
             Provenance { trajectory: json!({ "file": name }), device_file: device_file.as_ref(), stated: None };
         return write_signal(&args, format, &output, output_path, profile, &signal, provenance);
     }
-    let (curve, amplitude, comments) = read_curve(profile)?;
+    let design = read_design(profile)?;
     if let Some(file) = &device_file {
-        args.drive.use_device_file(file, &comments, profile)?;
+        args.drive.use_device_file(file, &design.comments, profile)?;
     }
-    let stated_a_max = if amplitude.is_some() { stated_a_max(&comments) } else { None };
-    let a_max_um = args.drive.a_max_um(profile, amplitude.as_ref(), stated_a_max)?;
-    let (trajectory, trajectory_source) = trajectory(&args, &curve)?;
+    let a_max_um = args.drive.a_max_um(profile, design.amplitude.as_ref(), design.stated_a_max())?;
+    let (trajectory, trajectory_source) = trajectory(&args, &design.curve)?;
     let settings = args.drive.settings(args.sample_rate);
-    check_design_carrier(&comments, &settings.carrier, profile)?;
-    let mut signal = match (&amplitude, a_max_um) {
-        (Some(amplitude), Some(a_max)) => render_two_channel(&curve, amplitude, a_max, &trajectory, &settings)?,
-        _ => render(&curve, &trajectory, &settings)?,
-    };
+    design.check_carrier(&settings.carrier, &profile.display().to_string())?;
+    let mut signal = design.render(&trajectory, &settings, a_max_um)?;
     if let Some(f) = args.plate_resonance_hz {
         modulate_at_resonance(&mut signal, f)
             .with_context(|| format!("--plate-resonance-hz for {}", profile.display()))?;
     }
 
-    let stated = comments.iter().find(|c| c.contains(crate::args::DEVICE_SHA256_MARK)).cloned();
+    let stated = design.comments.iter().find(|c| c.contains(crate::args::DEVICE_SHA256_MARK)).cloned();
     let provenance = Provenance { trajectory: trajectory_source, device_file: device_file.as_ref(), stated };
     write_signal(&args, format, &output, output_path, profile, &signal, provenance)
 }
@@ -411,12 +386,11 @@ fn write_signal(
                 },
                 volts_per_full_scale: args.drive.volts_per_full_scale(),
             };
-            let mut source = json!({
-                "profile": profile.display().to_string(),
-                "trajectory": trajectory_source,
-                "command": std::env::args().collect::<Vec<_>>().join(" "),
-                "haptex_version": env!("CARGO_PKG_VERSION"),
-            });
+            let mut source = sidecar_source(
+                &profile.display().to_string(),
+                trajectory_source,
+                &std::env::args().collect::<Vec<_>>().join(" "),
+            );
             // The device file played on, or the one the design says it was made with.
             if let Some(file) = provenance.device_file {
                 source["device_file"] = file.provenance();
@@ -523,76 +497,17 @@ fn check(path: &Path, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Reads the voltage curve, and the amplitude curve of a profile with an
-/// `amplitude_um` column, from a file, or stdin for `-`; with the `#`
-/// comment lines before its header row (where `haptex voltage` states an
-/// a_max and a design carrier).
-pub fn read_curve(path: &Path) -> anyhow::Result<(VoltageCurve, Option<AmplitudeCurve>, Vec<String>)> {
+/// Reads the design to play from a file, or stdin for `-`: its voltage
+/// curve, the amplitude curve of a profile with an `amplitude_um` column,
+/// and the `#` comment lines before its header row (where `haptex voltage`
+/// states an a_max and a design carrier).
+pub fn read_design(path: &Path) -> anyhow::Result<PlayProfile> {
     let table = if path.as_os_str() == "-" {
         Table::read(std::io::stdin().lock(), "<stdin>")?
     } else {
         Table::read_file(path)?
     };
-    let (curve, amplitude) = VoltageCurve::from_display_table(&table)?;
-    Ok((curve, amplitude, table.comments().to_vec()))
-}
-
-/// The a_max a display profile's header comment states: the smallest
-/// `at most a_max = A um` among its comment lines.
-pub(crate) fn stated_a_max(comments: &[String]) -> Option<f64> {
-    comments
-        .iter()
-        .flat_map(|l| l.split("at most a_max = ").skip(1).map(str::to_owned).collect::<Vec<_>>())
-        .filter_map(|rest| rest.split_whitespace().next().and_then(|v| v.parse::<f64>().ok()))
-        .filter(|a| ranges::A_MAX_UM.contains(*a))
-        .reduce(f64::min)
-}
-
-/// The carrier a frequency-dependent design states it was designed for
-/// (`designed for the carrier: SHAPE F Hz`, as `haptex voltage
-/// --force-model circuit` writes): the shape word and the frequency, or
-/// the unreadable text itself as an error.
-pub(crate) fn stated_carrier(comments: &[String]) -> Option<Result<(String, f64), String>> {
-    let rest = comments.iter().find_map(|l| l.split_once("designed for the carrier: ").map(|(_, r)| r.to_owned()))?;
-    let mut words = rest.split_whitespace();
-    let parsed = match (words.next(), words.next().and_then(|f| f.parse::<f64>().ok()), words.next()) {
-        (Some(shape @ ("sine" | "square" | "none")), Some(f), Some("Hz")) if f.is_finite() && f > 0.0 => {
-            Some((shape.to_owned(), f))
-        }
-        _ => None,
-    };
-    Some(parsed.ok_or(rest))
-}
-
-/// Refuses to play a frequency-dependent design on another carrier than
-/// the one it was designed for: its voltages render the target only there.
-pub(crate) fn check_design_carrier(comments: &[String], carrier: &Carrier, profile: &Path) -> anyhow::Result<()> {
-    let Some(stated) = stated_carrier(comments) else {
-        return Ok(());
-    };
-    let (shape, f_hz) = stated.map_err(|text| {
-        anyhow::anyhow!(
-            "{}: cannot read the design carrier in its comment ('designed for the carrier: {text}'): expected \
-             SHAPE F Hz with SHAPE sine, square or none",
-            profile.display()
-        )
-    })?;
-    let played = carrier.shape.name();
-    // A direct drive has no frequency; sine and square must match it to
-    // the digits written (the comment prints the frequency in full).
-    let same = played == shape && (shape == "none" || f_hz == carrier.frequency_hz);
-    if !same {
-        bail!(
-            "{} was designed with a frequency-dependent force model for a {shape} carrier at {} Hz, and renders its \
-             target only on that carrier: play it with --carrier {shape} --carrier-hz {} (or design it again for \
-             --carrier {played} --carrier-hz {})",
-            profile.display(),
-            Num(f_hz),
-            Num(f_hz),
-            Num(carrier.frequency_hz)
-        );
-    }
-    Ok(())
+    Ok(PlayProfile::from_table(&table)?)
 }
 
 /// The trajectory (read or generated) and a JSON description of where it
@@ -603,19 +518,7 @@ fn trajectory(args: &PlayArgs, curve: &VoltageCurve) -> anyhow::Result<(Trajecto
         return Ok((t, json!({ "file": path.display().to_string() })));
     }
     let speed = args.velocity.context("give --trajectory T.csv, or --velocity to generate one")?;
-    let (x0, x1) = curve.span_mm();
-    let (from, to) = (args.from_mm.unwrap_or(x0), args.to_mm.unwrap_or(x1));
-    Ok(match args.strokes {
-        None => (
-            Trajectory::constant_velocity(from, to, speed, GENERATED_RATE_HZ)?,
-            json!({ "generator": "constant_velocity", "from_mm": from, "to_mm": to, "velocity_mm_s": speed }),
-        ),
-        Some(n) => (
-            Trajectory::strokes(from, to, speed, n as usize, GENERATED_RATE_HZ)?,
-            json!({ "generator": "minimum_jerk_strokes", "from_mm": from, "to_mm": to,
-                    "mean_velocity_mm_s": speed, "strokes": n }),
-        ),
-    })
+    Ok(generate_trajectory(curve, speed, args.strokes, args.from_mm, args.to_mm)?)
 }
 
 fn file_name(path: &Path) -> String {

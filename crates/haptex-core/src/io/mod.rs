@@ -14,6 +14,7 @@ pub use fileset::{FileSet, MemberError, MemberHashes, OutputDir, sha256_file, sh
 pub use table::{Category, MAX_LINE_BYTES, Table, TableError, TableErrorKind};
 
 use std::io::Write;
+use std::path::{Component, Path, PathBuf};
 
 /// Writes one CSV row of numbers (shortest representation that round-trips).
 pub fn write_csv_row(w: &mut dyn Write, values: &[f64]) -> std::io::Result<()> {
@@ -25,4 +26,31 @@ pub fn write_csv_row(w: &mut dyn Write, values: &[f64]) -> std::io::Result<()> {
         w.write_all(buffer.format(*v).as_bytes())?;
     }
     w.write_all(b"\n")
+}
+
+/// A shipped data file or directory (the texture library, the FE
+/// database): the path in environment variable `env_var` if set, else
+/// `relative` (e.g. `data/db`) in the source tree haptex was built from.
+/// The command line and the Python package find shipped data by this one
+/// rule.
+pub fn shipped_data(env_var: &str, relative: &str) -> PathBuf {
+    if let Some(path) = std::env::var_os(env_var) {
+        return PathBuf::from(path);
+    }
+    normalize(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(relative))
+}
+
+/// Removes `.` and `..` components lexically (for readable messages).
+fn normalize(path: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for component in path.components() {
+        match component {
+            Component::ParentDir if out.file_name().is_some() => {
+                out.pop();
+            }
+            Component::CurDir => {}
+            other => out.push(other),
+        }
+    }
+    out
 }

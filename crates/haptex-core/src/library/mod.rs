@@ -35,11 +35,24 @@ use sha2::{Digest, Sha256};
 
 use crate::name::{NameError, check_name};
 use crate::profile::FrictionProfile;
+use crate::recording::format::METADATA_SUFFIX;
 use crate::recording::rng::SplitMix64;
-use crate::recording::{ProcessedStroke, ProcessingConfig, Recording};
+use crate::recording::{ProcessedStroke, ProcessingConfig, Recording, RecordingError, process};
 use crate::text::Quoted;
 
 pub use schema::SCHEMA_VERSION;
+
+/// Where the shipped demo library is, relative to the repository root.
+pub const SHIPPED_LIBRARY: &str = "data/library/library.sqlite";
+
+/// The environment variable naming the default library.
+pub const LIBRARY_ENV_VAR: &str = "HAPTEX_LIBRARY";
+
+/// The library used when none is given: $HAPTEX_LIBRARY, else the shipped
+/// library of this source tree ([`crate::io::shipped_data`]).
+pub fn default_library_path() -> PathBuf {
+    crate::io::shipped_data(LIBRARY_ENV_VAR, SHIPPED_LIBRARY)
+}
 
 /// How long a connection waits for a lock before giving up.
 const BUSY_TIMEOUT: Duration = Duration::from_secs(10);
@@ -79,6 +92,16 @@ pub enum LibraryError {
     Unreadable(String),
     #[error("library database error: {0}")]
     Sqlite(#[from] rusqlite::Error),
+}
+
+/// A recording could not be imported: it could not be read or processed,
+/// or the library refused it.
+#[derive(Debug, thiserror::Error)]
+pub enum ImportError {
+    #[error(transparent)]
+    Recording(#[from] RecordingError),
+    #[error(transparent)]
+    Library(#[from] LibraryError),
 }
 
 /// One material with its strokes summarized.
@@ -216,6 +239,60 @@ pub struct ProfileProvenance {
     pub synthetic: bool,
     /// The file the profile was read from.
     pub origin_path: String,
+}
+
+/// Recording metadata files: the files given, and every
+/// `*.recording.json` below the directories given, each directory's sorted
+/// (what `haptex library import` imports). A path that is neither is a
+/// `NotFound` error, a directory without recordings an `InvalidInput` one.
+pub fn collect_recordings(inputs: &[PathBuf]) -> std::io::Result<Vec<PathBuf>> {
+    use std::collections::HashSet;
+    use std::io::{Error, ErrorKind};
+    let cannot_read =
+        |dir: &Path, e: Error| Error::new(e.kind(), format!("cannot read directory {}: {e}", dir.display()));
+    /// Walks `dir` depth first, entering each real directory once (a
+    /// symbolic link back up the tree would otherwise make the walk
+    /// endless, or exponential with two such links).
+    fn walk(
+        dir: &Path,
+        out: &mut Vec<PathBuf>,
+        seen: &mut HashSet<PathBuf>,
+        cannot_read: &dyn Fn(&Path, Error) -> Error,
+    ) -> std::io::Result<()> {
+        let real = std::fs::canonicalize(dir).map_err(|e| cannot_read(dir, e))?;
+        if !seen.insert(real) {
+            return Ok(());
+        }
+        for entry in std::fs::read_dir(dir).map_err(|e| cannot_read(dir, e))? {
+            let path = entry.map_err(|e| cannot_read(dir, e))?.path();
+            if path.is_dir() {
+                walk(&path, out, seen, cannot_read)?;
+            } else if path.to_string_lossy().ends_with(METADATA_SUFFIX) {
+                out.push(path);
+            }
+        }
+        Ok(())
+    }
+    let mut files = Vec::new();
+    let mut seen = HashSet::new();
+    for input in inputs {
+        if input.is_dir() {
+            let before = files.len();
+            walk(input, &mut files, &mut seen, &cannot_read)?;
+            files[before..].sort();
+            if files.len() == before {
+                return Err(Error::new(
+                    ErrorKind::InvalidInput,
+                    format!("{}: no recordings (*{METADATA_SUFFIX}) in this directory", input.display()),
+                ));
+            }
+        } else if input.is_file() {
+            files.push(input.clone());
+        } else {
+            return Err(Error::new(ErrorKind::NotFound, format!("{}: no such file or directory", input.display())));
+        }
+    }
+    Ok(files)
 }
 
 /// The texture library (see the module documentation).
@@ -442,6 +519,24 @@ impl Library {
     ) -> Result<Added, LibraryError> {
         let sha = recording.sha256.clone().unwrap_or_else(|| recording_hash(recording));
         self.insert(import, &recording_row(recording, processed, config, &sha), &processed.profile)
+    }
+
+    /// Imports one recording (its metadata file `file`) in the import run
+    /// `import`: skipped as a duplicate when its content is already
+    /// stored, else processed with `config` and stored with its profile
+    /// (what `haptex library import` does for each recording).
+    pub fn import_recording(
+        &mut self,
+        import: ImportId,
+        file: &Path,
+        config: &ProcessingConfig,
+    ) -> Result<Added, ImportError> {
+        let recording = Recording::load(file)?;
+        if let Some(id) = self.find_content(recording.sha256.as_deref().expect("loaded recordings have a hash"))? {
+            return Ok(Added::Duplicate(id));
+        }
+        let processed = process(&recording, config)?;
+        Ok(self.add_recording(import, &recording, &processed, config)?)
     }
 
     /// Stores processed recordings all or none: an import run (`command`,

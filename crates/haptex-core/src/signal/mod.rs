@@ -18,6 +18,7 @@
 
 mod carrier;
 mod curve;
+pub mod play;
 mod safety;
 mod wav;
 
@@ -32,8 +33,8 @@ pub use curve::{AmplitudeCurve, Extend, VoltageCurve};
 pub use safety::{ClipReport, EnvelopeLimiter, Limits};
 pub use wav::{
     AmplitudeScale, DriveWav, EncodedWav, FmtFields, SCALE_CHUNK_ID, SCALE_CHUNK_VERSION, ScaleChunk, WavFormat,
-    WavOptions, WavSidecar, check_volts_per_full_scale, decode_drive_wav, decode_drive_wav_channels, encode_wav,
-    read_drive_wav, sidecar_path, write_wav,
+    WavOptions, WavSidecar, check_full_scale, check_volts_per_full_scale, decode_drive_wav, decode_drive_wav_channels,
+    encode_wav, read_drive_wav, sidecar_path, write_wav,
 };
 
 use crate::io::{WriteError, write_csv_row};

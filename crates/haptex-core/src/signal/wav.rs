@@ -404,17 +404,25 @@ pub fn check_volts_per_full_scale(vpfs: f64) -> Result<f64, SignalError> {
     crate::ranges::VOLTS_PER_FULL_SCALE.check(vpfs).map_err(|e| SignalError::Settings(e.to_string()))
 }
 
+/// Checks that a signal with `report` fits a WAV whose full scale stands
+/// for `volts_per_full_scale` volts: the value within its range and the
+/// drive's peak within it (refused, never clipped). Returns the value.
+pub fn check_full_scale(report: &SignalReport, volts_per_full_scale: f64) -> Result<f64, SignalError> {
+    let vpfs = check_volts_per_full_scale(volts_per_full_scale)?;
+    if report.peak_v > vpfs {
+        return Err(SignalError::ExceedsFullScale { amplitude_v: report.peak_v, volts_per_full_scale: vpfs });
+    }
+    Ok(vpfs)
+}
+
 /// Encodes `signal` as a WAV file in memory (mono, or two channels when
 /// the signal has an ultrasonic channel), with its scale chunk
 /// (what [`write_wav`] writes; a server sends these bytes). Refuses a
 /// signal whose peak exceeds `volts_per_full_scale`. `label` names the
 /// output in errors.
 pub fn encode_wav(signal: &DriveSignal, options: &WavOptions, label: &str) -> Result<EncodedWav, SignalError> {
-    let vpfs = check_volts_per_full_scale(options.volts_per_full_scale)?;
+    let vpfs = check_full_scale(&signal.report, options.volts_per_full_scale)?;
     let report = &signal.report;
-    if report.peak_v > vpfs {
-        return Err(SignalError::ExceedsFullScale { amplitude_v: report.peak_v, volts_per_full_scale: vpfs });
-    }
     let wav_error = |e: hound::Error| SignalError::Wav { path: label.to_string(), message: e.to_string() };
     let format = options.format;
     let full_scale = format.full_scale();

@@ -23,37 +23,22 @@ from ._errors import (
     HaptexOSError,
     InvalidInputError,
 )
-from ._types import Regions, Summary
+from ._types import LibrarySample, Regions, Summary
 from ._haptex import (
     Cae,
     Database,
     Design,
+    DriveSignal,
+    Library,
     LooCase,
     Prediction,
     Profile,
     __version__,
     cae_loo,
+    play,
     predict,
+    read_wav,
     voltage,
 )
 
-__all__ = [
-    "Cae",
-    "CancelledError",
-    "ComputationError",
-    "Database",
-    "Design",
-    "ExtrapolationWarning",
-    "HaptexError",
-    "HaptexOSError",
-    "InvalidInputError",
-    "LooCase",
-    "Prediction",
-    "Profile",
-    "Regions",
-    "Summary",
-    "__version__",
-    "cae_loo",
-    "predict",
-    "voltage",
-]
+__all__ = sorted(name for name in dir() if not name.startswith("_")) + ["__version__"]

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Optional, Tuple
 
-__all__ = ["Regions", "Summary"]
+__all__ = ["LibrarySample", "Regions", "Summary"]
 
 
 @dataclass(frozen=True)
@@ -58,3 +58,22 @@ class Summary:
 
     def __str__(self) -> str:
         return self.text
+
+
+@dataclass(frozen=True)
+class LibrarySample:
+    """A stroke of the texture library and its friction profile.
+
+    profile: a haptex.Profile (x_mm in mm, mu, fn_n in N when known).
+    stroke: the stroke's record as `haptex library list --material NAME
+      --format json` gives it (id, material, provenance, n_points, span_mm,
+      mean_mu, mean_fn_n).
+    seed: the seed that picked it (Library.sample), None for
+      Library.stroke.
+    comments: the provenance lines an exported profile CSV starts with.
+    """
+
+    profile: Any
+    stroke: Dict[str, Any]
+    seed: Optional[int]
+    comments: List[str] = field(repr=False)

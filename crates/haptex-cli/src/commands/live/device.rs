@@ -22,7 +22,7 @@ use haptex_core::trajectory::Trajectory;
 use serde_json::json;
 
 use super::{LiveArgs, OutputArgs};
-use crate::commands::play::{check_design_carrier, read_curve, stated_a_max};
+use crate::commands::play::read_design;
 
 /// Touch events queued between the input thread and the callback.
 const QUEUE: usize = 1024;
@@ -257,16 +257,15 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
         return run_map(&args, design);
     }
     let profile = design;
-    let (curve, amplitude, comments) = read_curve(profile)?;
-    let stated = if amplitude.is_some() { stated_a_max(&comments) } else { None };
-    let a_max_um = output.drive.a_max_um(profile, amplitude.as_ref(), stated)?;
+    let design = read_design(profile)?;
+    let a_max_um = output.drive.a_max_um(profile, design.amplitude.as_ref(), design.stated_a_max())?;
     let design_channels: u16 = if a_max_um.is_some() { 2 } else { 1 };
     // The touch log is read (and refused) before the device is opened.
     let log = args.touch_log.as_deref().map(Trajectory::read_csv_file).transpose()?;
     let resolved = resolve(output, output.channels.unwrap_or(design_channels))?;
     // A frequency-dependent design renders its target only on its carrier.
-    check_design_carrier(&comments, &output.drive.settings(resolved.sample_rate).carrier, profile)?;
-    let renderer = renderer(output, resolved.sample_rate, &curve, amplitude.as_ref().zip(a_max_um))?;
+    design.check_carrier(&output.drive.settings(resolved.sample_rate).carrier, &profile.display().to_string())?;
+    let renderer = renderer(output, resolved.sample_rate, &design.curve, design.amplitude.as_ref().zip(a_max_um))?;
     let mut engine = engine(output, renderer, resolved.channels)?;
     if let Some(log) = &log {
         let t0 = log.start_s();
@@ -280,7 +279,7 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
     }
     let what = if design_channels == 2 { "drive + ultrasonic amplitude" } else { "drive" };
     let channel_2 = a_max_um.map_or(String::new(), |a| format!(", channel 2 at {} um (a_max) per full scale", Num(a)));
-    let (x0, x1) = curve.span_mm();
+    let (x0, x1) = design.curve.span_mm();
     play(&args, &resolved, engine, &format!("{what}){channel_2}"), PageArea { x_mm: (x0, x1), y_mm: None })
 }
 

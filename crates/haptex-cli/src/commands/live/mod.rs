@@ -166,7 +166,7 @@ impl OutputArgs {
 fn use_device_file(args: &mut LiveArgs) -> anyhow::Result<()> {
     let Some(file) = args.device_file.read()? else { return Ok(()) };
     let comments = match &args.profile {
-        Some(profile) if profile.as_os_str() != "-" => super::play::read_curve(profile)?.2,
+        Some(profile) if profile.as_os_str() != "-" => super::play::read_design(profile)?.comments,
         _ => Vec::new(),
     };
     let design = args.profile.as_ref().or(args.voltage_map.as_ref()).cloned().unwrap_or_default();
