@@ -11,6 +11,7 @@ use pyo3::prelude::*;
 mod convert;
 mod design;
 mod errors;
+mod fem;
 mod profile;
 
 #[pymodule]
@@ -19,5 +20,10 @@ fn _haptex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<profile::Profile>()?;
     m.add_class::<design::Design>()?;
     m.add_function(wrap_pyfunction!(design::voltage, m)?)?;
+    m.add_class::<fem::Simulation>()?;
+    m.add_class::<fem::CheckResult>()?;
+    m.add_function(wrap_pyfunction!(fem::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(fem::check, m)?)?;
+    m.add_function(wrap_pyfunction!(fem::compensate, m)?)?;
     Ok(())
 }

@@ -22,11 +22,14 @@ from ._errors import (
     HaptexOSError,
     InvalidInputError,
 )
-from ._types import Regions, Summary
+from ._types import CheckMetrics, Regions, Summary
 from ._haptex import Design, Profile, __version__, voltage
+from ._haptex import CheckResult, Simulation, check, compensate, simulate
 
 __all__ = [
     "CancelledError",
+    "CheckMetrics",
+    "CheckResult",
     "ComputationError",
     "Design",
     "HaptexError",
@@ -34,7 +37,11 @@ __all__ = [
     "InvalidInputError",
     "Profile",
     "Regions",
+    "Simulation",
     "Summary",
     "__version__",
+    "check",
+    "compensate",
+    "simulate",
     "voltage",
 ]
