@@ -94,26 +94,41 @@ impl Reporter {
 
     /// Closes the reporter and turns the run's outcome into Python's: the
     /// reporter's error first (the run stopped for it).
-    fn finish<T>(self, py: Python<'_>, result: Result<T, RenderError>) -> PyResult<T> {
+    fn finish<T, E>(self, py: Python<'_>, result: Result<T, E>, error: impl FnOnce(E) -> PyErr) -> PyResult<T> {
         if let Some(r) = &self.reporter {
             r.bind(py).call_method0("close")?;
         }
         if let Some(e) = self.error.into_inner().unwrap_or_else(|e| e.into_inner()) {
             return Err(e);
         }
-        result.map_err(render_error)
+        result.map_err(error)
     }
 }
 
-/// An FE error as its exception: a run that did not converge (or lost
-/// contact) is a ComputationError, anything refused before a run bad input.
+/// The exception class of a simulation error: a run that did not
+/// converge (or lost contact) is a ComputationError, anything refused
+/// before a run bad input.
+fn simulation_kind(error: &SimulationError) -> Kind {
+    match error {
+        SimulationError::Solve(_) | SimulationError::NoContact { .. } => Kind::Computation,
+        SimulationError::Cancelled => Kind::Cancelled,
+        _ => Kind::Input,
+    }
+}
+
+/// A check's error as its exception, with `haptex check`'s message.
 fn render_error(error: RenderError) -> PyErr {
     let kind = match &error {
-        RenderError::Simulation(SimulationError::Solve(_) | SimulationError::NoContact { .. }) => Kind::Computation,
-        RenderError::Simulation(SimulationError::Cancelled) => Kind::Cancelled,
+        RenderError::Simulation(e) => simulation_kind(e),
         _ => Kind::Input,
     };
     raise(kind, describe(&error))
+}
+
+/// A simulation's error as its exception, with `haptex simulate`'s
+/// message: "simulation failed: " before an error of the run itself.
+fn simulation_error(error: SimulationError) -> PyErr {
+    raise(simulation_kind(&error), format!("simulation failed: {}", describe(&error)))
 }
 
 // ---------------------------------------------------------------- arguments
@@ -506,13 +521,11 @@ pub fn simulate(
     let description = output::describe(&scenario, &output::surface_text(&shape, voltage_source, &sampled_name));
     scenario.display = display;
     // Every setting is checked before anything runs.
-    scenario.slide_steps().map_err(|e| render_error(e.into()))?;
+    scenario.slide_steps().map_err(|e| raise(simulation_kind(&e), describe(&e)))?;
     let reporter = Reporter::new(py, &progress_or_default(py, progress), "simulate")?;
     scenario.stop = Some(reporter.stop.clone());
-    let result = py.detach(|| {
-        scenario::run(&scenario, &mut |p| reporter.report(p.step, p.total_steps)).map_err(RenderError::from)
-    });
-    let result = reporter.finish(py, result)?;
+    let result = py.detach(|| scenario::run(&scenario, &mut |p| reporter.report(p.step, p.total_steps)));
+    let result = reporter.finish(py, result, simulation_error)?;
     Simulation::new(py, result, description)
 }
 
@@ -606,7 +619,7 @@ pub fn compensate(
             reporter.report_run(&mut counter, max_runs, p)
         })
     });
-    let (voltage, comment) = reporter.finish(py, result)?;
+    let (voltage, comment) = reporter.finish(py, result, render_error)?;
     Design::new(py, Designed::Electrovibration(voltage), vec![comment])
 }
 
@@ -854,7 +867,7 @@ pub fn check(
                 reporter.report(p.step, p.total_steps)
             })
         });
-        let check = reporter.finish(py, result)?;
+        let check = reporter.finish(py, result, render_error)?;
         let header = render::combined_header(&name, &settings, &ultrasonic, strategy, None);
         let lines = render::describe_combined_metrics(&check.metrics);
         let design =
@@ -878,7 +891,7 @@ pub fn check(
             reporter.report_run(&mut counter, runs_most, p)
         })
     });
-    let run = reporter.finish(py, result)?;
+    let run = reporter.finish(py, result, render_error)?;
     let header = render::check_header(&name, &run, None);
     let m = run.check.metrics;
     let voltage = map_profile(&run.check.target, &run.settings.device, Method::Physical, None)
