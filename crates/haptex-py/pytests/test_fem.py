@@ -107,6 +107,8 @@ def test_simulate_a_height_profile_file_or_arrays(cli, tmp_path, heights):
     assert mine.read_bytes() == out.read_bytes()
     by_path = haptex.simulate(path, slide=1.5, mesh="coarse", progress=False)
     assert by_path.to_csv() == out.read_text()
+    by_str = haptex.simulate(str(path), slide=1.5, mesh="coarse", progress=False)
+    assert by_str.to_csv() == out.read_text()
     # The same points as arrays: the same run (the description names them).
     by_arrays = haptex.simulate((x, h), slide=1.5, mesh="coarse", progress=False)
     expected = read_csv(out)

@@ -203,6 +203,11 @@ fn path_text(path: &std::path::Path) -> String {
 
 /// The surface of `surface=`, and how the description names a sampled one.
 fn surface_arg(value: &Bound<'_, PyAny>, x0: f64, width: f64, height: f64) -> PyResult<(SurfaceShape, String, bool)> {
+    // As `haptex simulate` checks its flags, whatever the surface.
+    let width = positive("width", width)?;
+    if !x0.is_finite() || !height.is_finite() {
+        return Err(input("x0 and height must be finite numbers"));
+    }
     if value.is_instance_of::<PyString>() {
         let name: String = value.extract()?;
         let name = name.as_str();
@@ -210,15 +215,15 @@ fn surface_arg(value: &Bound<'_, PyAny>, x0: f64, width: f64, height: f64) -> Py
             let shape = SurfaceShape::read_csv(&input_path("surface", &PyString::new(value.py(), path))?).or_raise()?;
             return Ok((shape, name.to_string(), false));
         }
-        let width = positive("width", width)?;
-        if !x0.is_finite() || !height.is_finite() {
-            return Err(input("x0 and height must be finite numbers"));
-        }
         let shape = match name {
             "flat" | "display" => SurfaceShape::Flat,
             "bump" => SurfaceShape::Bump { x0, width, height },
             "edge" => SurfaceShape::Edge { x0, width, height },
             "sine" => SurfaceShape::Sine { x0, width, height },
+            other if std::path::Path::new(other).is_file() => {
+                let shape = SurfaceShape::read_csv(std::path::Path::new(other)).or_raise()?;
+                return Ok((shape, format!("file:{other}"), false));
+            }
             other => {
                 return Err(input(format!(
                     "surface must be flat, bump, edge, sine, display, file:H.csv, a path to a height CSV or a pair \
