@@ -633,3 +633,28 @@ fn feature_position(surface: &SurfaceShape) -> Option<f64> {
         _ => None,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stop flag set by the progress callback ends the run after that
+    /// step, with `Cancelled`; a clone of the scenario shares the flag.
+    #[test]
+    fn stop_flag_cancels_after_the_step() {
+        let stop = Arc::new(AtomicBool::new(false));
+        let mut scenario = Scenario::paper(SurfaceShape::Flat);
+        scenario.slide_mm = 0.0;
+        scenario.stop = Some(stop.clone());
+        let scenario = scenario.clone();
+        let mut steps = Vec::new();
+        let result = run(&scenario, &mut |p| {
+            steps.push(p.step);
+            if p.step == 3 {
+                stop.store(true, Ordering::Relaxed);
+            }
+        });
+        assert!(matches!(result, Err(SimulationError::Cancelled)), "{result:?}");
+        assert_eq!(steps, [1, 2, 3]);
+    }
+}
