@@ -414,7 +414,8 @@ impl Simulation {
 ///   paper's) or "finite" (neo-Hookean, about 3x slower); mesh: "coarse",
 ///   "default", "fine"; finger: a finger model file (default the shipped
 ///   one); penalty: contact penalty in MPa per mm.
-/// progress: True (a tqdm bar when tqdm is installed), False, or a
+/// progress: True (the default, as None): a tqdm bar when tqdm is
+///   installed; False: none; or a
 ///   callable progress(done, total) called after every FE step; returning
 ///   False cancels (haptex.CancelledError). Ctrl-C interrupts.
 ///
@@ -556,7 +557,8 @@ fn progress_or_default<'py>(py: Python<'py>, progress: Option<&Bound<'py, PyAny>
 /// max_runs: most FE runs, eq. (8)'s included (1 to 100; each about 0.6
 ///   s on a 10 mm profile). The finger is visco-elastic, default mesh,
 ///   0.05 mm steps.
-/// progress: True (a tqdm bar when tqdm is installed), False, or a
+/// progress: True (the default, as None): a tqdm bar when tqdm is
+///   installed; False: none; or a
 ///   callable progress(done, total) in FE steps (total: max_runs runs'
 ///   worth; the compensation may stop earlier); returning False cancels
 ///   (haptex.CancelledError). Ctrl-C interrupts.
@@ -758,7 +760,8 @@ impl CheckResult {
 ///   ultrasonic vibration shared by strategy "split", "bias" or
 ///   "weighted" with weight; ultrasonic_calibration: a CSV path or
 ///   (amplitude_um, relative_friction); a_max_um in um peak).
-/// progress: True (a tqdm bar when tqdm is installed), False, or a
+/// progress: True (the default, as None): a tqdm bar when tqdm is
+///   installed; False: none; or a
 ///   callable progress(done, total) in FE steps (total: the most runs'
 ///   worth); returning False cancels (haptex.CancelledError). Ctrl-C
 ///   interrupts.
