@@ -10,7 +10,58 @@ use haptex_core::plot::{Figure, PlotError};
 
 use crate::drawing::{MeshView, mesh_panel};
 use crate::finger::subdomain;
-use crate::scenario::{Frame, SimulationResult};
+use crate::scenario::{Frame, Kinematics, Loading, Scenario, SimulationResult};
+use crate::surface::SurfaceShape;
+use haptex_core::num::Num;
+
+/// Where a display's voltage comes from, as a simulation's description
+/// names it.
+#[derive(Debug, Clone, Copy)]
+pub enum VoltageSource<'a> {
+    /// A voltage profile read from (or given as) this.
+    Profile(&'a str),
+    /// One voltage over the whole slide, V RMS.
+    Constant(f64),
+}
+
+/// The surface part of a simulation's description: a template with its
+/// parameters (`bump x0 = 5 mm, r_w = 1.5 mm, r_h = 0.3 mm`), `flat`, the
+/// display and its voltage's source, or `sampled` (what the caller read a
+/// sampled surface from, e.g. `file:heights.csv`).
+pub fn surface_text(shape: &SurfaceShape, display: Option<VoltageSource<'_>>, sampled: &str) -> String {
+    let template = |name: &str, x0: f64, width: f64, height: f64| {
+        format!("{name} x0 = {} mm, r_w = {} mm, r_h = {} mm", Num(x0), Num(width), Num(height))
+    };
+    match shape {
+        SurfaceShape::Flat => match display {
+            Some(VoltageSource::Profile(source)) => format!("display, voltage from {source}"),
+            Some(VoltageSource::Constant(u)) => format!("display, constant {} V", Num(u)),
+            None => "flat".to_string(),
+        },
+        SurfaceShape::Sampled { .. } => sampled.to_string(),
+        SurfaceShape::Bump { x0, width, height } => template("bump", *x0, *width, *height),
+        SurfaceShape::Edge { x0, width, height } => template("edge", *x0, *width, *height),
+        SurfaceShape::Sine { x0, width, height } => template("sine", *x0, *width, *height),
+    }
+}
+
+/// The description `haptex simulate` writes in its profile's first
+/// comment: the surface (`surface`, from [`surface_text`]), the loading,
+/// the slide, the tissue, the mesh and the kinematics.
+pub fn describe(scenario: &Scenario, surface: &str) -> String {
+    let loading = match scenario.loading {
+        Loading::Indent(d) => format!("indent {} mm", Num(d)),
+        Loading::Load(f) => format!("load {} N/mm", Num(f)),
+    };
+    format!(
+        "{surface}; {loading}, slide {} mm at {} mm/s, {} tissue, {:?} mesh{}",
+        Num(scenario.slide_mm),
+        Num(scenario.velocity_mm_s),
+        if scenario.viscoelastic { "visco-elastic" } else { "elastic" },
+        scenario.resolution,
+        if scenario.kinematics == Kinematics::Finite { ", finite strain" } else { "" }
+    )
+}
 
 /// Writes `t_s,slide_mm,fn_n,ft_n,contact_mm` and diagnostic columns
 /// (forces per mm of finger width), then the display's `voltage_v`, the

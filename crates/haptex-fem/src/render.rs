@@ -621,3 +621,242 @@ pub fn compensate(
     }
     Ok(Compensation { trials, best })
 }
+
+/// `haptex voltage --compensate`: eq. (8)'s design `voltage` (on
+/// `device`) with its voltage compensated on the FE finger pressed with
+/// `load_n_per_mm` (default [`DEFAULT_LOAD_N_PER_MM`]), visco-elastic,
+/// default mesh, 0.05 mm steps, in at most `max_runs` FE runs; and the
+/// comment its file starts with (the achieved error). `stop` cancels the
+/// runs ([`Scenario::stop`]); `progress` is told the run (from 0) and the
+/// FE's progress.
+pub fn compensate_design(
+    voltage: haptex_core::electrovibration::VoltageProfile,
+    device: &Device,
+    load_n_per_mm: Option<f64>,
+    max_runs: usize,
+    stop: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+    progress: &mut dyn FnMut(usize, Progress),
+) -> Result<(haptex_core::electrovibration::VoltageProfile, String), RenderError> {
+    if voltage.summary.method != Method::Physical || !device.contact.is_linear() {
+        return Err(RenderError::Invalid(
+            "--compensate needs --method physical and the linear contact-area law (--area-exponent 1)".into(),
+        ));
+    }
+    let load = load_n_per_mm.unwrap_or(DEFAULT_LOAD_N_PER_MM);
+    let target = FrictionProfile::new(voltage.x_mm.clone(), voltage.mu.clone())?;
+    let mut settings = RenderSettings::new(device.mu_hd, load);
+    settings.device = *device;
+    settings.scenario.step_mm = 0.05;
+    settings.scenario.stop = stop;
+    let stopping = Stopping { max_runs, ..Stopping::default() };
+    let c = compensate(&target, &settings, stopping, progress)?;
+    let (eq8, best) = (&c.trials[0].metrics, c.best());
+    let comment = format!(
+        "compensated on the FE finger (load {} N/mm, visco-elastic, default mesh): felt-friction RMS error {:.3e} \
+         over the renderable region after {} FE runs (eq. 8: {:.3e})",
+        Num(load),
+        best.metrics.rms_error,
+        c.trials.len(),
+        eq8.rms_error
+    );
+    let voltage_v = best.voltage_v.clone();
+    Ok((voltage.with_voltages(voltage_v)?, comment))
+}
+
+/// A check of the electrovibration display as `haptex check` reports it
+/// ([`check_electrovibration`]).
+#[derive(Debug, Clone)]
+pub struct CheckRun {
+    /// The check reported: eq. (8)'s, or the compensation's best trial.
+    pub check: Check,
+    /// Every trial of a compensation, eq. (8) first (empty without one).
+    pub trials: Vec<CheckMetrics>,
+    /// Index of `check` in `trials` (0 without a compensation).
+    pub best: usize,
+    /// The FE finger's k of a first run when eq. (8) took it (`fe_k`).
+    pub fe_k_mm2_per_n: Option<f64>,
+    /// What the voltage is: "eq. (8)" or "compensated (trial N)".
+    pub label: String,
+    /// The report's lines (the fe-k run, the trials, the metrics).
+    pub lines: Vec<String>,
+    /// The settings the check ran with (k the FE finger's with `fe_k`).
+    pub settings: RenderSettings,
+}
+
+/// `haptex check` on the electrovibration display: with `fe_k` a first
+/// eq. (8) run measures the FE finger's k, which eq. (8) then takes; then
+/// eq. (8)'s voltage is checked, or (`compensate`) compensated as
+/// `stopping` says. `progress` is told the run (from 0; the fe-k run and
+/// the compensation both count from 0) and the FE's progress.
+pub fn check_electrovibration(
+    target: &FrictionProfile,
+    mut settings: RenderSettings,
+    fe_k: bool,
+    compensate_with: Option<Stopping>,
+    progress: &mut dyn FnMut(usize, Progress),
+) -> Result<CheckRun, RenderError> {
+    let mut lines = Vec::new();
+    let mut fe_k_mm2_per_n = None;
+    if fe_k {
+        let first = check(target, &settings, &mut |p| progress(0, p))?;
+        let k = first.metrics.k_fe_mm2_per_n;
+        lines.push(format!(
+            "eq. (8) with k = {} mm^2/N: RMS error {:.3e}; the FE finger's k is {k:.1} mm^2/N",
+            Num(settings.device.contact.k_mm2_per_n),
+            first.metrics.rms_error,
+        ));
+        settings.device.contact.k_mm2_per_n =
+            haptex_core::ranges::K_MM2_PER_N.check(k).map_err(|e| RenderError::Invalid(e.to_string()))?;
+        fe_k_mm2_per_n = Some(k);
+    }
+    let (check, trials, best, label) = match compensate_with {
+        Some(stopping) => {
+            let c = compensate(target, &settings, stopping, progress)?;
+            for (i, t) in c.trials.iter().enumerate() {
+                lines.push(format!(
+                    "trial {} ({}): RMS error {:.3e}, max {:.3e}",
+                    i + 1,
+                    if i == 0 { "eq. 8" } else { "compensated" },
+                    t.metrics.rms_error,
+                    t.metrics.max_error
+                ));
+            }
+            let trials: Vec<CheckMetrics> = c.trials.iter().map(|t| t.metrics).collect();
+            let best = c.best;
+            let check = c.trials.into_iter().nth(best).expect("best trial exists");
+            (check, trials, best, format!("compensated (trial {})", best + 1))
+        }
+        None => (check(target, &settings, &mut |p| progress(0, p))?, Vec::new(), 0, "eq. (8)".to_string()),
+    };
+    lines.extend(describe_metrics(&check.metrics, &settings));
+    Ok(CheckRun { check, trials, best, fe_k_mm2_per_n, label, lines, settings })
+}
+
+/// The finger's loading as a check's header says it.
+pub fn loading_text(loading: crate::scenario::Loading) -> String {
+    match loading {
+        crate::scenario::Loading::Load(f) => format!("{} N/mm", Num(f)),
+        crate::scenario::Loading::Indent(d) => format!("indent {} mm", Num(d)),
+    }
+}
+
+/// The first line of `haptex check`'s report and files: the profile
+/// (`profile`, as the caller names it), the finger, the load and what the
+/// voltage is; `device_file` the device file's path, if any.
+pub fn check_header(profile: &str, run: &CheckRun, device_file: Option<&str>) -> String {
+    format!(
+        "haptex check: {profile} on the FE finger ({}, load {}), voltage {}{}",
+        if run.settings.scenario.viscoelastic { "visco-elastic" } else { "elastic" },
+        loading_text(run.settings.scenario.loading),
+        run.label,
+        device_file.map_or(String::new(), |f| format!(", device file {f}"))
+    )
+}
+
+/// The first comment of the voltage a check writes (`--voltage-out`).
+pub fn voltage_comment(header: &str, metrics: &CheckMetrics) -> String {
+    format!("{header}; felt-friction RMS error {} over the renderable region", Num(metrics.rms_error))
+}
+
+/// The report's lines on the metrics of an electrovibration check.
+pub fn describe_metrics(m: &CheckMetrics, settings: &RenderSettings) -> Vec<String> {
+    let d = &settings.device;
+    let k_paper = d.contact.k_mm2_per_n;
+    vec![
+        format!(
+            "felt friction against the target over the renderable region: RMS error {:.3e}, max {:.3e}, lag {:.3} mm",
+            m.rms_error, m.max_error, m.lag_mm
+        ),
+        format!(
+            "not renderable (mu_RS < mu_HD = {}): {:.1}% of the length; above mu at U_max: {:.1}%",
+            Num(d.mu_hd),
+            100.0 * m.not_renderable_fraction,
+            100.0 * m.clipped_fraction
+        ),
+        match m.detail_retained {
+            Some(r) => format!(
+                "detail finer than the contact ({:.2} mm): target RMS {:.4}, {:.0}% of it felt",
+                m.contact_mm,
+                m.target_detail_rms,
+                100.0 * r
+            ),
+            None => format!("the target has no detail finer than the contact ({:.2} mm)", m.contact_mm),
+        },
+        format!(
+            "contact-area coefficient: eq. (8) used k = {k_paper:.1} mm^2/N; the FE finger's contact length per \
+             normal force is {:.1} mm^2/N (per mm of width; --fe-k uses it)",
+            m.k_fe_mm2_per_n
+        ),
+    ]
+}
+
+/// The first line of a combined display's check report.
+pub fn combined_header(
+    profile: &str,
+    settings: &RenderSettings,
+    ultrasonic: &UltrasonicDevice,
+    strategy: Strategy,
+    device_file: Option<&str>,
+) -> String {
+    format!(
+        "haptex check: {profile} on the FE finger, combined display ({} strategy{}; plate: {}), load {}{}",
+        strategy.kind(),
+        match strategy {
+            Strategy::Weighted { weight } => format!(", weight {}", Num(weight)),
+            _ => String::new(),
+        },
+        ultrasonic.describe(),
+        loading_text(settings.scenario.loading),
+        device_file.map_or(String::new(), |f| format!(", device file {f}"))
+    )
+}
+
+/// The report's lines on the metrics of a combined display's check.
+pub fn describe_combined_metrics(m: &CheckMetrics) -> Vec<String> {
+    vec![
+        format!(
+            "felt friction against the target over the combined display's band: RMS error {:.3e}, max {:.3e}, lag {:.3} mm",
+            m.rms_error, m.max_error, m.lag_mm
+        ),
+        format!(
+            "outside the band: {:.1}% of the length below it, {:.1}% above it",
+            100.0 * m.not_renderable_fraction,
+            100.0 * m.clipped_fraction
+        ),
+    ]
+}
+
+/// Writes a check as `haptex check -o` does: `# header`, `# line` each,
+/// then `x_mm,target_mu,voltage_v,felt_mu,k_fe_mm2_per_n` (electrovibration)
+/// or `x_mm,target_mu,voltage_v,amplitude_um,felt_mu` (combined), in full
+/// precision.
+pub fn write_check_csv(
+    check: &Check,
+    header: &str,
+    lines: &[String],
+    w: &mut dyn std::io::Write,
+) -> std::io::Result<()> {
+    writeln!(w, "# {header}")?;
+    for line in lines {
+        writeln!(w, "# {line}")?;
+    }
+    let (x, mu) = (check.target.x_mm(), check.target.mu());
+    match &check.amplitude_um {
+        None => {
+            writeln!(w, "x_mm,target_mu,voltage_v,felt_mu,k_fe_mm2_per_n")?;
+            for i in 0..check.target.len() {
+                haptex_core::io::write_csv_row(
+                    w,
+                    &[x[i], mu[i], check.voltage_v[i], check.felt.mu[i], check.felt.k_mm2_per_n[i]],
+                )?;
+            }
+        }
+        Some(amplitude) => {
+            writeln!(w, "x_mm,target_mu,voltage_v,amplitude_um,felt_mu")?;
+            for (i, &a) in amplitude.iter().enumerate() {
+                haptex_core::io::write_csv_row(w, &[x[i], mu[i], check.voltage_v[i], a, check.felt.mu[i]])?;
+            }
+        }
+    }
+    Ok(())
+}

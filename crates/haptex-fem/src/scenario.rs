@@ -6,6 +6,8 @@
 //! template's coordinates: the finger starts at x = 0 and ends at x =
 //! slide).
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use haptex_core::num::Num;
@@ -74,6 +76,10 @@ pub struct Scenario {
     /// The surface is an electrovibration display with this electrode (the
     /// surface must then be flat; its friction is `mu_skin`, mu_HD).
     pub display: Option<Display>,
+    /// Set (by the progress callback, or another thread) to stop the run
+    /// after the step under way: [`run`] then returns
+    /// [`SimulationError::Cancelled`]. Clones of the scenario share it.
+    pub stop: Option<Arc<AtomicBool>>,
 }
 
 impl Scenario {
@@ -100,6 +106,7 @@ impl Scenario {
             frame_every: 0,
             settings: SolverSettings::default(),
             display: None,
+            stop: None,
         }
     }
 
@@ -203,6 +210,14 @@ impl Scenario {
         Ok(())
     }
 
+    /// [`SimulationError::Cancelled`] once [`Scenario::stop`] is set.
+    fn check_stop(&self) -> Result<(), SimulationError> {
+        match &self.stop {
+            Some(stop) if stop.load(Ordering::Relaxed) => Err(SimulationError::Cancelled),
+            _ => Ok(()),
+        }
+    }
+
     /// The x range of the surface the finger can meet over the slide (mm).
     pub fn surface_range_mm(&self) -> (f64, f64) {
         let half = self.model.geometry.half_width_mm;
@@ -260,6 +275,9 @@ pub enum SimulationError {
     Body(#[from] BodyError),
     #[error(transparent)]
     Solve(#[from] SolveError),
+    /// The run was stopped through [`Scenario::stop`].
+    #[error("the simulation was cancelled")]
+    Cancelled,
     #[error("the finger lost contact with the surface at x = {x_mm:.3} mm (t = {t_s:.4} s): Ft/Fn is undefined there")]
     NoContact { x_mm: f64, t_s: f64 },
 }
@@ -455,6 +473,7 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
                 let report = solver.advance(dt_press, 0.0, Drive::Displacement([0.0, y]))?;
                 history.push(record(&mut solver, &report));
                 progress(Progress { step: k, total_steps, t_s: report.t_s, slide_mm: 0.0 });
+                scenario.check_stop()?;
             }
         }
         Loading::Load(load) => {
@@ -465,6 +484,7 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
                 let report = solver.advance(dt_press, 0.0, Drive::Load { x_mm: 0.0, fy_n: fy })?;
                 history.push(record(&mut solver, &report));
                 progress(Progress { step: k, total_steps, t_s: report.t_s, slide_mm: 0.0 });
+                scenario.check_stop()?;
             }
         }
     }
@@ -500,6 +520,7 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
             frames.push(frame(&solver));
         }
         progress(Progress { step: scenario.press_steps + k, total_steps, t_s: report.t_s, slide_mm: slide });
+        scenario.check_stop()?;
     }
     if frames.last().is_some_and(|f| f.slide_mm != solver.state().slide_mm) {
         frames.push(frame(&solver));
@@ -610,5 +631,30 @@ fn feature_position(surface: &SurfaceShape) -> Option<f64> {
     match surface {
         SurfaceShape::Bump { x0, .. } | SurfaceShape::Edge { x0, .. } | SurfaceShape::Sine { x0, .. } => Some(*x0),
         _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stop flag set by the progress callback ends the run after that
+    /// step, with `Cancelled`; a clone of the scenario shares the flag.
+    #[test]
+    fn stop_flag_cancels_after_the_step() {
+        let stop = Arc::new(AtomicBool::new(false));
+        let mut scenario = Scenario::paper(SurfaceShape::Flat);
+        scenario.slide_mm = 0.0;
+        scenario.stop = Some(stop.clone());
+        let scenario = scenario.clone();
+        let mut steps = Vec::new();
+        let result = run(&scenario, &mut |p| {
+            steps.push(p.step);
+            if p.step == 3 {
+                stop.store(true, Ordering::Relaxed);
+            }
+        });
+        assert!(matches!(result, Err(SimulationError::Cancelled)), "{result:?}");
+        assert_eq!(steps, [1, 2, 3]);
     }
 }

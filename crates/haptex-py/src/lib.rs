@@ -15,6 +15,7 @@ mod design;
 mod errors;
 mod library;
 mod playback;
+mod fem;
 mod profile;
 
 #[pymodule]
@@ -35,6 +36,11 @@ fn _haptex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(playback::play, m)?)?;
     m.add_function(wrap_pyfunction!(playback::read_wav, m)?)?;
     m.add_class::<library::Library>()?;
+    m.add_class::<fem::Simulation>()?;
+    m.add_class::<fem::CheckResult>()?;
+    m.add_function(wrap_pyfunction!(fem::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(fem::check, m)?)?;
+    m.add_function(wrap_pyfunction!(fem::compensate, m)?)?;
     Ok(())
 }
 

@@ -9,7 +9,7 @@ use haptex_core::electrovibration::{ContactArea, Device, Method, map_profile};
 use haptex_core::num::Num;
 use haptex_core::plot::{Figure, Panel};
 use haptex_core::ranges;
-use haptex_fem::render::{self, Check, CheckMetrics, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping, TargetPart};
+use haptex_fem::render::{self, Check, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping, TargetPart};
 use haptex_fem::scenario::Loading;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -188,78 +188,32 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
         bar.set_position(p.step as u64);
         bar.set_message(format!("FE run {}, x = {:.2} mm", run + 1, p.slide_mm));
     };
-    let mut lines: Vec<String> = device_file.iter().map(DesignDevice::comment).collect();
     if args.display.display != DisplayArg::Electrovibration {
         return run_display(&args, &target, &settings, device_file.as_ref(), &mut report, &bar);
     }
     args.display.refuse_display_flags()?;
-    if args.fe_k {
-        let first = render::check(&target, &settings, &mut |p| report(0, p))?;
-        let k = first.metrics.k_fe_mm2_per_n;
-        lines.push(format!(
-            "eq. (8) with k = {} mm^2/N: RMS error {:.3e}; the FE finger's k is {k:.1} mm^2/N",
-            Num(args.k_mm2_per_n),
-            first.metrics.rms_error,
-        ));
-        settings.device.contact.k_mm2_per_n = ranges::K_MM2_PER_N.check(k)?;
-    }
-    let (check, label) = if args.compensate {
-        let stopping = Stopping { max_runs: args.max_runs as usize, tolerance: args.tolerance, ..Stopping::default() };
-        let c = render::compensate(&target, &settings, stopping, &mut report)?;
-        for (i, t) in c.trials.iter().enumerate() {
-            lines.push(format!(
-                "trial {} ({}): RMS error {:.3e}, max {:.3e}",
-                i + 1,
-                if i == 0 { "eq. 8" } else { "compensated" },
-                t.metrics.rms_error,
-                t.metrics.max_error
-            ));
-        }
-        let best = c.best;
-        (c.trials.into_iter().nth(best).expect("best trial exists"), format!("compensated (trial {})", best + 1))
-    } else {
-        (render::check(&target, &settings, &mut |p| report(0, p))?, "eq. (8)".to_string())
-    };
+    let stopping = args.compensate.then(|| Stopping {
+        max_runs: args.max_runs as usize,
+        tolerance: args.tolerance,
+        ..Stopping::default()
+    });
+    let run = render::check_electrovibration(&target, settings, args.fe_k, stopping, &mut report)?;
     bar.finish_and_clear();
-    let m = check.metrics;
-    lines.extend(describe(&m, &settings));
-    let header = format!(
-        "haptex check: {} on the FE finger ({}, load {}), voltage {label}{}",
-        args.profile.display(),
-        if settings.scenario.viscoelastic { "visco-elastic" } else { "elastic" },
-        loading_text(settings.scenario.loading),
-        device_file.as_ref().map_or(String::new(), |f| format!(", device file {}", f.file.path))
-    );
+    let lines: Vec<String> = device_file.iter().map(DesignDevice::comment).chain(run.lines.iter().cloned()).collect();
+    let profile_name = args.profile.display().to_string();
+    let header = render::check_header(&profile_name, &run, device_file.as_ref().map(|f| f.file.path.as_str()));
+    let (check, settings, m) = (&run.check, &run.settings, run.check.metrics);
     // What a voltage profile written from the check states for `haptex
     // play`: the device file and the carrier it was designed for.
     let design_notes = design_notes(device_file.as_ref(), &args);
     if let Some(path) = &args.output {
-        haptex_core::io::write_atomic(path, |w| {
-            writeln!(w, "# {header}")?;
-            for line in &lines {
-                writeln!(w, "# {line}")?;
-            }
-            writeln!(w, "x_mm,target_mu,voltage_v,felt_mu,k_fe_mm2_per_n")?;
-            for i in 0..check.target.len() {
-                haptex_core::io::write_csv_row(
-                    w,
-                    &[
-                        check.target.x_mm()[i],
-                        check.target.mu()[i],
-                        check.voltage_v[i],
-                        check.felt.mu[i],
-                        check.felt.k_mm2_per_n[i],
-                    ],
-                )?;
-            }
-            Ok(())
-        })?;
+        haptex_core::io::write_atomic(path, |w| render::write_check_csv(check, &header, &lines, w))?;
     }
     if let Some(path) = &args.voltage_out {
         let profile = map_profile(&check.target, &settings.device, Method::Physical, None)?
             .with_voltages(check.voltage_v.clone())?;
         haptex_core::io::write_atomic(path, |w| {
-            writeln!(w, "# {header}; felt-friction RMS error {} over the renderable region", Num(m.rms_error))?;
+            writeln!(w, "# {}", render::voltage_comment(&header, &m))?;
             for note in &design_notes {
                 writeln!(w, "# {note}")?;
             }
@@ -267,7 +221,7 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
         })?;
     }
     if let Some(path) = &args.png {
-        figure(&check, &header, &settings).write_png(path)?;
+        figure(check, &header, settings).write_png(path)?;
     }
     if !args.quiet {
         eprintln!("{header}");
@@ -310,47 +264,18 @@ fn run_display(
     bar.finish_and_clear();
     let m = check.metrics;
     let amplitude = check.amplitude_um.as_deref().expect("a combined check has amplitudes");
-    let header = format!(
-        "haptex check: {} on the FE finger, combined display ({} strategy{}; plate: {}), load {}{}",
-        args.profile.display(),
-        strategy.kind(),
-        match strategy {
-            haptex_core::combined::Strategy::Weighted { weight } => format!(", weight {}", Num(weight)),
-            _ => String::new(),
-        },
-        ultrasonic.describe(),
-        loading_text(settings.scenario.loading),
-        device_file.map_or(String::new(), |f| format!(", device file {}", f.file.path))
+    let header = render::combined_header(
+        &args.profile.display().to_string(),
+        settings,
+        &ultrasonic,
+        strategy,
+        device_file.map(|f| f.file.path.as_str()),
     );
     let design_notes = design_notes(device_file, args);
-    let lines: Vec<String> = device_file.iter().map(|f| f.comment()).chain([
-
-        format!(
-            "felt friction against the target over the combined display's band: RMS error {:.3e}, max {:.3e}, lag {:.3} mm",
-            m.rms_error, m.max_error, m.lag_mm
-        ),
-        format!(
-            "outside the band: {:.1}% of the length below it, {:.1}% above it",
-            100.0 * m.not_renderable_fraction,
-            100.0 * m.clipped_fraction
-        ),
-    ])
-    .collect();
+    let lines: Vec<String> =
+        device_file.iter().map(|f| f.comment()).chain(render::describe_combined_metrics(&m)).collect();
     if let Some(path) = &args.output {
-        haptex_core::io::write_atomic(path, |w| {
-            writeln!(w, "# {header}")?;
-            for line in &lines {
-                writeln!(w, "# {line}")?;
-            }
-            writeln!(w, "x_mm,target_mu,voltage_v,amplitude_um,felt_mu")?;
-            for (i, &a) in amplitude.iter().enumerate() {
-                haptex_core::io::write_csv_row(
-                    w,
-                    &[check.target.x_mm()[i], check.target.mu()[i], check.voltage_v[i], a, check.felt.mu[i]],
-                )?;
-            }
-            Ok(())
-        })?;
+        haptex_core::io::write_atomic(path, |w| render::write_check_csv(&check, &header, &lines, w))?;
     }
     if let Some(path) = &args.voltage_out {
         // The same design the check applied (map_display is deterministic),
@@ -426,45 +351,6 @@ fn carrier(args: &CheckArgs) -> haptex_core::signal::Carrier {
 fn design_notes(device_file: Option<&DesignDevice>, args: &CheckArgs) -> Vec<String> {
     let Some(file) = device_file else { return Vec::new() };
     vec![file.comment(), crate::args::carrier_note(&carrier(args))]
-}
-
-/// The finger's loading as the header says it.
-fn loading_text(loading: Loading) -> String {
-    match loading {
-        Loading::Load(f) => format!("{} N/mm", Num(f)),
-        Loading::Indent(d) => format!("indent {} mm", Num(d)),
-    }
-}
-
-fn describe(m: &CheckMetrics, settings: &RenderSettings) -> Vec<String> {
-    let d = &settings.device;
-    let k_paper = d.contact.k_mm2_per_n;
-    vec![
-        format!(
-            "felt friction against the target over the renderable region: RMS error {:.3e}, max {:.3e}, lag {:.3} mm",
-            m.rms_error, m.max_error, m.lag_mm
-        ),
-        format!(
-            "not renderable (mu_RS < mu_HD = {}): {:.1}% of the length; above mu at U_max: {:.1}%",
-            Num(d.mu_hd),
-            100.0 * m.not_renderable_fraction,
-            100.0 * m.clipped_fraction
-        ),
-        match m.detail_retained {
-            Some(r) => format!(
-                "detail finer than the contact ({:.2} mm): target RMS {:.4}, {:.0}% of it felt",
-                m.contact_mm,
-                m.target_detail_rms,
-                100.0 * r
-            ),
-            None => format!("the target has no detail finer than the contact ({:.2} mm)", m.contact_mm),
-        },
-        format!(
-            "contact-area coefficient: eq. (8) used k = {k_paper:.1} mm^2/N; the FE finger's contact length per \
-             normal force is {:.1} mm^2/N (per mm of width; --fe-k uses it)",
-            m.k_fe_mm2_per_n
-        ),
-    ]
 }
 
 fn figure(check: &Check, title: &str, settings: &RenderSettings) -> Figure {

@@ -264,31 +264,11 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
 }
 
 fn describe(args: &SimulateArgs, scenario: &Scenario) -> String {
-    let surface = match &scenario.surface {
-        SurfaceShape::Flat => match (&scenario.display, &args.voltage, args.constant_voltage) {
-            (Some(_), Some(path), _) => format!("display, voltage from {}", path.display()),
-            (Some(_), None, Some(u)) => format!("display, constant {} V", Num(u)),
-            _ => "flat".to_string(),
-        },
-        SurfaceShape::Sampled { .. } => args.surface.clone(),
-        _ => format!(
-            "{} x0 = {} mm, r_w = {} mm, r_h = {} mm",
-            args.surface,
-            Num(args.x0),
-            Num(args.width),
-            Num(args.height)
-        ),
+    let voltage = args.voltage.as_ref().map(|p| p.display().to_string());
+    let source = match (&scenario.display, &voltage, args.constant_voltage) {
+        (Some(_), Some(path), _) => Some(output::VoltageSource::Profile(path)),
+        (Some(_), None, Some(u)) => Some(output::VoltageSource::Constant(u)),
+        _ => None,
     };
-    let loading = match scenario.loading {
-        Loading::Indent(d) => format!("indent {} mm", Num(d)),
-        Loading::Load(f) => format!("load {} N/mm", Num(f)),
-    };
-    format!(
-        "{surface}; {loading}, slide {} mm at {} mm/s, {} tissue, {:?} mesh{}",
-        Num(scenario.slide_mm),
-        Num(scenario.velocity_mm_s),
-        if scenario.viscoelastic { "visco-elastic" } else { "elastic" },
-        scenario.resolution,
-        if scenario.kinematics == Kinematics::Finite { ", finite strain" } else { "" }
-    )
+    output::describe(scenario, &output::surface_text(&scenario.surface, source, &args.surface))
 }

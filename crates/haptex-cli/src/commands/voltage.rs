@@ -11,7 +11,7 @@ use haptex_core::num::Num;
 use haptex_core::profile::FrictionProfile;
 use haptex_core::ranges;
 use haptex_core::relative::FlatMu;
-use haptex_fem::render::{self, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping};
+use haptex_fem::render;
 
 use crate::args::{
     DesignDevice, DeviceFileArgs, DisplayArg, DisplayArgs, ForceModelArgs, LayerStackArgs, Output, carrier_note,
@@ -178,25 +178,10 @@ pub fn run(args: VoltageArgs) -> anyhow::Result<()> {
 
     let mut comment = None;
     if args.compensate {
-        if method != Method::Physical || !device.contact.is_linear() {
-            anyhow::bail!("--compensate needs --method physical and the linear contact-area law (--area-exponent 1)");
-        }
-        let target = FrictionProfile::new(voltage.x_mm.clone(), voltage.mu.clone())?;
-        let mut settings = RenderSettings::new(device.mu_hd, args.load.unwrap_or(DEFAULT_LOAD_N_PER_MM));
-        settings.device = device;
-        settings.scenario.step_mm = 0.05;
-        let stopping = Stopping { max_runs: args.max_runs as usize, ..Stopping::default() };
-        let c = render::compensate(&target, &settings, stopping, &mut |_, _| {})?;
-        let (eq8, best) = (&c.trials[0].metrics, c.best());
-        comment = Some(format!(
-            "compensated on the FE finger (load {} N/mm, visco-elastic, default mesh): felt-friction RMS error {:.3e} \
-             over the renderable region after {} FE runs (eq. 8: {:.3e})",
-            Num(args.load.unwrap_or(DEFAULT_LOAD_N_PER_MM)),
-            best.metrics.rms_error,
-            c.trials.len(),
-            eq8.rms_error
-        ));
-        voltage = voltage.with_voltages(best.voltage_v.clone())?;
+        let (compensated, c) =
+            render::compensate_design(voltage, &device, args.load, args.max_runs as usize, None, &mut |_, _| {})?;
+        voltage = compensated;
+        comment = Some(c);
     }
     let output = Output::new(args.output);
     write_output(&output, args.format, &voltage, device_file.as_ref().map(|f| (f, &notes[..])), |w| {

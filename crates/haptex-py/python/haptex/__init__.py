@@ -23,9 +23,10 @@ from ._errors import (
     HaptexOSError,
     InvalidInputError,
 )
-from ._types import LibrarySample, Regions, Summary
+from ._types import CheckMetrics, LibrarySample, Regions, Summary
 from ._haptex import (
     Cae,
+    CheckResult,
     Database,
     Design,
     DriveSignal,
@@ -33,11 +34,15 @@ from ._haptex import (
     LooCase,
     Prediction,
     Profile,
+    Simulation,
     __version__,
     cae_loo,
+    check,
+    compensate,
     play,
     predict,
     read_wav,
+    simulate,
     voltage,
 )
 

@@ -1,18 +1,216 @@
-"""Type stubs of the extension module haptex._haptex."""
+"""Type stubs of the extension module haptex._haptex (re-exported by
+haptex): what editors and type checkers see. Units are in the names."""
 
 from __future__ import annotations
 
 import os
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy
 import numpy.typing
 
+from ._types import CheckMetrics, Summary
+
+# Anything NumPy converts to a float64 array (read in place when it is one).
+_ArrayLike = numpy.typing.ArrayLike
+# A float64 array haptex returns (Python owns it).
+_F64 = numpy.typing.NDArray[numpy.float64]
+_Path = Union[str, os.PathLike[str]]
+# True: a tqdm bar (when tqdm is installed); False: nothing; a callable
+# progress(done, total) in FE steps, returning False to cancel.
+_Progress = Union[bool, None, Callable[[int, int], Any]]
+# A friction profile argument: a Profile, a profile CSV, (x_mm, mu), or an
+# object with x_mm and mu arrays (a Prediction, a Design, a Simulation).
+_ProfileArg = Union["Profile", _Path, Tuple[_ArrayLike, _ArrayLike], Any]
+
+__version__: str
+
+# --- friction profiles and design (haptex voltage) ---
+
+class Profile:
+    """A friction profile: x in mm (strictly increasing), mu = Ft/Fn, and
+    optionally the normal force Fn in N."""
+
+    def __init__(self, x_mm: _ArrayLike, mu: _ArrayLike) -> None: ...
+    @staticmethod
+    def from_forces(x_mm: _ArrayLike, ft_n: _ArrayLike, fn_n: _ArrayLike) -> Profile: ...
+    @staticmethod
+    def read_csv(path: _Path) -> Profile: ...
+    def write_csv(self, path: _Path) -> None: ...
+    @property
+    def x_mm(self) -> _F64: ...
+    @property
+    def mu(self) -> _F64: ...
+    @property
+    def fn_n(self) -> Optional[_F64]: ...
+    def __len__(self) -> int: ...
+
+class Design:
+    """A display's drive for a friction profile (haptex.voltage)."""
+
+    @property
+    def x_mm(self) -> _F64: ...
+    @property
+    def mu(self) -> _F64: ...
+    @property
+    def voltage_v(self) -> Optional[_F64]:
+        """Electrovibration voltage, V RMS (None without electrovibration)."""
+    @property
+    def amplitude_um(self) -> Optional[_F64]:
+        """Ultrasonic vibration amplitude, um peak (None without a plate)."""
+    @property
+    def summary(self) -> Summary: ...
+    @property
+    def notes(self) -> List[str]: ...
+    def write_csv(self, path: _Path) -> None: ...
+    def to_csv(self) -> str: ...
+    def to_dict(self) -> Dict[str, Any]: ...
+
+def voltage(
+    profile: _ProfileArg,
+    *,
+    method: str = "physical",
+    relative: bool = False,
+    flat_mu: Optional[float] = None,
+    mu_hd: Optional[float] = None,
+    eps_sc: Optional[float] = None,
+    eps_i: Optional[float] = None,
+    d_sc_mm: Optional[float] = None,
+    d_i_mm: Optional[float] = None,
+    k_mm2_per_n: Optional[float] = None,
+    area_exponent: Optional[float] = None,
+    fn_n: Optional[float] = None,
+    u_max: Optional[float] = None,
+    display: str = "electrovibration",
+    strategy: Optional[str] = None,
+    weight: Optional[float] = None,
+    ultrasonic_calibration: Union[_Path, Tuple[_ArrayLike, _ArrayLike], None] = None,
+    a_max_um: Optional[float] = None,
+    force_model: str = "eq3",
+    rho_sc_ohm_m: Optional[float] = None,
+    gap_um: Optional[float] = None,
+    carrier: Optional[str] = None,
+    carrier_hz: Optional[float] = None,
+) -> Design: ...
+
+# --- the conditional average estimator and the FE database ---
+
+class Cae:
+    """The conditional average estimator (paper eqs. 10-12) over a model
+    matrix: inputs (N x D), outputs (N x M)."""
+
+    def __init__(
+        self,
+        inputs: _ArrayLike,
+        outputs: _ArrayLike,
+        *,
+        width: Optional[float] = None,
+        widths: Optional[Tuple[float, float]] = None,
+        input_names: Optional[Sequence[str]] = None,
+        output_names: Optional[Sequence[str]] = None,
+        memory_budget_mib: int = 2048,
+    ) -> None: ...
+    @staticmethod
+    def read_csv(
+        path: _Path,
+        inputs: Sequence[str],
+        *,
+        width: Optional[float] = None,
+        widths: Optional[Tuple[float, float]] = None,
+        memory_budget_mib: int = 2048,
+    ) -> Cae: ...
+    def predict(self, query: _ArrayLike) -> _F64:
+        """M outputs at one query of D inputs."""
+    def predict_batch(self, queries: _ArrayLike) -> _F64:
+        """K x M outputs at K x D queries."""
+    def diagnose(self, query: _ArrayLike) -> Dict[str, Any]: ...
+    @property
+    def widths(self) -> Tuple[float, float]: ...
+    @property
+    def inputs(self) -> List[str]: ...
+    @property
+    def outputs(self) -> List[str]: ...
+    @property
+    def shape(self) -> Tuple[int, int, int]: ...
+
+def cae_loo(
+    model: _Path,
+    inputs: Sequence[str],
+    *,
+    constant: bool = False,
+    width: Optional[float] = None,
+    widths: Optional[Tuple[float, float]] = None,
+    range: Tuple[float, float] = (0.005, 2.0),
+    memory_budget_mib: int = 2048,
+) -> Dict[str, Any]: ...
+
+class Prediction:
+    """A friction profile predicted from the FE database (haptex predict)."""
+
+    @property
+    def x_mm(self) -> _F64: ...
+    @property
+    def mu(self) -> _F64: ...
+    @property
+    def fe_row(self) -> Optional[int]: ...
+    @property
+    def source(self) -> str: ...
+    @property
+    def warning(self) -> Optional[str]: ...
+    @property
+    def flat_mu(self) -> float: ...
+    def write_csv(self, path: _Path) -> None: ...
+    def to_csv(self) -> str: ...
+    def profile(self) -> Profile: ...
+
+class LooCase:
+    """One database case against the CAE (haptex db loo --surface)."""
+
+    @property
+    def xi_mm(self) -> _F64: ...
+    @property
+    def h_mm(self) -> _F64: ...
+    @property
+    def mu_fe(self) -> _F64: ...
+    @property
+    def mu_cae_loo(self) -> _F64: ...
+    @property
+    def mu_cae_full(self) -> _F64: ...
+    @property
+    def row(self) -> Optional[int]: ...
+    @property
+    def source(self) -> str: ...
+    @property
+    def rms_loo(self) -> float: ...
+    @property
+    def rms_full(self) -> float: ...
+    def write_csv(self, path: _Path) -> None: ...
+
+class Database:
+    """The FE database of the bump, edge and sine templates."""
+
+    def __init__(self, db: Optional[_Path] = None) -> None: ...
+    def predict(
+        self, surface: str, x0: float, width: float, height: float, velocity: float = 20.0
+    ) -> Prediction: ...
+    def loo_summary(self) -> Dict[str, Any]: ...
+    def loo(self, surface: str, width: float, height: float, velocity: float = 20.0) -> LooCase: ...
+    @property
+    def dir(self) -> os.PathLike[str]: ...
+    @property
+    def flat_mu(self) -> float: ...
+
+def predict(
+    surface: str,
+    x0: float,
+    width: float,
+    height: float,
+    velocity: float = 20.0,
+    db: Optional[_Path] = None,
+) -> Prediction: ...
+
 # --- playback and library ---
 
-_Floats = numpy.typing.ArrayLike
-_Path = Union[str, os.PathLike[str]]
-_F64 = numpy.typing.NDArray[numpy.float64]
 
 class DriveSignal:
     """A rendered drive signal (haptex.play) with the scale its WAV carries."""
@@ -52,9 +250,9 @@ class DriveSignal:
     def __len__(self) -> int: ...
 
 def play(
-    design: Union["Design", _Path, Tuple[_Floats, _Floats], Tuple[_Floats, _Floats, _Floats]],
+    design: Union["Design", _Path, Tuple[_ArrayLike, _ArrayLike], Tuple[_ArrayLike, _ArrayLike, _ArrayLike]],
     *,
-    trajectory: Union[_Path, Tuple[_Floats, _Floats], None] = None,
+    trajectory: Union[_Path, Tuple[_ArrayLike, _ArrayLike], None] = None,
     velocity: Optional[float] = None,
     strokes: Optional[int] = None,
     from_mm: Optional[float] = None,
@@ -104,7 +302,7 @@ class Library:
     ) -> Dict[str, List[int]]: ...
     def import_profile(
         self,
-        profile: Union["Profile", _Path, Tuple[_Floats, _Floats]],
+        profile: Union["Profile", _Path, Tuple[_ArrayLike, _ArrayLike]],
         *,
         material: str,
         synthetic: bool,
@@ -114,3 +312,113 @@ class Library:
     ) -> Dict[str, int]: ...
 
 from ._types import LibrarySample
+
+# --- FE finger (simulate, check, compensate) ---
+
+
+
+class Simulation:
+    description: str
+    x_mm: Optional[_F64]
+    mu: Optional[_F64]
+    ft_n: Optional[_F64]
+    fn_n: Optional[_F64]
+    profile: Optional["Profile"]
+    history: Dict[str, _F64]
+    statistics: Dict[str, Any]
+    def write_csv(self, path: _Path) -> None: ...
+    def to_csv(self) -> str: ...
+    def write_history(self, path: _Path) -> None: ...
+    def write_png(self, path: _Path) -> None: ...
+
+class CheckResult:
+    header: str
+    lines: List[str]
+    x_mm: _F64
+    target_mu: _F64
+    voltage_v: _F64
+    amplitude_um: Optional[_F64]
+    felt_mu: _F64
+    k_fe_mm2_per_n: Optional[_F64]
+    metrics: CheckMetrics
+    trials: List[CheckMetrics]
+    best: int
+    fe_k: Optional[float]
+    design: "Design"
+    def write_csv(self, path: _Path) -> None: ...
+    def to_csv(self) -> str: ...
+
+def simulate(
+    surface: Union[str, _Path, Tuple[_ArrayLike, _ArrayLike]],
+    *,
+    voltage: Union["Design", _Path, Tuple[_ArrayLike, _ArrayLike], None] = None,
+    constant_voltage: Optional[float] = None,
+    mu_display: Optional[float] = None,
+    eps_sc: Optional[float] = None,
+    eps_i: Optional[float] = None,
+    d_sc_mm: Optional[float] = None,
+    d_i_mm: Optional[float] = None,
+    x0: float = 5.0,
+    width: float = 1.5,
+    height: float = 0.3,
+    velocity: float = 20.0,
+    indent: Optional[float] = None,
+    load: Optional[float] = None,
+    slide: float = 10.0,
+    step: Optional[float] = None,
+    press_time: float = 0.1,
+    mu_skin: Optional[float] = None,
+    material: str = "viscoelastic",
+    kinematics: str = "small",
+    mesh: str = "default",
+    finger: Optional[_Path] = None,
+    penalty: float = 200.0,
+    progress: _Progress = True,
+) -> Simulation: ...
+def check(
+    profile: Union["Profile", _Path, Tuple[_ArrayLike, _ArrayLike]],
+    *,
+    mu_hd: Optional[float] = None,
+    u_max: Optional[float] = None,
+    k_mm2_per_n: Optional[float] = None,
+    fe_k: bool = False,
+    eps_sc: Optional[float] = None,
+    eps_i: Optional[float] = None,
+    d_sc_mm: Optional[float] = None,
+    d_i_mm: Optional[float] = None,
+    load: Optional[float] = None,
+    indent: Optional[float] = None,
+    velocity: float = 20.0,
+    step: float = 0.05,
+    run_up: float = 1.0,
+    material: str = "viscoelastic",
+    mesh: str = "default",
+    finger: Optional[_Path] = None,
+    compensate: bool = False,
+    max_runs: int = 8,
+    tolerance: float = 1e-4,
+    display: str = "electrovibration",
+    strategy: Optional[str] = None,
+    weight: Optional[float] = None,
+    ultrasonic_calibration: Union[_Path, Tuple[_ArrayLike, _ArrayLike], None] = None,
+    a_max_um: Optional[float] = None,
+    progress: _Progress = True,
+) -> CheckResult: ...
+def compensate(
+    profile: Union["Profile", _Path, Tuple[_ArrayLike, _ArrayLike]],
+    *,
+    relative: bool = False,
+    flat_mu: Optional[float] = None,
+    mu_hd: Optional[float] = None,
+    eps_sc: Optional[float] = None,
+    eps_i: Optional[float] = None,
+    d_sc_mm: Optional[float] = None,
+    d_i_mm: Optional[float] = None,
+    k_mm2_per_n: Optional[float] = None,
+    area_exponent: Optional[float] = None,
+    fn_n: Optional[float] = None,
+    u_max: Optional[float] = None,
+    load: Optional[float] = None,
+    max_runs: int = 8,
+    progress: _Progress = True,
+) -> "Design": ...

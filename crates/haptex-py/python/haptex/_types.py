@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Optional, Tuple
 
-__all__ = ["LibrarySample", "Regions", "Summary"]
+__all__ = ["CheckMetrics", "LibrarySample", "Regions", "Summary"]
 
 
 @dataclass(frozen=True)
@@ -77,3 +77,34 @@ class LibrarySample:
     stroke: Dict[str, Any]
     seed: Optional[int]
     comments: List[str] = field(repr=False)
+
+
+@dataclass(frozen=True)
+class CheckMetrics:
+    """How well the friction the FE finger feels follows a target
+    (haptex.check; `haptex check`'s report).
+
+    rms_error, max_error: RMS and largest |felt - target| over the
+      renderable region (mu_HD <= mu <= mu at U_max; the combined
+      display's band), in units of mu.
+    not_renderable_fraction: fraction of the target's length below the
+      band (mu < mu_HD on the electrovibration display); clipped_fraction:
+      above it (0..1).
+    lag_mm: the shift in mm (> 0: the felt profile comes later), within
+      +-0.1 mm, that best aligns felt and target.
+    target_detail_rms: RMS of the target's detail finer than the contact;
+      detail_retained: the fraction of it felt (None without such detail).
+    k_fe_mm2_per_n: the FE finger's contact length per normal force, mm^2/N
+      (eq. 8's k per mm of finger width); contact_mm: the mean contact
+      length in mm.
+    """
+
+    rms_error: float
+    max_error: float
+    not_renderable_fraction: float
+    clipped_fraction: float
+    lag_mm: float
+    target_detail_rms: float
+    detail_retained: Optional[float]
+    k_fe_mm2_per_n: float
+    contact_mm: float
