@@ -11,6 +11,7 @@ use pyo3::prelude::*;
 mod convert;
 mod design;
 mod errors;
+mod maps;
 mod profile;
 
 #[pymodule]
@@ -19,5 +20,12 @@ fn _haptex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<profile::Profile>()?;
     m.add_class::<design::Design>()?;
     m.add_function(wrap_pyfunction!(design::voltage, m)?)?;
+    m.add_class::<maps::FrictionMap>()?;
+    m.add_class::<maps::VoltageMap>()?;
+    m.add_class::<maps::PathSamples>()?;
+    m.add_function(wrap_pyfunction!(maps::map_from_image, m)?)?;
+    m.add_function(wrap_pyfunction!(maps::map_from_profile, m)?)?;
+    m.add_function(wrap_pyfunction!(maps::map_voltage, m)?)?;
+    m.add_function(wrap_pyfunction!(maps::map_sample_path, m)?)?;
     Ok(())
 }

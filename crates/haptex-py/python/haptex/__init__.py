@@ -22,19 +22,36 @@ from ._errors import (
     HaptexOSError,
     InvalidInputError,
 )
-from ._types import Regions, Summary
+from ._types import MapSummary, Regions, Summary
 from ._haptex import Design, Profile, __version__, voltage
+from ._haptex import (
+    FrictionMap,
+    PathSamples,
+    VoltageMap,
+    map_from_image,
+    map_from_profile,
+    map_sample_path,
+    map_voltage,
+)
 
 __all__ = [
     "CancelledError",
     "ComputationError",
     "Design",
+    "FrictionMap",
     "HaptexError",
     "HaptexOSError",
     "InvalidInputError",
+    "MapSummary",
+    "PathSamples",
     "Profile",
     "Regions",
     "Summary",
+    "VoltageMap",
     "__version__",
+    "map_from_image",
+    "map_from_profile",
+    "map_sample_path",
+    "map_voltage",
     "voltage",
 ]
