@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import haptex
-from conftest import EXAMPLES, assert_identical, read_csv
+from conftest import EXAMPLES, REPO, assert_identical, read_csv
 
 BUMP = EXAMPLES / "bump_friction.csv"
 PLATE = EXAMPLES / "ultrasonic_calibration.csv"
@@ -424,6 +424,43 @@ def test_sample_path_refusals(cli, tmp_path, friction_csv):
     assert str(caught.value) == message
     with pytest.raises(haptex.InvalidInputError, match="tuple"):
         haptex.map_sample_path(u, 3)
+
+
+# --- grating -----------------------------------------------------------------------------------------------------
+
+DB = REPO / "data" / "db"
+GRATING = ["--period-mm", "1.5", "--amplitude-mm", "0.2", "--angle-deg", "30", "--nx", "6", "--ny", "3", "--dx-mm",
+           "0.3", "--dy-mm", "0.4", "--y0-mm", "-0.5"]
+GRATING_KW = {"period_mm": 1.5, "amplitude_mm": 0.2, "angle_deg": 30.0, "nx": 6, "ny": 3, "dx_mm": 0.3, "dy_mm": 0.4,
+              "y0_mm": -0.5}
+
+
+@pytest.mark.parametrize("source", ["cae", "fe"])
+def test_grating_matches_the_command_line(cli, tmp_path, source):
+    # One small case each: the FE source runs the FE model once (about a second).
+    cli.run("map", "grating", *GRATING, "--source", source, "--db", DB, "-o", tmp_path / "cli.csv")
+    friction = haptex.map_grating(**GRATING_KW, source=source, db=DB)
+    expected = read_csv(tmp_path / "cli.csv")
+    assert friction.shape == (3, 6)
+    assert_identical(friction.mu.ravel(), expected["mu"], "mu")
+    friction.write(tmp_path / "mine.csv")
+    assert_same_files(tmp_path / "mine.csv", tmp_path / "cli.csv")
+    # The rows differ (each line a shifted sine), unlike an extruded profile.
+    assert not (friction.mu[0] == friction.mu[1]).all()
+
+
+def test_grating_refusals(cli, tmp_path):
+    outside = [*GRATING[:1], "9", *GRATING[2:], "--source", "cae", "--db", DB]
+    message = cli.error("map", "grating", *outside, "-o", tmp_path / "g.csv")
+    with pytest.raises(haptex.InvalidInputError) as caught:
+        haptex.map_grating(**{**GRATING_KW, "period_mm": 9.0}, source="cae", db=DB)
+    assert str(caught.value) == message.replace("--source fe", 'source="fe"')
+    for kwargs in ({"angle_deg": 120.0}, {"period_mm": float("nan")}, {"nx": 1}, {"dx_mm": -1.0}):
+        with pytest.raises(haptex.InvalidInputError):
+            haptex.map_grating(**{**GRATING_KW, **kwargs}, source="cae", db=DB)
+    # Ridges along the sliding direction: every line flat, the flat friction.
+    flat = haptex.map_grating(**{**GRATING_KW, "angle_deg": 90.0}, source="cae", db=DB)
+    assert (flat.mu == flat.mu[0, 0]).all()
 
 
 # --- the limits, for any map and device --------------------------------------------------------------------------

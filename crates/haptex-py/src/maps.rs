@@ -639,7 +639,7 @@ pub fn map_sample_path(
     } else if trajectory.extract::<std::path::PathBuf>().is_ok() {
         let file = input_path("trajectory", trajectory)?;
         let name = file.display().to_string();
-        let reader = std::fs::File::open(&file).map_err(|e| crate::errors::to_py(e))?;
+        let reader = std::fs::File::open(&file).map_err(crate::errors::to_py)?;
         (PlanarTrajectory::read_csv(std::io::BufReader::new(reader), &name).or_raise()?, name)
     } else {
         return Err(input(format!(
@@ -715,4 +715,92 @@ fn x_axis(py: Python<'_>, grid: &MapGrid) -> Py<PyArray1<f64>> {
 
 fn y_axis(py: Python<'_>, grid: &MapGrid) -> Py<PyArray1<f64>> {
     array(py, (0..grid.ny).map(|j| grid.y(j)).collect())
+}
+
+/// A sine grating at an angle to the sliding direction (+x) as a friction
+/// map (`haptex map grating`): each line y = const cuts a sine of period
+/// period_mm / cos(angle), whose steady friction comes from one FE run of
+/// that sine (source="fe", about a second, with the GIL released) or the
+/// FE database's CAE estimate (source="cae", milliseconds; db a database
+/// directory, default $HAPTEX_DB). Plane strain along the sliding
+/// direction: the map depends on the direction (docs/maps.md).
+///
+/// period_mm: grating period (mm, across the ridges); amplitude_mm: sine
+/// amplitude (mm); angle_deg: angle between the wave vector and x (-90 ..
+/// 90 degrees; 0: ridges across the sliding direction); velocity: sliding
+/// velocity in mm/s; nx, ny: columns and rows (2 .. 100000); dx_mm, dy_mm,
+/// x0_mm, y0_mm: the grid (mm).
+///
+/// Raises haptex.ComputationError when the FE run fails.
+#[pyfunction]
+#[pyo3(signature = (
+    *, period_mm, amplitude_mm, angle_deg, velocity = 20.0, nx, ny, dx_mm, dy_mm, x0_mm = 0.0, y0_mm = 0.0,
+    source = "fe", db = None
+))]
+#[allow(clippy::too_many_arguments)]
+pub fn map_grating(
+    py: Python<'_>,
+    period_mm: f64,
+    amplitude_mm: f64,
+    angle_deg: f64,
+    velocity: f64,
+    nx: i64,
+    ny: i64,
+    dx_mm: f64,
+    dy_mm: f64,
+    x0_mm: f64,
+    y0_mm: f64,
+    source: &str,
+    db: Option<&Bound<'_, PyAny>>,
+) -> PyResult<FrictionMap> {
+    use haptex_fem::grating::{self, LineError, LineSource};
+    let grating = map::Grating {
+        period_mm: positive("period_mm", period_mm)?,
+        amplitude_mm: positive("amplitude_mm", amplitude_mm)?,
+        angle_deg,
+        velocity_mm_s: positive("velocity", velocity)?,
+    };
+    for (name, n) in [("nx", nx), ("ny", ny)] {
+        if !(2..=100_000).contains(&n) {
+            return Err(input(format!("{name} must be from 2 to 100000, got {n}")));
+        }
+    }
+    let grid = MapGrid {
+        nx: nx as usize,
+        ny: ny as usize,
+        x0_mm,
+        y0_mm,
+        dx_mm: positive("dx_mm", dx_mm)?,
+        dy_mm: positive("dy_mm", dy_mm)?,
+    };
+    grating.validate().or_raise()?;
+    grid.validate("grating").or_raise()?;
+    let source = match choice("source", source, &["fe", "cae"])? {
+        "fe" => LineSource::Fe,
+        _ => LineSource::Cae,
+    };
+    let dir = match db {
+        Some(db) => crate::convert::path("db", db)?,
+        None => match std::env::var_os("HAPTEX_DB") {
+            Some(dir) => dir.into(),
+            None if source == LineSource::Cae => {
+                return Err(input("source=\"cae\" needs db= (an FE database directory) or $HAPTEX_DB"));
+            }
+            None => std::path::PathBuf::new(),
+        },
+    };
+    let line = py.detach(|| -> Result<_, LineError> {
+        Ok((grating::flat_mu(source, &dir)?, grating::line_friction(&grating, source, &dir)?))
+    });
+    let (flat, line) = match line {
+        Ok(found) => found,
+        Err(e @ LineError::OutsideDatabase { .. }) => return Err(input(format!("{e}: use source=\"fe\""))),
+        Err(e @ (LineError::Fe { .. } | LineError::NoProfile)) => {
+            return Err(raise(Kind::Computation, crate::errors::describe(&e)));
+        }
+        Err(e) => return Err(crate::errors::to_py(e)),
+    };
+    let line = line.as_ref().map(|(x, mu, x0)| (x.as_slice(), mu.as_slice(), *x0));
+    let (inner, _) = py.detach(|| grating.friction_map(line, flat, grid)).or_raise()?;
+    Ok(FrictionMap { inner })
 }

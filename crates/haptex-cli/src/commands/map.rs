@@ -566,7 +566,6 @@ fn sample_path(a: SamplePathArgs) -> anyhow::Result<()> {
 }
 
 fn grating(a: GratingArgs) -> anyhow::Result<()> {
-    use haptex_core::database::Metadata;
     use haptex_core::map::Grating;
     let format = MapFormat::of(&a.output)?;
     let grid = MapGrid {
@@ -586,13 +585,9 @@ fn grating(a: GratingArgs) -> anyhow::Result<()> {
     g.validate()?;
     grid.validate("grating")?;
     let dir = a.db.clone().unwrap_or_else(super::db::default_db);
-    let flat = match a.source {
-        // The FE model's own flat-surface friction: its skin friction.
-        LineSource::Fe => haptex_fem::finger::FingerModel::default_model().contact.mu_skin,
-        LineSource::Cae => {
-            Metadata::read(&dir).with_context(|| format!("no FE database in {}", dir.display()))?.fe.flat_mu()
-        }
-    };
+    // The FE model's own flat-surface friction (its skin friction), or the
+    // database's.
+    let flat = haptex_fem::grating::flat_mu(a.source.into(), &dir)?;
     let across = Grating { angle_deg: 0.0, ..g };
     let mut maps = Vec::new();
     for grating in [g, across] {
@@ -762,46 +757,23 @@ fn compose(a: ComposeArgs) -> anyhow::Result<()> {
 /// its phase x0 (None where the line is flat): from an FE run (10 mm of
 /// slide, the paper's scenario) or the database's CAE.
 fn line_friction(g: &haptex_core::map::Grating, source: LineSource, db: &Path) -> anyhow::Result<Option<LineProfile>> {
-    let p = g.line_period_mm();
-    if !p.is_finite() {
-        return Ok(None);
-    }
-    match source {
-        LineSource::Fe => {
-            use haptex_fem::scenario::{self, Scenario};
-            use haptex_fem::surface::SurfaceShape;
-            let x0 = 5.0;
-            let mut scenario = Scenario::paper(SurfaceShape::Sine { x0, width: p, height: g.amplitude_mm });
-            scenario.velocity_mm_s = g.velocity_mm_s;
-            let result = scenario::run(&scenario, &mut |_| {})
-                .with_context(|| format!("the FE run of the line's sine (period {p:.4} mm) failed"))?;
-            let profile = result.profile.context("the FE run gave no profile")?;
-            Ok(Some((profile.x_mm().to_vec(), profile.mu().to_vec(), x0)))
-        }
-        LineSource::Cae => {
-            use haptex_core::database::{Metadata, Template, TemplateModel};
-            let metadata = Metadata::read(db).with_context(|| format!("no FE database in {}", db.display()))?;
-            let model = TemplateModel::load_with(db, &metadata, Template::Sine)?;
-            let [(w_lo, w_hi), (h_lo, h_hi), _] = model.input_ranges();
-            if p < w_lo || p > w_hi || g.amplitude_mm < h_lo || g.amplitude_mm > h_hi {
-                bail!(
-                    "the line's sine (period {p:.4} mm, amplitude {} mm) is outside the database's sine periods {} .. \
-                     {} mm and heights {} .. {} mm: use --source fe",
-                    Num(g.amplitude_mm),
-                    Num(w_lo),
-                    Num(w_hi),
-                    Num(h_lo),
-                    Num(h_hi)
-                );
-            }
-            let prediction = model.predict(0.0, p, g.amplitude_mm, g.velocity_mm_s)?;
-            Ok(Some((prediction.x_mm, prediction.mu, 0.0)))
-        }
+    use haptex_fem::grating::LineError;
+    match haptex_fem::grating::line_friction(g, source.into(), db) {
+        Err(e @ LineError::OutsideDatabase { .. }) => bail!("{e}: use --source fe"),
+        other => Ok(other?),
     }
 }
 
-/// A line's friction profile: positions, Ft/Fn, and the sine's phase x0.
-type LineProfile = (Vec<f64>, Vec<f64>, f64);
+use haptex_fem::grating::LineProfile;
+
+impl From<LineSource> for haptex_fem::grating::LineSource {
+    fn from(source: LineSource) -> Self {
+        match source {
+            LineSource::Fe => Self::Fe,
+            LineSource::Cae => Self::Cae,
+        }
+    }
+}
 
 #[derive(Debug, Clone, Copy, PartialEq, ValueEnum)]
 enum LineSource {

@@ -121,3 +121,18 @@ def map_sample_path(
     voltage_map: Union[VoltageMap, _Path],
     trajectory: Union[_Path, Tuple[_Floats1, _Floats1, _Floats1]],
 ) -> PathSamples: ...
+def map_grating(
+    *,
+    period_mm: float,
+    amplitude_mm: float,
+    angle_deg: float,
+    velocity: float = 20.0,
+    nx: int,
+    ny: int,
+    dx_mm: float,
+    dy_mm: float,
+    x0_mm: float = 0.0,
+    y0_mm: float = 0.0,
+    source: str = "fe",
+    db: Optional[_Path] = None,
+) -> FrictionMap: ...
