@@ -71,6 +71,25 @@ impl MapGrid {
         Ok(())
     }
 
+    /// The grid over a `w_mm` x `h_mm` rectangle from `origin_mm` at
+    /// `spacing_mm`: floor(w / dx) + 1 columns and floor(h / dy) + 1 rows
+    /// (`haptex map compose --size-mm`); None when that is more than
+    /// [`MAX_CELLS`] cells. Not validated.
+    pub fn covering(w_mm: f64, h_mm: f64, spacing_mm: (f64, f64), origin_mm: (f64, f64)) -> Option<Self> {
+        let (nx, ny) = ((w_mm / spacing_mm.0).floor() + 1.0, (h_mm / spacing_mm.1).floor() + 1.0);
+        if nx * ny > MAX_CELLS as f64 {
+            return None;
+        }
+        Some(MapGrid {
+            nx: nx as usize,
+            ny: ny as usize,
+            x0_mm: origin_mm.0,
+            y0_mm: origin_mm.1,
+            dx_mm: spacing_mm.0,
+            dy_mm: spacing_mm.1,
+        })
+    }
+
     /// Number of cells.
     pub fn len(&self) -> usize {
         self.nx * self.ny

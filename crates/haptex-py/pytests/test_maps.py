@@ -463,6 +463,67 @@ def test_grating_refusals(cli, tmp_path):
     assert (flat.mu == flat.mu[0, 0]).all()
 
 
+# --- compose -----------------------------------------------------------------------------------------------------
+
+
+def label_image() -> np.ndarray:
+    labels = np.zeros((12, 20), dtype=np.uint8)
+    labels[2:8, 3:15] = 128
+    labels[9:, 10:] = 255
+    return labels
+
+
+def test_compose_matches_the_command_line(cli, tmp_path):
+    png = tmp_path / "labels.png"
+    labels = label_image()
+    write_gray_png(png, labels)
+    polygon = "0.2,0.1;1.5,0.3;0.9,1.0"
+    flags = ["--region", "0=0.5", "--region", f"128=profile:{BUMP}", "--region", "255=1.2",
+             "--polygon", f"{polygon}=0.9", "--pixel-mm", "0.1", "--pixel-mm-y", "0.08", "--x0-mm", "-0.5"]
+    cli.run("map", "compose", png, *flags, "-o", tmp_path / "cli.csv")
+    vertices = [(0.2, 0.1), (1.5, 0.3), (0.9, 1.0)]
+    expected = read_csv(tmp_path / "cli.csv")
+    for image in (png, labels):
+        for bump in (BUMP, haptex.Profile.read_csv(BUMP)):
+            friction = haptex.map_compose(
+                image, regions={0: 0.5, 128: bump, 255: 1.2}, polygons=[(vertices, 0.9)], pixel_mm=0.1,
+                pixel_mm_y=0.08, x0_mm=-0.5,
+            )
+            assert_identical(friction.mu.ravel(), expected["mu"], "mu")
+    assert (friction.mu == 0.9).any() and (friction.mu == 1.2).any() and (friction.mu == 0.5).any()
+    friction.write(tmp_path / "mine.csv")
+    assert_same_files(tmp_path / "mine.csv", tmp_path / "cli.csv")
+    # Without labels: a base over a rectangle, then the polygon.
+    cli.run("map", "compose", "--base", "0.7", "--size-mm", "2,1.5", "--polygon", f"{polygon}=profile:{BUMP}",
+            "--pixel-mm", "0.1", "-o", tmp_path / "cli-base.csv")
+    based = haptex.map_compose(base=0.7, size_mm=(2.0, 1.5), polygons=[(vertices, BUMP)], pixel_mm=0.1)
+    assert_identical(based.mu.ravel(), read_csv(tmp_path / "cli-base.csv")["mu"], "mu on a base")
+
+
+def test_compose_refusals(cli, tmp_path):
+    png = tmp_path / "labels.png"
+    write_gray_png(png, label_image())
+    message = cli.error("map", "compose", png, "--region", "0=0.5", "--pixel-mm", "0.1", "-o", tmp_path / "m.csv")
+    with pytest.raises(haptex.InvalidInputError) as caught:
+        haptex.map_compose(png, regions={0: 0.5}, pixel_mm=0.1)
+    assert str(caught.value) == message  # level 128 has no fill
+    for kwargs, words in [
+        ({"regions": {0: 5000.0, 128: 1, 255: 1}}, "mu"),
+        ({"regions": {300: 1.0}}, "gray level"),
+        ({"regions": {0: "material:sponge"}}, "material"),
+        ({"regions": {0: np.nan, 128: 1, 255: 1}}, "mu"),
+        ({}, "needs regions"),
+    ]:
+        with pytest.raises(haptex.InvalidInputError, match=words):
+            haptex.map_compose(png, pixel_mm=0.1, **kwargs)
+    with pytest.raises(haptex.InvalidInputError, match="2-D uint8"):
+        haptex.map_compose(label_image().astype(np.uint16), regions={0: 1.0}, pixel_mm=0.1)
+    with pytest.raises(haptex.InvalidInputError, match="or base"):
+        haptex.map_compose(pixel_mm=0.1)
+    with pytest.raises(haptex.InvalidInputError, match="vertices"):
+        haptex.map_compose(base=0.7, size_mm=(1.0, 1.0), polygons=[([(0.0, 0.0), (1.0, 1.0)], 0.5)], pixel_mm=0.1)
+
+
 # --- the limits, for any map and device --------------------------------------------------------------------------
 
 cells = st.floats(min_value=-5.0, max_value=20.0, allow_nan=False)

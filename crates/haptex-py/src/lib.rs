@@ -28,5 +28,6 @@ fn _haptex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(maps::map_voltage, m)?)?;
     m.add_function(wrap_pyfunction!(maps::map_sample_path, m)?)?;
     m.add_function(wrap_pyfunction!(maps::map_grating, m)?)?;
+    m.add_function(wrap_pyfunction!(maps::map_compose, m)?)?;
     Ok(())
 }

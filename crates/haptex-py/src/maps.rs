@@ -804,3 +804,148 @@ pub fn map_grating(
     let (inner, _) = py.detach(|| grating.friction_map(line, flat, grid)).or_raise()?;
     Ok(FrictionMap { inner })
 }
+
+/// What fills a region of `map_compose`: a number (mu), or a friction
+/// profile (a haptex.Profile, a profile CSV path or (x_mm, mu)) tiled
+/// along x.
+fn region_fill(what: &str, value: &Bound<'_, PyAny>) -> PyResult<map::RegionFill> {
+    if let Ok(text) = value.extract::<String>()
+        && text.trim_start().starts_with("material:")
+    {
+        return Err(input(format!(
+            "{what}: material fills (the texture library) are not bound in Python yet: give a number or a friction \
+             profile, or use haptex map compose"
+        )));
+    }
+    if !value.is_instance_of::<pyo3::types::PyBool>()
+        && let Ok(mu) = value.extract::<f64>()
+    {
+        return ranges::MU.check(mu).map(map::RegionFill::Constant).map_err(|e| input(format!("{what}: {e}")));
+    }
+    profile_arg(what, value).map(map::RegionFill::Texture)
+}
+
+/// A friction map composed of regions (`haptex map compose`): a label
+/// image whose gray levels name regions, or one base fill over a
+/// rectangle, then polygons filled over it in order.
+///
+/// labels: a path to an 8-bit grayscale PNG or a 2-D uint8 array (row 0
+///   the top row, at the largest y), one cell per pixel; regions: {gray
+///   level: fill} for each level present. Without labels: base (a fill)
+///   and size_mm (width, height in mm).
+/// A fill: a number (mu) or a friction profile (a haptex.Profile, a
+///   profile CSV path or (x_mm, mu)) tiled along x with its span as the
+///   period.
+/// polygons: [(vertices, fill), ...], vertices [(x_mm, y_mm), ...] (3 ..
+///   10000, even-odd rule at the cell positions).
+/// pixel_mm, pixel_mm_y (default pixel_mm): cell size in mm; x0_mm, y0_mm:
+///   the bottom-left cell's position in mm.
+#[pyfunction]
+#[pyo3(signature = (
+    labels = None, *, regions = None, base = None, size_mm = None, polygons = None, pixel_mm, pixel_mm_y = None,
+    x0_mm = 0.0, y0_mm = 0.0
+))]
+#[allow(clippy::too_many_arguments)]
+pub fn map_compose(
+    py: Python<'_>,
+    labels: Option<&Bound<'_, PyAny>>,
+    regions: Option<&Bound<'_, PyDict>>,
+    base: Option<&Bound<'_, PyAny>>,
+    size_mm: Option<(f64, f64)>,
+    polygons: Option<Vec<(Vec<(f64, f64)>, Bound<'_, PyAny>)>>,
+    pixel_mm: f64,
+    pixel_mm_y: Option<f64>,
+    x0_mm: f64,
+    y0_mm: f64,
+) -> PyResult<FrictionMap> {
+    let pixel_mm = positive("pixel_mm", pixel_mm)?;
+    let spacing = (pixel_mm, pixel_mm_y.map(|v| positive("pixel_mm_y", v)).transpose()?.unwrap_or(pixel_mm));
+    let origin = (x0_mm, y0_mm);
+    let mut map = match (labels, base, size_mm) {
+        (Some(labels), None, None) => {
+            let regions = regions
+                .filter(|r| !r.is_empty())
+                .ok_or_else(|| input("a label image needs regions={level: fill} for each of its gray levels"))?;
+            let mut fills: Vec<Option<map::RegionFill>> = vec![None; 256];
+            for (level, fill) in regions.iter() {
+                let what = format!("regions[{}]", level.repr()?);
+                let level = level
+                    .extract::<u8>()
+                    .map_err(|_| input(format!("{what}: the level must be a gray level 0 .. 255")))?;
+                fills[level as usize] = Some(region_fill(&what, &fill)?);
+            }
+            let image = label_image(py, labels)?;
+            let fill = |level: u8| fills[level as usize].clone();
+            image.0.compose(&fill, spacing, origin, &image.1).or_raise()?
+        }
+        (None, Some(base), Some((w, h))) => {
+            if regions.is_some() {
+                return Err(input("regions are the label image's: give labels, or drop regions"));
+            }
+            if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
+                return Err(input(format!(
+                    "size_mm ({}, {}): expected (width, height) in mm, both positive",
+                    Num(w),
+                    Num(h)
+                )));
+            }
+            let grid = MapGrid::covering(w, h, spacing, origin).ok_or_else(|| {
+                input(format!(
+                    "size_mm ({}, {}) at {} x {} mm cells: more than {} cells",
+                    Num(w),
+                    Num(h),
+                    Num(spacing.0),
+                    Num(spacing.1),
+                    map::MAX_CELLS
+                ))
+            })?;
+            grid.validate("size_mm").or_raise()?;
+            let base = region_fill("base", base)?;
+            let one = map::LabelImage { width: grid.nx, height: grid.ny, labels: vec![0; grid.len()] };
+            one.compose(&|_| Some(base.clone()), spacing, origin, "base").or_raise()?
+        }
+        _ => {
+            return Err(input(
+                "give a label image with regions={level: fill}, or base=FILL with size_mm=(width, height)",
+            ));
+        }
+    };
+    for (k, (vertices, fill)) in polygons.unwrap_or_default().iter().enumerate() {
+        let what = format!("polygons[{k}]");
+        let fill = region_fill(&what, fill)?;
+        map.fill_polygon(vertices, &fill, &what).or_raise()?;
+    }
+    Ok(FrictionMap { inner: map })
+}
+
+/// The label image of `map_compose` and its name for messages.
+fn label_image(py: Python<'_>, labels: &Bound<'_, PyAny>) -> PyResult<(map::LabelImage, String)> {
+    if let Ok(array) = labels.cast::<numpy::PyUntypedArray>() {
+        let dtype = array.dtype().to_string();
+        if array.ndim() != 2 || dtype != "uint8" {
+            return Err(input(format!(
+                "labels must be a 2-D uint8 array of gray levels (row 0 the top row), got a {}-D {dtype} array",
+                array.ndim()
+            )));
+        }
+        let levels = labels.cast::<PyArray2<u8>>()?.readonly();
+        let view = levels.as_array();
+        let (height, width) = view.dim();
+        let image = map::LabelImage { width, height, labels: view.iter().copied().collect() };
+        return Ok((image, "labels".into()));
+    }
+    if labels.extract::<std::path::PathBuf>().is_err() {
+        return Err(input(format!(
+            "labels must be a path to an 8-bit grayscale PNG or a 2-D uint8 array, got {}",
+            type_name(labels)
+        )));
+    }
+    let path = input_path("labels", labels)?;
+    let name = path.display().to_string();
+    let bytes = py.detach(|| haptex_core::io::read_file_bounded(&path, 256 << 20)).map_err(|e| {
+        let kind = if matches!(e, BoundedReadError::Io(_)) { Kind::Os } else { Kind::Input };
+        raise(kind, format!("{name}: {e}"))
+    })?;
+    let image = map::LabelImage::read_png(&bytes, &name).or_raise()?;
+    Ok((image, name))
+}

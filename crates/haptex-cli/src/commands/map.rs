@@ -812,23 +812,14 @@ fn sized_grid(size: &str, spacing: (f64, f64), origin: (f64, f64)) -> anyhow::Re
         .ok()
         .filter(|(w, h)| *w > 0.0 && *h > 0.0)
         .with_context(|| format!("--size-mm '{size}': expected W,H in mm, both positive"))?;
-    let (nx, ny) = ((w / spacing.0).floor() + 1.0, (h / spacing.1).floor() + 1.0);
-    if nx * ny > haptex_core::map::MAX_CELLS as f64 {
-        bail!(
+    let grid = MapGrid::covering(w, h, spacing, origin).with_context(|| {
+        format!(
             "--size-mm {size} at {} x {} mm cells: more than {} cells",
             Num(spacing.0),
             Num(spacing.1),
             haptex_core::map::MAX_CELLS
-        );
-    }
-    let grid = MapGrid {
-        nx: nx as usize,
-        ny: ny as usize,
-        x0_mm: origin.0,
-        y0_mm: origin.1,
-        dx_mm: spacing.0,
-        dy_mm: spacing.1,
-    };
+        )
+    })?;
     grid.validate("--size-mm")?;
     Ok(grid)
 }

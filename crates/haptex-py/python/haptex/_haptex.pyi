@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from typing import Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -135,4 +135,18 @@ def map_grating(
     y0_mm: float = 0.0,
     source: str = "fe",
     db: Optional[_Path] = None,
+) -> FrictionMap: ...
+_Fill = Union[float, Any]  # a number (mu) or a friction profile (Profile, CSV path, (x_mm, mu))
+
+def map_compose(
+    labels: Optional[Union[_Path, npt.NDArray[np.uint8]]] = None,
+    *,
+    regions: Optional[Dict[int, _Fill]] = None,
+    base: Optional[_Fill] = None,
+    size_mm: Optional[Tuple[float, float]] = None,
+    polygons: Optional[List[Tuple[Sequence[Tuple[float, float]], _Fill]]] = None,
+    pixel_mm: float,
+    pixel_mm_y: Optional[float] = None,
+    x0_mm: float = 0.0,
+    y0_mm: float = 0.0,
 ) -> FrictionMap: ...
