@@ -32,7 +32,7 @@ pub enum LineError {
     Fe {
         period_mm: f64,
         #[source]
-        source: SimulationError,
+        source: Box<SimulationError>,
     },
     #[error("the FE run gave no profile")]
     NoProfile,
@@ -40,10 +40,10 @@ pub enum LineError {
     NoDatabase {
         dir: PathBuf,
         #[source]
-        source: DatabaseError,
+        source: Box<DatabaseError>,
     },
     #[error(transparent)]
-    Database(#[from] DatabaseError),
+    Database(Box<DatabaseError>),
     /// The line's sine is outside what the database covers (the caller
     /// says which source to use instead).
     #[error(
@@ -52,6 +52,12 @@ pub enum LineError {
         Num(*amplitude_mm), Num(periods_mm.0), Num(periods_mm.1), Num(heights_mm.0), Num(heights_mm.1)
     )]
     OutsideDatabase { period_mm: f64, amplitude_mm: f64, periods_mm: (f64, f64), heights_mm: (f64, f64) },
+}
+
+impl From<DatabaseError> for LineError {
+    fn from(e: DatabaseError) -> Self {
+        LineError::Database(Box::new(e))
+    }
 }
 
 /// The flat-surface friction of `source`: the FE model's skin friction,
@@ -64,7 +70,7 @@ pub fn flat_mu(source: LineSource, db: &Path) -> Result<f64, LineError> {
 }
 
 fn read_metadata(db: &Path) -> Result<Metadata, LineError> {
-    Metadata::read(db).map_err(|source| LineError::NoDatabase { dir: db.to_path_buf(), source })
+    Metadata::read(db).map_err(|source| LineError::NoDatabase { dir: db.to_path_buf(), source: Box::new(source) })
 }
 
 /// The friction profile of the 1-D sine a line of the grating cuts, and
@@ -79,8 +85,8 @@ pub fn line_friction(g: &Grating, source: LineSource, db: &Path) -> Result<Optio
             let x0 = 5.0;
             let mut scenario = Scenario::paper(SurfaceShape::Sine { x0, width: p, height: g.amplitude_mm });
             scenario.velocity_mm_s = g.velocity_mm_s;
-            let result =
-                scenario::run(&scenario, &mut |_| {}).map_err(|source| LineError::Fe { period_mm: p, source })?;
+            let result = scenario::run(&scenario, &mut |_| {})
+                .map_err(|source| LineError::Fe { period_mm: p, source: Box::new(source) })?;
             let profile = result.profile.ok_or(LineError::NoProfile)?;
             Ok(Some((profile.x_mm().to_vec(), profile.mu().to_vec(), x0)))
         }

@@ -852,7 +852,7 @@ pub fn map_compose(
     regions: Option<&Bound<'_, PyDict>>,
     base: Option<&Bound<'_, PyAny>>,
     size_mm: Option<(f64, f64)>,
-    polygons: Option<Vec<(Vec<(f64, f64)>, Bound<'_, PyAny>)>>,
+    polygons: Option<Polygons<'_>>,
     pixel_mm: f64,
     pixel_mm_y: Option<f64>,
     x0_mm: f64,
@@ -917,6 +917,9 @@ pub fn map_compose(
     }
     Ok(FrictionMap { inner: map })
 }
+
+/// The polygons of `map_compose`: vertices (mm) and a fill each.
+type Polygons<'py> = Vec<(Vec<(f64, f64)>, Bound<'py, PyAny>)>;
 
 /// The label image of `map_compose` and its name for messages.
 fn label_image(py: Python<'_>, labels: &Bound<'_, PyAny>) -> PyResult<(map::LabelImage, String)> {
