@@ -71,6 +71,25 @@ impl MapGrid {
         Ok(())
     }
 
+    /// The grid over a `w_mm` x `h_mm` rectangle from `origin_mm` at
+    /// `spacing_mm`: floor(w / dx) + 1 columns and floor(h / dy) + 1 rows
+    /// (`haptex map compose --size-mm`); None when that is more than
+    /// [`MAX_CELLS`] cells. Not validated.
+    pub fn covering(w_mm: f64, h_mm: f64, spacing_mm: (f64, f64), origin_mm: (f64, f64)) -> Option<Self> {
+        let (nx, ny) = ((w_mm / spacing_mm.0).floor() + 1.0, (h_mm / spacing_mm.1).floor() + 1.0);
+        if nx * ny > MAX_CELLS as f64 {
+            return None;
+        }
+        Some(MapGrid {
+            nx: nx as usize,
+            ny: ny as usize,
+            x0_mm: origin_mm.0,
+            y0_mm: origin_mm.1,
+            dx_mm: spacing_mm.0,
+            dy_mm: spacing_mm.1,
+        })
+    }
+
     /// Number of cells.
     pub fn len(&self) -> usize {
         self.nx * self.ny
@@ -905,24 +924,104 @@ pub(crate) fn read_gray_grid(
         dy_mm: spacing_mm.1,
     };
     grid.validate(source_name)?;
-    let full = if bits == 8 { 255.0 } else { 65535.0 };
-    let table: Vec<f64> = if bits == 8 { (0..256).map(|g| value(g as f64 / full)).collect() } else { Vec::new() };
-    let mut values = vec![0.0; width * height];
-    for r in 0..height {
+    let values = gray_values(width, height, bits, value, |r, out, level| {
         let line = &buffer[r * stride..r * stride + stride];
-        let j = height - 1 - r;
-        let out = &mut values[j * width..(j + 1) * width];
         if bits == 8 {
             for (o, &g) in out.iter_mut().zip(line) {
-                *o = table[g as usize];
+                *o = level(g as u16);
             }
         } else {
             for (o, g) in out.iter_mut().zip(line.chunks_exact(2)) {
-                *o = value(u16::from_be_bytes([g[0], g[1]]) as f64 / full);
+                *o = level(u16::from_be_bytes([g[0], g[1]]));
             }
         }
-    }
+    });
     Ok((grid, values))
+}
+
+/// The values of a `width` x `height` gray image of `bits` (8 or 16) bits,
+/// `value(g)` per pixel with g = level / full level in [0, 1] (an 8-bit
+/// image's 256 values computed once), the image's top row (r = 0) at the
+/// largest y. `row(r, out, level)` fills `out` with `level(l)` of row r's
+/// pixels, left to right.
+fn gray_values(
+    width: usize,
+    height: usize,
+    bits: u8,
+    value: impl Fn(f64) -> f64,
+    row: impl Fn(usize, &mut [f64], &dyn Fn(u16) -> f64),
+) -> Vec<f64> {
+    let full = if bits == 8 { 255.0 } else { 65535.0 };
+    let table: Vec<f64> = if bits == 8 { (0..256).map(|g| value(g as f64 / full)).collect() } else { Vec::new() };
+    let level = |l: u16| if bits == 8 { table[l as usize] } else { value(l as f64 / full) };
+    let mut values = vec![0.0; width * height];
+    for r in 0..height {
+        let j = height - 1 - r;
+        row(r, &mut values[j * width..(j + 1) * width], &level);
+    }
+    values
+}
+
+/// Gray levels of an image held in memory, row by row from the top row,
+/// as a decoded 8- or 16-bit grayscale PNG holds them.
+#[derive(Debug, Clone, Copy)]
+pub enum GrayLevels<'a> {
+    Eight(&'a [u8]),
+    Sixteen(&'a [u16]),
+}
+
+impl FrictionMap {
+    /// [`FrictionMap::read_gray_png`] of an image already decoded: `width`
+    /// x `height` gray levels, row 0 the top (at the largest y), with the
+    /// same gray-to-friction arithmetic, so that the map is the one the PNG
+    /// of these levels gives, bit for bit.
+    pub fn from_gray_levels(
+        levels: GrayLevels<'_>,
+        width: usize,
+        height: usize,
+        mapping: &GrayMapping,
+        spacing_mm: (f64, f64),
+        origin_mm: (f64, f64),
+        source_name: &str,
+    ) -> Result<Self, MapError> {
+        mapping.validate(source_name)?;
+        let n = match levels {
+            GrayLevels::Eight(l) => l.len(),
+            GrayLevels::Sixteen(l) => l.len(),
+        };
+        if width.checked_mul(height) != Some(n) {
+            return Err(MapError::new(source_name, None, format!("{n} gray levels for {width} x {height} pixels")));
+        }
+        let grid = MapGrid {
+            nx: width,
+            ny: height,
+            x0_mm: origin_mm.0,
+            y0_mm: origin_mm.1,
+            dx_mm: spacing_mm.0,
+            dy_mm: spacing_mm.1,
+        };
+        grid.validate(source_name)?;
+        let bits = if matches!(levels, GrayLevels::Eight(_)) { 8 } else { 16 };
+        let mu = gray_values(
+            width,
+            height,
+            bits,
+            |g| mapping.mu(g),
+            |r, out, level| match levels {
+                GrayLevels::Eight(l) => {
+                    for (o, &g) in out.iter_mut().zip(&l[r * width..(r + 1) * width]) {
+                        *o = level(g as u16);
+                    }
+                }
+                GrayLevels::Sixteen(l) => {
+                    for (o, &g) in out.iter_mut().zip(&l[r * width..(r + 1) * width]) {
+                        *o = level(g);
+                    }
+                }
+            },
+        );
+        Self::new(grid, mu, source_name)
+    }
 }
 
 /// A decoded grayscale PNG: its rows from the top, `stride` bytes apart.
@@ -1240,4 +1339,186 @@ impl FrictionMap {
         }
         Ok(filled)
     }
+}
+
+/// The format of a map file, from its extension: `.csv` (long format) or
+/// `.npy` (with its `.npy.json` sidecar).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MapFormat {
+    Csv,
+    Npy,
+}
+
+impl MapFormat {
+    /// The format of `path` (refused unless .csv or .npy).
+    pub fn of(path: &std::path::Path) -> Result<Self, MapError> {
+        match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+            Some("csv") => Ok(MapFormat::Csv),
+            Some("npy") => Ok(MapFormat::Npy),
+            _ => Err(MapError::new(
+                &path.display().to_string(),
+                None,
+                "a map file is .csv or .npy (with its .npy.json sidecar)",
+            )),
+        }
+    }
+}
+
+/// A map file that cannot be opened, or whose content is refused.
+#[derive(Debug, thiserror::Error)]
+pub enum MapFileError {
+    #[error("cannot open {name}")]
+    Open {
+        name: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Map(#[from] MapError),
+}
+
+/// Reads a map CSV `x_mm,y_mm,QUANTITY` from a file (see [`read_grid_csv`]).
+pub fn read_map_csv_file(
+    path: &std::path::Path,
+    quantity: &ranges::Range,
+) -> Result<(MapGrid, Vec<f64>), MapFileError> {
+    let name = path.display().to_string();
+    let file = std::fs::File::open(path).map_err(|source| MapFileError::Open { name: name.clone(), source })?;
+    Ok(read_grid_csv(std::io::BufReader::new(file), &name, quantity)?)
+}
+
+impl FrictionMap {
+    /// Reads a friction map file, CSV or NPY by its extension.
+    pub fn read_file(path: &std::path::Path) -> Result<Self, MapFileError> {
+        let name = path.display().to_string();
+        Ok(match MapFormat::of(path)? {
+            MapFormat::Csv => {
+                let (grid, mu) = read_map_csv_file(path, &ranges::MU)?;
+                FrictionMap::new(grid, mu, &name)?
+            }
+            MapFormat::Npy => {
+                let (sidecar, mu) = read_npy_pair(path, "mu")?;
+                FrictionMap::new(sidecar.grid, mu, &name)?
+            }
+        })
+    }
+
+    /// Writes the map as `format` (CSV atomically; NPY with its sidecar).
+    pub fn write_file(&self, path: &std::path::Path, format: MapFormat) -> Result<(), crate::io::WriteError> {
+        match format {
+            MapFormat::Csv => crate::io::write_atomic(path, |w| self.write_csv(w)),
+            MapFormat::Npy => write_npy_pair(path, &self.grid, &self.mu, "mu", None),
+        }
+    }
+
+    /// `haptex map from-profile`: every row the profile sampled at
+    /// x0 + i dx over the profile's span (x0 its first x; floor(span / dx)
+    /// + 1 columns), `ny` rows from `y0_mm` at `dy_mm`.
+    pub fn from_profile(
+        profile: &crate::profile::FrictionProfile,
+        dx_mm: f64,
+        dy_mm: f64,
+        ny: usize,
+        y0_mm: f64,
+    ) -> Result<Self, FromProfileError> {
+        let (x0, x1) = (profile.x_mm()[0], profile.x_mm()[profile.len() - 1]);
+        let columns = ((x1 - x0) / dx_mm).floor() + 1.0;
+        if columns > MAX_CELLS as f64 {
+            return Err(FromProfileError::TooManyColumns { columns, span_mm: x1 - x0 });
+        }
+        let grid = MapGrid { nx: columns as usize, ny, x0_mm: x0, y0_mm, dx_mm, dy_mm };
+        Ok(Self::extrude(profile, grid)?)
+    }
+
+    /// The line `haptex map` prints about a friction map it made.
+    pub fn summary_line(&self) -> String {
+        let g = &self.grid;
+        let (lo, hi) = min_max(&self.mu);
+        format!(
+            "friction map: {} x {} cells, x {} .. {} mm, y {} .. {} mm, mu {:.4} .. {:.4}",
+            g.nx,
+            g.ny,
+            Num(g.x0_mm),
+            Num(g.x(g.nx - 1)),
+            Num(g.y0_mm),
+            Num(g.y(g.ny - 1)),
+            lo,
+            hi
+        )
+    }
+}
+
+/// Why [`FrictionMap::from_profile`] refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FromProfileError {
+    /// The spacing gives more than [`MAX_CELLS`] columns over the span.
+    #[error("{columns} columns over the profile's {span_mm} mm: too many")]
+    TooManyColumns { columns: f64, span_mm: f64 },
+    #[error(transparent)]
+    Map(#[from] MapError),
+}
+
+impl VoltageMap {
+    /// Reads a voltage map file, CSV or NPY by its extension. U_max is the
+    /// NPY sidecar's (NaN for a CSV); the area fractions are NaN.
+    pub fn read_file(path: &std::path::Path) -> Result<Self, MapFileError> {
+        let (grid, voltage_v, u_max_v) = match MapFormat::of(path)? {
+            MapFormat::Csv => {
+                let (grid, v) = read_map_csv_file(path, &ranges::VOLTAGE_V)?;
+                (grid, v, f64::NAN)
+            }
+            MapFormat::Npy => {
+                let (sidecar, v) = read_npy_pair(path, "voltage_v")?;
+                (sidecar.grid, v, sidecar.u_max_v.unwrap_or(f64::NAN))
+            }
+        };
+        Ok(VoltageMap { grid, voltage_v, u_max_v, not_renderable_fraction: f64::NAN, clipped_fraction: f64::NAN })
+    }
+
+    /// The lines `haptex map voltage` prints about a map made with
+    /// `method`.
+    pub fn summary_lines(&self, method: Method) -> Vec<String> {
+        let (lo, hi) = min_max(&self.voltage_v);
+        let mut lines = vec![
+            format!("method: {method}"),
+            format!(
+                "voltage map: {} x {} cells, {:.3} .. {:.3} V RMS, U_max = {} V",
+                self.grid.nx,
+                self.grid.ny,
+                lo,
+                hi,
+                Num(self.u_max_v)
+            ),
+        ];
+        if method == Method::Physical {
+            lines.push(format!(
+                "area below mu_HD (not renderable, 0 V): {:.2}%; clipped at U_max: {:.2}%",
+                100.0 * self.not_renderable_fraction,
+                100.0 * self.clipped_fraction
+            ));
+        }
+        lines
+    }
+}
+
+impl DisplayMap {
+    /// The line `haptex map voltage --display ultrasonic|combined` prints.
+    pub fn summary_line(&self) -> String {
+        format!(
+            "display map: {} x {} cells; band mu {:.4} .. {:.4}; below it (plate at a_max = {} um): {:.2}% of the \
+             area, above it (clipped): {:.2}%",
+            self.grid.nx,
+            self.grid.ny,
+            self.band_mu[0],
+            self.band_mu[1],
+            Num(self.a_max_um),
+            100.0 * self.below_fraction,
+            100.0 * self.above_fraction
+        )
+    }
+}
+
+/// The lowest and highest of `v` (inf, -inf when empty).
+pub fn min_max(v: &[f64]) -> (f64, f64) {
+    v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)))
 }

@@ -85,6 +85,33 @@ impl PlanarTrajectory {
         }
         Ok(())
     }
+
+    /// What `haptex map sample-path` writes: a comment naming the voltage
+    /// map and the path, then `t_s,x_mm,y_mm,voltage_v` (`voltage_v` the
+    /// map sampled at each sample, V RMS).
+    pub fn write_sampled_voltage_csv(
+        &self,
+        w: &mut dyn Write,
+        map_name: &str,
+        path_name: &str,
+        voltage_v: &[f64],
+    ) -> std::io::Result<()> {
+        writeln!(w, "# haptex map sample-path: voltage (V RMS) of {map_name} along {path_name}")?;
+        self.write_csv_with(w, "voltage_v", voltage_v)
+    }
+
+    /// The line `haptex map sample-path` prints about the voltages
+    /// sampled along the path.
+    pub fn sampled_voltage_summary(&self, voltage_v: &[f64]) -> String {
+        let (lo, hi) = crate::map::min_max(voltage_v);
+        format!(
+            "path: {} samples, {} s; voltage {:.3} .. {:.3} V RMS",
+            self.len(),
+            Num(self.t_s[self.len() - 1] - self.t_s[0]),
+            lo,
+            hi
+        )
+    }
 }
 
 fn validate(t_s: &[f64], x_mm: &[f64], y_mm: &[f64]) -> Result<(), crate::profile::Violation> {

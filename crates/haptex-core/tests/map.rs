@@ -83,6 +83,34 @@ fn png_round_trip_within_quantization() {
     }
 }
 
+/// Gray levels in memory (as a caller that decoded the image itself holds
+/// them, top row first) give the PNG's map, bit for bit.
+#[test]
+fn gray_levels_in_memory_are_the_pngs_map() {
+    use haptex_core::map::GrayLevels;
+    let m = test_map(13, 7);
+    for (bits, gamma) in [(8u8, 1.0), (16, 1.0), (8, 2.2), (16, 0.4)] {
+        let mapping = GrayMapping { mu_black: 0.5, mu_white: 2.0, gamma };
+        let mut bytes = Vec::new();
+        m.write_gray_png(&mut bytes, &mapping, bits).unwrap();
+        let from_png = FrictionMap::read_gray_png(&bytes, &mapping, (0.05, 0.1), (-1.0, 2.0), "m.png").unwrap();
+        // The levels the PNG holds, from its top row (the map's last).
+        let level = |j: usize, i: usize| {
+            let full = if bits == 8 { 255.0 } else { 65535.0 };
+            (mapping.gray(m.mu[j * 13 + i]) * full).round() as u16
+        };
+        let top_first: Vec<u16> = (0..7).rev().flat_map(|j| (0..13).map(move |i| level(j, i))).collect();
+        let eight: Vec<u8> = top_first.iter().map(|&l| l as u8).collect();
+        let levels = if bits == 8 { GrayLevels::Eight(&eight) } else { GrayLevels::Sixteen(&top_first) };
+        let from_levels =
+            FrictionMap::from_gray_levels(levels, 13, 7, &mapping, (0.05, 0.1), (-1.0, 2.0), "levels").unwrap();
+        assert_eq!(from_levels, from_png, "{bits} bit, gamma {gamma}");
+        let short = GrayLevels::Sixteen(&top_first[1..]);
+        let err = FrictionMap::from_gray_levels(short, 13, 7, &mapping, (0.05, 0.1), (-1.0, 2.0), "levels");
+        assert!(err.unwrap_err().to_string().contains("90 gray levels for 13 x 7 pixels"));
+    }
+}
+
 #[test]
 fn bad_images_are_refused_with_the_reason() {
     let mapping = GrayMapping { mu_black: 0.8, mu_white: 1.4, gamma: 1.0 };

@@ -20,6 +20,7 @@ pub mod element;
 pub mod finger;
 pub mod finite_element;
 pub mod finite_solver;
+pub mod grating;
 pub mod hyperelastic;
 pub mod lanes;
 pub mod linalg;

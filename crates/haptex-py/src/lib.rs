@@ -16,6 +16,7 @@ mod errors;
 mod library;
 mod playback;
 mod fem;
+mod maps;
 mod profile;
 
 #[pymodule]
@@ -41,6 +42,15 @@ fn _haptex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fem::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(fem::check, m)?)?;
     m.add_function(wrap_pyfunction!(fem::compensate, m)?)?;
+    m.add_class::<maps::FrictionMap>()?;
+    m.add_class::<maps::VoltageMap>()?;
+    m.add_class::<maps::PathSamples>()?;
+    m.add_function(wrap_pyfunction!(maps::map_from_image, m)?)?;
+    m.add_function(wrap_pyfunction!(maps::map_from_profile, m)?)?;
+    m.add_function(wrap_pyfunction!(maps::map_voltage, m)?)?;
+    m.add_function(wrap_pyfunction!(maps::map_sample_path, m)?)?;
+    m.add_function(wrap_pyfunction!(maps::map_grating, m)?)?;
+    m.add_function(wrap_pyfunction!(maps::map_compose, m)?)?;
     Ok(())
 }
 

@@ -7,9 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand, ValueEnum};
 use haptex_core::electrovibration::{ContactArea, Device, Method};
-use haptex_core::map::{
-    FrictionMap, GrayMapping, MapGrid, VoltageMap, png_header, read_grid_csv, read_npy_pair, write_npy_pair,
-};
+use haptex_core::map::{FrictionMap, GrayMapping, MapFormat, MapGrid, VoltageMap, min_max, png_header};
 use haptex_core::num::Num;
 use haptex_core::planar::PlanarTrajectory;
 use haptex_core::ranges;
@@ -367,19 +365,16 @@ fn from_image(a: FromImageArgs) -> anyhow::Result<()> {
 fn from_profile(a: FromProfileArgs) -> anyhow::Result<()> {
     let format = MapFormat::of(&a.output)?;
     let profile = read_profile(&a.profile)?;
-    let (x0, x1) = (profile.x_mm()[0], profile.x_mm()[profile.len() - 1]);
-    let nx_float = ((x1 - x0) / a.dx_mm).floor() + 1.0;
-    if nx_float > haptex_core::map::MAX_CELLS as f64 {
-        bail!(
+    let map = match FrictionMap::from_profile(&profile, a.dx_mm, a.dy_mm, a.ny as usize, a.y0_mm) {
+        Ok(map) => map,
+        Err(haptex_core::map::FromProfileError::TooManyColumns { columns, span_mm }) => bail!(
             "--dx-mm {} gives {} columns over the profile's {} mm: too many",
             Num(a.dx_mm),
-            Num(nx_float),
-            Num(x1 - x0)
-        );
-    }
-    let grid =
-        MapGrid { nx: nx_float as usize, ny: a.ny as usize, x0_mm: x0, y0_mm: a.y0_mm, dx_mm: a.dx_mm, dy_mm: a.dy_mm };
-    let map = FrictionMap::extrude(&profile, grid)?;
+            Num(columns),
+            Num(span_mm)
+        ),
+        Err(e) => return Err(e.into()),
+    };
     write_friction_map(&map, &a.output, format)?;
     report_map(&map);
     eprintln!("wrote {}", a.output.display());
@@ -433,22 +428,8 @@ fn voltage(a: MapVoltageArgs) -> anyhow::Result<()> {
     for note in &notes {
         eprintln!("{note}");
     }
-    let (lo, hi) = min_max(&v.voltage_v);
-    eprintln!("method: {method}");
-    eprintln!(
-        "voltage map: {} x {} cells, {:.3} .. {:.3} V RMS, U_max = {} V",
-        v.grid.nx,
-        v.grid.ny,
-        lo,
-        hi,
-        Num(v.u_max_v)
-    );
-    if method == Method::Physical {
-        eprintln!(
-            "area below mu_HD (not renderable, 0 V): {:.2}%; clipped at U_max: {:.2}%",
-            100.0 * v.not_renderable_fraction,
-            100.0 * v.clipped_fraction
-        );
+    for line in v.summary_lines(method) {
+        eprintln!("{line}");
     }
     eprintln!("wrote {}", a.output.display());
     Ok(())
@@ -490,17 +471,7 @@ fn display_map(
     for note in notes {
         eprintln!("{note}");
     }
-    eprintln!(
-        "display map: {} x {} cells; band mu {:.4} .. {:.4}; below it (plate at a_max = {} um): {:.2}% of the area, \
-         above it (clipped): {:.2}%",
-        d.grid.nx,
-        d.grid.ny,
-        d.band_mu[0],
-        d.band_mu[1],
-        Num(d.a_max_um),
-        100.0 * d.below_fraction,
-        100.0 * d.above_fraction
-    );
+    eprintln!("{}", d.summary_line());
     eprintln!("wrote {}", a.output.display());
     Ok(())
 }
@@ -586,18 +557,8 @@ fn sample_path(a: SamplePathArgs) -> anyhow::Result<()> {
     let path = PlanarTrajectory::read_csv(std::io::BufReader::new(file), &name)?;
     let u = path.sample(&v.grid, &v.voltage_v);
     let output = crate::args::Output::new(a.output);
-    output.write(|w| {
-        writeln!(w, "# haptex map sample-path: voltage (V RMS) of {} along {}", a.voltage_map.display(), name)?;
-        path.write_csv_with(w, "voltage_v", &u)
-    })?;
-    let (lo, hi) = min_max(&u);
-    eprintln!(
-        "path: {} samples, {} s; voltage {:.3} .. {:.3} V RMS",
-        path.len(),
-        Num(path.t_s()[path.len() - 1] - path.t_s()[0]),
-        lo,
-        hi
-    );
+    output.write(|w| path.write_sampled_voltage_csv(w, &a.voltage_map.display().to_string(), &name, &u))?;
+    eprintln!("{}", path.sampled_voltage_summary(&u));
     if let Some(p) = output.path() {
         eprintln!("wrote {}", p.display());
     }
@@ -605,7 +566,6 @@ fn sample_path(a: SamplePathArgs) -> anyhow::Result<()> {
 }
 
 fn grating(a: GratingArgs) -> anyhow::Result<()> {
-    use haptex_core::database::Metadata;
     use haptex_core::map::Grating;
     let format = MapFormat::of(&a.output)?;
     let grid = MapGrid {
@@ -625,13 +585,9 @@ fn grating(a: GratingArgs) -> anyhow::Result<()> {
     g.validate()?;
     grid.validate("grating")?;
     let dir = a.db.clone().unwrap_or_else(super::db::default_db);
-    let flat = match a.source {
-        // The FE model's own flat-surface friction: its skin friction.
-        LineSource::Fe => haptex_fem::finger::FingerModel::default_model().contact.mu_skin,
-        LineSource::Cae => {
-            Metadata::read(&dir).with_context(|| format!("no FE database in {}", dir.display()))?.fe.flat_mu()
-        }
-    };
+    // The FE model's own flat-surface friction (its skin friction), or the
+    // database's.
+    let flat = haptex_fem::grating::flat_mu(a.source.into(), &dir)?;
     let across = Grating { angle_deg: 0.0, ..g };
     let mut maps = Vec::new();
     for grating in [g, across] {
@@ -801,46 +757,23 @@ fn compose(a: ComposeArgs) -> anyhow::Result<()> {
 /// its phase x0 (None where the line is flat): from an FE run (10 mm of
 /// slide, the paper's scenario) or the database's CAE.
 fn line_friction(g: &haptex_core::map::Grating, source: LineSource, db: &Path) -> anyhow::Result<Option<LineProfile>> {
-    let p = g.line_period_mm();
-    if !p.is_finite() {
-        return Ok(None);
-    }
-    match source {
-        LineSource::Fe => {
-            use haptex_fem::scenario::{self, Scenario};
-            use haptex_fem::surface::SurfaceShape;
-            let x0 = 5.0;
-            let mut scenario = Scenario::paper(SurfaceShape::Sine { x0, width: p, height: g.amplitude_mm });
-            scenario.velocity_mm_s = g.velocity_mm_s;
-            let result = scenario::run(&scenario, &mut |_| {})
-                .with_context(|| format!("the FE run of the line's sine (period {p:.4} mm) failed"))?;
-            let profile = result.profile.context("the FE run gave no profile")?;
-            Ok(Some((profile.x_mm().to_vec(), profile.mu().to_vec(), x0)))
-        }
-        LineSource::Cae => {
-            use haptex_core::database::{Metadata, Template, TemplateModel};
-            let metadata = Metadata::read(db).with_context(|| format!("no FE database in {}", db.display()))?;
-            let model = TemplateModel::load_with(db, &metadata, Template::Sine)?;
-            let [(w_lo, w_hi), (h_lo, h_hi), _] = model.input_ranges();
-            if p < w_lo || p > w_hi || g.amplitude_mm < h_lo || g.amplitude_mm > h_hi {
-                bail!(
-                    "the line's sine (period {p:.4} mm, amplitude {} mm) is outside the database's sine periods {} .. \
-                     {} mm and heights {} .. {} mm: use --source fe",
-                    Num(g.amplitude_mm),
-                    Num(w_lo),
-                    Num(w_hi),
-                    Num(h_lo),
-                    Num(h_hi)
-                );
-            }
-            let prediction = model.predict(0.0, p, g.amplitude_mm, g.velocity_mm_s)?;
-            Ok(Some((prediction.x_mm, prediction.mu, 0.0)))
-        }
+    use haptex_fem::grating::LineError;
+    match haptex_fem::grating::line_friction(g, source.into(), db) {
+        Err(e @ LineError::OutsideDatabase { .. }) => bail!("{e}: use --source fe"),
+        other => Ok(other?),
     }
 }
 
-/// A line's friction profile: positions, Ft/Fn, and the sine's phase x0.
-type LineProfile = (Vec<f64>, Vec<f64>, f64);
+use haptex_fem::grating::LineProfile;
+
+impl From<LineSource> for haptex_fem::grating::LineSource {
+    fn from(source: LineSource) -> Self {
+        match source {
+            LineSource::Fe => Self::Fe,
+            LineSource::Cae => Self::Cae,
+        }
+    }
+}
 
 #[derive(Debug, Clone, Copy, PartialEq, ValueEnum)]
 enum LineSource {
@@ -848,61 +781,16 @@ enum LineSource {
     Cae,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum MapFormat {
-    Csv,
-    Npy,
-}
-
-impl MapFormat {
-    fn of(path: &Path) -> anyhow::Result<Self> {
-        match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-            Some("csv") => Ok(MapFormat::Csv),
-            Some("npy") => Ok(MapFormat::Npy),
-            _ => bail!("{}: a map file is .csv or .npy (with its .npy.json sidecar)", path.display()),
-        }
-    }
-}
-
 fn write_friction_map(map: &FrictionMap, path: &Path, format: MapFormat) -> anyhow::Result<()> {
-    match format {
-        MapFormat::Csv => haptex_core::io::write_atomic(path, |w| map.write_csv(w))?,
-        MapFormat::Npy => write_npy_pair(path, &map.grid, &map.mu, "mu", None)?,
-    }
-    Ok(())
+    Ok(map.write_file(path, format)?)
 }
 
 fn read_friction_map(path: &Path) -> anyhow::Result<FrictionMap> {
-    Ok(match MapFormat::of(path)? {
-        MapFormat::Csv => {
-            let (grid, mu) = read_map_csv(path, &ranges::MU)?;
-            FrictionMap::new(grid, mu, &path.display().to_string())?
-        }
-        MapFormat::Npy => {
-            let (sidecar, mu) = read_npy_pair(path, "mu")?;
-            FrictionMap::new(sidecar.grid, mu, &path.display().to_string())?
-        }
-    })
+    Ok(FrictionMap::read_file(path)?)
 }
 
 pub(crate) fn read_voltage_map(path: &Path) -> anyhow::Result<VoltageMap> {
-    let (grid, voltage_v, u_max_v) = match MapFormat::of(path)? {
-        MapFormat::Csv => {
-            let (grid, v) = read_map_csv(path, &ranges::VOLTAGE_V)?;
-            (grid, v, f64::NAN)
-        }
-        MapFormat::Npy => {
-            let (sidecar, v) = read_npy_pair(path, "voltage_v")?;
-            (sidecar.grid, v, sidecar.u_max_v.unwrap_or(f64::NAN))
-        }
-    };
-    Ok(VoltageMap { grid, voltage_v, u_max_v, not_renderable_fraction: f64::NAN, clipped_fraction: f64::NAN })
-}
-
-fn read_map_csv(path: &Path, quantity: &ranges::Range) -> anyhow::Result<(MapGrid, Vec<f64>)> {
-    let name = path.display().to_string();
-    let file = std::fs::File::open(path).with_context(|| format!("cannot open {name}"))?;
-    Ok(read_grid_csv(std::io::BufReader::new(file), &name, quantity)?)
+    Ok(VoltageMap::read_file(path)?)
 }
 
 /// Reads a file of at most `limit` bytes.
@@ -924,43 +812,18 @@ fn sized_grid(size: &str, spacing: (f64, f64), origin: (f64, f64)) -> anyhow::Re
         .ok()
         .filter(|(w, h)| *w > 0.0 && *h > 0.0)
         .with_context(|| format!("--size-mm '{size}': expected W,H in mm, both positive"))?;
-    let (nx, ny) = ((w / spacing.0).floor() + 1.0, (h / spacing.1).floor() + 1.0);
-    if nx * ny > haptex_core::map::MAX_CELLS as f64 {
-        bail!(
+    let grid = MapGrid::covering(w, h, spacing, origin).with_context(|| {
+        format!(
             "--size-mm {size} at {} x {} mm cells: more than {} cells",
             Num(spacing.0),
             Num(spacing.1),
             haptex_core::map::MAX_CELLS
-        );
-    }
-    let grid = MapGrid {
-        nx: nx as usize,
-        ny: ny as usize,
-        x0_mm: origin.0,
-        y0_mm: origin.1,
-        dx_mm: spacing.0,
-        dy_mm: spacing.1,
-    };
+        )
+    })?;
     grid.validate("--size-mm")?;
     Ok(grid)
 }
 
 fn report_map(map: &FrictionMap) {
-    let g = &map.grid;
-    let (lo, hi) = min_max(&map.mu);
-    eprintln!(
-        "friction map: {} x {} cells, x {} .. {} mm, y {} .. {} mm, mu {:.4} .. {:.4}",
-        g.nx,
-        g.ny,
-        Num(g.x0_mm),
-        Num(g.x(g.nx - 1)),
-        Num(g.y0_mm),
-        Num(g.y(g.ny - 1)),
-        lo,
-        hi
-    );
-}
-
-fn min_max(v: &[f64]) -> (f64, f64) {
-    v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)))
+    eprintln!("{}", map.summary_line());
 }

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Optional, Tuple
 
-__all__ = ["CheckMetrics", "LibrarySample", "Regions", "Summary"]
+__all__ = ["CheckMetrics", "LibrarySample", "MapSummary", "Regions", "Summary"]
 
 
 @dataclass(frozen=True)
@@ -108,3 +108,41 @@ class CheckMetrics:
     detail_retained: Optional[float]
     k_fe_mm2_per_n: float
     contact_mm: float
+
+
+@dataclass(frozen=True)
+class MapSummary:
+    """What a voltage map (haptex.map_voltage) did, and where the display
+    could not follow, as fractions of the map's area.
+
+    display: "electrovibration", "ultrasonic" or "combined".
+    method: "physical (eq. 8)" or "normalized (eq. 9)".
+    shape: (ny, nx) cells.
+    voltage_range_v: lowest and highest voltage, V RMS (None without
+      electrovibration); amplitude_range_um: lowest and highest plate
+      amplitude, um peak (None without an ultrasonic plate).
+    u_max_v: U_max in V RMS (None without electrovibration); a_max_um: the
+      plate's a_max in um peak (None without a plate).
+    band_mu: the renderable band of felt friction (low, high) of an
+      ultrasonic or combined display (None for electrovibration alone).
+    below_band_fraction: fraction of the cells below what the display
+      renders (electrovibration: mu < mu_HD, 0 V; a plate: at a_max);
+      above_band_fraction: fraction above it (clipped at U_max). None for
+      eq. (9), which has neither.
+    text: what `haptex map voltage` prints about the map.
+    """
+
+    display: str
+    method: str
+    shape: Tuple[int, int]
+    voltage_range_v: Optional[Tuple[float, float]]
+    amplitude_range_um: Optional[Tuple[float, float]]
+    u_max_v: Optional[float]
+    a_max_um: Optional[float]
+    band_mu: Optional[Tuple[float, float]]
+    below_band_fraction: Optional[float]
+    above_band_fraction: Optional[float]
+    text: str = field(repr=False)
+
+    def __str__(self) -> str:
+        return self.text
