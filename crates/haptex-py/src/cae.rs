@@ -117,6 +117,7 @@ impl Cae {
 impl Cae {
     #[new]
     #[pyo3(signature = (inputs, outputs, *, width = None, widths = None, input_names = None, output_names = None, memory_budget_mib = 2048))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         inputs: Matrix<'_>,

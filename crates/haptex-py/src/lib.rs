@@ -13,10 +13,10 @@ mod convert;
 mod database;
 mod design;
 mod errors;
-mod library;
-mod playback;
 mod fem;
+mod library;
 mod maps;
+mod playback;
 mod profile;
 
 #[pymodule]

@@ -4,7 +4,7 @@ haptex): what editors and type checkers see. Units are in the names."""
 from __future__ import annotations
 
 import os
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union, final
 
 import numpy
 import numpy as np
@@ -26,14 +26,16 @@ _Progress = Union[bool, None, Callable[[int, int], Any]]
 _ProfileArg = Union["Profile", _Path, Tuple[_ArrayLike, _ArrayLike], Any]
 
 __version__: str
+__all__ = ["Cae", "CheckResult", "Database", "Design", "DriveSignal", "FrictionMap", "Library", "LooCase", "PathSamples", "Prediction", "Profile", "Simulation", "VoltageMap", "__version__", "_bench_rust_predict", "_bench_rust_predict_batch", "cae_loo", "check", "compensate", "map_compose", "map_from_image", "map_from_profile", "map_grating", "map_sample_path", "map_voltage", "play", "predict", "read_wav", "simulate", "voltage"]
 
 # --- friction profiles and design (haptex voltage) ---
 
+@final
 class Profile:
     """A friction profile: x in mm (strictly increasing), mu = Ft/Fn, and
     optionally the normal force Fn in N."""
 
-    def __init__(self, x_mm: _ArrayLike, mu: _ArrayLike) -> None: ...
+    def __new__(cls, x_mm: _ArrayLike, mu: _ArrayLike) -> Profile: ...
     @staticmethod
     def from_forces(x_mm: _ArrayLike, ft_n: _ArrayLike, fn_n: _ArrayLike) -> Profile: ...
     @staticmethod
@@ -47,6 +49,7 @@ class Profile:
     def fn_n(self) -> Optional[_F64]: ...
     def __len__(self) -> int: ...
 
+@final
 class Design:
     """A display's drive for a friction profile (haptex.voltage)."""
 
@@ -97,12 +100,13 @@ def voltage(
 
 # --- the conditional average estimator and the FE database ---
 
+@final
 class Cae:
     """The conditional average estimator (paper eqs. 10-12) over a model
     matrix: inputs (N x D), outputs (N x M)."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         inputs: _ArrayLike,
         outputs: _ArrayLike,
         *,
@@ -111,7 +115,7 @@ class Cae:
         input_names: Optional[Sequence[str]] = None,
         output_names: Optional[Sequence[str]] = None,
         memory_budget_mib: int = 2048,
-    ) -> None: ...
+    ) -> Cae: ...
     @staticmethod
     def read_csv(
         path: _Path,
@@ -142,10 +146,11 @@ def cae_loo(
     constant: bool = False,
     width: Optional[float] = None,
     widths: Optional[Tuple[float, float]] = None,
-    range: Tuple[float, float] = (0.005, 2.0),
+    range: Tuple[float, float] = ...,  # (0.005, 2.0)
     memory_budget_mib: int = 2048,
 ) -> Dict[str, Any]: ...
 
+@final
 class Prediction:
     """A friction profile predicted from the FE database (haptex predict)."""
 
@@ -165,6 +170,7 @@ class Prediction:
     def to_csv(self) -> str: ...
     def profile(self) -> Profile: ...
 
+@final
 class LooCase:
     """One database case against the CAE (haptex db loo --surface)."""
 
@@ -188,10 +194,11 @@ class LooCase:
     def rms_full(self) -> float: ...
     def write_csv(self, path: _Path) -> None: ...
 
+@final
 class Database:
     """The FE database of the bump, edge and sine templates."""
 
-    def __init__(self, db: Optional[_Path] = None) -> None: ...
+    def __new__(cls, db: Optional[_Path] = None) -> Database: ...
     def predict(
         self, surface: str, x0: float, width: float, height: float, velocity: float = 20.0
     ) -> Prediction: ...
@@ -202,6 +209,8 @@ class Database:
     @property
     def flat_mu(self) -> float: ...
 
+def _bench_rust_predict(cae: Cae, query: _ArrayLike, repeats: int) -> float: ...
+def _bench_rust_predict_batch(cae: Cae, queries: _ArrayLike, repeats: int) -> float: ...
 def predict(
     surface: str,
     x0: float,
@@ -214,6 +223,7 @@ def predict(
 # --- playback and library ---
 
 
+@final
 class DriveSignal:
     """A rendered drive signal (haptex.play) with the scale its WAV carries."""
 
@@ -273,10 +283,11 @@ def play(
 
 def read_wav(path: _Path) -> Dict[str, Any]: ...
 
+@final
 class Library:
     """A texture library (haptex library): materials, strokes, profiles."""
 
-    def __init__(self, path: Optional[_Path] = None) -> None: ...
+    def __new__(cls, path: Optional[_Path] = None) -> Library: ...
     @property
     def path(self) -> os.PathLike[str]: ...
     def materials(self) -> List[Dict[str, Any]]: ...
@@ -319,6 +330,7 @@ from ._types import LibrarySample
 
 
 
+@final
 class Simulation:
     description: str
     x_mm: Optional[_F64]
@@ -333,6 +345,7 @@ class Simulation:
     def write_history(self, path: _Path) -> None: ...
     def write_png(self, path: _Path) -> None: ...
 
+@final
 class CheckResult:
     header: str
     lines: List[str]
@@ -430,18 +443,19 @@ def compensate(
 _Floats1 = Union[npt.NDArray[np.float64], Sequence[float]]
 _Calibration = Union[_Path, Tuple[_Floats1, _Floats1]]
 
+@final
 class FrictionMap:
     """mu over a regular grid: mu[j, i] at x = x0_mm + i dx_mm, y = y0_mm + j dy_mm (mm)."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         mu: npt.ArrayLike,
         *,
         dx_mm: float,
         dy_mm: float,
         x0_mm: float = 0.0,
         y0_mm: float = 0.0,
-    ) -> None: ...
+    ) -> FrictionMap: ...
     @staticmethod
     def read(path: _Path) -> FrictionMap: ...
     def write(self, path: _Path) -> None: ...
@@ -465,6 +479,7 @@ class FrictionMap:
     @property
     def summary(self) -> str: ...
 
+@final
 class VoltageMap:
     """A display's drive over a map's grid: voltage_v (V RMS), amplitude_um (um peak), (ny, nx)."""
 
@@ -483,6 +498,7 @@ class VoltageMap:
     @property
     def shape(self) -> Tuple[int, int]: ...
 
+@final
 class PathSamples:
     """The voltage (V RMS) along a finger path: 1-D arrays t_s, x_mm, y_mm, voltage_v."""
 
