@@ -17,22 +17,26 @@ fi
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/haptex-python.XXXXXX")
 trap 'rm -rf "$work"' EXIT
-# maturin in a venv of its own, so that the test environment holds only the
-# wheel and what the tests import.
-"$PYTHON" -m venv "$work/tools"
-"$work/tools/bin/pip" install --quiet --disable-pip-version-check "maturin==$MATURIN_VERSION"
+# One fresh environment: maturin, then the wheel and what the tests import
+# (--no-compile: modules are byte-compiled when first imported, not all of
+# NumPy, Matplotlib and mypy at install time).
 "$PYTHON" -m venv "$work/env"
-"$work/env/bin/pip" install --quiet --disable-pip-version-check -r crates/haptex-py/pytests/requirements.txt
+"$work/env/bin/pip" install --quiet --disable-pip-version-check --no-compile "maturin==$MATURIN_VERSION" \
+    -r crates/haptex-py/pytests/requirements.txt
 
-# The ci profile of scripts/test.sh: the wheel reuses what cargo test built.
+# The wheel is built in scripts/test.sh's ci profile (optimised, as the tests
+# are). It shares cargo test's compiled dependencies only where their
+# features agree: the workspace's build unifies features (serde's alloc,
+# serde_json's raw_value, ...) that the module's graph alone does not, so
+# haptex-core and haptex-fem compile again for it (~2 min on 2 cores).
 # HAPTEX_BIN given (scripts/test.sh: the binary its cargo test built, with
 # its features) is the command line the parity tests run; else it is built.
 if [ -z "${HAPTEX_BIN:-}" ]; then
     cargo build --profile ci --locked -p haptex-cli --bin haptex
     HAPTEX_BIN="$PWD/target/ci/haptex"
 fi
-"$work/tools/bin/maturin" build --quiet --profile ci --locked -m crates/haptex-py/Cargo.toml -o "$work/wheels"
-"$work/env/bin/pip" install --quiet --disable-pip-version-check --no-deps "$work"/wheels/haptex-*.whl
+"$work/env/bin/maturin" build --quiet --profile ci --locked -m crates/haptex-py/Cargo.toml -o "$work/wheels"
+"$work/env/bin/pip" install --quiet --disable-pip-version-check --no-deps --no-compile "$work"/wheels/haptex-*.whl
 
 # From outside the source tree: `import haptex` is the installed wheel.
 HAPTEX_BIN="$HAPTEX_BIN" "$work/env/bin/python" -m pytest -q -p no:cacheprovider \
