@@ -43,22 +43,6 @@ pub struct Database {
 }
 
 impl Database {
-    pub fn open(db: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
-        Self::new(db)
-    }
-
-    pub fn predict_one(
-        &mut self,
-        py: Python<'_>,
-        surface: &str,
-        x0: f64,
-        width: f64,
-        height: f64,
-        velocity: f64,
-    ) -> PyResult<Prediction> {
-        self.predict(py, surface, x0, width, height, velocity)
-    }
-
     /// Loads a template's model if it is not yet.
     fn load(&mut self, template: Template) -> PyResult<()> {
         if !self.models.contains_key(&template) {
@@ -73,7 +57,7 @@ impl Database {
 impl Database {
     #[new]
     #[pyo3(signature = (db = None))]
-    fn new(db: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+    pub fn new(db: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
         let dir = match db {
             Some(db) => path("db", db)?,
             None => default_db(),
@@ -99,7 +83,7 @@ impl Database {
     /// for bit. Warns (haptex.ExtrapolationWarning) as the command line
     /// does.
     #[pyo3(signature = (surface, x0, width, height, velocity = 20.0))]
-    fn predict(
+    pub fn predict(
         &mut self,
         py: Python<'_>,
         surface: &str,
@@ -288,4 +272,21 @@ impl LooCase {
         let path = crate::convert::path("path", path)?;
         haptex_core::io::write_atomic(&path, |w| self.case.write_csv(w)).or_raise()
     }
+}
+
+/// The friction profile of a bump, edge or sine from the shipped FE
+/// database (`haptex predict`): haptex.Database(db).predict(...), the
+/// database opened for this call. Keep a haptex.Database to predict many.
+#[pyfunction]
+#[pyo3(signature = (surface, x0, width, height, velocity = 20.0, db = None))]
+pub fn predict(
+    py: Python<'_>,
+    surface: &str,
+    x0: f64,
+    width: f64,
+    height: f64,
+    velocity: f64,
+    db: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Prediction> {
+    Database::new(db)?.predict(py, surface, x0, width, height, velocity)
 }

@@ -326,6 +326,18 @@ impl DisplayChoice<'_> {
         }
     }
 
+    /// The plate and the combined display's strategy of a design with
+    /// `method` on the ultrasonic or combined display (eq. 9 is refused:
+    /// it is the electrovibration display's).
+    pub fn plate(&self, method: Method) -> PyResult<(UltrasonicDevice, Option<Strategy>)> {
+        if method != Method::Physical {
+            return Err(input(
+                "method=\"normalized\" (eq. 9) is for the electrovibration display: drop it with display=",
+            ));
+        }
+        Ok((self.ultrasonic()?, self.strategy()?))
+    }
+
     /// The combined display's strategy (None for the other displays).
     pub fn strategy(&self) -> PyResult<Option<Strategy>> {
         let kind = self.kind()?;
@@ -428,13 +440,8 @@ pub fn voltage(
         });
         Designed::Electrovibration(voltage.or_raise()?)
     } else {
-        if method != Method::Physical {
-            return Err(input(
-                "method=\"normalized\" (eq. 9) is for the electrovibration display: drop it with display=",
-            ));
-        }
-        let ultrasonic = choice.ultrasonic()?;
-        let channels = match choice.strategy()? {
+        let (ultrasonic, strategy) = choice.plate(method)?;
+        let channels = match strategy {
             Some(strategy) => Channels::Combined(&ultrasonic, strategy),
             None => Channels::Ultrasonic(&ultrasonic),
         };

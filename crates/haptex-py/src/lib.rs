@@ -32,7 +32,7 @@ fn _haptex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<database::Database>()?;
     m.add_class::<database::Prediction>()?;
     m.add_class::<database::LooCase>()?;
-    m.add_function(wrap_pyfunction!(predict, m)?)?;
+    m.add_function(wrap_pyfunction!(database::predict, m)?)?;
     m.add_class::<playback::Signal>()?;
     m.add_function(wrap_pyfunction!(playback::play, m)?)?;
     m.add_function(wrap_pyfunction!(playback::read_wav, m)?)?;
@@ -52,21 +52,4 @@ fn _haptex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(maps::map_grating, m)?)?;
     m.add_function(wrap_pyfunction!(maps::map_compose, m)?)?;
     Ok(())
-}
-
-/// The friction profile of a bump, edge or sine from the shipped FE
-/// database (`haptex predict`): haptex.Database(db).predict(...), the
-/// database opened for this call. Keep a haptex.Database to predict many.
-#[pyfunction]
-#[pyo3(signature = (surface, x0, width, height, velocity = 20.0, db = None))]
-fn predict(
-    py: Python<'_>,
-    surface: &str,
-    x0: f64,
-    width: f64,
-    height: f64,
-    velocity: f64,
-    db: Option<&Bound<'_, PyAny>>,
-) -> PyResult<database::Prediction> {
-    database::Database::open(db)?.predict_one(py, surface, x0, width, height, velocity)
 }

@@ -536,13 +536,8 @@ pub fn map_voltage(
         choice.refuse_plate_args()?;
         Drive::Electrovibration(py.detach(|| friction.voltages(&device, method)).or_raise()?, Some(method))
     } else {
-        if method != Method::Physical {
-            return Err(input(
-                "method=\"normalized\" (eq. 9) is for the electrovibration display: drop it with display=",
-            ));
-        }
-        let ultrasonic = choice.ultrasonic()?;
-        let channels = match choice.strategy()? {
+        let (ultrasonic, strategy) = choice.plate(method)?;
+        let channels = match strategy {
             Some(strategy) => Channels::Combined(&ultrasonic, strategy),
             None => Channels::Ultrasonic(&ultrasonic),
         };
