@@ -466,32 +466,25 @@ impl TemplateModel {
         }
     }
 
-    /// Writes a prediction as `haptex predict` does: comments saying what
-    /// was predicted, where it comes from ([`Self::describe`]), the
-    /// database's flat-surface friction and the warning if any, then
-    /// `x_mm,mu` in full precision.
-    pub fn write_prediction_csv(
+    /// The comment lines (without `# `) of a prediction's file, as `haptex
+    /// predict` writes them ([`write_prediction_csv`]): what was predicted,
+    /// where it comes from (`source`, [`Self::describe`]'s), the database's
+    /// flat-surface friction and the `warning` if any ([`Self::warning`]'s).
+    pub fn prediction_comments(
         &self,
-        w: &mut dyn std::io::Write,
         metadata: &Metadata,
         x0_mm: f64,
         query: &[f64; 3],
-        prediction: &Prediction,
-    ) -> std::io::Result<()> {
-        let entry = metadata.entry(self.template).ok_or_else(|| {
-            std::io::Error::other(format!("the database's metadata has no {} entry", self.template.name()))
-        })?;
-        writeln!(w, "# haptex predict: {}", self.template.describe_query(x0_mm, query))?;
-        writeln!(w, "# {}", self.describe(query, prediction, entry))?;
-        writeln!(w, "# {}", metadata.fe.flat_mu_comment())?;
-        if let Some(warning) = self.warning(query, prediction.fe_row, &prediction.diagnostics) {
-            writeln!(w, "# warning: {warning}")?;
-        }
-        writeln!(w, "x_mm,mu")?;
-        for (x, mu) in prediction.x_mm.iter().zip(&prediction.mu) {
-            crate::io::write_csv_row(w, &[*x, *mu])?;
-        }
-        Ok(())
+        source: &str,
+        warning: Option<&str>,
+    ) -> Vec<String> {
+        let mut comments = vec![
+            format!("haptex predict: {}", self.template.describe_query(x0_mm, query)),
+            source.to_string(),
+            metadata.fe.flat_mu_comment(),
+        ];
+        comments.extend(warning.map(|w| format!("warning: {w}")));
+        comments
     }
 
     /// The warning for a query (r_w, r_h, velocity) and its prediction, if
@@ -567,6 +560,25 @@ pub fn utc_now_rfc3339() -> String {
     let month = if mp < 10 { mp + 3 } else { mp - 9 };
     let year = yoe + era * 400 + i64::from(month <= 2);
     format!("{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z", rest / 3600, rest % 3600 / 60, rest % 60)
+}
+
+/// Writes a predicted profile as `haptex predict` does: `comments` (from
+/// [`TemplateModel::prediction_comments`]) as `# ` lines, then `x_mm,mu`
+/// in full precision.
+pub fn write_prediction_csv(
+    w: &mut dyn std::io::Write,
+    comments: &[String],
+    x_mm: &[f64],
+    mu: &[f64],
+) -> std::io::Result<()> {
+    for comment in comments {
+        writeln!(w, "# {comment}")?;
+    }
+    writeln!(w, "x_mm,mu")?;
+    for (x, mu) in x_mm.iter().zip(mu) {
+        crate::io::write_csv_row(w, &[*x, *mu])?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

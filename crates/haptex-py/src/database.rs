@@ -5,10 +5,10 @@
 use std::collections::HashMap;
 use std::path::PathBuf;
 
-use haptex_core::database::{Metadata, Prediction as CorePrediction, Template, TemplateModel};
+use haptex_core::database::{Metadata, Prediction as CorePrediction, Template, TemplateModel, write_prediction_csv};
 use haptex_fem::loo_case::LooCase as CoreLooCase;
 use haptex_fem::sweep::Run;
-use numpy::{PyArray1, PyArrayMethods};
+use numpy::PyArray1;
 use pyo3::prelude::*;
 
 use crate::convert::{array, choice, json_object, path};
@@ -102,8 +102,6 @@ impl Database {
         self.load(template)?;
         let model = &self.models[&template];
         let prediction = model.predict(x0, width, height, velocity).or_raise()?;
-        let mut csv = Vec::new();
-        model.write_prediction_csv(&mut csv, &self.metadata, x0, &query, &prediction).or_raise()?;
         let entry = self.metadata.entry(template).ok_or_else(|| input("the database has no such template"))?;
         let source = model.describe(&query, &prediction, entry);
         let warning = model.warning(&query, prediction.fe_row, &prediction.diagnostics);
@@ -111,15 +109,17 @@ impl Database {
             let class = py.import("haptex._errors")?.getattr("ExtrapolationWarning")?;
             PyErr::warn(py, &class, &std::ffi::CString::new(text.as_str())?, 1)?;
         }
+        let comments = model.prediction_comments(&self.metadata, x0, &query, &source, warning.as_deref());
         let CorePrediction { x_mm, mu, fe_row, .. } = prediction;
         Ok(Prediction {
-            x_mm: array(py, x_mm),
-            mu: array(py, mu),
+            x_mm: array(py, x_mm.clone()),
+            mu: array(py, mu.clone()),
             fe_row,
             source,
             warning,
             flat_mu: self.metadata.fe.flat_mu(),
-            csv: String::from_utf8(csv).map_err(|e| input(format!("internal: {e}")))?,
+            comments,
+            points: (x_mm, mu),
         })
     }
 
@@ -180,7 +180,17 @@ pub struct Prediction {
     warning: Option<String>,
     #[pyo3(get)]
     flat_mu: f64,
-    csv: String,
+    /// The file's comment lines, and the points as predicted (the arrays
+    /// handed out are the caller's to change): the CSV is written from
+    /// these when asked for, not at every prediction.
+    comments: Vec<String>,
+    points: (Vec<f64>, Vec<f64>),
+}
+
+impl Prediction {
+    fn write(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        write_prediction_csv(w, &self.comments, &self.points.0, &self.points.1)
+    }
 }
 
 #[pymethods]
@@ -188,19 +198,19 @@ impl Prediction {
     /// Writes the profile as `haptex predict -o` does, atomically.
     fn write_csv(&self, path: &Bound<'_, PyAny>) -> PyResult<()> {
         let path = crate::convert::path("path", path)?;
-        haptex_core::io::write_atomic(&path, |w| w.write_all(self.csv.as_bytes())).or_raise()
+        haptex_core::io::write_atomic(&path, |w| self.write(w)).or_raise()
     }
 
     /// The CSV `write_csv` writes, as a str.
-    fn to_csv(&self) -> String {
-        self.csv.clone()
+    fn to_csv(&self) -> PyResult<String> {
+        let mut bytes = Vec::new();
+        self.write(&mut bytes).or_raise()?;
+        String::from_utf8(bytes).map_err(|e| input(format!("internal: {e}")))
     }
 
     /// The profile as a haptex.Profile (for haptex.voltage).
-    fn profile(&self, py: Python<'_>) -> PyResult<crate::profile::Profile> {
-        let internal = |e: numpy::AsSliceError| input(format!("internal: {e}"));
-        let x = self.x_mm.bind(py).to_vec().map_err(internal)?;
-        let mu = self.mu.bind(py).to_vec().map_err(internal)?;
+    fn profile(&self) -> PyResult<crate::profile::Profile> {
+        let (x, mu) = self.points.clone();
         Ok(crate::profile::Profile { inner: haptex_core::FrictionProfile::new(x, mu).or_raise()? })
     }
 

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-use haptex_core::database::{Metadata, Template, TemplateModel};
+use haptex_core::database::{Metadata, Template, TemplateModel, write_prediction_csv};
 
 use crate::args::{Output, positive};
 
@@ -83,8 +83,10 @@ pub fn run(args: PredictArgs) -> anyhow::Result<()> {
     let entry = metadata.entry(template).expect("the model was loaded from this entry");
     let source = model.describe(&query, &prediction, entry);
     let warning = model.warning(&query, prediction.fe_row, &prediction.diagnostics);
-    Output::new(args.output.clone())
-        .write(|w| model.write_prediction_csv(w, &metadata, args.x0, &query, &prediction))?;
+    Output::new(args.output.clone()).write(|w| {
+        let comments = model.prediction_comments(&metadata, args.x0, &query, &source, warning.as_deref());
+        write_prediction_csv(w, &comments, &prediction.x_mm, &prediction.mu)
+    })?;
     if !args.quiet {
         eprintln!("{source}");
         if let Some(warning) = warning {
