@@ -25,10 +25,11 @@ trap 'rm -rf "$work"' EXIT
     -r crates/haptex-py/pytests/requirements.txt
 
 # The wheel is built in scripts/test.sh's ci profile (optimised, as the tests
-# are). It shares cargo test's compiled dependencies only where their
-# features agree: the workspace's build unifies features (serde's alloc,
-# serde_json's raw_value, ...) that the module's graph alone does not, so
-# haptex-core and haptex-fem compile again for it (~2 min on 2 cores).
+# are), reusing cargo test's compiled dependencies: crates/haptex-workspace-hack
+# gives the module's build the features the test build unifies. Where they
+# have drifted apart, this says which crates compile twice (a slower build,
+# not a wrong one). HAPTEX_FEATURES: the test build's extra cargo flags.
+bash scripts/check-feature-unification.sh ${HAPTEX_FEATURES:-} || true
 # HAPTEX_BIN given (scripts/test.sh: the binary its cargo test built, with
 # its features) is the command line the parity tests run; else it is built.
 if [ -z "${HAPTEX_BIN:-}" ]; then

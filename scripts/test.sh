@@ -129,7 +129,7 @@ if ! python3 -c 'import ensurepip, venv' >/dev/null 2>&1 && can_apt; then
     apt_install --no-install-recommends python3 python3-venv || true
 fi
 if python3 -c 'import ensurepip, venv, sys; assert sys.version_info >= (3, 9)' >/dev/null 2>&1; then
-    HAPTEX_BIN="$PWD/target/ci/haptex" bash scripts/test-python.sh || status=$?
+    HAPTEX_BIN="$PWD/target/ci/haptex" HAPTEX_FEATURES="${LIVE_FEATURE[*]}" bash scripts/test-python.sh || status=$?
 else
     echo "scripts/test.sh: FAILING: the Python package's tests (scripts/test-python.sh) need CPython 3.9 or" \
         "later with the venv module, which is missing and could not be installed (as root: apt-get install" \
