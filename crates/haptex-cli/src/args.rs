@@ -204,8 +204,6 @@ pub fn carrier_of(shape: Option<CarrierArg>, frequency_hz: Option<f64>) -> hapte
     }
 }
 
-pub use haptex_core::frequency::carrier_note;
-
 #[derive(Debug, Clone, Copy, PartialEq, clap::ValueEnum)]
 pub enum ForceModelArg {
     Eq3,
@@ -317,7 +315,7 @@ impl DisplayArgs {
     ) -> anyhow::Result<haptex_core::ultrasonic::UltrasonicDevice> {
         use haptex_core::ultrasonic::{Calibration, UltrasonicDevice};
         if let Some(file) = device_file {
-            return file.ultrasonic(self.a_max_um);
+            return Ok(file.ultrasonic(self.a_max_um)?);
         }
         Ok(match &self.ultrasonic_calibration {
             Some(path) => UltrasonicDevice::calibrated(Calibration::read_csv_file(path)?, self.a_max_um)?,
@@ -374,7 +372,7 @@ pub struct DeviceFileArgs {
 impl DeviceFileArgs {
     /// The device file, read and checked, if one was given.
     pub fn read(&self) -> anyhow::Result<Option<DesignDevice>> {
-        self.device_file.as_deref().map(DesignDevice::read).transpose()
+        self.device_file.as_deref().map(read_device_file).transpose()
     }
 }
 
@@ -399,159 +397,40 @@ pub struct DeviceFileLongArgs {
 impl DeviceFileLongArgs {
     /// The device file, read and checked, if one was given.
     pub fn read(&self) -> anyhow::Result<Option<DesignDevice>> {
-        self.device_file.as_deref().map(DesignDevice::read).transpose()
+        self.device_file.as_deref().map(read_device_file).transpose()
     }
 }
 
-/// A device file read for a design: its constants and the SHA-256 of its
-/// bytes, which every output designed with it records.
-#[derive(Debug, Clone)]
-pub struct DesignDevice {
-    pub file: haptex_core::calibration::device_file::DeviceFile,
-    /// SHA-256 of the file's bytes (hex).
-    pub sha256: String,
+/// A device file read for a design (haptex-core's, shared with the Python
+/// package; its messages name this command line's flags).
+pub use haptex_core::calibration::design_device::DesignDevice;
+
+/// Reads and checks the device file at `path`.
+pub fn read_device_file(path: &Path) -> anyhow::Result<DesignDevice> {
+    Ok(DesignDevice::read(path, haptex_core::calibration::design_device::ArgNames::CLI)?)
 }
 
-/// The words of the comment line a design made with a device file
-/// carries, before the file's SHA-256 (read back by `haptex play` and
-/// `haptex live`).
-pub const DEVICE_SHA256_MARK: &str = haptex_core::signal::play::DEVICE_SHA256_MARK;
-
-impl DesignDevice {
-    /// Reads and checks the device file at `path`; the hash is of the bytes
-    /// parsed.
-    pub fn read(path: &Path) -> anyhow::Result<Self> {
-        use haptex_core::calibration::device_file::{DeviceFile, MAX_FILE_BYTES};
-        let name = path.display().to_string();
-        let bytes = haptex_core::io::read_file_bounded(path, MAX_FILE_BYTES)
-            .map_err(|e| anyhow::anyhow!("device file {name}: {e}"))?;
-        let text =
-            std::str::from_utf8(&bytes).map_err(|_| anyhow::anyhow!("{name}: not UTF-8 text, not a device file"))?;
-        let file = DeviceFile::from_toml(text, &name)?;
-        Ok(Self { file, sha256: haptex_core::io::sha256_hex(&bytes) })
-    }
-
-    /// The electrovibration device for a design played on `carrier`, with
-    /// U_max the file's or the lower `--u-max` given.
-    pub fn device(
-        &self,
-        carrier: &haptex_core::signal::Carrier,
-        u_max_given: Option<f64>,
-    ) -> anyhow::Result<haptex_core::electrovibration::Device> {
-        let mut device = self.file.device(carrier)?;
-        device.u_max_v = self.u_max_v(u_max_given)?;
-        Ok(device)
-    }
-
-    /// U_max: the file's, or a lower `--u-max`; a higher one is refused
-    /// (the amplifier gives no more than the file states).
-    pub fn u_max_v(&self, given: Option<f64>) -> anyhow::Result<f64> {
-        let stated = self.file.u_max_v;
-        match given {
-            Some(u) if u > stated => anyhow::bail!(
-                "--u-max {} is above the U_max = {} V RMS of device file {}: the display gives at most that; give \
-                 at most {} (a lower U_max is allowed), or drop --u-max",
-                haptex_core::num::Num(u),
-                haptex_core::num::Num(stated),
-                self.file.path,
-                haptex_core::num::Num(stated)
-            ),
-            Some(u) => Ok(u),
-            None => Ok(stated),
-        }
-    }
-
-    /// The file's ultrasonic plate, a_max the file's or a lower
-    /// `--a-max-um` (a higher one is refused).
-    pub fn ultrasonic(&self, a_max_given: Option<f64>) -> anyhow::Result<haptex_core::ultrasonic::UltrasonicDevice> {
-        let path = &self.file.path;
-        let Some(section) = &self.file.ultrasonic else {
-            anyhow::bail!(
-                "device file {path} has no ultrasonic plate (its measurements did not calibrate rho(a)): design for \
-                 --display electrovibration, or calibrate the plate"
-            );
-        };
-        let mut file = self.file.clone();
-        if let Some(a) = a_max_given {
-            if a > section.a_max_um {
-                anyhow::bail!(
-                    "--a-max-um {} is above the a_max = {} um of device file {path}: give at most that, or drop \
-                     --a-max-um",
-                    haptex_core::num::Num(a),
-                    haptex_core::num::Num(section.a_max_um)
-                );
-            }
-            if let Some(u) = file.ultrasonic.as_mut() {
-                u.a_max_um = a;
-            }
-        }
-        let device = file.ultrasonic_device().map_err(|e| anyhow::anyhow!("device file {path}: {e}"))?;
-        device.ok_or_else(|| anyhow::anyhow!("device file {path} has no ultrasonic plate"))
-    }
-
-    /// The comment every output designed with the file carries (without
-    /// `# `): what the file is, and the SHA-256 of its bytes.
-    pub fn comment(&self) -> String {
-        format!("designed with {}; {DEVICE_SHA256_MARK}{}", self.file.describe(), self.sha256)
-    }
-
-    /// The file as a JSON provenance record (WAV and NPY sidecars).
-    pub fn provenance(&self) -> serde_json::Value {
-        serde_json::json!({
-            "path": self.file.path,
-            "sha256": self.sha256,
-            "describe": self.file.describe(),
-        })
-    }
-
-    /// The web application's default device (`haptex serve --device-file`,
-    /// `haptex recipe run`): the file's device on the default carrier (sine
-    /// 1000 Hz, the page's playback default), the circuit model's gain on
-    /// it folded into k (the API's device has no gain: Fe is proportional
-    /// to k G either way).
-    pub fn server_default(&self) -> anyhow::Result<haptex_server::params::DefaultDevice> {
-        use haptex_core::signal::Carrier;
-        use haptex_server::params::{DefaultDevice, DeviceFileSource};
-        let carrier = Carrier::DEFAULT;
-        let mut device = self.file.device(&carrier)?;
-        device.contact.k_mm2_per_n = ranges::K_MM2_PER_N
-            .check(device.contact.k_mm2_per_n * device.force_gain)
-            .map_err(|e| anyhow::anyhow!("device file {}: k G on {}: {e}", self.file.path, carrier_name(&carrier)))?;
-        device.force_gain = 1.0;
-        Ok(DefaultDevice {
-            device,
-            file: Some(DeviceFileSource {
-                path: self.file.path.clone(),
-                sha256: self.sha256.clone(),
-                describe: self.file.describe(),
-                carrier: carrier_name(&carrier),
-            }),
-        })
-    }
-
-    /// Refuses a design whose comments say it was made with another device
-    /// file (another SHA-256) than this one.
-    pub fn check_design(&self, comments: &[String], design: &Path) -> anyhow::Result<()> {
-        if let Some(stated) = stated_device_sha256(comments)
-            && stated != self.sha256
-        {
-            anyhow::bail!(
-                "{} was designed with a device file of SHA-256 {stated}, and device file {} has SHA-256 {}: design it \
-                 again with this device file, or play it with the one it was designed with",
-                design.display(),
-                self.file.path,
-                self.sha256
-            );
-        }
-        Ok(())
-    }
-}
-
-/// The SHA-256 of the device file a design's comment says it was made
-/// with (`...; device file sha256 HEX`).
-pub fn stated_device_sha256(comments: &[String]) -> Option<String> {
-    comments.iter().find_map(|line| {
-        let (_, rest) = line.split_once(DEVICE_SHA256_MARK)?;
-        Some(rest.split_whitespace().next().unwrap_or("").to_string())
+/// The web application's default device (`haptex serve --device-file`,
+/// `haptex recipe run`): the file's device on the default carrier (sine
+/// 1000 Hz, the page's playback default), the circuit model's gain on it
+/// folded into k (the API's device has no gain: Fe is proportional to k G
+/// either way).
+pub fn server_default(file: &DesignDevice) -> anyhow::Result<haptex_server::params::DefaultDevice> {
+    use haptex_core::signal::Carrier;
+    use haptex_server::params::{DefaultDevice, DeviceFileSource};
+    let carrier = Carrier::DEFAULT;
+    let mut device = file.file.device(&carrier)?;
+    device.contact.k_mm2_per_n = ranges::K_MM2_PER_N
+        .check(device.contact.k_mm2_per_n * device.force_gain)
+        .map_err(|e| anyhow::anyhow!("device file {}: k G on {}: {e}", file.file.path, carrier_name(&carrier)))?;
+    device.force_gain = 1.0;
+    Ok(DefaultDevice {
+        device,
+        file: Some(DeviceFileSource {
+            path: file.file.path.clone(),
+            sha256: file.sha256.clone(),
+            describe: file.file.describe(),
+            carrier: carrier_name(&carrier),
+        }),
     })
 }

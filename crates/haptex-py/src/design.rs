@@ -2,6 +2,7 @@
 //! `haptex voltage` computes it (paper eqs. 3-9; the ultrasonic and
 //! combined displays of docs/physics.md).
 
+use haptex_core::calibration::design_device::{ArgNames, DesignDevice};
 use haptex_core::combined::{Channels, DisplayProfile, Strategy, map_display};
 use haptex_core::electrovibration::{
     ContactArea, Device, LayerStack, Method, VoltageProfile, map_profile, map_profile_relative,
@@ -50,6 +51,9 @@ pub struct Design {
     /// force model and the carrier a circuit design is for.
     #[pyo3(get)]
     notes: Vec<String>,
+    /// The device file it was designed with (path, SHA-256, what it is),
+    /// for the JSON record as `haptex voltage --device` writes it.
+    device_file: Option<serde_json::Value>,
     #[pyo3(get)]
     x_mm: Py<PyArray1<f64>>,
     #[pyo3(get)]
@@ -79,12 +83,19 @@ impl Design {
         String::from_utf8(bytes).map_err(|e| input(format!("internal: {e}")))
     }
 
-    /// The design as `haptex voltage --format json` writes it, as a dict.
+    /// The design as `haptex voltage --format json` writes it, as a dict
+    /// (with `device_file` and `notes` when a device file designed it).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        match &self.designed {
-            Designed::Electrovibration(v) => json_object(py, v),
-            Designed::Display(d) => json_object(py, d),
+        let mut json = match &self.designed {
+            Designed::Electrovibration(v) => serde_json::to_value(v),
+            Designed::Display(d) => serde_json::to_value(d),
         }
+        .map_err(|e| input(format!("internal: {e}")))?;
+        if let (Some(file), Some(object)) = (&self.device_file, json.as_object_mut()) {
+            object.insert("device_file".into(), file.clone());
+            object.insert("notes".into(), serde_json::json!(self.notes));
+        }
+        json_object(py, &json)
     }
 
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
@@ -112,7 +123,14 @@ impl Design {
             summary: summary.unbind(),
             designed,
             notes,
+            device_file: None,
         })
+    }
+
+    /// The design made with `file`: its JSON record names the file.
+    pub fn with_device_file(mut self, file: Option<&DesignDevice>) -> Self {
+        self.device_file = file.map(DesignDevice::provenance);
+        self
     }
 
     pub fn designed(&self) -> &Designed {
@@ -236,6 +254,27 @@ pub fn carrier_of(shape: Option<&str>, frequency_hz: Option<f64>) -> PyResult<Ca
     Ok(Carrier { shape, frequency_hz: frequency_hz.unwrap_or(Carrier::DEFAULT.frequency_hz) })
 }
 
+/// The device file of `device=` (a path to a `haptex calibrate` TOML),
+/// read and checked; None when not given.
+pub fn device_file(device: Option<&Bound<'_, PyAny>>) -> PyResult<Option<DesignDevice>> {
+    device.map(|d| DesignDevice::read(&input_path("device", d)?, ArgNames::PYTHON).or_raise()).transpose()
+}
+
+/// With a device file, refuses the arguments whose values come from it
+/// (`given`: whether each was given, and its name), as the command line
+/// refuses those flags beside --device.
+pub fn refuse_set_by_file(file: Option<&DesignDevice>, given: &[(bool, &str)]) -> PyResult<()> {
+    let Some(file) = file else { return Ok(()) };
+    match given.iter().find(|(g, _)| *g) {
+        Some((_, name)) => Err(input(format!(
+            "{name} cannot be given with device=: the device file {} sets it (drop {name}; u_max may lower the \
+             file's U_max, never raise it)",
+            file.file.path
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// The force model of `force_model=` and the circuit's arguments, refusing
 /// the circuit's arguments with eq. (3) as `haptex voltage` does.
 pub fn force_model_of(
@@ -279,6 +318,8 @@ pub struct DisplayChoice<'a> {
     pub weight: Option<f64>,
     pub ultrasonic_calibration: Option<&'a Bound<'a, PyAny>>,
     pub a_max_um: Option<f64>,
+    /// The device file given: its plate (a_max at most its own).
+    pub file: Option<&'a DesignDevice>,
 }
 
 impl DisplayChoice<'_> {
@@ -304,11 +345,14 @@ impl DisplayChoice<'_> {
         Ok(())
     }
 
-    /// The ultrasonic plate: the calibration given (a CSV path, or a pair
-    /// of arrays amplitude_um, relative_friction) or the literature
-    /// default.
+    /// The ultrasonic plate: the device file's, the calibration given (a
+    /// CSV path, or a pair of arrays amplitude_um, relative_friction) or
+    /// the literature default.
     pub fn ultrasonic(&self) -> PyResult<UltrasonicDevice> {
         let a_max = ranged_opt("a_max_um", ranges::A_MAX_UM, self.a_max_um)?;
+        if let Some(file) = self.file {
+            return file.ultrasonic(a_max).or_raise();
+        }
         match self.ultrasonic_calibration {
             None => UltrasonicDevice::literature_default(a_max).or_raise(),
             Some(value) => {
@@ -377,6 +421,11 @@ impl DisplayChoice<'_> {
 ///   arrays (default: the literature placeholder); a_max_um (um peak).
 /// force_model: "eq3" or "circuit" (with rho_sc_ohm_m, gap_um, carrier,
 ///   carrier_hz).
+/// device: a display's device file (TOML, `haptex calibrate`): mu_HD, the
+///   layer stack, the force coefficient on the carrier (carrier, carrier_hz;
+///   default sine 1000 Hz) and U_max come from it, so the arguments that
+///   set them are refused with it; u_max may lower U_max, never raise it.
+///   The design's notes name the file and its SHA-256.
 ///
 /// Returns a haptex.Design. Raises haptex.InvalidInputError (a ValueError)
 /// with the command line's message for anything `haptex voltage` refuses.
@@ -385,7 +434,8 @@ impl DisplayChoice<'_> {
     profile, *, method = "physical", relative = false, flat_mu = None, mu_hd = None, eps_sc = None,
     eps_i = None, d_sc_mm = None, d_i_mm = None, k_mm2_per_n = None, area_exponent = None, fn_n = None,
     u_max = None, display = "electrovibration", strategy = None, weight = None, ultrasonic_calibration = None,
-    a_max_um = None, force_model = "eq3", rho_sc_ohm_m = None, gap_um = None, carrier = None, carrier_hz = None
+    a_max_um = None, force_model = "eq3", rho_sc_ohm_m = None, gap_um = None, carrier = None, carrier_hz = None,
+    device = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn voltage(
@@ -413,11 +463,40 @@ pub fn voltage(
     gap_um: Option<f64>,
     carrier: Option<&str>,
     carrier_hz: Option<f64>,
+    device: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Design> {
     let profile = profile_arg("profile", profile)?;
-    let force_model = force_model_of(force_model, rho_sc_ohm_m, gap_um, carrier, carrier_hz)?;
-    let device =
-        DeviceArgs { mu_hd, eps_sc, eps_i, d_sc_mm, d_i_mm, k_mm2_per_n, area_exponent, u_max }.device(&force_model)?;
+    let file = device_file(device)?;
+    refuse_set_by_file(
+        file.as_ref(),
+        &[
+            (mu_hd.is_some(), "mu_hd"),
+            (eps_sc.is_some(), "eps_sc"),
+            (eps_i.is_some(), "eps_i"),
+            (d_sc_mm.is_some(), "d_sc_mm"),
+            (d_i_mm.is_some(), "d_i_mm"),
+            (k_mm2_per_n.is_some(), "k_mm2_per_n"),
+            (area_exponent.is_some(), "area_exponent"),
+            (force_model != "eq3", "force_model"),
+            (rho_sc_ohm_m.is_some(), "rho_sc_ohm_m"),
+            (gap_um.is_some(), "gap_um"),
+            (ultrasonic_calibration.is_some(), "ultrasonic_calibration"),
+        ],
+    )?;
+    let (device, notes) = match &file {
+        Some(file) => {
+            let u_max = ranged_opt("u_max", ranges::U_MAX_V, u_max)?;
+            let design = file.design(&carrier_of(carrier, carrier_hz)?, u_max).or_raise()?;
+            (design.device, design.notes)
+        }
+        None => {
+            let force_model = force_model_of(force_model, rho_sc_ohm_m, gap_um, carrier, carrier_hz)?;
+            let device = DeviceArgs { mu_hd, eps_sc, eps_i, d_sc_mm, d_i_mm, k_mm2_per_n, area_exponent, u_max }
+                .device(&force_model)?;
+            let notes = force_model.design_comment(&device).into_iter().collect();
+            (device, notes)
+        }
+    };
     let method = match choice("method", method, &["physical", "normalized"])? {
         "physical" => Method::Physical,
         _ => Method::Normalized,
@@ -427,7 +506,7 @@ pub fn voltage(
     }
     let flat_mu = ranged_opt("flat_mu", ranges::FLAT_MU, flat_mu)?;
     let fn_n = ranged_opt("fn_n", ranges::FN_N, fn_n)?;
-    let choice = DisplayChoice { display, strategy, weight, ultrasonic_calibration, a_max_um };
+    let choice = DisplayChoice { display, strategy, weight, ultrasonic_calibration, a_max_um, file: file.as_ref() };
     let flat = flat_mu.map_or(FlatMu::Median, FlatMu::Given);
     let designed = if choice.kind()? == "electrovibration" {
         choice.refuse_plate_args()?;
@@ -448,5 +527,5 @@ pub fn voltage(
         let design = py.detach(|| map_display(&profile, &device, channels, fn_n, relative.then_some(flat)));
         Designed::Display(design.or_raise()?)
     };
-    Design::new(py, designed, force_model.design_comment(&device).into_iter().collect())
+    Ok(Design::new(py, designed, notes)?.with_device_file(file.as_ref()))
 }

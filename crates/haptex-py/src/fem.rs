@@ -26,7 +26,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
 use crate::convert::{Floats, array, choice, input_path, ranged, ranged_opt, to_vec, type_name};
-use crate::design::{Design, Designed, DeviceArgs, DisplayChoice};
+use crate::design::{Design, Designed, DeviceArgs, DisplayChoice, carrier_of, device_file, refuse_set_by_file};
 use crate::errors::{Kind, OrRaise, describe, input, raise};
 use crate::profile::{Profile, profile_arg};
 
@@ -760,6 +760,11 @@ impl CheckResult {
 ///   ultrasonic vibration shared by strategy "split", "bias" or
 ///   "weighted" with weight; ultrasonic_calibration: a CSV path or
 ///   (amplitude_um, relative_friction); a_max_um in um peak).
+/// device: a display's device file (TOML, `haptex calibrate`): mu_HD, the
+///   stack, k for the carrier (carrier, carrier_hz: what the design will be
+///   played on; default sine 1000 Hz) and U_max come from it (u_max may
+///   lower it); a circuit-model file is refused (the FE display applies
+///   eq. 3 without its gain).
 /// progress: True (the default, as None): a tqdm bar when tqdm is
 ///   installed; False: none; or a
 ///   callable progress(done, total) in FE steps (total: the most runs'
@@ -774,9 +779,9 @@ impl CheckResult {
     d_sc_mm = None, d_i_mm = None, load = None, indent = None, velocity = 20.0, step = 0.05, run_up = 1.0,
     material = "viscoelastic", mesh = "default", finger = None, compensate = false, max_runs = 8,
     tolerance = 1e-4, display = "electrovibration", strategy = None, weight = None,
-    ultrasonic_calibration = None, a_max_um = None, progress = None
+    ultrasonic_calibration = None, a_max_um = None, device = None, carrier = None, carrier_hz = None, progress = None
 ),
-    text_signature = "(profile, *, mu_hd=None, u_max=None, k_mm2_per_n=None, fe_k=False, eps_sc=None, eps_i=None, d_sc_mm=None, d_i_mm=None, load=None, indent=None, velocity=20.0, step=0.05, run_up=1.0, material=\"viscoelastic\", mesh=\"default\", finger=None, compensate=False, max_runs=8, tolerance=0.0001, display=\"electrovibration\", strategy=None, weight=None, ultrasonic_calibration=None, a_max_um=None, progress=True)"
+    text_signature = "(profile, *, mu_hd=None, u_max=None, k_mm2_per_n=None, fe_k=False, eps_sc=None, eps_i=None, d_sc_mm=None, d_i_mm=None, load=None, indent=None, velocity=20.0, step=0.05, run_up=1.0, material=\"viscoelastic\", mesh=\"default\", finger=None, compensate=False, max_runs=8, tolerance=0.0001, display=\"electrovibration\", strategy=None, weight=None, ultrasonic_calibration=None, a_max_um=None, device=None, carrier=None, carrier_hz=None, progress=True)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub fn check(
@@ -806,6 +811,9 @@ pub fn check(
     weight: Option<f64>,
     ultrasonic_calibration: Option<&Bound<'_, PyAny>>,
     a_max_um: Option<f64>,
+    device: Option<&Bound<'_, PyAny>>,
+    carrier: Option<&str>,
+    carrier_hz: Option<f64>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<CheckResult> {
     let name = match profile.extract::<PathBuf>() {
@@ -822,12 +830,49 @@ pub fn check(
     if indent.is_some() && load.is_some() {
         return Err(input("load and indent cannot be given together"));
     }
-    let device = Device {
-        stack: stack_of(eps_sc, eps_i, d_sc_mm, d_i_mm)?,
-        contact: ContactArea { k_mm2_per_n: k, exponent: 1.0 },
-        mu_hd: mu_hd.unwrap_or(model.contact.mu_skin),
-        u_max_v: u_max.unwrap_or(Device::PAPER.u_max_v),
-        force_gain: 1.0,
+    let file = device_file(device)?;
+    refuse_set_by_file(
+        file.as_ref(),
+        &[
+            (mu_hd.is_some(), "mu_hd"),
+            (eps_sc.is_some(), "eps_sc"),
+            (eps_i.is_some(), "eps_i"),
+            (d_sc_mm.is_some(), "d_sc_mm"),
+            (d_i_mm.is_some(), "d_i_mm"),
+            (k_mm2_per_n.is_some(), "k_mm2_per_n"),
+            (fe_k, "fe_k"),
+            (ultrasonic_calibration.is_some(), "ultrasonic_calibration"),
+        ],
+    )?;
+    // The carrier the design will be played on: the device file's c is
+    // measured per carrier (without a file, eq. 3 does not depend on it).
+    let carrier = match &file {
+        Some(_) => Some(carrier_of(carrier, carrier_hz)?),
+        None if carrier.is_some() || carrier_hz.is_some() => {
+            return Err(input(
+                "carrier and carrier_hz are the carrier a device file's design is played on: give device= with them",
+            ));
+        }
+        None => None,
+    };
+    let device = match (&file, &carrier) {
+        (Some(file), Some(carrier)) => file.check_device(carrier, u_max).or_raise()?,
+        _ => Device {
+            stack: stack_of(eps_sc, eps_i, d_sc_mm, d_i_mm)?,
+            contact: ContactArea { k_mm2_per_n: k, exponent: 1.0 },
+            mu_hd: mu_hd.unwrap_or(model.contact.mu_skin),
+            u_max_v: u_max.unwrap_or(Device::PAPER.u_max_v),
+            force_gain: 1.0,
+        },
+    };
+    let file_path = file.as_ref().map(|f| f.file.path.as_str());
+    // The device file (and its SHA-256) first among the check's lines;
+    // the design's notes name it and the carrier, as `haptex check
+    // --voltage-out` writes them.
+    let file_lines: Vec<String> = file.iter().map(|f| f.comment()).collect();
+    let design_notes = match (&file, &carrier) {
+        (Some(file), Some(carrier)) => file.design_notes(carrier),
+        _ => Vec::new(),
     };
     let load = load.map(|l| positive("load", l)).transpose()?;
     let mut settings = RenderSettings::new(device.mu_hd, load.unwrap_or(DEFAULT_LOAD_N_PER_MM));
@@ -850,7 +895,7 @@ pub fn check(
         render::TargetPart::Step => input(format!("step {}: {e}", Num(step))),
         render::TargetPart::RunUp => input(format!("run_up {}: {e}", Num(run_up))),
     })?;
-    let choice = DisplayChoice { display, strategy, weight, ultrasonic_calibration, a_max_um };
+    let choice = DisplayChoice { display, strategy, weight, ultrasonic_calibration, a_max_um, file: file.as_ref() };
     let kind = choice.kind()?;
     if kind == "ultrasonic" {
         return Err(input(
@@ -876,8 +921,8 @@ pub fn check(
             })
         });
         let check = reporter.finish(py, result, render_error)?;
-        let header = render::combined_header(&name, &settings, &ultrasonic, strategy, None);
-        let lines = render::describe_combined_metrics(&check.metrics);
+        let header = render::combined_header(&name, &settings, &ultrasonic, strategy, file_path);
+        let lines = file_lines.into_iter().chain(render::describe_combined_metrics(&check.metrics)).collect();
         let design =
             map_display(&target, &settings.device, Channels::Combined(&ultrasonic, strategy), None, None).or_raise()?;
         if design.voltage_v.as_deref() != Some(&check.voltage_v[..])
@@ -885,7 +930,7 @@ pub fn check(
         {
             return Err(input("internal: the design differs from the one checked"));
         }
-        let design = Design::new(py, Designed::Display(design), Vec::new())?;
+        let design = Design::new(py, Designed::Display(design), design_notes)?.with_device_file(file.as_ref());
         return result_object(py, check, header, lines, Vec::new(), 0, None, design);
     }
     choice.refuse_plate_args()?;
@@ -900,13 +945,15 @@ pub fn check(
         })
     });
     let run = reporter.finish(py, result, render_error)?;
-    let header = render::check_header(&name, &run, None);
+    let header = render::check_header(&name, &run, file_path);
     let m = run.check.metrics;
     let voltage = map_profile(&run.check.target, &run.settings.device, Method::Physical, None)
         .and_then(|v| v.with_voltages(run.check.voltage_v.clone()))
         .or_raise()?;
-    let design = Design::new(py, Designed::Electrovibration(voltage), vec![render::voltage_comment(&header, &m)])?;
-    result_object(py, run.check, header, run.lines, run.trials, run.best, run.fe_k_mm2_per_n, design)
+    let notes = std::iter::once(render::voltage_comment(&header, &m)).chain(design_notes).collect();
+    let design = Design::new(py, Designed::Electrovibration(voltage), notes)?.with_device_file(file.as_ref());
+    let lines = file_lines.into_iter().chain(run.lines).collect();
+    result_object(py, run.check, header, lines, run.trials, run.best, run.fe_k_mm2_per_n, design)
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -17,8 +17,8 @@ use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike2, PyArrayMethods, P
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{Floats, array, choice, input_path, ranged, to_vec, type_name};
-use crate::design::{DeviceArgs, DisplayChoice};
+use crate::convert::{Floats, array, choice, input_path, ranged, ranged_opt, to_vec, type_name};
+use crate::design::{DeviceArgs, DisplayChoice, carrier_of, device_file, refuse_set_by_file};
 use crate::errors::{Kind, OrRaise, input, raise};
 use crate::profile::profile_arg;
 use haptex_core::io::BoundedReadError;
@@ -295,6 +295,11 @@ pub struct VoltageMap {
     drive: Drive,
     /// What the file's comment of `map_sample_path` names the map by.
     source: String,
+    /// What the map was designed for, when a device file designed it: the
+    /// file (and its SHA-256) and the carrier. `write` puts them in the
+    /// CSV's comments or the NPY's sidecar, as `haptex map voltage` does.
+    #[pyo3(get)]
+    notes: Vec<String>,
     #[pyo3(get)]
     voltage_v: Option<Py<PyArray2<f64>>>,
     #[pyo3(get)]
@@ -312,7 +317,7 @@ impl VoltageMap {
     fn read(py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<Self> {
         let path = input_path("path", path)?;
         let v = py.detach(|| map::VoltageMap::read_file(&path)).or_raise()?;
-        Self::new(py, Drive::Electrovibration(v, None), path.display().to_string())
+        Self::new(py, Drive::Electrovibration(v, None), path.display().to_string(), Vec::new())
     }
 
     /// Writes the map as `haptex map voltage -o PATH` does: `.csv`, or
@@ -326,9 +331,12 @@ impl VoltageMap {
                 "{}: an ultrasonic or combined display's map is written as CSV (one column per channel)",
                 path.display()
             ))),
-            (Drive::Electrovibration(v, _), MapFormat::Npy) => {
-                py.detach(|| map::write_npy_pair(&path, &v.grid, &v.voltage_v, "voltage_v", Some(v.u_max_v))).or_raise()
-            }
+            (Drive::Electrovibration(v, _), MapFormat::Npy) => py
+                .detach(|| {
+                    let designed = (!self.notes.is_empty()).then(|| self.notes.join("; "));
+                    map::write_npy_pair_designed(&path, &v.grid, &v.voltage_v, "voltage_v", Some(v.u_max_v), designed)
+                })
+                .or_raise(),
             (_, MapFormat::Csv) => py.detach(|| haptex_core::io::write_atomic(&path, |w| self.write_csv(w))).or_raise(),
         }
     }
@@ -386,7 +394,7 @@ impl VoltageMap {
 }
 
 impl VoltageMap {
-    fn new(py: Python<'_>, drive: Drive, source: String) -> PyResult<Self> {
+    fn new(py: Python<'_>, drive: Drive, source: String, notes: Vec<String>) -> PyResult<Self> {
         let (grid, u, a) = match &drive {
             Drive::Electrovibration(v, _) => (v.grid, Some(v.voltage_v.clone()), None),
             Drive::Display(d) => (d.grid, d.voltage_v.clone(), Some(d.amplitude_um.clone())),
@@ -398,6 +406,7 @@ impl VoltageMap {
             summary,
             drive,
             source,
+            notes,
         })
     }
 
@@ -409,6 +418,9 @@ impl VoltageMap {
     }
 
     fn write_csv(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        for note in &self.notes {
+            writeln!(w, "# {note}")?;
+        }
         match &self.drive {
             Drive::Electrovibration(v, _) => v.write_csv(w),
             Drive::Display(d) => d.write_csv(w),
@@ -481,6 +493,10 @@ fn map_summary(py: Python<'_>, drive: &Drive) -> PyResult<Option<Py<PyAny>>> {
 ///   "bias", "weighted") and weight for the combined display;
 ///   ultrasonic_calibration: a CSV path or (amplitude_um,
 ///   relative_friction) arrays; a_max_um (um peak).
+/// device: the display's device file (TOML, `haptex calibrate`): mu_HD,
+///   the stack, k for the carrier (carrier, carrier_hz; default sine
+///   1000 Hz), U_max (u_max may lower it) and the plate come from it; the
+///   map's notes name the file and the carrier.
 ///
 /// Returns a haptex.VoltageMap: no voltage above U_max, no amplitude above
 /// a_max, in any cell. Raises haptex.InvalidInputError with the command
@@ -489,7 +505,7 @@ fn map_summary(py: Python<'_>, drive: &Drive) -> PyResult<Option<Py<PyAny>>> {
 #[pyo3(signature = (
     friction_map, *, method = "physical", mu_hd = None, eps_sc = None, eps_i = None, d_sc_mm = None,
     d_i_mm = None, k_mm2_per_n = None, u_max = None, display = "electrovibration", strategy = None,
-    weight = None, ultrasonic_calibration = None, a_max_um = None
+    weight = None, ultrasonic_calibration = None, a_max_um = None, device = None, carrier = None, carrier_hz = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn map_voltage(
@@ -508,14 +524,44 @@ pub fn map_voltage(
     weight: Option<f64>,
     ultrasonic_calibration: Option<&Bound<'_, PyAny>>,
     a_max_um: Option<f64>,
+    device: Option<&Bound<'_, PyAny>>,
+    carrier: Option<&str>,
+    carrier_hz: Option<f64>,
 ) -> PyResult<VoltageMap> {
-    let device = DeviceArgs { mu_hd, eps_sc, eps_i, d_sc_mm, d_i_mm, k_mm2_per_n, area_exponent: None, u_max }
-        .device(&ForceModel::Eq3)?;
+    let file = device_file(device)?;
+    refuse_set_by_file(
+        file.as_ref(),
+        &[
+            (mu_hd.is_some(), "mu_hd"),
+            (eps_sc.is_some(), "eps_sc"),
+            (eps_i.is_some(), "eps_i"),
+            (d_sc_mm.is_some(), "d_sc_mm"),
+            (d_i_mm.is_some(), "d_i_mm"),
+            (k_mm2_per_n.is_some(), "k_mm2_per_n"),
+            (ultrasonic_calibration.is_some(), "ultrasonic_calibration"),
+        ],
+    )?;
+    let (device, notes) = match &file {
+        Some(file) => {
+            let carrier = carrier_of(carrier, carrier_hz)?;
+            let u_max = ranged_opt("u_max", ranges::U_MAX_V, u_max)?;
+            (file.device(&carrier, u_max).or_raise()?, file.design_notes(&carrier))
+        }
+        None if carrier.is_some() || carrier_hz.is_some() => {
+            return Err(input(
+                "carrier and carrier_hz are the carrier a device file's design is played on: give device= with them",
+            ));
+        }
+        None => {
+            let args = DeviceArgs { mu_hd, eps_sc, eps_i, d_sc_mm, d_i_mm, k_mm2_per_n, area_exponent: None, u_max };
+            (args.device(&ForceModel::Eq3)?, Vec::new())
+        }
+    };
     let method = match choice("method", method, &["physical", "normalized"])? {
         "physical" => Method::Physical,
         _ => Method::Normalized,
     };
-    let choice = DisplayChoice { display, strategy, weight, ultrasonic_calibration, a_max_um };
+    let choice = DisplayChoice { display, strategy, weight, ultrasonic_calibration, a_max_um, file: file.as_ref() };
     let kind = choice.kind()?;
     let owned;
     let friction = match friction_map.cast::<FrictionMap>() {
@@ -543,7 +589,7 @@ pub fn map_voltage(
         };
         Drive::Display(py.detach(|| friction.display_channels(&device, channels)).or_raise()?)
     };
-    VoltageMap::new(py, drive, "a haptex.map_voltage map".into())
+    VoltageMap::new(py, drive, "a haptex.map_voltage map".into(), notes)
 }
 
 /// The voltage along a finger path over a voltage map, at the path's own

@@ -19,7 +19,7 @@ use pyo3::types::{PyBytes, PyDict};
 use serde_json::json;
 
 use crate::convert::{Floats, array, choice, input_path, json_object, ranged, ranged_opt, to_vec, type_name};
-use crate::design::{Design, carrier_of};
+use crate::design::{Design, carrier_of, device_file};
 use crate::errors::{OrRaise, input};
 
 /// A rendered drive signal, one value per output sample, with the scale a
@@ -234,6 +234,11 @@ fn design_arg(py: Python<'_>, value: &Bound<'_, PyAny>) -> PyResult<(PlayProfile
 ///   envelope itself); carrier_hz (Hz, default 1000, below half the sample
 ///   rate).
 /// u_max (V RMS, default 100): envelopes above it are clamped (reported).
+/// device: the display's device file (TOML, `haptex calibrate`): U_max is
+///   the file's (u_max may lower it, never raise it), the carrier must be one it
+///   gives the force for, and a design that names another device file
+///   (its SHA-256) is refused; the signal's CSV comment and WAV sidecar
+///   name the file.
 /// slew_v_per_s (V/s): largest rate of change of the envelope (it then
 ///   also fades in from 0 V).
 /// amp_range_v (V): the amplifier's peak output; a drive whose peak
@@ -256,7 +261,7 @@ fn design_arg(py: Python<'_>, value: &Bound<'_, PyAny>) -> PyResult<(PlayProfile
 #[pyo3(signature = (
     design, *, trajectory = None, velocity = None, strokes = None, from_mm = None, to_mm = None,
     carrier = "sine", carrier_hz = None, a_max_um = None, u_max = None, slew_v_per_s = None, amp_range_v = None,
-    volts_per_full_scale = None, outside = "hold", plate_resonance_hz = None, sample_rate = 48000
+    volts_per_full_scale = None, outside = "hold", plate_resonance_hz = None, sample_rate = 48000, device = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn play(
@@ -277,6 +282,7 @@ pub fn play(
     outside: &str,
     plate_resonance_hz: Option<f64>,
     sample_rate: u32,
+    device: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Signal> {
     // The flags' own checks, as the command line's parser makes them.
     if !(1000..=768_000).contains(&sample_rate) {
@@ -306,14 +312,9 @@ pub fn play(
     }
     let carrier = carrier_of(Some(carrier), carrier_hz)?;
     let a_max_um = ranged_opt("a_max_um", ranges::A_MAX_UM, a_max_um)?;
-    let u_max = ranged("u_max", ranges::U_MAX_V, u_max.unwrap_or(Limits::DEFAULT.u_max_v))?;
+    let u_max = ranged_opt("u_max", ranges::U_MAX_V, u_max)?;
     let slew_v_per_s = ranged_opt("slew_v_per_s", ranges::SLEW_V_PER_S, slew_v_per_s)?;
     let amp_range_v = ranged_opt("amp_range_v", ranges::AMPLIFIER_RANGE_V, amp_range_v)?;
-    let volts_per_full_scale = ranged(
-        "volts_per_full_scale",
-        ranges::VOLTS_PER_FULL_SCALE,
-        volts_per_full_scale.unwrap_or(std::f64::consts::SQRT_2 * u_max),
-    )?;
     let plate_resonance_hz = ranged_opt("plate_resonance_hz", ranges::PLATE_RESONANCE_HZ, plate_resonance_hz)?;
     let extend = match choice("outside", outside, &["hold", "zero", "repeat"])? {
         "hold" => Extend::Hold,
@@ -321,7 +322,19 @@ pub fn play(
         _ => Extend::Repeat,
     };
 
+    let file = device_file(device)?;
     let (design, name) = design_arg(py, design)?;
+    // On a device file's display: U_max the file's (or lower), a carrier it
+    // gives the force for, and a design made with this file if it says so.
+    let u_max = match &file {
+        Some(file) => file.play_u_max(&carrier, u_max, &design.comments, &name).or_raise()?,
+        None => u_max.unwrap_or(Limits::DEFAULT.u_max_v),
+    };
+    let volts_per_full_scale = ranged(
+        "volts_per_full_scale",
+        ranges::VOLTS_PER_FULL_SCALE,
+        volts_per_full_scale.unwrap_or(std::f64::consts::SQRT_2 * u_max),
+    )?;
     let a_max_um = design.a_max_um(&name, a_max_um).or_raise()?;
     let (trajectory, trajectory_source) = match (trajectory, velocity) {
         (Some(value), _) => {
@@ -361,11 +374,20 @@ pub fn play(
         })
         .or_raise()?;
 
+    // The device file played on, or the one the design says it was made with.
     let stated = design.comments.iter().find(|c| c.contains(DEVICE_SHA256_MARK)).cloned();
     let mut source = sidecar_source(&name, &trajectory_source, "haptex.play (Python)");
-    if let Some(stated) = &stated {
-        source["design_device_file"] = json!(stated);
-    }
+    let csv_comment = match (&file, &stated) {
+        (Some(file), _) => {
+            source["device_file"] = file.provenance();
+            Some(format!("played on the display of {}", file.comment()))
+        }
+        (None, Some(stated)) => {
+            source["design_device_file"] = json!(stated);
+            Some(format!("the design says: {stated}"))
+        }
+        (None, None) => None,
+    };
     let report = json_object(py, &signal.report)?.unbind();
     let modulated = signal.report.ultrasonic.as_ref().is_some_and(|u| u.resonance_hz.is_some());
     let channel_2 = signal.amplitude_um.clone().map(|a| array(py, a));
@@ -379,7 +401,7 @@ pub fn play(
         displacement_um,
         report,
         volts_per_full_scale,
-        csv_comment: stated.map(|s| format!("the design says: {s}")),
+        csv_comment,
         source,
         signal,
     })

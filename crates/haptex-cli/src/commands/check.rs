@@ -319,25 +319,10 @@ fn run_display(
     Ok(())
 }
 
-/// The device of a check made with a device file: eq. (8) with the file's
-/// mu_HD, U_max and k for the carrier. The FE display applies eq. (3)'s
-/// attraction over its own contact, so a circuit-model file (whose force
-/// on a carrier is eq. (3)'s times the circuit's gain) is refused rather
-/// than checked on a display it does not describe.
+/// The device of a check made with a device file (a circuit-model file
+/// is refused: haptex-core's `DesignDevice::check_device` says why).
 fn file_device(file: &DesignDevice, args: &CheckArgs) -> anyhow::Result<Device> {
-    let carrier = carrier(args);
-    let device = file.device(&carrier, args.u_max)?;
-    if file.file.electrovibration.as_ref().is_some_and(|e| e.circuit.is_some()) {
-        anyhow::bail!(
-            "device file {} is of the circuit model (its force on {} is eq. (3)'s times a gain of {:.4}): the FE \
-             display applies eq. (3)'s attraction without that gain, so the check would not be of this display; \
-             design with `haptex voltage --device` and play it, or check with an eq3 device file",
-            file.file.path,
-            haptex_core::calibration::force_fit::carrier_name(&carrier),
-            device.force_gain
-        );
-    }
-    Ok(device)
+    Ok(file.check_device(&carrier(args), args.u_max)?)
 }
 
 /// The carrier of --carrier and --carrier-hz (default sine 1000 Hz).
@@ -349,8 +334,7 @@ fn carrier(args: &CheckArgs) -> haptex_core::signal::Carrier {
 /// file, and the carrier it is designed for (`haptex play` refuses
 /// another).
 fn design_notes(device_file: Option<&DesignDevice>, args: &CheckArgs) -> Vec<String> {
-    let Some(file) = device_file else { return Vec::new() };
-    vec![file.comment(), crate::args::carrier_note(&carrier(args))]
+    device_file.map_or_else(Vec::new, |file| file.design_notes(&carrier(args)))
 }
 
 fn figure(check: &Check, title: &str, settings: &RenderSettings) -> Figure {

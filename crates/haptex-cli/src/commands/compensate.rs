@@ -109,7 +109,7 @@ fn learning_gain(text: &str) -> Result<f64, String> {
 /// the one place a device is built here.
 fn device(args: &CompensateArgs, file: Option<&DesignDevice>, comments: &[String]) -> anyhow::Result<Device> {
     if let Some(file) = file {
-        file.check_design(comments, &args.design)?;
+        file.check_design(comments, &args.design.display().to_string())?;
         let carrier = match haptex_core::signal::play::stated_carrier(comments) {
             None => Carrier::DEFAULT,
             Some(Ok((shape, f))) => Carrier {
@@ -125,7 +125,7 @@ fn device(args: &CompensateArgs, file: Option<&DesignDevice>, comments: &[String
                 args.design.display()
             ),
         };
-        return file.device(&carrier, args.u_max);
+        return Ok(file.device(&carrier, args.u_max)?);
     }
     let device = Device {
         stack: args.stack.stack(),

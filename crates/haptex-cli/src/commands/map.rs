@@ -398,8 +398,7 @@ fn voltage(a: MapVoltageArgs) -> anyhow::Result<()> {
     };
     // The device file and the carrier the map is designed for, in its
     // comments (CSV) or sidecar (NPY).
-    let notes: Vec<String> =
-        device_file.iter().flat_map(|f| [f.comment(), crate::args::carrier_note(&carrier)]).collect();
+    let notes: Vec<String> = device_file.as_ref().map_or_else(Vec::new, |f| f.design_notes(&carrier));
     let method = match a.method {
         MethodArg::Physical => Method::Physical,
         MethodArg::Normalized => Method::Normalized,

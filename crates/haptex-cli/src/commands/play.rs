@@ -227,11 +227,9 @@ impl DriveArgs {
         comments: &[String],
         profile: &Path,
     ) -> anyhow::Result<()> {
-        self.u_max = Some(file.u_max_v(self.u_max)?);
-        if file.file.electrovibration.is_some() {
-            file.file.device(&Carrier { shape: self.carrier.shape(), frequency_hz: self.carrier_hz })?;
-        }
-        file.check_design(comments, profile)
+        let carrier = Carrier { shape: self.carrier.shape(), frequency_hz: self.carrier_hz };
+        self.u_max = Some(file.play_u_max(&carrier, self.u_max, comments, &profile.display().to_string())?);
+        Ok(())
     }
 
     /// Channel 2's a_max for the profile read from `profile`: --a-max-um
@@ -330,7 +328,7 @@ pub fn run(mut args: PlayArgs) -> anyhow::Result<()> {
             .with_context(|| format!("--plate-resonance-hz for {}", profile.display()))?;
     }
 
-    let stated = design.comments.iter().find(|c| c.contains(crate::args::DEVICE_SHA256_MARK)).cloned();
+    let stated = design.comments.iter().find(|c| c.contains(haptex_core::signal::play::DEVICE_SHA256_MARK)).cloned();
     let provenance = Provenance { trajectory: trajectory_source, device_file: device_file.as_ref(), stated };
     write_signal(&args, format, &output, output_path, profile, &signal, provenance)
 }

@@ -89,9 +89,9 @@ pub fn run(args: RecipeArgs) -> anyhow::Result<()> {
         .or_else(|| recipe.device_file_sha256.as_ref().and_then(|_| recipe.device_file.as_ref().map(PathBuf::from)));
     let state = match device_file {
         Some(path) => {
-            let file = crate::args::DesignDevice::read(&path)
+            let file = crate::args::read_device_file(&path)
                 .with_context(|| format!("{}: the device file it was made with", args.file.display()))?;
-            state.with_default_device(file.server_default()?)
+            state.with_default_device(crate::args::server_default(&file)?)
         }
         None => state,
     };

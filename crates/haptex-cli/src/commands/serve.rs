@@ -98,7 +98,7 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
     }
     let device_file = args.device_file.read()?;
     let default_device = match &device_file {
-        Some(file) => file.server_default()?,
+        Some(file) => crate::args::server_default(file)?,
         None => haptex_server::params::DefaultDevice::PAPER,
     };
     let live = live_output(args.live, args.output)?;

@@ -7,15 +7,14 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use haptex_core::combined::{Channels, map_display};
 use haptex_core::electrovibration::{ContactArea, Device, Method, map_profile, map_profile_relative};
-use haptex_core::num::Num;
 use haptex_core::profile::FrictionProfile;
 use haptex_core::ranges;
 use haptex_core::relative::FlatMu;
 use haptex_fem::render;
 
 use crate::args::{
-    DesignDevice, DeviceFileArgs, DisplayArg, DisplayArgs, ForceModelArgs, LayerStackArgs, Output, carrier_note,
-    in_range, read_profile,
+    DesignDevice, DeviceFileArgs, DisplayArg, DisplayArgs, ForceModelArgs, LayerStackArgs, Output, in_range,
+    read_profile,
 };
 
 /// Compute the voltage an electrovibration display must apply to reproduce a
@@ -286,22 +285,6 @@ fn write_output<T: serde::Serialize>(
 /// origin and the carrier, in the words `haptex play` reads), and whether
 /// the force is the circuit model's.
 fn device_file_design(file: &DesignDevice, args: &VoltageArgs) -> anyhow::Result<(Device, Vec<String>, bool)> {
-    let carrier = args.force.carrier();
-    let device = file.device(&carrier, args.u_max)?;
-    let circuit = file.file.electrovibration.as_ref().is_some_and(|e| e.circuit.is_some());
-    let force = if circuit {
-        format!(
-            "force model: the device file's circuit; Fe = G Fe_eq3 with G = {:.6} for this carrier",
-            device.force_gain
-        )
-    } else {
-        format!(
-            "force model: eq. (3) with the device file's c measured on {} (k = {} mm^2/N with its stack)",
-            haptex_core::calibration::force_fit::carrier_name(&carrier),
-            Num(device.contact.k_mm2_per_n)
-        )
-    };
-    let notes =
-        vec![file.comment(), format!("{force}; U_max = {} V RMS; {}", Num(device.u_max_v), carrier_note(&carrier))];
-    Ok((device, notes, circuit))
+    let design = file.design(&args.force.carrier(), args.u_max)?;
+    Ok((design.device, design.notes, design.circuit))
 }

@@ -18,6 +18,7 @@
 //!   test bench that stands in for hardware.
 
 pub mod curves;
+pub mod design_device;
 pub mod device_file;
 pub mod distributions;
 pub mod force_fit;

@@ -96,6 +96,7 @@ def voltage(
     gap_um: Optional[float] = None,
     carrier: Optional[str] = None,
     carrier_hz: Optional[float] = None,
+    device: Optional[_Path] = None,
 ) -> Design: ...
 
 # --- the conditional average estimator and the FE database ---
@@ -279,6 +280,7 @@ def play(
     outside: str = "hold",
     plate_resonance_hz: Optional[float] = None,
     sample_rate: int = 48000,
+    device: Optional[_Path] = None,
 ) -> DriveSignal: ...
 
 def read_wav(path: _Path) -> Dict[str, Any]: ...
@@ -417,6 +419,9 @@ def check(
     weight: Optional[float] = None,
     ultrasonic_calibration: Union[_Path, Tuple[_ArrayLike, _ArrayLike], None] = None,
     a_max_um: Optional[float] = None,
+    device: Optional[_Path] = None,
+    carrier: Optional[str] = None,
+    carrier_hz: Optional[float] = None,
     progress: _Progress = True,
 ) -> CheckResult: ...
 def compensate(
@@ -486,6 +491,7 @@ class VoltageMap:
     voltage_v: Optional[npt.NDArray[np.float64]]
     amplitude_um: Optional[npt.NDArray[np.float64]]
     summary: Optional[MapSummary]
+    notes: List[str]
     @staticmethod
     def read(path: _Path) -> VoltageMap: ...
     def write(self, path: _Path) -> None: ...
@@ -546,6 +552,9 @@ def map_voltage(
     weight: Optional[float] = None,
     ultrasonic_calibration: Optional[_Calibration] = None,
     a_max_um: Optional[float] = None,
+    device: Optional[_Path] = None,
+    carrier: Optional[str] = None,
+    carrier_hz: Optional[float] = None,
 ) -> VoltageMap: ...
 def map_sample_path(
     voltage_map: Union[VoltageMap, _Path],
