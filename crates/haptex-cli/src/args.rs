@@ -407,7 +407,7 @@ pub use haptex_core::calibration::design_device::DesignDevice;
 
 /// Reads and checks the device file at `path`.
 pub fn read_device_file(path: &Path) -> anyhow::Result<DesignDevice> {
-    Ok(DesignDevice::read(path, haptex_core::calibration::design_device::ArgNames::CLI)?)
+    Ok(DesignDevice::read(path, haptex_core::arg_names::ArgNames::CLI)?)
 }
 
 /// The web application's default device (`haptex serve --device-file`,

@@ -5,6 +5,7 @@
 //! Units follow `docs/file-formats.md`: positions in mm, forces in N,
 //! voltages in V (RMS), and every field that carries a unit names it.
 
+pub mod arg_names;
 pub mod buffer;
 pub mod cae;
 pub mod calibration;

@@ -9,6 +9,7 @@ checkout (scripts/test.sh builds target/ci/haptex before running pytest).
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 from pathlib import Path
 from typing import List
@@ -97,3 +98,21 @@ def assert_identical(actual, expected, what: str) -> None:
     assert differ.size == 0, (
         f"{what}: {differ.size} values differ, first at {differ[0]}: {actual[differ[0]]!r} vs {expected[differ[0]]!r}"
     )
+
+
+# What the package's messages say where the command line's name a flag
+# (haptex_core::arg_names::ArgNames::PYTHON against ::CLI).
+KEYWORDS = {
+    "--a-max-um": "a_max_um",
+    "--u-max": "u_max",
+    "--display electrovibration": "display='electrovibration'",
+    "`haptex voltage --device`": "haptex.voltage(..., device=...)",
+}
+
+
+def in_keywords(message: str) -> str:
+    """A command-line message in the words of the Python keywords."""
+    message = re.sub(r"--carrier (\w+) --carrier-hz (\S+?)(?=[ )]|$)", r'carrier="\1", carrier_hz=\2', message)
+    for flag, keyword in KEYWORDS.items():
+        message = message.replace(flag, keyword)
+    return message

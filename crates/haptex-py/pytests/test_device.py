@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import haptex
-from conftest import EXAMPLES, assert_identical, read_csv
+from conftest import EXAMPLES, assert_identical, in_keywords, read_csv
 
 BUMP = EXAMPLES / "bump_friction.csv"
 MEASUREMENTS = EXAMPLES / "calibration-measurements.csv"
@@ -107,10 +107,7 @@ def test_refusals_are_the_command_lines_in_keyword_words(cli, files, which, flag
     message = cli.error("voltage", "--profile", BUMP, "--device", files[which], *flags, "-q", "-o", "u.csv")
     with pytest.raises(haptex.InvalidInputError) as caught:
         haptex.voltage(BUMP, device=files[which], **kwargs)
-    words = {"--u-max": "u_max", "--a-max-um": "a_max_um", "--display electrovibration": "display='electrovibration'"}
-    for flag, keyword in words.items():
-        message = message.replace(flag, keyword)
-    assert str(caught.value) == message
+    assert str(caught.value) == in_keywords(message)
 
 
 @pytest.mark.parametrize("keyword", ["mu_hd", "k_mm2_per_n", "eps_sc", "area_exponent", "gap_um"])
@@ -145,7 +142,7 @@ def test_check_with_a_device_file(cli, tmp_path, files):
     message = cli.error("check", "--profile", BUMP, "--device", files["circuit"], "-q")
     with pytest.raises(haptex.InvalidInputError) as caught:
         haptex.check(BUMP, device=files["circuit"], progress=False)
-    assert str(caught.value) == message.replace("`haptex voltage --device`", "haptex.voltage(..., device=...)")
+    assert str(caught.value) == in_keywords(message)
     with pytest.raises(haptex.InvalidInputError, match="^fe_k cannot be given with device="):
         haptex.check(BUMP, device=files["eq3"], fe_k=True, progress=False)
     with pytest.raises(haptex.InvalidInputError, match="give device= with them"):
@@ -177,6 +174,14 @@ def test_play_on_a_device_files_display(cli, tmp_path, files):
     with pytest.raises(haptex.InvalidInputError) as caught:
         haptex.play(str(design), device=files["eq3"], velocity=50.0)
     assert str(caught.value) == message
+    # A design for 300 Hz is not played on another carrier.
+    message = cli.error("play", "--profile", design, "--carrier-hz", "500", "--velocity", "50", "-q",
+                        "-o", tmp_path / "x.csv")
+    with pytest.raises(haptex.InvalidInputError) as caught:
+        haptex.play(design, velocity=50.0, carrier_hz=500.0)
+    assert str(caught.value) == in_keywords(message)
+    assert 'play it with carrier="sine", carrier_hz=300 (or design it again for carrier="sine", carrier_hz=500)' in (
+        str(caught.value))
     # The file's U_max bounds the drive: a higher u_max is refused.
     with pytest.raises(haptex.InvalidInputError, match="^u_max 120 is above the U_max = 100 V RMS"):
         haptex.play(design, device=files["circuit"], velocity=50.0, carrier_hz=300.0, u_max=120.0)

@@ -479,3 +479,15 @@ def test_the_area_exponent_refusal_is_the_command_lines(cli, targets):
     with pytest.raises(haptex.InvalidInputError) as caught:
         haptex.compensate(str(target), area_exponent=0.8, fn_n=0.5)
     assert str(caught.value) == message
+
+
+def test_a_run_that_cannot_finish_is_a_computation_error(cli, tmp_path):
+    # An edge stepping down 0.5 mm under a finger pressed 0.05 mm in: the
+    # finger loses the surface, and Ft/Fn is undefined from there on.
+    flags = ["--surface", "edge", "--height", "-0.5", "--indent", "0.05", "--x0", "1", "--slide", "2"]
+    message = cli.error("simulate", *flags, "-q", "-o", tmp_path / "e.csv")
+    with pytest.raises(haptex.ComputationError) as caught:
+        haptex.simulate("edge", height=-0.5, indent=0.05, x0=1.0, slide=2.0, progress=False)
+    assert str(caught.value) == message
+    assert "lost contact" in message
+    assert isinstance(caught.value, haptex.HaptexError) and isinstance(caught.value, RuntimeError)

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 import haptex
-from conftest import EXAMPLES, assert_identical, read_csv
+from conftest import EXAMPLES, assert_identical, in_keywords, read_csv
 
 BUMP = EXAMPLES / "bump_friction.csv"
 
@@ -165,7 +165,7 @@ def test_refusals_are_the_command_lines(cli, tmp_path, designs, flags, kwargs):
     message = cli.error("play", "--profile", designs["u"], *flags, "-o", tmp_path / "x.wav")
     with pytest.raises(haptex.InvalidInputError) as caught:
         haptex.play(designs["u"], **kwargs)
-    assert str(caught.value) == message
+    assert str(caught.value) == in_keywords(message)
     assert not (tmp_path / "x.wav").exists()
 
 
@@ -174,7 +174,8 @@ def test_channel_2_above_the_stated_a_max_is_refused(cli, tmp_path, designs):
                         "-o", tmp_path / "x.wav")
     with pytest.raises(haptex.InvalidInputError) as caught:
         haptex.play(designs["ua"], velocity=50.0, a_max_um=50.0)
-    assert str(caught.value) == message
+    assert str(caught.value) == in_keywords(message)
+    assert str(caught.value).startswith("a_max_um 50 is above the a_max")
 
 
 def test_argument_refusals():

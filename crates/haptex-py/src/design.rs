@@ -2,7 +2,8 @@
 //! `haptex voltage` computes it (paper eqs. 3-9; the ultrasonic and
 //! combined displays of docs/physics.md).
 
-use haptex_core::calibration::design_device::{ArgNames, DesignDevice};
+use haptex_core::arg_names::ArgNames;
+use haptex_core::calibration::design_device::DesignDevice;
 use haptex_core::combined::{Channels, DisplayProfile, Strategy, map_display};
 use haptex_core::electrovibration::{
     ContactArea, Device, LayerStack, Method, VoltageProfile, map_profile, map_profile_relative,

@@ -5,6 +5,7 @@
 
 use std::path::PathBuf;
 
+use haptex_core::arg_names::ArgNames;
 use haptex_core::io::Table;
 use haptex_core::ranges;
 use haptex_core::signal::play::{PlayProfile, generate_trajectory, sidecar_source};
@@ -335,7 +336,7 @@ pub fn play(
         ranges::VOLTS_PER_FULL_SCALE,
         volts_per_full_scale.unwrap_or(std::f64::consts::SQRT_2 * u_max),
     )?;
-    let a_max_um = design.a_max_um(&name, a_max_um).or_raise()?;
+    let a_max_um = design.a_max_um(&name, a_max_um, &ArgNames::PYTHON).or_raise()?;
     let (trajectory, trajectory_source) = match (trajectory, velocity) {
         (Some(value), _) => {
             if let Ok((t, x)) = value.extract::<(Floats<'_>, Floats<'_>)>() {
@@ -360,7 +361,7 @@ pub fn play(
         limits: Limits { u_max_v: u_max, slew_v_per_s, amplifier_range_v: amp_range_v },
         extend,
     };
-    design.check_carrier(&settings.carrier, &name).or_raise()?;
+    design.check_carrier(&settings.carrier, &name, &ArgNames::PYTHON).or_raise()?;
     let signal = py
         .detach(|| {
             let mut signal = design.render(&trajectory, &settings, a_max_um)?;

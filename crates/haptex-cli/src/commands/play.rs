@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
+use haptex_core::arg_names::ArgNames;
 use haptex_core::io::Table;
 use haptex_core::num::Num;
 use haptex_core::ranges;
@@ -241,7 +242,13 @@ impl DriveArgs {
         amplitude: Option<&AmplitudeCurve>,
         stated_a_max: Option<f64>,
     ) -> anyhow::Result<Option<f64>> {
-        Ok(resolve_a_max_um(&profile.display().to_string(), amplitude.is_some(), self.a_max_um, stated_a_max)?)
+        Ok(resolve_a_max_um(
+            &profile.display().to_string(),
+            amplitude.is_some(),
+            self.a_max_um,
+            stated_a_max,
+            &ArgNames::CLI,
+        )?)
     }
 }
 
@@ -321,7 +328,7 @@ pub fn run(mut args: PlayArgs) -> anyhow::Result<()> {
     let a_max_um = args.drive.a_max_um(profile, design.amplitude.as_ref(), design.stated_a_max())?;
     let (trajectory, trajectory_source) = trajectory(&args, &design.curve)?;
     let settings = args.drive.settings(args.sample_rate);
-    design.check_carrier(&settings.carrier, &profile.display().to_string())?;
+    design.check_carrier(&settings.carrier, &profile.display().to_string(), &ArgNames::CLI)?;
     let mut signal = design.render(&trajectory, &settings, a_max_um)?;
     if let Some(f) = args.plate_resonance_hz {
         modulate_at_resonance(&mut signal, f)

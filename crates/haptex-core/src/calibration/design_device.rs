@@ -10,6 +10,7 @@
 
 use std::path::Path;
 
+pub use crate::arg_names::ArgNames;
 use crate::calibration::device_file::{DeviceFile, DeviceFileError, MAX_FILE_BYTES};
 use crate::calibration::force_fit::carrier_name;
 use crate::electrovibration::Device;
@@ -18,37 +19,6 @@ use crate::num::Num;
 use crate::signal::Carrier;
 use crate::signal::play::DEVICE_SHA256_MARK;
 use crate::ultrasonic::UltrasonicDevice;
-
-/// The names a message gives the arguments it asks to change: the
-/// command line's flags, or the Python keywords.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ArgNames {
-    /// The argument that lowers U_max.
-    pub u_max: &'static str,
-    /// The argument that lowers the plate's a_max.
-    pub a_max: &'static str,
-    /// How to ask for the electrovibration display.
-    pub electrovibration: &'static str,
-    /// How to design with the device file (for what the FE check cannot do).
-    pub design_with_file: &'static str,
-}
-
-impl ArgNames {
-    /// The command line's flags.
-    pub const CLI: ArgNames = ArgNames {
-        u_max: "--u-max",
-        a_max: "--a-max-um",
-        electrovibration: "--display electrovibration",
-        design_with_file: "`haptex voltage --device`",
-    };
-    /// The Python package's keyword arguments.
-    pub const PYTHON: ArgNames = ArgNames {
-        u_max: "u_max",
-        a_max: "a_max_um",
-        electrovibration: "display='electrovibration'",
-        design_with_file: "haptex.voltage(..., device=...)",
-    };
-}
 
 /// A device file that cannot be read, or cannot do what is asked of it.
 #[derive(Debug, thiserror::Error)]

@@ -9,6 +9,7 @@ use serde_json::json;
 use super::{
     AmplitudeCurve, Carrier, DriveSignal, RenderSettings, SignalError, VoltageCurve, render, render_two_channel,
 };
+use crate::arg_names::ArgNames;
 use crate::io::Table;
 use crate::num::Num;
 use crate::profile::ProfileError;
@@ -49,13 +50,13 @@ impl PlayProfile {
     /// Channel 2's a_max for this design, named `profile` in messages:
     /// `given` (at most what the design states), else the stated one;
     /// `None` for a design without an amplitude channel.
-    pub fn a_max_um(&self, profile: &str, given: Option<f64>) -> Result<Option<f64>, SignalError> {
-        resolve_a_max_um(profile, self.amplitude.is_some(), given, self.stated_a_max())
+    pub fn a_max_um(&self, profile: &str, given: Option<f64>, names: &ArgNames) -> Result<Option<f64>, SignalError> {
+        resolve_a_max_um(profile, self.amplitude.is_some(), given, self.stated_a_max(), names)
     }
 
     /// Refuses a carrier the design was not made for ([`check_design_carrier`]).
-    pub fn check_carrier(&self, carrier: &Carrier, profile: &str) -> Result<(), SignalError> {
-        check_design_carrier(&self.comments, carrier, profile)
+    pub fn check_carrier(&self, carrier: &Carrier, profile: &str, names: &ArgNames) -> Result<(), SignalError> {
+        check_design_carrier(&self.comments, carrier, profile, names)
     }
 
     /// Renders the design along `trajectory`: one channel, or two with
@@ -86,15 +87,17 @@ pub fn resolve_a_max_um(
     has_amplitude: bool,
     given: Option<f64>,
     stated: Option<f64>,
+    names: &ArgNames,
 ) -> Result<Option<f64>, SignalError> {
     let refuse = |message: String| Err(SignalError::Settings(message));
+    let a_max = names.a_max;
     match (has_amplitude, given, stated) {
         (false, Some(_), _) => {
-            refuse(format!("--a-max-um is for a profile with an amplitude_um column; {profile} has none"))
+            refuse(format!("{a_max} is for a profile with an amplitude_um column; {profile} has none"))
         }
         (false, None, _) => Ok(None),
         (true, Some(given), Some(stated)) if given > stated => refuse(format!(
-            "--a-max-um {} is above the a_max = {} um {profile} states it was designed for: give at most that",
+            "{a_max} {} is above the a_max = {} um {profile} states it was designed for: give at most that",
             Num(given),
             Num(stated),
         )),
@@ -102,7 +105,7 @@ pub fn resolve_a_max_um(
         (true, None, Some(stated)) => Ok(Some(stated)),
         (true, None, None) => refuse(format!(
             "{profile} has an amplitude_um column (a combined or ultrasonic display's profile) but no header \
-             comment stating its a_max: give --a-max-um, the largest amplitude of the plate, to drive channel 2 \
+             comment stating its a_max: give {a_max}, the largest amplitude of the plate, to drive channel 2 \
              (the ultrasonic amplitude) with it as limit and full scale"
         )),
     }
@@ -138,7 +141,12 @@ pub fn stated_carrier(comments: &[String]) -> Option<Result<(String, f64), Strin
 /// Refuses to play a frequency-dependent design (its `comments`, from the
 /// file named `profile`) on another carrier than the one it was designed
 /// for: its voltages render the target only there.
-pub fn check_design_carrier(comments: &[String], carrier: &Carrier, profile: &str) -> Result<(), SignalError> {
+pub fn check_design_carrier(
+    comments: &[String],
+    carrier: &Carrier,
+    profile: &str,
+    names: &ArgNames,
+) -> Result<(), SignalError> {
     let Some(stated) = stated_carrier(comments) else {
         return Ok(());
     };
@@ -155,11 +163,10 @@ pub fn check_design_carrier(comments: &[String], carrier: &Carrier, profile: &st
     if !same {
         return Err(SignalError::Settings(format!(
             "{profile} was designed with a frequency-dependent force model for a {shape} carrier at {} Hz, and \
-             renders its target only on that carrier: play it with --carrier {shape} --carrier-hz {} (or design it \
-             again for --carrier {played} --carrier-hz {})",
+             renders its target only on that carrier: play it with {} (or design it again for {})",
             Num(f_hz),
-            Num(f_hz),
-            Num(carrier.frequency_hz)
+            names.carrier(&shape, f_hz),
+            names.carrier(played, carrier.frequency_hz)
         )));
     }
     Ok(())

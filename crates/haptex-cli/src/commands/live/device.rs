@@ -264,7 +264,11 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
     let log = args.touch_log.as_deref().map(Trajectory::read_csv_file).transpose()?;
     let resolved = resolve(output, output.channels.unwrap_or(design_channels))?;
     // A frequency-dependent design renders its target only on its carrier.
-    design.check_carrier(&output.drive.settings(resolved.sample_rate).carrier, &profile.display().to_string())?;
+    design.check_carrier(
+        &output.drive.settings(resolved.sample_rate).carrier,
+        &profile.display().to_string(),
+        &haptex_core::arg_names::ArgNames::CLI,
+    )?;
     let renderer = renderer(output, resolved.sample_rate, &design.curve, design.amplitude.as_ref().zip(a_max_um))?;
     let mut engine = engine(output, renderer, resolved.channels)?;
     if let Some(log) = &log {
