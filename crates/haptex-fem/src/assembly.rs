@@ -60,13 +60,25 @@ pub struct Pattern {
 impl Pattern {
     /// The pattern of the elements listed in `elements` (others contribute nothing).
     pub fn new(dofs: &DofMap, element_nodes: &[[usize; 4]], elements: &[usize]) -> Self {
-        let n = dofs.n_free;
+        let mut element_dofs = vec![Vec::new(); element_nodes.len()];
+        for &e in elements {
+            element_dofs[e] = DofMap::element_dofs(&element_nodes[e]).map(|d| dofs.free[d]).to_vec();
+        }
+        Self::from_element_dofs(dofs.n_free, &element_dofs)
+    }
+
+    /// The pattern of `n` free DOFs coupled by elements whose DOFs, in the
+    /// order of their matrices' rows, are `element_dofs[e]` (free indices,
+    /// or [`PRESCRIBED`]; an empty list for an element that contributes
+    /// nothing). Any number of DOFs per element up to 256 (the 3D
+    /// hexahedron has 24).
+    pub fn from_element_dofs(n: usize, element_dofs: &[Vec<usize>]) -> Self {
         // Column -> sorted row set, built from element couplings.
         let mut columns: Vec<Vec<usize>> = vec![Vec::new(); n];
-        for &e in elements {
-            let g = DofMap::element_dofs(&element_nodes[e]).map(|d| dofs.free[d]);
-            for &i in &g {
-                for &j in &g {
+        for g in element_dofs {
+            assert!(g.len() <= 256, "an element has at most 256 DOFs");
+            for &i in g {
+                for &j in g {
                     if i != PRESCRIBED && j != PRESCRIBED && i >= j {
                         columns[j].push(i);
                     }
@@ -87,9 +99,8 @@ impl Pattern {
             row_idx.extend_from_slice(column);
             col_ptr.push(row_idx.len());
         }
-        let mut slots = vec![Vec::new(); element_nodes.len()];
-        for &e in elements {
-            let g = DofMap::element_dofs(&element_nodes[e]).map(|d| dofs.free[d]);
+        let mut slots = vec![Vec::new(); element_dofs.len()];
+        for (e, g) in element_dofs.iter().enumerate() {
             for (li, &i) in g.iter().enumerate() {
                 for (lj, &j) in g.iter().enumerate() {
                     if i != PRESCRIBED && j != PRESCRIBED && i >= j {
@@ -107,8 +118,16 @@ impl Pattern {
         self.row_idx.len()
     }
 
+    /// The value slot of entry (i, j) or (j, i) of the lower triangle, if
+    /// the pattern has it.
+    pub fn slot(&self, i: usize, j: usize) -> Option<usize> {
+        let (row, col) = if i >= j { (i, j) } else { (j, i) };
+        let range = self.col_ptr[col]..self.col_ptr[col + 1];
+        self.row_idx[range.clone()].binary_search(&row).ok().map(|offset| range.start + offset)
+    }
+
     /// Adds an element matrix into `values`.
-    pub fn add_element(&self, e: usize, k: &[[f64; 8]; 8], values: &mut [f64]) {
+    pub fn add_element<const N: usize>(&self, e: usize, k: &[[f64; N]; N], values: &mut [f64]) {
         for &(i, j, slot) in &self.slots[e] {
             values[slot] += k[i as usize][j as usize];
         }

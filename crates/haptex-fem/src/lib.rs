@@ -31,6 +31,7 @@ pub mod output;
 pub mod render;
 pub mod ring;
 pub mod scenario;
+pub mod solid3d;
 pub mod solver;
 pub mod statics;
 pub mod surface;

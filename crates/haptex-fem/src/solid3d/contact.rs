@@ -1,0 +1,94 @@
+//! Contact points of a 3D body's skin: the 2x2 Gauss points of each
+//! bilinear face, with their reference positions and areas (the 2D
+//! model's Gauss-point-to-surface scheme, one dimension up), and their
+//! gaps to a rigid plane z = z_plane below the body.
+//!
+//! Small strain: positions and areas are the reference ones, the gap is
+//! the vertical distance of the displaced point to the plane.
+
+use super::mesh::Mesh3;
+
+/// One contact point: on a face of four nodes, the shape-function values
+/// at the point, its reference position (mm) and its area weight (mm^2).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactPoint {
+    pub nodes: [usize; 4],
+    pub shape: [f64; 4],
+    pub position: [f64; 3],
+    pub weight: f64,
+}
+
+/// The contact points of a set of faces.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactSurface {
+    pub points: Vec<ContactPoint>,
+}
+
+impl ContactSurface {
+    /// The 2x2 Gauss points of each face (4 nodes, in order around it).
+    pub fn new(mesh: &Mesh3, faces: &[[usize; 4]]) -> Self {
+        const A: f64 = 0.577_350_269_189_625_8;
+        const CORNERS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+        let mut points = Vec::with_capacity(4 * faces.len());
+        for face in faces {
+            let x = face.map(|n| mesh.nodes[n]);
+            for [gr, gs] in CORNERS.map(|[r, s]| [A * r, A * s]) {
+                let shape = CORNERS.map(|[r, s]| 0.25 * (1.0 + r * gr) * (1.0 + s * gs));
+                let dr = CORNERS.map(|[r, s]| 0.25 * r * (1.0 + s * gs));
+                let ds = CORNERS.map(|[r, s]| 0.25 * s * (1.0 + r * gr));
+                let mut position = [0.0; 3];
+                let (mut tr, mut ts) = ([0.0; 3], [0.0; 3]);
+                for a in 0..4 {
+                    for k in 0..3 {
+                        position[k] += shape[a] * x[a][k];
+                        tr[k] += dr[a] * x[a][k];
+                        ts[k] += ds[a] * x[a][k];
+                    }
+                }
+                let normal =
+                    [tr[1] * ts[2] - tr[2] * ts[1], tr[2] * ts[0] - tr[0] * ts[2], tr[0] * ts[1] - tr[1] * ts[0]];
+                let weight = (normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]).sqrt();
+                points.push(ContactPoint { nodes: *face, shape, position, weight });
+            }
+        }
+        Self { points }
+    }
+
+    /// The vertical gap (mm) of point `q` above the plane z = `plane_z` for
+    /// global displacements `u` (3 per node): negative is penetration.
+    pub fn gap(&self, q: usize, u: &[f64], plane_z: f64) -> f64 {
+        let p = &self.points[q];
+        let w: f64 = (0..4).map(|a| p.shape[a] * u[3 * p.nodes[a] + 2]).sum();
+        p.position[2] + w - plane_z
+    }
+
+    /// The total reference area of the faces (mm^2).
+    pub fn area(&self) -> f64 {
+        self.points.iter().map(|p| p.weight).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn points_integrate_the_area_and_interpolate_positions() {
+        let mut m = Mesh3::block(&[0.0, 1.0, 3.0], &[0.0, 2.0], &[0.0, 1.0]).unwrap();
+        // A tilted bottom: z = 0.1 x, its area grows by sqrt(1 + 0.01).
+        m.map(|[x, y, z]| [x, y, z + 0.1 * x * (1.0 - z)]);
+        let faces: Vec<[usize; 4]> = m.bottom_faces().into_iter().map(|(_, f)| f).collect();
+        let s = ContactSurface::new(&m, &faces);
+        assert_eq!(s.points.len(), 8);
+        assert!((s.area() - 6.0 * (1.01f64).sqrt()).abs() < 1e-12);
+        for p in &s.points {
+            assert!((p.position[2] - 0.1 * p.position[0]).abs() < 1e-12);
+            assert!((p.shape.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+        }
+        // A rigid lift of 0.5 mm raises every gap by 0.5.
+        let u: Vec<f64> = (0..3 * m.n_nodes()).map(|i| if i % 3 == 2 { 0.5 } else { 0.0 }).collect();
+        for q in 0..8 {
+            assert!((s.gap(q, &u, 0.0) - (s.points[q].position[2] + 0.5)).abs() < 1e-15);
+        }
+    }
+}
