@@ -149,13 +149,13 @@ impl StepCoefficients {
 }
 
 /// The part of the deviatoric stress at n+1 that does not depend on the
-/// new strain, for a point with instantaneous deviator `s0` and internal
+/// new strain (N tensor components: 4 in plane strain, 6 in 3D), for a point with instantaneous deviator `s0` and internal
 /// stresses `h` (one per term): sum_i (exp(-dt/tau_i) h_i(n) - gamma_i s0(n)).
 /// The full deviator is then 2 G0 shear_ratio dev(eps(n+1)) + this.
-pub fn frozen_deviator(s0: &[f64; 4], h: &[[f64; 4]], c: &StepCoefficients) -> [f64; 4] {
-    let mut s = [0.0; 4];
+pub fn frozen_deviator<const N: usize>(s0: &[f64; N], h: &[[f64; N]], c: &StepCoefficients) -> [f64; N] {
+    let mut s = [0.0; N];
     for i in 0..c.n_terms() {
-        for k in 0..4 {
+        for k in 0..N {
             s[k] += c.decay[i] * h[i][k] - c.gamma[i] * s0[k];
         }
     }
@@ -164,9 +164,9 @@ pub fn frozen_deviator(s0: &[f64; 4], h: &[[f64; 4]], c: &StepCoefficients) -> [
 
 /// Advances a point's history (`s0`, `h`) to the new instantaneous
 /// deviator `s0_new`.
-pub fn advance_history(s0: &mut [f64; 4], h: &mut [[f64; 4]], c: &StepCoefficients, s0_new: &[f64; 4]) {
+pub fn advance_history<const N: usize>(s0: &mut [f64; N], h: &mut [[f64; N]], c: &StepCoefficients, s0_new: &[f64; N]) {
     for i in 0..c.n_terms() {
-        for k in 0..4 {
+        for k in 0..N {
             h[i][k] = c.decay[i] * h[i][k] + c.gamma[i] * (s0_new[k] - s0[k]);
         }
     }
@@ -174,10 +174,10 @@ pub fn advance_history(s0: &mut [f64; 4], h: &mut [[f64; 4]], c: &StepCoefficien
 }
 
 /// Deviatoric stress g_inf s0 + sum h_i of a point with history (`s0`, `h`).
-pub fn history_deviator(s0: &[f64; 4], h: &[[f64; 4]], g_inf: f64) -> [f64; 4] {
+pub fn history_deviator<const N: usize>(s0: &[f64; N], h: &[[f64; N]], g_inf: f64) -> [f64; N] {
     let mut s = s0.map(|v| g_inf * v);
     for h in h {
-        for k in 0..4 {
+        for k in 0..N {
             s[k] += h[k];
         }
     }

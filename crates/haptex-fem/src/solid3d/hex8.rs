@@ -150,6 +150,22 @@ impl Hex8 {
         ]
     }
 
+    /// Adds the nodal forces of a deviatoric stress `s` (tensor components
+    /// xx, yy, zz, xy, yz, zx; MPa) at Gauss point `gp` to `f`: the
+    /// transpose of the deviatoric strain operator, f_ai += w sum_j
+    /// dev(s)_ij d_j N_a (for a deviator, dev(s) = s).
+    pub fn add_deviator_force(&self, gp: usize, s: &[f64; 6], f: &mut [f64; 24]) {
+        let w = self.weight[gp];
+        let mean = (s[0] + s[1] + s[2]) / 3.0;
+        let t = [[s[0] - mean, s[3], s[5]], [s[3], s[1] - mean, s[4]], [s[5], s[4], s[2] - mean]];
+        for a in 0..8 {
+            let g = self.grad[gp][a];
+            for i in 0..3 {
+                f[3 * a + i] += w * (t[i][0] * g[0] + t[i][1] * g[1] + t[i][2] * g[2]);
+            }
+        }
+    }
+
     /// Element stiffness (24 x 24, DOFs u_a, v_a, w_a interleaved) for
     /// shear modulus `g_mpa` and bulk modulus `k_mpa`: the second variation
     /// of the energy G dev(eps):dev(eps) + K/2 theta^2, i.e. for node a in
@@ -327,6 +343,28 @@ mod tests {
                 assert!((s[0] - (2.0 * g * (eps[0][0] - theta / 3.0) + bulk * theta)).abs() < 1e-12);
                 assert!((s[4] - 2.0 * g * eps[1][2]).abs() < 1e-12);
             }
+        }
+    }
+
+    /// The deviator forces are the transpose of the stiffness's deviatoric
+    /// part: sum_gp w Bd^T (2G dev eps(u)) = K(G, K = 0) u.
+    #[test]
+    fn deviator_forces_are_the_stiffness_transpose() {
+        let x = distorted_nodes();
+        let h = Hex8::new(&x).unwrap();
+        let u: [f64; 24] = std::array::from_fn(|i| 0.01 * ((i * 7 % 11) as f64 - 5.0));
+        let g = 0.4;
+        let k = h.stiffness(Formulation::BBar, g, 0.0);
+        let mut f = [0.0; 24];
+        for gp in 0..8 {
+            let e = h.strain(gp, &u);
+            let mean = (e[0] + e[1] + e[2]) / 3.0;
+            let s = [e[0] - mean, e[1] - mean, e[2] - mean, e[3], e[4], e[5]].map(|v| 2.0 * g * v);
+            h.add_deviator_force(gp, &s, &mut f);
+        }
+        for i in 0..24 {
+            let ku: f64 = (0..24).map(|j| k[i][j] * u[j]).sum();
+            assert!((ku - f[i]).abs() < 1e-14, "row {i}: {ku} vs {}", f[i]);
         }
     }
 
