@@ -79,7 +79,9 @@ fn press(h0: f64, indents: &[f64]) -> Vec<Pressed> {
     prescribed.sort_unstable_by_key(|p| p.0);
     prescribed.dedup_by_key(|p| p.0);
     // eps_N: the penetration p0 / eps_N is below 0.2% of the approach.
-    let mut body = ElasticBody::new(mesh, Formulation::BBar, E_MPA, NU, &prescribed, contact, 100.0).unwrap();
+    let one_material = vec![0; mesh.elements.len()];
+    let mut body =
+        ElasticBody::new(mesh, Formulation::BBar, &[(E_MPA, NU)], &one_material, &prescribed, contact, 100.0).unwrap();
     eprintln!("hertz: h0 {h0} mm, {} unknowns, factor {} non-zeros", body.n_free(), body.factor_nnz());
     let mut start: Option<(f64, Vec<f64>)> = None;
     let mut out = Vec::new();

@@ -5,10 +5,13 @@
 //! penalty contact of an elastic body with a rigid plane ([`solver`]),
 //! checked against Hertz's sphere on a flat (tests/hertz_sphere.rs), and
 //! the visco-elastic body of several materials with the 2D model's Prony
-//! series ([`body`]; tests/prony_relaxation_3d.rs).
+//! series ([`body`]; tests/prony_relaxation_3d.rs), and the fingertip's
+//! layered ellipsoidal cap ([`fingertip`]; examples/contact_area_3d.rs
+//! presses it onto a flat).
 
 pub mod body;
 pub mod contact;
+pub mod fingertip;
 pub mod hex8;
 pub mod mesh;
 pub mod solver;

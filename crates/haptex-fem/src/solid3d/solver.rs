@@ -25,9 +25,8 @@ pub struct ElasticBody {
     pub mesh: Mesh3,
     pub geometry: Vec<Hex8>,
     pub formulation: Formulation,
-    /// Shear and bulk moduli (MPa), one material.
-    pub g_mpa: f64,
-    pub k_mpa: f64,
+    /// Shear and bulk moduli (MPa) of each element.
+    pub moduli: Vec<(f64, f64)>,
     pub contact: ContactSurface,
     /// Penalty stiffness eps_N in MPa/mm.
     pub penalty_mpa_per_mm: f64,
@@ -78,14 +77,15 @@ pub struct Solution {
 }
 
 impl ElasticBody {
-    /// A body of one linear elastic material (E in MPa, Poisson's ratio
-    /// nu), with the global DOFs in `prescribed` fixed at the values given
-    /// and the contact `surface`; analyses the stiffness pattern.
+    /// A body of linear elastic materials (E in MPa, Poisson's ratio nu),
+    /// element e of `materials[element_material[e]]`, with the global DOFs
+    /// in `prescribed` fixed at the values given and the contact
+    /// `surface`; analyses the stiffness pattern.
     pub fn new(
         mesh: Mesh3,
         formulation: Formulation,
-        e_mpa: f64,
-        nu: f64,
+        materials: &[(f64, f64)],
+        element_material: &[usize],
         prescribed: &[(usize, f64)],
         contact: ContactSurface,
         penalty_mpa_per_mm: f64,
@@ -108,11 +108,18 @@ impl ElasticBody {
         let element_dofs: Vec<Vec<usize>> =
             mesh.elements.iter().map(|nodes| (0..24).map(|i| free[3 * nodes[i / 3] + i % 3]).collect()).collect();
         let pattern = Pattern::from_element_dofs(n_free, &element_dofs);
-        let g_mpa = e_mpa / (2.0 * (1.0 + nu));
-        let k_mpa = e_mpa / (3.0 * (1.0 - 2.0 * nu));
+        assert_eq!(element_material.len(), mesh.elements.len(), "one material index per element");
+        let moduli: Vec<(f64, f64)> = element_material
+            .iter()
+            .map(|&m| {
+                let (e_mpa, nu) = materials[m];
+                (e_mpa / (2.0 * (1.0 + nu)), e_mpa / (3.0 * (1.0 - 2.0 * nu)))
+            })
+            .collect();
         let mut base = vec![0.0; pattern.nnz()];
         for (e, h) in geometry.iter().enumerate() {
-            pattern.add_element(e, &h.stiffness(formulation, g_mpa, k_mpa), &mut base);
+            let (g, k) = moduli[e];
+            pattern.add_element(e, &h.stiffness(formulation, g, k), &mut base);
         }
         let point_slots = contact
             .points
@@ -132,8 +139,7 @@ impl ElasticBody {
             mesh,
             geometry,
             formulation,
-            g_mpa,
-            k_mpa,
+            moduli,
             contact,
             penalty_mpa_per_mm,
             free,
@@ -234,7 +240,8 @@ impl ElasticBody {
             if dofs.iter().all(|&d| self.prescribed_value[d] == 0.0) {
                 continue;
             }
-            let k = self.geometry[e].stiffness(self.formulation, self.g_mpa, self.k_mpa);
+            let (g, bulk) = self.moduli[e];
+            let k = self.geometry[e].stiffness(self.formulation, g, bulk);
             for i in 0..24 {
                 let fi = self.free[dofs[i]];
                 if fi == PRESCRIBED {
