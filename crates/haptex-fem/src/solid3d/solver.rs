@@ -1,15 +1,19 @@
-//! The static, frictionless contact of a linear elastic 3D body with a
-//! rigid plane below it, by penalty: at every contact point the pressure
-//! is p = eps_N d for a penetration d > 0, else 0. The penalty law is
-//! piecewise linear, so Newton's method is an active-set iteration: for a
-//! set of points in contact the equations are linear,
+//! The static contact of a linear elastic 3D body with a rigid plane below
+//! it, by penalty: at every contact point the pressure is p = eps_N d for
+//! a penetration d > 0, and the tangential traction follows Coulomb's law
+//! in both directions (a penalty eps_T on the slip since the last commit,
+//! returned onto the disc |t| <= mu p). Two solvers:
 //!
-//!   (K + sum_active eps_N w N N^T) u_f = f_prescribed + sum_active eps_N w N (z_plane - Z),
+//! - [`ElasticBody::solve`], frictionless: the penalty law is piecewise
+//!   linear, so Newton's method is an active-set iteration, one sparse
+//!   Cholesky factorization (faer) per active set;
+//! - [`ElasticBody::solve_frictional`]: the 2D model's condensation onto
+//!   the contact nodes' unknowns (one factorization of K with them ordered
+//!   last gives their condensed stiffness), then Newton's method with the
+//!   consistent tangent on those unknowns alone, dense.
 //!
-//! solved by one sparse Cholesky factorization (faer; symbolic analysis
-//! once per problem, numeric per active set), and the set is updated
-//! from the new gaps until it no longer changes. The first piece of the
-//! 3D finger pad (issue 39), validated against Hertz's sphere on a flat.
+//! The first pieces of the 3D finger pad (issue 39), validated against
+//! Hertz's sphere on a flat and Cattaneo-Mindlin's partial slip.
 
 use std::collections::HashSet;
 
@@ -37,9 +41,26 @@ pub struct ElasticBody {
     prescribed_value: Vec<f64>,
     /// Stiffness values (lower triangle) without contact.
     base: Vec<f64>,
-    /// For each contact point, the slots of its 4 x 4 z-z couplings
-    /// (None where a DOF is prescribed).
-    point_slots: Vec<[[Option<usize>; 4]; 4]>,
+    /// For each contact point and direction (x, y, z), the slots of its
+    /// 4 x 4 couplings in that direction (None where a DOF is prescribed,
+    /// and for the upper triangle).
+    point_slots: Vec<[[[Option<usize>; 4]; 4]; 3]>,
+    /// Committed friction state of each contact point: its tangential
+    /// traction on the plane and its tangential slip (mm) at the last
+    /// commit ([`ElasticBody::commit_friction`]).
+    committed_traction: Vec<[f64; 2]>,
+    committed_slip: Vec<[f64; 2]>,
+    /// The free unknowns of the contact nodes, ordered last in the
+    /// factorization (their global DOFs, and each global DOF's place among
+    /// them).
+    contact_dofs: Vec<usize>,
+    contact_global: Vec<usize>,
+    contact_index: Vec<Option<usize>>,
+    /// The condensed stiffness on them and their response to the
+    /// prescribed displacements, once computed.
+    condensed: Option<Condensed>,
+    /// Whether the factorization is of K alone (not K plus contact).
+    factor_is_base: bool,
     cholesky: SparseCholesky,
 }
 
@@ -61,6 +82,43 @@ pub enum SolveError {
         "the active set did not settle in {iterations} iterations (it cycles): the penalty or the mesh is unsuitable"
     )]
     NoActiveSet { iterations: usize },
+}
+
+/// The body condensed on its contact unknowns.
+struct Condensed {
+    /// S, m x m column-major.
+    stiffness: Vec<f64>,
+    /// The contact unknowns' displacements under the prescribed ones alone.
+    v0: Vec<f64>,
+}
+
+/// The contact of one set of displacements.
+struct ContactState {
+    forces: Vec<f64>,
+    pressure: Vec<f64>,
+    /// The trial traction of each point in contact (its direction is the
+    /// slip's).
+    trial: Vec<[f64; 2]>,
+    traction: Vec<[f64; 2]>,
+    sticking: Vec<bool>,
+}
+
+/// The solution of one frictional contact problem.
+#[derive(Debug, Clone)]
+pub struct FrictionalSolution {
+    /// Global displacements (mm), 3 per node.
+    pub u: Vec<f64>,
+    /// Contact pressure (MPa) and tangential traction on the plane (MPa)
+    /// at each contact point; zero where open.
+    pub pressure: Vec<f64>,
+    pub traction: Vec<[f64; 2]>,
+    /// Whether each point in contact sticks (false: slips, or open).
+    pub sticking: Vec<bool>,
+    /// Total contact force on the body (N): tangential x, y and normal z.
+    pub force_n: [f64; 3],
+    /// Newton iterations (sparse solves) taken, and factorizations.
+    pub iterations: usize,
+    pub factorizations: usize,
 }
 
 /// The solution of one contact problem.
@@ -125,16 +183,34 @@ impl ElasticBody {
             .points
             .iter()
             .map(|p| {
-                let dof = |a: usize| free[3 * p.nodes[a] + 2];
-                std::array::from_fn(|a| {
-                    std::array::from_fn(|b| {
-                        let (i, j) = (dof(a), dof(b));
-                        if i == PRESCRIBED || j == PRESCRIBED || i < j { None } else { pattern.slot(i, j) }
+                std::array::from_fn(|d| {
+                    let dof = |a: usize| free[3 * p.nodes[a] + d];
+                    std::array::from_fn(|a| {
+                        std::array::from_fn(|b| {
+                            let (i, j) = (dof(a), dof(b));
+                            if i == PRESCRIBED || j == PRESCRIBED || i < j { None } else { pattern.slot(i, j) }
+                        })
                     })
                 })
             })
             .collect();
-        let cholesky = SparseCholesky::new(&pattern, 1)?;
+        let n_points = contact.points.len();
+        // The contact nodes' free unknowns, ordered last.
+        let mut contact_global: Vec<usize> = contact
+            .points
+            .iter()
+            .flat_map(|p| p.nodes)
+            .flat_map(|n| (0..3).map(move |d| 3 * n + d))
+            .filter(|&g| free[g] != PRESCRIBED)
+            .collect();
+        contact_global.sort_unstable();
+        contact_global.dedup();
+        let contact_dofs: Vec<usize> = contact_global.iter().map(|&g| free[g]).collect();
+        let mut contact_index = vec![None; n_dofs];
+        for (k, &g) in contact_global.iter().enumerate() {
+            contact_index[g] = Some(k);
+        }
+        let cholesky = SparseCholesky::with_trailing(&pattern, &contact_dofs, 1)?;
         Ok(Self {
             mesh,
             geometry,
@@ -145,6 +221,13 @@ impl ElasticBody {
             free,
             n_free,
             prescribed_value,
+            committed_traction: vec![[0.0; 2]; n_points],
+            committed_slip: vec![[0.0; 2]; n_points],
+            contact_dofs,
+            contact_global,
+            contact_index,
+            condensed: None,
+            factor_is_base: false,
             base,
             point_slots,
             cholesky,
@@ -206,12 +289,13 @@ impl ElasticBody {
                     }
                     rhs[i] += c * p.shape[a] * (plane_z - p.position[2] - fixed);
                     for b in 0..4 {
-                        if let Some(slot) = self.point_slots[q][a][b] {
+                        if let Some(slot) = self.point_slots[q][2][a][b] {
                             values[slot] += c * p.shape[a] * p.shape[b];
                         }
                     }
                 }
             }
+            self.factor_is_base = false;
             self.cholesky.factorize(&values)?;
             self.cholesky.solve_vec(&mut rhs);
             for g in 0..n_dofs {
@@ -230,6 +314,268 @@ impl ElasticBody {
             active = next;
         }
         Err(SolveError::NoActiveSet { iterations: MAX_ITERATIONS })
+    }
+
+    /// The tangential slip (mm) of contact point `q` relative to a plane
+    /// shifted by `shift`: the point's tangential displacement minus the
+    /// plane's.
+    fn slip(&self, q: usize, u: &[f64], shift: [f64; 2]) -> [f64; 2] {
+        let p = &self.contact.points[q];
+        std::array::from_fn(|d| (0..4).map(|a| p.shape[a] * u[3 * p.nodes[a] + d]).sum::<f64>() - shift[d])
+    }
+
+    /// Commits the friction state of the solution `u` on the plane shifted
+    /// by `shift`: each point's slip and traction become the reference of
+    /// the next load step.
+    pub fn commit_friction(&mut self, u: &[f64], shift: [f64; 2], traction: &[[f64; 2]]) {
+        for q in 0..self.contact.points.len() {
+            self.committed_slip[q] = self.slip(q, u, shift);
+            self.committed_traction[q] = traction[q];
+        }
+    }
+
+    /// Pressed onto the rigid plane z = `plane_z` shifted tangentially by
+    /// `shift` (mm) from the last commit, with Coulomb friction `mu` in
+    /// both tangential directions (penalty `penalty_t` MPa/mm on the slip,
+    /// return mapping onto the disc |t| <= mu p). Path-dependent: the
+    /// trial traction is the committed one plus penalty_t times the slip
+    /// since the commit.
+    ///
+    /// Solved on the contact nodes' unknowns alone (the 2D model's
+    /// condensation, crate::solver): the stiffness K, factorized once with
+    /// those unknowns ordered last, gives their condensed stiffness S (the
+    /// factor's trailing block L, S = L L^T), and the body's response to
+    /// the prescribed displacements v0; equilibrium is S (v - v0) = F(v),
+    /// F the contact forces. Newton's method with the consistent tangent
+    /// (unsymmetric where slipping: the slip limit follows the pressure),
+    /// dense LU, backtracking on |R|^2; converged when |R| is below 1e-10
+    /// of the largest contact force and the correction below 1e-10 mm.
+    pub fn solve_frictional(
+        &mut self,
+        plane_z: f64,
+        shift: [f64; 2],
+        mu: f64,
+        penalty_t: f64,
+        start: Option<&[f64]>,
+    ) -> Result<FrictionalSolution, SolveError> {
+        const MAX_ITERATIONS: usize = 100;
+        let m = self.contact_dofs.len();
+        if !self.factor_is_base {
+            self.cholesky.factorize(&self.base)?;
+            self.factor_is_base = true;
+        }
+        if self.condensed.is_none() {
+            let mut l = vec![0.0; m * m];
+            self.cholesky.trailing_factor(&mut l);
+            // S = L L^T (column-major, symmetric).
+            let mut s = vec![0.0; m * m];
+            for j in 0..m {
+                for i in j..m {
+                    let mut sum = 0.0;
+                    for k in 0..=j {
+                        sum += l[k * m + i] * l[k * m + j];
+                    }
+                    s[j * m + i] = sum;
+                    s[i * m + j] = sum;
+                }
+            }
+            let mut u0 = self.prescribed_load();
+            self.cholesky.solve_vec(&mut u0);
+            let v0 = self.contact_dofs.iter().map(|&f| u0[f]).collect();
+            self.condensed = Some(Condensed { stiffness: s, v0 });
+        }
+        let eps_n = self.penalty_mpa_per_mm;
+        let mut u: Vec<f64> = match start {
+            Some(s) => s.to_vec(),
+            None => self.prescribed_value.clone(),
+        };
+        for (g, &f) in self.free.iter().enumerate() {
+            if f == PRESCRIBED {
+                u[g] = self.prescribed_value[g];
+            } else if start.is_none() {
+                u[g] = 0.0;
+            }
+        }
+        let condensed = self.condensed.as_ref().expect("made above");
+        if start.is_none() {
+            for (k, &f) in self.contact_dofs.iter().enumerate() {
+                u[self.contact_global[k]] = condensed.v0[k];
+                let _ = f;
+            }
+        }
+        let residual_of = |body: &Self, u: &[f64]| -> (Vec<f64>, ContactState) {
+            let state = body.contact_state(u, plane_z, shift, mu, penalty_t);
+            let c = body.condensed.as_ref().expect("made above");
+            let mut r = vec![0.0; m];
+            for j in 0..m {
+                let dv = u[body.contact_global[j]] - c.v0[j];
+                for i in 0..m {
+                    r[i] += c.stiffness[j * m + i] * dv;
+                }
+            }
+            for (k, &g) in body.contact_global.iter().enumerate() {
+                r[k] -= state.forces[g];
+            }
+            (r, state)
+        };
+        let norm2 = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
+        let (mut r, mut state) = residual_of(self, &u);
+        let mut lu = crate::linalg::DenseLu::new(m);
+        for iteration in 1..=MAX_ITERATIONS {
+            let largest_force = state.forces.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let r_max = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            // J = S + D, D = -dF/dv of each point in contact.
+            {
+                let c = self.condensed.as_ref().expect("made above");
+                let mut jac = lu.matrix_mut(m);
+                for j in 0..m {
+                    for i in 0..m {
+                        jac[(i, j)] = c.stiffness[j * m + i];
+                    }
+                }
+                for (q, p) in self.contact.points.iter().enumerate() {
+                    if state.pressure[q] <= 0.0 {
+                        continue;
+                    }
+                    // d(traction)/d(u) of the point: rows x, y (traction),
+                    // columns x, y, z (displacement); the pressure's -eps_N.
+                    let mut dt = [[0.0; 3]; 2];
+                    if state.sticking[q] {
+                        dt[0][0] = penalty_t;
+                        dt[1][1] = penalty_t;
+                    } else {
+                        let trial = state.trial[q];
+                        let size = trial[0].hypot(trial[1]);
+                        let n = [trial[0] / size, trial[1] / size];
+                        let c = mu * state.pressure[q] * penalty_t / size;
+                        for a in 0..2 {
+                            for b in 0..2 {
+                                dt[a][b] = c * (if a == b { 1.0 } else { 0.0 } - n[a] * n[b]);
+                            }
+                            dt[a][2] = -mu * eps_n * n[a];
+                        }
+                    }
+                    for a in 0..4 {
+                        for b in 0..4 {
+                            let nn = p.weight * p.shape[a] * p.shape[b];
+                            let row = |d: usize| self.contact_index[3 * p.nodes[a] + d];
+                            let col = |d: usize| self.contact_index[3 * p.nodes[b] + d];
+                            // Normal: F_z = w N p, dF_z/du_z = -eps_N w N N.
+                            if let (Some(i), Some(j)) = (row(2), col(2)) {
+                                jac[(i, j)] += eps_n * nn;
+                            }
+                            // Tangential: F_t = -w N t, D = +w N N dt/du.
+                            for d in 0..2 {
+                                if let Some(i) = row(d) {
+                                    for e in 0..3 {
+                                        if dt[d][e] != 0.0
+                                            && let Some(j) = col(e)
+                                        {
+                                            jac[(i, j)] += nn * dt[d][e];
+                                        }
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            if !lu.factor() {
+                return Err(SolveError::NoActiveSet { iterations: iteration });
+            }
+            let mut dv: Vec<f64> = r.iter().map(|v| -v).collect();
+            lu.solve(&mut dv);
+            let step_max = dv.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            if r_max <= 1e-10 * largest_force.max(1e-12) && step_max <= 1e-10 {
+                let mut full = self.prescribed_load();
+                for (g, &f) in self.free.iter().enumerate() {
+                    if f != PRESCRIBED {
+                        full[f] += state.forces[g];
+                    }
+                }
+                self.cholesky.solve_vec(&mut full);
+                for (g, &f) in self.free.iter().enumerate() {
+                    if f != PRESCRIBED {
+                        u[g] = full[f];
+                    }
+                }
+                let mut force = [0.0; 3];
+                for (q, p) in self.contact.points.iter().enumerate() {
+                    force[0] -= p.weight * state.traction[q][0];
+                    force[1] -= p.weight * state.traction[q][1];
+                    force[2] += p.weight * state.pressure[q];
+                }
+                return Ok(FrictionalSolution {
+                    u,
+                    pressure: state.pressure,
+                    traction: state.traction,
+                    sticking: state.sticking,
+                    force_n: force,
+                    iterations: iteration,
+                    factorizations: 1,
+                });
+            }
+            // Backtracking on |R|^2.
+            let before = norm2(&r);
+            let mut alpha = 1.0;
+            let original: Vec<f64> = self.contact_global.iter().map(|&g| u[g]).collect();
+            for _ in 0..12 {
+                for (k, &g) in self.contact_global.iter().enumerate() {
+                    u[g] = original[k] + alpha * dv[k];
+                }
+                let (r_new, state_new) = residual_of(self, &u);
+                if norm2(&r_new) <= (1.0 - 1e-4 * alpha) * before || alpha < 1e-3 {
+                    r = r_new;
+                    state = state_new;
+                    break;
+                }
+                alpha *= 0.5;
+            }
+        }
+        Err(SolveError::NoActiveSet { iterations: MAX_ITERATIONS })
+    }
+
+    /// The contact tractions of displacements `u` and the nodal forces they
+    /// put on the body (global vector).
+    fn contact_state(&self, u: &[f64], plane_z: f64, shift: [f64; 2], mu: f64, penalty_t: f64) -> ContactState {
+        let n_points = self.contact.points.len();
+        let mut state = ContactState {
+            forces: vec![0.0; u.len()],
+            pressure: vec![0.0; n_points],
+            trial: vec![[0.0; 2]; n_points],
+            traction: vec![[0.0; 2]; n_points],
+            sticking: vec![false; n_points],
+        };
+        for (q, p) in self.contact.points.iter().enumerate() {
+            let depth = -self.contact.gap(q, u, plane_z);
+            if depth <= 0.0 {
+                continue;
+            }
+            let pressure = self.penalty_mpa_per_mm * depth;
+            let slip = self.slip(q, u, shift);
+            let (t0, s0) = (self.committed_traction[q], self.committed_slip[q]);
+            let trial = [t0[0] + penalty_t * (slip[0] - s0[0]), t0[1] + penalty_t * (slip[1] - s0[1])];
+            let size = trial[0].hypot(trial[1]);
+            let limit = mu * pressure;
+            let traction = if size <= limit {
+                state.sticking[q] = true;
+                trial
+            } else {
+                [limit * trial[0] / size, limit * trial[1] / size]
+            };
+            state.pressure[q] = pressure;
+            state.trial[q] = trial;
+            state.traction[q] = traction;
+            for a in 0..4 {
+                let base = 3 * p.nodes[a];
+                let w = p.weight * p.shape[a];
+                // The plane pushes the body up and resists its slip.
+                state.forces[base] -= w * traction[0];
+                state.forces[base + 1] -= w * traction[1];
+                state.forces[base + 2] += w * pressure;
+            }
+        }
+        state
     }
 
     /// -K_fp u_p: the free DOFs' load from the prescribed displacements.
