@@ -67,7 +67,12 @@ fn cattaneo_mindlin_sphere() {
     let one = vec![0; mesh.elements.len()];
     let mut body =
         ElasticBody::new(mesh, Formulation::BBar, &[(E_MPA, NU)], &one, &prescribed, contact, 100.0).unwrap();
-    eprintln!("cattaneo-mindlin: {} unknowns, factor {} non-zeros", body.n_free(), body.factor_nnz());
+    eprintln!(
+        "cattaneo-mindlin: {} unknowns ({} on the contact nodes), factor {} non-zeros",
+        body.n_free(),
+        body.contact_unknowns(),
+        body.factor_nnz()
+    );
     let penalty_t = 100.0;
     // Pressed without friction (it would not act: beta = 0), then the
     // flat moved along x in three steps, each committed.

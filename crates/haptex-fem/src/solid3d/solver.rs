@@ -239,6 +239,11 @@ impl ElasticBody {
         self.n_free
     }
 
+    /// The contact nodes' free unknowns (the condensed system's size).
+    pub fn contact_unknowns(&self) -> usize {
+        self.contact_dofs.len()
+    }
+
     /// Non-zeros of the Cholesky factor.
     pub fn factor_nnz(&self) -> usize {
         self.cholesky.factor_nnz()
