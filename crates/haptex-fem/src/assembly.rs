@@ -22,7 +22,14 @@ pub struct DofMap {
 impl DofMap {
     /// Numbers the DOFs of `n_nodes` nodes, leaving out those in `prescribed`.
     pub fn new(n_nodes: usize, prescribed: &[usize]) -> Self {
-        let mut free = vec![0; 2 * n_nodes];
+        Self::with_dofs_per_node(n_nodes, 2, prescribed)
+    }
+
+    /// Numbers the DOFs of `n_nodes` nodes of `per_node` DOFs each (3 in
+    /// the 3D model: global DOF per_node n + direction), leaving out those
+    /// in `prescribed`.
+    pub fn with_dofs_per_node(n_nodes: usize, per_node: usize, prescribed: &[usize]) -> Self {
+        let mut free = vec![0; per_node * n_nodes];
         for &d in prescribed {
             free[d] = PRESCRIBED;
         }

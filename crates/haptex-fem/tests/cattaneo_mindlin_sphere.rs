@@ -23,9 +23,11 @@
 //! closed form, whose half-spaces the block only approximates. The normal
 //! force stays within 1e-4 of its value as the flat moves (uncoupled).
 
+mod common;
+
 use haptex_fem::solid3d::contact::ContactSurface;
 use haptex_fem::solid3d::hex8::Formulation;
-use haptex_fem::solid3d::mesh::{Mesh3, Side, graded};
+use haptex_fem::solid3d::mesh::{Side, graded};
 use haptex_fem::solid3d::solver::ElasticBody;
 
 const E_MPA: f64 = 0.1;
@@ -43,20 +45,7 @@ fn cattaneo_mindlin_sphere() {
     let half = graded(h0, 1.3 * a, 1.35, length);
     let xs: Vec<f64> = half.iter().rev().map(|v| -v).chain(half[1..].iter().cloned()).collect();
     let zs = graded(h0, 0.5 * a, 1.35, length);
-    let mut mesh = Mesh3::block(&xs, &half, &zs).unwrap();
-    let r_c = 4.0 * a;
-    let face = |r: f64| if r <= r_c { r * r / (2.0 * R_MM) } else { r_c * r_c / (2.0 * R_MM) + r_c / R_MM * (r - r_c) };
-    mesh.map(|[x, y, z]| [x, y, z + face(x.hypot(y)) * (1.0 - z / length)]);
-    // The faces that may touch: centres within 1.6 a (the contact reaches a).
-    let faces: Vec<[usize; 4]> = mesh
-        .bottom_faces()
-        .into_iter()
-        .map(|(_, f)| f)
-        .filter(|f| {
-            let c: [f64; 2] = std::array::from_fn(|k| f.iter().map(|&n| mesh.nodes[n][k]).sum::<f64>() / 4.0);
-            c[0].hypot(c[1]) < 1.6 * a
-        })
-        .collect();
+    let (mesh, faces) = common::paraboloid_block(&xs, &half, &zs, R_MM, a);
     let contact = ContactSurface::new(&mesh, &faces);
     let mut prescribed: Vec<(usize, f64)> = mesh.side_nodes(Side::YMin).into_iter().map(|n| (3 * n + 1, 0.0)).collect();
     for n in mesh.side_nodes(Side::ZMax) {

@@ -103,3 +103,34 @@ pub fn cylinder_on_flat(
         display: None,
     }
 }
+
+/// The body of the 3D contact tests (Hertz, Cattaneo-Mindlin): the block
+/// over the grid `xs` x `ys` x `zs` (z from 0 to `length`) whose bottom
+/// face becomes Hertz's paraboloid z = r^2 / (2 `radius`) out to 4 `a`,
+/// continued by its tangent cone beyond (C1, so that the far corners stay
+/// thick; the contact reaches a), the top kept flat; with the bottom
+/// faces that may touch (centres within 1.6 a).
+pub fn paraboloid_block(
+    xs: &[f64],
+    ys: &[f64],
+    zs: &[f64],
+    radius: f64,
+    a: f64,
+) -> (haptex_fem::solid3d::mesh::Mesh3, Vec<[usize; 4]>) {
+    let length = *zs.last().expect("z coordinates");
+    let mut mesh = haptex_fem::solid3d::mesh::Mesh3::block(xs, ys, zs).expect("a valid grid");
+    let r_c = 4.0 * a;
+    let face =
+        |r: f64| if r <= r_c { r * r / (2.0 * radius) } else { r_c * r_c / (2.0 * radius) + r_c / radius * (r - r_c) };
+    mesh.map(|[x, y, z]| [x, y, z + face(x.hypot(y)) * (1.0 - z / length)]);
+    let faces = mesh
+        .bottom_faces()
+        .into_iter()
+        .map(|(_, f)| f)
+        .filter(|f| {
+            let c: [f64; 2] = std::array::from_fn(|k| f.iter().map(|&n| mesh.nodes[n][k]).sum::<f64>() / 4.0);
+            c[0].hypot(c[1]) < 1.6 * a
+        })
+        .collect();
+    (mesh, faces)
+}

@@ -27,9 +27,11 @@
 //! - beta: negative (a block held at its top is stiffer than a half-space)
 //!   and at most 5% of the approach at the largest force (measured 2.8%).
 
+mod common;
+
 use haptex_fem::solid3d::contact::ContactSurface;
 use haptex_fem::solid3d::hex8::Formulation;
-use haptex_fem::solid3d::mesh::{Mesh3, Side, graded};
+use haptex_fem::solid3d::mesh::{Side, graded};
 use haptex_fem::solid3d::solver::ElasticBody;
 
 const E_MPA: f64 = 0.1;
@@ -55,23 +57,7 @@ fn press(h0: f64, indents: &[f64]) -> Vec<Pressed> {
     let length = 24.0 * a_max;
     let xs = graded(h0, 1.3 * a_max, 1.35, length);
     let zs = graded(h0, 0.5 * a_max, 1.35, length);
-    let mut mesh = Mesh3::block(&xs, &xs, &zs).unwrap();
-    // The bottom face becomes z = r^2 / (2R) out to 4 a (the contact
-    // reaches a), continued by its tangent cone beyond (C1), so that the
-    // block's far corners stay thick; the top stays flat.
-    let r_c = 4.0 * a_max;
-    let face = |r: f64| if r <= r_c { r * r / (2.0 * R_MM) } else { r_c * r_c / (2.0 * R_MM) + r_c / R_MM * (r - r_c) };
-    mesh.map(|[x, y, z]| [x, y, z + face(x.hypot(y)) * (1.0 - z / length)]);
-    // The faces that may touch: centres within 1.6 a (the contact reaches a).
-    let faces: Vec<[usize; 4]> = mesh
-        .bottom_faces()
-        .into_iter()
-        .map(|(_, f)| f)
-        .filter(|f| {
-            let c: [f64; 2] = std::array::from_fn(|k| f.iter().map(|&n| mesh.nodes[n][k]).sum::<f64>() / 4.0);
-            c[0].hypot(c[1]) < 1.6 * a_max
-        })
-        .collect();
+    let (mesh, faces) = common::paraboloid_block(&xs, &xs, &zs, R_MM, a_max);
     let contact = ContactSurface::new(&mesh, &faces);
     let mut prescribed = Vec::new();
     for n in mesh.side_nodes(Side::XMin) {

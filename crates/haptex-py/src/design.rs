@@ -261,12 +261,20 @@ pub fn device_file(device: Option<&Bound<'_, PyAny>>) -> PyResult<Option<DesignD
     device.map(|d| DesignDevice::read(&input_path("device", d)?, ArgNames::PYTHON).or_raise()).transpose()
 }
 
-/// With a device file, refuses the arguments whose values come from it
-/// (`given`: whether each was given, and its name), as the command line
-/// refuses those flags beside --device.
-pub fn refuse_set_by_file(file: Option<&DesignDevice>, given: &[(bool, &str)]) -> PyResult<()> {
+/// With a device file, refuses the arguments whose values come from it,
+/// as the command line refuses those flags beside --device: the display's
+/// constants every design function takes (`constants`: mu_hd, eps_sc,
+/// eps_i, d_sc_mm, d_i_mm, k_mm2_per_n, as given), then the function's
+/// own (`others`: whether each was given, and its name).
+pub fn refuse_set_by_file(
+    file: Option<&DesignDevice>,
+    constants: [Option<f64>; 6],
+    others: &[(bool, &str)],
+) -> PyResult<()> {
     let Some(file) = file else { return Ok(()) };
-    match given.iter().find(|(g, _)| *g) {
+    const NAMES: [&str; 6] = ["mu_hd", "eps_sc", "eps_i", "d_sc_mm", "d_i_mm", "k_mm2_per_n"];
+    let mut given = constants.iter().zip(NAMES).map(|(c, name)| (c.is_some(), name)).chain(others.iter().copied());
+    match given.find(|(g, _)| *g) {
         Some((_, name)) => Err(input(format!(
             "{name} cannot be given with device=: the device file {} sets it (drop {name}; u_max may lower the \
              file's U_max, never raise it)",
@@ -470,13 +478,8 @@ pub fn voltage(
     let file = device_file(device)?;
     refuse_set_by_file(
         file.as_ref(),
+        [mu_hd, eps_sc, eps_i, d_sc_mm, d_i_mm, k_mm2_per_n],
         &[
-            (mu_hd.is_some(), "mu_hd"),
-            (eps_sc.is_some(), "eps_sc"),
-            (eps_i.is_some(), "eps_i"),
-            (d_sc_mm.is_some(), "d_sc_mm"),
-            (d_i_mm.is_some(), "d_i_mm"),
-            (k_mm2_per_n.is_some(), "k_mm2_per_n"),
             (area_exponent.is_some(), "area_exponent"),
             (force_model != "eq3", "force_model"),
             (rho_sc_ohm_m.is_some(), "rho_sc_ohm_m"),

@@ -833,16 +833,8 @@ pub fn check(
     let file = device_file(device)?;
     refuse_set_by_file(
         file.as_ref(),
-        &[
-            (mu_hd.is_some(), "mu_hd"),
-            (eps_sc.is_some(), "eps_sc"),
-            (eps_i.is_some(), "eps_i"),
-            (d_sc_mm.is_some(), "d_sc_mm"),
-            (d_i_mm.is_some(), "d_i_mm"),
-            (k_mm2_per_n.is_some(), "k_mm2_per_n"),
-            (fe_k, "fe_k"),
-            (ultrasonic_calibration.is_some(), "ultrasonic_calibration"),
-        ],
+        [mu_hd, eps_sc, eps_i, d_sc_mm, d_i_mm, k_mm2_per_n],
+        &[(fe_k, "fe_k"), (ultrasonic_calibration.is_some(), "ultrasonic_calibration")],
     )?;
     // The carrier the design will be played on: the device file's c is
     // measured per carrier (without a file, eq. 3 does not depend on it).

@@ -531,15 +531,8 @@ pub fn map_voltage(
     let file = device_file(device)?;
     refuse_set_by_file(
         file.as_ref(),
-        &[
-            (mu_hd.is_some(), "mu_hd"),
-            (eps_sc.is_some(), "eps_sc"),
-            (eps_i.is_some(), "eps_i"),
-            (d_sc_mm.is_some(), "d_sc_mm"),
-            (d_i_mm.is_some(), "d_i_mm"),
-            (k_mm2_per_n.is_some(), "k_mm2_per_n"),
-            (ultrasonic_calibration.is_some(), "ultrasonic_calibration"),
-        ],
+        [mu_hd, eps_sc, eps_i, d_sc_mm, d_i_mm, k_mm2_per_n],
+        &[(ultrasonic_calibration.is_some(), "ultrasonic_calibration")],
     )?;
     let (device, notes) = match &file {
         Some(file) => {

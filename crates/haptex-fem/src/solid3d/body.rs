@@ -12,7 +12,7 @@
 
 use super::hex8::{Formulation, Hex8};
 use super::mesh::{Mesh3, MeshError};
-use crate::assembly::{PRESCRIBED, Pattern};
+use crate::assembly::{DofMap, PRESCRIBED, Pattern};
 use crate::linalg::{FactorError, SparseCholesky};
 use crate::material::{Material, MaterialError, StepCoefficients, advance_history, frozen_deviator, history_deviator};
 
@@ -71,17 +71,7 @@ impl ViscoelasticBody {
         }
         assert_eq!(element_material.len(), mesh.elements.len(), "one material index per element");
         let geometry = mesh.geometry()?;
-        let mut free = vec![0usize; 3 * mesh.n_nodes()];
-        for &d in prescribed {
-            free[d] = PRESCRIBED;
-        }
-        let mut n_free = 0;
-        for f in free.iter_mut() {
-            if *f != PRESCRIBED {
-                *f = n_free;
-                n_free += 1;
-            }
-        }
+        let DofMap { free, n_free } = DofMap::with_dofs_per_node(mesh.n_nodes(), 3, prescribed);
         let element_dofs: Vec<Vec<usize>> =
             mesh.elements.iter().map(|nodes| (0..24).map(|i| free[3 * nodes[i / 3] + i % 3]).collect()).collect();
         let pattern = Pattern::from_element_dofs(n_free, &element_dofs);

@@ -20,7 +20,7 @@ use std::collections::HashSet;
 use super::contact::ContactSurface;
 use super::hex8::{Formulation, Hex8};
 use super::mesh::{Mesh3, MeshError};
-use crate::assembly::{PRESCRIBED, Pattern};
+use crate::assembly::{DofMap, PRESCRIBED, Pattern};
 use crate::linalg::{FactorError, SparseCholesky};
 
 /// A linear elastic body, its prescribed displacements and its contact
@@ -150,19 +150,12 @@ impl ElasticBody {
     ) -> Result<Self, BodyError> {
         let geometry = mesh.geometry()?;
         let n_dofs = 3 * mesh.n_nodes();
-        let mut free = vec![0usize; n_dofs];
         let mut prescribed_value = vec![0.0; n_dofs];
         for &(d, v) in prescribed {
-            free[d] = PRESCRIBED;
             prescribed_value[d] = v;
         }
-        let mut n_free = 0;
-        for f in free.iter_mut() {
-            if *f != PRESCRIBED {
-                *f = n_free;
-                n_free += 1;
-            }
-        }
+        let fixed: Vec<usize> = prescribed.iter().map(|&(d, _)| d).collect();
+        let DofMap { free, n_free } = DofMap::with_dofs_per_node(mesh.n_nodes(), 3, &fixed);
         let element_dofs: Vec<Vec<usize>> =
             mesh.elements.iter().map(|nodes| (0..24).map(|i| free[3 * nodes[i / 3] + i % 3]).collect()).collect();
         let pattern = Pattern::from_element_dofs(n_free, &element_dofs);
@@ -256,15 +249,7 @@ impl ElasticBody {
         const MAX_ITERATIONS: usize = 100;
         let eps = self.penalty_mpa_per_mm;
         let n_dofs = self.free.len();
-        let mut u: Vec<f64> = match start {
-            Some(s) => s.to_vec(),
-            None => self.prescribed_value.clone(),
-        };
-        for (g, &f) in self.free.iter().enumerate() {
-            if f == PRESCRIBED {
-                u[g] = self.prescribed_value[g];
-            }
-        }
+        let mut u = self.starting_displacements(start);
         let mut active: Vec<bool> =
             (0..self.contact.points.len()).map(|q| self.contact.gap(q, &u, plane_z) < 0.0).collect();
         let mut seen: HashSet<Vec<bool>> = HashSet::new();
@@ -390,17 +375,7 @@ impl ElasticBody {
             self.condensed = Some(Condensed { stiffness: s, v0 });
         }
         let eps_n = self.penalty_mpa_per_mm;
-        let mut u: Vec<f64> = match start {
-            Some(s) => s.to_vec(),
-            None => self.prescribed_value.clone(),
-        };
-        for (g, &f) in self.free.iter().enumerate() {
-            if f == PRESCRIBED {
-                u[g] = self.prescribed_value[g];
-            } else if start.is_none() {
-                u[g] = 0.0;
-            }
-        }
+        let mut u = self.starting_displacements(start);
         let condensed = self.condensed.as_ref().expect("made above");
         if start.is_none() {
             for (k, &f) in self.contact_dofs.iter().enumerate() {
@@ -581,6 +556,17 @@ impl ElasticBody {
             }
         }
         state
+    }
+
+    /// `start` (or zero) with the prescribed values in place.
+    fn starting_displacements(&self, start: Option<&[f64]>) -> Vec<f64> {
+        let mut u = start.map_or_else(|| vec![0.0; self.free.len()], <[f64]>::to_vec);
+        for (g, &f) in self.free.iter().enumerate() {
+            if f == PRESCRIBED {
+                u[g] = self.prescribed_value[g];
+            }
+        }
+        u
     }
 
     /// -K_fp u_p: the free DOFs' load from the prescribed displacements.
