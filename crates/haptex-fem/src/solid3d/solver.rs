@@ -59,9 +59,14 @@ pub struct ElasticBody {
     /// The condensed stiffness on them and their response to the
     /// prescribed displacements, once computed.
     condensed: Option<Condensed>,
-    /// Whether the factorization is of K alone (not K plus contact).
-    factor_is_base: bool,
+    pattern: Pattern,
+    /// The active-set solver's factorization (AMD ordering; K plus the
+    /// contact penalties of the active set).
     cholesky: SparseCholesky,
+    /// The condensed solver's factorization of K alone, with the contact
+    /// unknowns ordered last; made at its first use (a large contact
+    /// surface makes its trailing block dense and costly).
+    trailing: Option<SparseCholesky>,
 }
 
 /// Why a body cannot be set up.
@@ -203,7 +208,7 @@ impl ElasticBody {
         for (k, &g) in contact_global.iter().enumerate() {
             contact_index[g] = Some(k);
         }
-        let cholesky = SparseCholesky::with_trailing(&pattern, &contact_dofs, 1)?;
+        let cholesky = SparseCholesky::new(&pattern, 1)?;
         Ok(Self {
             mesh,
             geometry,
@@ -220,7 +225,8 @@ impl ElasticBody {
             contact_global,
             contact_index,
             condensed: None,
-            factor_is_base: false,
+            pattern,
+            trailing: None,
             base,
             point_slots,
             cholesky,
@@ -285,7 +291,6 @@ impl ElasticBody {
                     }
                 }
             }
-            self.factor_is_base = false;
             self.cholesky.factorize(&values)?;
             self.cholesky.solve_vec(&mut rhs);
             for g in 0..n_dofs {
@@ -350,13 +355,11 @@ impl ElasticBody {
     ) -> Result<FrictionalSolution, SolveError> {
         const MAX_ITERATIONS: usize = 100;
         let m = self.contact_dofs.len();
-        if !self.factor_is_base {
-            self.cholesky.factorize(&self.base)?;
-            self.factor_is_base = true;
-        }
-        if self.condensed.is_none() {
+        if self.trailing.is_none() {
+            let mut trailing = SparseCholesky::with_trailing(&self.pattern, &self.contact_dofs, 1)?;
+            trailing.factorize(&self.base)?;
             let mut l = vec![0.0; m * m];
-            self.cholesky.trailing_factor(&mut l);
+            trailing.trailing_factor(&mut l);
             // S = L L^T (column-major, symmetric).
             let mut s = vec![0.0; m * m];
             for j in 0..m {
@@ -370,9 +373,10 @@ impl ElasticBody {
                 }
             }
             let mut u0 = self.prescribed_load();
-            self.cholesky.solve_vec(&mut u0);
+            trailing.solve_vec(&mut u0);
             let v0 = self.contact_dofs.iter().map(|&f| u0[f]).collect();
             self.condensed = Some(Condensed { stiffness: s, v0 });
+            self.trailing = Some(trailing);
         }
         let eps_n = self.penalty_mpa_per_mm;
         let mut u = self.starting_displacements(start);
@@ -473,7 +477,7 @@ impl ElasticBody {
                         full[f] += state.forces[g];
                     }
                 }
-                self.cholesky.solve_vec(&mut full);
+                self.trailing.as_mut().expect("made above").solve_vec(&mut full);
                 for (g, &f) in self.free.iter().enumerate() {
                     if f != PRESCRIBED {
                         u[g] = full[f];
