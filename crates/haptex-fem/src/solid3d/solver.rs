@@ -121,7 +121,8 @@ pub struct FrictionalSolution {
     pub sticking: Vec<bool>,
     /// Total contact force on the body (N): tangential x, y and normal z.
     pub force_n: [f64; 3],
-    /// Newton iterations (sparse solves) taken, and factorizations.
+    /// Newton iterations taken, and sparse factorizations made (one, at
+    /// the body's first frictional solve; none after).
     pub iterations: usize,
     pub factorizations: usize,
 }
@@ -355,6 +356,7 @@ impl ElasticBody {
     ) -> Result<FrictionalSolution, SolveError> {
         const MAX_ITERATIONS: usize = 100;
         let m = self.contact_dofs.len();
+        let factorized_now = self.trailing.is_none();
         if self.trailing.is_none() {
             let mut trailing = SparseCholesky::with_trailing(&self.pattern, &self.contact_dofs, 1)?;
             trailing.factorize(&self.base)?;
@@ -496,7 +498,7 @@ impl ElasticBody {
                     sticking: state.sticking,
                     force_n: force,
                     iterations: iteration,
-                    factorizations: 1,
+                    factorizations: usize::from(factorized_now),
                 });
             }
             // Backtracking on |R|^2.
