@@ -71,10 +71,9 @@ impl ViscoelasticBody {
         }
         assert_eq!(element_material.len(), mesh.elements.len(), "one material index per element");
         let geometry = mesh.geometry()?;
-        let DofMap { free, n_free } = DofMap::with_dofs_per_node(mesh.n_nodes(), 3, prescribed);
-        let element_dofs: Vec<Vec<usize>> =
-            mesh.elements.iter().map(|nodes| (0..24).map(|i| free[3 * nodes[i / 3] + i % 3]).collect()).collect();
-        let pattern = Pattern::from_element_dofs(n_free, &element_dofs);
+        let dofs = DofMap::with_dofs_per_node(mesh.n_nodes(), 3, prescribed);
+        let pattern = mesh.pattern(&dofs);
+        let DofMap { free, n_free } = dofs;
         let cholesky = SparseCholesky::new(&pattern, 1)?;
         let mut history_start = Vec::with_capacity(mesh.elements.len() + 1);
         let mut count = 0;
@@ -141,8 +140,7 @@ impl ViscoelasticBody {
         for (e, h) in self.geometry.iter().enumerate() {
             let mi = self.element_material[e];
             let (m, c) = (&self.materials[mi], &self.coefficients[mi]);
-            let nodes = self.mesh.elements[e];
-            let dofs: [usize; 24] = std::array::from_fn(|i| 3 * nodes[i / 3] + i % 3);
+            let dofs = self.mesh.element_dofs(e);
             // Frozen history forces, and the prescribed displacements'.
             let mut f = [0.0; 24];
             let per_point = 1 + m.prony.len();
@@ -205,8 +203,7 @@ impl ViscoelasticBody {
     }
 
     fn element_displacements(&self, e: usize, u: &[f64]) -> [f64; 24] {
-        let nodes = self.mesh.elements[e];
-        std::array::from_fn(|i| u[3 * nodes[i / 3] + i % 3])
+        self.mesh.element_dofs(e).map(|d| u[d])
     }
 
     /// The stress (tensor components xx, yy, zz, xy, yz, zx; MPa) at Gauss

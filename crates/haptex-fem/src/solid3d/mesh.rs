@@ -88,6 +88,20 @@ impl Mesh3 {
         self.nodes.len()
     }
 
+    /// The global DOFs (3 n + direction) of element `e`, in the order of
+    /// its matrices' rows (u_a, v_a, w_a interleaved).
+    pub fn element_dofs(&self, e: usize) -> [usize; 24] {
+        let nodes = self.elements[e];
+        std::array::from_fn(|i| 3 * nodes[i / 3] + i % 3)
+    }
+
+    /// The stiffness pattern of the free DOFs of `dofs` (3 per node).
+    pub fn pattern(&self, dofs: &crate::assembly::DofMap) -> crate::assembly::Pattern {
+        let element_dofs: Vec<Vec<usize>> =
+            (0..self.elements.len()).map(|e| self.element_dofs(e).map(|d| dofs.free[d]).to_vec()).collect();
+        crate::assembly::Pattern::from_element_dofs(dofs.n_free, &element_dofs)
+    }
+
     /// Moves every node by `f` (the grid's topology is kept).
     pub fn map(&mut self, f: impl Fn([f64; 3]) -> [f64; 3]) {
         for p in &mut self.nodes {

@@ -161,10 +161,9 @@ impl ElasticBody {
             prescribed_value[d] = v;
         }
         let fixed: Vec<usize> = prescribed.iter().map(|&(d, _)| d).collect();
-        let DofMap { free, n_free } = DofMap::with_dofs_per_node(mesh.n_nodes(), 3, &fixed);
-        let element_dofs: Vec<Vec<usize>> =
-            mesh.elements.iter().map(|nodes| (0..24).map(|i| free[3 * nodes[i / 3] + i % 3]).collect()).collect();
-        let pattern = Pattern::from_element_dofs(n_free, &element_dofs);
+        let dofs = DofMap::with_dofs_per_node(mesh.n_nodes(), 3, &fixed);
+        let pattern = mesh.pattern(&dofs);
+        let DofMap { free, n_free } = dofs;
         assert_eq!(element_material.len(), mesh.elements.len(), "one material index per element");
         let moduli: Vec<(f64, f64)> = element_material
             .iter()
@@ -578,8 +577,8 @@ impl ElasticBody {
     /// -K_fp u_p: the free DOFs' load from the prescribed displacements.
     fn prescribed_load(&self) -> Vec<f64> {
         let mut f = vec![0.0; self.n_free];
-        for (e, nodes) in self.mesh.elements.iter().enumerate() {
-            let dofs: [usize; 24] = std::array::from_fn(|i| 3 * nodes[i / 3] + i % 3);
+        for e in 0..self.mesh.elements.len() {
+            let dofs = self.mesh.element_dofs(e);
             if dofs.iter().all(|&d| self.prescribed_value[d] == 0.0) {
                 continue;
             }
