@@ -61,14 +61,22 @@ impl ContactLaw {
     /// method). Equivalent to moving the surface by delta/2 under full
     /// pressure: with delta = 0.2 um, negligible next to the 250 um press.
     pub fn pressure(&self, depth: f64) -> (f64, f64) {
-        let (e, delta) = (self.penalty_normal, self.smoothing_mm);
-        if depth <= 0.0 {
-            (0.0, 0.0)
-        } else if depth < delta {
-            (e * depth * depth / (2.0 * delta), e * depth / delta)
-        } else {
-            (e * (depth - 0.5 * delta), e)
-        }
+        smoothed_penalty(self.penalty_normal, self.smoothing_mm, depth)
+    }
+}
+
+/// The normal pressure (MPa) of a penalty `eps_n` (MPa/mm) with a C1 onset
+/// over `smoothing_mm` at a penetration `depth` (mm), and its derivative
+/// with respect to the depth ([`ContactLaw::pressure`]; the 3D finger's
+/// contact uses it too).
+pub fn smoothed_penalty(eps_n: f64, smoothing_mm: f64, depth: f64) -> (f64, f64) {
+    let (e, delta) = (eps_n, smoothing_mm);
+    if depth <= 0.0 {
+        (0.0, 0.0)
+    } else if depth < delta {
+        (e * depth * depth / (2.0 * delta), e * depth / delta)
+    } else {
+        (e * (depth - 0.5 * delta), e)
     }
 }
 

@@ -554,7 +554,7 @@ impl RigidSurface {
     /// (a polyline's jump at each vertex kept Newton's method from
     /// converging over crests).
     pub fn project(&self, p: [f64; 2]) -> Option<Projection> {
-        let [hp, slope, second] = self.curve_at(p[0]);
+        let [hp, slope, second] = self.height_derivatives(p[0]);
         let vertical = hp - p[1];
         if vertical.is_nan() || vertical <= 0.0 {
             return None;
@@ -564,7 +564,7 @@ impl RigidSurface {
         } else {
             self.closest_parameter(p, vertical)
         };
-        let [h, h1, h2] = self.curve_at(s);
+        let [h, h1, h2] = self.height_derivatives(s);
         let length = h1.hypot(1.0);
         let normal = [-h1 / length, 1.0 / length];
         let tangent = [1.0 / length, h1 / length];
@@ -579,7 +579,7 @@ impl RigidSurface {
     }
 
     /// h, h', h'' of the curve, held flat outside the range.
-    fn curve_at(&self, x: f64) -> [f64; 3] {
+    pub fn height_derivatives(&self, x: f64) -> [f64; 3] {
         let (lo, hi) = self.range();
         if x < lo || x > hi { [self.curve.eval(x.clamp(lo, hi))[0], 0.0, 0.0] } else { self.curve.eval(x) }
     }
@@ -661,7 +661,7 @@ impl RigidSurface {
         let start = self.x[i] + t * (self.x[i + 1] - self.x[i]);
         // g'(s) and g''(s) of g(s) = |c(s) - p|^2 / 2.
         let derivatives = |s: f64| {
-            let [h, h1, h2] = self.curve_at(s);
+            let [h, h1, h2] = self.height_derivatives(s);
             ((s - p[0]) + (h - p[1]) * h1, 1.0 + h1 * h1 + (h - p[1]) * h2)
         };
         // Bracket: the neighbouring vertices, widened until g' changes sign

@@ -12,8 +12,11 @@
 //! presses it onto a flat).
 
 pub mod body;
+pub mod condensed;
 pub mod contact;
 pub mod fingertip;
+pub mod friction;
 pub mod hex8;
 pub mod mesh;
 pub mod solver;
+pub mod surface;

@@ -8,18 +8,21 @@
 //!   linear, so Newton's method is an active-set iteration, one sparse
 //!   Cholesky factorization (faer) per active set;
 //! - [`ElasticBody::solve_frictional`]: the 2D model's condensation onto
-//!   the contact nodes' unknowns (one factorization of K with them ordered
-//!   last gives their condensed stiffness), then Newton's method with the
-//!   consistent tangent on those unknowns alone, dense.
+//!   the contact nodes' unknowns ([`super::condensed`]), then Newton's
+//!   method with the consistent tangent of the contact law
+//!   ([`super::friction`]) on those unknowns alone, dense.
 //!
 //! The first pieces of the 3D finger pad (issue 39), validated against
 //! Hertz's sphere on a flat and Cattaneo-Mindlin's partial slip.
 
 use std::collections::HashSet;
 
+use super::condensed::{Condensation, EquilibriumError};
 use super::contact::ContactSurface;
+use super::friction::{Committed, FrictionLaw};
 use super::hex8::{Formulation, Hex8};
 use super::mesh::{Mesh3, MeshError};
+use super::surface::HeightField;
 use crate::assembly::{DofMap, PRESCRIBED, Pattern};
 use crate::linalg::{FactorError, SparseCholesky};
 
@@ -45,20 +48,10 @@ pub struct ElasticBody {
     /// 4 x 4 couplings in that direction (None where a DOF is prescribed,
     /// and for the upper triangle).
     point_slots: Vec<[[[Option<usize>; 4]; 4]; 3]>,
-    /// Committed friction state of each contact point: its tangential
-    /// traction on the plane and its tangential slip (mm) at the last
+    /// Committed friction state of each contact point: its position
+    /// relative to the plane and its tangential traction at the last
     /// commit ([`ElasticBody::commit_friction`]).
-    committed_traction: Vec<[f64; 2]>,
-    committed_slip: Vec<[f64; 2]>,
-    /// The free unknowns of the contact nodes, ordered last in the
-    /// factorization (their global DOFs, and each global DOF's place among
-    /// them).
-    contact_dofs: Vec<usize>,
-    contact_global: Vec<usize>,
-    contact_index: Vec<Option<usize>>,
-    /// The condensed stiffness on them and their response to the
-    /// prescribed displacements, once computed.
-    condensed: Option<Condensed>,
+    committed: Vec<Committed>,
     pattern: Pattern,
     /// The active-set solver's factorization (AMD ordering; K plus the
     /// contact penalties of the active set).
@@ -66,7 +59,7 @@ pub struct ElasticBody {
     /// The condensed solver's factorization of K alone, with the contact
     /// unknowns ordered last; made at its first use (a large contact
     /// surface makes its trailing block dense and costly).
-    trailing: Option<SparseCholesky>,
+    condensation: Option<Condensation>,
 }
 
 /// Why a body cannot be set up.
@@ -87,25 +80,8 @@ pub enum SolveError {
         "the active set did not settle in {iterations} iterations (it cycles): the penalty or the mesh is unsuitable"
     )]
     NoActiveSet { iterations: usize },
-}
-
-/// The body condensed on its contact unknowns.
-struct Condensed {
-    /// S, m x m column-major.
-    stiffness: Vec<f64>,
-    /// The contact unknowns' displacements under the prescribed ones alone.
-    v0: Vec<f64>,
-}
-
-/// The contact of one set of displacements.
-struct ContactState {
-    forces: Vec<f64>,
-    pressure: Vec<f64>,
-    /// The trial traction of each point in contact (its direction is the
-    /// slip's).
-    trial: Vec<[f64; 2]>,
-    traction: Vec<[f64; 2]>,
-    sticking: Vec<bool>,
+    #[error(transparent)]
+    Equilibrium(#[from] EquilibriumError),
 }
 
 /// The solution of one frictional contact problem.
@@ -193,21 +169,6 @@ impl ElasticBody {
             })
             .collect();
         let n_points = contact.points.len();
-        // The contact nodes' free unknowns, ordered last.
-        let mut contact_global: Vec<usize> = contact
-            .points
-            .iter()
-            .flat_map(|p| p.nodes)
-            .flat_map(|n| (0..3).map(move |d| 3 * n + d))
-            .filter(|&g| free[g] != PRESCRIBED)
-            .collect();
-        contact_global.sort_unstable();
-        contact_global.dedup();
-        let contact_dofs: Vec<usize> = contact_global.iter().map(|&g| free[g]).collect();
-        let mut contact_index = vec![None; n_dofs];
-        for (k, &g) in contact_global.iter().enumerate() {
-            contact_index[g] = Some(k);
-        }
         let cholesky = SparseCholesky::new(&pattern, 1)?;
         Ok(Self {
             mesh,
@@ -219,14 +180,9 @@ impl ElasticBody {
             free,
             n_free,
             prescribed_value,
-            committed_traction: vec![[0.0; 2]; n_points],
-            committed_slip: vec![[0.0; 2]; n_points],
-            contact_dofs,
-            contact_global,
-            contact_index,
-            condensed: None,
+            committed: vec![Committed::default(); n_points],
             pattern,
-            trailing: None,
+            condensation: None,
             base,
             point_slots,
             cholesky,
@@ -240,7 +196,13 @@ impl ElasticBody {
 
     /// The contact nodes' free unknowns (the condensed system's size).
     pub fn contact_unknowns(&self) -> usize {
-        self.contact_dofs.len()
+        let mut dofs: Vec<usize> = (self.contact.points.iter().flat_map(|p| p.nodes))
+            .flat_map(|n| (0..3).map(move |d| 3 * n + d))
+            .filter(|&g| self.free[g] != PRESCRIBED)
+            .collect();
+        dofs.sort_unstable();
+        dofs.dedup();
+        dofs.len()
     }
 
     /// Non-zeros of the Cholesky factor.
@@ -311,40 +273,44 @@ impl ElasticBody {
         Err(SolveError::NoActiveSet { iterations: MAX_ITERATIONS })
     }
 
-    /// The tangential slip (mm) of contact point `q` relative to a plane
-    /// shifted by `shift`: the point's tangential displacement minus the
-    /// plane's.
-    fn slip(&self, q: usize, u: &[f64], shift: [f64; 2]) -> [f64; 2] {
+    /// The position (mm) of contact point `q` with displacement `w`
+    /// relative to the plane z = `plane_z` shifted tangentially by
+    /// `shift`.
+    fn relative(&self, q: usize, w: [f64; 3], plane_z: f64, shift: [f64; 2]) -> [f64; 3] {
+        let x = self.contact.points[q].position;
+        let origin = [shift[0], shift[1], plane_z];
+        std::array::from_fn(|d| x[d] + w[d] - origin[d])
+    }
+
+    fn point_displacement(&self, q: usize, u: &[f64]) -> [f64; 3] {
         let p = &self.contact.points[q];
-        std::array::from_fn(|d| (0..4).map(|a| p.shape[a] * u[3 * p.nodes[a] + d]).sum::<f64>() - shift[d])
+        std::array::from_fn(|d| (0..4).map(|a| p.shape[a] * u[3 * p.nodes[a] + d]).sum())
     }
 
     /// Commits the friction state of the solution `u` on the plane shifted
-    /// by `shift`: each point's slip and traction become the reference of
-    /// the next load step.
+    /// by `shift`: each point's position relative to the plane and its
+    /// traction become the reference of the next load step.
     pub fn commit_friction(&mut self, u: &[f64], shift: [f64; 2], traction: &[[f64; 2]]) {
         for q in 0..self.contact.points.len() {
-            self.committed_slip[q] = self.slip(q, u, shift);
-            self.committed_traction[q] = traction[q];
+            let w = self.point_displacement(q, u);
+            // The plane's height does not enter the tangential slip.
+            self.committed[q] = Committed {
+                position: self.relative(q, w, 0.0, shift),
+                traction: [traction[q][0], traction[q][1], 0.0],
+            };
         }
     }
 
     /// Pressed onto the rigid plane z = `plane_z` shifted tangentially by
     /// `shift` (mm) from the last commit, with Coulomb friction `mu` in
     /// both tangential directions (penalty `penalty_t` MPa/mm on the slip,
-    /// return mapping onto the disc |t| <= mu p). Path-dependent: the
-    /// trial traction is the committed one plus penalty_t times the slip
-    /// since the commit.
+    /// return mapping onto the disc |t| <= mu p, [`FrictionLaw`]).
+    /// Path-dependent: the trial traction is the committed one plus
+    /// penalty_t times the slip since the commit.
     ///
-    /// Solved on the contact nodes' unknowns alone (the 2D model's
-    /// condensation, crate::solver): the stiffness K, factorized once with
-    /// those unknowns ordered last, gives their condensed stiffness S (the
-    /// factor's trailing block L, S = L L^T), and the body's response to
-    /// the prescribed displacements v0; equilibrium is S (v - v0) = F(v),
-    /// F the contact forces. Newton's method with the consistent tangent
-    /// (unsymmetric where slipping: the slip limit follows the pressure),
-    /// dense LU, backtracking on |R|^2; converged when |R| is below 1e-10
-    /// of the largest contact force and the correction below 1e-10 mm.
+    /// Solved on the contact nodes' unknowns alone ([`Condensation`]: K
+    /// factorized once, at the body's first frictional solve, with those
+    /// unknowns ordered last), Newton's method with the consistent tangent.
     pub fn solve_frictional(
         &mut self,
         plane_z: f64,
@@ -353,214 +319,48 @@ impl ElasticBody {
         penalty_t: f64,
         start: Option<&[f64]>,
     ) -> Result<FrictionalSolution, SolveError> {
-        const MAX_ITERATIONS: usize = 100;
-        let m = self.contact_dofs.len();
-        let factorized_now = self.trailing.is_none();
-        if self.trailing.is_none() {
-            let mut trailing = SparseCholesky::with_trailing(&self.pattern, &self.contact_dofs, 1)?;
-            trailing.factorize(&self.base)?;
-            let mut l = vec![0.0; m * m];
-            trailing.trailing_factor(&mut l);
-            // S = L L^T (column-major, symmetric).
-            let mut s = vec![0.0; m * m];
-            for j in 0..m {
-                for i in j..m {
-                    let mut sum = 0.0;
-                    for k in 0..=j {
-                        sum += l[k * m + i] * l[k * m + j];
-                    }
-                    s[j * m + i] = sum;
-                    s[i * m + j] = sum;
-                }
-            }
-            let mut u0 = self.prescribed_load();
-            trailing.solve_vec(&mut u0);
-            let v0 = self.contact_dofs.iter().map(|&f| u0[f]).collect();
-            self.condensed = Some(Condensed { stiffness: s, v0 });
-            self.trailing = Some(trailing);
+        let factorized_now = self.condensation.is_none();
+        if self.condensation.is_none() {
+            let mut condensation = Condensation::new(&self.pattern, &self.free, &self.contact)?;
+            condensation.factorize(&self.base)?;
+            self.condensation = Some(condensation);
         }
-        let eps_n = self.penalty_mpa_per_mm;
+        let law = FrictionLaw { penalty_n: self.penalty_mpa_per_mm, smoothing_mm: 0.0, penalty_t, mu };
         let mut u = self.starting_displacements(start);
-        let condensed = self.condensed.as_ref().expect("made above");
-        if start.is_none() {
-            for (k, &f) in self.contact_dofs.iter().enumerate() {
-                u[self.contact_global[k]] = condensed.v0[k];
-                let _ = f;
-            }
-        }
-        let residual_of = |body: &Self, u: &[f64]| -> (Vec<f64>, ContactState) {
-            let state = body.contact_state(u, plane_z, shift, mu, penalty_t);
-            let c = body.condensed.as_ref().expect("made above");
-            let mut r = vec![0.0; m];
-            for j in 0..m {
-                let dv = u[body.contact_global[j]] - c.v0[j];
-                for i in 0..m {
-                    r[i] += c.stiffness[j * m + i] * dv;
-                }
-            }
-            for (k, &g) in body.contact_global.iter().enumerate() {
-                r[k] -= state.forces[g];
-            }
-            (r, state)
+        let load = self.prescribed_load();
+        let mut condensation = self.condensation.take().expect("made above");
+        let evaluate = |body: &Self, q: usize, w: [f64; 3]| {
+            let relative = body.relative(q, w, plane_z, shift);
+            let (depth, normal) = HeightField::Flat.depth_normal(relative);
+            law.evaluate(depth, normal, relative, &body.committed[q])
         };
-        let norm2 = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
-        let (mut r, mut state) = residual_of(self, &u);
-        let mut lu = crate::linalg::DenseLu::new(m);
-        for iteration in 1..=MAX_ITERATIONS {
-            let largest_force = state.forces.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            let r_max = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            // J = S + D, D = -dF/dv of each point in contact.
-            {
-                let c = self.condensed.as_ref().expect("made above");
-                let mut jac = lu.matrix_mut(m);
-                for j in 0..m {
-                    for i in 0..m {
-                        jac[(i, j)] = c.stiffness[j * m + i];
-                    }
-                }
-                for (q, p) in self.contact.points.iter().enumerate() {
-                    if state.pressure[q] <= 0.0 {
-                        continue;
-                    }
-                    // d(traction)/d(u) of the point: rows x, y (traction),
-                    // columns x, y, z (displacement); the pressure's -eps_N.
-                    let mut dt = [[0.0; 3]; 2];
-                    if state.sticking[q] {
-                        dt[0][0] = penalty_t;
-                        dt[1][1] = penalty_t;
-                    } else {
-                        let trial = state.trial[q];
-                        let size = trial[0].hypot(trial[1]);
-                        let n = [trial[0] / size, trial[1] / size];
-                        let c = mu * state.pressure[q] * penalty_t / size;
-                        for a in 0..2 {
-                            for b in 0..2 {
-                                dt[a][b] = c * (if a == b { 1.0 } else { 0.0 } - n[a] * n[b]);
-                            }
-                            dt[a][2] = -mu * eps_n * n[a];
-                        }
-                    }
-                    for a in 0..4 {
-                        for b in 0..4 {
-                            let nn = p.weight * p.shape[a] * p.shape[b];
-                            let row = |d: usize| self.contact_index[3 * p.nodes[a] + d];
-                            let col = |d: usize| self.contact_index[3 * p.nodes[b] + d];
-                            // Normal: F_z = w N p, dF_z/du_z = -eps_N w N N.
-                            if let (Some(i), Some(j)) = (row(2), col(2)) {
-                                jac[(i, j)] += eps_n * nn;
-                            }
-                            // Tangential: F_t = -w N t, D = +w N N dt/du.
-                            for d in 0..2 {
-                                if let Some(i) = row(d) {
-                                    for e in 0..3 {
-                                        if dt[d][e] != 0.0
-                                            && let Some(j) = col(e)
-                                        {
-                                            jac[(i, j)] += nn * dt[d][e];
-                                        }
-                                    }
-                                }
-                            }
-                        }
-                    }
-                }
-            }
-            if !lu.factor() {
-                return Err(SolveError::NoActiveSet { iterations: iteration });
-            }
-            let mut dv: Vec<f64> = r.iter().map(|v| -v).collect();
-            lu.solve(&mut dv);
-            let step_max = dv.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            if r_max <= 1e-10 * largest_force.max(1e-12) && step_max <= 1e-10 {
-                let mut full = self.prescribed_load();
-                for (g, &f) in self.free.iter().enumerate() {
-                    if f != PRESCRIBED {
-                        full[f] += state.forces[g];
-                    }
-                }
-                self.trailing.as_mut().expect("made above").solve_vec(&mut full);
-                for (g, &f) in self.free.iter().enumerate() {
-                    if f != PRESCRIBED {
-                        u[g] = full[f];
-                    }
-                }
-                let mut force = [0.0; 3];
-                for (q, p) in self.contact.points.iter().enumerate() {
-                    force[0] -= p.weight * state.traction[q][0];
-                    force[1] -= p.weight * state.traction[q][1];
-                    force[2] += p.weight * state.pressure[q];
-                }
-                return Ok(FrictionalSolution {
-                    u,
-                    pressure: state.pressure,
-                    traction: state.traction,
-                    sticking: state.sticking,
-                    force_n: force,
-                    iterations: iteration,
-                    factorizations: usize::from(factorized_now),
-                });
-            }
-            // Backtracking on |R|^2.
-            let before = norm2(&r);
-            let mut alpha = 1.0;
-            let original: Vec<f64> = self.contact_global.iter().map(|&g| u[g]).collect();
-            for _ in 0..12 {
-                for (k, &g) in self.contact_global.iter().enumerate() {
-                    u[g] = original[k] + alpha * dv[k];
-                }
-                let (r_new, state_new) = residual_of(self, &u);
-                if norm2(&r_new) <= (1.0 - 1e-4 * alpha) * before || alpha < 1e-3 {
-                    r = r_new;
-                    state = state_new;
-                    break;
-                }
-                alpha *= 0.5;
-            }
-        }
-        Err(SolveError::NoActiveSet { iterations: MAX_ITERATIONS })
-    }
-
-    /// The contact tractions of displacements `u` and the nodal forces they
-    /// put on the body (global vector).
-    fn contact_state(&self, u: &[f64], plane_z: f64, shift: [f64; 2], mu: f64, penalty_t: f64) -> ContactState {
+        let effort = condensation.equilibrium(&load, &self.free, &mut u, &self.contact, &mut |q, w| {
+            evaluate(self, q, w).map(|r| (r.force, r.tangent))
+        });
+        self.condensation = Some(condensation);
+        let effort = effort?;
         let n_points = self.contact.points.len();
-        let mut state = ContactState {
-            forces: vec![0.0; u.len()],
+        let mut solution = FrictionalSolution {
             pressure: vec![0.0; n_points],
-            trial: vec![[0.0; 2]; n_points],
             traction: vec![[0.0; 2]; n_points],
             sticking: vec![false; n_points],
+            force_n: [0.0; 3],
+            iterations: effort.iterations,
+            factorizations: usize::from(factorized_now),
+            u: Vec::new(),
         };
         for (q, p) in self.contact.points.iter().enumerate() {
-            let depth = -self.contact.gap(q, u, plane_z);
-            if depth <= 0.0 {
-                continue;
-            }
-            let pressure = self.penalty_mpa_per_mm * depth;
-            let slip = self.slip(q, u, shift);
-            let (t0, s0) = (self.committed_traction[q], self.committed_slip[q]);
-            let trial = [t0[0] + penalty_t * (slip[0] - s0[0]), t0[1] + penalty_t * (slip[1] - s0[1])];
-            let size = trial[0].hypot(trial[1]);
-            let limit = mu * pressure;
-            let traction = if size <= limit {
-                state.sticking[q] = true;
-                trial
-            } else {
-                [limit * trial[0] / size, limit * trial[1] / size]
-            };
-            state.pressure[q] = pressure;
-            state.trial[q] = trial;
-            state.traction[q] = traction;
-            for a in 0..4 {
-                let base = 3 * p.nodes[a];
-                let w = p.weight * p.shape[a];
-                // The plane pushes the body up and resists its slip.
-                state.forces[base] -= w * traction[0];
-                state.forces[base + 1] -= w * traction[1];
-                state.forces[base + 2] += w * pressure;
+            if let Some(r) = evaluate(self, q, self.point_displacement(q, &u)) {
+                solution.pressure[q] = r.pressure;
+                solution.traction[q] = [r.traction[0], r.traction[1]];
+                solution.sticking[q] = r.sticking;
+                for d in 0..3 {
+                    solution.force_n[d] += p.weight * r.force[d];
+                }
             }
         }
-        state
+        solution.u = u;
+        Ok(solution)
     }
 
     /// `start` (or zero) with the prescribed values in place.
