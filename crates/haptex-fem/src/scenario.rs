@@ -211,7 +211,7 @@ impl Scenario {
     }
 
     /// [`SimulationError::Cancelled`] once [`Scenario::stop`] is set.
-    fn check_stop(&self) -> Result<(), SimulationError> {
+    pub(crate) fn check_stop(&self) -> Result<(), SimulationError> {
         match &self.stop {
             Some(stop) if stop.load(Ordering::Relaxed) => Err(SimulationError::Cancelled),
             _ => Ok(()),
@@ -280,6 +280,20 @@ pub enum SimulationError {
     Cancelled,
     #[error("the finger lost contact with the surface at x = {x_mm:.3} mm (t = {t_s:.4} s): Ft/Fn is undefined there")]
     NoContact { x_mm: f64, t_s: f64 },
+    /// The 3D finger's mesh.
+    #[error("the 3D fingertip cannot be meshed: {0}")]
+    Fingertip(#[from] crate::solid3d::fingertip::FingertipError),
+    #[error("the 3D finger: {0}")]
+    Body3(#[from] crate::solid3d::body::BodyError),
+    #[error("the 3D finger's stiffness could not be factorized: {0}")]
+    Factor(#[from] crate::linalg::FactorError),
+    #[error("the 3D finger at x = {x_mm:.3} mm (t = {t_s:.4} s): {source}")]
+    Equilibrium3 { x_mm: f64, t_s: f64, source: crate::solid3d::condensed::EquilibriumError },
+    #[error(
+        "the 3D finger touches the surface beyond its contact region (skin up to {z_cut_mm:.2} mm above the pad) at \
+         x = {x_mm:.3} mm (t = {t_s:.4} s): the surface's relief or the indentation is too large for the 3D model"
+    )]
+    ContactBeyondRegion { x_mm: f64, t_s: f64, z_cut_mm: f64 },
 }
 
 /// One row of the force history (forces per mm of finger width).

@@ -41,9 +41,13 @@ pub struct ViscoelasticBody {
     free: Vec<usize>,
     n_free: usize,
     pattern: Pattern,
-    cholesky: SparseCholesky,
+    /// The body's own factorization of K(dt), made at the first
+    /// [`ViscoelasticBody::step`] (a contact solver factorizes its own).
+    cholesky: Option<SparseCholesky>,
+    /// Whether `cholesky` holds K of `assembled_dt`.
+    factorized: bool,
     values: Vec<f64>,
-    factored_dt: Option<f64>,
+    assembled_dt: Option<f64>,
     coefficients: Vec<StepCoefficients>,
     /// Per element and Gauss point: the instantaneous deviator s0, then one
     /// internal stress per Prony term of its material (6 components each).
@@ -74,7 +78,6 @@ impl ViscoelasticBody {
         let dofs = DofMap::with_dofs_per_node(mesh.n_nodes(), 3, prescribed);
         let pattern = mesh.pattern(&dofs);
         let DofMap { free, n_free } = dofs;
-        let cholesky = SparseCholesky::new(&pattern, 1)?;
         let mut history_start = Vec::with_capacity(mesh.elements.len() + 1);
         let mut count = 0;
         for &m in &element_material {
@@ -92,8 +95,9 @@ impl ViscoelasticBody {
             free,
             n_free,
             pattern,
-            cholesky,
-            factored_dt: None,
+            cholesky: None,
+            factorized: false,
+            assembled_dt: None,
             coefficients: Vec::new(),
             history: vec![[0.0; 6]; count],
             history_start,
@@ -105,15 +109,16 @@ impl ViscoelasticBody {
         self.n_free
     }
 
-    /// Factorizes K(dt_s), unless it is already for this step size.
-    fn prepare(&mut self, dt_s: f64) -> Result<(), BodyError> {
+    /// Assembles K(dt_s) and the step's coefficients, unless they are
+    /// already for this step size; true if they changed.
+    pub fn prepare(&mut self, dt_s: f64) -> Result<bool, BodyError> {
         if !(dt_s.is_finite() && dt_s >= 0.0) {
             return Err(BodyError::StepSize(dt_s));
         }
-        if self.factored_dt == Some(dt_s) {
-            return Ok(());
+        if self.assembled_dt == Some(dt_s) {
+            return Ok(false);
         }
-        self.factored_dt = None;
+        self.assembled_dt = None;
         self.coefficients = self.materials.iter().map(|m| m.step(dt_s)).collect();
         self.values.fill(0.0);
         for (e, h) in self.geometry.iter().enumerate() {
@@ -121,27 +126,34 @@ impl ViscoelasticBody {
             let g = m.shear_mpa() * self.coefficients[self.element_material[e]].shear_ratio;
             self.pattern.add_element(e, &h.stiffness(self.formulation, g, m.bulk_mpa()), &mut self.values);
         }
-        self.cholesky.factorize(&self.values)?;
-        self.factored_dt = Some(dt_s);
-        Ok(())
+        self.assembled_dt = Some(dt_s);
+        Ok(true)
     }
 
-    /// One step of size `dt_s`: `u` (3 per node) holds the prescribed
-    /// values on entry and the whole solution on return; `f_ext` the
-    /// external nodal forces (global). The history is committed.
-    pub fn step(&mut self, dt_s: f64, u: &mut [f64], f_ext: &[f64]) -> Result<(), BodyError> {
-        self.prepare(dt_s)?;
+    /// K(dt) of the last [`ViscoelasticBody::prepare`], on [`ViscoelasticBody::pattern`].
+    pub fn stiffness_values(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// The stiffness pattern over the free unknowns.
+    pub fn pattern(&self) -> &Pattern {
+        &self.pattern
+    }
+
+    /// Global DOF (3 n + direction) -> free index, or PRESCRIBED.
+    pub fn free(&self) -> &[usize] {
+        &self.free
+    }
+
+    /// The free unknowns' load of the step last prepared, besides external
+    /// forces: minus the frozen history's forces and minus K_fp u_p, the
+    /// prescribed displacements' (`u` holds their values).
+    pub fn step_load(&self, u: &[f64]) -> Vec<f64> {
         let mut rhs = vec![0.0; self.n_free];
-        for (g, &d) in self.free.iter().enumerate() {
-            if d != PRESCRIBED {
-                rhs[d] = f_ext[g];
-            }
-        }
         for (e, h) in self.geometry.iter().enumerate() {
             let mi = self.element_material[e];
             let (m, c) = (&self.materials[mi], &self.coefficients[mi]);
             let dofs = self.mesh.element_dofs(e);
-            // Frozen history forces, and the prescribed displacements'.
             let mut f = [0.0; 24];
             let per_point = 1 + m.prony.len();
             for gp in 0..8 {
@@ -166,7 +178,30 @@ impl ViscoelasticBody {
                 }
             }
         }
-        self.cholesky.solve_vec(&mut rhs);
+        rhs
+    }
+
+    /// One step of size `dt_s`: `u` (3 per node) holds the prescribed
+    /// values on entry and the whole solution on return; `f_ext` the
+    /// external nodal forces (global). The history is committed.
+    pub fn step(&mut self, dt_s: f64, u: &mut [f64], f_ext: &[f64]) -> Result<(), BodyError> {
+        let changed = self.prepare(dt_s)?;
+        if self.cholesky.is_none() {
+            self.cholesky = Some(SparseCholesky::new(&self.pattern, 1)?);
+        }
+        let cholesky = self.cholesky.as_mut().expect("made above");
+        if changed || !self.factorized {
+            self.factorized = false;
+            cholesky.factorize(&self.values)?;
+            self.factorized = true;
+        }
+        let mut rhs = self.step_load(u);
+        for (g, &d) in self.free.iter().enumerate() {
+            if d != PRESCRIBED {
+                rhs[d] += f_ext[g];
+            }
+        }
+        self.cholesky.as_mut().expect("made above").solve_vec(&mut rhs);
         for (g, &d) in self.free.iter().enumerate() {
             if d != PRESCRIBED {
                 u[g] = rhs[d];
@@ -176,8 +211,9 @@ impl ViscoelasticBody {
         Ok(())
     }
 
-    /// Advances every point's history to the displacements `u`.
-    fn commit(&mut self, u: &[f64]) {
+    /// Advances every point's history to the displacements `u` of the
+    /// step last prepared.
+    pub fn commit(&mut self, u: &[f64]) {
         for (e, h) in self.geometry.iter().enumerate() {
             let mi = self.element_material[e];
             let (m, c) = (&self.materials[mi], &self.coefficients[mi]);

@@ -3,19 +3,29 @@
 //! crate::solver, one dimension up).
 //!
 //! K, factorized once with the contact unknowns ordered last, gives their
-//! condensed stiffness S (the factor's trailing block L, S = L L^T) and,
-//! for a load f on the free unknowns, their displacements v0 under f
-//! alone. Equilibrium with the contact forces F(v) is then
+//! condensed stiffness S (the factor's trailing block L, S = L L^T), its
+//! inverse C = S^-1 (the contact unknowns' compliance) and, for a load f
+//! on the free unknowns, their displacements v0 under f alone.
+//! Equilibrium with the contact forces F(v) is
 //!
-//!   R(v) = S (v - v0) - F(v) = 0,
+//!   R(v) = S (v - v0) - F(v) = 0,  or  rho(v) = v - v0 - C F(v) = 0.
 //!
-//! solved by Newton's method with the contact law's consistent tangent
-//! (unsymmetric where points slip), dense LU, backtracking on |R|^2. The
-//! whole field follows from one more solve with K: u = K^-1 (f + F(v)).
+//! Newton's method on it with the contact law's consistent tangent D (J =
+//! S + D, unsymmetric where points slip) needs a solve with J. D acts on
+//! the unknowns A of the nodes in contact only, so with C the step
+//! delta = -J^-1 R = -rho - C D delta is, on A,
+//!
+//!   (I + C_AA D_AA) delta_A = -rho_A,
+//!
+//! a dense LU of the size of the contact patch (not of the whole region
+//! that may touch), and then delta = -rho - C_:A (D_AA delta_A). F is
+//! non-zero on A only, so rho costs m |A|, not m^2. Backtracking on
+//! |rho|^2 (the Newton step is a descent direction for it). The whole
+//! field follows from one more solve with K: u = K^-1 (f + F(v)).
 
 use super::contact::ContactSurface;
 use crate::assembly::{PRESCRIBED, Pattern};
-use crate::linalg::{DenseLu, FactorError, SparseCholesky};
+use crate::linalg::{DenseLu, FactorError, SparseCholesky, lower_times, schur_compliance};
 
 /// What a point's contact law gives the solver for its displacement: the
 /// force per unit area on the body (MPa) and its tangent -dF/du (MPa/mm);
@@ -36,8 +46,9 @@ pub enum EquilibriumError {
 /// The body's stiffness condensed on the contact unknowns.
 pub struct Condensation {
     factor: SparseCholesky,
-    /// S, m x m, column-major.
-    stiffness: Vec<f64>,
+    /// L (S = L L^T) and C = S^-1, m x m, column-major.
+    l: Vec<f64>,
+    compliance: Vec<f64>,
     /// Global DOF of each contact unknown, its free index, and for each
     /// global DOF its place among the contact unknowns.
     global: Vec<usize>,
@@ -50,6 +61,21 @@ pub struct Condensation {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Effort {
     pub iterations: usize,
+}
+
+/// The contact forces of one set of contact displacements, and the
+/// tangent's entries on the unknowns in contact.
+struct Forces {
+    /// F on the contact unknowns.
+    f: Vec<f64>,
+    /// The unknowns in contact (A, ascending).
+    active: Vec<usize>,
+    /// D_AA, |A| x |A| column-major (filled only when asked for).
+    d: Vec<f64>,
+    /// rho = v - v0 - C F.
+    rho: Vec<f64>,
+    /// The largest nodal contact force (N).
+    largest: f64,
 }
 
 impl Condensation {
@@ -74,7 +100,8 @@ impl Condensation {
         let m = global.len();
         Ok(Self {
             factor: SparseCholesky::with_trailing(pattern, &free_index, 1)?,
-            stiffness: vec![0.0; m * m],
+            l: vec![0.0; m * m],
+            compliance: vec![0.0; m * m],
             global,
             free_index,
             index,
@@ -82,7 +109,7 @@ impl Condensation {
         })
     }
 
-    /// The contact unknowns (the dense system's size).
+    /// The contact unknowns (the condensed system's size).
     pub fn unknowns(&self) -> usize {
         self.global.len()
     }
@@ -92,20 +119,13 @@ impl Condensation {
         self.factor.factor_nnz()
     }
 
-    /// Factorizes K (`values` on the pattern) and forms S.
+    /// Factorizes K (`values` on the pattern) and forms L and C.
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), FactorError> {
         self.factor.factorize(values)?;
         let m = self.global.len();
-        let mut l = vec![0.0; m * m];
-        self.factor.trailing_factor(&mut l);
-        // S = L L^T (column-major, symmetric; L lower).
-        for j in 0..m {
-            for i in j..m {
-                let sum: f64 = (0..=j).map(|k| l[k * m + i] * l[k * m + j]).sum();
-                self.stiffness[j * m + i] = sum;
-                self.stiffness[i * m + j] = sum;
-            }
-        }
+        self.factor.trailing_factor(&mut self.l);
+        let mut scratch = vec![0.0; m * m];
+        schur_compliance(&self.l, m, &mut scratch, &mut self.compliance);
         Ok(())
     }
 
@@ -121,9 +141,9 @@ impl Condensation {
     /// prescribed values and a start for the contact nodes on entry, the
     /// whole solution on return.
     ///
-    /// Converged when the largest residual is below 1e-10 of the largest
-    /// nodal contact force (or of 1 mN, whichever is larger) and the last
-    /// correction below 1e-10 mm.
+    /// Converged when the largest residual force (R) is below 1e-10 of the
+    /// largest nodal contact force (or of 1 mN, whichever is larger) and
+    /// the last correction below 1e-10 mm.
     pub fn equilibrium(
         &mut self,
         load: &[f64],
@@ -137,25 +157,56 @@ impl Condensation {
         let mut u0 = load.to_vec();
         self.factor.solve_vec(&mut u0);
         let v0: Vec<f64> = self.free_index.iter().map(|&f| u0[f]).collect();
-        let mut forces = vec![0.0; m];
         let mut residual = vec![0.0; m];
-        let mut candidate = vec![0.0; m];
-        let norm2 = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
+        let mut half = vec![0.0; m];
+        let mut r_max = f64::INFINITY;
         for iteration in 1..=MAX_ITERATIONS {
-            // R and J = S + the points' tangents, then the Newton step.
-            let largest = self.residual(u, &v0, surface, point, &mut forces, &mut residual, true);
+            let state = self.forces(u, &v0, surface, point, true);
+            // R = S rho = L (L^T rho).
+            for (i, h) in half.iter_mut().enumerate() {
+                *h = crate::linalg::dot(&self.l[i * m + i..(i + 1) * m], &state.rho[i..]);
+            }
+            lower_times(&self.l, m, &half, &mut residual);
+            r_max = residual.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            // (I + C_AA D_AA) delta_A = -rho_A.
+            let k = state.active.len();
+            {
+                let mut matrix = self.lu.matrix_mut(k);
+                for (j, column) in state.d.chunks_exact(k.max(1)).take(k).enumerate() {
+                    for i in 0..k {
+                        matrix[(i, j)] = f64::from(u8::from(i == j));
+                    }
+                    for (l, &d_lj) in column.iter().enumerate() {
+                        if d_lj != 0.0 {
+                            let c_col = &self.compliance[state.active[l] * m..(state.active[l] + 1) * m];
+                            for (i, &row) in state.active.iter().enumerate() {
+                                matrix[(i, j)] += c_col[row] * d_lj;
+                            }
+                        }
+                    }
+                }
+            }
             if !self.lu.factor() {
                 return Err(EquilibriumError::Singular { iteration });
             }
-            let mut step: Vec<f64> = residual.iter().map(|v| -v).collect();
-            self.lu.solve(&mut step);
-            let r_max = residual.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let mut delta_a: Vec<f64> = state.active.iter().map(|&i| -state.rho[i]).collect();
+            self.lu.solve(&mut delta_a);
+            // delta = -rho - C_:A (D_AA delta_A).
+            let mut step: Vec<f64> = state.rho.iter().map(|v| -v).collect();
+            for (l, &col) in state.active.iter().enumerate() {
+                let y: f64 = (0..k).map(|j| state.d[j * k + l] * delta_a[j]).sum::<f64>();
+                if y != 0.0 {
+                    for (s, c) in step.iter_mut().zip(&self.compliance[col * m..(col + 1) * m]) {
+                        *s -= c * y;
+                    }
+                }
+            }
             let step_max = step.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            if r_max <= 1e-10 * largest.max(1e-3) && step_max <= 1e-10 {
+            if r_max <= 1e-10 * state.largest.max(1e-3) && step_max <= 1e-10 {
                 // The whole field: u = K^-1 (f + F).
                 let mut full = load.to_vec();
                 for (k, &f) in self.free_index.iter().enumerate() {
-                    full[f] += forces[k];
+                    full[f] += state.f[k];
                 }
                 self.factor.solve_vec(&mut full);
                 for (g, &f) in free.iter().enumerate() {
@@ -165,91 +216,102 @@ impl Condensation {
                 }
                 return Ok(Effort { iterations: iteration });
             }
-            let before = norm2(&residual);
+            // Backtracking on |rho|^2.
+            let norm2 = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
+            let before = norm2(&state.rho);
             let original: Vec<f64> = self.global.iter().map(|&g| u[g]).collect();
             let mut alpha = 1.0;
             loop {
                 for (k, &g) in self.global.iter().enumerate() {
                     u[g] = original[k] + alpha * step[k];
                 }
-                self.residual(u, &v0, surface, point, &mut forces, &mut candidate, false);
-                if norm2(&candidate) <= (1.0 - 1e-4 * alpha) * before || alpha < 1e-3 {
+                let trial = self.forces(u, &v0, surface, point, false);
+                if norm2(&trial.rho) <= (1.0 - 1e-4 * alpha) * before || alpha < 1e-3 {
                     break;
                 }
                 alpha *= 0.5;
             }
         }
-        let residual_n = residual.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        Err(EquilibriumError::NoConvergence { iterations: MAX_ITERATIONS, residual_n })
+        Err(EquilibriumError::NoConvergence { iterations: MAX_ITERATIONS, residual_n: r_max })
     }
 
-    /// R(v) = S (v - v0) - F(v) into `residual` and F into `forces`; with
-    /// `jacobian`, J = S + the tangents into the LU's matrix. Returns the
-    /// largest nodal contact force (N).
-    #[allow(clippy::too_many_arguments)]
-    fn residual(
-        &mut self,
+    /// F, rho and (with `tangent`) D_AA at the displacements `u`.
+    fn forces(
+        &self,
         u: &[f64],
         v0: &[f64],
         surface: &ContactSurface,
         point: &mut dyn FnMut(usize, [f64; 3]) -> PointForce,
-        forces: &mut [f64],
-        residual: &mut [f64],
-        jacobian: bool,
-    ) -> f64 {
+        tangent: bool,
+    ) -> Forces {
         let m = self.global.len();
-        forces.fill(0.0);
-        let mut jac = jacobian.then(|| self.lu.matrix_mut(m));
-        if let Some(jac) = jac.as_mut() {
-            for j in 0..m {
-                for i in 0..m {
-                    jac[(i, j)] = self.stiffness[j * m + i];
-                }
-            }
-        }
-        for (q, p) in surface.points.iter().enumerate() {
-            let w: [f64; 3] = std::array::from_fn(|d| (0..4).map(|a| p.shape[a] * u[3 * p.nodes[a] + d]).sum());
-            let Some((force, tangent)) = point(q, w) else {
+        let mut f = vec![0.0; m];
+        let responses: Vec<PointForce> = surface
+            .points
+            .iter()
+            .enumerate()
+            .map(|(q, p)| {
+                let w: [f64; 3] = std::array::from_fn(|d| (0..4).map(|a| p.shape[a] * u[3 * p.nodes[a] + d]).sum());
+                point(q, w)
+            })
+            .collect();
+        let mut place = vec![None; m];
+        let mut active = Vec::new();
+        for (p, response) in surface.points.iter().zip(&responses) {
+            let Some((force, _)) = response else {
                 continue;
             };
             for a in 0..4 {
-                let row = |d: usize| self.index[3 * p.nodes[a] + d];
                 for d in 0..3 {
-                    if let Some(i) = row(d) {
-                        forces[i] += p.weight * p.shape[a] * force[d];
+                    if let Some(i) = self.index[3 * p.nodes[a] + d] {
+                        f[i] += p.weight * p.shape[a] * force[d];
+                        if place[i].is_none() {
+                            place[i] = Some(0);
+                            active.push(i);
+                        }
                     }
                 }
-                let Some(jac) = jac.as_mut() else {
+            }
+        }
+        active.sort_unstable();
+        for (k, &i) in active.iter().enumerate() {
+            place[i] = Some(k);
+        }
+        let k = active.len();
+        let mut d = Vec::new();
+        if tangent {
+            d = vec![0.0; k * k];
+            for (p, response) in surface.points.iter().zip(&responses) {
+                let Some((_, t)) = response else {
                     continue;
                 };
-                for b in 0..4 {
-                    let nn = p.weight * p.shape[a] * p.shape[b];
-                    for d in 0..3 {
-                        let Some(i) = row(d) else {
-                            continue;
-                        };
-                        for e in 0..3 {
-                            if let Some(j) = self.index[3 * p.nodes[b] + e] {
-                                jac[(i, j)] += nn * tangent[d][e];
+                for a in 0..4 {
+                    for b in 0..4 {
+                        let nn = p.weight * p.shape[a] * p.shape[b];
+                        for r in 0..3 {
+                            let Some(i) = self.index[3 * p.nodes[a] + r].and_then(|i| place[i]) else {
+                                continue;
+                            };
+                            for c in 0..3 {
+                                if let Some(j) = self.index[3 * p.nodes[b] + c].and_then(|j| place[j]) {
+                                    d[j * k + i] += nn * t[r][c];
+                                }
                             }
                         }
                     }
                 }
             }
         }
-        residual.fill(0.0);
-        for j in 0..m {
-            let dv = u[self.global[j]] - v0[j];
-            if dv != 0.0 {
-                let column = &self.stiffness[j * m..(j + 1) * m];
-                for (r, s) in residual.iter_mut().zip(column) {
-                    *r += s * dv;
+        // rho = v - v0 - C F, F non-zero on A only.
+        let mut rho: Vec<f64> = self.global.iter().zip(v0).map(|(&g, v)| u[g] - v).collect();
+        for &i in &active {
+            if f[i] != 0.0 {
+                for (r, c) in rho.iter_mut().zip(&self.compliance[i * m..(i + 1) * m]) {
+                    *r -= c * f[i];
                 }
             }
         }
-        for (r, f) in residual.iter_mut().zip(forces.iter()) {
-            *r -= f;
-        }
-        forces.iter().fold(0.0f64, |a, v| a.max(v.abs()))
+        let largest = f.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        Forces { f, active, d, rho, largest }
     }
 }

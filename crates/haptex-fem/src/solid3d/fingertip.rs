@@ -3,8 +3,9 @@
 //! corneum, viable epidermis and dermis of constant thickness along the
 //! skin's normal, the hypodermis filling to the bone).
 //!
-//! Frame: x along the finger, y across it, z up (towards the nail); the
-//! pad's lowest point at the origin. The skin is the ellipsoid of
+//! Frame: x across the finger (the 2D model's cross-section is the x-z
+//! plane), y along it, z up (towards the nail); the pad's lowest point at
+//! the origin. The skin is the ellipsoid of
 //! half-axes (a_x, a_y, a_z) centred at (0, 0, a_z); the bone the
 //! ellipsoid of half-axes (b_x, b_y, b_z) centred at (0, 0, c_b).
 //!
@@ -20,11 +21,12 @@
 //! screen exploration).
 
 use super::mesh::{Mesh3, MeshError, Side};
+use crate::finger::{FingerModel, Resolution};
 
 /// The fingertip's shape, layers and mesh resolution.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FingertipSpec {
-    /// Skin ellipsoid half-axes along, across and through the finger (mm).
+    /// Skin ellipsoid half-axes across, along and through the finger (mm).
     pub skin_half_axes_mm: [f64; 3],
     /// Bone ellipsoid half-axes (mm) and the height of its centre (mm).
     pub bone_half_axes_mm: [f64; 3],
@@ -41,6 +43,12 @@ pub struct FingertipSpec {
     /// Element rows in each skin layer and in the hypodermis.
     pub rows: [usize; 4],
 }
+
+/// The fingertip's half-length along the finger (mm): the distal pad is
+/// about 20 mm long (assumed; the 2D model has no length).
+pub const SKIN_HALF_LENGTH_MM: f64 = 10.0;
+/// The distal phalanx's half-length inside the cap (mm, assumed).
+pub const BONE_HALF_LENGTH_MM: f64 = 4.0;
 
 /// The material index of each layer (element_material of the body).
 pub const STRATUM_CORNEUM: usize = 0;
@@ -71,20 +79,40 @@ pub enum FingertipError {
 }
 
 impl FingertipSpec {
-    /// An index fingertip: the 2D model's cross-section (16 mm wide, 12 mm
-    /// high, layers 0.2 / 0.125 / 1.0 mm, bone 6 x 3.5 mm at 6.75 mm) with
-    /// a half-length of 10 mm along the finger (assumed: the distal pad is
-    /// ~20 mm long), the bone 8 mm long (half-axis 4 mm, assumed).
+    /// An index fingertip: [`FingertipSpec::from_model`] of the shipped
+    /// 2D finger (data/finger/finger-2d.toml) at the default mesh.
     pub fn index_finger() -> Self {
+        Self::from_model(&FingerModel::default_model(), Resolution::Default)
+    }
+
+    /// The fingertip of a 2D finger model: its cross-section (the skin's
+    /// half-width and half-height, the bone's, the bone's height, the
+    /// three skin layers) with a half-length of
+    /// [`SKIN_HALF_LENGTH_MM`] along the finger and the bone's of
+    /// [`BONE_HALF_LENGTH_MM`]; the mesh of `resolution`:
+    ///
+    /// | resolution | surface divisions | grading | rows (SC, VE, dermis, hypodermis) |
+    /// |---|---|---|---|
+    /// | coarse | 12 | 3 | 1, 1, 1, 3 |
+    /// | default | 24 | 4 | 1, 1, 2, 6 |
+    /// | fine | 36 | 5 | 1, 1, 3, 8 |
+    pub fn from_model(model: &FingerModel, resolution: Resolution) -> Self {
+        let g = &model.geometry;
+        let l = &model.layers;
+        let (surface_divisions, surface_grading, rows) = match resolution {
+            Resolution::Coarse => (12, 3.0, [1, 1, 1, 3]),
+            Resolution::Default => (24, 4.0, [1, 1, 2, 6]),
+            Resolution::Fine => (36, 5.0, [1, 1, 3, 8]),
+        };
         Self {
-            skin_half_axes_mm: [10.0, 8.0, 6.0],
-            bone_half_axes_mm: [4.0, 3.0, 1.75],
-            bone_center_height_mm: 6.75,
-            layers_mm: [0.2, 0.125, 1.0],
+            skin_half_axes_mm: [g.half_width_mm, SKIN_HALF_LENGTH_MM, g.half_height_mm],
+            bone_half_axes_mm: [g.bone_half_width_mm, BONE_HALF_LENGTH_MM, g.bone_half_height_mm],
+            bone_center_height_mm: g.bone_center_height_mm,
+            layers_mm: [l.stratum_corneum_mm, l.viable_epidermis_mm, l.dermis_mm],
             cap_half_angle_deg: 60.0,
-            surface_divisions: 24,
-            surface_grading: 4.0,
-            rows: [1, 1, 2, 6],
+            surface_divisions,
+            surface_grading,
+            rows,
         }
     }
 

@@ -18,5 +18,6 @@ pub mod fingertip;
 pub mod friction;
 pub mod hex8;
 pub mod mesh;
+pub mod slide;
 pub mod solver;
 pub mod surface;

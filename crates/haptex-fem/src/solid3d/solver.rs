@@ -331,8 +331,7 @@ impl ElasticBody {
         let mut condensation = self.condensation.take().expect("made above");
         let evaluate = |body: &Self, q: usize, w: [f64; 3]| {
             let relative = body.relative(q, w, plane_z, shift);
-            let (depth, normal) = HeightField::Flat.depth_normal(relative);
-            law.evaluate(depth, normal, relative, &body.committed[q])
+            law.evaluate(&HeightField::Flat.at(relative), relative, &body.committed[q])
         };
         let effort = condensation.equilibrium(&load, &self.free, &mut u, &self.contact, &mut |q, w| {
             evaluate(self, q, w).map(|r| (r.force, r.tangent))

@@ -37,23 +37,55 @@ impl HeightField {
     }
 
     /// h(x, y) and its gradient (h_x, h_y).
-    pub fn height_gradient(&self, x: f64, _y: f64) -> (f64, [f64; 2]) {
+    pub fn height_gradient(&self, x: f64, y: f64) -> (f64, [f64; 2]) {
+        let (h, g, _) = self.derivatives(x, y);
+        (h, g)
+    }
+
+    /// h, its gradient and its Hessian at (x, y).
+    fn derivatives(&self, x: f64, _y: f64) -> (f64, [f64; 2], [[f64; 2]; 2]) {
         match self {
-            Self::Flat => (0.0, [0.0; 2]),
+            Self::Flat => (0.0, [0.0; 2], [[0.0; 2]; 2]),
             Self::Extruded(profile) => {
-                let [h, slope, _] = profile.height_derivatives(x);
-                (h, [slope, 0.0])
+                let [h, slope, curvature] = profile.height_derivatives(x);
+                (h, [slope, 0.0], [[curvature, 0.0], [0.0, 0.0]])
             }
         }
     }
 
-    /// The depth (mm) of the point `q` (surface frame) under the surface,
-    /// negative above it, and the surface's outward unit normal there.
-    pub fn depth_normal(&self, q: [f64; 3]) -> (f64, [f64; 3]) {
-        let (h, [hx, hy]) = self.height_gradient(q[0], q[1]);
-        let c = 1.0 / (1.0 + hx * hx + hy * hy).sqrt();
-        ((h - q[2]) * c, [-hx * c, -hy * c, c])
+    /// The surface as seen from the point `q` (surface frame): its depth
+    /// (mm, negative above the surface), the outward unit normal, and
+    /// their derivatives with respect to q.
+    pub fn at(&self, q: [f64; 3]) -> SurfaceAt {
+        let (h, g, hessian) = self.derivatives(q[0], q[1]);
+        let c = 1.0 / (1.0 + g[0] * g[0] + g[1] * g[1]).sqrt();
+        let a = [-g[0], -g[1], 1.0];
+        let mut d_depth = [0.0, 0.0, -c];
+        let mut d_normal = [[0.0; 3]; 3];
+        for j in 0..2 {
+            // dc/dq_j = -c^3 (g . H e_j); da/dq_j = -(H e_j, 0).
+            let dc = -c * c * c * (g[0] * hessian[0][j] + g[1] * hessian[1][j]);
+            d_depth[j] = g[j] * c + (h - q[2]) * dc;
+            let da = [-hessian[0][j], -hessian[1][j], 0.0];
+            for i in 0..3 {
+                d_normal[i][j] = c * da[i] + a[i] * dc;
+            }
+        }
+        SurfaceAt { depth: (h - q[2]) * c, normal: a.map(|v| v * c), d_depth, d_normal }
     }
+}
+
+/// A rigid surface seen from a point (see [`HeightField::at`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceAt {
+    /// Depth of the point under the surface (mm; negative above it).
+    pub depth: f64,
+    /// The outward unit normal n.
+    pub normal: [f64; 3],
+    /// d depth / dq.
+    pub d_depth: [f64; 3],
+    /// d n_i / d q_j, row i, column j.
+    pub d_normal: [[f64; 3]; 3],
 }
 
 #[cfg(test)]
@@ -69,7 +101,7 @@ mod tests {
         let field = HeightField::extruded(&shape, -8.0, 8.0).unwrap();
         let n_exact = [-0.5 / 1.25f64.sqrt(), 0.0, 1.0 / 1.25f64.sqrt()];
         for q in [[0.0, 3.0, -0.2], [1.0, -7.0, 0.1], [-2.0, 0.0, -1.05]] {
-            let (d, n) = field.depth_normal(q);
+            let SurfaceAt { depth: d, normal: n, .. } = field.at(q);
             // Distance of q to the plane z = x / 2 along its normal.
             let exact = -(n_exact[0] * q[0] + n_exact[2] * q[2]);
             assert!((d - exact).abs() < 1e-12, "{q:?}: {d} against {exact}");
@@ -77,7 +109,31 @@ mod tests {
                 assert!((n[k] - n_exact[k]).abs() < 1e-12);
             }
         }
-        let (d, n) = HeightField::Flat.depth_normal([4.0, -2.0, -0.3]);
-        assert_eq!((d, n), (0.3, [0.0, 0.0, 1.0]));
+        let flat = HeightField::Flat.at([4.0, -2.0, -0.3]);
+        assert_eq!((flat.depth, flat.normal), (0.3, [0.0, 0.0, 1.0]));
+    }
+
+    /// The derivatives of depth and normal are those of the functions
+    /// (central differences) on a curved surface: an extruded bump.
+    #[test]
+    fn derivatives_on_a_bump_match_differences() {
+        let shape = SurfaceShape::Bump { x0: 0.5, width: 1.5, height: 0.3 };
+        let field = HeightField::extruded(&shape, -5.0, 5.0).unwrap();
+        for q in [[0.0, 1.0, 0.2], [0.9, -3.0, 0.1], [1.4, 0.0, -0.05]] {
+            let at = field.at(q);
+            for j in 0..3 {
+                let h = 1e-6;
+                let (mut a, mut b) = (q, q);
+                a[j] += h;
+                b[j] -= h;
+                let (fa, fb) = (field.at(a), field.at(b));
+                let numeric = (fa.depth - fb.depth) / (2.0 * h);
+                assert!((numeric - at.d_depth[j]).abs() < 1e-7, "d depth/dq{j} at {q:?}");
+                for i in 0..3 {
+                    let numeric = (fa.normal[i] - fb.normal[i]) / (2.0 * h);
+                    assert!((numeric - at.d_normal[i][j]).abs() < 1e-7, "dn{i}/dq{j} at {q:?}");
+                }
+            }
+        }
     }
 }

@@ -1,0 +1,363 @@
+//! The 3D finger pad's tactile scenario (the 2D model's, crate::scenario,
+//! one dimension up): the layered visco-elastic fingertip
+//! ([`super::fingertip`]) is pressed onto a rigid surface by moving its
+//! bone down, then slides over it at constant velocity in any direction of
+//! the surface's plane, with Coulomb friction in both tangential
+//! directions.
+//!
+//! Frames: the finger's x runs across it (the 2D model's plane), y along
+//! it. The surface's frame is the finger's at the start: the pad's lowest
+//! point over the surface's origin, the finger pointing along the
+//! surface's y (as a finger on a screen held upright). A direction theta
+//! moves the finger by s = L (cos theta, sin theta) over the surface; the
+//! 2D model's surfaces vary along the surface's x and are extruded along
+//! its y ([`HeightField`]), so theta = 0 is the 2D model's slide, across
+//! the ridges, and theta = 90 degrees runs along them.
+//!
+//! As in 2D the finger stays in place and the surface moves under it: a
+//! skin point at x (finger frame) sits over the surface point x + s. Each
+//! step is linear in the body (the Prony recursion at that step's size)
+//! and non-linear in the contact, which is solved on the contact region's
+//! unknowns alone ([`Condensation`]); K(dt) is factorized once per step
+//! size (twice in a run: press and slide).
+//!
+//! The contact region is the skin whose height above the pad's lowest
+//! point is at most 1.5 (indentation + the surface's relief) + 0.3 mm;
+//! every step checks that no skin outside it touches the surface (an
+//! error if it does, never a silent penetration).
+
+use std::time::Instant;
+
+use haptex_core::profile::FrictionProfile;
+use serde::Serialize;
+
+use super::body::ViscoelasticBody;
+use super::condensed::Condensation;
+use super::contact::ContactSurface;
+use super::fingertip::{self, FingertipSpec};
+use super::friction::{Committed, FrictionLaw};
+use super::hex8::Formulation;
+use super::surface::HeightField;
+use crate::material::Material;
+use crate::scenario::{Kinematics, Loading, Progress, Scenario, SimulationError, Statistics};
+use crate::surface::SurfaceShape;
+
+/// One row of the 3D force history (forces in N).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Row3 {
+    pub t_s: f64,
+    /// Distance travelled along the slide direction (mm).
+    pub slide_mm: f64,
+    /// Normal force the finger applies (N).
+    pub fn_n: f64,
+    /// Friction force on the finger along its motion, positive opposing
+    /// it (N).
+    pub ft_n: f64,
+    /// Tangential force on the finger across its motion, positive towards
+    /// the motion's left (N).
+    pub ft_lateral_n: f64,
+    /// Area of skin in contact (mm^2, reference area of the contact points
+    /// with pressure).
+    pub contact_area_mm2: f64,
+    /// Vertical displacement of the bone (mm, negative: pressed down).
+    pub drive_z_mm: f64,
+    pub iterations: usize,
+}
+
+/// A contact point of a [`Patch`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PatchPoint {
+    /// Current position in the finger's frame (mm).
+    pub position_mm: [f64; 3],
+    /// Reference area (mm^2).
+    pub weight_mm2: f64,
+    /// Pressure and tangential traction (MPa; 0 out of contact).
+    pub pressure_mpa: f64,
+    pub traction_mpa: [f64; 3],
+    pub sticking: bool,
+}
+
+/// The contact region's state at one step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Patch {
+    pub t_s: f64,
+    pub slide_mm: f64,
+    pub points: Vec<PatchPoint>,
+}
+
+/// What a 3D simulation produces.
+#[derive(Debug, Clone)]
+pub struct Simulation3 {
+    pub history: Vec<Row3>,
+    /// Ft/Fn against the distance travelled (None for a press only).
+    pub profile: Option<FrictionProfile>,
+    /// The contact region after the press, where the finger's centre
+    /// reaches the feature (if it does), and at the end.
+    pub patches: Vec<Patch>,
+    pub direction_deg: f64,
+    pub statistics: Statistics,
+}
+
+/// Runs `scenario` on the 3D finger, sliding in direction `direction_deg`
+/// (degrees from the surface's x axis); `progress` is called after every
+/// step. The scenario's settings mean what they mean in 2D, with forces in
+/// N (not per mm of width); not yet supported in 3D: a normal load (the
+/// finger is pressed by an indentation), finite strain, a display.
+pub fn run(
+    scenario: &Scenario,
+    direction_deg: f64,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Simulation3, SimulationError> {
+    let started = Instant::now();
+    scenario.validate()?;
+    let invalid = |m: &str| Err(SimulationError::Invalid(m.to_string()));
+    if !(direction_deg.is_finite() && direction_deg.abs() <= 360.0) {
+        return Err(SimulationError::Invalid(format!(
+            "the slide direction {direction_deg} degrees must be a finite angle from -360 to 360"
+        )));
+    }
+    let indent = match scenario.loading {
+        Loading::Indent(indent) => indent,
+        Loading::Load(_) => {
+            return invalid("the 3D finger is pressed by an indentation; a normal load is not supported");
+        }
+    };
+    if scenario.kinematics == Kinematics::Finite {
+        return invalid("the 3D finger is small-strain only; finite strain is not supported in 3D");
+    }
+    if scenario.display.is_some() {
+        return invalid("a display surface is not supported by the 3D finger");
+    }
+    let spec = FingertipSpec::from_model(&scenario.model, scenario.resolution);
+    let tip = fingertip::mesh(&spec)?;
+    let theta = direction_deg.to_radians();
+    let direction = [theta.cos(), theta.sin()];
+    let travel = [scenario.slide_mm * direction[0], scenario.slide_mm * direction[1]];
+
+    // The surface over the skin's footprint along the whole path.
+    let skin = ContactSurface::new(&tip.mesh, &tip.skin_faces);
+    let (x_lo, x_hi) = skin
+        .points
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.position[0]), b.max(p.position[0])));
+    let (x_min, x_max) = (x_lo + travel[0].min(0.0) - 1.0, x_hi + travel[0].max(0.0) + 1.0);
+    let field =
+        HeightField::extruded(&scenario.surface, x_min, x_max).map_err(|e| SimulationError::Invalid(e.to_string()))?;
+    let relief = match &field {
+        HeightField::Flat => 0.0,
+        HeightField::Extruded(profile) => profile.max_height(x_min, x_max) - profile.min_height(x_min, x_max),
+    };
+    // The surface just touches the undeformed skin.
+    let lift = skin
+        .points
+        .iter()
+        .map(|p| p.position[2] - field.height_gradient(p.position[0], p.position[1]).0)
+        .fold(f64::INFINITY, f64::min);
+    let z_cut = 1.5 * (indent + relief) + 0.3;
+    let (inside, outside): (Vec<[usize; 4]>, Vec<[usize; 4]>) =
+        tip.skin_faces.iter().partition(|face| face.iter().any(|&n| tip.mesh.nodes[n][2] <= z_cut));
+    let candidate = ContactSurface::new(&tip.mesh, &inside);
+    let beyond = ContactSurface::new(&tip.mesh, &outside);
+
+    let soft = |m: &Material| {
+        let mut m = m.clone();
+        m.prony = if scenario.viscoelastic { scenario.model.viscoelasticity.prony.clone() } else { Vec::new() };
+        m
+    };
+    let materials = &scenario.model.materials;
+    let materials = vec![
+        soft(&materials.stratum_corneum),
+        soft(&materials.viable_epidermis),
+        soft(&materials.dermis),
+        soft(&materials.hypodermis),
+    ];
+    let prescribed: Vec<usize> = tip.driven_nodes.iter().flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]).collect();
+    let n_nodes = tip.mesh.n_nodes();
+    let n_elements = tip.mesh.elements.len();
+    let mut body = ViscoelasticBody::new(tip.mesh, Formulation::BBar, materials, tip.element_layer, &prescribed)?;
+    let mut condensation = Condensation::new(body.pattern(), body.free(), &candidate)?;
+    let law = FrictionLaw {
+        penalty_n: scenario.penalty_mpa_per_mm,
+        smoothing_mm: scenario.smoothing_mm,
+        penalty_t: scenario.penalty_mpa_per_mm,
+        mu: scenario.mu_skin.unwrap_or(scenario.model.contact.mu_skin),
+    };
+    // A point's position relative to the surface (surface frame) when the
+    // finger has travelled `s`.
+    let relative = |x: [f64; 3], w: [f64; 3], s: [f64; 2]| [x[0] + w[0] + s[0], x[1] + w[1] + s[1], x[2] + w[2] - lift];
+    let mut committed: Vec<Committed> = candidate
+        .points
+        .iter()
+        .map(|p| Committed { position: relative(p.position, [0.0; 3], [0.0; 2]), traction: [0.0; 3] })
+        .collect();
+
+    let mut u = vec![0.0; 3 * n_nodes];
+    // The nodes of the points in contact at the last step, and its slide.
+    let mut in_contact: Vec<usize> = Vec::new();
+    let mut last_patch_s: Option<[f64; 2]> = None;
+    let tip_nodes = body.mesh.nodes.clone();
+    let slide_steps = scenario.slide_steps()?;
+    let total_steps = scenario.press_steps + slide_steps;
+    let mut history = Vec::with_capacity(total_steps);
+    let mut patches = Vec::new();
+    let mut newton_iterations = 0;
+    let mut t_s = 0.0;
+    let feature = feature_distance(&scenario.surface, direction);
+    let mut feature_reached = false;
+    let (mut x, mut ft, mut fn_n) = (Vec::new(), Vec::new(), Vec::new());
+    for k in 1..=total_steps {
+        let pressing = k <= scenario.press_steps;
+        let (dt, depth, distance) = if pressing {
+            let dt = scenario.press_time_s / scenario.press_steps as f64;
+            (dt, indent * k as f64 / scenario.press_steps as f64, 0.0)
+        } else {
+            let j = k - scenario.press_steps;
+            let step = scenario.slide_mm / slide_steps as f64;
+            (step / scenario.velocity_mm_s, indent, scenario.slide_mm * j as f64 / slide_steps as f64)
+        };
+        t_s += dt;
+        let s = [distance * direction[0], distance * direction[1]];
+        if body.prepare(dt)? {
+            condensation.factorize(body.stiffness_values())?;
+        }
+        for &n in &tip.driven_nodes {
+            u[3 * n + 2] = -depth;
+        }
+        // Predictor: the skin in contact follows the surface's rise or
+        // fall under it since the last step (from the last state, the
+        // surface's move alone pushes it metres deep at the penalty's
+        // stiffness on a feature's flank, and Newton's first steps
+        // overshoot).
+        if let Some(last) = &last_patch_s
+            && s != *last
+        {
+            for &n in &in_contact {
+                if body.free()[3 * n + 2] == crate::assembly::PRESCRIBED {
+                    continue;
+                }
+                let x = tip_nodes[n];
+                let at = |shift: [f64; 2]| {
+                    field.height_gradient(x[0] + u[3 * n] + shift[0], x[1] + u[3 * n + 1] + shift[1]).0
+                };
+                u[3 * n + 2] += at(s) - at(*last);
+            }
+        }
+        let load = body.step_load(&u);
+        let point = |q: usize, w: [f64; 3]| {
+            let r = relative(candidate.points[q].position, w, s);
+            law.evaluate(&field.at(r), r, &committed[q])
+        };
+        let effort = condensation
+            .equilibrium(&load, body.free(), &mut u, &candidate, &mut |q, w| point(q, w).map(|r| (r.force, r.tangent)))
+            .map_err(|source| SimulationError::Equilibrium3 { x_mm: distance, t_s, source })?;
+        newton_iterations += effort.iterations;
+        // Forces, the patch, and the commit.
+        let mut force = [0.0; 3];
+        let mut area = 0.0;
+        let mut points = Vec::with_capacity(candidate.points.len());
+        let mut next = Vec::with_capacity(candidate.points.len());
+        for (q, p) in candidate.points.iter().enumerate() {
+            let w = displacement(p, &u);
+            let r = relative(p.position, w, s);
+            let response = point(q, w);
+            let (pressure, traction, sticking) = response.map_or((0.0, [0.0; 3], false), |r| {
+                for d in 0..3 {
+                    force[d] += p.weight * r.force[d];
+                }
+                (r.pressure, r.traction, r.sticking)
+            });
+            if pressure > 0.0 {
+                area += p.weight;
+            }
+            next.push(Committed { position: r, traction });
+            points.push(PatchPoint {
+                position_mm: std::array::from_fn(|d| p.position[d] + w[d]),
+                weight_mm2: p.weight,
+                pressure_mpa: pressure,
+                traction_mpa: traction,
+                sticking,
+            });
+        }
+        committed = next;
+        in_contact.clear();
+        for (p, point) in candidate.points.iter().zip(&points) {
+            if point.pressure_mpa > 0.0 {
+                in_contact.extend(p.nodes);
+            }
+        }
+        in_contact.sort_unstable();
+        in_contact.dedup();
+        last_patch_s = Some(s);
+        body.commit(&u);
+        for p in &beyond.points {
+            if field.at(relative(p.position, displacement(p, &u), s)).depth > 0.0 {
+                return Err(SimulationError::ContactBeyondRegion { x_mm: distance, t_s, z_cut_mm: z_cut });
+            }
+        }
+        let row = Row3 {
+            t_s,
+            slide_mm: distance,
+            fn_n: force[2],
+            ft_n: -(force[0] * direction[0] + force[1] * direction[1]),
+            ft_lateral_n: -(-force[0] * direction[1] + force[1] * direction[0]),
+            contact_area_mm2: area,
+            drive_z_mm: -depth,
+            iterations: effort.iterations,
+        };
+        history.push(row);
+        let patch = Patch { t_s, slide_mm: distance, points };
+        if k == scenario.press_steps {
+            patches.push(patch);
+        } else if !pressing {
+            if !(row.fn_n > 1e-12) {
+                return Err(SimulationError::NoContact { x_mm: distance, t_s });
+            }
+            x.push(distance);
+            ft.push(row.ft_n);
+            fn_n.push(row.fn_n);
+            let at_feature = !feature_reached && feature.is_some_and(|f| distance >= f);
+            if at_feature || k == total_steps {
+                feature_reached |= at_feature;
+                patches.push(patch);
+            }
+        }
+        progress(Progress { step: k, total_steps, t_s, slide_mm: distance });
+        scenario.check_stop()?;
+    }
+    let profile = if slide_steps == 0 {
+        None
+    } else {
+        Some(
+            FrictionProfile::from_forces(x, &ft, fn_n)
+                .map_err(|e| SimulationError::Invalid(format!("the computed profile is invalid: {e}")))?,
+        )
+    };
+    let statistics = Statistics {
+        nodes: n_nodes,
+        elements: n_elements,
+        free_dofs: body.n_free(),
+        contact_dofs: condensation.unknowns(),
+        factor_nnz: condensation.factor_nnz(),
+        steps: total_steps,
+        newton_iterations,
+        step_cuts: 0,
+        wall_time_s: started.elapsed().as_secs_f64(),
+    };
+    Ok(Simulation3 { history, profile, patches, direction_deg, statistics })
+}
+
+fn displacement(p: &super::contact::ContactPoint, u: &[f64]) -> [f64; 3] {
+    std::array::from_fn(|d| (0..4).map(|a| p.shape[a] * u[3 * p.nodes[a] + d]).sum())
+}
+
+/// The distance along the path at which the finger's centre is over the
+/// feature's characteristic point x0 (None if it never is).
+fn feature_distance(surface: &SurfaceShape, direction: [f64; 2]) -> Option<f64> {
+    match surface {
+        SurfaceShape::Bump { x0, .. } | SurfaceShape::Edge { x0, .. } | SurfaceShape::Sine { x0, .. } => {
+            let d = x0 / direction[0];
+            (d.is_finite() && d >= 0.0).then_some(d)
+        }
+        _ => None,
+    }
+}
