@@ -1,7 +1,7 @@
 //! The 3D finger (solid3d::slide) pressed and slid over a surface: prints
 //! the force history and the run's statistics.
 //!
-//!   cargo run --release -p haptex-fem --example slide_3d -- SURFACE MESH DIRECTION_DEG SLIDE_MM [INDENT_MM [PENALTY]]
+//!   cargo run --release -p haptex-fem --example slide_3d -- SURFACE MESH DIRECTION_DEG SLIDE_MM [INDENT_MM [PENALTY [MU]]]
 //!
 //! SURFACE: flat, bump, edge or sine (x0 = 5, r_w = 1.5, r_h = 0.3 mm);
 //! MESH: coarse, default or fine.
@@ -33,6 +33,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     scenario.slide_mm = arg(3, "2").parse()?;
     scenario.loading = Loading::Indent(arg(4, "0.5").parse()?);
     scenario.penalty_mpa_per_mm = arg(5, "200").parse()?;
+    scenario.mu_skin = args.get(6).map(|m| m.parse()).transpose()?;
     let result = slide::run(&scenario, direction, &mut |_| {})?;
     println!("t_s,slide_mm,fn_n,ft_n,ft_lateral_n,contact_area_mm2,iterations");
     for r in &result.history {

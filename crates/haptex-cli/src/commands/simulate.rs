@@ -1,5 +1,6 @@
-//! `haptex simulate`: the 2D finite-element finger pad pressed onto a rigid
-//! surface and slid over it; writes the friction profile Ft/Fn(x).
+//! `haptex simulate`: the finite-element finger pad (2D, or the 3D
+//! fingertip with `--model 3d`) pressed onto a rigid surface and slid over
+//! it; writes the friction profile Ft/Fn(x).
 
 use std::path::PathBuf;
 
@@ -8,6 +9,7 @@ use clap::{Args, ValueEnum};
 use haptex_core::num::Num;
 use haptex_fem::output;
 use haptex_fem::scenario::{self, Kinematics, Loading, Scenario, default_step_mm};
+use haptex_fem::solid3d::output as solid3d_output;
 use haptex_fem::surface::SurfaceShape;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -17,8 +19,8 @@ use haptex_fem::display::Display;
 
 use crate::args::{LayerStackArgs, MaterialArg, MeshArg, Output, finger_model, in_range, non_negative, positive};
 
-/// Simulate a finger pad sliding over a surface (2D plane-strain FE) and
-/// write its friction profile.
+/// Simulate a finger pad sliding over a surface (2D plane-strain FE, or the
+/// 3D fingertip) and write its friction profile.
 ///
 /// The finger (data/finger/finger-2d.toml: six tissue layers, rigid bone and
 /// nail) is pressed onto the rigid surface, which then slides under it. The
@@ -26,6 +28,12 @@ use crate::args::{LayerStackArgs, MaterialArg, MeshArg, Output, finger_model, in
 /// finger's position on the surface (x from 0 to --slide, in the surface
 /// template's coordinates); forces are per mm of finger width. It is a
 /// friction profile for `haptex voltage`.
+///
+/// With --model 3d the finger is the 3D fingertip of the same layers and
+/// cross-section (docs/fem.md, "The 3D finger pad"), pressed by --indent
+/// (default 0.5 mm) and slid in the direction --direction-deg over the
+/// surface extruded along y; x is the distance travelled and forces are in
+/// N.
 #[derive(Debug, Args)]
 #[command(
     allow_negative_numbers = true,
@@ -94,6 +102,14 @@ pub struct SimulateArgs {
     /// Mesh resolution (pad node spacing 0.2, 0.1, 0.05 mm).
     #[arg(long, value_enum, default_value_t = MeshArg::Default)]
     mesh: MeshArg,
+    /// The finger: the 2D plane-strain cross-section, or the 3D fingertip.
+    #[arg(long, value_enum, default_value_t = ModelArg::TwoD)]
+    model: ModelArg,
+    /// With --model 3d: the direction of the finger's motion over the
+    /// surface, degrees from the surface's x axis (0: across the surface's
+    /// features, as in 2D; 90: along them).
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    direction_deg: Option<f64>,
     /// Finger model file (default: the shipped data/finger/finger-2d.toml).
     #[arg(long, value_name = "FILE")]
     finger: Option<PathBuf>,
@@ -118,6 +134,14 @@ pub struct SimulateArgs {
     /// No progress bar or summary.
     #[arg(short, long)]
     quiet: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ModelArg {
+    #[value(name = "2d")]
+    TwoD,
+    #[value(name = "3d")]
+    ThreeD,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -179,10 +203,11 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
         KinematicsArg::Small => Kinematics::Small,
         KinematicsArg::Finite => Kinematics::Finite,
     };
+    let three_d = args.model == ModelArg::ThreeD;
     scenario.loading = match (args.indent, args.load) {
         (_, Some(load)) => Loading::Load(load),
         (Some(indent), None) => Loading::Indent(indent),
-        (None, None) => Loading::Indent(0.25),
+        (None, None) => Loading::Indent(if three_d { DEFAULT_INDENT_3D_MM } else { 0.25 }),
     };
     scenario.press_time_s = args.press_time;
     scenario.slide_mm = args.slide;
@@ -191,6 +216,12 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     scenario.mu_skin = args.mu_skin.or(args.mu_display);
     scenario.display = display;
     scenario.penalty_mpa_per_mm = args.penalty;
+    if three_d {
+        return run_3d(&args, scenario);
+    }
+    if args.direction_deg.is_some() {
+        anyhow::bail!("--direction-deg applies to --model 3d only (the 2D finger slides along x)");
+    }
     // Every setting is checked before anything is sized by it.
     let slide_steps = scenario.slide_steps()?;
     if args.vtk.is_some() {
@@ -198,19 +229,7 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
         scenario.validate()?;
     }
 
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        let bar = ProgressBar::new((scenario.press_steps + slide_steps) as u64);
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{spinner} simulate [{bar:30}] {pos}/{len} steps, {msg} ({elapsed}, eta {eta})",
-            )
-            .expect("valid template")
-            .progress_chars("=> "),
-        );
-        bar
-    };
+    let bar = progress_bar(args.quiet, scenario.press_steps + slide_steps);
     let result = scenario::run(&scenario, &mut |p| {
         bar.set_position(p.step as u64);
         bar.set_message(format!("t = {:.3} s, x = {:.2} mm", p.t_s, p.slide_mm));
@@ -255,6 +274,87 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
         for (label, path) in
             [("profile", &args.output), ("history", &args.history), ("VTK series", &args.vtk), ("PNG", &args.png)]
         {
+            if let Some(p) = path {
+                eprintln!("wrote {label}: {}", p.display());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The 3D finger's default indentation (mm): about 0.4 N on the shipped
+/// finger, within screen exploration's 0.1-1 N (docs/fem.md).
+const DEFAULT_INDENT_3D_MM: f64 = 0.5;
+
+fn progress_bar(quiet: bool, steps: usize) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(steps as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} simulate [{bar:30}] {pos}/{len} steps, {msg} ({elapsed}, eta {eta})")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar
+}
+
+/// `--model 3d`: the 3D fingertip.
+fn run_3d(args: &SimulateArgs, scenario: Scenario) -> anyhow::Result<()> {
+    for (given, flag) in [
+        (args.load.is_some(), "--load (the 3D finger is pressed by --indent)"),
+        (matches!(args.kinematics, KinematicsArg::Finite), "--kinematics finite"),
+        (scenario.display.is_some(), "--surface display"),
+        (args.vtk.is_some(), "--vtk"),
+    ] {
+        if given {
+            anyhow::bail!("{flag} is not supported with --model 3d");
+        }
+    }
+    let direction = args.direction_deg.unwrap_or(0.0);
+    if !(direction.is_finite() && direction.abs() <= 360.0) {
+        anyhow::bail!("--direction-deg {direction} must be a finite angle from -360 to 360 degrees");
+    }
+    let steps = scenario.press_steps + scenario.slide_steps()?;
+    let bar = progress_bar(args.quiet, steps);
+    let result = haptex_fem::solid3d::slide::run(&scenario, direction, &mut |p| {
+        bar.set_position(p.step as u64);
+        bar.set_message(format!("t = {:.3} s, travelled {:.2} mm", p.t_s, p.slide_mm));
+    });
+    bar.finish_and_clear();
+    let result = result.context("simulation failed")?;
+    let description = format!("{}; direction {} degrees", describe(args, &scenario), Num(direction));
+    Output::new(args.output.clone()).write(|w| solid3d_output::write_profile(&result, &description, w))?;
+    if let Some(path) = &args.history {
+        haptex_core::io::write_atomic(path, |w| solid3d_output::write_history(&result, w))?;
+    }
+    if let Some(path) = &args.png {
+        let title = format!("3D finger: {}", description.split(';').next().unwrap_or(""));
+        solid3d_output::write_png(&result, &title, path)?;
+    }
+    if !args.quiet {
+        let s = result.statistics;
+        eprintln!("{description}");
+        eprintln!(
+            "3D mesh: {} nodes, {} elements, {} free DOFs ({} in the contact region)",
+            s.nodes, s.elements, s.free_dofs, s.contact_dofs
+        );
+        eprintln!("solved {} steps, {} Newton iterations in {:.2} s", s.steps, s.newton_iterations, s.wall_time_s);
+        match (&result.profile, result.history.last()) {
+            (None, Some(last)) => eprintln!(
+                "press only: Fn = {:.4} N at {} mm, contact area {:.2} mm^2",
+                last.fn_n,
+                Num(-last.drive_z_mm),
+                last.contact_area_mm2
+            ),
+            (Some(p), _) => {
+                let (lo, hi) =
+                    p.mu().iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &m| (a.min(m), b.max(m)));
+                eprintln!("Ft/Fn over the slide: {lo:.4} .. {hi:.4}");
+            }
+            (None, None) => {}
+        }
+        for (label, path) in [("profile", &args.output), ("history", &args.history), ("PNG", &args.png)] {
             if let Some(p) = path {
                 eprintln!("wrote {label}: {}", p.display());
             }

@@ -18,6 +18,7 @@ pub mod fingertip;
 pub mod friction;
 pub mod hex8;
 pub mod mesh;
+pub mod output;
 pub mod slide;
 pub mod solver;
 pub mod surface;

@@ -182,6 +182,7 @@ pub fn run(
         penalty_t: scenario.penalty_mpa_per_mm,
         mu: scenario.mu_skin.unwrap_or(scenario.model.contact.mu_skin),
     };
+    let sticking = FrictionLaw { mu: f64::INFINITY, ..law };
     // A point's position relative to the surface (surface frame) when the
     // finger has travelled `s`.
     let relative = |x: [f64; 3], w: [f64; 3], s: [f64; 2]| [x[0] + w[0] + s[0], x[1] + w[1] + s[1], x[2] + w[2] - lift];
@@ -194,8 +195,14 @@ pub fn run(
     let mut u = vec![0.0; 3 * n_nodes];
     // The nodes of the points in contact at the last step, and its slide.
     let mut in_contact: Vec<usize> = Vec::new();
-    let mut last_patch_s: Option<[f64; 2]> = None;
+    let (mut last_s, mut last_depth) = ([0.0; 2], 0.0);
+    // Whether some point in contact stuck at the last step (Newton's
+    // method then starts with the stick predictor).
+    let mut some_stuck = false;
     let tip_nodes = body.mesh.nodes.clone();
+    let mut region_nodes: Vec<usize> = candidate.points.iter().flat_map(|p| p.nodes).collect();
+    region_nodes.sort_unstable();
+    region_nodes.dedup();
     let slide_steps = scenario.slide_steps()?;
     let total_steps = scenario.press_steps + slide_steps;
     let mut history = Vec::with_capacity(total_steps);
@@ -220,37 +227,64 @@ pub fn run(
         if body.prepare(dt)? {
             condensation.factorize(body.stiffness_values())?;
         }
-        for &n in &tip.driven_nodes {
-            u[3 * n + 2] = -depth;
-        }
-        // Predictor: the skin in contact follows the surface's rise or
-        // fall under it since the last step (from the last state, the
-        // surface's move alone pushes it metres deep at the penalty's
-        // stiffness on a feature's flank, and Newton's first steps
-        // overshoot).
-        if let Some(last) = &last_patch_s
-            && s != *last
-        {
-            for &n in &in_contact {
-                if body.free()[3 * n + 2] == crate::assembly::PRESCRIBED {
-                    continue;
+        // Continuation: the step's surface move and press in `pieces`
+        // equal parts, each solved from the last. The friction's reference
+        // is the last step's commit throughout, so the solution is the
+        // whole step's; only Newton's start is nearer. One piece first,
+        // doubled while Newton fails (at a slide's first step, where the
+        // pad goes from sticking to slipping, and on features finer than
+        // the mesh).
+        let start = u.clone();
+        let mut pieces = 1;
+        let iterations = loop {
+            u.copy_from_slice(&start);
+            let mut from = last_s;
+            let mut total = 0;
+            let mut failure = None;
+            for j in 1..=pieces {
+                let lambda = j as f64 / pieces as f64;
+                let to = [last_s[0] + lambda * (s[0] - last_s[0]), last_s[1] + lambda * (s[1] - last_s[1])];
+                let drive = last_depth + lambda * (depth - last_depth);
+                for &n in &tip.driven_nodes {
+                    u[3 * n + 2] = -drive;
                 }
-                let x = tip_nodes[n];
-                let at = |shift: [f64; 2]| {
-                    field.height_gradient(x[0] + u[3 * n] + shift[0], x[1] + u[3 * n + 1] + shift[1]).0
+                follow_surface(&mut u, &region_nodes, &in_contact, body.free(), &tip_nodes, &field, lift, from, to);
+                let load = body.step_load(&u);
+                let point = |q: usize, w: [f64; 3], stick: bool| {
+                    let r = relative(candidate.points[q].position, w, to);
+                    let law = if stick { &sticking } else { &law };
+                    law.evaluate(&field.at(r), r, &committed[q])
                 };
-                u[3 * n + 2] += at(s) - at(*last);
+                match condensation.equilibrium(
+                    &load,
+                    body.free(),
+                    &mut u,
+                    &candidate,
+                    &mut |q, w, stick| point(q, w, stick).map(|r| (r.force, r.tangent)),
+                    some_stuck,
+                ) {
+                    Ok(effort) => total += effort.iterations,
+                    Err(e) => {
+                        total += MAX_ITERATIONS_COUNTED;
+                        failure = Some(e);
+                        break;
+                    }
+                }
+                from = to;
             }
-        }
-        let load = body.step_load(&u);
+            newton_iterations += total;
+            match failure {
+                None => break total,
+                Some(source) if pieces >= MAX_PIECES => {
+                    return Err(SimulationError::Equilibrium3 { x_mm: distance, t_s, source });
+                }
+                Some(_) => pieces *= 2,
+            }
+        };
         let point = |q: usize, w: [f64; 3]| {
             let r = relative(candidate.points[q].position, w, s);
             law.evaluate(&field.at(r), r, &committed[q])
         };
-        let effort = condensation
-            .equilibrium(&load, body.free(), &mut u, &candidate, &mut |q, w| point(q, w).map(|r| (r.force, r.tangent)))
-            .map_err(|source| SimulationError::Equilibrium3 { x_mm: distance, t_s, source })?;
-        newton_iterations += effort.iterations;
         // Forces, the patch, and the commit.
         let mut force = [0.0; 3];
         let mut area = 0.0;
@@ -287,7 +321,8 @@ pub fn run(
         }
         in_contact.sort_unstable();
         in_contact.dedup();
-        last_patch_s = Some(s);
+        some_stuck = points.iter().any(|p| p.pressure_mpa > 0.0 && p.sticking);
+        (last_s, last_depth) = (s, depth);
         body.commit(&u);
         for p in &beyond.points {
             if field.at(relative(p.position, displacement(p, &u), s)).depth > 0.0 {
@@ -302,7 +337,7 @@ pub fn run(
             ft_lateral_n: -(-force[0] * direction[1] + force[1] * direction[0]),
             contact_area_mm2: area,
             drive_z_mm: -depth,
-            iterations: effort.iterations,
+            iterations,
         };
         history.push(row);
         let patch = Patch { t_s, slide_mm: distance, points };
@@ -344,6 +379,47 @@ pub fn run(
         wall_time_s: started.elapsed().as_secs_f64(),
     };
     Ok(Simulation3 { history, profile, patches, direction_deg, statistics })
+}
+
+/// Most parts a step is cut into when Newton's method fails on it.
+const MAX_PIECES: usize = 16;
+/// The Newton iterations a failed attempt counts for in the statistics.
+const MAX_ITERATIONS_COUNTED: usize = 100;
+
+/// The predictor of a step that moves the surface from `from` to `to`:
+/// the skin in contact at the last step follows the surface's rise or
+/// fall under it, and the skin that was not in contact and would now be
+/// inside the surface is put on it (from the last state, the surface's
+/// move alone pushes skin tens of micrometres deep at the penalty's
+/// stiffness on a feature's flank, and Newton's first steps overshoot).
+#[allow(clippy::too_many_arguments)]
+fn follow_surface(
+    u: &mut [f64],
+    region_nodes: &[usize],
+    in_contact: &[usize],
+    free: &[usize],
+    nodes: &[[f64; 3]],
+    field: &HeightField,
+    lift: f64,
+    from: [f64; 2],
+    to: [f64; 2],
+) {
+    if from == to {
+        return;
+    }
+    for &n in region_nodes {
+        if free[3 * n + 2] == crate::assembly::PRESCRIBED {
+            continue;
+        }
+        let x = nodes[n];
+        let (ux, uy) = (u[3 * n], u[3 * n + 1]);
+        let at = |shift: [f64; 2]| field.height_gradient(x[0] + ux + shift[0], x[1] + uy + shift[1]).0 + lift;
+        if in_contact.binary_search(&n).is_ok() {
+            u[3 * n + 2] += at(to) - at(from);
+        } else {
+            u[3 * n + 2] = u[3 * n + 2].max(at(to) - x[2]);
+        }
+    }
 }
 
 fn displacement(p: &super::contact::ContactPoint, u: &[f64]) -> [f64; 3] {

@@ -329,13 +329,20 @@ impl ElasticBody {
         let mut u = self.starting_displacements(start);
         let load = self.prescribed_load();
         let mut condensation = self.condensation.take().expect("made above");
-        let evaluate = |body: &Self, q: usize, w: [f64; 3]| {
+        let sticking = FrictionLaw { mu: f64::INFINITY, ..law };
+        let evaluate = |body: &Self, q: usize, w: [f64; 3], stick: bool| {
             let relative = body.relative(q, w, plane_z, shift);
+            let law = if stick { &sticking } else { &law };
             law.evaluate(&HeightField::Flat.at(relative), relative, &body.committed[q])
         };
-        let effort = condensation.equilibrium(&load, &self.free, &mut u, &self.contact, &mut |q, w| {
-            evaluate(self, q, w).map(|r| (r.force, r.tangent))
-        });
+        let effort = condensation.equilibrium(
+            &load,
+            &self.free,
+            &mut u,
+            &self.contact,
+            &mut |q, w, stick| evaluate(self, q, w, stick).map(|r| (r.force, r.tangent)),
+            false,
+        );
         self.condensation = Some(condensation);
         let effort = effort?;
         let n_points = self.contact.points.len();
@@ -349,7 +356,7 @@ impl ElasticBody {
             u: Vec::new(),
         };
         for (q, p) in self.contact.points.iter().enumerate() {
-            if let Some(r) = evaluate(self, q, self.point_displacement(q, &u)) {
+            if let Some(r) = evaluate(self, q, self.point_displacement(q, &u), false) {
                 solution.pressure[q] = r.pressure;
                 solution.traction[q] = [r.traction[0], r.traction[1]];
                 solution.sticking[q] = r.sticking;

@@ -1,0 +1,132 @@
+//! Files written from a 3D simulation ([`super::slide`]): the friction
+//! profile and the force history (CSV, with forces in N, not per mm of
+//! width as in 2D), and a PNG of the contact patch.
+
+use std::io::Write;
+use std::path::Path;
+
+use haptex_core::io::write_csv_row;
+use haptex_core::plot::{Figure, Panel, PlotError, Series, Shape};
+
+use super::slide::{Patch, Simulation3};
+
+/// Writes `x_mm,mu,ft_n,fn_n,ft_lateral_n,force_angle_deg`: x the distance
+/// the finger travelled along its direction, mu = Ft/Fn with Ft the
+/// friction along the motion; a `haptex voltage` input as is. The lateral
+/// force and the tangential force's angle from the motion's direction
+/// follow. A press-only run writes its press curve instead.
+pub fn write_profile(result: &Simulation3, description: &str, w: &mut dyn Write) -> std::io::Result<()> {
+    let Some(p) = &result.profile else {
+        return write_press_curve(result, description, w);
+    };
+    writeln!(w, "# haptex simulate --model 3d: {description}")?;
+    writeln!(
+        w,
+        "# x_mm: distance travelled at {} degrees from the surface's x axis; mu = ft_n/fn_n; forces in N on the \
+         3D finger; force_angle_deg: the tangential force's direction from the motion's, positive to its left",
+        haptex_core::num::Num(result.direction_deg)
+    )?;
+    writeln!(w, "x_mm,mu,ft_n,fn_n,ft_lateral_n,force_angle_deg")?;
+    // The slide's rows of the history: those past the press.
+    for (i, r) in result.history.iter().filter(|r| r.slide_mm > 0.0).enumerate() {
+        let angle = r.ft_lateral_n.atan2(r.ft_n).to_degrees();
+        write_csv_row(w, &[p.x_mm()[i], p.mu()[i], r.ft_n, r.fn_n, r.ft_lateral_n, angle])?;
+    }
+    Ok(())
+}
+
+/// Writes the press of a press-only run: `t_s,indent_mm,fn_n,contact_area_mm2`.
+pub fn write_press_curve(result: &Simulation3, description: &str, w: &mut dyn Write) -> std::io::Result<()> {
+    writeln!(w, "# haptex simulate --model 3d (press only): {description}")?;
+    writeln!(w, "# indent_mm: the bone moved down since first touch; fn_n in N; contact_area_mm2 in mm^2")?;
+    writeln!(w, "t_s,indent_mm,fn_n,contact_area_mm2")?;
+    for r in &result.history {
+        write_csv_row(w, &[r.t_s, -r.drive_z_mm, r.fn_n, r.contact_area_mm2])?;
+    }
+    Ok(())
+}
+
+/// Writes every step: `t_s,slide_mm,fn_n,ft_n,ft_lateral_n,contact_area_mm2,drive_z_mm,newton_iterations`.
+pub fn write_history(result: &Simulation3, w: &mut dyn Write) -> std::io::Result<()> {
+    writeln!(w, "# haptex simulate --model 3d force history; forces in N on the 3D finger")?;
+    writeln!(w, "t_s,slide_mm,fn_n,ft_n,ft_lateral_n,contact_area_mm2,drive_z_mm,newton_iterations")?;
+    for r in &result.history {
+        write_csv_row(
+            w,
+            &[r.t_s, r.slide_mm, r.fn_n, r.ft_n, r.ft_lateral_n, r.contact_area_mm2, r.drive_z_mm, r.iterations as f64],
+        )?;
+    }
+    Ok(())
+}
+
+/// Pressure colours, from the lowest band to the highest.
+const BANDS: [(u8, u8, u8); 6] =
+    [(254, 240, 217), (253, 212, 158), (253, 187, 132), (252, 141, 89), (227, 74, 51), (179, 0, 0)];
+
+/// The contact patches of a run seen from below the surface: each skin
+/// face of the contact region at its deformed place, filled by its mean
+/// pressure in six bands up to the largest pressure of the run, with the
+/// patch's area and force in the panel's title; the direction of motion
+/// as an arrow from the pad's centre.
+pub fn patch_figure(result: &Simulation3, title: &str) -> Figure {
+    let peak =
+        result.patches.iter().flat_map(|p| p.points.iter().map(|q| q.pressure_mpa)).fold(0.0f64, f64::max).max(1e-12);
+    let mut figure = Figure::new(title).size(760, 560);
+    for patch in &result.patches {
+        figure = figure.panel(patch_panel(patch, peak, result.direction_deg));
+    }
+    figure
+}
+
+fn patch_panel(patch: &Patch, peak: f64, direction_deg: f64) -> Panel {
+    let area: f64 = patch.points.iter().filter(|p| p.pressure_mpa > 0.0).map(|p| p.weight_mm2).sum();
+    let force: f64 = patch.points.iter().map(|p| p.pressure_mpa * p.weight_mm2).sum();
+    let mut panel = Panel::new("x across the finger (mm)", "y along the finger (mm)").title(format!(
+        "t = {:.3} s, travelled {:.2} mm: contact {area:.1} mm^2, pressure force {force:.3} N",
+        patch.t_s, patch.slide_mm
+    ));
+    // The Gauss points of a face sit at +-1/sqrt(3) of its parameters:
+    // scaled by sqrt(3) about their centre they give its corners (exactly
+    // for a parallelogram).
+    let grow = 3f64.sqrt();
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for face in patch.points.chunks_exact(4) {
+        let centre = [0, 1].map(|d| face.iter().map(|p| p.position_mm[d]).sum::<f64>() / 4.0);
+        let corners: Vec<(f64, f64)> = face
+            .iter()
+            .map(|p| {
+                (centre[0] + grow * (p.position_mm[0] - centre[0]), centre[1] + grow * (p.position_mm[1] - centre[1]))
+            })
+            .collect();
+        let pressure = face.iter().map(|p| p.pressure_mpa).sum::<f64>() / 4.0;
+        let fill = if pressure > 0.0 {
+            for (d, v) in [centre[0], centre[1]].into_iter().enumerate() {
+                lo[d] = lo[d].min(v);
+                hi[d] = hi[d].max(v);
+            }
+            let band = ((pressure / peak) * BANDS.len() as f64).floor() as usize;
+            BANDS[band.min(BANDS.len() - 1)]
+        } else {
+            (255, 255, 255)
+        };
+        panel = panel.shape(Shape { points: corners, fill: Some(fill), stroke: Some((170, 170, 170)) });
+    }
+    for (k, &color) in BANDS.iter().enumerate() {
+        let (a, b) = (peak * k as f64 / BANDS.len() as f64, peak * (k + 1) as f64 / BANDS.len() as f64);
+        panel = panel.swatch(format!("{:.0}-{:.0} kPa", 1e3 * a, 1e3 * b), color);
+    }
+    let theta = direction_deg.to_radians();
+    let arrow = 2.0;
+    panel = panel.series(
+        Series::line("finger's motion", &[0.0, arrow * theta.cos()], &[0.0, arrow * theta.sin()]).color((20, 60, 160)),
+    );
+    // A square window around the patch, with a margin.
+    let half = if lo[0].is_finite() { (hi[0] - lo[0]).max(hi[1] - lo[1]) / 2.0 + 2.0 } else { 6.0 };
+    let mid = if lo[0].is_finite() { [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0] } else { [0.0, 0.0] };
+    panel.x_range(mid[0] - half, mid[0] + half).y_range(mid[1] - half, mid[1] + half)
+}
+
+/// Writes [`patch_figure`] as a PNG.
+pub fn write_png(result: &Simulation3, title: &str, path: &Path) -> Result<(), PlotError> {
+    patch_figure(result, title).write_png(path)
+}

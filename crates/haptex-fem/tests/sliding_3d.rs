@@ -1,0 +1,92 @@
+//! The 3D finger sliding (solid3d::slide), against what holds exactly:
+//!
+//! - Coulomb's law in full slip: on a flat, once every point in contact
+//!   slips, Ft = mu Fn along the motion, whatever the direction (the
+//!   penalty's elastic slip and the patch's edge: measured 1 - Ft/(mu Fn)
+//!   = 3e-8 to 1e-7 after 1.5 mm, tolerance 1e-6); the tangential force
+//!   has no lateral part (exactly, by symmetry, at 0 and 90 degrees; 1e-4
+//!   of Ft at 45 and -120 degrees, where the mesh is not symmetric about
+//!   the motion; tolerance 1e-3); along a ridge (90 degrees, the ridge
+//!   under the pad's centre line), Ft = mu times the pressure's force
+//!   (to 1e-3; not mu Fn, as the pressure leans on the flanks);
+//! - symmetry: the fingertip is mirror-symmetric in x, so sliding at 180
+//!   degrees over a bump at -x0 gives the profile of sliding at 0 degrees
+//!   over the bump at x0, to rounding (1e-9 of Fn), and sliding along a
+//!   ridge has no lateral force;
+//! - the coarse mesh and 1-2 mm slides keep each case within a second or
+//!   two.
+
+use haptex_fem::finger::Resolution;
+use haptex_fem::scenario::{Loading, Scenario};
+use haptex_fem::solid3d::slide::{Simulation3, run};
+use haptex_fem::surface::SurfaceShape;
+
+fn scenario(surface: SurfaceShape, slide_mm: f64) -> Scenario {
+    let mut s = Scenario::paper(surface);
+    s.resolution = Resolution::Coarse;
+    s.loading = Loading::Indent(0.5);
+    s.slide_mm = slide_mm;
+    s.step_mm = 0.1;
+    s
+}
+
+fn simulate(surface: SurfaceShape, slide_mm: f64, direction_deg: f64) -> Simulation3 {
+    run(&scenario(surface, slide_mm), direction_deg, &mut |_| {}).unwrap()
+}
+
+#[test]
+fn full_slip_on_a_flat_is_coulomb_in_every_direction() {
+    let mut normal = Vec::new();
+    for direction in [0.0, 45.0, 90.0, -120.0] {
+        let r = simulate(SurfaceShape::Flat, 1.5, direction);
+        let last = r.history.last().unwrap();
+        let mu = last.ft_n / last.fn_n;
+        eprintln!("direction {direction}: Fn {:.5} N, Ft/Fn {mu:.10}, lateral {:.2e} N", last.fn_n, last.ft_lateral_n);
+        assert!((mu / 0.5 - 1.0).abs() < 1e-6, "direction {direction}: Ft/Fn = {mu}");
+        assert!(last.ft_lateral_n.abs() < 1e-3 * last.ft_n, "direction {direction}: lateral {}", last.ft_lateral_n);
+        // The profile is the history's slide, mu = Ft/Fn.
+        let p = r.profile.as_ref().unwrap();
+        assert_eq!(p.len(), 15);
+        assert!((p.mu()[14] - mu).abs() < 1e-15);
+        normal.push(last.fn_n);
+    }
+    // The press is the same in every direction; the slide's friction
+    // changes Fn a little with the direction (the fingertip is longer along
+    // y than across): within 2%.
+    let spread =
+        normal.iter().cloned().fold(f64::NEG_INFINITY, f64::max) / normal.iter().cloned().fold(f64::INFINITY, f64::min);
+    assert!(spread < 1.02, "Fn over directions: {normal:?}");
+}
+
+#[test]
+fn mirrored_surface_and_direction_give_the_same_profile() {
+    let bump = |x0: f64| SurfaceShape::Bump { x0, width: 1.0, height: 0.2 };
+    let forward = simulate(bump(0.8), 1.6, 0.0);
+    let backward = simulate(bump(-0.8), 1.6, 180.0);
+    for (a, b) in forward.history.iter().zip(&backward.history) {
+        assert!((a.fn_n - b.fn_n).abs() < 1e-9 * a.fn_n, "Fn {} against {}", a.fn_n, b.fn_n);
+        assert!((a.ft_n - b.ft_n).abs() < 1e-9 * a.fn_n, "Ft {} against {}", a.ft_n, b.ft_n);
+        assert!((a.ft_lateral_n + b.ft_lateral_n).abs() < 1e-9 * a.fn_n);
+    }
+    // The bump raised Ft/Fn on its way up.
+    let mu = forward.profile.as_ref().unwrap().mu().to_vec();
+    assert!(mu.iter().cloned().fold(0.0, f64::max) > 0.55, "{mu:?}");
+}
+
+#[test]
+fn sliding_along_a_ridge_has_no_lateral_force() {
+    let ridge = SurfaceShape::Bump { x0: 0.0, width: 1.5, height: 0.2 };
+    let r = simulate(ridge, 1.0, 90.0);
+    for row in &r.history {
+        assert!(row.ft_lateral_n.abs() < 1e-9, "{row:?}");
+    }
+    // Every point in contact slips along y with t = mu p: Ft = mu times
+    // the pressure's force (not mu Fn: on the ridge's flanks the pressure
+    // leans away from the vertical, Fn is less than it).
+    let last = r.history.last().unwrap();
+    let patch = r.patches.last().unwrap();
+    let pressure_force: f64 = patch.points.iter().map(|p| p.pressure_mpa * p.weight_mm2).sum();
+    eprintln!("Ft {:.6} N, mu x pressure force {:.6} N, Fn {:.6} N", last.ft_n, 0.5 * pressure_force, last.fn_n);
+    assert!((last.ft_n / (0.5 * pressure_force) - 1.0).abs() < 1e-3, "{last:?}");
+    assert!(last.fn_n < pressure_force);
+}
