@@ -265,3 +265,96 @@ fn error_causes_are_printed_once() {
     let cause = "No such file or directory";
     assert_eq!(message.matches(cause).count(), 1, "{message}");
 }
+
+/// `--model 3d` (issue 39): the profile reads back as a friction profile
+/// and feeds `haptex voltage`; the history and the contact-patch PNG are
+/// written; x is the distance travelled.
+#[test]
+fn simulate_3d_writes_profile_history_and_png() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let out = haptex(&[
+        "simulate",
+        "--model",
+        "3d",
+        "--mesh",
+        "coarse",
+        "--surface",
+        "bump",
+        "--x0",
+        "1",
+        "--width",
+        "1.5",
+        "--height",
+        "0.1",
+        "--slide",
+        "1.5",
+        "--direction-deg",
+        "30",
+        "-o",
+        &p("profile.csv"),
+        "--history",
+        &p("history.csv"),
+        "--png",
+        &p("patch.png"),
+    ]);
+    let text = stderr(&out);
+    assert!(out.status.success(), "{text}");
+    assert!(text.contains("direction 30 degrees") && text.contains("3D mesh:"), "{text}");
+    let profile = haptex_core::FrictionProfile::read_csv_file(std::path::Path::new(&p("profile.csv"))).unwrap();
+    assert_eq!(profile.len(), 15);
+    assert!((profile.x_mm()[14] - 1.5).abs() < 1e-9);
+    let table = haptex_core::io::Table::read_file(std::path::Path::new(&p("profile.csv"))).unwrap();
+    for column in ["x_mm", "mu", "ft_n", "fn_n", "ft_lateral_n", "force_angle_deg"] {
+        assert!(table.column(column).is_some(), "{column}");
+    }
+    // Forces in N on the whole finger: about 0.3 N at 0.5 mm.
+    let fn_n = profile.fn_n().unwrap();
+    assert!(fn_n.iter().all(|&f| f > 0.1 && f < 1.0), "{fn_n:?}");
+    let v = haptex(&["voltage", "--profile", &p("profile.csv"), "--method", "normalized", "-q"]);
+    assert!(v.status.success(), "{}", stderr(&v));
+    let history = haptex_core::io::Table::read_file(std::path::Path::new(&p("history.csv"))).unwrap();
+    for column in ["t_s", "slide_mm", "fn_n", "ft_n", "ft_lateral_n", "contact_area_mm2", "drive_z_mm"] {
+        assert!(history.column(column).is_some(), "{column}");
+    }
+    assert_eq!(history.n_rows(), 10 + 15);
+    let png = std::fs::read(p("patch.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+}
+
+/// What the 3D finger does not do is refused by the flag's name, before
+/// any work; a 3D-only flag is refused in 2D.
+#[test]
+fn simulate_3d_refuses_what_it_does_not_support() {
+    let dir = tempfile::tempdir().unwrap();
+    let vtk = dir.path().join("vtk");
+    let vtk = vtk.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["--model", "3d", "--load", "0.5"],
+            "--load (the 3D finger is pressed by --indent) is not supported with --model 3d",
+        ),
+        (vec!["--model", "3d", "--kinematics", "finite"], "--kinematics finite is not supported with --model 3d"),
+        (vec!["--model", "3d", "--vtk", vtk], "--vtk is not supported with --model 3d"),
+        (
+            vec!["--model", "3d", "--surface", "display", "--constant-voltage", "100"],
+            "--surface display is not supported",
+        ),
+        (vec!["--model", "3d", "--direction-deg", "NaN"], "--direction-deg NaN must be a finite angle"),
+        (vec!["--model", "3d", "--direction-deg", "400"], "--direction-deg 400 must be a finite angle"),
+        (vec!["--direction-deg", "30"], "--direction-deg applies to --model 3d only"),
+        (vec!["--model", "4d"], "invalid value '4d'"),
+        (vec!["--model", "3d", "--indent", "7"], "indent"),
+    ];
+    for (args, fragment) in cases {
+        let mut full = vec!["simulate", "-q", "--mesh", "coarse", "--slide", "0.5"];
+        if !args.contains(&"--surface") {
+            full.extend(["--surface", "flat"]);
+        }
+        full.extend(args.iter());
+        let out = haptex(&full);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(stderr(&out).contains(fragment), "{args:?}: {}", stderr(&out));
+        assert!(!vtk.is_empty() && !std::path::Path::new(vtk).exists(), "{args:?} wrote {vtk}");
+    }
+}

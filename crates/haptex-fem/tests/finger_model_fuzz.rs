@@ -7,7 +7,8 @@
 //! line of its key); never a panic. Every accepted model meshes at every
 //! resolution, with positive Jacobians at every Gauss point, finite nodes,
 //! a contact region of free skin and node counts within the documented
-//! bounds.
+//! bounds, and its 3D fingertip (coarse) meshes or is refused with an
+//! error naming the setting.
 //!
 //! Cases per property: `HAPTEX_FUZZ_CASES` (default 1000, a few seconds in
 //! CI). The campaign of issue 13 ran 1e5 cases of each property
@@ -17,6 +18,7 @@
 //! reused by a fuzz campaign over every parser.
 
 use haptex_fem::finger::{DEFAULT_MODEL_TOML, FingerError, FingerModel, Resolution};
+use haptex_fem::solid3d::fingertip::{self, FingertipSpec};
 use std::collections::BTreeMap;
 use std::sync::Mutex;
 use std::sync::atomic::Ordering::Relaxed;
@@ -357,6 +359,9 @@ impl Edit {
 /// The largest meshes of accepted models: nodes, contact segments.
 static MOST_NODES: AtomicUsize = AtomicUsize::new(0);
 static MOST_SEGMENTS: AtomicUsize = AtomicUsize::new(0);
+/// 3D fingertips of accepted models meshed and refused (issue 39).
+static MESHED_3D: AtomicUsize = AtomicUsize::new(0);
+static REFUSED_3D: AtomicUsize = AtomicUsize::new(0);
 
 /// Why generated models were refused: the field (or "syntax") and a count.
 static REFUSED: Mutex<BTreeMap<String, u32>> = Mutex::new(BTreeMap::new());
@@ -399,6 +404,21 @@ fn check(text: &str) -> Result<bool, TestCaseError> {
                     .mesh(resolution)
                     .map_err(|e| TestCaseError::fail(format!("{resolution:?}: accepted model does not mesh: {e}")))?;
                 check_mesh(&finger, resolution)?;
+            }
+            // The 3D fingertip of the same model (issue 39), coarse: a
+            // mesh of positive volumes or an error naming a setting.
+            let spec = FingertipSpec::from_model(&model, Resolution::Coarse);
+            match fingertip::mesh(&spec) {
+                Ok(tip) => {
+                    prop_assert!(tip.mesh.nodes.iter().flatten().all(|v| v.is_finite()));
+                    prop_assert_eq!(tip.mesh.elements.len(), 12 * 12 * 6);
+                    MESHED_3D.fetch_add(1, Relaxed);
+                }
+                Err(e) => {
+                    let message = e.to_string();
+                    prop_assert!(message.contains(" = ") || message.contains("element"), "{message}");
+                    REFUSED_3D.fetch_add(1, Relaxed);
+                }
             }
             Ok(true)
         }
@@ -445,6 +465,11 @@ fn random_finger_models_are_read_or_refused_and_accepted_ones_mesh() {
         MOST_SEGMENTS.load(Relaxed)
     );
     eprintln!("refused (both properties so far), by field: {:?}", REFUSED.lock().unwrap());
+    eprintln!(
+        "3D fingertips of accepted models (both properties so far): {} meshed, {} refused",
+        MESHED_3D.load(Relaxed),
+        REFUSED_3D.load(Relaxed)
+    );
     assert!(accepted > 0, "no generated model was accepted: the generator misses the valid region");
 }
 

@@ -38,7 +38,7 @@ pub type PointForce = Option<([f64; 3], [[f64; 3]; 3])>;
 #[derive(Debug, thiserror::Error)]
 pub enum EquilibriumError {
     #[error(
-        "the contact equilibrium was not reached in {iterations} Newton iterations (largest residual {residual_n:e} N)"
+        "the contact equilibrium was not reached in {iterations} Newton iterations (largest residual {residual_n:.3e} N)"
     )]
     NoConvergence { iterations: usize, residual_n: f64 },
     #[error("the contact tangent is singular at Newton iteration {iteration}")]
