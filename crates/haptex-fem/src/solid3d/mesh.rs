@@ -22,7 +22,9 @@ pub enum Side {
 pub struct Mesh3 {
     pub nodes: Vec<[f64; 3]>,
     pub elements: Vec<[usize; 8]>,
-    /// The grid's node counts along x, y and z (a structured block).
+    /// The grid's node counts along x, y and z (a structured block; zeros
+    /// for a mesh made otherwise, whose sides and bottom faces are not
+    /// known to it).
     pub shape: [usize; 3],
 }
 

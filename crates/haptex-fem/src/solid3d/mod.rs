@@ -14,6 +14,7 @@
 pub mod body;
 pub mod condensed;
 pub mod contact;
+pub mod extrude;
 pub mod fingertip;
 pub mod friction;
 pub mod hex8;

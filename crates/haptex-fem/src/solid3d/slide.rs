@@ -98,12 +98,53 @@ pub struct Simulation3 {
     pub statistics: Statistics,
 }
 
-/// Runs `scenario` on the 3D finger, sliding in direction `direction_deg`
-/// (degrees from the surface's x axis); `progress` is called after every
-/// step. The scenario's settings mean what they mean in 2D, with forces in
-/// N (not per mm of width); not yet supported in 3D: a normal load (the
-/// finger is pressed by an indentation), finite strain, a display.
+/// A 3D finger as the slide needs it: the mesh, each element's layer
+/// (0-3: stratum corneum to hypodermis, [`super::fingertip`]'s indices),
+/// the nodes the bone drives (pressed down, held in x and y), further
+/// DOFs held at zero, and the skin's faces that may touch the surface.
+#[derive(Debug, Clone)]
+pub struct Finger3 {
+    pub mesh: super::mesh::Mesh3,
+    pub element_layer: Vec<usize>,
+    pub driven_nodes: Vec<usize>,
+    pub held_dofs: Vec<usize>,
+    pub skin_faces: Vec<[usize; 4]>,
+}
+
+impl From<fingertip::FingertipMesh> for Finger3 {
+    fn from(tip: fingertip::FingertipMesh) -> Self {
+        Self {
+            mesh: tip.mesh,
+            element_layer: tip.element_layer,
+            driven_nodes: tip.driven_nodes,
+            held_dofs: Vec::new(),
+            skin_faces: tip.skin_faces,
+        }
+    }
+}
+
+/// Runs `scenario` on the 3D fingertip of its finger model
+/// ([`FingertipSpec::from_model`] at its resolution), sliding in direction
+/// `direction_deg` (degrees from the surface's x axis); `progress` is
+/// called after every step. The scenario's settings mean what they mean
+/// in 2D, with forces in N (not per mm of width); not yet supported in 3D:
+/// a normal load (the finger is pressed by an indentation), finite strain,
+/// a display.
 pub fn run(
+    scenario: &Scenario,
+    direction_deg: f64,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Simulation3, SimulationError> {
+    scenario.validate()?;
+    let spec = FingertipSpec::from_model(&scenario.model, scenario.resolution);
+    let tip = fingertip::mesh(&spec)?;
+    run_finger(tip.into(), scenario, direction_deg, progress)
+}
+
+/// [`run`] on the 3D finger `tip` (the scenario's finger model gives the
+/// materials and the friction; its resolution is not used).
+pub fn run_finger(
+    tip: Finger3,
     scenario: &Scenario,
     direction_deg: f64,
     progress: &mut dyn FnMut(Progress),
@@ -128,8 +169,6 @@ pub fn run(
     if scenario.display.is_some() {
         return invalid("a display surface is not supported by the 3D finger");
     }
-    let spec = FingertipSpec::from_model(&scenario.model, scenario.resolution);
-    let tip = fingertip::mesh(&spec)?;
     let theta = direction_deg.to_radians();
     let direction = [theta.cos(), theta.sin()];
     let travel = [scenario.slide_mm * direction[0], scenario.slide_mm * direction[1]];
@@ -171,7 +210,10 @@ pub fn run(
         soft(&materials.dermis),
         soft(&materials.hypodermis),
     ];
-    let prescribed: Vec<usize> = tip.driven_nodes.iter().flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]).collect();
+    let mut prescribed: Vec<usize> = tip.driven_nodes.iter().flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]).collect();
+    prescribed.extend_from_slice(&tip.held_dofs);
+    prescribed.sort_unstable();
+    prescribed.dedup();
     let n_nodes = tip.mesh.n_nodes();
     let n_elements = tip.mesh.elements.len();
     let mut body = ViscoelasticBody::new(tip.mesh, Formulation::BBar, materials, tip.element_layer, &prescribed)?;
