@@ -448,7 +448,7 @@ impl ContactSet {
 }
 
 /// Gauss-Legendre abscissae and weights on [-1, 1] for 1 to 4 points.
-fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
+pub(crate) fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
     match n {
         1 => (vec![0.0], vec![2.0]),
         2 => {

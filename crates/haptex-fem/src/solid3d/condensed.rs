@@ -41,12 +41,71 @@ pub enum EquilibriumError {
         "the contact equilibrium was not reached in {iterations} Newton iterations (largest residual {residual_n:.3e} N)"
     )]
     NoConvergence { iterations: usize, residual_n: f64 },
-    #[error("the contact tangent is singular at Newton iteration {iteration}")]
-    Singular { iteration: usize },
+    #[error("the contact tangent is singular")]
+    Singular,
 }
 
-/// Most Newton (or damped) iterations of one equilibrium.
-const MAX_ITERATIONS: usize = 200;
+/// How a point's law is asked for its force and tangent.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PointMode {
+    /// The law as it is, with the exact tangent.
+    Exact,
+    /// The tangent without the surface's curvature's terms (the force is
+    /// the same).
+    NoCurvature,
+    /// As if the point stuck, whatever its friction.
+    Stick,
+}
+
+/// The tolerances and limits of [`Condensation::equilibrium`] (the 2D
+/// model's [`crate::solver::SolverSettings`] give them).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NewtonSettings {
+    pub max_iterations: usize,
+    /// Further iterations once continuation has started.
+    pub continuation_iterations: usize,
+    pub relative_tolerance: f64,
+    /// The smallest force the relative tolerance is taken of (N).
+    pub force_floor_n: f64,
+    pub increment_tolerance_mm: f64,
+}
+
+/// Damping of pseudo-transient continuation where it starts (the 2D
+/// model's: with 1, the iterates overshoot and cycle between active sets),
+/// and the least, below which the step is Newton's.
+const CONTINUATION_DAMPING: f64 = 10.0;
+const MIN_DAMPING: f64 = 1e-12;
+
+/// A limit cycle of continuation (the 2D model's rule, crate::solver): the
+/// residual norms of the last damped steps repeat, one period of at most
+/// 8 apart, to 1e-8 over 3 periods.
+#[derive(Debug, Clone, Copy)]
+struct CycleWatch {
+    norms: [f64; CYCLE_WINDOW],
+    next: usize,
+    len: usize,
+}
+
+const CYCLE_PERIOD: usize = 8;
+const CYCLE_REPEATS: usize = 3;
+const CYCLE_AGREEMENT: f64 = 1e-8;
+const CYCLE_WINDOW: usize = (CYCLE_REPEATS + 1) * CYCLE_PERIOD;
+
+impl CycleWatch {
+    const EMPTY: CycleWatch = CycleWatch { norms: [0.0; CYCLE_WINDOW], next: 0, len: 0 };
+
+    /// Records a damped step's norm; the period if the norms now cycle.
+    fn push(&mut self, norm: f64) -> Option<usize> {
+        self.norms[self.next] = norm;
+        self.next = (self.next + 1) % CYCLE_WINDOW;
+        self.len = (self.len + 1).min(CYCLE_WINDOW);
+        let back = |i: usize| self.norms[(self.next + CYCLE_WINDOW - 1 - i) % CYCLE_WINDOW];
+        (1..=CYCLE_PERIOD).find(|&p| {
+            self.len >= (CYCLE_REPEATS + 1) * p
+                && (0..CYCLE_REPEATS * p).all(|i| (back(i) - back(i + p)).abs() <= CYCLE_AGREEMENT * back(i))
+        })
+    }
+}
 
 /// The body's stiffness condensed on the contact unknowns.
 pub struct Condensation {
@@ -142,93 +201,85 @@ impl Condensation {
     /// The equilibrium of the body under the load `load` (over the free
     /// unknowns; the prescribed displacements' share included) with the
     /// contact of `surface`, whose point q with displacement w (mm) has
-    /// the force and tangent `point(q, w, stick)`. `u` (3 per node) holds the
-    /// prescribed values and a start for the contact nodes on entry, the
-    /// whole solution on return.
+    /// the force and tangent `point(q, w, mode)`. `u` (3 per node) holds
+    /// the prescribed values and a start for the contact nodes on entry,
+    /// the whole solution on return.
     ///
-    /// With `stick_predictor`, the first step is Newton's for every point
-    /// in contact sticking (the 2D model's stick predictor: where the pad
-    /// still sticks, as at a slide's start, the linearised slip of the
-    /// last state drags it past the surface and the iterates flip the slip
-    /// directions back and forth).
+    /// The 2D model's contact Newton (crate::solver::newton), step for
+    /// step:
     ///
-    /// Converged when the largest residual force (R) is below 1e-10 of the
-    /// largest nodal contact force (or of 1 mN, whichever is larger) and
-    /// the last correction below 1e-10 mm.
+    /// - with `stick_predictor`, the first step is Newton's for every
+    ///   point in contact sticking (where the pad still sticks, as at a
+    ///   slide's start, the linearised slip of the last state drags it
+    ///   past the surface and the iterates flip the slip directions back
+    ///   and forth);
+    /// - Newton's method with the exact tangent, backtracking on |R|^2 to
+    ///   1/128 of the step;
+    /// - where that finds no decrease (a kink of the residual within the
+    ///   step: a point entering or leaving contact or changing between
+    ///   stick and slip, or no equilibrium near, the skin snapping off a
+    ///   crest), the curvature's term of the tangent is dropped for the
+    ///   rest of the solve; the first time the full Newton step is taken,
+    ///   after that pseudo-transient continuation: the damped step of
+    ///   ((1 + tau) S + D) delta = -R, with tau from
+    ///   [`CONTINUATION_DAMPING`] falling with the residual, which turns
+    ///   into Newton's method near the solution; a limit cycle of it ends
+    ///   the attempt.
+    ///
+    /// Converged when the largest residual force is below
+    /// `relative_tolerance` of the largest nodal contact force (or of
+    /// `force_floor_n`) and the part of the last Newton step not taken
+    /// below `increment_tolerance_mm`.
     pub fn equilibrium(
         &mut self,
         load: &[f64],
         free: &[usize],
         u: &mut [f64],
         surface: &ContactSurface,
-        point: &mut dyn FnMut(usize, [f64; 3], bool) -> PointForce,
+        point: &mut dyn FnMut(usize, [f64; 3], PointMode) -> PointForce,
         stick_predictor: bool,
+        settings: &NewtonSettings,
     ) -> Result<Effort, EquilibriumError> {
         let m = self.global.len();
         let mut u0 = load.to_vec();
         self.factor.solve_vec(&mut u0);
         let v0: Vec<f64> = self.free_index.iter().map(|&f| u0[f]).collect();
         let mut residual = vec![0.0; m];
-        let mut half = vec![0.0; m];
-        let mut r_max = f64::INFINITY;
-        let norm2 = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
-        let mut stick = stick_predictor;
-        let debug = std::env::var_os("HAPTEX_DEBUG").is_some();
         let mut trial_residual = vec![0.0; m];
-        for iteration in 1..=MAX_ITERATIONS {
-            let state = self.forces(u, &v0, surface, point, true, stick);
+        let mut half = vec![0.0; m];
+        let norm2 = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
+        let max_abs = |r: &[f64]| r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let debug = std::env::var_os("HAPTEX_DEBUG").is_some();
+        let tolerance = |scale: f64| settings.relative_tolerance * scale.max(settings.force_floor_n);
+        let mut mode = if stick_predictor { PointMode::Stick } else { PointMode::Exact };
+        let mut damping = 0.0f64;
+        let mut continuation_start = 0.0f64;
+        let mut stalls = 0;
+        let mut correction = 0.0f64;
+        let mut limit = settings.max_iterations;
+        let mut cycle = CycleWatch::EMPTY;
+        let mut norm = f64::INFINITY;
+        let mut iteration = 0;
+        while iteration < limit {
+            iteration += 1;
+            let state = self.forces(u, &v0, surface, point, true, mode);
             self.stiffness_times(&state.rho, &mut half, &mut residual);
-            r_max = residual.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            // (I + C_AA D_AA) delta_A = -rho_A.
-            let k = state.active.len();
-            {
-                let mut matrix = self.lu.matrix_mut(k);
-                for (j, column) in state.d.chunks_exact(k.max(1)).take(k).enumerate() {
-                    for i in 0..k {
-                        matrix[(i, j)] = f64::from(u8::from(i == j));
-                    }
-                    for (l, &d_lj) in column.iter().enumerate() {
-                        if d_lj != 0.0 {
-                            let c_col = &self.compliance[state.active[l] * m..(state.active[l] + 1) * m];
-                            for (i, &row) in state.active.iter().enumerate() {
-                                matrix[(i, j)] += c_col[row] * d_lj;
-                            }
-                        }
-                    }
-                }
+            norm = max_abs(&residual);
+            if !norm.is_finite() {
+                break;
             }
-            if !self.lu.factor() {
-                return Err(EquilibriumError::Singular { iteration });
-            }
-            let mut delta_a: Vec<f64> = state.active.iter().map(|&i| -state.rho[i]).collect();
-            self.lu.solve(&mut delta_a);
-            // delta = -rho - C_:A (D_AA delta_A).
-            let mut step: Vec<f64> = state.rho.iter().map(|v| -v).collect();
-            for (l, &col) in state.active.iter().enumerate() {
-                let y: f64 = (0..k).map(|j| state.d[j * k + l] * delta_a[j]).sum::<f64>();
-                if y != 0.0 {
-                    for (s, c) in step.iter_mut().zip(&self.compliance[col * m..(col + 1) * m]) {
-                        *s -= c * y;
-                    }
-                }
-            }
-            let step_max = step.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             if debug {
                 eprintln!(
-                    "  3D contact iteration {iteration}: |R| max {r_max:.3e} N, largest force {:.3e} N, step {step_max:.3e} \
-                     mm, {k} unknowns in contact",
-                    state.largest
+                    "  3D contact iteration {iteration}: |R| {norm:.3e} N, largest force {:.3e} N, {} unknowns in \
+                     contact, damping {damping:.1e}",
+                    state.largest,
+                    state.active.len()
                 );
             }
-            if stick {
-                // The predictor's whole step, then Newton's method.
-                for (k, &g) in self.global.iter().enumerate() {
-                    u[g] += step[k];
-                }
-                stick = false;
-                continue;
-            }
-            if r_max <= 1e-10 * state.largest.max(1e-3) && step_max <= 1e-10 {
+            if mode != PointMode::Stick
+                && norm <= tolerance(state.largest)
+                && correction <= settings.increment_tolerance_mm
+            {
                 // The whole field: u = K^-1 (f + F).
                 let mut full = load.to_vec();
                 for (k, &f) in self.free_index.iter().enumerate() {
@@ -242,28 +293,124 @@ impl Condensation {
                 }
                 return Ok(Effort { iterations: iteration });
             }
-            // Newton's step, backtracking on |R|^2 (measured against |rho|^2:
-            // 10% fewer iterations over the bump and a grating on the coarse
-            // mesh).
+            let step = self.direction(&state, damping)?;
+            let step_max = max_abs(&step);
             let original: Vec<f64> = self.global.iter().map(|&g| u[g]).collect();
-            let before = norm2(&residual);
-            let mut alpha = 1.0;
-            loop {
+            let set = |u: &mut [f64], alpha: f64| {
                 for (k, &g) in self.global.iter().enumerate() {
                     u[g] = original[k] + alpha * step[k];
                 }
-                let trial = self.forces(u, &v0, surface, point, false, false);
+            };
+            if mode == PointMode::Stick {
+                // The predictor's whole step, then Newton's method.
+                set(u, 1.0);
+                mode = PointMode::Exact;
+                correction = 0.0;
+                continue;
+            }
+            if damping > 0.0 {
+                // Continuation: the whole damped step; the damping follows
+                // the residual relative to where continuation started, at
+                // most halved per step.
+                set(u, 1.0);
+                let trial = self.forces(u, &v0, surface, point, false, mode);
                 self.stiffness_times(&trial.rho, &mut half, &mut trial_residual);
-                if norm2(&trial_residual) <= (1.0 - 1e-4 * alpha) * before || alpha < 1e-3 {
+                let next = max_abs(&trial_residual);
+                correction = damping * step_max;
+                damping = if next.is_finite() && continuation_start > 0.0 {
+                    (CONTINUATION_DAMPING * (next / continuation_start).min(1.0)).max(0.5 * damping)
+                } else {
+                    CONTINUATION_DAMPING
+                };
+                if damping < MIN_DAMPING {
+                    damping = 0.0;
+                }
+                if cycle.push(next).is_some() {
+                    break;
+                }
+                continue;
+            }
+            // Newton's step, backtracking on |R|^2.
+            let before = norm2(&residual);
+            let mut alpha = 1.0;
+            let mut accepted = false;
+            for _ in 0..8 {
+                set(u, alpha);
+                let trial = self.forces(u, &v0, surface, point, false, mode);
+                self.stiffness_times(&trial.rho, &mut half, &mut trial_residual);
+                let merit = norm2(&trial_residual);
+                if merit.is_finite()
+                    && (merit < (1.0 - 1e-4 * alpha) * before || max_abs(&trial_residual) <= tolerance(trial.largest))
+                {
+                    accepted = true;
                     break;
                 }
                 alpha *= 0.5;
             }
+            if !accepted {
+                mode = PointMode::NoCurvature;
+                stalls += 1;
+                if stalls == 1 {
+                    alpha = 1.0;
+                    set(u, 1.0);
+                } else {
+                    alpha = 0.0;
+                    set(u, 0.0);
+                    damping = CONTINUATION_DAMPING;
+                    continuation_start = norm;
+                    limit = limit.max(iteration + 1 + settings.continuation_iterations);
+                }
+            }
+            correction = (1.0 - alpha) * step_max;
             if debug {
-                eprintln!("    step length {alpha}");
+                eprintln!("    step length {}", if accepted { alpha } else { f64::NAN });
             }
         }
-        Err(EquilibriumError::NoConvergence { iterations: MAX_ITERATIONS, residual_n: r_max })
+        Err(EquilibriumError::NoConvergence { iterations: iteration, residual_n: norm })
+    }
+
+    /// The step at the state `state`: Newton's, or with `damping` tau > 0
+    /// the damped one of ((1 + tau) S + D) delta = -R. In compliance form,
+    /// ((1 + tau) I + C_AA D_AA) delta_A = -rho_A on the unknowns in
+    /// contact, then delta = (-rho - C_:A (D_AA delta_A)) / (1 + tau).
+    fn direction(&mut self, state: &Forces, damping: f64) -> Result<Vec<f64>, EquilibriumError> {
+        let m = self.global.len();
+        let k = state.active.len();
+        let gamma = 1.0 + damping;
+        {
+            let mut matrix = self.lu.matrix_mut(k);
+            for (j, column) in state.d.chunks_exact(k.max(1)).take(k).enumerate() {
+                for i in 0..k {
+                    matrix[(i, j)] = if i == j { gamma } else { 0.0 };
+                }
+                for (l, &d_lj) in column.iter().enumerate() {
+                    if d_lj != 0.0 {
+                        let c_col = &self.compliance[state.active[l] * m..(state.active[l] + 1) * m];
+                        for (i, &row) in state.active.iter().enumerate() {
+                            matrix[(i, j)] += c_col[row] * d_lj;
+                        }
+                    }
+                }
+            }
+        }
+        if !self.lu.factor() {
+            return Err(EquilibriumError::Singular);
+        }
+        let mut delta_a: Vec<f64> = state.active.iter().map(|&i| -state.rho[i]).collect();
+        self.lu.solve(&mut delta_a);
+        let mut step: Vec<f64> = state.rho.iter().map(|v| -v).collect();
+        for (l, &col) in state.active.iter().enumerate() {
+            let y: f64 = (0..k).map(|j| state.d[j * k + l] * delta_a[j]).sum::<f64>();
+            if y != 0.0 {
+                for (s, c) in step.iter_mut().zip(&self.compliance[col * m..(col + 1) * m]) {
+                    *s -= c * y;
+                }
+            }
+        }
+        if damping > 0.0 {
+            step.iter_mut().for_each(|s| *s /= gamma);
+        }
+        Ok(step)
     }
 
     /// R = S rho = L (L^T rho) into `out` (`half` is scratch).
@@ -275,16 +422,16 @@ impl Condensation {
         lower_times(&self.l, m, half, out);
     }
 
-    /// F, rho and (with `tangent`) D_AA at the displacements `u` (with
-    /// `stick`, every point in contact sticking).
+    /// F, rho and (with `tangent`) D_AA at the displacements `u`, each
+    /// point's law in `mode`.
     fn forces(
         &self,
         u: &[f64],
         v0: &[f64],
         surface: &ContactSurface,
-        point: &mut dyn FnMut(usize, [f64; 3], bool) -> PointForce,
+        point: &mut dyn FnMut(usize, [f64; 3], PointMode) -> PointForce,
         tangent: bool,
-        stick: bool,
+        mode: PointMode,
     ) -> Forces {
         let m = self.global.len();
         let mut f = vec![0.0; m];
@@ -294,7 +441,7 @@ impl Condensation {
             .enumerate()
             .map(|(q, p)| {
                 let w: [f64; 3] = std::array::from_fn(|d| (0..4).map(|a| p.shape[a] * u[3 * p.nodes[a] + d]).sum());
-                point(q, w, stick)
+                point(q, w, mode)
             })
             .collect();
         let mut place = vec![None; m];

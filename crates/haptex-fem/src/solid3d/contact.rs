@@ -22,36 +22,51 @@ pub struct ContactPoint {
 #[derive(Debug, Clone, PartialEq)]
 pub struct ContactSurface {
     pub points: Vec<ContactPoint>,
+    /// Points per face (face f has points f * per_face ..).
+    pub per_face: usize,
 }
 
 impl ContactSurface {
     /// The 2x2 Gauss points of each face (4 nodes, in order around it).
     pub fn new(mesh: &Mesh3, faces: &[[usize; 4]]) -> Self {
-        const A: f64 = 0.577_350_269_189_625_8;
+        Self::with_rule(mesh, faces, 2)
+    }
+
+    /// The n x n Gauss-Legendre points of each face (n from 1 to 4), in
+    /// rows of the face's first direction.
+    pub fn with_rule(mesh: &Mesh3, faces: &[[usize; 4]], n: usize) -> Self {
         const CORNERS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
-        let mut points = Vec::with_capacity(4 * faces.len());
+        let (abscissae, weights) = crate::contact::gauss_legendre(n.clamp(1, 4));
+        let mut points = Vec::with_capacity(abscissae.len() * abscissae.len() * faces.len());
         for face in faces {
             let x = face.map(|n| mesh.nodes[n]);
-            for [gr, gs] in CORNERS.map(|[r, s]| [A * r, A * s]) {
-                let shape = CORNERS.map(|[r, s]| 0.25 * (1.0 + r * gr) * (1.0 + s * gs));
-                let dr = CORNERS.map(|[r, s]| 0.25 * r * (1.0 + s * gs));
-                let ds = CORNERS.map(|[r, s]| 0.25 * s * (1.0 + r * gr));
-                let mut position = [0.0; 3];
-                let (mut tr, mut ts) = ([0.0; 3], [0.0; 3]);
-                for a in 0..4 {
-                    for k in 0..3 {
-                        position[k] += shape[a] * x[a][k];
-                        tr[k] += dr[a] * x[a][k];
-                        ts[k] += ds[a] * x[a][k];
+            for (j, &gs) in abscissae.iter().enumerate() {
+                for (i, &gr) in abscissae.iter().enumerate() {
+                    let shape = CORNERS.map(|[r, s]| 0.25 * (1.0 + r * gr) * (1.0 + s * gs));
+                    let dr = CORNERS.map(|[r, s]| 0.25 * r * (1.0 + s * gs));
+                    let ds = CORNERS.map(|[r, s]| 0.25 * s * (1.0 + r * gr));
+                    let mut position = [0.0; 3];
+                    let (mut tr, mut ts) = ([0.0; 3], [0.0; 3]);
+                    for a in 0..4 {
+                        for k in 0..3 {
+                            position[k] += shape[a] * x[a][k];
+                            tr[k] += dr[a] * x[a][k];
+                            ts[k] += ds[a] * x[a][k];
+                        }
                     }
+                    let normal =
+                        [tr[1] * ts[2] - tr[2] * ts[1], tr[2] * ts[0] - tr[0] * ts[2], tr[0] * ts[1] - tr[1] * ts[0]];
+                    let jacobian = (normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]).sqrt();
+                    points.push(ContactPoint {
+                        nodes: *face,
+                        shape,
+                        position,
+                        weight: jacobian * weights[i] * weights[j],
+                    });
                 }
-                let normal =
-                    [tr[1] * ts[2] - tr[2] * ts[1], tr[2] * ts[0] - tr[0] * ts[2], tr[0] * ts[1] - tr[1] * ts[0]];
-                let weight = (normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]).sqrt();
-                points.push(ContactPoint { nodes: *face, shape, position, weight });
             }
         }
-        Self { points }
+        Self { points, per_face: abscissae.len() * abscissae.len() }
     }
 
     /// The vertical gap (mm) of point `q` above the plane z = `plane_z` for

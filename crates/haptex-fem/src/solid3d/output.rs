@@ -65,7 +65,8 @@ const BANDS: [(u8, u8, u8); 6] =
 
 /// The contact patches of a run seen from below the surface: each skin
 /// face of the contact region at its deformed place, filled by its mean
-/// pressure in six bands up to the largest pressure of the run, with the
+/// pressure (over its contact points) in six bands up to the largest
+/// pressure of the run, with the
 /// patch's area and force in the panel's title; the direction of motion
 /// as an arrow from the pad's centre.
 pub fn patch_figure(result: &Simulation3, title: &str) -> Figure {
@@ -85,31 +86,24 @@ fn patch_panel(patch: &Patch, peak: f64, direction_deg: f64) -> Panel {
         "t = {:.3} s, travelled {:.2} mm: contact {area:.1} mm^2, pressure force {force:.3} N",
         patch.t_s, patch.slide_mm
     ));
-    // The Gauss points of a face sit at +-1/sqrt(3) of its parameters:
-    // scaled by sqrt(3) about their centre they give its corners (exactly
-    // for a parallelogram).
-    let grow = 3f64.sqrt();
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for face in patch.points.chunks_exact(4) {
-        let centre = [0, 1].map(|d| face.iter().map(|p| p.position_mm[d]).sum::<f64>() / 4.0);
-        let corners: Vec<(f64, f64)> = face
-            .iter()
-            .map(|p| {
-                (centre[0] + grow * (p.position_mm[0] - centre[0]), centre[1] + grow * (p.position_mm[1] - centre[1]))
-            })
-            .collect();
-        let pressure = face.iter().map(|p| p.pressure_mpa).sum::<f64>() / 4.0;
+    for (face, corners) in patch.points.chunks_exact(patch.per_face.max(1)).zip(&patch.faces) {
+        let pressure = face.iter().map(|p| p.pressure_mpa * p.weight_mm2).sum::<f64>()
+            / face.iter().map(|p| p.weight_mm2).sum::<f64>().max(1e-300);
         let fill = if pressure > 0.0 {
-            for (d, v) in [centre[0], centre[1]].into_iter().enumerate() {
-                lo[d] = lo[d].min(v);
-                hi[d] = hi[d].max(v);
+            for c in corners {
+                for d in 0..2 {
+                    lo[d] = lo[d].min(c[d]);
+                    hi[d] = hi[d].max(c[d]);
+                }
             }
             let band = ((pressure / peak) * BANDS.len() as f64).floor() as usize;
             BANDS[band.min(BANDS.len() - 1)]
         } else {
             (255, 255, 255)
         };
-        panel = panel.shape(Shape { points: corners, fill: Some(fill), stroke: Some((170, 170, 170)) });
+        let points = corners.iter().map(|c| (c[0], c[1])).collect();
+        panel = panel.shape(Shape { points, fill: Some(fill), stroke: Some((170, 170, 170)) });
     }
     for (k, &color) in BANDS.iter().enumerate() {
         let (a, b) = (peak * k as f64 / BANDS.len() as f64, peak * (k + 1) as f64 / BANDS.len() as f64);

@@ -17,7 +17,7 @@
 
 use std::collections::HashSet;
 
-use super::condensed::{Condensation, EquilibriumError};
+use super::condensed::{Condensation, EquilibriumError, NewtonSettings, PointMode};
 use super::contact::ContactSurface;
 use super::friction::{Committed, FrictionLaw};
 use super::hex8::{Formulation, Hex8};
@@ -330,18 +330,27 @@ impl ElasticBody {
         let load = self.prescribed_load();
         let mut condensation = self.condensation.take().expect("made above");
         let sticking = FrictionLaw { mu: f64::INFINITY, ..law };
-        let evaluate = |body: &Self, q: usize, w: [f64; 3], stick: bool| {
+        let evaluate = |body: &Self, q: usize, w: [f64; 3], mode: PointMode| {
             let relative = body.relative(q, w, plane_z, shift);
-            let law = if stick { &sticking } else { &law };
+            let law = if mode == PointMode::Stick { &sticking } else { &law };
             law.evaluate(&HeightField::Flat.at(relative), relative, &body.committed[q])
+        };
+        let lightest = self.contact.points.iter().map(|p| p.weight).fold(f64::INFINITY, f64::min);
+        let settings = NewtonSettings {
+            max_iterations: 100,
+            continuation_iterations: 1000,
+            relative_tolerance: 1e-10,
+            force_floor_n: self.penalty_mpa_per_mm * 1e-3 * lightest,
+            increment_tolerance_mm: 1e-10,
         };
         let effort = condensation.equilibrium(
             &load,
             &self.free,
             &mut u,
             &self.contact,
-            &mut |q, w, stick| evaluate(self, q, w, stick).map(|r| (r.force, r.tangent)),
+            &mut |q, w, mode| evaluate(self, q, w, mode).map(|r| (r.force, r.tangent)),
             false,
+            &settings,
         );
         self.condensation = Some(condensation);
         let effort = effort?;
@@ -356,7 +365,7 @@ impl ElasticBody {
             u: Vec::new(),
         };
         for (q, p) in self.contact.points.iter().enumerate() {
-            if let Some(r) = evaluate(self, q, self.point_displacement(q, &u), false) {
+            if let Some(r) = evaluate(self, q, self.point_displacement(q, &u), PointMode::Exact) {
                 solution.pressure[q] = r.pressure;
                 solution.traction[q] = [r.traction[0], r.traction[1]];
                 solution.sticking[q] = r.sticking;

@@ -88,6 +88,14 @@ pub struct SurfaceAt {
     pub d_normal: [[f64; 3]; 3],
 }
 
+impl SurfaceAt {
+    /// The same without the curvature's terms in the derivatives (those
+    /// of the tangent plane: d depth/dq = -n, dn/dq = 0).
+    pub fn without_curvature(self) -> Self {
+        Self { d_depth: self.normal.map(|v| -v), d_normal: [[0.0; 3]; 3], ..self }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
