@@ -330,10 +330,6 @@ fn simulate_3d_refuses_what_it_does_not_support() {
     let vtk = dir.path().join("vtk");
     let vtk = vtk.to_str().unwrap();
     let cases: Vec<(Vec<&str>, &str)> = vec![
-        (
-            vec!["--model", "3d", "--load", "0.5"],
-            "--load (the 3D finger is pressed by --indent) is not supported with --model 3d",
-        ),
         (vec!["--model", "3d", "--kinematics", "finite"], "--kinematics finite is not supported with --model 3d"),
         (vec!["--model", "3d", "--vtk", vtk], "--vtk is not supported with --model 3d"),
         (

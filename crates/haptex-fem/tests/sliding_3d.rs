@@ -90,3 +90,22 @@ fn sliding_along_a_ridge_has_no_lateral_force() {
     assert!((last.ft_n / (0.5 * pressure_force) - 1.0).abs() < 1e-3, "{last:?}");
     assert!(last.fn_n < pressure_force);
 }
+
+/// Under a normal load (N), the bone's depth is an unknown: Fn is the
+/// load at every step of the press ramp and the slide (to the solver's
+/// relative tolerance, 1e-9; asserted to 1e-7), the bone sinks as the
+/// tissue relaxes, and the slide is Coulomb's as under an indentation.
+#[test]
+fn a_normal_load_is_held_through_the_press_and_the_slide() {
+    let mut s = scenario(SurfaceShape::Flat, 1.0);
+    s.loading = Loading::Load(0.4);
+    let r = run(&s, 0.0, &mut |_| {}).unwrap();
+    for (k, row) in r.history.iter().enumerate() {
+        let load = 0.4 * ((k + 1) as f64 / s.press_steps as f64).min(1.0);
+        assert!((row.fn_n / load - 1.0).abs() < 1e-7, "step {k}: Fn {} N against {load} N", row.fn_n);
+    }
+    let depths: Vec<f64> = r.history.iter().map(|row| row.drive_z_mm).collect();
+    assert!(depths.windows(2).all(|w| w[1] <= w[0] + 1e-12), "the bone rose: {depths:?}");
+    let last = r.history.last().unwrap();
+    assert!((last.ft_n / last.fn_n / 0.5 - 1.0).abs() < 1e-6, "{last:?}");
+}

@@ -31,9 +31,9 @@ use crate::args::{LayerStackArgs, MaterialArg, MeshArg, Output, finger_model, in
 ///
 /// With --model 3d the finger is the 3D fingertip of the same layers and
 /// cross-section (docs/fem.md, "The 3D finger pad"), pressed by --indent
-/// (default 0.5 mm) and slid in the direction --direction-deg over the
-/// surface extruded along y; x is the distance travelled and forces are in
-/// N.
+/// (default 0.5 mm) or --load (N) and slid in the direction --direction-deg
+/// over the surface extruded along y; x is the distance travelled and
+/// forces are in N.
 #[derive(Debug, Args)]
 #[command(
     allow_negative_numbers = true,
@@ -75,7 +75,8 @@ pub struct SimulateArgs {
     /// Press bone and nail down by this much after first touch (mm).
     #[arg(long, value_parser = positive, conflicts_with = "load")]
     indent: Option<f64>,
-    /// Press with a constant normal load instead (N per mm of finger width).
+    /// Press with a constant normal load instead (N per mm of finger width;
+    /// with --model 3d, N).
     #[arg(long, value_parser = positive)]
     load: Option<f64>,
     /// Slide distance in mm; 0 for a press only (the output is then the
@@ -302,7 +303,6 @@ fn progress_bar(quiet: bool, steps: usize) -> ProgressBar {
 /// `--model 3d`: the 3D fingertip.
 fn run_3d(args: &SimulateArgs, scenario: Scenario) -> anyhow::Result<()> {
     for (given, flag) in [
-        (args.load.is_some(), "--load (the 3D finger is pressed by --indent)"),
         (matches!(args.kinematics, KinematicsArg::Finite), "--kinematics finite"),
         (scenario.display.is_some(), "--surface display"),
         (args.vtk.is_some(), "--vtk"),

@@ -43,6 +43,8 @@ pub enum EquilibriumError {
     NoConvergence { iterations: usize, residual_n: f64 },
     #[error("the contact tangent is singular")]
     Singular,
+    #[error("nothing is in contact, so no drive can carry the load")]
+    NoContactForLoad,
 }
 
 /// How a point's law is asked for its force and tangent.
@@ -68,6 +70,17 @@ pub struct NewtonSettings {
     /// The smallest force the relative tolerance is taken of (N).
     pub force_floor_n: f64,
     pub increment_tolerance_mm: f64,
+}
+
+/// Load control: the driven nodes' vertical displacement is an unknown
+/// and the total normal contact force is given. `per_mm` is the free
+/// unknowns' load per mm of the drive (the prescribed displacements'
+/// share of a unit drive); `change_mm` returns the drive's change.
+#[derive(Debug)]
+pub struct LoadControl<'a> {
+    pub per_mm: &'a [f64],
+    pub normal_force_n: f64,
+    pub change_mm: f64,
 }
 
 /// Damping of pseudo-transient continuation where it starts (the 2D
@@ -136,8 +149,12 @@ struct Forces {
     active: Vec<usize>,
     /// D_AA, |A| x |A| column-major (filled only when asked for).
     d: Vec<f64>,
-    /// rho = v - v0 - C F.
+    /// rho = v - v0 - dz w - C F.
     rho: Vec<f64>,
+    /// The total normal contact force (N) and, with the tangent, its
+    /// derivative with respect to the contact unknowns.
+    normal_n: f64,
+    g: Vec<f64>,
     /// The largest nodal contact force (N).
     largest: f64,
 }
@@ -239,11 +256,24 @@ impl Condensation {
         point: &mut dyn FnMut(usize, [f64; 3], PointMode) -> PointForce,
         stick_predictor: bool,
         settings: &NewtonSettings,
+        mut control: Option<&mut LoadControl<'_>>,
     ) -> Result<Effort, EquilibriumError> {
         let m = self.global.len();
         let mut u0 = load.to_vec();
         self.factor.solve_vec(&mut u0);
         let v0: Vec<f64> = self.free_index.iter().map(|&f| u0[f]).collect();
+        // Under load control: the contact unknowns' displacement per mm of
+        // the drive, and the drive's change dz (mm) from where it started.
+        let w: Vec<f64> = match &control {
+            Some(c) => {
+                let mut per = c.per_mm.to_vec();
+                self.factor.solve_vec(&mut per);
+                self.free_index.iter().map(|&f| per[f]).collect()
+            }
+            None => Vec::new(),
+        };
+        let target = control.as_ref().map(|c| c.normal_force_n);
+        let mut dz = 0.0f64;
         let mut residual = vec![0.0; m];
         let mut trial_residual = vec![0.0; m];
         let mut half = vec![0.0; m];
@@ -251,6 +281,12 @@ impl Condensation {
         let max_abs = |r: &[f64]| r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         let debug = std::env::var_os("HAPTEX_DEBUG").is_some();
         let tolerance = |scale: f64| settings.relative_tolerance * scale.max(settings.force_floor_n);
+        // The residual's size and merit: |R| max and |R|^2 with the load's
+        // residual beside R.
+        let measure = |r: &[f64], state: &Forces| {
+            let load_residual = target.map_or(0.0, |t| state.normal_n - t);
+            (max_abs(r).max(load_residual.abs()), norm2(r) + load_residual * load_residual)
+        };
         let mut mode = if stick_predictor { PointMode::Stick } else { PointMode::Exact };
         let mut damping = 0.0f64;
         let mut continuation_start = 0.0f64;
@@ -262,16 +298,17 @@ impl Condensation {
         let mut iteration = 0;
         while iteration < limit {
             iteration += 1;
-            let state = self.forces(u, &v0, surface, point, true, mode);
+            let state = self.forces(u, &v0, &w, dz, surface, point, true, mode);
             self.stiffness_times(&state.rho, &mut half, &mut residual);
-            norm = max_abs(&residual);
+            let merit;
+            (norm, merit) = measure(&residual, &state);
             if !norm.is_finite() {
                 break;
             }
             if debug {
                 eprintln!(
                     "  3D contact iteration {iteration}: |R| {norm:.3e} N, largest force {:.3e} N, {} unknowns in \
-                     contact, damping {damping:.1e}",
+                     contact, damping {damping:.1e}, drive change {dz:.3e} mm",
                     state.largest,
                     state.active.len()
                 );
@@ -280,8 +317,14 @@ impl Condensation {
                 && norm <= tolerance(state.largest)
                 && correction <= settings.increment_tolerance_mm
             {
-                // The whole field: u = K^-1 (f + F).
+                // The whole field: u = K^-1 (f + dz f_z + F).
                 let mut full = load.to_vec();
+                if let Some(c) = control.as_mut() {
+                    for (f, p) in full.iter_mut().zip(c.per_mm) {
+                        *f += dz * p;
+                    }
+                    c.change_mm = dz;
+                }
                 for (k, &f) in self.free_index.iter().enumerate() {
                     full[f] += state.f[k];
                 }
@@ -293,17 +336,36 @@ impl Condensation {
                 }
                 return Ok(Effort { iterations: iteration });
             }
-            let step = self.direction(&state, damping)?;
-            let step_max = max_abs(&step);
+            // The step: Newton's (damped in continuation), bordered by the
+            // load's row under load control: with (gamma I + C D) a = -rho
+            // and (gamma I + C D) b = w, delta = a + ddz b and the load's
+            // linearised residual g . delta + (F_z - F) = 0 gives ddz.
+            self.factor_direction(&state, damping)?;
+            let mut step = self.solve_direction(&state, damping, state.rho.iter().map(|v| -v).collect());
+            let mut ddz = 0.0;
+            if let Some(t) = target {
+                let b = self.solve_direction(&state, damping, w.clone());
+                let (ga, gb) = (crate::linalg::dot(&state.g, &step), crate::linalg::dot(&state.g, &b));
+                if !(gb.abs() > 0.0) {
+                    return Err(EquilibriumError::NoContactForLoad);
+                }
+                ddz = (t - state.normal_n - ga) / gb;
+                for (s, bi) in step.iter_mut().zip(&b) {
+                    *s += ddz * bi;
+                }
+            }
+            let step_max = max_abs(&step).max(ddz.abs());
             let original: Vec<f64> = self.global.iter().map(|&g| u[g]).collect();
-            let set = |u: &mut [f64], alpha: f64| {
+            let dz_start = dz;
+            let set = |u: &mut [f64], dz: &mut f64, alpha: f64| {
                 for (k, &g) in self.global.iter().enumerate() {
                     u[g] = original[k] + alpha * step[k];
                 }
+                *dz = dz_start + alpha * ddz;
             };
             if mode == PointMode::Stick {
                 // The predictor's whole step, then Newton's method.
-                set(u, 1.0);
+                set(u, &mut dz, 1.0);
                 mode = PointMode::Exact;
                 correction = 0.0;
                 continue;
@@ -312,10 +374,10 @@ impl Condensation {
                 // Continuation: the whole damped step; the damping follows
                 // the residual relative to where continuation started, at
                 // most halved per step.
-                set(u, 1.0);
-                let trial = self.forces(u, &v0, surface, point, false, mode);
+                set(u, &mut dz, 1.0);
+                let trial = self.forces(u, &v0, &w, dz, surface, point, false, mode);
                 self.stiffness_times(&trial.rho, &mut half, &mut trial_residual);
-                let next = max_abs(&trial_residual);
+                let (next, _) = measure(&trial_residual, &trial);
                 correction = damping * step_max;
                 damping = if next.is_finite() && continuation_start > 0.0 {
                     (CONTINUATION_DAMPING * (next / continuation_start).min(1.0)).max(0.5 * damping)
@@ -330,17 +392,16 @@ impl Condensation {
                 }
                 continue;
             }
-            // Newton's step, backtracking on |R|^2.
-            let before = norm2(&residual);
+            // Newton's step, backtracking on the merit.
             let mut alpha = 1.0;
             let mut accepted = false;
             for _ in 0..8 {
-                set(u, alpha);
-                let trial = self.forces(u, &v0, surface, point, false, mode);
+                set(u, &mut dz, alpha);
+                let trial = self.forces(u, &v0, &w, dz, surface, point, false, mode);
                 self.stiffness_times(&trial.rho, &mut half, &mut trial_residual);
-                let merit = norm2(&trial_residual);
-                if merit.is_finite()
-                    && (merit < (1.0 - 1e-4 * alpha) * before || max_abs(&trial_residual) <= tolerance(trial.largest))
+                let (trial_norm, trial_merit) = measure(&trial_residual, &trial);
+                if trial_merit.is_finite()
+                    && (trial_merit < (1.0 - 1e-4 * alpha) * merit || trial_norm <= tolerance(trial.largest))
                 {
                     accepted = true;
                     break;
@@ -352,10 +413,10 @@ impl Condensation {
                 stalls += 1;
                 if stalls == 1 {
                     alpha = 1.0;
-                    set(u, 1.0);
+                    set(u, &mut dz, 1.0);
                 } else {
                     alpha = 0.0;
-                    set(u, 0.0);
+                    set(u, &mut dz, 0.0);
                     damping = CONTINUATION_DAMPING;
                     continuation_start = norm;
                     limit = limit.max(iteration + 1 + settings.continuation_iterations);
@@ -369,48 +430,53 @@ impl Condensation {
         Err(EquilibriumError::NoConvergence { iterations: iteration, residual_n: norm })
     }
 
-    /// The step at the state `state`: Newton's, or with `damping` tau > 0
-    /// the damped one of ((1 + tau) S + D) delta = -R. In compliance form,
-    /// ((1 + tau) I + C_AA D_AA) delta_A = -rho_A on the unknowns in
-    /// contact, then delta = (-rho - C_:A (D_AA delta_A)) / (1 + tau).
-    fn direction(&mut self, state: &Forces, damping: f64) -> Result<Vec<f64>, EquilibriumError> {
+    /// Factorizes the step's matrix at `state`: Newton's, or with
+    /// `damping` tau > 0 that of ((1 + tau) S + D) delta = -R; in
+    /// compliance form (gamma I + C_AA D_AA), gamma = 1 + tau, on the
+    /// unknowns in contact.
+    fn factor_direction(&mut self, state: &Forces, damping: f64) -> Result<(), EquilibriumError> {
         let m = self.global.len();
         let k = state.active.len();
         let gamma = 1.0 + damping;
-        {
-            let mut matrix = self.lu.matrix_mut(k);
-            for (j, column) in state.d.chunks_exact(k.max(1)).take(k).enumerate() {
-                for i in 0..k {
-                    matrix[(i, j)] = if i == j { gamma } else { 0.0 };
-                }
-                for (l, &d_lj) in column.iter().enumerate() {
-                    if d_lj != 0.0 {
-                        let c_col = &self.compliance[state.active[l] * m..(state.active[l] + 1) * m];
-                        for (i, &row) in state.active.iter().enumerate() {
-                            matrix[(i, j)] += c_col[row] * d_lj;
-                        }
+        let mut matrix = self.lu.matrix_mut(k);
+        for (j, column) in state.d.chunks_exact(k.max(1)).take(k).enumerate() {
+            for i in 0..k {
+                matrix[(i, j)] = if i == j { gamma } else { 0.0 };
+            }
+            for (l, &d_lj) in column.iter().enumerate() {
+                if d_lj != 0.0 {
+                    let c_col = &self.compliance[state.active[l] * m..(state.active[l] + 1) * m];
+                    for (i, &row) in state.active.iter().enumerate() {
+                        matrix[(i, j)] += c_col[row] * d_lj;
                     }
                 }
             }
         }
-        if !self.lu.factor() {
-            return Err(EquilibriumError::Singular);
-        }
-        let mut delta_a: Vec<f64> = state.active.iter().map(|&i| -state.rho[i]).collect();
-        self.lu.solve(&mut delta_a);
-        let mut step: Vec<f64> = state.rho.iter().map(|v| -v).collect();
+        if self.lu.factor() { Ok(()) } else { Err(EquilibriumError::Singular) }
+    }
+
+    /// x with (gamma I + C D) x = y (the matrix of
+    /// [`Condensation::factor_direction`]): x_A from the LU, then
+    /// x = (y - C_:A (D_AA x_A)) / gamma.
+    fn solve_direction(&mut self, state: &Forces, damping: f64, y: Vec<f64>) -> Vec<f64> {
+        let m = self.global.len();
+        let k = state.active.len();
+        let gamma = 1.0 + damping;
+        let mut x_a: Vec<f64> = state.active.iter().map(|&i| y[i]).collect();
+        self.lu.solve(&mut x_a);
+        let mut x = y;
         for (l, &col) in state.active.iter().enumerate() {
-            let y: f64 = (0..k).map(|j| state.d[j * k + l] * delta_a[j]).sum::<f64>();
-            if y != 0.0 {
-                for (s, c) in step.iter_mut().zip(&self.compliance[col * m..(col + 1) * m]) {
-                    *s -= c * y;
+            let d_x: f64 = (0..k).map(|j| state.d[j * k + l] * x_a[j]).sum::<f64>();
+            if d_x != 0.0 {
+                for (s, c) in x.iter_mut().zip(&self.compliance[col * m..(col + 1) * m]) {
+                    *s -= c * d_x;
                 }
             }
         }
         if damping > 0.0 {
-            step.iter_mut().for_each(|s| *s /= gamma);
+            x.iter_mut().for_each(|s| *s /= gamma);
         }
-        Ok(step)
+        x
     }
 
     /// R = S rho = L (L^T rho) into `out` (`half` is scratch).
@@ -424,10 +490,13 @@ impl Condensation {
 
     /// F, rho and (with `tangent`) D_AA at the displacements `u`, each
     /// point's law in `mode`.
+    #[allow(clippy::too_many_arguments)]
     fn forces(
         &self,
         u: &[f64],
         v0: &[f64],
+        drive: &[f64],
+        dz: f64,
         surface: &ContactSurface,
         point: &mut dyn FnMut(usize, [f64; 3], PointMode) -> PointForce,
         tangent: bool,
@@ -446,10 +515,12 @@ impl Condensation {
             .collect();
         let mut place = vec![None; m];
         let mut active = Vec::new();
+        let mut normal_n = 0.0;
         for (p, response) in surface.points.iter().zip(&responses) {
             let Some((force, _)) = response else {
                 continue;
             };
+            normal_n += p.weight * force[2];
             for a in 0..4 {
                 for d in 0..3 {
                     if let Some(i) = self.index[3 * p.nodes[a] + d] {
@@ -468,12 +539,22 @@ impl Condensation {
         }
         let k = active.len();
         let mut d = Vec::new();
+        let mut g = Vec::new();
         if tangent {
             d = vec![0.0; k * k];
+            g = vec![0.0; m];
             for (p, response) in surface.points.iter().zip(&responses) {
                 let Some((_, t)) = response else {
                     continue;
                 };
+                // The total normal force's derivative: -w N_b K[z][c].
+                for b in 0..4 {
+                    for c in 0..3 {
+                        if let Some(j) = self.index[3 * p.nodes[b] + c] {
+                            g[j] -= p.weight * p.shape[b] * t[2][c];
+                        }
+                    }
+                }
                 for a in 0..4 {
                     for b in 0..4 {
                         let nn = p.weight * p.shape[a] * p.shape[b];
@@ -491,8 +572,13 @@ impl Condensation {
                 }
             }
         }
-        // rho = v - v0 - C F, F non-zero on A only.
+        // rho = v - v0 - dz w - C F, F non-zero on A only.
         let mut rho: Vec<f64> = self.global.iter().zip(v0).map(|(&g, v)| u[g] - v).collect();
+        if dz != 0.0 {
+            for (r, w) in rho.iter_mut().zip(drive) {
+                *r -= dz * w;
+            }
+        }
         for &i in &active {
             if f[i] != 0.0 {
                 for (r, c) in rho.iter_mut().zip(&self.compliance[i * m..(i + 1) * m]) {
@@ -501,6 +587,6 @@ impl Condensation {
             }
         }
         let largest = f.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        Forces { f, active, d, rho, largest }
+        Forces { f, active, d, g, rho, largest, normal_n }
     }
 }

@@ -32,7 +32,7 @@ use haptex_core::profile::FrictionProfile;
 use serde::Serialize;
 
 use super::body::ViscoelasticBody;
-use super::condensed::{Condensation, NewtonSettings, PointMode};
+use super::condensed::{Condensation, LoadControl, NewtonSettings, PointMode};
 use super::contact::ContactSurface;
 use super::fingertip::{self, FingertipSpec};
 use super::friction::{Committed, FrictionLaw};
@@ -131,9 +131,9 @@ impl From<fingertip::FingertipMesh> for Finger3 {
 /// ([`FingertipSpec::from_model`] at its resolution), sliding in direction
 /// `direction_deg` (degrees from the surface's x axis); `progress` is
 /// called after every step. The scenario's settings mean what they mean
-/// in 2D, with forces in N (not per mm of width); not yet supported in 3D:
-/// a normal load (the finger is pressed by an indentation), finite strain,
-/// a display.
+/// in 2D, with forces in N (not per mm of width; a load
+/// [`Loading::Load`] is the normal force in N); not yet supported in 3D:
+/// finite strain, a display.
 pub fn run(
     scenario: &Scenario,
     direction_deg: f64,
@@ -161,11 +161,12 @@ pub fn run_finger(
             "the slide direction {direction_deg} degrees must be a finite angle from -360 to 360"
         )));
     }
+    // The surface's relief plus this is the depth the skin may reach (the
+    // contact region's height): the indentation, or under a load a
+    // generous bound of the depth it takes.
     let indent = match scenario.loading {
         Loading::Indent(indent) => indent,
-        Loading::Load(_) => {
-            return invalid("the 3D finger is pressed by an indentation; a normal load is not supported");
-        }
+        Loading::Load(load_n) => LOAD_DEPTH_MM_PER_N * load_n.max(0.5),
     };
     if scenario.kinematics == Kinematics::Finite {
         return invalid("the 3D finger is small-strain only; finite strain is not supported in 3D");
@@ -251,7 +252,9 @@ pub fn run_finger(
     let mut u = vec![0.0; 3 * n_nodes];
     // The nodes of the points in contact at the last step, and its slide.
     let mut in_contact: Vec<usize> = Vec::new();
-    let (mut last_s, mut last_depth) = ([0.0; 2], 0.0);
+    // The last step's slide, the bone's vertical displacement (mm,
+    // negative down) and the normal force (N).
+    let (mut last_s, mut drive_z, mut last_force) = ([0.0; 2], 0.0f64, 0.0f64);
     // Whether some point in contact stuck at the last step (Newton's
     // method then starts with the stick predictor).
     let mut some_stuck = false;
@@ -261,6 +264,25 @@ pub fn run_finger(
     region_nodes.dedup();
     let slide_steps = scenario.slide_steps()?;
     let total_steps = scenario.press_steps + slide_steps;
+    // The steps: under a load, an instant touch first (as in 2D: by a
+    // micrometre, unrecorded), then the press and the slide.
+    let mut plan = Vec::with_capacity(total_steps + 1);
+    let target = |fraction: f64| match scenario.loading {
+        Loading::Indent(indent) => Target::Depth(indent * fraction),
+        Loading::Load(load_n) => Target::Force(load_n * fraction),
+    };
+    if matches!(scenario.loading, Loading::Load(_)) {
+        plan.push((0.0, Target::Depth(TOUCH_MM), 0.0, 0));
+    }
+    let dt_press = scenario.press_time_s / scenario.press_steps as f64;
+    for k in 1..=scenario.press_steps {
+        plan.push((dt_press, target(k as f64 / scenario.press_steps as f64), 0.0, k));
+    }
+    for j in 1..=slide_steps {
+        let step = scenario.slide_mm / slide_steps as f64;
+        let distance = scenario.slide_mm * j as f64 / slide_steps as f64;
+        plan.push((step / scenario.velocity_mm_s, target(1.0), distance, scenario.press_steps + j));
+    }
     let mut history = Vec::with_capacity(total_steps);
     let mut patches = Vec::new();
     let mut newton_iterations = 0;
@@ -268,16 +290,8 @@ pub fn run_finger(
     let feature = feature_distance(&scenario.surface, direction);
     let mut feature_reached = false;
     let (mut x, mut ft, mut fn_n) = (Vec::new(), Vec::new(), Vec::new());
-    for k in 1..=total_steps {
+    for &(dt, goal, distance, k) in &plan {
         let pressing = k <= scenario.press_steps;
-        let (dt, depth, distance) = if pressing {
-            let dt = scenario.press_time_s / scenario.press_steps as f64;
-            (dt, indent * k as f64 / scenario.press_steps as f64, 0.0)
-        } else {
-            let j = k - scenario.press_steps;
-            let step = scenario.slide_mm / slide_steps as f64;
-            (step / scenario.velocity_mm_s, indent, scenario.slide_mm * j as f64 / slide_steps as f64)
-        };
         t_s += dt;
         let s = [distance * direction[0], distance * direction[1]];
         if body.prepare(dt)? {
@@ -297,15 +311,41 @@ pub fn run_finger(
             let mut from = last_s;
             let mut total = 0;
             let mut failure = None;
+            let mut z = drive_z;
             for j in 1..=pieces {
                 let lambda = j as f64 / pieces as f64;
                 let to = [last_s[0] + lambda * (s[0] - last_s[0]), last_s[1] + lambda * (s[1] - last_s[1])];
-                let drive = last_depth + lambda * (depth - last_depth);
+                if let Target::Depth(depth) = goal {
+                    z = drive_z + lambda * (-depth - drive_z);
+                }
                 for &n in &tip.driven_nodes {
-                    u[3 * n + 2] = -drive;
+                    u[3 * n + 2] = z;
                 }
                 follow_surface(&mut u, &region_nodes, &in_contact, body.free(), &tip_nodes, &field, lift, from, to);
                 let load = body.step_load(&u);
+                // Under a load: the load per mm of the drive (the step's
+                // load is affine in it).
+                let per_mm: Vec<f64> = match goal {
+                    Target::Depth(_) => Vec::new(),
+                    Target::Force(_) => {
+                        for &n in &tip.driven_nodes {
+                            u[3 * n + 2] = z + 1.0;
+                        }
+                        let unit = body.step_load(&u);
+                        for &n in &tip.driven_nodes {
+                            u[3 * n + 2] = z;
+                        }
+                        unit.iter().zip(&load).map(|(a, b)| a - b).collect()
+                    }
+                };
+                let mut control = match goal {
+                    Target::Depth(_) => None,
+                    Target::Force(force) => Some(LoadControl {
+                        per_mm: &per_mm,
+                        normal_force_n: last_force + lambda * (force - last_force),
+                        change_mm: 0.0,
+                    }),
+                };
                 let point = |q: usize, w: [f64; 3], mode: PointMode| {
                     let r = relative(candidate.points[q].position, w, to);
                     match mode {
@@ -322,8 +362,17 @@ pub fn run_finger(
                     &mut |q, w, mode| point(q, w, mode).map(|r| (r.force, r.tangent)),
                     some_stuck,
                     &newton,
+                    control.as_mut(),
                 ) {
-                    Ok(effort) => total += effort.iterations,
+                    Ok(effort) => {
+                        total += effort.iterations;
+                        if let Some(c) = &control {
+                            z += c.change_mm;
+                            for &n in &tip.driven_nodes {
+                                u[3 * n + 2] = z;
+                            }
+                        }
+                    }
                     Err(e) => {
                         total += MAX_ITERATIONS_COUNTED;
                         failure = Some(e);
@@ -334,7 +383,10 @@ pub fn run_finger(
             }
             newton_iterations += total;
             match failure {
-                None => break total,
+                None => {
+                    drive_z = z;
+                    break total;
+                }
                 Some(source) if pieces >= MAX_PIECES => {
                     return Err(SimulationError::Equilibrium3 { x_mm: distance, t_s, source });
                 }
@@ -382,7 +434,7 @@ pub fn run_finger(
         in_contact.sort_unstable();
         in_contact.dedup();
         some_stuck = points.iter().any(|p| p.pressure_mpa > 0.0 && p.sticking);
-        (last_s, last_depth) = (s, depth);
+        (last_s, last_force) = (s, force[2]);
         body.commit(&u);
         for p in &beyond.points {
             if field.at(relative(p.position, displacement(p, &u), s)).depth > 0.0 {
@@ -396,9 +448,13 @@ pub fn run_finger(
             ft_n: -(force[0] * direction[0] + force[1] * direction[1]),
             ft_lateral_n: -(-force[0] * direction[1] + force[1] * direction[0]),
             contact_area_mm2: area,
-            drive_z_mm: -depth,
+            drive_z_mm: drive_z,
             iterations,
         };
+        if k == 0 {
+            // The touch is not a step of the run.
+            continue;
+        }
         history.push(row);
         let faces =
             inside.iter().map(|face| face.map(|n| std::array::from_fn(|d| tip_nodes[n][d] + u[3 * n + d]))).collect();
@@ -442,6 +498,23 @@ pub fn run_finger(
     };
     Ok(Simulation3 { history, profile, patches, direction_deg, statistics })
 }
+
+/// A step's aim: the bone's depth below first touch (mm), or the normal
+/// force (N).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Target {
+    Depth(f64),
+    Force(f64),
+}
+
+/// The touch before a load is applied (mm): a micrometre.
+const TOUCH_MM: f64 = 1e-3;
+
+/// The contact region under a load is sized for a depth of this much per
+/// N (at least 0.5 N's): the default fingertip carries 0.4 N at 0.5 mm and
+/// 1.5 N at 0.8 mm (instantaneous moduli), less deep than this bound; skin
+/// beyond the region that touches is an error all the same.
+const LOAD_DEPTH_MM_PER_N: f64 = 1.0;
 
 /// Gauss points along each side of a skin face: 4 x 4, as the 2D model
 /// has 4 per segment. On the default mesh over the default bump the

@@ -351,6 +351,7 @@ impl ElasticBody {
             &mut |q, w, mode| evaluate(self, q, w, mode).map(|r| (r.force, r.tangent)),
             false,
             &settings,
+            None,
         );
         self.condensation = Some(condensation);
         let effort = effort?;
