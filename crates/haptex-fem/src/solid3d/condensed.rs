@@ -149,7 +149,7 @@ struct Forces {
     active: Vec<usize>,
     /// D_AA, |A| x |A| column-major (filled only when asked for).
     d: Vec<f64>,
-    /// rho = v - v0 - dz w - C F.
+    /// rho = v - v0 - dz w - C F (with the tangent only).
     rho: Vec<f64>,
     /// The total normal contact force (N) and, with the tangent, its
     /// derivative with respect to the contact unknowns.
@@ -277,6 +277,29 @@ impl Condensation {
         let mut residual = vec![0.0; m];
         let mut trial_residual = vec![0.0; m];
         let mut half = vec![0.0; m];
+        // The elastic force e = S (v - v0 - dz w), so that R = e - F. It is
+        // linear in the iterate, so a step's change of it follows from the
+        // step's equation without a product with the dense S (D is sparse),
+        // and it is computed afresh where convergence is declared.
+        let sw: Vec<f64> = if w.is_empty() {
+            Vec::new()
+        } else {
+            let mut out = vec![0.0; m];
+            self.stiffness_times(&w, &mut half, &mut out);
+            out
+        };
+        let mut elastic = vec![0.0; m];
+        let elastic_afresh = |this: &Self, u: &[f64], dz: f64, half: &mut [f64], out: &mut [f64]| {
+            let x: Vec<f64> =
+                (0..m).map(|k| u[this.global[k]] - v0[k] - if w.is_empty() { 0.0 } else { dz * w[k] }).collect();
+            this.stiffness_times(&x, half, out);
+        };
+        elastic_afresh(self, u, dz, &mut half, &mut elastic);
+        let residual_of = |elastic: &[f64], state: &Forces, out: &mut [f64]| {
+            for ((r, e), f) in out.iter_mut().zip(elastic).zip(&state.f) {
+                *r = e - f;
+            }
+        };
         let norm2 = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
         let max_abs = |r: &[f64]| r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         let debug = std::env::var_os("HAPTEX_DEBUG").is_some();
@@ -299,8 +322,8 @@ impl Condensation {
         while iteration < limit {
             iteration += 1;
             let state = self.forces(u, &v0, &w, dz, surface, point, true, mode);
-            self.stiffness_times(&state.rho, &mut half, &mut residual);
-            let merit;
+            residual_of(&elastic, &state, &mut residual);
+            let mut merit;
             (norm, merit) = measure(&residual, &state);
             if !norm.is_finite() {
                 break;
@@ -313,10 +336,18 @@ impl Condensation {
                     state.active.len()
                 );
             }
-            if mode != PointMode::Stick
-                && norm <= tolerance(state.largest)
-                && correction <= settings.increment_tolerance_mm
-            {
+            let converged = |norm: f64| {
+                mode != PointMode::Stick
+                    && norm <= tolerance(state.largest)
+                    && correction <= settings.increment_tolerance_mm
+            };
+            if converged(norm) {
+                // Confirmed with e computed afresh (no drift of the updates).
+                elastic_afresh(self, u, dz, &mut half, &mut elastic);
+                residual_of(&elastic, &state, &mut residual);
+                (norm, merit) = measure(&residual, &state);
+            }
+            if converged(norm) {
                 // The whole field: u = K^-1 (f + dz f_z + F).
                 let mut full = load.to_vec();
                 if let Some(c) = control.as_mut() {
@@ -355,17 +386,36 @@ impl Condensation {
                 }
             }
             let step_max = max_abs(&step).max(ddz.abs());
+            // The step's change of e: from (gamma S + D) delta = -R + ddz S w,
+            // S delta = (-R + ddz S w - D delta) / gamma, and e changes by
+            // S delta - ddz S w.
+            let gamma = 1.0 + damping;
+            let mut d_elastic: Vec<f64> = residual.iter().map(|r| -r / gamma).collect();
+            let k = state.active.len();
+            for (i, &row) in state.active.iter().enumerate() {
+                let d_delta: f64 = (0..k).map(|j| state.d[j * k + i] * step[state.active[j]]).sum();
+                d_elastic[row] -= d_delta / gamma;
+            }
+            if !sw.is_empty() {
+                for (de, s) in d_elastic.iter_mut().zip(&sw) {
+                    *de += ddz * s * (1.0 / gamma - 1.0);
+                }
+            }
+            let elastic_start = elastic.clone();
             let original: Vec<f64> = self.global.iter().map(|&g| u[g]).collect();
             let dz_start = dz;
-            let set = |u: &mut [f64], dz: &mut f64, alpha: f64| {
+            let set = |u: &mut [f64], dz: &mut f64, elastic: &mut [f64], alpha: f64| {
                 for (k, &g) in self.global.iter().enumerate() {
                     u[g] = original[k] + alpha * step[k];
                 }
                 *dz = dz_start + alpha * ddz;
+                for ((e, e0), de) in elastic.iter_mut().zip(&elastic_start).zip(&d_elastic) {
+                    *e = e0 + alpha * de;
+                }
             };
             if mode == PointMode::Stick {
                 // The predictor's whole step, then Newton's method.
-                set(u, &mut dz, 1.0);
+                set(u, &mut dz, &mut elastic, 1.0);
                 mode = PointMode::Exact;
                 correction = 0.0;
                 continue;
@@ -374,9 +424,9 @@ impl Condensation {
                 // Continuation: the whole damped step; the damping follows
                 // the residual relative to where continuation started, at
                 // most halved per step.
-                set(u, &mut dz, 1.0);
+                set(u, &mut dz, &mut elastic, 1.0);
                 let trial = self.forces(u, &v0, &w, dz, surface, point, false, mode);
-                self.stiffness_times(&trial.rho, &mut half, &mut trial_residual);
+                residual_of(&elastic, &trial, &mut trial_residual);
                 let (next, _) = measure(&trial_residual, &trial);
                 correction = damping * step_max;
                 damping = if next.is_finite() && continuation_start > 0.0 {
@@ -396,9 +446,9 @@ impl Condensation {
             let mut alpha = 1.0;
             let mut accepted = false;
             for _ in 0..8 {
-                set(u, &mut dz, alpha);
+                set(u, &mut dz, &mut elastic, alpha);
                 let trial = self.forces(u, &v0, &w, dz, surface, point, false, mode);
-                self.stiffness_times(&trial.rho, &mut half, &mut trial_residual);
+                residual_of(&elastic, &trial, &mut trial_residual);
                 let (trial_norm, trial_merit) = measure(&trial_residual, &trial);
                 if trial_merit.is_finite()
                     && (trial_merit < (1.0 - 1e-4 * alpha) * merit || trial_norm <= tolerance(trial.largest))
@@ -413,10 +463,10 @@ impl Condensation {
                 stalls += 1;
                 if stalls == 1 {
                     alpha = 1.0;
-                    set(u, &mut dz, 1.0);
+                    set(u, &mut dz, &mut elastic, 1.0);
                 } else {
                     alpha = 0.0;
-                    set(u, &mut dz, 0.0);
+                    set(u, &mut dz, &mut elastic, 0.0);
                     damping = CONTINUATION_DAMPING;
                     continuation_start = norm;
                     limit = limit.max(iteration + 1 + settings.continuation_iterations);
@@ -438,18 +488,30 @@ impl Condensation {
         let m = self.global.len();
         let k = state.active.len();
         let gamma = 1.0 + damping;
+        // C_AA gathered once (column-major), then each column of C_AA D_AA
+        // as a sum of C_AA's columns over D's non-zeros (D is sparse: a
+        // node couples to its faces' neighbours only).
+        let mut c_aa = vec![0.0; k * k];
+        for (l, &col) in state.active.iter().enumerate() {
+            let c_col = &self.compliance[col * m..(col + 1) * m];
+            for (i, &row) in state.active.iter().enumerate() {
+                c_aa[l * k + i] = c_col[row];
+            }
+        }
+        let mut column_out = vec![0.0; k];
         let mut matrix = self.lu.matrix_mut(k);
         for (j, column) in state.d.chunks_exact(k.max(1)).take(k).enumerate() {
-            for i in 0..k {
-                matrix[(i, j)] = if i == j { gamma } else { 0.0 };
-            }
+            column_out.fill(0.0);
+            column_out[j] = gamma;
             for (l, &d_lj) in column.iter().enumerate() {
                 if d_lj != 0.0 {
-                    let c_col = &self.compliance[state.active[l] * m..(state.active[l] + 1) * m];
-                    for (i, &row) in state.active.iter().enumerate() {
-                        matrix[(i, j)] += c_col[row] * d_lj;
+                    for (o, c) in column_out.iter_mut().zip(&c_aa[l * k..(l + 1) * k]) {
+                        *o += c * d_lj;
                     }
                 }
+            }
+            for (i, &v) in column_out.iter().enumerate() {
+                matrix[(i, j)] = v;
             }
         }
         if self.lu.factor() { Ok(()) } else { Err(EquilibriumError::Singular) }
@@ -572,17 +634,21 @@ impl Condensation {
                 }
             }
         }
-        // rho = v - v0 - dz w - C F, F non-zero on A only.
-        let mut rho: Vec<f64> = self.global.iter().zip(v0).map(|(&g, v)| u[g] - v).collect();
-        if dz != 0.0 {
-            for (r, w) in rho.iter_mut().zip(drive) {
-                *r -= dz * w;
+        // rho = v - v0 - dz w - C F, F non-zero on A only (with the
+        // tangent: a line search's trial needs F alone).
+        let mut rho = Vec::new();
+        if tangent {
+            rho = self.global.iter().zip(v0).map(|(&g, v)| u[g] - v).collect();
+            if dz != 0.0 {
+                for (r, w) in rho.iter_mut().zip(drive) {
+                    *r -= dz * w;
+                }
             }
-        }
-        for &i in &active {
-            if f[i] != 0.0 {
-                for (r, c) in rho.iter_mut().zip(&self.compliance[i * m..(i + 1) * m]) {
-                    *r -= c * f[i];
+            for &i in &active {
+                if f[i] != 0.0 {
+                    for (r, c) in rho.iter_mut().zip(&self.compliance[i * m..(i + 1) * m]) {
+                        *r -= c * f[i];
+                    }
                 }
             }
         }
