@@ -539,14 +539,7 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
     if frames.last().is_some_and(|f| f.slide_mm != solver.state().slide_mm) {
         frames.push(frame(&solver));
     }
-    let profile = if slide_steps == 0 {
-        None
-    } else {
-        Some(
-            FrictionProfile::from_forces(x, &ft, fn_n)
-                .map_err(|e| SimulationError::Invalid(format!("the computed profile is invalid: {e}")))?,
-        )
-    };
+    let profile = slide_profile(x, &ft, fn_n)?;
     if let AnySolver::Finite(f) = &solver
         && std::env::var_os("HAPTEX_PROFILE").is_some()
     {
@@ -575,6 +568,21 @@ pub fn run(scenario: &Scenario, progress: &mut dyn FnMut(Progress)) -> Result<Si
         lift_mm,
         surface: solver.problem.surface.clone(),
     })
+}
+
+/// The profile of a slide's positions and forces (`None` for a press
+/// only, no positions).
+pub(crate) fn slide_profile(
+    x: Vec<f64>,
+    ft: &[f64],
+    fn_n: Vec<f64>,
+) -> Result<Option<FrictionProfile>, SimulationError> {
+    if x.is_empty() {
+        return Ok(None);
+    }
+    FrictionProfile::from_forces(x, ft, fn_n)
+        .map(Some)
+        .map_err(|e| SimulationError::Invalid(format!("the computed profile is invalid: {e}")))
 }
 
 fn frame(solver: &AnySolver) -> Frame {

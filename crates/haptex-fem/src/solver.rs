@@ -760,8 +760,8 @@ impl Condensed<'_> {
 /// per damped step while the skin snaps to the crest's other side, and
 /// with damping 1 the iterates, too long, overshoot the new equilibrium and
 /// cycle between active sets; with 10 all of them cross.
-const CONTINUATION_DAMPING: f64 = 10.0;
-const MIN_DAMPING: f64 = 1e-12;
+pub(crate) const CONTINUATION_DAMPING: f64 = 10.0;
+pub(crate) const MIN_DAMPING: f64 = 1e-12;
 
 /// A limit cycle of pseudo-transient continuation: the residual norms of
 /// the last damped steps repeat, one period apart, to [`CYCLE_AGREEMENT`]
@@ -782,7 +782,7 @@ const MIN_DAMPING: f64 = 1e-12;
 /// (the profiles of those runs are identical to the bit), only when a
 /// failing attempt ends.
 #[derive(Debug, Clone, Copy)]
-struct CycleWatch {
+pub(crate) struct CycleWatch {
     /// The last norms, most recent at `norms[(next + W - 1) % W]`.
     norms: [f64; CYCLE_WINDOW],
     next: usize,
@@ -795,11 +795,11 @@ const CYCLE_AGREEMENT: f64 = 1e-8;
 const CYCLE_WINDOW: usize = (CYCLE_REPEATS + 1) * CYCLE_PERIOD;
 
 impl CycleWatch {
-    const EMPTY: CycleWatch = CycleWatch { norms: [0.0; CYCLE_WINDOW], next: 0, len: 0 };
+    pub(crate) const EMPTY: CycleWatch = CycleWatch { norms: [0.0; CYCLE_WINDOW], next: 0, len: 0 };
 
     /// Records the norm of a damped step; the period if the norms now
     /// cycle.
-    fn push(&mut self, norm: f64) -> Option<usize> {
+    pub(crate) fn push(&mut self, norm: f64) -> Option<usize> {
         self.norms[self.next] = norm;
         self.next = (self.next + 1) % CYCLE_WINDOW;
         self.len = (self.len + 1).min(CYCLE_WINDOW);

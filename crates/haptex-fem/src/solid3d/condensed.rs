@@ -27,6 +27,10 @@
 use super::contact::ContactSurface;
 use crate::assembly::{PRESCRIBED, Pattern};
 use crate::linalg::{DenseLu, FactorError, SparseCholesky, lower_times, schur_compliance};
+// The 2D model's continuation: its damping where it starts (with 1 the
+// iterates overshoot and cycle between active sets), the least before the
+// step is Newton's, and its limit-cycle watch.
+use crate::solver::{CONTINUATION_DAMPING, CycleWatch, MIN_DAMPING};
 
 /// What a point's contact law gives the solver for its displacement (and,
 /// when asked to, as if the point stuck, whatever its friction): the
@@ -81,43 +85,6 @@ pub struct LoadControl<'a> {
     pub per_mm: &'a [f64],
     pub normal_force_n: f64,
     pub change_mm: f64,
-}
-
-/// Damping of pseudo-transient continuation where it starts (the 2D
-/// model's: with 1, the iterates overshoot and cycle between active sets),
-/// and the least, below which the step is Newton's.
-const CONTINUATION_DAMPING: f64 = 10.0;
-const MIN_DAMPING: f64 = 1e-12;
-
-/// A limit cycle of continuation (the 2D model's rule, crate::solver): the
-/// residual norms of the last damped steps repeat, one period of at most
-/// 8 apart, to 1e-8 over 3 periods.
-#[derive(Debug, Clone, Copy)]
-struct CycleWatch {
-    norms: [f64; CYCLE_WINDOW],
-    next: usize,
-    len: usize,
-}
-
-const CYCLE_PERIOD: usize = 8;
-const CYCLE_REPEATS: usize = 3;
-const CYCLE_AGREEMENT: f64 = 1e-8;
-const CYCLE_WINDOW: usize = (CYCLE_REPEATS + 1) * CYCLE_PERIOD;
-
-impl CycleWatch {
-    const EMPTY: CycleWatch = CycleWatch { norms: [0.0; CYCLE_WINDOW], next: 0, len: 0 };
-
-    /// Records a damped step's norm; the period if the norms now cycle.
-    fn push(&mut self, norm: f64) -> Option<usize> {
-        self.norms[self.next] = norm;
-        self.next = (self.next + 1) % CYCLE_WINDOW;
-        self.len = (self.len + 1).min(CYCLE_WINDOW);
-        let back = |i: usize| self.norms[(self.next + CYCLE_WINDOW - 1 - i) % CYCLE_WINDOW];
-        (1..=CYCLE_PERIOD).find(|&p| {
-            self.len >= (CYCLE_REPEATS + 1) * p
-                && (0..CYCLE_REPEATS * p).all(|i| (back(i) - back(i + p)).abs() <= CYCLE_AGREEMENT * back(i))
-        })
-    }
 }
 
 /// The body's stiffness condensed on the contact unknowns.
@@ -247,6 +214,7 @@ impl Condensation {
     /// `relative_tolerance` of the largest nodal contact force (or of
     /// `force_floor_n`) and the part of the last Newton step not taken
     /// below `increment_tolerance_mm`.
+    #[allow(clippy::too_many_arguments)]
     pub fn equilibrium(
         &mut self,
         load: &[f64],
@@ -377,7 +345,7 @@ impl Condensation {
             if let Some(t) = target {
                 let b = self.solve_direction(&state, damping, w.clone());
                 let (ga, gb) = (crate::linalg::dot(&state.g, &step), crate::linalg::dot(&state.g, &b));
-                if !(gb.abs() > 0.0) {
+                if gb == 0.0 || gb.is_nan() {
                     return Err(EquilibriumError::NoContactForLoad);
                 }
                 ddz = (t - state.normal_n - ga) / gb;

@@ -462,7 +462,7 @@ pub fn run_finger(
         if k == scenario.press_steps {
             patches.push(patch);
         } else if !pressing {
-            if !(row.fn_n > 1e-12) {
+            if row.fn_n.is_nan() || row.fn_n <= 1e-12 {
                 return Err(SimulationError::NoContact { x_mm: distance, t_s });
             }
             x.push(distance);
@@ -477,14 +477,7 @@ pub fn run_finger(
         progress(Progress { step: k, total_steps, t_s, slide_mm: distance });
         scenario.check_stop()?;
     }
-    let profile = if slide_steps == 0 {
-        None
-    } else {
-        Some(
-            FrictionProfile::from_forces(x, &ft, fn_n)
-                .map_err(|e| SimulationError::Invalid(format!("the computed profile is invalid: {e}")))?,
-        )
-    };
+    let profile = crate::scenario::slide_profile(x, &ft, fn_n)?;
     let statistics = Statistics {
         nodes: n_nodes,
         elements: n_elements,

@@ -23,7 +23,7 @@ pub enum HeightField {
     Flat,
     /// A 2D surface (a template or a sampled profile) h(x), the same for
     /// every y: the 2D model's surfaces, their ridges along y.
-    Extruded(RigidSurface),
+    Extruded(Box<RigidSurface>),
 }
 
 impl HeightField {
@@ -32,7 +32,7 @@ impl HeightField {
     pub fn extruded(shape: &SurfaceShape, x_min: f64, x_max: f64) -> Result<Self, SurfaceError> {
         Ok(match shape {
             SurfaceShape::Flat => Self::Flat,
-            _ => Self::Extruded(RigidSurface::new(shape, x_min, x_max)?),
+            _ => Self::Extruded(Box::new(RigidSurface::new(shape, x_min, x_max)?)),
         })
     }
 
