@@ -178,8 +178,11 @@ pub fn run_finger(
     let direction = [theta.cos(), theta.sin()];
     let travel = [scenario.slide_mm * direction[0], scenario.slide_mm * direction[1]];
 
-    // The surface over the skin's footprint along the whole path.
-    let skin = ContactSurface::new(&tip.mesh, &tip.skin_faces);
+    // The surface over the skin's footprint along the whole path. (The
+    // skin's points are those of the contact, so that the first touch is
+    // the contact's: with 2 x 2 points the 4 x 4 ones started up to 2 um
+    // inside the surface at the default mesh.)
+    let skin = ContactSurface::with_rule(&tip.mesh, &tip.skin_faces, CONTACT_RULE);
     let (x_lo, x_hi) = skin
         .points
         .iter()
