@@ -44,8 +44,8 @@ pub struct ViscoelasticBody {
     /// The body's own factorization of K(dt), made at the first
     /// [`ViscoelasticBody::step`] (a contact solver factorizes its own).
     cholesky: Option<SparseCholesky>,
-    /// Whether `cholesky` holds K of `assembled_dt`.
-    factorized: bool,
+    /// The step size whose K `cholesky` holds.
+    factored_dt: Option<f64>,
     values: Vec<f64>,
     assembled_dt: Option<f64>,
     coefficients: Vec<StepCoefficients>,
@@ -96,7 +96,7 @@ impl ViscoelasticBody {
             n_free,
             pattern,
             cholesky: None,
-            factorized: false,
+            factored_dt: None,
             assembled_dt: None,
             coefficients: Vec::new(),
             history: vec![[0.0; 6]; count],
@@ -185,15 +185,14 @@ impl ViscoelasticBody {
     /// values on entry and the whole solution on return; `f_ext` the
     /// external nodal forces (global). The history is committed.
     pub fn step(&mut self, dt_s: f64, u: &mut [f64], f_ext: &[f64]) -> Result<(), BodyError> {
-        let changed = self.prepare(dt_s)?;
+        self.prepare(dt_s)?;
         if self.cholesky.is_none() {
             self.cholesky = Some(SparseCholesky::new(&self.pattern, 1)?);
         }
-        let cholesky = self.cholesky.as_mut().expect("made above");
-        if changed || !self.factorized {
-            self.factorized = false;
-            cholesky.factorize(&self.values)?;
-            self.factorized = true;
+        if self.factored_dt != Some(dt_s) {
+            self.factored_dt = None;
+            self.cholesky.as_mut().expect("made above").factorize(&self.values)?;
+            self.factored_dt = Some(dt_s);
         }
         let mut rhs = self.step_load(u);
         for (g, &d) in self.free.iter().enumerate() {

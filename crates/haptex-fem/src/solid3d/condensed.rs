@@ -534,15 +534,8 @@ impl Condensation {
     ) -> Forces {
         let m = self.global.len();
         let mut f = vec![0.0; m];
-        let responses: Vec<PointForce> = surface
-            .points
-            .iter()
-            .enumerate()
-            .map(|(q, p)| {
-                let w: [f64; 3] = std::array::from_fn(|d| (0..4).map(|a| p.shape[a] * u[3 * p.nodes[a] + d]).sum());
-                point(q, w, mode)
-            })
-            .collect();
+        let responses: Vec<PointForce> =
+            surface.points.iter().enumerate().map(|(q, p)| point(q, p.displacement(u), mode)).collect();
         let mut place = vec![None; m];
         let mut active = Vec::new();
         let mut normal_n = 0.0;

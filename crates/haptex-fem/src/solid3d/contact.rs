@@ -18,6 +18,14 @@ pub struct ContactPoint {
     pub weight: f64,
 }
 
+impl ContactPoint {
+    /// The point's displacement (mm) for global displacements `u` (3 per
+    /// node), interpolated from its face's nodes.
+    pub fn displacement(&self, u: &[f64]) -> [f64; 3] {
+        std::array::from_fn(|d| (0..4).map(|a| self.shape[a] * u[3 * self.nodes[a] + d]).sum())
+    }
+}
+
 /// The contact points of a set of faces.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ContactSurface {
@@ -73,7 +81,7 @@ impl ContactSurface {
     /// global displacements `u` (3 per node): negative is penetration.
     pub fn gap(&self, q: usize, u: &[f64], plane_z: f64) -> f64 {
         let p = &self.points[q];
-        let w: f64 = (0..4).map(|a| p.shape[a] * u[3 * p.nodes[a] + 2]).sum();
+        let w = p.displacement(u)[2];
         p.position[2] + w - plane_z
     }
 

@@ -293,12 +293,25 @@ pub fn run_finger(
     let feature = feature_distance(&scenario.surface, direction);
     let mut feature_reached = false;
     let (mut x, mut ft, mut fn_n) = (Vec::new(), Vec::new(), Vec::new());
+    // Under a load, the free unknowns' load per mm of the drive at the
+    // step size last prepared.
+    let mut per_mm: Vec<f64> = Vec::new();
     for &(dt, goal, distance, k) in &plan {
         let pressing = k <= scenario.press_steps;
         t_s += dt;
         let s = [distance * direction[0], distance * direction[1]];
         if body.prepare(dt)? {
             condensation.factorize(body.stiffness_values())?;
+            if matches!(scenario.loading, Loading::Load(_)) {
+                // The load per mm of the drive: the step's load is affine
+                // in it, with a slope of K(dt) alone.
+                let mut moved = u.clone();
+                let base = body.step_load(&moved);
+                for &n in &tip.driven_nodes {
+                    moved[3 * n + 2] += 1.0;
+                }
+                per_mm = body.step_load(&moved).iter().zip(&base).map(|(a, b)| a - b).collect();
+            }
         }
         // Continuation: the step's surface move and press in `pieces`
         // equal parts, each solved from the last. The friction's reference
@@ -326,21 +339,6 @@ pub fn run_finger(
                 }
                 follow_surface(&mut u, &region_nodes, &in_contact, body.free(), &tip_nodes, &field, lift, from, to);
                 let load = body.step_load(&u);
-                // Under a load: the load per mm of the drive (the step's
-                // load is affine in it).
-                let per_mm: Vec<f64> = match goal {
-                    Target::Depth(_) => Vec::new(),
-                    Target::Force(_) => {
-                        for &n in &tip.driven_nodes {
-                            u[3 * n + 2] = z + 1.0;
-                        }
-                        let unit = body.step_load(&u);
-                        for &n in &tip.driven_nodes {
-                            u[3 * n + 2] = z;
-                        }
-                        unit.iter().zip(&load).map(|(a, b)| a - b).collect()
-                    }
-                };
                 let mut control = match goal {
                     Target::Depth(_) => None,
                     Target::Force(force) => Some(LoadControl {
@@ -406,7 +404,7 @@ pub fn run_finger(
         let mut points = Vec::with_capacity(candidate.points.len());
         let mut next = Vec::with_capacity(candidate.points.len());
         for (q, p) in candidate.points.iter().enumerate() {
-            let w = displacement(p, &u);
+            let w = p.displacement(&u);
             let r = relative(p.position, w, s);
             let response = point(q, w);
             let (pressure, traction, sticking) = response.map_or((0.0, [0.0; 3], false), |r| {
@@ -440,7 +438,7 @@ pub fn run_finger(
         (last_s, last_force) = (s, force[2]);
         body.commit(&u);
         for p in &beyond.points {
-            if field.at(relative(p.position, displacement(p, &u), s)).depth > 0.0 {
+            if field.at(relative(p.position, p.displacement(&u), s)).depth > 0.0 {
                 return Err(SimulationError::ContactBeyondRegion { x_mm: distance, t_s, z_cut_mm: z_cut });
             }
         }
@@ -559,10 +557,6 @@ fn follow_surface(
             u[3 * n + 2] = u[3 * n + 2].max(at(to) - x[2]);
         }
     }
-}
-
-fn displacement(p: &super::contact::ContactPoint, u: &[f64]) -> [f64; 3] {
-    std::array::from_fn(|d| (0..4).map(|a| p.shape[a] * u[3 * p.nodes[a] + d]).sum())
 }
 
 /// The distance along the path at which the finger's centre is over the

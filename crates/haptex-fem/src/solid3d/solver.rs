@@ -282,17 +282,12 @@ impl ElasticBody {
         std::array::from_fn(|d| x[d] + w[d] - origin[d])
     }
 
-    fn point_displacement(&self, q: usize, u: &[f64]) -> [f64; 3] {
-        let p = &self.contact.points[q];
-        std::array::from_fn(|d| (0..4).map(|a| p.shape[a] * u[3 * p.nodes[a] + d]).sum())
-    }
-
     /// Commits the friction state of the solution `u` on the plane shifted
     /// by `shift`: each point's position relative to the plane and its
     /// traction become the reference of the next load step.
     pub fn commit_friction(&mut self, u: &[f64], shift: [f64; 2], traction: &[[f64; 2]]) {
         for q in 0..self.contact.points.len() {
-            let w = self.point_displacement(q, u);
+            let w = self.contact.points[q].displacement(u);
             // The plane's height does not enter the tangential slip.
             self.committed[q] = Committed {
                 position: self.relative(q, w, 0.0, shift),
@@ -366,7 +361,7 @@ impl ElasticBody {
             u: Vec::new(),
         };
         for (q, p) in self.contact.points.iter().enumerate() {
-            if let Some(r) = evaluate(self, q, self.point_displacement(q, &u), PointMode::Exact) {
+            if let Some(r) = evaluate(self, q, self.contact.points[q].displacement(&u), PointMode::Exact) {
                 solution.pressure[q] = r.pressure;
                 solution.traction[q] = [r.traction[0], r.traction[1]];
                 solution.sticking[q] = r.sticking;
