@@ -107,6 +107,26 @@ impl LayerStackArgs {
     }
 }
 
+/// The FE finger flag (`--model`): the 2D plane-strain cross-section or
+/// the 3D fingertip.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ModelArg {
+    #[value(name = "2d")]
+    TwoD,
+    #[value(name = "3d")]
+    ThreeD,
+}
+
+/// `--direction-deg` of the 3D finger: a finite angle from -360 to 360
+/// degrees, or the flag's error.
+pub fn direction_deg(given: Option<f64>) -> anyhow::Result<f64> {
+    let direction = given.unwrap_or(0.0);
+    if !(direction.is_finite() && direction.abs() <= 360.0) {
+        anyhow::bail!("--direction-deg {direction} must be a finite angle from -360 to 360 degrees");
+    }
+    Ok(direction)
+}
+
 /// The FE mesh resolution flag (`--mesh`).
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 pub enum MeshArg {

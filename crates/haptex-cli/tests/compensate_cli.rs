@@ -71,7 +71,7 @@ impl VirtualDevice {
         // The slide s runs from 0 at x = x0 - run-up; keep it from 0.5 mm
         // on (past the pre-sliding) to the end.
         let start = target.x_mm()[0] - self.settings.run_up_mm;
-        let rows: Vec<_> = felt.result.history.iter().filter(|r| r.slide_mm >= 0.5).collect();
+        let rows: Vec<_> = felt.result.plane().unwrap().history.iter().filter(|r| r.slide_mm >= 0.5).collect();
         let slide: Vec<f64> = rows.iter().map(|r| r.slide_mm).collect();
         let ft: Vec<f64> = rows.iter().map(|r| r.ft_n).collect();
         let fnn: Vec<f64> = rows.iter().map(|r| r.fn_n).collect();

@@ -160,7 +160,7 @@ impl Electrostatic {
     }
 
     /// Whether the traction's gap derivative enters the tangent at `gap_mm`.
-    fn in_tangent(&self, gap_mm: f64) -> bool {
+    pub fn in_tangent(&self, gap_mm: f64) -> bool {
         gap_mm > 0.0 && gap_mm < Self::TANGENT_GAPS * self.electric_mm
     }
 }

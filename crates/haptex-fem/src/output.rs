@@ -49,9 +49,14 @@ pub fn surface_text(shape: &SurfaceShape, display: Option<VoltageSource<'_>>, sa
 /// comment: the surface (`surface`, from [`surface_text`]), the loading,
 /// the slide, the tissue, the mesh and the kinematics.
 pub fn describe(scenario: &Scenario, surface: &str) -> String {
+    describe_with_load_unit(scenario, surface, "N/mm")
+}
+
+/// [`describe`] with a load in `load_unit` (the 3D finger's is N).
+pub fn describe_with_load_unit(scenario: &Scenario, surface: &str, load_unit: &str) -> String {
     let loading = match scenario.loading {
         Loading::Indent(d) => format!("indent {} mm", Num(d)),
-        Loading::Load(f) => format!("load {} N/mm", Num(f)),
+        Loading::Load(f) => format!("load {} {load_unit}", Num(f)),
     };
     format!(
         "{surface}; {loading}, slide {} mm at {} mm/s, {} tissue, {:?} mesh{}",

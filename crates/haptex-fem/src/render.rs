@@ -223,6 +223,33 @@ pub struct RenderSettings {
     /// ([`Display::air_gap_um`]); 0, as eq. (8) assumes, unless a virtual
     /// device is to differ from its design.
     pub air_gap_um: f64,
+    /// The FE finger that feels the display: the 2D plane-strain finger,
+    /// or the 3D fingertip (whose load is in N, not N per mm of width).
+    pub finger: FeFinger,
+}
+
+/// Which FE finger a check slides on the display.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum FeFinger {
+    /// The 2D plane-strain finger: forces per mm of width, and eq. (8)'s
+    /// k measured as a contact length per normal force per mm of width.
+    #[default]
+    Plane,
+    /// The 3D fingertip ([`crate::solid3d`]) sliding at `direction_deg`
+    /// from the display's x axis (0: across the finger, as in 2D): forces
+    /// in N, and k measured as eq. (8) defines it, the real contact area
+    /// over the normal force.
+    Solid { direction_deg: f64 },
+}
+
+impl FeFinger {
+    /// The unit of a normal load on this finger.
+    pub fn load_unit(self) -> &'static str {
+        match self {
+            Self::Plane => "N/mm",
+            Self::Solid { .. } => "N",
+        }
+    }
 }
 
 impl RenderSettings {
@@ -232,7 +259,13 @@ impl RenderSettings {
     pub fn new(mu_hd: f64, load_n_per_mm: f64) -> Self {
         let mut scenario = Scenario::paper(SurfaceShape::Flat);
         scenario.loading = crate::scenario::Loading::Load(load_n_per_mm);
-        Self { device: Device { mu_hd, ..Device::PAPER }, scenario, run_up_mm: 1.0, air_gap_um: 0.0 }
+        Self {
+            device: Device { mu_hd, ..Device::PAPER },
+            scenario,
+            run_up_mm: 1.0,
+            air_gap_um: 0.0,
+            finger: FeFinger::Plane,
+        }
     }
 }
 
@@ -242,17 +275,39 @@ impl RenderSettings {
 /// 0.0098 N/mm and relaxes to 0.0075 N/mm over the slide).
 pub const DEFAULT_LOAD_N_PER_MM: f64 = 0.0133;
 
+/// The default normal load of a check on the 3D finger, N: within the
+/// paper's "typical screen exploration (< 0.5 N)", at its top.
+pub const DEFAULT_LOAD_3D_N: f64 = 0.5;
+
 /// What the finger felt on the display.
 #[derive(Debug, Clone)]
 pub struct Felt {
     /// The FE run (its positions are the slide, from 0 at x = a - run_up).
-    pub result: SimulationResult,
+    pub result: FeRun,
     /// Felt Ft/Fn at the target's positions.
     pub mu: Vec<f64>,
-    /// Contact length over net normal force at the target's positions, mm^2/N.
+    /// Contact length (2D, per mm of width) or area (3D) over net normal
+    /// force at the target's positions, mm^2/N.
     pub k_mm2_per_n: Vec<f64>,
-    /// Mean contact length over the slide, mm.
+    /// Mean contact length over the slide (3D: along the motion), mm.
     pub contact_mm: f64,
+}
+
+/// The FE run of a check, on the finger it ran on.
+#[derive(Debug, Clone)]
+pub enum FeRun {
+    Plane(Box<SimulationResult>),
+    Solid(Box<crate::solid3d::slide::Simulation3>),
+}
+
+impl FeRun {
+    /// The 2D run, if the check ran on the 2D finger.
+    pub fn plane(&self) -> Option<&SimulationResult> {
+        match self {
+            Self::Plane(r) => Some(r),
+            Self::Solid(_) => None,
+        }
+    }
 }
 
 /// How well the felt friction follows the target.
@@ -356,12 +411,26 @@ pub fn feel_display(
         vibration,
         air_gap_um: settings.air_gap_um,
     });
-    let result = scenario::run(&scenario, progress)?;
-    let rows: Vec<_> = result.history.iter().filter(|r| r.slide_mm > 0.0).collect();
-    let slide: Vec<f64> = rows.iter().map(|r| r.slide_mm).collect();
-    let contact_mm = mean(&rows.iter().map(|r| r.contact_mm).collect::<Vec<_>>());
-    let mu_run: Vec<f64> = rows.iter().map(|r| r.ft_n / r.fn_n).collect();
-    let k_run: Vec<f64> = rows.iter().map(|r| r.contact_mm / r.fn_n).collect();
+    // Each slide step's position, Ft, Fn (net), contact length along the
+    // motion, and contact length (2D) or area (3D).
+    let (result, rows): (FeRun, Vec<[f64; 5]>) = match settings.finger {
+        FeFinger::Plane => {
+            let result = scenario::run(&scenario, progress)?;
+            let rows = result.history.iter().filter(|r| r.slide_mm > 0.0);
+            let rows = rows.map(|r| [r.slide_mm, r.ft_n, r.fn_n, r.contact_mm, r.contact_mm]).collect();
+            (FeRun::Plane(Box::new(result)), rows)
+        }
+        FeFinger::Solid { direction_deg } => {
+            let result = crate::solid3d::slide::run(&scenario, direction_deg, progress)?;
+            let rows = result.history.iter().filter(|r| r.slide_mm > 0.0);
+            let rows = rows.map(|r| [r.slide_mm, r.ft_n, r.fn_n, r.contact_length_mm, r.contact_area_mm2]).collect();
+            (FeRun::Solid(Box::new(result)), rows)
+        }
+    };
+    let slide: Vec<f64> = rows.iter().map(|r| r[0]).collect();
+    let contact_mm = mean(&rows.iter().map(|r| r[3]).collect::<Vec<_>>());
+    let mu_run: Vec<f64> = rows.iter().map(|r| r[1] / r[2]).collect();
+    let k_run: Vec<f64> = rows.iter().map(|r| r[4] / r[2]).collect();
     let at = |values: &[f64], x: f64| haptex_core::profile::interpolate(&slide, values, x - start);
     let mu = x.iter().map(|&x| at(&mu_run, x)).collect();
     let k_mm2_per_n = x.iter().map(|&x| at(&k_run, x)).collect();
@@ -733,10 +802,18 @@ pub fn check_electrovibration(
 }
 
 /// The finger's loading as a check's header says it.
-pub fn loading_text(loading: crate::scenario::Loading) -> String {
+pub fn loading_text(loading: crate::scenario::Loading, finger: FeFinger) -> String {
     match loading {
-        crate::scenario::Loading::Load(f) => format!("{} N/mm", Num(f)),
+        crate::scenario::Loading::Load(f) => format!("{} {}", Num(f), finger.load_unit()),
         crate::scenario::Loading::Indent(d) => format!("indent {} mm", Num(d)),
+    }
+}
+
+/// The FE finger as a check's header names it.
+fn finger_text(finger: FeFinger) -> String {
+    match finger {
+        FeFinger::Plane => "FE finger".to_string(),
+        FeFinger::Solid { direction_deg } => format!("3D FE finger sliding at {} degrees", Num(direction_deg)),
     }
 }
 
@@ -745,9 +822,10 @@ pub fn loading_text(loading: crate::scenario::Loading) -> String {
 /// voltage is; `device_file` the device file's path, if any.
 pub fn check_header(profile: &str, run: &CheckRun, device_file: Option<&str>) -> String {
     format!(
-        "haptex check: {profile} on the FE finger ({}, load {}), voltage {}{}",
+        "haptex check: {profile} on the {} ({}, load {}), voltage {}{}",
+        finger_text(run.settings.finger),
         if run.settings.scenario.viscoelastic { "visco-elastic" } else { "elastic" },
-        loading_text(run.settings.scenario.loading),
+        loading_text(run.settings.scenario.loading, run.settings.finger),
         run.label,
         device_file.map_or(String::new(), |f| format!(", device file {f}"))
     )
@@ -782,11 +860,18 @@ pub fn describe_metrics(m: &CheckMetrics, settings: &RenderSettings) -> Vec<Stri
             ),
             None => format!("the target has no detail finer than the contact ({:.2} mm)", m.contact_mm),
         },
-        format!(
-            "contact-area coefficient: eq. (8) used k = {k_paper:.1} mm^2/N; the FE finger's contact length per \
-             normal force is {:.1} mm^2/N (per mm of width; --fe-k uses it)",
-            m.k_fe_mm2_per_n
-        ),
+        match settings.finger {
+            FeFinger::Plane => format!(
+                "contact-area coefficient: eq. (8) used k = {k_paper:.1} mm^2/N; the FE finger's contact length per \
+                 normal force is {:.1} mm^2/N (per mm of width; --fe-k uses it)",
+                m.k_fe_mm2_per_n
+            ),
+            FeFinger::Solid { .. } => format!(
+                "contact-area coefficient: eq. (8) used k = {k_paper:.1} mm^2/N; the 3D finger's contact area per \
+                 normal force is {:.1} mm^2/N (--fe-k uses it)",
+                m.k_fe_mm2_per_n
+            ),
+        },
     ]
 }
 
@@ -799,14 +884,15 @@ pub fn combined_header(
     device_file: Option<&str>,
 ) -> String {
     format!(
-        "haptex check: {profile} on the FE finger, combined display ({} strategy{}; plate: {}), load {}{}",
+        "haptex check: {profile} on the {}, combined display ({} strategy{}; plate: {}), load {}{}",
+        finger_text(settings.finger),
         strategy.kind(),
         match strategy {
             Strategy::Weighted { weight } => format!(", weight {}", Num(weight)),
             _ => String::new(),
         },
         ultrasonic.describe(),
-        loading_text(settings.scenario.loading),
+        loading_text(settings.scenario.loading, settings.finger),
         device_file.map_or(String::new(), |f| format!(", device file {f}"))
     )
 }

@@ -9,12 +9,14 @@ use haptex_core::electrovibration::{ContactArea, Device, Method, map_profile};
 use haptex_core::num::Num;
 use haptex_core::plot::{Figure, Panel};
 use haptex_core::ranges;
-use haptex_fem::render::{self, Check, DEFAULT_LOAD_N_PER_MM, RenderSettings, Stopping, TargetPart};
+use haptex_fem::render::{
+    self, Check, DEFAULT_LOAD_3D_N, DEFAULT_LOAD_N_PER_MM, FeFinger, RenderSettings, Stopping, TargetPart,
+};
 use haptex_fem::scenario::Loading;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::{
-    CarrierArg, DesignDevice, DeviceFileArgs, DisplayArg, DisplayArgs, LayerStackArgs, MaterialArg, MeshArg,
+    CarrierArg, DesignDevice, DeviceFileArgs, DisplayArg, DisplayArgs, LayerStackArgs, MaterialArg, MeshArg, ModelArg,
     finger_model, in_range, non_negative, positive, read_profile,
 };
 
@@ -22,7 +24,8 @@ use crate::args::{
 /// display under eq. (8)'s voltage and compare the friction it feels with
 /// the target.
 ///
-/// The finger (2D plane strain, per mm of width) is pressed onto the flat
+/// The finger (2D plane strain, per mm of width; or with --model 3d the 3D
+/// fingertip, in N) is pressed onto the flat
 /// display with a constant normal load and slid over the profile's span
 /// (after a run-up, so that it slides steadily from the first position);
 /// the voltage at each moment is U at the finger's position. The display's
@@ -39,7 +42,8 @@ use crate::args::{
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:\n  haptex predict --surface bump --x0 5 --width 1.5 --height 0.3 -o bump.csv\n  \
                   haptex check --profile bump.csv --png check.png\n  \
-                  haptex check --profile bump.csv --compensate --voltage-out u-compensated.csv\n\n\
+                  haptex check --profile bump.csv --compensate --voltage-out u-compensated.csv\n  \
+                  haptex check --profile bump.csv --model 3d --mesh coarse --fe-k -o check3d.csv\n\n\
                   With a device file (`haptex calibrate`, eq3 model): eq. (8) takes its mu_HD, k for the carrier \
                   (default sine 1000 Hz) and U_max, and the FE display its layer stack:\n  \
                   haptex check --profile bump.csv --device my-display.toml --carrier-hz 300 -o check.csv \
@@ -70,7 +74,8 @@ pub struct CheckArgs {
     stack: LayerStackArgs,
     /// Normal load the finger presses with, N per mm of finger width
     /// (default 0.0133: the force of the paper's 0.25 mm press on a flat
-    /// surface with the elastic tissue).
+    /// surface with the elastic tissue); with --model 3d in N (default
+    /// 0.5, the top of the paper's "typical screen exploration").
     #[arg(long, value_parser = positive, conflicts_with = "indent")]
     load: Option<f64>,
     /// Press by a displacement of bone and nail instead (mm), the paper's
@@ -93,6 +98,16 @@ pub struct CheckArgs {
     /// Mesh resolution.
     #[arg(long, value_enum, default_value_t = MeshArg::Default)]
     mesh: MeshArg,
+    /// The FE finger: the 2D plane-strain cross-section, or the 3D
+    /// fingertip (eq. (3)'s attraction on its real contact area; --fe-k
+    /// then measures eq. (8)'s k as a real area over the normal force).
+    #[arg(long, value_enum, default_value_t = ModelArg::TwoD)]
+    model: ModelArg,
+    /// With --model 3d: the direction of the finger's motion on the
+    /// display, degrees from the display's x axis (0: across the finger,
+    /// as the 2D finger slides; 90: along it).
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    direction_deg: Option<f64>,
     /// Finger model file (default: the shipped data/finger/finger-2d.toml).
     #[arg(long, value_name = "FILE")]
     finger: Option<PathBuf>,
@@ -151,7 +166,18 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
             force_gain: 1.0,
         },
     };
-    let mut settings = RenderSettings::new(device.mu_hd, args.load.unwrap_or(DEFAULT_LOAD_N_PER_MM));
+    let finger = match args.model {
+        ModelArg::TwoD => {
+            if args.direction_deg.is_some() {
+                anyhow::bail!("--direction-deg applies to --model 3d only (the 2D finger slides along x)");
+            }
+            FeFinger::Plane
+        }
+        ModelArg::ThreeD => FeFinger::Solid { direction_deg: crate::args::direction_deg(args.direction_deg)? },
+    };
+    let default_load = if finger == FeFinger::Plane { DEFAULT_LOAD_N_PER_MM } else { DEFAULT_LOAD_3D_N };
+    let mut settings = RenderSettings::new(device.mu_hd, args.load.unwrap_or(default_load));
+    settings.finger = finger;
     settings.device = device;
     settings.device.validate()?;
     let scenario = &mut settings.scenario;

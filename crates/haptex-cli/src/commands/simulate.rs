@@ -17,7 +17,9 @@ use haptex_core::ranges;
 use haptex_core::signal::{Extend, VoltageCurve};
 use haptex_fem::display::Display;
 
-use crate::args::{LayerStackArgs, MaterialArg, MeshArg, Output, finger_model, in_range, non_negative, positive};
+use crate::args::{
+    LayerStackArgs, MaterialArg, MeshArg, ModelArg, Output, finger_model, in_range, non_negative, positive,
+};
 
 /// Simulate a finger pad sliding over a surface (2D plane-strain FE, or the
 /// 3D fingertip) and write its friction profile.
@@ -135,14 +137,6 @@ pub struct SimulateArgs {
     /// No progress bar or summary.
     #[arg(short, long)]
     quiet: bool,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum ModelArg {
-    #[value(name = "2d")]
-    TwoD,
-    #[value(name = "3d")]
-    ThreeD,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -301,21 +295,17 @@ fn progress_bar(quiet: bool, steps: usize) -> ProgressBar {
 }
 
 /// `--model 3d`: the 3D fingertip.
-fn run_3d(args: &SimulateArgs, scenario: Scenario) -> anyhow::Result<()> {
-    for (given, flag) in [
-        (matches!(args.kinematics, KinematicsArg::Finite), "--kinematics finite"),
-        (scenario.display.is_some(), "--surface display"),
-        (args.vtk.is_some(), "--vtk"),
-    ] {
-        if given {
-            anyhow::bail!("{flag} is not supported with --model 3d");
-        }
+fn run_3d(args: &SimulateArgs, mut scenario: Scenario) -> anyhow::Result<()> {
+    if matches!(args.kinematics, KinematicsArg::Finite) {
+        anyhow::bail!("--kinematics finite is not supported with --model 3d");
     }
-    let direction = args.direction_deg.unwrap_or(0.0);
-    if !(direction.is_finite() && direction.abs() <= 360.0) {
-        anyhow::bail!("--direction-deg {direction} must be a finite angle from -360 to 360 degrees");
+    let direction = crate::args::direction_deg(args.direction_deg)?;
+    let slide_steps = scenario.slide_steps()?;
+    if args.vtk.is_some() {
+        scenario.frame_every = args.vtk_every.unwrap_or((slide_steps / 25).max(1)).max(1);
+        scenario.validate()?;
     }
-    let steps = scenario.press_steps + scenario.slide_steps()?;
+    let steps = scenario.press_steps + slide_steps;
     let bar = progress_bar(args.quiet, steps);
     let result = haptex_fem::solid3d::slide::run(&scenario, direction, &mut |p| {
         bar.set_position(p.step as u64);
@@ -327,6 +317,9 @@ fn run_3d(args: &SimulateArgs, scenario: Scenario) -> anyhow::Result<()> {
     Output::new(args.output.clone()).write(|w| solid3d_output::write_profile(&result, &description, w))?;
     if let Some(path) = &args.history {
         haptex_core::io::write_atomic(path, |w| solid3d_output::write_history(&result, w))?;
+    }
+    if let Some(dir) = &args.vtk {
+        solid3d_output::write_vtk_series(&result, dir)?;
     }
     if let Some(path) = &args.png {
         let title = format!("3D finger: {}", description.split(';').next().unwrap_or(""));
@@ -354,7 +347,9 @@ fn run_3d(args: &SimulateArgs, scenario: Scenario) -> anyhow::Result<()> {
             }
             (None, None) => {}
         }
-        for (label, path) in [("profile", &args.output), ("history", &args.history), ("PNG", &args.png)] {
+        for (label, path) in
+            [("profile", &args.output), ("history", &args.history), ("VTK series", &args.vtk), ("PNG", &args.png)]
+        {
             if let Some(p) = path {
                 eprintln!("wrote {label}: {}", p.display());
             }
@@ -370,5 +365,6 @@ fn describe(args: &SimulateArgs, scenario: &Scenario) -> String {
         (Some(_), None, Some(u)) => Some(output::VoltageSource::Constant(u)),
         _ => None,
     };
-    output::describe(scenario, &output::surface_text(&scenario.surface, source, &args.surface))
+    let unit = if args.model == ModelArg::ThreeD { "N" } else { "N/mm" };
+    output::describe_with_load_unit(scenario, &output::surface_text(&scenario.surface, source, &args.surface), unit)
 }

@@ -19,7 +19,9 @@
 //!
 //! a dense LU of the size of the contact patch (not of the whole region
 //! that may touch), and then delta = -rho - C_:A (D_AA delta_A). F is
-//! non-zero on A only, so rho costs m |A|, not m^2. Backtracking on
+//! non-zero on the loaded unknowns only (A, and on a display the skin
+//! its attraction reaches, whose tangent is left out where it is
+//! negligible), so rho costs m times their number, not m^2. Backtracking on
 //! |R|^2 (R = S rho = L (L^T rho), m^2; the Newton step is a descent
 //! direction for it). The whole field follows from one more solve with K:
 //! u = K^-1 (f + F(v)).
@@ -538,17 +540,23 @@ impl Condensation {
             surface.points.iter().enumerate().map(|(q, p)| point(q, p.displacement(u), mode)).collect();
         let mut place = vec![None; m];
         let mut active = Vec::new();
+        let mut loaded = vec![false; m];
         let mut normal_n = 0.0;
         for (p, response) in surface.points.iter().zip(&responses) {
-            let Some((force, _)) = response else {
+            let Some((force, t)) = response else {
                 continue;
             };
             normal_n += p.weight * force[2];
+            // A point whose tangent is zero (a display's attraction on
+            // skin far from it) loads its nodes without making them
+            // unknowns of the step's dense system.
+            let stiff = t.iter().flatten().any(|&v| v != 0.0);
             for a in 0..4 {
                 for d in 0..3 {
                     if let Some(i) = self.index[3 * p.nodes[a] + d] {
                         f[i] += p.weight * p.shape[a] * force[d];
-                        if place[i].is_none() {
+                        loaded[i] = true;
+                        if stiff && place[i].is_none() {
                             place[i] = Some(0);
                             active.push(i);
                         }
@@ -595,8 +603,8 @@ impl Condensation {
                 }
             }
         }
-        // rho = v - v0 - dz w - C F, F non-zero on A only (with the
-        // tangent: a line search's trial needs F alone).
+        // rho = v - v0 - dz w - C F, F non-zero on the loaded unknowns
+        // only (with the tangent: a line search's trial needs F alone).
         let mut rho = Vec::new();
         if tangent {
             rho = self.global.iter().zip(v0).map(|(&g, v)| u[g] - v).collect();
@@ -605,7 +613,7 @@ impl Condensation {
                     *r -= dz * w;
                 }
             }
-            for &i in &active {
+            for i in (0..m).filter(|&i| loaded[i]) {
                 if f[i] != 0.0 {
                     for (r, c) in rho.iter_mut().zip(&self.compliance[i * m..(i + 1) * m]) {
                         *r -= c * f[i];

@@ -1,14 +1,15 @@
 //! Files written from a 3D simulation ([`super::slide`]): the friction
 //! profile and the force history (CSV, with forces in N, not per mm of
-//! width as in 2D), and a PNG of the contact patch.
+//! width as in 2D), a PNG of the contact patch, and a VTK series of the
+//! whole field for ParaView.
 
 use std::io::Write;
 use std::path::Path;
 
-use haptex_core::io::write_csv_row;
+use haptex_core::io::{FileSet, WriteError, write_csv_row};
 use haptex_core::plot::{Figure, Panel, PlotError, Series, Shape};
 
-use super::slide::{Patch, Simulation3};
+use super::slide::{Frame3, Patch, SURFACE_GRID, Simulation3};
 
 /// Writes `x_mm,mu,ft_n,fn_n,ft_lateral_n,force_angle_deg`: x the distance
 /// the finger travelled along its direction, mu = Ft/Fn with Ft the
@@ -46,14 +47,33 @@ pub fn write_press_curve(result: &Simulation3, description: &str, w: &mut dyn Wr
     Ok(())
 }
 
-/// Writes every step: `t_s,slide_mm,fn_n,ft_n,ft_lateral_n,contact_area_mm2,drive_z_mm,newton_iterations`.
+/// Writes every step: `t_s,slide_mm,fn_n,ft_n,ft_lateral_n,contact_area_mm2,drive_z_mm,newton_iterations`,
+/// then the contact's length along the motion and, on a display, the
+/// electrostatic attraction `fe_n` and its part on skin in contact
+/// `fe_contact_n` (0 on a passive surface; `fn_n` is the net force).
 pub fn write_history(result: &Simulation3, w: &mut dyn Write) -> std::io::Result<()> {
     writeln!(w, "# haptex simulate --model 3d force history; forces in N on the 3D finger")?;
-    writeln!(w, "t_s,slide_mm,fn_n,ft_n,ft_lateral_n,contact_area_mm2,drive_z_mm,newton_iterations")?;
+    writeln!(
+        w,
+        "t_s,slide_mm,fn_n,ft_n,ft_lateral_n,contact_area_mm2,drive_z_mm,newton_iterations,contact_length_mm,fe_n,\
+         fe_contact_n"
+    )?;
     for r in &result.history {
         write_csv_row(
             w,
-            &[r.t_s, r.slide_mm, r.fn_n, r.ft_n, r.ft_lateral_n, r.contact_area_mm2, r.drive_z_mm, r.iterations as f64],
+            &[
+                r.t_s,
+                r.slide_mm,
+                r.fn_n,
+                r.ft_n,
+                r.ft_lateral_n,
+                r.contact_area_mm2,
+                r.drive_z_mm,
+                r.iterations as f64,
+                r.contact_length_mm,
+                r.fe_n,
+                r.fe_contact_n,
+            ],
         )?;
     }
     Ok(())
@@ -123,4 +143,159 @@ fn patch_panel(patch: &Patch, peak: f64, direction_deg: f64) -> Panel {
 /// Writes [`patch_figure`] as a PNG.
 pub fn write_png(result: &Simulation3, title: &str, path: &Path) -> Result<(), PlotError> {
     patch_figure(result, title).write_png(path)
+}
+
+/// Writes one .vtu per frame of `result` ([`Simulation3::frames`]) and a
+/// .pvd collection into `dir` (created if missing), as the 2D model's
+/// series (crate::output::write_vtk_series): the marker `simulation.pvd`
+/// is removed first and written last with each frame's SHA-256, so that an
+/// interrupted run leaves no collection naming a mix of frames.
+///
+/// Each frame holds, on the reference positions with a point vector
+/// `displacement` (mm; ParaView's Warp By Vector shows the deformed
+/// finger) and a point field `driven` (1 on the nodes the bone drives):
+///
+/// - the hexahedra (VTK_HEXAHEDRON), `part` 0-3 their layer (stratum
+///   corneum to hypodermis);
+/// - the contact region's skin faces (VTK_QUAD, `part` 4) with their mean
+///   `pressure_MPa`, tangential `traction_MPa` (on the finger), and the
+///   fractions of their area `in_contact` and `sticking`;
+/// - the surface under the finger (VTK_QUAD, `part` 6), in place.
+pub fn write_vtk_series(result: &Simulation3, dir: &Path) -> Result<Vec<std::path::PathBuf>, WriteError> {
+    let mut set = FileSet::begin(dir, "simulation.pvd")?;
+    let mut written = Vec::new();
+    let mut entries = Vec::new();
+    for (k, frame) in result.frames.iter().enumerate() {
+        let name = format!("frame_{k:04}.vtu");
+        written.push(set.write(&name, |w| write_vtu(result, frame, w))?);
+        entries.push((frame.t_s, name));
+    }
+    let pvd = set.finish(|w, hashes| {
+        writeln!(w, "<?xml version=\"1.0\"?>")?;
+        writeln!(w, "<!-- written by haptex simulate --model 3d; SHA-256 of each frame:")?;
+        for (name, hash) in hashes {
+            writeln!(w, "     {hash}  {name}")?;
+        }
+        writeln!(w, "-->")?;
+        writeln!(w, "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">")?;
+        writeln!(w, "  <Collection>")?;
+        for (t, name) in &entries {
+            writeln!(w, "    <DataSet timestep=\"{t}\" group=\"\" part=\"0\" file=\"{name}\"/>")?;
+        }
+        writeln!(w, "  </Collection>\n</VTKFile>")
+    })?;
+    written.push(pvd);
+    Ok(written)
+}
+
+/// The `part` of the contact faces and of the surface in a VTK frame.
+pub const VTK_PART_CONTACT_FACE: usize = 4;
+pub const VTK_PART_SURFACE: usize = 6;
+
+fn write_vtu(result: &Simulation3, frame: &Frame3, w: &mut dyn Write) -> std::io::Result<()> {
+    let mesh = &result.mesh;
+    let n_nodes = mesh.n_nodes();
+    let grid = SURFACE_GRID;
+    let surface_quads = (grid - 1) * (grid - 1);
+    let (hexes, faces) = (mesh.elements.len(), result.contact_faces.len());
+    let cells = hexes + faces + surface_quads;
+    writeln!(w, "<?xml version=\"1.0\"?>")?;
+    writeln!(w, "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">")?;
+    writeln!(w, "  <UnstructuredGrid>")?;
+    writeln!(w, "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{cells}\">", n_nodes + frame.surface.len())?;
+    writeln!(w, "      <Points>\n        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">")?;
+    for p in mesh.nodes.iter().chain(&frame.surface) {
+        writeln!(w, "{} {} {}", p[0], p[1], p[2])?;
+    }
+    writeln!(w, "        </DataArray>\n      </Points>")?;
+    writeln!(w, "      <Cells>\n        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">")?;
+    // VTK_HEXAHEDRON's corners are hex8::CORNERS' order: the bottom face
+    // counter-clockwise, then the top face above it.
+    for e in &mesh.elements {
+        writeln!(w, "{} {} {} {} {} {} {} {}", e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7])?;
+    }
+    for f in &result.contact_faces {
+        writeln!(w, "{} {} {} {}", f[0], f[1], f[2], f[3])?;
+    }
+    for j in 0..grid - 1 {
+        for i in 0..grid - 1 {
+            let a = n_nodes + j * grid + i;
+            writeln!(w, "{} {} {} {}", a, a + 1, a + grid + 1, a + grid)?;
+        }
+    }
+    writeln!(w, "        </DataArray>\n        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">")?;
+    let mut offset = 0;
+    for k in 0..cells {
+        offset += if k < hexes { 8 } else { 4 };
+        writeln!(w, "{offset}")?;
+    }
+    writeln!(w, "        </DataArray>\n        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">")?;
+    for k in 0..cells {
+        writeln!(w, "{}", if k < hexes { 12 } else { 9 })?;
+    }
+    writeln!(w, "        </DataArray>\n      </Cells>")?;
+    writeln!(w, "      <PointData Vectors=\"displacement\">")?;
+    writeln!(
+        w,
+        "        <DataArray type=\"Float64\" Name=\"displacement\" NumberOfComponents=\"3\" format=\"ascii\">"
+    )?;
+    for u in frame.displacement.chunks_exact(3) {
+        writeln!(w, "{} {} {}", u[0], u[1], u[2])?;
+    }
+    for _ in &frame.surface {
+        writeln!(w, "0 0 0")?;
+    }
+    writeln!(w, "        </DataArray>")?;
+    writeln!(w, "        <DataArray type=\"UInt8\" Name=\"driven\" format=\"ascii\">")?;
+    let mut driven = vec![0u8; n_nodes + frame.surface.len()];
+    for &n in &result.driven_nodes {
+        driven[n] = 1;
+    }
+    for d in driven {
+        writeln!(w, "{d}")?;
+    }
+    writeln!(w, "        </DataArray>\n      </PointData>")?;
+    writeln!(w, "      <CellData Scalars=\"part\">")?;
+    writeln!(w, "        <DataArray type=\"Int32\" Name=\"part\" format=\"ascii\">")?;
+    for layer in &result.element_layer {
+        writeln!(w, "{layer}")?;
+    }
+    for _ in 0..faces {
+        writeln!(w, "{VTK_PART_CONTACT_FACE}")?;
+    }
+    for _ in 0..surface_quads {
+        writeln!(w, "{VTK_PART_SURFACE}")?;
+    }
+    writeln!(w, "        </DataArray>")?;
+    let face_field = |w: &mut dyn Write, name: &str, values: &[f64]| -> std::io::Result<()> {
+        writeln!(w, "        <DataArray type=\"Float64\" Name=\"{name}\" format=\"ascii\">")?;
+        for _ in 0..hexes {
+            writeln!(w, "0")?;
+        }
+        for v in values {
+            writeln!(w, "{v}")?;
+        }
+        for _ in 0..surface_quads {
+            writeln!(w, "0")?;
+        }
+        writeln!(w, "        </DataArray>")
+    };
+    face_field(w, "pressure_MPa", &frame.face_pressure_mpa)?;
+    face_field(w, "in_contact", &frame.face_contact)?;
+    face_field(w, "sticking", &frame.face_sticking)?;
+    writeln!(
+        w,
+        "        <DataArray type=\"Float64\" Name=\"traction_MPa\" NumberOfComponents=\"3\" format=\"ascii\">"
+    )?;
+    for _ in 0..hexes {
+        writeln!(w, "0 0 0")?;
+    }
+    for t in &frame.face_traction_mpa {
+        writeln!(w, "{} {} {}", t[0], t[1], t[2])?;
+    }
+    for _ in 0..surface_quads {
+        writeln!(w, "0 0 0")?;
+    }
+    writeln!(w, "        </DataArray>\n      </CellData>")?;
+    writeln!(w, "    </Piece>\n  </UnstructuredGrid>\n</VTKFile>")
 }

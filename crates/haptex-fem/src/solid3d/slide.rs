@@ -25,6 +25,19 @@
 //! point is at most 1.5 (indentation + the surface's relief) + 0.3 mm;
 //! every step checks that no skin outside it touches the surface (an
 //! error if it does, never a silent penetration).
+//!
+//! On a display (the scenario's [`crate::display::Display`], a flat
+//! surface) the voltage at the finger's position U(x_f), x_f the distance
+//! travelled, attracts the skin of the contact region with eq. (3)'s
+//! traction over the gap ([`crate::contact::Electrostatic`], as in 2D):
+//! on the skin in contact that is eq. (3) on the real contact area, and
+//! the skin near the patch's edge is attracted across its gap. Skin
+//! beyond the region, at least 0.3 mm from the display, is left out:
+//! there the traction is below 3 x 10^-5 of the contact's with the
+//! paper's layers. The friction law acts on the total contact pressure,
+//! and the normal force Fn reported is the net force the finger applies
+//! (the contact's less the attraction). A vibrating display lowers the
+//! friction coefficient to mu_HD rho(a(x_f)).
 
 use std::time::Instant;
 
@@ -32,12 +45,13 @@ use haptex_core::profile::FrictionProfile;
 use serde::Serialize;
 
 use super::body::ViscoelasticBody;
-use super::condensed::{Condensation, LoadControl, NewtonSettings, PointMode};
+use super::condensed::{Condensation, LoadControl, NewtonSettings, PointForce, PointMode};
 use super::contact::ContactSurface;
 use super::fingertip::{self, FingertipSpec};
 use super::friction::{Committed, FrictionLaw};
 use super::hex8::Formulation;
 use super::surface::HeightField;
+use crate::contact::Electrostatic;
 use crate::material::Material;
 use crate::scenario::{Kinematics, Loading, Progress, Scenario, SimulationError, Statistics};
 use crate::surface::SurfaceShape;
@@ -59,6 +73,16 @@ pub struct Row3 {
     /// Area of skin in contact (mm^2, reference area of the contact points
     /// with pressure).
     pub contact_area_mm2: f64,
+    /// The contact's extent along the motion (mm, current positions of
+    /// the contact points with pressure).
+    pub contact_length_mm: f64,
+    /// A display's electrostatic attraction on the finger (N, > 0 pulling
+    /// it onto the display; 0 on a passive surface); `fn_n` is the net
+    /// normal force, the contact's less this.
+    pub fe_n: f64,
+    /// The part of `fe_n` on skin in contact (N): eq. (3) on the real
+    /// contact area; the rest pulls skin near the patch's edge.
+    pub fe_contact_n: f64,
     /// Vertical displacement of the bone (mm, negative: pressed down).
     pub drive_z_mm: f64,
     pub iterations: usize,
@@ -100,6 +124,68 @@ pub struct Simulation3 {
     pub patches: Vec<Patch>,
     pub direction_deg: f64,
     pub statistics: Statistics,
+    /// The finger's mesh (reference positions), each element's layer, the
+    /// nodes the bone drives, and the skin faces of the contact region
+    /// (the faces of [`Frame3`]'s per-face fields).
+    pub mesh: super::mesh::Mesh3,
+    pub element_layer: Vec<usize>,
+    pub driven_nodes: Vec<usize>,
+    pub contact_faces: Vec<[usize; 4]>,
+    /// Full-field snapshots when the scenario asks for them
+    /// ([`Scenario::frame_every`] > 0): after the press, every
+    /// `frame_every` slide steps, where the finger reaches the feature, and
+    /// at the end.
+    pub frames: Vec<Frame3>,
+}
+
+/// A full-field snapshot of a 3D run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Frame3 {
+    pub t_s: f64,
+    pub slide_mm: f64,
+    /// Displacement of every node (3 per node), mm.
+    pub displacement: Vec<f64>,
+    /// Per contact face (of [`Simulation3::contact_faces`]): the mean
+    /// pressure and tangential traction over its contact points (MPa,
+    /// traction on the finger), and the fraction of its area in contact
+    /// and sticking.
+    pub face_pressure_mpa: Vec<f64>,
+    pub face_traction_mpa: Vec<[f64; 3]>,
+    pub face_contact: Vec<f64>,
+    pub face_sticking: Vec<f64>,
+    /// The surface under the finger, in the finger's frame: a grid of
+    /// [`SURFACE_GRID`] x [`SURFACE_GRID`] points (x fastest) over the contact
+    /// region's footprint and 1 mm around it.
+    pub surface: Vec<[f64; 3]>,
+}
+
+/// Points along each side of a [`Frame3`]'s surface grid.
+pub const SURFACE_GRID: usize = 61;
+
+impl Frame3 {
+    fn new(t_s: f64, slide_mm: f64, u: &[f64], patch: &Patch, surface: Vec<[f64; 3]>) -> Self {
+        let faces = patch.faces.len();
+        let (mut pressure, mut traction) = (Vec::with_capacity(faces), Vec::with_capacity(faces));
+        let (mut contact, mut sticking) = (Vec::with_capacity(faces), Vec::with_capacity(faces));
+        for face in patch.points.chunks_exact(patch.per_face.max(1)) {
+            let area: f64 = face.iter().map(|p| p.weight_mm2).sum::<f64>().max(f64::MIN_POSITIVE);
+            let mean = |f: &dyn Fn(&PatchPoint) -> f64| face.iter().map(|p| p.weight_mm2 * f(p)).sum::<f64>() / area;
+            pressure.push(mean(&|p| p.pressure_mpa));
+            traction.push(std::array::from_fn(|d| mean(&|p| p.traction_mpa[d])));
+            contact.push(mean(&|p| f64::from(u8::from(p.pressure_mpa > 0.0))));
+            sticking.push(mean(&|p| f64::from(u8::from(p.pressure_mpa > 0.0 && p.sticking))));
+        }
+        Self {
+            t_s,
+            slide_mm,
+            displacement: u.to_vec(),
+            face_pressure_mpa: pressure,
+            face_traction_mpa: traction,
+            face_contact: contact,
+            face_sticking: sticking,
+            surface,
+        }
+    }
 }
 
 /// A 3D finger as the slide needs it: the mesh, each element's layer
@@ -132,8 +218,8 @@ impl From<fingertip::FingertipMesh> for Finger3 {
 /// `direction_deg` (degrees from the surface's x axis); `progress` is
 /// called after every step. The scenario's settings mean what they mean
 /// in 2D, with forces in N (not per mm of width; a load
-/// [`Loading::Load`] is the normal force in N); not yet supported in 3D:
-/// finite strain, a display.
+/// [`Loading::Load`] is the normal force in N); a display (module docs)
+/// as well. Not yet supported in 3D: finite strain.
 pub fn run(
     scenario: &Scenario,
     direction_deg: f64,
@@ -171,9 +257,7 @@ pub fn run_finger(
     if scenario.kinematics == Kinematics::Finite {
         return invalid("the 3D finger is small-strain only; finite strain is not supported in 3D");
     }
-    if scenario.display.is_some() {
-        return invalid("a display surface is not supported by the 3D finger");
-    }
+    let display = scenario.display.as_ref();
     let theta = direction_deg.to_radians();
     let direction = [theta.cos(), theta.sin()];
     let travel = [scenario.slide_mm * direction[0], scenario.slide_mm * direction[1]];
@@ -224,6 +308,7 @@ pub fn run_finger(
     prescribed.dedup();
     let n_nodes = tip.mesh.n_nodes();
     let n_elements = tip.mesh.elements.len();
+    let body_layers = tip.element_layer.clone();
     let mut body = ViscoelasticBody::new(tip.mesh, Formulation::BBar, materials, tip.element_layer, &prescribed)?;
     let mut condensation = Condensation::new(body.pattern(), body.free(), &candidate)?;
     let law = FrictionLaw {
@@ -232,7 +317,6 @@ pub fn run_finger(
         penalty_t: scenario.penalty_mpa_per_mm,
         mu: scenario.mu_skin.unwrap_or(scenario.model.contact.mu_skin),
     };
-    let sticking = FrictionLaw { mu: f64::INFINITY, ..law };
     // The 2D model's tolerances and limits; the force floor of a point's
     // penalty at the floor's depth, on the lightest point.
     let lightest = candidate.points.iter().map(|p| p.weight).fold(f64::INFINITY, f64::min);
@@ -288,6 +372,25 @@ pub fn run_finger(
     }
     let mut history = Vec::with_capacity(total_steps);
     let mut patches = Vec::new();
+    let mut frames = Vec::new();
+    // The surface under the contact region (and 1 mm around it) in the
+    // finger's frame with the finger at `s`.
+    let (lo, hi) = inside.iter().flatten().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), &n| {
+        let x = tip_nodes[n];
+        ([lo[0].min(x[0]), lo[1].min(x[1])], [hi[0].max(x[0]), hi[1].max(x[1])])
+    });
+    let surface_grid = |s: [f64; 2]| -> Vec<[f64; 3]> {
+        let last = (SURFACE_GRID - 1) as f64;
+        let mut grid = Vec::with_capacity(SURFACE_GRID * SURFACE_GRID);
+        for j in 0..SURFACE_GRID {
+            for i in 0..SURFACE_GRID {
+                let x = lo[0] - 1.0 + (hi[0] - lo[0] + 2.0) * i as f64 / last;
+                let y = lo[1] - 1.0 + (hi[1] - lo[1] + 2.0) * j as f64 / last;
+                grid.push([x, y, field.height_gradient(x + s[0], y + s[1]).0 + lift]);
+            }
+        }
+        grid
+    };
     let mut newton_iterations = 0;
     let mut t_s = 0.0;
     let feature = feature_distance(&scenario.surface, direction);
@@ -300,6 +403,11 @@ pub fn run_finger(
         let pressing = k <= scenario.press_steps;
         t_s += dt;
         let s = [distance * direction[0], distance * direction[1]];
+        // A display's attraction and friction with the finger at x_f =
+        // the distance travelled (held over the step's pieces).
+        let electrostatic = display.map(|d| d.electrostatic_at(distance)).filter(|e| e.pressure_mpa > 0.0);
+        let law = FrictionLaw { mu: display.and_then(|d| d.friction_at(distance)).unwrap_or(law.mu), ..law };
+        let sticking = FrictionLaw { mu: f64::INFINITY, ..law };
         if body.prepare(dt)? {
             condensation.factorize(body.stiffness_values())?;
             if matches!(scenario.loading, Loading::Load(_)) {
@@ -349,18 +457,19 @@ pub fn run_finger(
                 };
                 let point = |q: usize, w: [f64; 3], mode: PointMode| {
                     let r = relative(candidate.points[q].position, w, to);
-                    match mode {
+                    let contact = match mode {
                         PointMode::Exact => law.evaluate(&field.at(r), r, &committed[q]),
                         PointMode::NoCurvature => law.evaluate(&field.at(r).without_curvature(), r, &committed[q]),
                         PointMode::Stick => sticking.evaluate(&field.at(r), r, &committed[q]),
-                    }
+                    };
+                    attracted(contact.map(|c| (c.force, c.tangent)), electrostatic.as_ref(), r[2])
                 };
                 match condensation.equilibrium(
                     &load,
                     body.free(),
                     &mut u,
                     &candidate,
-                    &mut |q, w, mode| point(q, w, mode).map(|r| (r.force, r.tangent)),
+                    &mut |q, w, mode| point(q, w, mode),
                     some_stuck,
                     &newton,
                     control.as_mut(),
@@ -401,6 +510,8 @@ pub fn run_finger(
         // Forces, the patch, and the commit.
         let mut force = [0.0; 3];
         let mut area = 0.0;
+        let (mut fe_n, mut fe_contact_n) = (0.0, 0.0);
+        let (mut ahead, mut behind) = (f64::NEG_INFINITY, f64::INFINITY);
         let mut points = Vec::with_capacity(candidate.points.len());
         let mut next = Vec::with_capacity(candidate.points.len());
         for (q, p) in candidate.points.iter().enumerate() {
@@ -415,6 +526,15 @@ pub fn run_finger(
             });
             if pressure > 0.0 {
                 area += p.weight;
+                let along = (p.position[0] + w[0]) * direction[0] + (p.position[1] + w[1]) * direction[1];
+                (ahead, behind) = (ahead.max(along), behind.min(along));
+            }
+            if let Some(e) = &electrostatic {
+                let attraction = p.weight * e.traction(r[2]).0;
+                fe_n += attraction;
+                if pressure > 0.0 {
+                    fe_contact_n += attraction;
+                }
             }
             next.push(Committed { position: r, traction });
             points.push(PatchPoint {
@@ -435,7 +555,7 @@ pub fn run_finger(
         in_contact.sort_unstable();
         in_contact.dedup();
         some_stuck = points.iter().any(|p| p.pressure_mpa > 0.0 && p.sticking);
-        (last_s, last_force) = (s, force[2]);
+        (last_s, last_force) = (s, force[2] - fe_n);
         body.commit(&u);
         for p in &beyond.points {
             if field.at(relative(p.position, p.displacement(&u), s)).depth > 0.0 {
@@ -445,10 +565,13 @@ pub fn run_finger(
         let row = Row3 {
             t_s,
             slide_mm: distance,
-            fn_n: force[2],
+            fn_n: force[2] - fe_n,
             ft_n: -(force[0] * direction[0] + force[1] * direction[1]),
             ft_lateral_n: -(-force[0] * direction[1] + force[1] * direction[0]),
             contact_area_mm2: area,
+            contact_length_mm: (ahead - behind).max(0.0),
+            fe_n,
+            fe_contact_n,
             drive_z_mm: drive_z,
             iterations,
         };
@@ -460,6 +583,16 @@ pub fn run_finger(
         let faces =
             inside.iter().map(|face| face.map(|n| std::array::from_fn(|d| tip_nodes[n][d] + u[3 * n + d]))).collect();
         let patch = Patch { t_s, slide_mm: distance, points, per_face: candidate.per_face, faces };
+        let slide_step = k.saturating_sub(scenario.press_steps);
+        let at_feature = !pressing && !feature_reached && feature.is_some_and(|f| distance >= f);
+        if scenario.frame_every > 0
+            && (k == scenario.press_steps
+                || at_feature
+                || k == total_steps
+                || (!pressing && slide_step % scenario.frame_every == 0))
+        {
+            frames.push(Frame3::new(t_s, distance, &u, &patch, surface_grid(s)));
+        }
         if k == scenario.press_steps {
             patches.push(patch);
         } else if !pressing {
@@ -469,7 +602,6 @@ pub fn run_finger(
             x.push(distance);
             ft.push(row.ft_n);
             fn_n.push(row.fn_n);
-            let at_feature = !feature_reached && feature.is_some_and(|f| distance >= f);
             if at_feature || k == total_steps {
                 feature_reached |= at_feature;
                 patches.push(patch);
@@ -490,7 +622,19 @@ pub fn run_finger(
         step_cuts: 0,
         wall_time_s: started.elapsed().as_secs_f64(),
     };
-    Ok(Simulation3 { history, profile, patches, direction_deg, statistics })
+    let mesh = body.mesh.clone();
+    Ok(Simulation3 {
+        history,
+        profile,
+        patches,
+        direction_deg,
+        statistics,
+        mesh,
+        element_layer: body_layers,
+        driven_nodes: tip.driven_nodes,
+        contact_faces: inside,
+        frames,
+    })
 }
 
 /// A step's aim: the bone's depth below first touch (mm), or the normal
@@ -522,6 +666,25 @@ const CONTACT_RULE: usize = 4;
 const MAX_PIECES: usize = 16;
 /// The Newton iterations a failed attempt counts for in the statistics.
 const MAX_ITERATIONS_COUNTED: usize = 100;
+
+/// A point's contact force and tangent (MPa, MPa/mm; [`PointForce`]) with
+/// a display's attraction at the point's gap `gap_mm` above the flat
+/// display added: F_z = -p_e(g), whose tangent -dF_z/dz = dp_e/dg enters
+/// where [`Electrostatic::in_tangent`] says it matters (the 2D model's
+/// rule; beyond, the force is kept and the point is no unknown of the
+/// step's dense system).
+fn attracted(contact: PointForce, electrostatic: Option<&Electrostatic>, gap_mm: f64) -> PointForce {
+    let Some(e) = electrostatic else {
+        return contact;
+    };
+    let (p, dp) = e.traction(gap_mm);
+    let (mut force, mut tangent) = contact.unwrap_or(([0.0; 3], [[0.0; 3]; 3]));
+    force[2] -= p;
+    if e.in_tangent(gap_mm) {
+        tangent[2][2] += dp;
+    }
+    Some((force, tangent))
+}
 
 /// The predictor of a step that moves the surface from `from` to `to`:
 /// the skin in contact at the last step follows the surface's rise or
