@@ -335,6 +335,8 @@ fn simulate_3d_refuses_what_it_does_not_support() {
         (vec!["--model", "3d", "--direction-deg", "NaN"], "--direction-deg NaN must be a finite angle"),
         (vec!["--model", "3d", "--direction-deg", "400"], "--direction-deg 400 must be a finite angle"),
         (vec!["--direction-deg", "30"], "--direction-deg applies to --model 3d only"),
+        (vec!["--surface", "map:h.csv"], "a height map needs --model 3d"),
+        (vec!["--model", "3d", "--surface", "map:/nonexistent/h.csv"], "/nonexistent/h.csv"),
         (vec!["--model", "4d"], "invalid value '4d'"),
         (vec!["--model", "3d", "--indent", "7"], "indent"),
     ];
@@ -404,4 +406,63 @@ fn simulate_3d_writes_a_vtk_series() {
     }
     // Some contact face carries pressure after the press.
     assert!(array("pressure_MPa").iter().any(|&p| p > 0.0));
+}
+
+/// `--model 3d --surface map:H.csv`: the 3D finger over a height map as
+/// `haptex map height` writes it (here a ridge laid along a path); the
+/// description names the map; a bad cell is refused by file, line and
+/// column.
+#[test]
+fn simulate_3d_slides_over_a_height_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let out = haptex(&[
+        "map",
+        "height",
+        "--template",
+        "bump:1.5,0.2",
+        "--path",
+        "-20,1;20,1",
+        "--size-mm",
+        "26,26",
+        "--origin-mm",
+        "-13,-13",
+        "--pixel-mm",
+        "0.2",
+        "--direction-deg",
+        "90",
+        "-q",
+        "-o",
+        &p("mu.csv"),
+        "--heights-out",
+        &p("h.csv"),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let surface = format!("map:{}", p("h.csv"));
+    let out = haptex(&[
+        "simulate",
+        "--model",
+        "3d",
+        "--mesh",
+        "coarse",
+        "--surface",
+        &surface,
+        "--slide",
+        "2",
+        "--direction-deg",
+        "90",
+        "-o",
+        &p("profile.csv"),
+    ]);
+    let text = stderr(&out);
+    assert!(out.status.success(), "{text}");
+    assert!(text.contains(&format!("height map {}", p("h.csv"))), "{text}");
+    // The ridge along y = 1 mm is met across as the finger slides along y.
+    let profile = haptex_core::FrictionProfile::read_csv_file(std::path::Path::new(&p("profile.csv"))).unwrap();
+    let (lo, hi) = profile.mu().iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &m| (a.min(m), b.max(m)));
+    assert!(hi - lo > 0.02, "Ft/Fn {lo} .. {hi}: the ridge is not felt");
+    std::fs::write(p("bad.csv"), "x_mm,y_mm,h_mm\n0,0,0\n1,0,nan\n0,1,0\n1,1,0\n").unwrap();
+    let out = haptex(&["simulate", "--model", "3d", "--surface", &format!("map:{}", p("bad.csv")), "-q"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("bad.csv: line 3, column 'h_mm'"), "{}", stderr(&out));
 }

@@ -361,8 +361,13 @@ pub fn read_grid_csv<R: std::io::Read>(
     source_name: &str,
     quantity: &ranges::Range,
 ) -> Result<(MapGrid, Vec<f64>), MapError> {
-    let table = crate::io::Table::read(reader, source_name)
-        .map_err(|e| MapError::new(source_name, None, e.to_string().replacen(&format!("{source_name}: "), "", 1)))?;
+    // The table's error names the file first ("F: ..." or "F, line N,
+    // ..."); the map's error names it once.
+    let table = crate::io::Table::read(reader, source_name).map_err(|e| {
+        let text = e.to_string();
+        let rest = text.strip_prefix(source_name).map_or(text.as_str(), |r| r.trim_start_matches([':', ',', ' ']));
+        MapError::new(source_name, None, rest)
+    })?;
     let col = |name: &str| {
         table.column(name).ok_or_else(|| {
             MapError::new(

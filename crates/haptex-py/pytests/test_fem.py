@@ -280,6 +280,24 @@ def test_check_the_combined_display(cli, tmp_path, short):
     assert result.metrics.not_renderable_fraction == 0.0
 
 
+def test_check_on_the_3d_finger_is_the_cli_s(cli, tmp_path, short):
+    """model="3d" runs `haptex check --model 3d`: the same felt friction,
+    the same files, and k as the 3D finger's real area over its force."""
+    out, u = tmp_path / "c.csv", tmp_path / "u.csv"
+    background = Background(cli, [("check", "--profile", short, "--model", "3d", "--mesh", "coarse",
+                                   "--direction-deg", "20", "--fe-k", "--step", "0.1", "-q", "-o", out,
+                                   "--voltage-out", u)])
+    result = haptex.check(str(short), model="3d", mesh="coarse", direction_deg=20.0, fe_k=True, step=0.1,
+                          progress=False)
+    background.wait()
+    check_columns(result, read_csv(out), combined=False)
+    assert result.to_csv() == out.read_text()
+    assert result.design.to_csv() == u.read_text()
+    assert "3D FE finger sliding at 20 degrees" in result.header and "load 0.5 N)" in result.header
+    # The 3D finger's k at 0.5 N: tens of mm^2/N, not the 2D model's 232.
+    assert 20.0 < result.fe_k < 150.0
+
+
 # ---------------------------------------------------------------- progress, cancelling, the GIL
 
 
@@ -452,6 +470,10 @@ def test_refusals_say_what_the_command_line_says(cli, targets, tmp_path):
         {"display": "combined", "fe_k": True},
         {"strategy": "bias"},
         {"a_max_um": 1.0},
+        {"model": "4d"},
+        {"direction_deg": 30.0},
+        {"model": "3d", "direction_deg": float("nan")},
+        {"model": "3d", "direction_deg": 400.0},
         {"profile": (np.array([0.0, 1.0, 2.0]), np.array([0.6, float("nan"), 0.6]))},
         {"profile": (np.array([0.0, 1.0, 2.0]), np.array([0.6, float("inf"), 0.6]))},
         {"progress": 3},

@@ -750,10 +750,16 @@ impl CheckResult {
 ///   coefficient in mm^2/N (default 200); fe_k=True uses the FE finger's
 ///   own, measured on a first run. eps_sc, eps_i, d_sc_mm, d_i_mm: the
 ///   layers (default the paper's Fig. 2).
-/// load: normal load, N per mm of width (default 0.0133), or indent: a
-///   press of bone and nail in mm. velocity (mm/s), step (mm per FE step,
-///   default 0.05), run_up (mm before the profile, 0 to 100), material,
-///   mesh, finger: as haptex.simulate.
+/// load: normal load, N per mm of width (default 0.0133; with model="3d"
+///   in N, default 0.5), or indent: a press of bone and nail in mm.
+///   velocity (mm/s), step (mm per FE step, default 0.05), run_up (mm
+///   before the profile, 0 to 100), material, mesh, finger: as
+///   haptex.simulate.
+/// model: "2d" (the plane-strain finger) or "3d" (the 3D fingertip: eq.
+///   (3)'s attraction on its real contact area, k reported and, with
+///   fe_k, used as a real area over the normal force); direction_deg:
+///   with "3d", the slide's direction from the display's x axis (default
+///   0, across the finger).
 /// compensate=True: correct the voltage run by run, at most max_runs FE
 ///   runs (1 to 100), until the RMS error is below tolerance (in mu).
 /// display: "electrovibration" (eq. 8) or "combined" (voltage and
@@ -779,9 +785,10 @@ impl CheckResult {
     d_sc_mm = None, d_i_mm = None, load = None, indent = None, velocity = 20.0, step = 0.05, run_up = 1.0,
     material = "viscoelastic", mesh = "default", finger = None, compensate = false, max_runs = 8,
     tolerance = 1e-4, display = "electrovibration", strategy = None, weight = None,
-    ultrasonic_calibration = None, a_max_um = None, device = None, carrier = None, carrier_hz = None, progress = None
+    ultrasonic_calibration = None, a_max_um = None, device = None, carrier = None, carrier_hz = None, progress = None,
+    model = "2d", direction_deg = None
 ),
-    text_signature = "(profile, *, mu_hd=None, u_max=None, k_mm2_per_n=None, fe_k=False, eps_sc=None, eps_i=None, d_sc_mm=None, d_i_mm=None, load=None, indent=None, velocity=20.0, step=0.05, run_up=1.0, material=\"viscoelastic\", mesh=\"default\", finger=None, compensate=False, max_runs=8, tolerance=0.0001, display=\"electrovibration\", strategy=None, weight=None, ultrasonic_calibration=None, a_max_um=None, device=None, carrier=None, carrier_hz=None, progress=True)"
+    text_signature = "(profile, *, mu_hd=None, u_max=None, k_mm2_per_n=None, fe_k=False, eps_sc=None, eps_i=None, d_sc_mm=None, d_i_mm=None, load=None, indent=None, velocity=20.0, step=0.05, run_up=1.0, material=\"viscoelastic\", mesh=\"default\", finger=None, compensate=False, max_runs=8, tolerance=0.0001, display=\"electrovibration\", strategy=None, weight=None, ultrasonic_calibration=None, a_max_um=None, device=None, carrier=None, carrier_hz=None, progress=True, model=\"2d\", direction_deg=None)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub fn check(
@@ -815,7 +822,24 @@ pub fn check(
     carrier: Option<&str>,
     carrier_hz: Option<f64>,
     progress: Option<&Bound<'_, PyAny>>,
+    model: &str,
+    direction_deg: Option<f64>,
 ) -> PyResult<CheckResult> {
+    let fe_finger = match (model, direction_deg) {
+        ("2d", None) => render::FeFinger::Plane,
+        ("2d", Some(_)) => return Err(input("direction_deg is for model=\"3d\" (the 2D finger slides along x)")),
+        ("3d", direction) => {
+            let direction_deg = direction.unwrap_or(0.0);
+            if !(direction_deg.is_finite() && direction_deg.abs() <= 360.0) {
+                return Err(input(format!(
+                    "direction_deg {} must be a finite angle from -360 to 360 degrees",
+                    Num(direction_deg)
+                )));
+            }
+            render::FeFinger::Solid { direction_deg }
+        }
+        (other, _) => return Err(input(format!("model must be \"2d\" or \"3d\", got {other:?}"))),
+    };
     let name = match profile.extract::<PathBuf>() {
         Ok(path) => path_text(&path),
         _ if profile.cast::<Profile>().is_ok() => "a haptex.Profile".to_string(),
@@ -867,7 +891,10 @@ pub fn check(
         _ => Vec::new(),
     };
     let load = load.map(|l| positive("load", l)).transpose()?;
-    let mut settings = RenderSettings::new(device.mu_hd, load.unwrap_or(DEFAULT_LOAD_N_PER_MM));
+    let default_load =
+        if fe_finger == render::FeFinger::Plane { DEFAULT_LOAD_N_PER_MM } else { render::DEFAULT_LOAD_3D_N };
+    let mut settings = RenderSettings::new(device.mu_hd, load.unwrap_or(default_load));
+    settings.finger = fe_finger;
     settings.device = device;
     settings.device.validate().or_raise()?;
     let scenario = &mut settings.scenario;

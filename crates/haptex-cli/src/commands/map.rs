@@ -41,6 +41,7 @@ enum MapCommand {
 }
 
 mod height;
+pub(crate) use height::read_height_map;
 
 /// A map (friction, voltage or heights, .csv or .npy) as a 16- or 8-bit
 /// grayscale PNG: its lowest value black, its highest white (or

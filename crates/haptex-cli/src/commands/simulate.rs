@@ -43,9 +43,12 @@ use crate::args::{
                   haptex simulate --surface file:heights.csv --history history.csv --vtk vtk/"
 )]
 pub struct SimulateArgs {
-    /// Surface: flat, bump, edge, sine, file:H.csv (columns x_mm,h_mm), or
+    /// Surface: flat, bump, edge, sine, file:H.csv (columns x_mm,h_mm),
     /// display: a flat electrovibration display under the voltage of
-    /// --voltage or --constant-voltage at the finger's position.
+    /// --voltage or --constant-voltage at the finger's position, or with
+    /// --model 3d map:H.csv|H.npy, a height map h(x, y) as `haptex map
+    /// height` reads it (the finger starts over its (0, 0); beyond the map
+    /// its edge's heights continue).
     #[arg(long, value_name = "SURFACE")]
     surface: String,
     /// With --surface display: the voltage profile U(x) (CSV with x_mm and
@@ -155,9 +158,20 @@ fn parse_surface(args: &SimulateArgs) -> anyhow::Result<SurfaceShape> {
         "bump" => SurfaceShape::Bump { x0, width, height },
         "edge" => SurfaceShape::Edge { x0, width, height },
         "sine" => SurfaceShape::Sine { x0, width, height },
+        other if other.starts_with("map:") => {
+            if args.model != ModelArg::ThreeD {
+                anyhow::bail!(
+                    "--surface {other}: a height map needs --model 3d (the 2D finger's friction map of a height map \
+                     is `haptex map height`)"
+                );
+            }
+            SurfaceShape::Flat
+        }
         other => match other.strip_prefix("file:") {
             Some(path) => SurfaceShape::read_csv(std::path::Path::new(path))?,
-            None => anyhow::bail!("--surface must be flat, bump, edge, sine, display or file:H.csv, got '{other}'"),
+            None => anyhow::bail!(
+                "--surface must be flat, bump, edge, sine, display, file:H.csv or (3D) map:H.csv, got '{other}'"
+            ),
         },
     })
 }
@@ -305,12 +319,20 @@ fn run_3d(args: &SimulateArgs, mut scenario: Scenario) -> anyhow::Result<()> {
         scenario.frame_every = args.vtk_every.unwrap_or((slide_steps / 25).max(1)).max(1);
         scenario.validate()?;
     }
+    let map = match args.surface.strip_prefix("map:") {
+        Some(path) => Some(crate::commands::map::read_height_map(std::path::Path::new(path))?),
+        None => None,
+    };
     let steps = scenario.press_steps + slide_steps;
     let bar = progress_bar(args.quiet, steps);
-    let result = haptex_fem::solid3d::slide::run(&scenario, direction, &mut |p| {
+    let mut report = |p: scenario::Progress| {
         bar.set_position(p.step as u64);
         bar.set_message(format!("t = {:.3} s, travelled {:.2} mm", p.t_s, p.slide_mm));
-    });
+    };
+    let result = match &map {
+        Some(map) => haptex_fem::solid3d::slide::run_on_map(&scenario, map, direction, &mut report),
+        None => haptex_fem::solid3d::slide::run(&scenario, direction, &mut report),
+    };
     bar.finish_and_clear();
     let result = result.context("simulation failed")?;
     let description = format!("{}; direction {} degrees", describe(args, &scenario), Num(direction));
@@ -366,5 +388,9 @@ fn describe(args: &SimulateArgs, scenario: &Scenario) -> String {
         _ => None,
     };
     let unit = if args.model == ModelArg::ThreeD { "N" } else { "N/mm" };
-    output::describe_with_load_unit(scenario, &output::surface_text(&scenario.surface, source, &args.surface), unit)
+    let surface = match args.surface.strip_prefix("map:") {
+        Some(path) => format!("height map {path}"),
+        None => output::surface_text(&scenario.surface, source, &args.surface),
+    };
+    output::describe_with_load_unit(scenario, &surface, unit)
 }

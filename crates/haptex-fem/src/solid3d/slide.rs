@@ -41,6 +41,7 @@
 
 use std::time::Instant;
 
+use haptex_core::height::HeightMap;
 use haptex_core::profile::FrictionProfile;
 use serde::Serialize;
 
@@ -50,7 +51,7 @@ use super::contact::ContactSurface;
 use super::fingertip::{self, FingertipSpec};
 use super::friction::{Committed, FrictionLaw};
 use super::hex8::Formulation;
-use super::surface::HeightField;
+use super::surface::{HeightField, MapSurface};
 use crate::contact::Electrostatic;
 use crate::material::Material;
 use crate::scenario::{Kinematics, Loading, Progress, Scenario, SimulationError, Statistics};
@@ -231,11 +232,40 @@ pub fn run(
     run_finger(tip.into(), scenario, direction_deg, progress)
 }
 
+/// [`run`] over a height map h(x, y) (`haptex map height`'s;
+/// [`MapSurface`]) instead of the scenario's surface, which must be flat.
+/// The map's coordinates are the surface frame's: the finger starts with
+/// its pad's lowest point over the map's (0, 0) and moves by
+/// `scenario.slide_mm` in `direction_deg`. Beyond the map its edge's
+/// heights continue.
+pub fn run_on_map(
+    scenario: &Scenario,
+    map: &HeightMap,
+    direction_deg: f64,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Simulation3, SimulationError> {
+    scenario.validate()?;
+    let spec = FingertipSpec::from_model(&scenario.model, scenario.resolution);
+    let tip = fingertip::mesh(&spec)?;
+    run_finger_on(tip.into(), scenario, Some(map), direction_deg, progress)
+}
+
 /// [`run`] on the 3D finger `tip` (the scenario's finger model gives the
 /// materials and the friction; its resolution is not used).
 pub fn run_finger(
     tip: Finger3,
     scenario: &Scenario,
+    direction_deg: f64,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Simulation3, SimulationError> {
+    run_finger_on(tip, scenario, None, direction_deg, progress)
+}
+
+/// [`run_finger`], over the height map `map` if given ([`run_on_map`]).
+pub fn run_finger_on(
+    tip: Finger3,
+    scenario: &Scenario,
+    map: Option<&HeightMap>,
     direction_deg: f64,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Simulation3, SimulationError> {
@@ -267,17 +297,26 @@ pub fn run_finger(
     // the contact's: with 2 x 2 points the 4 x 4 ones started up to 2 um
     // inside the surface at the default mesh.)
     let skin = ContactSurface::with_rule(&tip.mesh, &tip.skin_faces, CONTACT_RULE);
-    let (x_lo, x_hi) = skin
-        .points
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.position[0]), b.max(p.position[0])));
-    let (x_min, x_max) = (x_lo + travel[0].min(0.0) - 1.0, x_hi + travel[0].max(0.0) + 1.0);
-    let field =
-        HeightField::extruded(&scenario.surface, x_min, x_max).map_err(|e| SimulationError::Invalid(e.to_string()))?;
-    let relief = match &field {
-        HeightField::Flat => 0.0,
-        HeightField::Extruded(profile) => profile.max_height(x_min, x_max) - profile.min_height(x_min, x_max),
+    let (lo, hi) = skin.points.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
+        ([lo[0].min(p.position[0]), lo[1].min(p.position[1])], [hi[0].max(p.position[0]), hi[1].max(p.position[1])])
+    });
+    let (x_min, x_max) = (lo[0] + travel[0].min(0.0) - 1.0, hi[0] + travel[0].max(0.0) + 1.0);
+    let (y_min, y_max) = (lo[1] + travel[1].min(0.0) - 1.0, hi[1] + travel[1].max(0.0) + 1.0);
+    let field = match map {
+        Some(map) => {
+            if scenario.surface != SurfaceShape::Flat {
+                return invalid("a height map is the surface: the scenario's surface must be flat");
+            }
+            // Its fields are public: checked again (grid, count, heights).
+            let map = HeightMap::new(map.grid, map.h_mm.clone(), "the height map")
+                .map_err(|e| SimulationError::Invalid(e.to_string()))?;
+            HeightField::Map(Box::new(MapSurface::new(&map)))
+        }
+        None => HeightField::extruded(&scenario.surface, x_min, x_max)
+            .map_err(|e| SimulationError::Invalid(e.to_string()))?,
     };
+    let (low, high) = field.height_range([x_min, x_max], [y_min, y_max]);
+    let relief = high - low;
     // The surface just touches the undeformed skin.
     let lift = skin
         .points

@@ -423,6 +423,8 @@ def check(
     carrier: Optional[str] = None,
     carrier_hz: Optional[float] = None,
     progress: _Progress = True,
+    model: str = "2d",
+    direction_deg: Optional[float] = None,
 ) -> CheckResult: ...
 def compensate(
     profile: Union["Profile", _Path, Tuple[_ArrayLike, _ArrayLike]],

@@ -273,7 +273,7 @@ fn is_png(path: &std::path::Path) -> bool {
 }
 
 /// A height map from .csv or .npy (with its sidecar).
-pub(super) fn read_height_map(path: &std::path::Path) -> anyhow::Result<HeightMap> {
+pub(crate) fn read_height_map(path: &std::path::Path) -> anyhow::Result<HeightMap> {
     let name = path.display().to_string();
     Ok(match MapFormat::of(path)? {
         MapFormat::Csv => {
