@@ -232,3 +232,76 @@ fn png_height_input_is_checked() {
     ];
     assert_refused(&p("out.csv"), cases);
 }
+
+/// `--model 3d` (issue 39): the 3D fingertip over the whole height map,
+/// runs every --line-spacing-mm across the direction and the rows between
+/// interpolated. A ridge along y met across (0 degrees) is the same for
+/// every row, so every row of the map is the same to rounding, and each is
+/// what `haptex simulate --model 3d` gives over the analytic bump placed
+/// where the row's ridge is (an independent surface: the template, not
+/// the map's spline; measured within 3.1e-5 in Ft/Fn, tolerance 1e-3).
+/// 3D-only flags are refused in 2D.
+#[test]
+fn a_ridge_mapped_by_the_3d_finger_is_the_simulated_bump() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let ridge = ["--template", "bump:1.5,0.2", "--path", "0,-20;0,20", "--size-mm", "8,3", "--origin-mm", "-4,-1.5"];
+    let m3 = p("m3.csv");
+    let mut three = vec!["map", "height", "--pixel-mm", "0.1", "--direction-deg", "0", "-q"];
+    three.extend(ridge);
+    three.extend(["--model", "3d", "--mesh", "coarse", "--line-spacing-mm", "1", "-o", &m3]);
+    run_ok(&three);
+    let [x, mu3] = <[Vec<f64>; 2]>::try_from(columns(&m3, &["x_mm", "mu"])).unwrap();
+    assert_eq!(mu3.len(), 81 * 31);
+    // Row by row the same (rows at y = -1.5 .. 1.5, 81 points each).
+    for row in mu3.chunks_exact(81).skip(1) {
+        for (a, b) in row.iter().zip(&mu3[..81]) {
+            assert!((a - b).abs() < 1e-9, "{a} vs {b}");
+        }
+    }
+    // The row's finger starts 3 mm (the lead-in) before x = -4: the ridge
+    // at x = 0 is 7 mm from its start, the row's end 11 mm.
+    let profile = p("bump.csv");
+    run_ok(&[
+        "simulate",
+        "--model",
+        "3d",
+        "--mesh",
+        "coarse",
+        "--surface",
+        "bump",
+        "--x0",
+        "7",
+        "--width",
+        "1.5",
+        "--height",
+        "0.2",
+        "--slide",
+        "11",
+        "--step",
+        "0.1",
+        "-q",
+        "-o",
+        &profile,
+    ]);
+    let [px, pmu] = <[Vec<f64>; 2]>::try_from(columns(&profile, &["x_mm", "mu"])).unwrap();
+    let mut worst = 0.0f64;
+    for (xi, m) in x[..81].iter().zip(&mu3[..81]) {
+        worst = worst.max((at(&px, &pmu, xi + 7.0) - m).abs());
+    }
+    let range =
+        mu3.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - mu3.iter().cloned().fold(f64::INFINITY, f64::min);
+    eprintln!("Ft/Fn range {range:.4}; largest difference from the simulated bump {worst:.2e}");
+    assert!(range > 0.05, "the ridge is not felt: {range}");
+    assert!(worst < 1e-3, "{worst}");
+
+    let out = p("refused.csv");
+    assert_refused(
+        &out,
+        vec![
+            ([&["--pixel-mm", "0.1"][..], &ridge, &["--mesh", "coarse"]].concat(), "--mesh is for --model 3d"),
+            ([&["--pixel-mm", "0.1"][..], &ridge, &["--line-spacing-mm", "1"]].concat(), "--line-spacing-mm is for"),
+            ([&["--pixel-mm", "0.1"][..], &ridge, &["--model", "3d", "--line-spacing-mm", "0"]].concat(), "0"),
+        ],
+    );
+}

@@ -60,7 +60,7 @@ fn any_accepted_map_is_a_finite_surface() {
                     prop_assert!((h - map.h_mm[j * nx + i]).abs() <= 1e-9 * scale, "sample ({i}, {j}): {h}");
                 }
             }
-            let field = HeightField::Map(Box::new(surface.clone()));
+            let field = HeightField::Map { surface: std::sync::Arc::new(surface.clone()), origin_mm: [0.0; 2] };
             for (x, y, z) in queries {
                 let (h, g, hessian) = surface.derivatives(x, y);
                 prop_assert!(h.is_finite() && g.iter().all(|v| v.is_finite()), "({x}, {y}): {h} {g:?}");
@@ -68,6 +68,9 @@ fn any_accepted_map_is_a_finite_surface() {
                 if x.is_finite() && y.is_finite() {
                     let at = field.at([x, y, z]);
                     prop_assert!(at.depth.is_finite() && at.normal.iter().all(|v| v.is_finite()));
+                    // The bounds hold the spline.
+                    let (lo, hi) = surface.bounds([x - 1.0, x + 1.0], [y - 1.0, y + 1.0]);
+                    prop_assert!(lo <= h + 1e-9 * scale && h <= hi + 1e-9 * scale, "{lo} <= {h} <= {hi}");
                 }
             }
             Ok(())

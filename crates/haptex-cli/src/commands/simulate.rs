@@ -293,7 +293,7 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
 
 /// The 3D finger's default indentation (mm): about 0.4 N on the shipped
 /// finger, within screen exploration's 0.1-1 N (docs/fem.md).
-const DEFAULT_INDENT_3D_MM: f64 = 0.5;
+pub const DEFAULT_INDENT_3D_MM: f64 = 0.5;
 
 fn progress_bar(quiet: bool, steps: usize) -> ProgressBar {
     if quiet {

@@ -41,6 +41,8 @@
 
 use std::time::Instant;
 
+use std::sync::Arc;
+
 use haptex_core::height::HeightMap;
 use haptex_core::profile::FrictionProfile;
 use serde::Serialize;
@@ -244,10 +246,29 @@ pub fn run_on_map(
     direction_deg: f64,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Simulation3, SimulationError> {
+    // Its fields are public: checked again (grid, count, heights).
+    let map = HeightMap::new(map.grid, map.h_mm.clone(), "the height map")
+        .map_err(|e| SimulationError::Invalid(e.to_string()))?;
+    run_on_surface(scenario, Arc::new(MapSurface::new(&map)), [0.0; 2], direction_deg, progress)
+}
+
+/// [`run_on_map`] on a map's surface built once (for many runs), the
+/// finger starting over the map's point `start_mm`.
+pub fn run_on_surface(
+    scenario: &Scenario,
+    surface: Arc<MapSurface>,
+    start_mm: [f64; 2],
+    direction_deg: f64,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Simulation3, SimulationError> {
     scenario.validate()?;
+    if !start_mm.iter().all(|v| v.is_finite()) {
+        return Err(SimulationError::Invalid(format!("the start {start_mm:?} mm must be finite")));
+    }
     let spec = FingertipSpec::from_model(&scenario.model, scenario.resolution);
     let tip = fingertip::mesh(&spec)?;
-    run_finger_on(tip.into(), scenario, Some(map), direction_deg, progress)
+    let field = HeightField::Map { surface, origin_mm: start_mm };
+    run_finger_on(tip.into(), scenario, Some(field), direction_deg, progress)
 }
 
 /// [`run`] on the 3D finger `tip` (the scenario's finger model gives the
@@ -261,11 +282,12 @@ pub fn run_finger(
     run_finger_on(tip, scenario, None, direction_deg, progress)
 }
 
-/// [`run_finger`], over the height map `map` if given ([`run_on_map`]).
-pub fn run_finger_on(
+/// [`run_finger`], over the height map's field `map` if given
+/// ([`run_on_surface`]; the scenario's surface must then be flat).
+fn run_finger_on(
     tip: Finger3,
     scenario: &Scenario,
-    map: Option<&HeightMap>,
+    map: Option<HeightField>,
     direction_deg: f64,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Simulation3, SimulationError> {
@@ -307,10 +329,7 @@ pub fn run_finger_on(
             if scenario.surface != SurfaceShape::Flat {
                 return invalid("a height map is the surface: the scenario's surface must be flat");
             }
-            // Its fields are public: checked again (grid, count, heights).
-            let map = HeightMap::new(map.grid, map.h_mm.clone(), "the height map")
-                .map_err(|e| SimulationError::Invalid(e.to_string()))?;
-            HeightField::Map(Box::new(MapSurface::new(&map)))
+            map
         }
         None => HeightField::extruded(&scenario.surface, x_min, x_max)
             .map_err(|e| SimulationError::Invalid(e.to_string()))?,

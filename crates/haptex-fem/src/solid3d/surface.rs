@@ -14,6 +14,8 @@
 //! contact law uses; the curvature's term is left out, as the 2D model
 //! leaves it out after a stall).
 
+use std::sync::Arc;
+
 use haptex_core::height::HeightMap;
 
 use crate::surface::{RigidSurface, SurfaceError, SurfaceShape};
@@ -27,8 +29,9 @@ pub enum HeightField {
     /// every y: the 2D model's surfaces, their ridges along y.
     Extruded(Box<RigidSurface>),
     /// A height map h(x, y) (`haptex map height`'s), as a C2 surface
-    /// ([`MapSurface`]).
-    Map(Box<MapSurface>),
+    /// ([`MapSurface`]), shared (one surface for many runs), with the
+    /// surface frame's origin at the map's point `origin_mm`.
+    Map { surface: Arc<MapSurface>, origin_mm: [f64; 2] },
 }
 
 impl HeightField {
@@ -55,19 +58,20 @@ impl HeightField {
                 let [h, slope, curvature] = profile.height_derivatives(x);
                 (h, [slope, 0.0], [[curvature, 0.0], [0.0, 0.0]])
             }
-            Self::Map(map) => map.derivatives(x, y),
+            Self::Map { surface, origin_mm } => surface.derivatives(x + origin_mm[0], y + origin_mm[1]),
         }
     }
 
     /// The lowest and highest heights over the rectangle [x0, x1] x [y0,
-    /// y1] (for the extruded profiles, over [x0, x1]; for a map, of its
-    /// samples there and one cell around, which bound the spline's to
-    /// within its overshoot).
+    /// y1] (for the extruded profiles, over [x0, x1]; for a map, bounds
+    /// of the spline's there, [`MapSurface::bounds`]).
     pub fn height_range(&self, x: [f64; 2], y: [f64; 2]) -> (f64, f64) {
         match self {
             Self::Flat => (0.0, 0.0),
             Self::Extruded(profile) => (profile.min_height(x[0], x[1]), profile.max_height(x[0], x[1])),
-            Self::Map(map) => map.sample_range(x, y),
+            Self::Map { surface, origin_mm } => {
+                surface.bounds([x[0] + origin_mm[0], x[1] + origin_mm[0]], [y[0] + origin_mm[1], y[1] + origin_mm[1]])
+            }
         }
     }
 
@@ -117,8 +121,6 @@ pub struct MapSurface {
     nx: usize,
     ny: usize,
     coefficients: Vec<f64>,
-    /// The map's own samples, for [`MapSurface::sample_range`].
-    samples: HeightMap,
 }
 
 impl MapSurface {
@@ -153,22 +155,13 @@ impl MapSurface {
                 c[j * nx + i] = *v;
             }
         }
-        Self {
-            x0_mm: g.x0_mm,
-            y0_mm: g.y0_mm,
-            dx_mm: g.dx_mm,
-            dy_mm: g.dy_mm,
-            nx,
-            ny,
-            coefficients: c,
-            samples: map.clone(),
-        }
+        Self { x0_mm: g.x0_mm, y0_mm: g.y0_mm, dx_mm: g.dx_mm, dy_mm: g.dy_mm, nx, ny, coefficients: c }
     }
 
     /// h, its gradient and its Hessian at (x, y).
     pub fn derivatives(&self, x: f64, y: f64) -> (f64, [f64; 2], [[f64; 2]; 2]) {
         // Position in the padded grid's index, held within the cells whose
-        // four coefficients exist (two cells beyond the map).
+        // four coefficients exist (five cells beyond the map).
         let place = |v: f64, v0: f64, d: f64, n: usize| -> (usize, f64, bool) {
             let u = (v - v0) / d + Self::PAD as f64;
             let (lo, hi) = (1.0, (n - 2) as f64);
@@ -211,22 +204,25 @@ impl MapSurface {
         (h, g, hessian)
     }
 
-    /// The lowest and highest sample of the map within [x0, x1] x [y0, y1]
-    /// and one cell around it (the edge's samples where the rectangle
-    /// leaves the map).
-    pub fn sample_range(&self, x: [f64; 2], y: [f64; 2]) -> (f64, f64) {
-        let g = &self.samples.grid;
+    /// Bounds of the spline over [x0, x1] x [y0, y1]: the least and
+    /// largest coefficient whose basis reaches the rectangle (the spline
+    /// is a convex combination of its coefficients, its B-spline weights
+    /// being non-negative and summing to 1). Beyond the map, where the
+    /// spline is held, those of the held cells.
+    pub fn bounds(&self, x: [f64; 2], y: [f64; 2]) -> (f64, f64) {
         let index = |v: f64, v0: f64, d: f64, n: usize| -> usize {
-            let u = ((v - v0) / d).clamp(0.0, (n - 1) as f64);
-            if u.is_nan() { 0 } else { u as usize }
+            let u = ((v - v0) / d + Self::PAD as f64).clamp(1.0, (n - 2) as f64);
+            if u.is_nan() { 1 } else { u as usize }
         };
-        let (i0, i1) = (index(x[0], g.x0_mm, g.dx_mm, g.nx).saturating_sub(1), index(x[1], g.x0_mm, g.dx_mm, g.nx) + 1);
-        let (j0, j1) = (index(y[0], g.y0_mm, g.dy_mm, g.ny).saturating_sub(1), index(y[1], g.y0_mm, g.dy_mm, g.ny) + 1);
+        let (i0, i1) =
+            (index(x[0], self.x0_mm, self.dx_mm, self.nx) - 1, index(x[1], self.x0_mm, self.dx_mm, self.nx) + 2);
+        let (j0, j1) =
+            (index(y[0], self.y0_mm, self.dy_mm, self.ny) - 1, index(y[1], self.y0_mm, self.dy_mm, self.ny) + 2);
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for j in j0..=j1.min(g.ny - 1) {
-            for &h in &self.samples.h_mm[j * g.nx + i0..=j * g.nx + i1.min(g.nx - 1)] {
-                lo = lo.min(h);
-                hi = hi.max(h);
+        for j in j0..=j1.min(self.ny - 1) {
+            for &c in &self.coefficients[j * self.nx + i0..=j * self.nx + i1.min(self.nx - 1)] {
+                lo = lo.min(c);
+                hi = hi.max(c);
             }
         }
         (lo, hi)
@@ -393,7 +389,7 @@ mod tests {
         let bump = SurfaceShape::Bump { x0: 0.5, width: 1.5, height: 0.3 };
         let profile = RigidSurface::new(&bump, -6.0, 6.0).unwrap();
         let map = map_of(81, 41, 0.1, [-4.0, -2.0], |x, y| profile.height(x) * (1.0 - 0.05 * y));
-        let field = HeightField::Map(Box::new(MapSurface::new(&map)));
+        let field = HeightField::Map { surface: Arc::new(MapSurface::new(&map)), origin_mm: [0.0; 2] };
         for q in [[0.0, 1.0, 0.2], [0.93, -1.37, 0.1], [1.4, 0.0, -0.05], [-3.87, 1.91, 0.0]] {
             let at = field.at(q);
             for j in 0..3 {

@@ -14,7 +14,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use super::{MapFormat, min_max, parse_pair, report_map, sized_grid, write_friction_map};
-use crate::args::positive;
+use crate::args::{MeshArg, ModelArg, positive};
 
 /// Lead-in before each line, mm: the finger is pressed this far before the
 /// line's first point (on the first point's height) so that the press's
@@ -40,6 +40,14 @@ pub const LEAD_IN_MM: f64 = 3.0;
 /// along a path (--template with --path and --size-mm): a ridge (bump), a
 /// step (edge, up on the left of the path) or grooves (sine) following a
 /// polyline.
+///
+/// With --model 3d the lines are run by the 3D fingertip over the whole
+/// surface h(x, y) (its interpolating bicubic spline, docs/fem.md): each
+/// run is pressed 0.5 mm deep, LEAD_IN before its line, and slid along it, its
+/// contact patch seeing the heights beside the line too; runs are made
+/// every --line-spacing-mm across the direction and the lines between
+/// interpolated. A 3D run takes seconds (coarse mesh) to about a minute
+/// (default) per 10 mm.
 #[derive(Debug, Args)]
 #[command(
     allow_negative_numbers = true,
@@ -97,10 +105,26 @@ pub(super) struct HeightArgs {
     /// Output friction map (.csv or .npy with its sidecar).
     #[arg(short, long, value_name = "OUT")]
     output: PathBuf,
+    /// The FE finger: 2d (each line a 2D run over its own height profile)
+    /// or 3d (the 3D fingertip over the whole height map).
+    #[arg(long, value_enum, default_value_t = ModelArg::TwoD)]
+    model: ModelArg,
+    /// With --model 3d: the distance between 3D runs across the sliding
+    /// direction, mm (default 0.5; the lines between are interpolated).
+    #[arg(long, value_parser = positive)]
+    line_spacing_mm: Option<f64>,
+    /// With --model 3d: the 3D mesh resolution.
+    #[arg(long, value_enum)]
+    mesh: Option<MeshArg>,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
 }
+
+/// The default distance between 3D runs across the sliding direction, mm:
+/// a tenth of the 3D finger's contact width at its default press (about
+/// 5 mm), over which its friction varies little.
+pub const LINE_SPACING_3D_MM: f64 = 0.5;
 
 pub(super) fn run(a: HeightArgs) -> anyhow::Result<()> {
     let format = MapFormat::of(&a.output)?;
@@ -144,14 +168,168 @@ pub(super) fn run(a: HeightArgs) -> anyhow::Result<()> {
     };
     let lines = SlidingLines::new(&heights.grid, a.direction_deg)?;
     let jobs = a.jobs.map_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()), |j| j as usize);
+    if a.model == ModelArg::TwoD {
+        for (given, flag) in [(a.line_spacing_mm.is_some(), "--line-spacing-mm"), (a.mesh.is_some(), "--mesh")] {
+            if given {
+                bail!("{flag} is for --model 3d (the 2D lines are run one per map row, on the default 2D mesh)");
+            }
+        }
+    }
+    let map = if a.model == ModelArg::ThreeD {
+        friction_3d(&a, &heights, &lines, jobs)?
+    } else {
+        friction_2d(&a, &heights, &lines, jobs)?
+    };
 
+    if let (Some(path), Some(f)) = (&a.heights_out, heights_format) {
+        write_heights(&heights, path, f)?;
+    }
+    write_friction_map(&map, &a.output, format)?;
+    report_map(&map);
+    let (lo, hi) = min_max(&heights.h_mm);
+    eprintln!(
+        "heights {lo:.4} .. {hi:.4} mm; sliding at {} degrees, {} mm/s; each line pressed {} mm before the map{}",
+        Num(a.direction_deg),
+        Num(a.velocity),
+        Num(LEAD_IN_MM),
+        if a.model == ModelArg::ThreeD { " by the 3D finger" } else { "" }
+    );
+    if let Some(path) = &a.heights_out {
+        eprintln!("wrote {}", path.display());
+    }
+    eprintln!("wrote {}", a.output.display());
+    Ok(())
+}
+
+fn progress_bar(quiet: bool, runs: usize, label: &str) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(runs as u64);
+    bar.set_style(
+        ProgressStyle::with_template(&format!(
+            "{{spinner}} {label} [{{bar:30}}] {{pos}}/{{len}} ({{elapsed}}, eta {{eta}})"
+        ))
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    bar
+}
+
+/// The friction map from the 3D finger: runs along every few lines (every
+/// --line-spacing-mm across the direction, and the last), each over the
+/// whole surface, the lines between interpolated linearly across.
+fn friction_3d(
+    a: &HeightArgs,
+    heights: &HeightMap,
+    lines: &SlidingLines,
+    jobs: usize,
+) -> anyhow::Result<haptex_core::map::FrictionMap> {
+    use haptex_fem::solid3d::surface::MapSurface;
+    let spacing = a.line_spacing_mm.unwrap_or(LINE_SPACING_3D_MM);
+    let count = lines.count();
+    let every = ((spacing / lines.grid.dy_mm).round() as usize).clamp(1, count);
+    let mut runs: Vec<usize> = (0..count).step_by(every).collect();
+    if runs.last() != Some(&(count - 1)) {
+        runs.push(count - 1);
+    }
+    let resolution = a.mesh.unwrap_or(MeshArg::Default).resolution();
+    let surface = std::sync::Arc::new(MapSurface::new(heights));
+    if !a.quiet {
+        let g = &lines.grid;
+        eprintln!(
+            "haptex map height --model 3d: {} lines of {} mm at {} degrees; 3D runs on {} of them (every {} mm), {jobs} \
+             at a time",
+            count,
+            Num(g.dx_mm * (g.nx - 1) as f64),
+            Num(a.direction_deg),
+            runs.len(),
+            Num(every as f64 * g.dy_mm)
+        );
+    }
+    let bar = progress_bar(a.quiet, runs.len(), "3D lines");
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build().context("starting the FE workers")?;
+    let results = pool.install(|| {
+        runs.par_iter()
+            .map(|&k| {
+                let mu = line_friction_3d(lines, &surface, k, a.velocity, resolution).with_context(|| {
+                    format!("line {} of {count} (r = {} mm across the sliding direction)", k + 1, Num(lines.grid.y(k)))
+                })?;
+                bar.inc(1);
+                Ok(mu)
+            })
+            .collect::<anyhow::Result<Vec<Vec<f64>>>>()
+    });
+    bar.finish_and_clear();
+    let results = results?;
+    // Every line: a run's, or interpolated between the runs on each side.
+    let nx = lines.grid.nx;
+    let mut mu_lines = Vec::with_capacity(lines.grid.len());
+    let mut next = 0;
+    for k in 0..count {
+        while runs[next] < k {
+            next += 1;
+        }
+        if runs[next] == k {
+            mu_lines.extend_from_slice(&results[next]);
+        } else {
+            let (k0, k1) = (runs[next - 1], runs[next]);
+            let w = (k - k0) as f64 / (k1 - k0) as f64;
+            mu_lines.extend((0..nx).map(|i| (1.0 - w) * results[next - 1][i] + w * results[next][i]));
+        }
+    }
+    Ok(lines.assemble(&heights.grid, &mu_lines, "the height map's friction")?)
+}
+
+/// The 3D finger's friction (Ft/Fn) along line `k` of `lines` at its
+/// points: the fingertip pressed 0.5 mm deep, [`LEAD_IN_MM`] before the line's
+/// start, then slid along it over the whole surface at `velocity` mm/s in
+/// steps of at most 0.1 mm and at most the line's spacing.
+pub fn line_friction_3d(
+    lines: &SlidingLines,
+    surface: &std::sync::Arc<haptex_fem::solid3d::surface::MapSurface>,
+    k: usize,
+    velocity: f64,
+    resolution: haptex_fem::finger::Resolution,
+) -> anyhow::Result<Vec<f64>> {
+    use haptex_fem::scenario::{Loading, Scenario};
+    use haptex_fem::surface::SurfaceShape;
+    let g = &lines.grid;
+    let r = g.y(k);
+    let (s0, s1) = (g.x(0), g.x(g.nx - 1));
+    let start = lines.to_map_frame(s0 - LEAD_IN_MM, r);
+    let mut scenario = Scenario::paper(SurfaceShape::Flat);
+    scenario.resolution = resolution;
+    scenario.loading = Loading::Indent(crate::commands::simulate::DEFAULT_INDENT_3D_MM);
+    scenario.slide_mm = s1 - s0 + LEAD_IN_MM;
+    scenario.velocity_mm_s = velocity;
+    scenario.step_mm = scenario.step_mm.min(g.dx_mm);
+    let result = haptex_fem::solid3d::slide::run_on_surface(
+        &scenario,
+        surface.clone(),
+        [start.0, start.1],
+        lines.angle_deg,
+        &mut |_| {},
+    )?;
+    let profile = result.profile.context("the FE run gave no profile")?;
+    let (px, pmu) = (profile.x_mm(), profile.mu());
+    Ok((0..g.nx).map(|i| haptex_core::profile::interpolate(px, pmu, g.x(i) - s0 + LEAD_IN_MM)).collect())
+}
+
+/// The friction map from the 2D finger, line by line.
+fn friction_2d(
+    a: &HeightArgs,
+    heights: &HeightMap,
+    lines: &SlidingLines,
+    jobs: usize,
+) -> anyhow::Result<haptex_core::map::FrictionMap> {
     // The lines, relative to their start; identical ones run once.
     let mut unique: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
     let mut first_line: Vec<usize> = Vec::new();
     let mut of_line = Vec::with_capacity(lines.count());
     let mut seen: HashMap<Vec<u64>, usize> = HashMap::new();
     for k in 0..lines.count() {
-        let (s, h) = lines.line(&heights, k);
+        let (s, h) = lines.line(heights, k);
         let relative: Vec<f64> = h.iter().map(|v| v - h[0]).collect();
         let key: Vec<u64> = relative.iter().map(|v| (v + 0.0).to_bits()).collect();
         let index = *seen.entry(key).or_insert_with(|| {
@@ -209,25 +387,7 @@ pub(super) fn run(a: HeightArgs) -> anyhow::Result<()> {
     for &i in &of_line {
         mu_lines.extend_from_slice(&results[i]);
     }
-    let map = lines.assemble(&heights.grid, &mu_lines, "the height map's friction")?;
-
-    if let (Some(path), Some(f)) = (&a.heights_out, heights_format) {
-        write_heights(&heights, path, f)?;
-    }
-    write_friction_map(&map, &a.output, format)?;
-    report_map(&map);
-    let (lo, hi) = min_max(&heights.h_mm);
-    eprintln!(
-        "heights {lo:.4} .. {hi:.4} mm; sliding at {} degrees, {} mm/s; each line pressed {} mm before the map",
-        Num(a.direction_deg),
-        Num(a.velocity),
-        Num(LEAD_IN_MM)
-    );
-    if let Some(path) = &a.heights_out {
-        eprintln!("wrote {}", path.display());
-    }
-    eprintln!("wrote {}", a.output.display());
-    Ok(())
+    Ok(lines.assemble(&heights.grid, &mu_lines, "the height map's friction")?)
 }
 
 /// The FE friction (Ft/Fn) along one line at its points `s` (mm from its
