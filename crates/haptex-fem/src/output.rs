@@ -144,17 +144,33 @@ pub fn write_press_curve(result: &SimulationResult, description: &str, w: &mut d
 /// run interrupted while writing leaves no collection that could name a
 /// mix of old and new frames.
 pub fn write_vtk_series(result: &SimulationResult, dir: &Path) -> Result<Vec<std::path::PathBuf>, WriteError> {
+    let times: Vec<f64> = result.frames.iter().map(|f| f.t_s).collect();
+    write_series(dir, "haptex simulate", &times, |k, w| write_vtu(result, &result.frames[k], w))
+}
+
+/// Writes a VTK series into `dir` (created if missing): frame k's
+/// `frame_kkkk.vtu` by `frame(k, w)` for each of `times`, then the
+/// collection `simulation.pvd` naming each with its time and SHA-256
+/// (`written_by` in its comment). The collection is the file set's marker:
+/// removed first, written last, so that an interrupted run leaves no
+/// collection naming a mix of old and new frames.
+pub fn write_series(
+    dir: &Path,
+    written_by: &str,
+    times: &[f64],
+    frame: impl Fn(usize, &mut dyn Write) -> std::io::Result<()>,
+) -> Result<Vec<std::path::PathBuf>, WriteError> {
     let mut set = FileSet::begin(dir, "simulation.pvd")?;
     let mut written = Vec::new();
     let mut entries = Vec::new();
-    for (k, frame) in result.frames.iter().enumerate() {
+    for (k, &t) in times.iter().enumerate() {
         let name = format!("frame_{k:04}.vtu");
-        written.push(set.write(&name, |w| write_vtu(result, frame, w))?);
-        entries.push((frame.t_s, name));
+        written.push(set.write(&name, |w| frame(k, w))?);
+        entries.push((t, name));
     }
     let pvd = set.finish(|w, hashes| {
         writeln!(w, "<?xml version=\"1.0\"?>")?;
-        writeln!(w, "<!-- written by haptex simulate; SHA-256 of each frame:")?;
+        writeln!(w, "<!-- written by {written_by}; SHA-256 of each frame:")?;
         for (name, hash) in hashes {
             writeln!(w, "     {hash}  {name}")?;
         }

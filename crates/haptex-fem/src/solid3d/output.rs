@@ -6,7 +6,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use haptex_core::io::{FileSet, WriteError, write_csv_row};
+use haptex_core::io::{WriteError, write_csv_row};
 use haptex_core::plot::{Figure, Panel, PlotError, Series, Shape};
 
 use super::slide::{Frame3, Patch, SURFACE_GRID, Simulation3};
@@ -162,30 +162,10 @@ pub fn write_png(result: &Simulation3, title: &str, path: &Path) -> Result<(), P
 ///   fractions of their area `in_contact` and `sticking`;
 /// - the surface under the finger (VTK_QUAD, `part` 6), in place.
 pub fn write_vtk_series(result: &Simulation3, dir: &Path) -> Result<Vec<std::path::PathBuf>, WriteError> {
-    let mut set = FileSet::begin(dir, "simulation.pvd")?;
-    let mut written = Vec::new();
-    let mut entries = Vec::new();
-    for (k, frame) in result.frames.iter().enumerate() {
-        let name = format!("frame_{k:04}.vtu");
-        written.push(set.write(&name, |w| write_vtu(result, frame, w))?);
-        entries.push((frame.t_s, name));
-    }
-    let pvd = set.finish(|w, hashes| {
-        writeln!(w, "<?xml version=\"1.0\"?>")?;
-        writeln!(w, "<!-- written by haptex simulate --model 3d; SHA-256 of each frame:")?;
-        for (name, hash) in hashes {
-            writeln!(w, "     {hash}  {name}")?;
-        }
-        writeln!(w, "-->")?;
-        writeln!(w, "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">")?;
-        writeln!(w, "  <Collection>")?;
-        for (t, name) in &entries {
-            writeln!(w, "    <DataSet timestep=\"{t}\" group=\"\" part=\"0\" file=\"{name}\"/>")?;
-        }
-        writeln!(w, "  </Collection>\n</VTKFile>")
-    })?;
-    written.push(pvd);
-    Ok(written)
+    let times: Vec<f64> = result.frames.iter().map(|f| f.t_s).collect();
+    crate::output::write_series(dir, "haptex simulate --model 3d", &times, |k, w| {
+        write_vtu(result, &result.frames[k], w)
+    })
 }
 
 /// The `part` of the contact faces and of the surface in a VTK frame.

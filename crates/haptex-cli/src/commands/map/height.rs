@@ -201,19 +201,51 @@ pub(super) fn run(a: HeightArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn progress_bar(quiet: bool, runs: usize, label: &str) -> ProgressBar {
-    if quiet {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::new(runs as u64);
-    bar.set_style(
-        ProgressStyle::with_template(&format!(
-            "{{spinner}} {label} [{{bar:30}}] {{pos}}/{{len}} ({{elapsed}}, eta {{eta}})"
-        ))
-        .expect("valid template")
-        .progress_chars("=> "),
-    );
-    bar
+/// The FE runs of lines `line_of_run` (run i is `run(i)`, on line
+/// `line_of_run[i]`), `jobs` at a time with a progress bar labelled
+/// `label`; an error names the run's line.
+fn run_lines(
+    quiet: bool,
+    label: &str,
+    jobs: usize,
+    lines: &SlidingLines,
+    line_of_run: &[usize],
+    run: impl Fn(usize) -> anyhow::Result<Vec<f64>> + Sync,
+) -> anyhow::Result<Vec<Vec<f64>>> {
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        let bar = ProgressBar::new(line_of_run.len() as u64);
+        bar.set_style(
+            ProgressStyle::with_template(&format!(
+                "{{spinner}} {label} [{{bar:30}}] {{pos}}/{{len}} ({{elapsed}}, eta {{eta}})"
+            ))
+            .expect("valid template")
+            .progress_chars("=> "),
+        );
+        bar
+    };
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build().context("starting the FE workers")?;
+    let results = pool.install(|| {
+        line_of_run
+            .par_iter()
+            .enumerate()
+            .map(|(i, &k)| {
+                let mu = run(i).with_context(|| {
+                    format!(
+                        "line {} of {} (r = {} mm across the sliding direction)",
+                        k + 1,
+                        lines.count(),
+                        Num(lines.grid.y(k))
+                    )
+                })?;
+                bar.inc(1);
+                Ok(mu)
+            })
+            .collect::<anyhow::Result<Vec<Vec<f64>>>>()
+    });
+    bar.finish_and_clear();
+    results
 }
 
 /// The friction map from the 3D finger: runs along every few lines (every
@@ -247,21 +279,9 @@ fn friction_3d(
             Num(every as f64 * g.dy_mm)
         );
     }
-    let bar = progress_bar(a.quiet, runs.len(), "3D lines");
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build().context("starting the FE workers")?;
-    let results = pool.install(|| {
-        runs.par_iter()
-            .map(|&k| {
-                let mu = line_friction_3d(lines, &surface, k, a.velocity, resolution).with_context(|| {
-                    format!("line {} of {count} (r = {} mm across the sliding direction)", k + 1, Num(lines.grid.y(k)))
-                })?;
-                bar.inc(1);
-                Ok(mu)
-            })
-            .collect::<anyhow::Result<Vec<Vec<f64>>>>()
-    });
-    bar.finish_and_clear();
-    let results = results?;
+    let results = run_lines(a.quiet, "3D lines", jobs, lines, &runs, |i| {
+        line_friction_3d(lines, &surface, runs[i], a.velocity, resolution)
+    })?;
     // Every line: a run's, or interpolated between the runs on each side.
     let nx = lines.grid.nx;
     let mut mu_lines = Vec::with_capacity(lines.grid.len());
@@ -351,38 +371,10 @@ fn friction_2d(
             unique.len()
         );
     }
-    let bar = if a.quiet {
-        ProgressBar::hidden()
-    } else {
-        let bar = ProgressBar::new(unique.len() as u64);
-        bar.set_style(
-            ProgressStyle::with_template("{spinner} FE lines [{bar:30}] {pos}/{len} ({elapsed}, eta {eta})")
-                .expect("valid template")
-                .progress_chars("=> "),
-        );
-        bar
-    };
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build().context("starting the FE workers")?;
-    let results = pool.install(|| {
-        unique
-            .par_iter()
-            .zip(&first_line)
-            .map(|((s, h), &k)| {
-                let mu = line_friction(s, h, a.velocity).with_context(|| {
-                    format!(
-                        "line {} of {} (r = {} mm across the sliding direction)",
-                        k + 1,
-                        lines.count(),
-                        Num(lines.grid.y(k))
-                    )
-                })?;
-                bar.inc(1);
-                Ok(mu)
-            })
-            .collect::<anyhow::Result<Vec<Vec<f64>>>>()
-    });
-    bar.finish_and_clear();
-    let results = results?;
+    let results = run_lines(a.quiet, "FE lines", jobs, lines, &first_line, |i| {
+        let (s, h) = &unique[i];
+        line_friction(s, h, a.velocity)
+    })?;
     let mut mu_lines = Vec::with_capacity(lines.grid.len());
     for &i in &of_line {
         mu_lines.extend_from_slice(&results[i]);
