@@ -1,0 +1,115 @@
+#!/usr/bin/env bash
+# CalculiX 3D reference for haptex's 3D fingertip (data/finger/half-disc.toml):
+# haptex runs (curves + VTK mesh export) -> decks -> ccx runs -> CSVs -> comparison.
+#
+#   validation/calculix3d/run.sh                 every job below, one at a time
+#   validation/calculix3d/run.sh flat_linear     only these ccx jobs (haptex runs always)
+#
+# The timing of the peer comparison: whenever flat_linear is run, this script
+# times `haptex simulate` on the same case and mesh right before the ccx run,
+# and writes both wall times and their ratio to results/timing.txt.
+#
+# HAPTEX: haptex binary (default /tmp/ccx3d/haptex, a copy of /work/main/target/ci/haptex,
+# else target/ci/haptex of this checkout); CCX: the solver (default ccx);
+# CCX_TIMEOUT: wall limit per ccx run in s (default 900).
+# Scratch goes to work/ and runs/ (not for git); results/ gets the CSVs,
+# runs.log (one line per run), ccx/ (the .sta files), provenance.txt, timing.txt.
+set -euo pipefail
+HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+REPO="$(git -C "$HERE" rev-parse --show-toplevel)"
+if [[ -z "${HAPTEX:-}" ]]; then
+    HAPTEX=/tmp/ccx3d/haptex
+    [[ -x "$HAPTEX" ]] || HAPTEX="$REPO/target/ci/haptex"
+fi
+CCX="${CCX:-ccx}"
+CCX_TIMEOUT="${CCX_TIMEOUT:-900}"
+FINGER="$REPO/data/finger/half-disc.toml"
+PY="${PY:-python3}"   # a python3 with numpy
+export OMP_NUM_THREADS=1 CCX_NPROC_EQUATION_SOLVER=1 CCX_NPROC_STIFFNESS=1 CCX_NPROC_RESULTS=1
+cd "$HERE"
+mkdir -p work runs results/haptex results/ccx decks
+
+BUMP=(--x0 1.5 --width 1.5 --height 0.2)
+COMMON=(--model 3d --finger "$FINGER" --material elastic --indent 0.5 --slide 3 --step 0.1 --direction-deg 0 -q)
+
+echo "== provenance (results/provenance.txt)"
+{
+    echo "date: $(date -u +%Y-%m-%dT%H:%M:%SZ)"
+    echo "ccx: $("$CCX" -v 2>&1 | grep -m1 -i version | sed 's/^ *//') ($(command -v "$CCX"); Debian package $(dpkg-query -W -f='${Package} ${Version}' calculix-ccx 2>/dev/null || echo '?'))"
+    echo "haptex: $("$HAPTEX" --version) ($HAPTEX, sha256 $(sha256sum "$HAPTEX" | cut -d' ' -f1), modified $(date -u -r "$HAPTEX" +%Y-%m-%dT%H:%M:%SZ))"
+    echo "checkout: $REPO at $(git -C "$REPO" rev-parse HEAD) ($(git -C "$REPO" rev-parse --abbrev-ref HEAD))"
+    echo "machine: $(lscpu | sed -n 's/^Model name: *//p'), $(nproc --all) CPUs, L1d $(lscpu | sed -n 's/^L1d cache: *//p'), L2 $(lscpu | sed -n 's/^L2 cache: *//p'), L3 $(lscpu | sed -n 's/^L3 cache: *//p'), $(lscpu | sed -n 's/^Hypervisor vendor: *//p') guest, $(free -g | awk '/Mem:/ {print $2}') GB, Linux $(uname -r)"
+    echo "threads: OMP_NUM_THREADS=$OMP_NUM_THREADS (the other core was in use by another engineer's builds)"
+} | tee results/provenance.txt
+
+echo "== haptex curves and mesh export (frame 0 = after the press; reference positions)"
+for mesh in coarse default; do
+    for surf in flat bump; do
+        extra=(); [[ $surf == bump ]] && extra=("${BUMP[@]}")
+        rm -rf "work/vtk_${surf}_$mesh"
+        "$HAPTEX" simulate "${COMMON[@]}" --mesh $mesh --surface $surf "${extra[@]}" \
+            -o "results/haptex/${surf}_$mesh.csv" --history "results/haptex/${surf}_${mesh}_history.csv" \
+            --vtk "work/vtk_${surf}_$mesh" --vtk-every 1000
+    done
+done
+
+echo "== decks"
+mk() { "$PY" make_decks.py "$@" --out decks; }
+# the reference contact: surface-to-surface penalty, 200 N/mm^3, mu 0.5, stick slope 20 N/mm^3
+# (node-to-surface, and a stick slope of 200, stall on the bump: the *_n2s jobs)
+S2S=(--contact "SURFACE TO SURFACE" --stick 20)
+FC=work/vtk_flat_coarse/frame_0000.vtu
+BC=work/vtk_bump_coarse/frame_0000.vtu
+mk $FC --job flat_linear --surface flat "${S2S[@]}"
+mk $FC --job flat_linear_n2s --surface flat --contact "NODE TO SURFACE" --stick 200
+mk $FC --job flat_linear_C3D8 --surface flat "${S2S[@]}" --etype C3D8
+mk work/vtk_flat_default/frame_0000.vtu --job flat_linear_default --surface flat "${S2S[@]}" --slide 1
+mk $FC --job flat_nlgeom --surface flat "${S2S[@]}" --kin nlgeom
+mk $BC --job bump_linear --surface bump "${BUMP[@]}" "${S2S[@]}"
+mk $BC --job bump_nlgeom --surface bump "${BUMP[@]}" "${S2S[@]}" --kin nlgeom
+mk $BC --job bump_linear_n2s --surface bump "${BUMP[@]}" --contact "NODE TO SURFACE" --stick 200
+mk $BC --job bump_linear_n2s_stick20 --surface bump "${BUMP[@]}" --contact "NODE TO SURFACE" --stick 20
+
+JOBS=("$@")
+[[ ${#JOBS[@]} -eq 0 ]] && JOBS=(flat_linear flat_linear_n2s bump_linear flat_nlgeom flat_linear_C3D8 flat_linear_default bump_nlgeom bump_linear_n2s bump_linear_n2s_stick20)
+
+echo "== CalculiX runs"
+for job in "${JOBS[@]}"; do
+    if [[ $job == flat_linear ]]; then
+        # the peer timing: haptex's CLI on the same case and mesh, just before the ccx run
+        hstart=$(date +%s.%N)
+        "$HAPTEX" simulate "${COMMON[@]}" --mesh coarse --surface flat -o work/timed_flat.csv
+        hwall=$(echo "$(date +%s.%N) - $hstart" | bc)
+        cmp -s work/timed_flat.csv results/haptex/flat_coarse.csv || echo "note: the timed haptex run's profile differs from results/haptex/flat_coarse.csv"
+    fi
+    rm -rf "runs/$job"
+    mkdir -p "runs/$job"
+    cp "decks/$job.inp" "runs/$job/"
+    start=$(date +%s.%N)
+    set +e
+    (cd "runs/$job" && timeout "$CCX_TIMEOUT" "$CCX" -i "$job" > ccx.log 2>&1)
+    rc=$?
+    set -e
+    wall=$(echo "$(date +%s.%N) - $start" | bc)
+    last=$(awk 'NF == 7 && $1 ~ /^[0-9]+$/ && $3 !~ /U/ {t = $5} END {print t}' "runs/$job/$job.sta")
+    status=$(grep -m1 -o '\*ERROR[^*]*' "runs/$job/ccx.log" | tr -s ' \n' ' ' || true)
+    [[ $rc -eq 124 ]] && status="stopped by the ${CCX_TIMEOUT} s time limit"
+    [[ $rc -eq 0 && -z "$status" ]] && status="completed"
+    printf '%s ccx:%-22s rc=%-3d wall=%7.1f s  last converged total time=%-13s (press 0..1, then 1 + x) %s\n' \
+        "$(date -u +%FT%TZ)" "$job" "$rc" "$wall" "$last" "$status" | tee -a results/runs.log
+    cp "runs/$job/$job.sta" results/ccx/
+    rm -f "results/$job.csv" "results/${job}_press.csv"
+    [[ -f "runs/$job/$job.dat" ]] && "$PY" extract.py "runs/$job/$job.dat" "results/$job.csv" --press "results/${job}_press.csv" || true
+    if [[ $job == flat_linear ]]; then
+        {
+            echo "one run of run.sh, $(date -u +%FT%TZ), OMP_NUM_THREADS=1, same case and mesh (flat, coarse: 1183 nodes, 864 hexes; press 0.5 mm, slide 3 mm in 0.1 mm steps)"
+            echo "haptex simulate (CLI, whole process): $(printf '%.2f' "$hwall") s"
+            echo "ccx flat_linear (whole process):      $(printf '%.2f' "$wall") s (rc=$rc)"
+            echo "ratio ccx / haptex:                    $(echo "scale=1; $wall / $hwall" | bc)"
+            echo "machine: $(lscpu | sed -n 's/^Model name: *//p'); L1d $(lscpu | sed -n 's/^L1d cache: *//p'), L2 $(lscpu | sed -n 's/^L2 cache: *//p'), L3 $(lscpu | sed -n 's/^L3 cache: *//p')"
+        } | tee results/timing.txt
+    fi
+done
+
+echo "== comparison"
+"$PY" compare.py --results results
