@@ -163,12 +163,9 @@ impl ViscoelasticBody {
             }
             if dofs.iter().any(|&d| self.free[d] == PRESCRIBED && u[d] != 0.0) {
                 let k = h.stiffness(self.formulation, m.shear_mpa() * c.shear_ratio, m.bulk_mpa());
-                for i in 0..24 {
-                    for j in 0..24 {
-                        if self.free[dofs[j]] == PRESCRIBED {
-                            f[i] += k[i][j] * u[dofs[j]];
-                        }
-                    }
+                let moved = super::hex8::prescribed_forces(&k, &dofs, |d| (self.free[d] == PRESCRIBED).then(|| u[d]));
+                for (fi, m) in f.iter_mut().zip(moved) {
+                    *fi += m;
                 }
             }
             for i in 0..24 {

@@ -234,6 +234,20 @@ fn invert3(j: &[[f64; 3]; 3]) -> (f64, [[f64; 3]; 3]) {
     (det, inv)
 }
 
+/// The forces K_e u_p on an element's 24 DOFs `dofs` from the prescribed
+/// displacements among them (`prescribed(d)`: global DOF d's prescribed
+/// value, or `None` if it is free): what moves a body's free unknowns
+/// when its driven nodes move (the load of a prescribed displacement is
+/// its negative).
+pub fn prescribed_forces(
+    k: &[[f64; 24]; 24],
+    dofs: &[usize; 24],
+    prescribed: impl Fn(usize) -> Option<f64>,
+) -> [f64; 24] {
+    let values: [Option<f64>; 24] = std::array::from_fn(|j| prescribed(dofs[j]).filter(|&v| v != 0.0));
+    std::array::from_fn(|i| values.iter().enumerate().filter_map(|(j, v)| v.map(|v| k[i][j] * v)).sum())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -395,15 +395,13 @@ impl ElasticBody {
             }
             let (g, bulk) = self.moduli[e];
             let k = self.geometry[e].stiffness(self.formulation, g, bulk);
-            for i in 0..24 {
+            let moved = super::hex8::prescribed_forces(&k, &dofs, |d| {
+                (self.free[d] == PRESCRIBED).then(|| self.prescribed_value[d])
+            });
+            for (i, m) in moved.iter().enumerate() {
                 let fi = self.free[dofs[i]];
-                if fi == PRESCRIBED {
-                    continue;
-                }
-                for j in 0..24 {
-                    if self.free[dofs[j]] == PRESCRIBED {
-                        f[fi] -= k[i][j] * self.prescribed_value[dofs[j]];
-                    }
+                if fi != PRESCRIBED {
+                    f[fi] -= m;
                 }
             }
         }
