@@ -336,6 +336,7 @@ fn simulate_3d_refuses_what_it_does_not_support() {
         (vec!["--model", "3d", "--direction-deg", "400"], "--direction-deg 400 must be a finite angle"),
         (vec!["--direction-deg", "30"], "--direction-deg applies to --model 3d only"),
         (vec!["--surface", "map:h.csv"], "a height map needs --model 3d"),
+        (vec!["--model", "3d", "--load", "1000"], "load = 1000 N must be positive and at most 100 N"),
         (vec!["--model", "3d", "--surface", "map:/nonexistent/h.csv"], "/nonexistent/h.csv"),
         (vec!["--model", "4d"], "invalid value '4d'"),
         (vec!["--model", "3d", "--indent", "7"], "indent"),

@@ -314,6 +314,8 @@ fn run_3d(args: &SimulateArgs, mut scenario: Scenario) -> anyhow::Result<()> {
         anyhow::bail!("--kinematics finite is not supported with --model 3d");
     }
     let direction = crate::args::direction_deg(args.direction_deg)?;
+    // The 3D checks first: a load is in N here.
+    haptex_fem::solid3d::slide::validate(&scenario)?;
     let slide_steps = scenario.slide_steps()?;
     if args.vtk.is_some() {
         scenario.frame_every = args.vtk_every.unwrap_or((slide_steps / 25).max(1)).max(1);

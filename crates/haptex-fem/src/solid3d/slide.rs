@@ -228,7 +228,7 @@ pub fn run(
     direction_deg: f64,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Simulation3, SimulationError> {
-    scenario.validate()?;
+    validate(scenario)?;
     let spec = FingertipSpec::from_model(&scenario.model, scenario.resolution);
     let tip = fingertip::mesh(&spec)?;
     run_finger(tip.into(), scenario, direction_deg, progress)
@@ -261,7 +261,7 @@ pub fn run_on_surface(
     direction_deg: f64,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Simulation3, SimulationError> {
-    scenario.validate()?;
+    validate(scenario)?;
     if !start_mm.iter().all(|v| v.is_finite()) {
         return Err(SimulationError::Invalid(format!("the start {start_mm:?} mm must be finite")));
     }
@@ -292,7 +292,7 @@ fn run_finger_on(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Simulation3, SimulationError> {
     let started = Instant::now();
-    scenario.validate()?;
+    validate(scenario)?;
     let invalid = |m: &str| Err(SimulationError::Invalid(m.to_string()));
     if !(direction_deg.is_finite() && direction_deg.abs() <= 360.0) {
         return Err(SimulationError::Invalid(format!(
@@ -693,6 +693,23 @@ fn run_finger_on(
         contact_faces: inside,
         frames,
     })
+}
+
+/// The scenario's checks ([`Scenario::validate`]), a load first in the 3D
+/// finger's unit: N on the whole finger, not N per mm of width (the
+/// bound's number is the 2D model's).
+pub fn validate(scenario: &Scenario) -> Result<(), SimulationError> {
+    if let Loading::Load(load) = scenario.loading {
+        let most = crate::scenario::limits::LOAD_N_PER_MM;
+        if !(load.is_finite() && load > 0.0 && load <= most) {
+            return Err(SimulationError::Invalid(format!(
+                "load = {} N must be positive and at most {} N",
+                haptex_core::num::Num(load),
+                haptex_core::num::Num(most)
+            )));
+        }
+    }
+    scenario.validate()
 }
 
 /// A step's aim: the bone's depth below first touch (mm), or the normal
