@@ -121,7 +121,7 @@ pub enum ModelArg {
 /// degrees, or the flag's error.
 pub fn direction_deg(given: Option<f64>) -> anyhow::Result<f64> {
     let direction = given.unwrap_or(0.0);
-    if !(direction.is_finite() && direction.abs() <= 360.0) {
+    if !haptex_fem::solid3d::slide::is_direction(direction) {
         anyhow::bail!("--direction-deg {direction} must be a finite angle from -360 to 360 degrees");
     }
     Ok(direction)

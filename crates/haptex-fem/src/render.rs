@@ -243,6 +243,15 @@ pub enum FeFinger {
 }
 
 impl FeFinger {
+    /// A check's default normal load on this finger, in [`FeFinger::load_unit`]:
+    /// [`DEFAULT_LOAD_N_PER_MM`] or [`DEFAULT_LOAD_3D_N`].
+    pub fn default_load(self) -> f64 {
+        match self {
+            Self::Plane => DEFAULT_LOAD_N_PER_MM,
+            Self::Solid { .. } => DEFAULT_LOAD_3D_N,
+        }
+    }
+
     /// The unit of a normal load on this finger.
     pub fn load_unit(self) -> &'static str {
         match self {

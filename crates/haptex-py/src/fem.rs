@@ -18,7 +18,7 @@ use haptex_core::signal::{Extend, VoltageCurve};
 use haptex_fem::display::Display;
 use haptex_fem::finger::{FingerModel, Resolution};
 use haptex_fem::output::{self, VoltageSource};
-use haptex_fem::render::{self, Check, CheckMetrics, DEFAULT_LOAD_N_PER_MM, RenderError, RenderSettings, Stopping};
+use haptex_fem::render::{self, Check, CheckMetrics, RenderError, RenderSettings, Stopping};
 use haptex_fem::scenario::{self, Kinematics, Loading, Scenario, SimulationError, SimulationResult};
 use haptex_fem::surface::SurfaceShape;
 use numpy::PyArray1;
@@ -830,7 +830,7 @@ pub fn check(
         ("2d", Some(_)) => return Err(input("direction_deg is for model=\"3d\" (the 2D finger slides along x)")),
         ("3d", direction) => {
             let direction_deg = direction.unwrap_or(0.0);
-            if !(direction_deg.is_finite() && direction_deg.abs() <= 360.0) {
+            if !haptex_fem::solid3d::slide::is_direction(direction_deg) {
                 return Err(input(format!(
                     "direction_deg {} must be a finite angle from -360 to 360 degrees",
                     Num(direction_deg)
@@ -891,9 +891,7 @@ pub fn check(
         _ => Vec::new(),
     };
     let load = load.map(|l| positive("load", l)).transpose()?;
-    let default_load =
-        if fe_finger == render::FeFinger::Plane { DEFAULT_LOAD_N_PER_MM } else { render::DEFAULT_LOAD_3D_N };
-    let mut settings = RenderSettings::new(device.mu_hd, load.unwrap_or(default_load));
+    let mut settings = RenderSettings::new(device.mu_hd, load.unwrap_or(fe_finger.default_load()));
     settings.finger = fe_finger;
     settings.device = device;
     settings.device.validate().or_raise()?;

@@ -9,9 +9,7 @@ use haptex_core::electrovibration::{ContactArea, Device, Method, map_profile};
 use haptex_core::num::Num;
 use haptex_core::plot::{Figure, Panel};
 use haptex_core::ranges;
-use haptex_fem::render::{
-    self, Check, DEFAULT_LOAD_3D_N, DEFAULT_LOAD_N_PER_MM, FeFinger, RenderSettings, Stopping, TargetPart,
-};
+use haptex_fem::render::{self, Check, FeFinger, RenderSettings, Stopping, TargetPart};
 use haptex_fem::scenario::Loading;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -175,8 +173,7 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
         }
         ModelArg::ThreeD => FeFinger::Solid { direction_deg: crate::args::direction_deg(args.direction_deg)? },
     };
-    let default_load = if finger == FeFinger::Plane { DEFAULT_LOAD_N_PER_MM } else { DEFAULT_LOAD_3D_N };
-    let mut settings = RenderSettings::new(device.mu_hd, args.load.unwrap_or(default_load));
+    let mut settings = RenderSettings::new(device.mu_hd, args.load.unwrap_or(finger.default_load()));
     settings.finger = finger;
     settings.device = device;
     settings.device.validate()?;

@@ -319,7 +319,7 @@ fn run_3d(args: &SimulateArgs, mut scenario: Scenario) -> anyhow::Result<()> {
     let slide_steps = scenario.slide_steps()?;
     if args.vtk.is_some() {
         scenario.frame_every = args.vtk_every.unwrap_or((slide_steps / 25).max(1)).max(1);
-        scenario.validate()?;
+        haptex_fem::solid3d::slide::validate(&scenario)?;
     }
     let map = match args.surface.strip_prefix("map:") {
         Some(path) => Some(crate::commands::map::read_height_map(std::path::Path::new(path))?),

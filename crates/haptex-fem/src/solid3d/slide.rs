@@ -294,7 +294,7 @@ fn run_finger_on(
     let started = Instant::now();
     validate(scenario)?;
     let invalid = |m: &str| Err(SimulationError::Invalid(m.to_string()));
-    if !(direction_deg.is_finite() && direction_deg.abs() <= 360.0) {
+    if !is_direction(direction_deg) {
         return Err(SimulationError::Invalid(format!(
             "the slide direction {direction_deg} degrees must be a finite angle from -360 to 360"
         )));
@@ -366,7 +366,6 @@ fn run_finger_on(
     prescribed.dedup();
     let n_nodes = tip.mesh.n_nodes();
     let n_elements = tip.mesh.elements.len();
-    let body_layers = tip.element_layer.clone();
     let mut body = ViscoelasticBody::new(tip.mesh, Formulation::BBar, materials, tip.element_layer, &prescribed)?;
     let mut condensation = Condensation::new(body.pattern(), body.free(), &candidate)?;
     let law = FrictionLaw {
@@ -680,19 +679,25 @@ fn run_finger_on(
         step_cuts: 0,
         wall_time_s: started.elapsed().as_secs_f64(),
     };
-    let mesh = body.mesh.clone();
     Ok(Simulation3 {
         history,
         profile,
         patches,
         direction_deg,
         statistics,
-        mesh,
-        element_layer: body_layers,
+        mesh: body.mesh,
+        element_layer: body.element_material,
         driven_nodes: tip.driven_nodes,
         contact_faces: inside,
         frames,
     })
+}
+
+/// Whether `direction_deg` is a slide direction the 3D finger takes: a
+/// finite angle from -360 to 360 degrees (the callers name the flag or
+/// argument in their error).
+pub fn is_direction(direction_deg: f64) -> bool {
+    direction_deg.is_finite() && direction_deg.abs() <= 360.0
 }
 
 /// The scenario's checks ([`Scenario::validate`]), a load first in the 3D

@@ -139,13 +139,10 @@ impl MapSurface {
                 c[j * nx + i] = map.h_mm[sj * g.nx + si];
             }
         }
-        let mut line = Vec::with_capacity(nx.max(ny));
+        let mut line = Vec::with_capacity(ny);
         let mut scratch = Vec::with_capacity(nx.max(ny));
-        for j in 0..ny {
-            line.clear();
-            line.extend_from_slice(&c[j * nx..(j + 1) * nx]);
-            interpolating_coefficients(&mut line, &mut scratch);
-            c[j * nx..(j + 1) * nx].copy_from_slice(&line);
+        for row in c.chunks_exact_mut(nx) {
+            interpolating_coefficients(row, &mut scratch);
         }
         for i in 0..nx {
             line.clear();
@@ -158,20 +155,25 @@ impl MapSurface {
         Self { x0_mm: g.x0_mm, y0_mm: g.y0_mm, dx_mm: g.dx_mm, dy_mm: g.dy_mm, nx, ny, coefficients: c }
     }
 
+    /// Where `v` (mm) lies in the padded grid of origin `v0`, spacing `d`
+    /// and `n` points: its index, held within the cells whose four
+    /// coefficients exist (1 ..= n - 2, five cells beyond the map; NaN at
+    /// the low end), and whether it was held there.
+    fn place(v: f64, v0: f64, d: f64, n: usize) -> (f64, bool) {
+        let u = (v - v0) / d + Self::PAD as f64;
+        let (lo, hi) = (1.0, (n - 2) as f64);
+        (if u.is_nan() { lo } else { u.clamp(lo, hi) }, !(u > lo && u < hi))
+    }
+
     /// h, its gradient and its Hessian at (x, y).
     pub fn derivatives(&self, x: f64, y: f64) -> (f64, [f64; 2], [[f64; 2]; 2]) {
-        // Position in the padded grid's index, held within the cells whose
-        // four coefficients exist (five cells beyond the map).
-        let place = |v: f64, v0: f64, d: f64, n: usize| -> (usize, f64, bool) {
-            let u = (v - v0) / d + Self::PAD as f64;
-            let (lo, hi) = (1.0, (n - 2) as f64);
-            let held = !(u > lo && u < hi);
-            let u = if u.is_nan() { lo } else { u.clamp(lo, hi) };
+        let cell = |v: f64, v0: f64, d: f64, n: usize| -> (usize, f64, bool) {
+            let (u, held) = Self::place(v, v0, d, n);
             let i = (u.floor() as usize).min(n - 3);
             (i, u - i as f64, held)
         };
-        let (i, tx, held_x) = place(x, self.x0_mm, self.dx_mm, self.nx);
-        let (j, ty, held_y) = place(y, self.y0_mm, self.dy_mm, self.ny);
+        let (i, tx, held_x) = cell(x, self.x0_mm, self.dx_mm, self.nx);
+        let (j, ty, held_y) = cell(y, self.y0_mm, self.dy_mm, self.ny);
         let (wx, dwx, ddwx) = bspline_weights(tx);
         let (wy, dwy, ddwy) = bspline_weights(ty);
         let (mut h, mut hx, mut hy, mut hxx, mut hyy, mut hxy) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
@@ -210,10 +212,7 @@ impl MapSurface {
     /// being non-negative and summing to 1). Beyond the map, where the
     /// spline is held, those of the held cells.
     pub fn bounds(&self, x: [f64; 2], y: [f64; 2]) -> (f64, f64) {
-        let index = |v: f64, v0: f64, d: f64, n: usize| -> usize {
-            let u = ((v - v0) / d + Self::PAD as f64).clamp(1.0, (n - 2) as f64);
-            if u.is_nan() { 1 } else { u as usize }
-        };
+        let index = |v: f64, v0: f64, d: f64, n: usize| Self::place(v, v0, d, n).0 as usize;
         let (i0, i1) =
             (index(x[0], self.x0_mm, self.dx_mm, self.nx) - 1, index(x[1], self.x0_mm, self.dx_mm, self.nx) + 2);
         let (j0, j1) =
@@ -232,33 +231,32 @@ impl MapSurface {
 /// Replaces the samples `p` by the coefficients of their interpolating
 /// cubic B-spline: (c_{i-1} + 4 c_i + c_{i+1}) / 6 = p_i inside, c = p at
 /// both ends (Thomas' algorithm; the matrix is diagonally dominant).
-fn interpolating_coefficients(p: &mut [f64], scratch: &mut Vec<f64>) {
+fn interpolating_coefficients(p: &mut [f64], diagonal: &mut Vec<f64>) {
     let n = p.len();
     if n < 3 {
         return;
     }
-    // Rows 1 .. n-2 of (1 4 1) c = 6 p with c_0, c_{n-1} known.
-    scratch.clear();
-    scratch.resize(n, 0.0);
+    // Rows 1 .. n-2 of (1 4 1) c = 6 p with c_0 = p_0 and c_{n-1} =
+    // p_{n-1} known, solved in place: forward elimination on the interior
+    // (sub- and super-diagonals 1), then back substitution.
     let (first, last) = (p[0], p[n - 1]);
-    let mut rhs: Vec<f64> = (0..n).map(|i| 6.0 * p[i]).collect();
-    rhs[1] -= first;
-    rhs[n - 2] -= last;
-    // Forward elimination on the interior (sub- and super-diagonals 1).
-    let mut diagonal = 4.0;
-    scratch[1] = diagonal;
+    for v in &mut p[1..n - 1] {
+        *v *= 6.0;
+    }
+    p[1] -= first;
+    p[n - 2] -= last;
+    diagonal.clear();
+    diagonal.resize(n, 0.0);
+    diagonal[1] = 4.0;
     for i in 2..n - 1 {
-        let factor = 1.0 / diagonal;
-        diagonal = 4.0 - factor;
-        scratch[i] = diagonal;
-        rhs[i] -= factor * rhs[i - 1];
+        let factor = 1.0 / diagonal[i - 1];
+        diagonal[i] = 4.0 - factor;
+        p[i] -= factor * p[i - 1];
     }
-    p[n - 2] = rhs[n - 2] / scratch[n - 2];
+    p[n - 2] /= diagonal[n - 2];
     for i in (1..n - 2).rev() {
-        p[i] = (rhs[i] - p[i + 1]) / scratch[i];
+        p[i] = (p[i] - p[i + 1]) / diagonal[i];
     }
-    p[0] = first;
-    p[n - 1] = last;
 }
 
 /// The uniform cubic B-spline's four weights at fraction t of a cell,
