@@ -777,9 +777,13 @@ impl TouchStamper {
 
 impl TouchEvent {
     /// The event of `line`, received at wall-clock instant `received`,
-    /// stamped on `clock` by `stamper` (a live source: stdin, a WebSocket).
-    pub fn received(line: TouchLine, received: Instant, clock: &DeviceClock, stamper: &mut TouchStamper) -> Self {
-        let (t_s, touch) = stamper.stamp(line, clock.time_of(received));
+    /// which is `arrival_s` on the output clock (`DeviceClock::time_of`),
+    /// stamped by `stamper` (a live source: stdin, a WebSocket). The lines
+    /// of one message share one `arrival_s`, read once: read per line, a
+    /// callback publishing between two lines moves the clock under them,
+    /// and lines sent together would arrive microseconds apart.
+    pub fn received(line: TouchLine, received: Instant, arrival_s: f64, stamper: &mut TouchStamper) -> Self {
+        let (t_s, touch) = stamper.stamp(line, arrival_s);
         Self { t_s, touch, received: Some(received) }
     }
 

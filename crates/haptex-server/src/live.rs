@@ -385,6 +385,7 @@ fn touches(text: &str, session: Option<&dyn LiveSession>, stamper: &mut TouchSta
         );
     };
     let received = Instant::now();
+    let arrival_s = live.clock().time_of(received);
     for line in text.lines() {
         let parsed = match parse_touch_line(line, TouchAxes::X) {
             Ok(Some(parsed)) => parsed,
@@ -396,7 +397,7 @@ fn touches(text: &str, session: Option<&dyn LiveSession>, stamper: &mut TouchSta
                 );
             }
         };
-        if !live.queue(TouchEvent::received(parsed, received, live.clock(), stamper)) {
+        if !live.queue(TouchEvent::received(parsed, received, arrival_s, stamper)) {
             return Some(Refusal::new("the touch queue is full: the output is not taking samples", "message").json());
         }
     }

@@ -30,7 +30,8 @@
 //! the last two reports, for at most `horizon_s` past the last report (then
 //! held), so the envelope does not step at every report. When a new report
 //! disagrees with the extrapolation, the difference is blended out linearly
-//! over `blend_s` instead of jumping.
+//! over `blend_s` instead of jumping. Reports closer than
+//! [`MIN_VELOCITY_DT_S`] give no velocity.
 //!
 //! A combined (or ultrasonic) display's design has a second channel, the
 //! plate's vibration amplitude a(x) in um ([`RealtimeRenderer::two_channel`]):
@@ -45,6 +46,7 @@ mod planar;
 mod touch;
 
 pub use planar::{PlanarRenderer, PlanarSample};
+pub use touch::MIN_VELOCITY_DT_S;
 
 use crate::num::Num;
 use crate::signal::{
@@ -711,6 +713,29 @@ mod tests {
             }
         }
         assert!(max_error < 1e-9, "{max_error}");
+    }
+
+    /// Two reports microseconds apart (one message's lines stamped across
+    /// a clock update, a report seen twice) give no velocity: the position
+    /// settles on the last report, instead of running off at 2.5 mm / 10 us
+    /// (the cause of a flaky live WebSocket test). Reports 2 ms apart give
+    /// their own velocity (40 mm/s to 1e-9).
+    #[test]
+    fn reports_closer_than_a_millisecond_give_no_velocity() {
+        let config = RealtimeConfig { blend_s: 0.0, ..RealtimeConfig::default() };
+        let mut r = RealtimeRenderer::new(&curve(), &config).unwrap();
+        r.touch(0.0, 2.0);
+        r.touch(0.5, 5.0);
+        r.touch(0.5 + 1e-5, 7.5);
+        for t in [0.5 + 1e-5, 0.52, 0.6] {
+            assert!((r.position_at(t) - 7.5).abs() < 1e-12, "t = {t}: {}", r.position_at(t));
+        }
+        let mut r = RealtimeRenderer::new(&curve(), &config).unwrap();
+        r.touch(0.0, 2.0);
+        r.touch(0.01, 2.4);
+        r.touch(0.012, 2.48);
+        let v = (r.position_at(0.02) - 2.48) / (0.02 - 0.012);
+        assert!((v - 40.0).abs() < 1e-9, "{v} mm/s");
     }
 
     #[test]

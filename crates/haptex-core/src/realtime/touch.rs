@@ -8,6 +8,16 @@
 //! difference is blended out linearly over `blend_s` instead of jumping.
 //! Each of the `D` coordinates (x; or x and y on a map) is extrapolated
 //! the same way, from the same reports.
+//!
+//! A report less than [`MIN_VELOCITY_DT_S`] after the last one moves the
+//! reference position but gives no velocity: touch digitizers report at
+//! most every 1 ms, so two reports closer than that are one report seen
+//! twice or clock jitter, and their difference over microseconds would be
+//! an absurd speed that the horizon then extrapolates.
+
+/// The shortest time between two reports that gives a velocity, in s
+/// (1 ms: a 1 kHz digitizer, faster than any touch screen's 60-240 Hz).
+pub const MIN_VELOCITY_DT_S: f64 = 1e-3;
 
 /// The touch state of a renderer over `D` coordinates.
 #[derive(Debug, Clone, Copy)]
@@ -64,15 +74,16 @@ impl<const D: usize> TouchEstimator<D> {
         }
         let estimate = self.position_at(t_s);
         let dt = t_s - self.t_report;
-        if dt > 0.0 {
+        if dt >= MIN_VELOCITY_DT_S {
             let fresh = dt <= self.horizon_s;
             for ((v, &a), &r) in self.velocity.iter_mut().zip(&at).zip(&self.report) {
                 *v = if fresh { (a - r) / dt } else { 0.0 };
             }
             self.t_report = t_s;
         }
-        // A report at or before the last one moves the reference position
-        // only (its timestamp carries no new velocity).
+        // A report at, before or within MIN_VELOCITY_DT_S of the last one
+        // moves the reference position only (its timestamp carries no new
+        // velocity).
         self.report = at;
         // Continuity: the new estimate at t_s equals the old one.
         for ((o, &e), &a) in self.offset.iter_mut().zip(&estimate).zip(&at) {

@@ -605,7 +605,7 @@ fn read_stdin(
             Ok(None) => continue,
             Err(message) => return fail(format!("stdin, line {}, {message}", i + 1)),
         };
-        match sender.try_send(TouchEvent::received(parsed, received, clock, &mut stamper)) {
+        match sender.try_send(TouchEvent::received(parsed, received, clock.time_of(received), &mut stamper)) {
             Ok(()) => {}
             Err(TrySendError::Full(_)) => {
                 return fail(format!(
@@ -701,9 +701,10 @@ async fn ws_session(mut socket: axum::extract::ws::WebSocket, state: WsState) {
                     Some(Ok(_)) => continue,
                 };
                 let received = Instant::now();
+                let arrival_s = state.clock.time_of(received);
                 for line in text.as_str().lines() {
                     let event = match haptex_core::live::parse_touch_line(line, state.axes) {
-                        Ok(Some(parsed)) => TouchEvent::received(parsed, received, &state.clock, &mut stamper),
+                        Ok(Some(parsed)) => TouchEvent::received(parsed, received, arrival_s, &mut stamper),
                         Ok(None) => continue,
                         Err(message) => {
                             lift(&state);
