@@ -25,12 +25,23 @@ JOBS = [
     ("bump_nlgeom", "bump_coarse", "bump, C3D8I, NLGEOM neo-Hookean"),
     ("bump_linear_n2s", "bump_coarse", "bump, node-to-surface, stick 200"),
     ("bump_linear_n2s_stick20", "bump_coarse", "bump, node-to-surface, stick 20"),
+    # the diagnosis of the bump (README, "Diagnosis of the bump")
+    ("bump_linear_inc025", "bump_coarse", "bump, s2s as the reference, slide increments 0.025 mm"),
+    ("bump_mu0_n2s", "bump_coarse_mu0", "bump, mu = 0, node-to-surface"),
+    ("bump_mu0_s2s", "bump_coarse_mu0", "bump, mu = 0, s2s, increments 0.1 mm"),
+    ("bump_mu0_s2s_inc025", "bump_coarse_mu0", "bump, mu = 0, s2s, increments 0.025 mm"),
+    ("bump_mu0_s2s_inc01", "bump_coarse_mu0", "bump, mu = 0, s2s, increments 0.01 mm"),
+    ("bump_mu0_s2s_nlgeom", "bump_coarse_mu0", "bump, mu = 0, s2s, NLGEOM neo-Hookean"),
 ]
 HAPTEX = {
     "flat_coarse": "haptex coarse mesh, flat",
     "flat_default": "haptex default mesh, flat",
     "bump_coarse": "haptex coarse mesh, bump",
     "bump_default": "haptex default mesh, bump",
+    "bump_fine": "haptex fine mesh, bump",
+    "bump_coarse_mu0": "haptex coarse mesh, bump, mu = 0",
+    "bump_default_mu0": "haptex default mesh, bump, mu = 0",
+    "bump_fine_mu0": "haptex fine mesh, bump, mu = 0",
 }
 
 
@@ -118,7 +129,11 @@ def main():
     pairs = [("haptex:flat_default", "haptex:flat_coarse"), ("haptex:bump_default", "haptex:bump_coarse"),
              ("flat_linear_default", "flat_linear"), ("flat_linear_C3D8", "flat_linear"),
              ("flat_linear_n2s", "flat_linear"), ("bump_linear_n2s", "bump_linear"), ("bump_linear_n2s_stick20", "bump_linear"),
-             ("flat_nlgeom", "flat_linear"), ("bump_nlgeom", "bump_linear")]
+             ("flat_nlgeom", "flat_linear"), ("bump_nlgeom", "bump_linear"),
+             ("haptex:bump_fine", "haptex:bump_default"), ("haptex:bump_default_mu0", "haptex:bump_coarse_mu0"),
+             ("haptex:bump_fine_mu0", "haptex:bump_default_mu0"), ("bump_linear_inc025", "bump_linear"),
+             ("bump_mu0_s2s", "bump_mu0_n2s"), ("bump_mu0_s2s_inc025", "bump_mu0_s2s"),
+             ("bump_mu0_s2s_inc01", "bump_mu0_s2s_inc025")]
 
     def load(name):
         if name.startswith("haptex:"):
@@ -134,6 +149,36 @@ def main():
             continue
         out.append(f"| {a_} | {b_} | {d['lo']:g} .. {d['hi']:g} mm ({d['n']}) | {100 * d['mfn'][0]:+.2f} % ({d['mfn'][1]:g}) | "
                    f"{100 * d['rfn']:.2f} % | {d['mmu'][0]:+.4f} ({d['mmu'][1]:g}) | {d['rmu']:.4f} |")
+    out.append("")
+
+    # The bump's path is symmetric: the finger starts with the bump 1.5 mm ahead and ends 1.5 mm
+    # past it, on a mesh symmetric in x. Without friction the problem is conservative (elastic body,
+    # penalty contact), so Ft/Fn(x) = -Ft/Fn(3 - x) and its mean over the path is 0 (up to the end
+    # points); with friction the mean is the dissipation per unit travel and normal force.
+    out += ["## Bump: mean Ft/Fn over the path, and the frictionless runs' antisymmetry", "",
+            "Mean over x = 0.1 .. 3 mm (haptex's grid). Antisymmetry (mu = 0 only): the largest and the RMS "
+            "|Ft/Fn(x) + Ft/Fn(3 - x)| over x = 0.1 .. 1.5 mm (0 for a conservative model).", "",
+            "| curve | points | mean Ft/Fn | max antisymmetry error | RMS antisymmetry error |", "|---|---|---|---|---|"]
+    bump = ["haptex:bump_coarse", "haptex:bump_default", "haptex:bump_fine", "bump_linear", "bump_linear_inc025",
+            "haptex:bump_coarse_mu0", "haptex:bump_default_mu0", "haptex:bump_fine_mu0", "bump_mu0_n2s", "bump_mu0_s2s",
+            "bump_mu0_s2s_inc025", "bump_mu0_s2s_inc01", "bump_mu0_s2s_nlgeom"]
+    for name in bump:
+        A = load(name)
+        if not A or not A["x_mm"]:
+            continue
+        c = curve(A)
+        xs = [round(0.1 * k, 6) for k in range(1, 31)]
+        if not all(x in c for x in xs):
+            out.append(f"| {name} | {sum(x in c for x in xs)} of 30 (incomplete) | | | |")
+            continue
+        mean = sum(c[x][1] for x in xs) / len(xs)
+        row = f"| {name} | 30 | {mean:+.4f} |"
+        if "mu0" in name:
+            e = [abs(c[x][1] + c[round(3.0 - x, 6)][1]) for x in xs[:15]]
+            row += f" {max(e):.4f} | {math.sqrt(sum(v * v for v in e) / len(e)):.4f} |"
+        else:
+            row += " | |"
+        out.append(row)
     out.append("")
 
     out += ["## Runs (results/runs.log)", "", "```"]

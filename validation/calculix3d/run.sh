@@ -4,6 +4,8 @@
 #
 #   validation/calculix3d/run.sh                 every job below, one at a time
 #   validation/calculix3d/run.sh flat_linear     only these ccx jobs (haptex runs always)
+#   validation/calculix3d/run.sh diagnosis       the bump diagnosis jobs (README, "Diagnosis of the bump"):
+#                                                frictionless and small-increment runs, ~15 min
 #
 # The timing of the peer comparison: whenever flat_linear is run, this script
 # times `haptex simulate` on the same case and mesh right before the ccx run,
@@ -53,6 +55,14 @@ for mesh in coarse default; do
     done
 done
 
+echo "== haptex on the bump: frictionless (--mu-skin 0), all meshes, and mu 0.5 on the fine mesh (the diagnosis)"
+for mesh in coarse default fine; do
+    "$HAPTEX" simulate "${COMMON[@]}" --mesh $mesh --surface bump "${BUMP[@]}" --mu-skin 0 \
+        -o "results/haptex/bump_${mesh}_mu0.csv" --history "results/haptex/bump_${mesh}_mu0_history.csv"
+done
+"$HAPTEX" simulate "${COMMON[@]}" --mesh fine --surface bump "${BUMP[@]}" \
+    -o results/haptex/bump_fine.csv --history results/haptex/bump_fine_history.csv
+
 echo "== decks"
 mk() { "$PY" make_decks.py "$@" --out decks; }
 # the reference contact: surface-to-surface penalty, 200 N/mm^3, mu 0.5, stick slope 20 N/mm^3
@@ -69,9 +79,18 @@ mk $BC --job bump_linear --surface bump "${BUMP[@]}" "${S2S[@]}"
 mk $BC --job bump_nlgeom --surface bump "${BUMP[@]}" "${S2S[@]}" --kin nlgeom
 mk $BC --job bump_linear_n2s --surface bump "${BUMP[@]}" --contact "NODE TO SURFACE" --stick 200
 mk $BC --job bump_linear_n2s_stick20 --surface bump "${BUMP[@]}" --contact "NODE TO SURFACE" --stick 20
+# the diagnosis of the bump (README, "Diagnosis of the bump"): frictionless, both contact types;
+# surface-to-surface with slide increments of 0.025 and 0.01 mm (instead of 0.1)
+mk $BC --job bump_mu0_n2s --surface bump "${BUMP[@]}" --mu 0 --contact "NODE TO SURFACE"
+mk $BC --job bump_mu0_s2s --surface bump "${BUMP[@]}" --mu 0 --contact "SURFACE TO SURFACE"
+mk $BC --job bump_mu0_s2s_inc025 --surface bump "${BUMP[@]}" --mu 0 --contact "SURFACE TO SURFACE" --inc 0.025
+mk $BC --job bump_mu0_s2s_inc01 --surface bump "${BUMP[@]}" --mu 0 --contact "SURFACE TO SURFACE" --inc 0.01
+mk $BC --job bump_mu0_s2s_nlgeom --surface bump "${BUMP[@]}" --mu 0 --contact "SURFACE TO SURFACE" --kin nlgeom
+mk $BC --job bump_linear_inc025 --surface bump "${BUMP[@]}" "${S2S[@]}" --inc 0.025
 
 JOBS=("$@")
 [[ ${#JOBS[@]} -eq 0 ]] && JOBS=(flat_linear flat_linear_n2s bump_linear flat_nlgeom flat_linear_C3D8 flat_linear_default bump_nlgeom bump_linear_n2s bump_linear_n2s_stick20)
+[[ ${JOBS[*]} == diagnosis ]] && JOBS=(bump_mu0_n2s bump_mu0_s2s bump_mu0_s2s_inc025 bump_mu0_s2s_inc01 bump_linear_inc025 bump_mu0_s2s_nlgeom)
 
 echo "== CalculiX runs"
 for job in "${JOBS[@]}"; do

@@ -517,3 +517,111 @@ fn interrupted_merge_leaves_a_detectably_incomplete_database() {
     assert!(!out.status.success());
     assert!(text(&out.stderr).contains("SHA-256"), "{}", text(&out.stderr));
 }
+
+/// `haptex db validate` on a small coarse database: random members of each
+/// template, each an FE run with the database's settings against the
+/// estimate. Checked: the members are the same for a seed (the CSV byte
+/// for byte) and lie in the database's ranges; each member's RMS error
+/// equals the one `haptex db loo` computes for the same parameters by its
+/// own path (its CSV's mu_fe and mu_cae_full columns, to the 6 decimals
+/// both write); the table's median and maximum are those of the members;
+/// bad flags and a missing database are refused.
+#[test]
+fn db_validate_measures_random_members_against_fresh_fe_runs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("db");
+    let out = build(&db, &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let db_arg = db.to_str().unwrap();
+    let members = |name: &str, seed: &str| {
+        let csv = tmp.path().join(name);
+        let out = haptex(&[
+            "db",
+            "validate",
+            "--db",
+            db_arg,
+            "--random",
+            "3",
+            "--seed",
+            seed,
+            "-q",
+            "-o",
+            csv.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        (read(&csv), text(&out.stdout))
+    };
+    let (first, table) = members("a.csv", "11");
+    let (again, _) = members("b.csv", "11");
+    assert_eq!(first, again, "the same seed gave other members");
+    let (other, _) = members("c.csv", "12");
+    assert_ne!(first, other, "another seed gave the same members");
+
+    let rows: Vec<Vec<String>> = first
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    assert_eq!(rows.len(), 6, "3 members of bump and of edge:\n{first}");
+    let mut relative = std::collections::HashMap::<String, Vec<f64>>::new();
+    for row in &rows {
+        let (template, w, h, v) = (&row[0], &row[1], &row[2], &row[3]);
+        let [w_mm, h_mm, v_mm_s, rms, range, rel]: [f64; 6] =
+            std::array::from_fn(|i| row[i + 1].parse().unwrap_or_else(|e| panic!("{row:?}: {e}")));
+        assert!((1.0..=2.0).contains(&w_mm) && h_mm == 0.3 && (20.0..=50.0).contains(&v_mm_s), "{row:?}");
+        // All three written to 6 decimals: each within 5e-7 of its value.
+        let rounding = 5e-7 + rel * (5e-7 / rms + 5e-7 / range);
+        assert!((rel - rms / range).abs() <= rounding, "{row:?}");
+        relative.entry(template.clone()).or_default().push(rel);
+        // The same member through `db loo`.
+        let csv = tmp.path().join("loo.csv");
+        let out = haptex(&[
+            "db",
+            "loo",
+            "--db",
+            db_arg,
+            "-q",
+            "--surface",
+            template,
+            "--width",
+            w,
+            "--height",
+            h,
+            "--velocity",
+            v,
+            "-o",
+            csv.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        let loo: Vec<Vec<f64>> = read(&csv)
+            .lines()
+            .filter(|l| !l.starts_with('#'))
+            .skip(1)
+            .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+            .collect();
+        let loo_rms = (loo.iter().map(|r| (r[4] - r[2]).powi(2)).sum::<f64>() / loo.len() as f64).sqrt();
+        // db loo writes both profiles to 6 decimals: a difference of at most 1e-6 per point.
+        assert!((loo_rms - rms).abs() <= 2e-6, "{row:?}: db loo gives RMS {loo_rms}");
+    }
+    for (template, mut rel) in relative {
+        rel.sort_by(f64::total_cmp);
+        let line =
+            table.lines().find(|l| l.starts_with(&format!("| {template} |"))).unwrap_or_else(|| panic!("{table}"));
+        let shown = |x: f64| format!("{:.1}%", 100.0 * x);
+        assert!(line.contains(&format!("{} ({})", shown(rel[1]), shown(rel[2]))), "{line} vs {rel:?}");
+    }
+
+    let missing = tmp.path().join("none");
+    let cases: [(&[&str], &str); 4] = [
+        (&["db", "validate", "--db", db_arg, "--random", "0"], "--random"),
+        (&["db", "validate", "--db", db_arg], "--random"),
+        (&["db", "validate", "--db", db_arg, "--random", "2", "--seed=-1"], "--seed"),
+        (&["db", "validate", "--db", missing.to_str().unwrap(), "--random", "2"], "metadata.json"),
+    ];
+    for (args, expected) in cases {
+        let out = haptex(args);
+        assert!(!out.status.success(), "{args:?} should fail");
+        assert!(text(&out.stderr).contains(expected), "{args:?}: expected '{expected}' in: {}", text(&out.stderr));
+    }
+}

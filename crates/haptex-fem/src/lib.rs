@@ -21,6 +21,7 @@ pub mod finger;
 pub mod finite_element;
 pub mod finite_solver;
 pub mod grating;
+pub mod held_out;
 pub mod hyperelastic;
 pub mod lanes;
 pub mod linalg;

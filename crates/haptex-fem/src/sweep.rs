@@ -133,7 +133,8 @@ impl DatabaseSpec {
         self.runs().into_iter().enumerate().filter(|(i, _)| i % n == k - 1).map(|(_, r)| r).collect()
     }
 
-    fn scenario(&self, run: &Run) -> Scenario {
+    /// The FE scenario of one run.
+    pub fn scenario(&self, run: &Run) -> Scenario {
         let surface = run.surface(self.x0_mm);
         let mut scenario = Scenario::paper(surface.clone());
         scenario.model = self.model.clone();

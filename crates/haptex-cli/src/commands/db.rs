@@ -10,6 +10,7 @@ use haptex_core::database::{Metadata, Template, TemplateModel};
 use haptex_core::num::Num;
 use haptex_core::plot::{Figure, Panel};
 use haptex_fem::finger::FingerModel;
+use haptex_fem::held_out;
 use haptex_fem::loo_case::LooCase;
 use haptex_fem::sweep::{self, DatabaseSpec, Run};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -31,6 +32,7 @@ enum DbCommand {
     Build(BuildArgs),
     Merge(MergeArgs),
     Loo(LooArgs),
+    Validate(ValidateArgs),
 }
 
 /// Run the FE sweep of the template database and, when every run is done,
@@ -150,6 +152,47 @@ struct LooArgs {
     quiet: bool,
 }
 
+/// The estimate on members nobody tuned it to: FE runs at N random
+/// members of each template's family (r_w, r_h and velocity uniform over the
+/// database's ranges), with the database's own FE settings, against the
+/// estimate `haptex predict` gives for them.
+///
+/// Prints, per template, the median and largest RMS error of Ft/Fn over the
+/// database's grid and the same relative to the FE profile's range
+/// (max - min), as a Markdown table, and the worst member. The members
+/// depend only on the seed (and the database's ranges): the same seed gives
+/// the same members on every machine, and any member can be looked at with
+/// `haptex db loo --surface S --width W --height H --velocity V --png F`.
+#[derive(Debug, Args)]
+#[command(after_help = "Examples:\n  haptex db validate --random 30 --seed 1\n  \
+                  haptex db validate --random 10 --seed 7 --templates sine -o members.csv")]
+struct ValidateArgs {
+    /// Database directory. Default: the shipped data/db, or $HAPTEX_DB.
+    #[arg(long, value_name = "DIR")]
+    db: Option<PathBuf>,
+    /// Random members per template.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    random: u32,
+    /// Seed of the members.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Surface templates, comma-separated. Default: all of the database's.
+    #[arg(long, value_delimiter = ',', value_enum)]
+    templates: Option<Vec<TemplateArg>>,
+    /// FE runs at a time (one thread each). Default: the number of cores.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    jobs: Option<u32>,
+    /// CSV of every member: template, parameters, RMS error, FE range, relative error.
+    #[arg(short, long, value_name = "FILE")]
+    output: Option<PathBuf>,
+    /// The summary as JSON on stdout instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum TemplateArg {
     Bump,
@@ -172,6 +215,7 @@ pub fn run(args: DbArgs) -> anyhow::Result<()> {
         DbCommand::Build(a) => build(a),
         DbCommand::Merge(a) => merge(a),
         DbCommand::Loo(a) => loo(a),
+        DbCommand::Validate(a) => validate(a),
     }
 }
 
@@ -386,6 +430,125 @@ fn loo(args: LooArgs) -> anyhow::Result<()> {
     }
     if args.json {
         eprintln!("{}", serde_json::to_string_pretty(&metadata.loo_summary())?);
+    }
+    Ok(())
+}
+
+fn validate(args: ValidateArgs) -> anyhow::Result<()> {
+    let dir = args.db.clone().unwrap_or_else(default_db);
+    let metadata = Metadata::read(&dir)?;
+    let templates: Vec<Template> = match &args.templates {
+        Some(list) => {
+            let mut t: Vec<Template> = list.iter().map(|&t| t.into()).collect();
+            t.sort();
+            t.dedup();
+            t
+        }
+        None => metadata.templates.iter().map(|e| e.template).collect(),
+    };
+    let jobs =
+        args.jobs.map(|j| j as usize).unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let n = args.random as usize;
+    if !args.quiet {
+        eprintln!(
+            "haptex db validate: {n} random members of {} (seed {}), FE runs with the database's settings ({} mesh, \
+             {}), {jobs} at a time",
+            templates.iter().map(|t| t.name()).collect::<Vec<_>>().join(", "),
+            args.seed,
+            metadata.fe.mesh,
+            metadata.fe.material
+        );
+    }
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        let bar = ProgressBar::new((n * templates.len()) as u64);
+        bar.set_style(
+            ProgressStyle::with_template("{spinner} db validate [{bar:30}] {pos}/{len} FE runs ({elapsed}, eta {eta})")
+                .expect("valid template")
+                .progress_chars("=> "),
+        );
+        bar
+    };
+    let members =
+        held_out::validate(&dir, &metadata, &templates, n, args.seed, jobs, &|done, _| bar.set_position(done as u64));
+    bar.finish_and_clear();
+    let members = members.with_context(|| format!("validating the database in {}", dir.display()))?;
+    // The members' CSV to a file, or to stdout (`-o -`), the table then to stderr.
+    let members_out = args.output.clone().map(|p| Output::new(Some(p)));
+    if let Some(out) = &members_out {
+        out.write(|w| {
+            writeln!(w, "# haptex db validate --random {n} --seed {} (database {})", args.seed, dir.display())?;
+            writeln!(w, "template,r_w_mm,r_h_mm,velocity_mm_s,rms,fe_range,relative")?;
+            for m in &members {
+                writeln!(
+                    w,
+                    "{},{},{},{},{:.6},{:.6},{:.6}",
+                    m.run.template.name(),
+                    Num(m.run.width_mm),
+                    Num(m.run.height_mm),
+                    Num(m.run.velocity_mm_s),
+                    m.rms,
+                    m.range,
+                    m.relative
+                )?;
+            }
+            Ok(())
+        })?;
+    }
+    let summary = held_out::summarize(&members);
+    let to_stderr = members_out.as_ref().is_some_and(|o| o.path().is_none());
+    if args.json {
+        let rows: Vec<serde_json::Value> = summary
+            .iter()
+            .map(|s| {
+                serde_json::json!({
+                    "template": s.template.name(),
+                    "members": s.members,
+                    "rms_median": s.rms_median,
+                    "rms_max": s.rms_max,
+                    "relative_median": s.relative_median,
+                    "relative_max": s.relative_max,
+                    "worst": { "r_w_mm": s.worst.width_mm, "r_h_mm": s.worst.height_mm,
+                               "velocity_mm_s": s.worst.velocity_mm_s },
+                })
+            })
+            .collect();
+        let json = serde_json::json!({ "seed": args.seed, "random": n, "templates": rows });
+        let json = serde_json::to_string_pretty(&json)?;
+        if to_stderr {
+            eprintln!("{json}");
+        } else {
+            println!("{json}");
+        }
+        return Ok(());
+    }
+    let mut lines = vec![
+        "| template | members | RMS of Ft/Fn, median (max) | relative to the FE profile's range, median (max) | worst \
+         member (r_w, r_h, v) |"
+            .to_string(),
+        "|---|---|---|---|---|".to_string(),
+    ];
+    for s in &summary {
+        lines.push(format!(
+            "| {} | {} | {:.4} ({:.4}) | {:.1}% ({:.1}%) | {} mm, {} mm, {} mm/s |",
+            s.template.name(),
+            s.members,
+            s.rms_median,
+            s.rms_max,
+            100.0 * s.relative_median,
+            100.0 * s.relative_max,
+            Num(s.worst.width_mm),
+            Num(s.worst.height_mm),
+            Num(s.worst.velocity_mm_s)
+        ));
+    }
+    for line in lines {
+        if to_stderr {
+            eprintln!("{line}");
+        } else {
+            println!("{line}");
+        }
     }
     Ok(())
 }

@@ -1,0 +1,228 @@
+//! The database's estimate on members nobody tuned it to (`haptex db
+//! validate --random N --seed S`): FE runs at random members of each
+//! template's family, with the database's own FE settings, against the
+//! estimate `haptex predict` gives for them.
+//!
+//! A member's parameters are drawn uniformly over the database's input
+//! ranges (r_w, r_h, velocity) by SplitMix64 (Steele, Lea and Flood 2014,
+//! "Fast splittable pseudorandom number generators"), seeded with the
+//! seed and the template, so the members of one template do not depend on
+//! which other templates are validated, and a seed gives the same members
+//! on every machine. Values are rounded to 1e-4 mm and 0.01 mm/s, so a
+//! member can be run again from the printed table (`haptex db loo
+//! --surface S --width W --height H --velocity V`).
+//!
+//! The error of a member is the RMS difference between estimate and FE
+//! profile over the database's grid of xi, and that RMS relative to the FE
+//! profile's range (max - min): the figure a user compares with what the
+//! profile is meant to show.
+
+use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use haptex_core::database::{Metadata, Template, TemplateModel};
+use rayon::prelude::*;
+
+use crate::sweep::{DatabaseSpec, Run, SweepError};
+
+/// SplitMix64: a 64-bit state advanced by a Weyl sequence and mixed.
+#[derive(Debug, Clone)]
+pub struct SplitMix64(u64);
+
+impl SplitMix64 {
+    pub fn new(seed: u64) -> Self {
+        Self(seed)
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, 1): the top 53 bits.
+    pub fn next_f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+}
+
+/// `n` random members of `template`'s family over `ranges` ((min, max) of
+/// r_w, r_h and velocity), from `seed`.
+pub fn random_members(template: Template, ranges: [(f64, f64); 3], n: usize, seed: u64) -> Vec<Run> {
+    let stream = match template {
+        Template::Bump => 1u64,
+        Template::Edge => 2,
+        Template::Sine => 3,
+    };
+    let mut rng = SplitMix64::new(seed ^ stream.wrapping_mul(0xd1b5_4a32_d192_ed03));
+    let mut draw = |(lo, hi): (f64, f64), step: f64| ((lo + rng.next_f64() * (hi - lo)) / step).round() * step;
+    (0..n)
+        .map(|_| {
+            let width_mm = draw(ranges[0], 1e-4);
+            let height_mm = draw(ranges[1], 1e-4);
+            let velocity_mm_s = draw(ranges[2], 1e-2);
+            Run { template, width_mm, height_mm, velocity_mm_s }
+        })
+        .collect()
+}
+
+/// One member: its FE profile against the estimate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Member {
+    pub run: Run,
+    /// RMS of estimate - FE over the grid (Ft/Fn).
+    pub rms: f64,
+    /// max - min of the FE profile over the grid.
+    pub range: f64,
+    /// rms / range.
+    pub relative: f64,
+}
+
+/// The members of one template, summarized.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Summary {
+    pub template: Template,
+    pub members: usize,
+    pub rms_median: f64,
+    pub rms_max: f64,
+    pub relative_median: f64,
+    pub relative_max: f64,
+    /// The member with the largest relative error.
+    pub worst: Run,
+}
+
+/// The error of `estimate` against `fe` (same grid).
+pub fn member_error(run: Run, fe: &[f64], estimate: &[f64]) -> Member {
+    let n = fe.len().max(1) as f64;
+    let rms = (fe.iter().zip(estimate).map(|(f, e)| (e - f) * (e - f)).sum::<f64>() / n).sqrt();
+    let (lo, hi) = fe.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    let range = hi - lo;
+    Member { run, rms, range, relative: if range > 0.0 { rms / range } else { f64::INFINITY } }
+}
+
+/// Validates the database in `dir` on `n` random members of each of
+/// `templates` from `seed`, `jobs` FE runs at a time, calling
+/// `progress(done, total)` after each run. Members in template order, each
+/// template's in the order drawn.
+pub fn validate(
+    dir: &Path,
+    metadata: &Metadata,
+    templates: &[Template],
+    n: usize,
+    seed: u64,
+    jobs: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Vec<Member>, SweepError> {
+    let spec = DatabaseSpec::from_metadata(metadata)?;
+    let models = templates
+        .iter()
+        .map(|&t| TemplateModel::load_with(dir, metadata, t))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(SweepError::from)?;
+    let runs: Vec<(usize, Run)> = models
+        .iter()
+        .enumerate()
+        .flat_map(|(i, m)| random_members(m.template, m.input_ranges(), n, seed).into_iter().map(move |r| (i, r)))
+        .collect();
+    for (_, run) in &runs {
+        spec.scenario(run).validate().map_err(|error| SweepError::Run { run: run.describe(), error })?;
+    }
+    let done = AtomicUsize::new(0);
+    progress(0, runs.len());
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs.max(1))
+        .build()
+        .map_err(|e| SweepError::Invalid(format!("cannot start {jobs} threads: {e}")))?;
+    pool.install(|| {
+        runs.par_iter()
+            .map(|&(i, run)| -> Result<Member, SweepError> {
+                let fe = spec.simulate(&run)?;
+                let estimate =
+                    models[i].predict(0.0, run.width_mm, run.height_mm, run.velocity_mm_s).map_err(SweepError::from)?;
+                progress(done.fetch_add(1, Ordering::SeqCst) + 1, runs.len());
+                Ok(member_error(run, &fe, &estimate.mu))
+            })
+            .collect()
+    })
+}
+
+/// Median and maximum per template, in the members' template order.
+pub fn summarize(members: &[Member]) -> Vec<Summary> {
+    let mut templates: Vec<Template> = Vec::new();
+    for m in members {
+        if !templates.contains(&m.run.template) {
+            templates.push(m.run.template);
+        }
+    }
+    templates
+        .into_iter()
+        .map(|template| {
+            let of: Vec<&Member> = members.iter().filter(|m| m.run.template == template).collect();
+            let rms: Vec<f64> = of.iter().map(|m| m.rms).collect();
+            let relative: Vec<f64> = of.iter().map(|m| m.relative).collect();
+            let worst = of.iter().max_by(|a, b| a.relative.total_cmp(&b.relative)).expect("one member at least").run;
+            Summary {
+                template,
+                members: of.len(),
+                rms_median: median(&rms),
+                rms_max: rms.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                relative_median: median(&relative),
+                relative_max: relative.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                worst,
+            }
+        })
+        .collect()
+}
+
+/// The median (the mean of the middle two for an even count).
+pub fn median(values: &[f64]) -> f64 {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// SplitMix64's first outputs for seed 1234567, as the reference C
+    /// implementation (Vigna, prng.di.unimi.it/splitmix64.c) prints them.
+    #[test]
+    fn splitmix64_matches_the_reference() {
+        let mut r = SplitMix64::new(1_234_567);
+        let got: Vec<u64> = (0..3).map(|_| r.next_u64()).collect();
+        assert_eq!(got, [6_457_827_717_110_365_317, 3_203_168_211_198_807_973, 9_817_491_932_198_370_423]);
+    }
+
+    /// Members lie in the ranges, on their rounding steps, the same for a
+    /// seed, other for another seed, and a template's do not depend on the others.
+    #[test]
+    fn members_are_reproducible_and_in_range() {
+        let ranges = [(0.5, 2.5), (0.1, 0.5), (10.0, 100.0)];
+        let a = random_members(Template::Sine, ranges, 50, 7);
+        assert_eq!(a, random_members(Template::Sine, ranges, 50, 7));
+        assert_ne!(a, random_members(Template::Sine, ranges, 50, 8));
+        assert_ne!(a[0].width_mm, random_members(Template::Bump, ranges, 1, 7)[0].width_mm);
+        for r in &a {
+            assert!((0.5..=2.5).contains(&r.width_mm) && (0.1..=0.5).contains(&r.height_mm), "{r:?}");
+            assert!((10.0..=100.0).contains(&r.velocity_mm_s), "{r:?}");
+            assert!((r.width_mm * 1e4 - (r.width_mm * 1e4).round()).abs() < 1e-6, "{r:?}");
+        }
+    }
+
+    #[test]
+    fn errors_and_medians() {
+        let run = Run { template: Template::Bump, width_mm: 1.0, height_mm: 0.2, velocity_mm_s: 20.0 };
+        let m = member_error(run, &[0.5, 0.7, 0.5, 0.3], &[0.5, 0.6, 0.5, 0.3]);
+        assert!((m.rms - 0.05).abs() < 1e-15 && (m.range - 0.4).abs() < 1e-15);
+        assert!((m.relative - 0.125).abs() < 1e-12);
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
+    }
+}
