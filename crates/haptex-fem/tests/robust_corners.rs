@@ -51,3 +51,31 @@ fn robust_edge_corners() {
 fn robust_sine_corners() {
     corners(|width, height| SurfaceShape::Sine { x0: 5.0, width, height });
 }
+
+/// A steep, narrow bump on the fine mesh with the database's settings
+/// (r_w 0.5551, r_h 0.4014 mm, 58.433 mm/s, visco-elastic; a member `haptex
+/// db validate` drew): with the pad in full slip at the bump's leading
+/// edge, Newton's method stalls at an equilibrium that friction makes
+/// unstable, and the damped continuation needs 1922 steps to leave it and
+/// settle on the next. With the earlier budget of 1000 the step failed at
+/// every halving and the run with it ("Newton iteration did not converge
+/// at t = 0.178513 s"). Checked: the whole slide, equilibrium at every step
+/// (relative 1e-6, as above).
+#[test]
+fn fine_mesh_steep_bump_leaves_an_unstable_equilibrium() {
+    use haptex_core::database::Template;
+    use haptex_fem::finger::Resolution;
+    use haptex_fem::sweep::{DatabaseSpec, Run};
+    let mut spec = DatabaseSpec::paper();
+    spec.resolution = Resolution::Fine;
+    let member = Run { template: Template::Bump, width_mm: 0.5551, height_mm: 0.4014, velocity_mm_s: 58.433 };
+    let result = run(&spec.scenario(&member), &mut |_| {}).unwrap_or_else(|e| panic!("{}: {e}", member.describe()));
+    let p = result.profile.as_ref().unwrap();
+    assert!((p.x_mm()[p.len() - 1] - spec.slide_mm).abs() < 1e-9, "slide ended at {}", p.x_mm()[p.len() - 1]);
+    assert!(p.mu().iter().all(|m| m.is_finite()));
+    for row in &result.history {
+        assert!(row.fn_n > 0.0, "lost contact at {}", row.slide_mm);
+        let error = (row.fn_n + row.reaction_n[1]).abs().max((row.ft_n - row.reaction_n[0]).abs());
+        assert!(error <= 1e-6 * row.fn_n, "equilibrium error {error} at t = {}", row.t_s);
+    }
+}
