@@ -612,6 +612,53 @@ fn db_validate_measures_random_members_against_fresh_fe_runs() {
         assert!(line.contains(&format!("{} ({})", shown(rel[1]), shown(rel[2]))), "{line} vs {rel:?}");
     }
 
+    // Recorded, the figures reach predict: its message and the file's
+    // comments state them, and advise the FE run exactly where the worst
+    // member was off by more than 10% of its range.
+    let out = haptex(&["db", "validate", "--db", db_arg, "--random", "3", "--seed", "11", "-q", "--record"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let metadata: serde_json::Value = serde_json::from_str(&read(&db.join("metadata.json"))).unwrap();
+    assert_eq!(
+        (metadata["validation"]["seed"].as_u64(), metadata["validation"]["members"].as_u64()),
+        (Some(11), Some(3))
+    );
+    for entry in metadata["validation"]["templates"].as_array().unwrap() {
+        let template = entry["template"].as_str().unwrap();
+        let csv = tmp.path().join("p.csv");
+        let out = haptex(&[
+            "predict",
+            "--db",
+            db_arg,
+            "--surface",
+            template,
+            "--x0",
+            "5",
+            "--width",
+            "1.3",
+            "--height",
+            "0.3",
+            "--velocity",
+            "30",
+            "-o",
+            csv.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        let (median, max) = (entry["relative_median"].as_f64().unwrap(), entry["relative_max"].as_f64().unwrap());
+        let expected = format!(
+            "expected error: on 3 random members against fresh FE runs (db validate, seed 11) the estimate was off by \
+             {:.1}% of the profile's range (median), {:.1}% at most",
+            100.0 * median,
+            100.0 * max
+        );
+        let stderr = text(&out.stderr);
+        assert!(stderr.contains(&expected), "{stderr}");
+        assert!(read(&csv).contains(&format!("# {expected}\n")), "{}", read(&csv));
+        assert_eq!(stderr.contains("advice: for"), max > 0.10, "{template}, worst {max}: {stderr}");
+    }
+    // A database case is the FE profile itself: nothing to expect of an estimate.
+    let out = haptex(&["predict", "--db", db_arg, "--surface", "bump", "--x0", "5", "--width", "1", "--height", "0.3"]);
+    assert!(out.status.success() && !text(&out.stderr).contains("expected error"), "{}", text(&out.stderr));
+
     let missing = tmp.path().join("none");
     let cases: [(&[&str], &str); 4] = [
         (&["db", "validate", "--db", db_arg, "--random", "0"], "--random"),

@@ -250,6 +250,76 @@ pub struct Metadata {
     /// merged before haptex recorded it (then not checked).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub files_sha256: Option<crate::io::MemberHashes>,
+    /// The estimate measured on random members against fresh FE runs
+    /// (`haptex db validate --record`), if it was.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub validation: Option<Validation>,
+}
+
+/// The estimate on random members of each template's family against FE
+/// runs with the database's settings (`haptex db validate --record`): what
+/// a user can expect of an estimate between the database's cases.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Validation {
+    /// UTC date and time of the validation (RFC 3339).
+    pub created: String,
+    /// The seed of the members and their number per template.
+    pub seed: u64,
+    pub members: usize,
+    pub templates: Vec<ValidationEntry>,
+}
+
+/// One template's errors on random members: RMS of estimate - FE over the
+/// grid, and that RMS relative to the FE profile's range (max - min).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ValidationEntry {
+    pub template: Template,
+    pub rms_median: f64,
+    pub rms_max: f64,
+    pub relative_median: f64,
+    pub relative_max: f64,
+}
+
+/// What to expect of one estimate ([`TemplateModel::estimate_notes`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct EstimateNotes {
+    /// The template's errors on random members, in one sentence.
+    pub expected: Option<String>,
+    /// The advice to run the FE model, where the estimate is not good enough.
+    pub advice: Option<String>,
+}
+
+/// The largest error relative to a profile's range, on random members, at
+/// which an estimate is offered without advising the FE run instead: 10%,
+/// issue 40's bound for the worst member.
+pub const ESTIMATE_ADVISED_MAX_RELATIVE: f64 = 0.10;
+
+impl Validation {
+    pub fn entry(&self, template: Template) -> Option<&ValidationEntry> {
+        self.templates.iter().find(|e| e.template == template)
+    }
+
+    /// The expected error of an estimate of `template`, in one sentence, if
+    /// the validation covers it.
+    pub fn expected_error(&self, template: Template) -> Option<String> {
+        self.entry(template).map(|e| {
+            format!(
+                "on {} random members against fresh FE runs (db validate, seed {}) the estimate was off by {:.1}% \
+                 of the profile's range (median), {:.1}% at most",
+                self.members,
+                self.seed,
+                100.0 * e.relative_median,
+                100.0 * e.relative_max
+            )
+        })
+    }
+
+    /// Whether the FE run is advised over the estimate for `template`: its
+    /// worst random member was off by more than
+    /// [`ESTIMATE_ADVISED_MAX_RELATIVE`] of the profile's range.
+    pub fn fe_advised(&self, template: Template) -> bool {
+        self.entry(template).is_some_and(|e| !(e.relative_max <= ESTIMATE_ADVISED_MAX_RELATIVE))
+    }
 }
 
 /// The identifier of the metadata format.
@@ -477,6 +547,7 @@ impl TemplateModel {
         query: &[f64; 3],
         source: &str,
         warning: Option<&str>,
+        fe_row: Option<usize>,
     ) -> Vec<String> {
         let mut comments = vec![
             format!("haptex predict: {}", self.template.describe_query(x0_mm, query)),
@@ -484,7 +555,36 @@ impl TemplateModel {
             metadata.fe.flat_mu_comment(),
         ];
         comments.extend(warning.map(|w| format!("warning: {w}")));
+        let notes = self.estimate_notes(metadata, query, fe_row);
+        comments.extend(notes.expected.map(|e| format!("expected error: {e}")));
+        comments.extend(notes.advice.map(|a| format!("advice: {a}")));
         comments
+    }
+
+    /// What the database's validation on random members ([`Validation`])
+    /// says of an estimate for `query` (r_w, r_h, velocity): its expected
+    /// error, and the advice to run the FE model where that is not good
+    /// enough. Nothing for an FE row or a database without a validation.
+    pub fn estimate_notes(&self, metadata: &Metadata, query: &[f64; 3], fe_row: Option<usize>) -> EstimateNotes {
+        let Some(validation) = metadata.validation.as_ref().filter(|_| fe_row.is_none()) else {
+            return EstimateNotes::default();
+        };
+        let t = self.template;
+        EstimateNotes {
+            expected: validation.expected_error(t),
+            advice: validation.fe_advised(t).then(|| {
+                format!(
+                    "for {} surfaces the estimate is not good enough: run the FE model instead, `haptex db loo \
+                     --surface {} --width {} --height {} --velocity {}` (its FE profile, with the database's \
+                     settings) or `haptex simulate`",
+                    t.name(),
+                    t.name(),
+                    Num(query[0]),
+                    Num(query[1]),
+                    Num(query[2])
+                )
+            }),
+        }
     }
 
     /// The warning for a query (r_w, r_h, velocity) and its prediction, if

@@ -20,7 +20,8 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use haptex_core::database::{Metadata, Template, TemplateModel};
+use haptex_core::database::{Metadata, Template, TemplateModel, Validation, ValidationEntry};
+use haptex_core::io::write_atomic;
 use rayon::prelude::*;
 
 use crate::sweep::{DatabaseSpec, Run, SweepError};
@@ -174,6 +175,37 @@ pub fn summarize(members: &[Member]) -> Vec<Summary> {
             }
         })
         .collect()
+}
+
+/// Records `summary` (of `members` members per template from `seed`) in
+/// the database's `metadata.json`, replacing an earlier validation; the
+/// file is rewritten atomically. `metadata` must be the directory's own.
+pub fn record(
+    dir: &Path,
+    metadata: &Metadata,
+    seed: u64,
+    members: usize,
+    summary: &[Summary],
+) -> Result<Metadata, SweepError> {
+    let mut metadata = metadata.clone();
+    metadata.validation = Some(Validation {
+        created: haptex_core::database::utc_now_rfc3339(),
+        seed,
+        members,
+        templates: summary
+            .iter()
+            .map(|s| ValidationEntry {
+                template: s.template,
+                rms_median: s.rms_median,
+                rms_max: s.rms_max,
+                relative_median: s.relative_median,
+                relative_max: s.relative_max,
+            })
+            .collect(),
+    });
+    let json = serde_json::to_string_pretty(&metadata).expect("metadata serializes");
+    write_atomic(&dir.join("metadata.json"), |w| writeln!(w, "{json}"))?;
+    Ok(metadata)
 }
 
 /// The median (the mean of the middle two for an even count).

@@ -109,7 +109,8 @@ impl Database {
             let class = py.import("haptex._errors")?.getattr("ExtrapolationWarning")?;
             PyErr::warn(py, &class, &std::ffi::CString::new(text.as_str())?, 1)?;
         }
-        let comments = model.prediction_comments(&self.metadata, x0, &query, &source, warning.as_deref());
+        let comments =
+            model.prediction_comments(&self.metadata, x0, &query, &source, warning.as_deref(), prediction.fe_row);
         let CorePrediction { x_mm, mu, fe_row, .. } = prediction;
         Ok(Prediction {
             x_mm: array(py, x_mm.clone()),

@@ -84,6 +84,7 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
         step!("combined check caveat", combined_check_caveat(client));
         step!("page words", page_words(client));
         step!("pins and extrapolation", pins_and_extrapolation(client));
+        step!("expected error and FE advice", expected_error_and_fe_advice(client));
         // A refusal the server answers is logged by Chromium itself ("Failed
         // to load resource"): not an error of the page's script.
         let errors: Vec<String> =
@@ -485,6 +486,48 @@ async fn pins_and_extrapolation(client: &Client) -> Check<()> {
     let info = text_of(client, "template-info").await?;
     if !info.contains("jagged") || !info.contains("FE model") {
         return Err(format!("an extrapolated template's estimate comes without a word: {info:?}"));
+    }
+    Ok(())
+}
+
+/// Step 7b: a template's estimate states what `db validate --record`
+/// measured on random members (the shipped metadata.json), beside the
+/// estimate in the template's note; for a sine, whose worst member was off
+/// by more than 10% of its range, the note advises the FE run in the words
+/// of its button, and the button is the note's next element.
+async fn expected_error_and_fe_advice(client: &Client) -> Check<()> {
+    for (surface, advised) in [("sine", true), ("bump", false)] {
+        let n = updates(client).await?;
+        script(
+            client,
+            &format!(
+                "const s = document.getElementById('surface'); s.value = '{surface}'; \
+                 s.dispatchEvent(new Event('change', {{bubbles: true}})); return true;"
+            ),
+        )
+        .await?;
+        wait_for(client, &format!("Number(document.body.dataset.updates) > {n}"), &format!("the {surface} designed"))
+            .await?;
+        let info = text_of(client, "template-info").await?;
+        if !info.contains("random members checked against fresh FE runs") || !info.contains("% at most") {
+            return Err(format!("the {surface}'s estimate does not say what to expect of it: {info:?}"));
+        }
+        let advice = info.contains("press \"check with the FE model\" below");
+        if advice != advised {
+            return Err(format!(
+                "the {surface}'s note {} the FE run: {info:?}",
+                if advised { "does not advise" } else { "advises" }
+            ));
+        }
+        let next = script(
+            client,
+            "const e = document.getElementById('template-info').nextElementSibling; \
+             return !!(e && e.querySelector('#run-fe'));",
+        )
+        .await?;
+        if next != Value::Bool(true) {
+            return Err("the FE button is not right below the note that advises it".into());
+        }
     }
     Ok(())
 }

@@ -188,6 +188,10 @@ struct ValidateArgs {
     /// The summary as JSON on stdout instead of the table.
     #[arg(long)]
     json: bool,
+    /// Record the result in the database's metadata.json, where `haptex
+    /// predict` and the web page read what to expect of an estimate.
+    #[arg(long)]
+    record: bool,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -497,6 +501,13 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
         })?;
     }
     let summary = held_out::summarize(&members);
+    if args.record {
+        held_out::record(&dir, &metadata, args.seed, n, &summary)
+            .with_context(|| format!("recording the validation in {}", dir.join("metadata.json").display()))?;
+        if !args.quiet {
+            eprintln!("recorded in {}", dir.join("metadata.json").display());
+        }
+    }
     let to_stderr = members_out.as_ref().is_some_and(|o| o.path().is_none());
     if args.json {
         let rows: Vec<serde_json::Value> = summary

@@ -83,14 +83,22 @@ pub fn run(args: PredictArgs) -> anyhow::Result<()> {
     let entry = metadata.entry(template).expect("the model was loaded from this entry");
     let source = model.describe(&query, &prediction, entry);
     let warning = model.warning(&query, prediction.fe_row, &prediction.diagnostics);
+    let notes = model.estimate_notes(&metadata, &query, prediction.fe_row);
     Output::new(args.output.clone()).write(|w| {
-        let comments = model.prediction_comments(&metadata, args.x0, &query, &source, warning.as_deref());
+        let comments =
+            model.prediction_comments(&metadata, args.x0, &query, &source, warning.as_deref(), prediction.fe_row);
         write_prediction_csv(w, &comments, &prediction.x_mm, &prediction.mu)
     })?;
     if !args.quiet {
         eprintln!("{source}");
+        if let Some(e) = &notes.expected {
+            eprintln!("expected error: {e}");
+        }
         if let Some(warning) = warning {
             eprintln!("warning: {warning}");
+        }
+        if let Some(a) = &notes.advice {
+            eprintln!("advice: {a}");
         }
     }
     Ok(())

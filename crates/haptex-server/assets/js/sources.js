@@ -41,7 +41,23 @@ export const SOURCES = {
         : `CAE estimate over the FE database; typical error ${fmt(answer.loo_rmse)} in mu ` +
           `(${Math.round(100 * answer.loo_rmse_relative_to_range)}% of a profile's range, leave-one-out).`;
       info.append(source);
-      info.classList.toggle('warning', answer.extrapolation);
+      const v = answer.fe_exact ? null : answer.validation;
+      if (v) {
+        const expected = document.createElement('div');
+        expected.className = 'expected-error';
+        expected.textContent = `On ${v.members} random members checked against fresh FE runs the estimate was off ` +
+          `by ${(100 * v.relative_median).toFixed(1)}% of the profile's range (median), ` +
+          `${(100 * v.relative_max).toFixed(1)}% at most.`;
+        info.append(expected);
+      }
+      if (answer.fe_advised) {
+        const advice = document.createElement('div');
+        advice.className = 'fe-advice';
+        advice.textContent = `For a ${answer.surface} the estimate is not good enough: press ` +
+          '"check with the FE model" below.';
+        info.append(advice);
+      }
+      info.classList.toggle('warning', answer.extrapolation || answer.fe_advised);
       answer.warnings.forEach((w) => {
         const line = document.createElement('div');
         line.textContent = `Extrapolation: ${w}`;

@@ -49,12 +49,8 @@ pub async fn post(call: Preamble<super::Template>) -> Result<Response, ApiError>
             .map_err(|e| ApiError::internal(format!("the predicted profile is invalid: {e}")))?;
 
         if format == "csv" {
-            let mut comments = vec![
-                format!("haptex predict: {}", template.describe_query(x0, &query)),
-                source,
-                set.metadata().fe.flat_mu_comment(),
-            ];
-            comments.extend(warning.map(|w| format!("warning: {w}")));
+            let mut comments =
+                model.prediction_comments(set.metadata(), x0, &query, &source, warning.as_deref(), fe_row);
             // The recipe's rest: with the parameters above, what reproduces the file.
             comments.push(format!(
                 "haptex {} (POST /api/predict); database_sha256: {}",
@@ -84,6 +80,19 @@ pub async fn post(call: Preamble<super::Template>) -> Result<Response, ApiError>
         answer["diagnostics"] = json!(diagnostics);
         answer["loo_rmse"] = json!(entry.loo_rmse);
         answer["loo_rmse_relative_to_range"] = json!(entry.loo_rmse_relative_to_range);
+        // What db validate measured on random members (null if it was not
+        // recorded), and whether the FE run is advised over the estimate.
+        let validation = set.metadata().validation.as_ref();
+        answer["validation"] = json!(validation.and_then(|v| v.entry(template)).map(|e| json!({
+            "members": validation.map(|v| v.members),
+            "seed": validation.map(|v| v.seed),
+            "rms_median": e.rms_median,
+            "rms_max": e.rms_max,
+            "relative_median": e.relative_median,
+            "relative_max": e.relative_max,
+        })));
+        let notes = model.estimate_notes(set.metadata(), &query, fe_row);
+        answer["fe_advised"] = json!(notes.advice.is_some());
         answer["h_mm"] = json!(h_mm);
         // The profile's flat-surface friction: the mu_flat of a relative
         // voltage mapping (`POST /api/voltage` with relative and flat_mu).
