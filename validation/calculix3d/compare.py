@@ -27,6 +27,10 @@ JOBS = [
     ("bump_linear_n2s_stick20", "bump_coarse", "bump, node-to-surface, stick 20"),
     # the diagnosis of the bump (README, "Diagnosis of the bump")
     ("bump_linear_inc025", "bump_coarse", "bump, s2s as the reference, slide increments 0.025 mm"),
+    ("bump_linear_inc01", "bump_coarse", "bump, s2s as the reference, slide increments 0.01 mm"),
+    ("bump_linear_n2s_stick2", "bump_coarse", "bump, node-to-surface, stick 2"),
+    ("bump_linear_n2s_ctrl", "bump_coarse", "bump, node-to-surface, stick 200, *CONTROLS"),
+    ("bump_linear_n2s_stick2_ctrl", "bump_coarse", "bump, node-to-surface, stick 2, *CONTROLS"),
     ("bump_mu0_n2s", "bump_coarse_mu0", "bump, mu = 0, node-to-surface"),
     ("bump_mu0_s2s", "bump_coarse_mu0", "bump, mu = 0, s2s, increments 0.1 mm"),
     ("bump_mu0_s2s_inc025", "bump_coarse_mu0", "bump, mu = 0, s2s, increments 0.025 mm"),
@@ -133,7 +137,8 @@ def main():
              ("haptex:bump_fine", "haptex:bump_default"), ("haptex:bump_default_mu0", "haptex:bump_coarse_mu0"),
              ("haptex:bump_fine_mu0", "haptex:bump_default_mu0"), ("bump_linear_inc025", "bump_linear"),
              ("bump_mu0_s2s", "bump_mu0_n2s"), ("bump_mu0_s2s_inc025", "bump_mu0_s2s"),
-             ("bump_mu0_s2s_inc01", "bump_mu0_s2s_inc025")]
+             ("bump_mu0_s2s_inc01", "bump_mu0_s2s_inc025"), ("bump_linear_inc01", "bump_linear_inc025"),
+             ("bump_linear_inc01", "bump_linear")]
 
     def load(name):
         if name.startswith("haptex:"):
@@ -159,7 +164,7 @@ def main():
             "Mean over x = 0.1 .. 3 mm (haptex's grid). Antisymmetry (mu = 0 only): the largest and the RMS "
             "|Ft/Fn(x) + Ft/Fn(3 - x)| over x = 0.1 .. 1.5 mm (0 for a conservative model).", "",
             "| curve | points | mean Ft/Fn | max antisymmetry error | RMS antisymmetry error |", "|---|---|---|---|---|"]
-    bump = ["haptex:bump_coarse", "haptex:bump_default", "haptex:bump_fine", "bump_linear", "bump_linear_inc025",
+    bump = ["haptex:bump_coarse", "haptex:bump_default", "haptex:bump_fine", "bump_linear", "bump_linear_inc025", "bump_linear_inc01",
             "haptex:bump_coarse_mu0", "haptex:bump_default_mu0", "haptex:bump_fine_mu0", "bump_mu0_n2s", "bump_mu0_s2s",
             "bump_mu0_s2s_inc025", "bump_mu0_s2s_inc01", "bump_mu0_s2s_nlgeom"]
     for name in bump:

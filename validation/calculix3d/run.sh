@@ -5,7 +5,7 @@
 #   validation/calculix3d/run.sh                 every job below, one at a time
 #   validation/calculix3d/run.sh flat_linear     only these ccx jobs (haptex runs always)
 #   validation/calculix3d/run.sh diagnosis       the bump diagnosis jobs (README, "Diagnosis of the bump"):
-#                                                frictionless and small-increment runs, ~15 min
+#                                                frictionless and small-increment runs, ~40 min
 #
 # The timing of the peer comparison: whenever flat_linear is run, this script
 # times `haptex simulate` on the same case and mesh right before the ccx run,
@@ -87,10 +87,16 @@ mk $BC --job bump_mu0_s2s_inc025 --surface bump "${BUMP[@]}" --mu 0 --contact "S
 mk $BC --job bump_mu0_s2s_inc01 --surface bump "${BUMP[@]}" --mu 0 --contact "SURFACE TO SURFACE" --inc 0.01
 mk $BC --job bump_mu0_s2s_nlgeom --surface bump "${BUMP[@]}" --mu 0 --contact "SURFACE TO SURFACE" --kin nlgeom
 mk $BC --job bump_linear_inc025 --surface bump "${BUMP[@]}" "${S2S[@]}" --inc 0.025
+mk $BC --job bump_linear_inc01 --surface bump "${BUMP[@]}" "${S2S[@]}" --inc 0.01
+# node-to-surface at mu 0.5 again (none gets through the bump): stick slope 2, longer iterations, both
+CTRL="*CONTROLS, PARAMETERS=TIME INCREMENTATION;8,16,9,200,10,4,,5"
+mk $BC --job bump_linear_n2s_stick2 --surface bump "${BUMP[@]}" --contact "NODE TO SURFACE" --stick 2
+mk $BC --job bump_linear_n2s_ctrl --surface bump "${BUMP[@]}" --contact "NODE TO SURFACE" --stick 200 --controls "$CTRL"
+mk $BC --job bump_linear_n2s_stick2_ctrl --surface bump "${BUMP[@]}" --contact "NODE TO SURFACE" --stick 2 --controls "$CTRL"
 
 JOBS=("$@")
 [[ ${#JOBS[@]} -eq 0 ]] && JOBS=(flat_linear flat_linear_n2s bump_linear flat_nlgeom flat_linear_C3D8 flat_linear_default bump_nlgeom bump_linear_n2s bump_linear_n2s_stick20)
-[[ ${JOBS[*]} == diagnosis ]] && JOBS=(bump_mu0_n2s bump_mu0_s2s bump_mu0_s2s_inc025 bump_mu0_s2s_inc01 bump_linear_inc025 bump_mu0_s2s_nlgeom)
+[[ ${JOBS[*]} == diagnosis ]] && JOBS=(bump_mu0_n2s bump_mu0_s2s bump_mu0_s2s_inc025 bump_mu0_s2s_inc01 bump_linear_inc025 bump_linear_inc01 bump_mu0_s2s_nlgeom bump_linear_n2s_stick2 bump_linear_n2s_ctrl bump_linear_n2s_stick2_ctrl)
 
 echo "== CalculiX runs"
 for job in "${JOBS[@]}"; do
