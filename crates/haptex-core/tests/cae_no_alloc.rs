@@ -36,10 +36,11 @@ fn predict_into_allocates_nothing_per_query() {
     }
 }
 
-/// The batched prediction over caller-provided buffers allocates only the
-/// matrix product's packing buffer, once per block of BATCH_BLOCK queries
-/// (matrixmultiply allocates it per call): 300 queries, 5 blocks, 5
-/// allocations, whatever the number of model vectors.
+/// The batched prediction over caller-provided buffers allocates at most
+/// the matrix product's packing buffer, once per block of BATCH_BLOCK
+/// queries: 300 queries, 5 blocks, at most 5 allocations, whatever the
+/// number of model vectors (faer's product keeps its buffer between calls:
+/// 1 measured; matrixmultiply, before it, allocated one per call).
 #[test]
 fn predict_batch_into_allocations() {
     let (n, m) = (200, 50);
@@ -55,6 +56,6 @@ fn predict_batch_into_allocations() {
     let allocations =
         allocations_in(|| cae.predict_batch_into(&queries, &mut scratch, &mut out, &mut diagnostics).unwrap());
     assert_eq!(300usize.div_ceil(haptex_core::cae::BATCH_BLOCK), 5);
-    assert_eq!(allocations, 5);
+    assert!((1..=5).contains(&allocations), "{allocations} allocations");
     assert_eq!(diagnostics.len(), 300);
 }

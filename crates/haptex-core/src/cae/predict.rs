@@ -324,8 +324,8 @@ impl Cae {
     /// instead of once per query. (A block whose queries each use under a
     /// quarter of the rows is summed query by query over those rows.) The results agree with
     /// [`Cae::predict_into`] to rounding (the sums are taken in another
-    /// order). Allocates only the product's packing buffer, once per block
-    /// (matrixmultiply makes it per call), once `diagnostics` has room for
+    /// order). Allocates at most the product's packing buffer, once per block
+    /// (faer keeps it between calls), once `diagnostics` has room for
     /// Q entries. An error names the query (1-based) it is about.
     pub fn predict_batch_into(
         &self,
@@ -393,29 +393,14 @@ impl Cae {
                 }
                 continue;
             }
-            assert!(scratch.weights.len() >= q_block * n && c.len() == n * m && out_block.len() == q_block * m);
-            // SAFETY: row-major matrices of the sizes given (q_block x N
-            // weights, N x M outputs, q_block x M results; checked just
-            // above), the result does not alias the inputs, and with beta = 0
-            // it is only written.
-            unsafe {
-                matrixmultiply::dgemm(
-                    q_block,
-                    n,
-                    m,
-                    1.0,
-                    scratch.weights.as_ptr(),
-                    n as isize,
-                    1,
-                    c.as_ptr(),
-                    m as isize,
-                    1,
-                    0.0,
-                    out_block.as_mut_ptr(),
-                    m as isize,
-                    1,
-                );
-            }
+            // The block's product, row-major: out (q x M) = W (q x N) C (N x M),
+            // as its transpose in faer's column-major views, out^T = C^T W^T
+            // (the same memory): faer's kernels use the widest vector unit
+            // the CPU has (AVX-512 where it has it).
+            let out_t = faer::MatMut::from_column_major_slice_mut(&mut out_block[..q_block * m], m, q_block);
+            let c_t = faer::MatRef::from_column_major_slice(c, m, n);
+            let w_t = faer::MatRef::from_column_major_slice(&scratch.weights[..q_block * n], n, q_block);
+            faer::linalg::matmul::matmul(out_t, faer::Accum::Replace, c_t, w_t, 1.0, faer::Par::Seq);
         }
         Ok(())
     }
