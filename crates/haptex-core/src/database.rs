@@ -318,7 +318,8 @@ impl Validation {
     /// worst random member was off by more than
     /// [`ESTIMATE_ADVISED_MAX_RELATIVE`] of the profile's range.
     pub fn fe_advised(&self, template: Template) -> bool {
-        self.entry(template).is_some_and(|e| !(e.relative_max <= ESTIMATE_ADVISED_MAX_RELATIVE))
+        // A value that is not a number (a hand-edited file) advises the FE run.
+        self.entry(template).is_some_and(|e| e.relative_max.is_nan() || e.relative_max > ESTIMATE_ADVISED_MAX_RELATIVE)
     }
 }
 
