@@ -36,6 +36,17 @@ fn build(dir: &Path, extra: &[&str]) -> Output {
     haptex(&args)
 }
 
+/// The RMS of mu_cae_full - mu_fe of a `haptex db loo` case file.
+fn loo_rms_full(path: &Path) -> f64 {
+    let rows: Vec<Vec<f64>> = read(path)
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    (rows.iter().map(|r| (r[4] - r[2]).powi(2)).sum::<f64>() / rows.len() as f64).sqrt()
+}
+
 fn read(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
@@ -402,13 +413,7 @@ fn shipped_database_predicts_off_grid_fe_cases() {
             csv.to_str().unwrap(),
         ]);
         assert!(out.status.success(), "{}", text(&out.stderr));
-        let rows: Vec<Vec<f64>> = read(&csv)
-            .lines()
-            .filter(|l| !l.starts_with('#'))
-            .skip(1)
-            .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-            .collect();
-        let rms = (rows.iter().map(|r| (r[4] - r[2]).powi(2)).sum::<f64>() / rows.len() as f64).sqrt();
+        let rms = loo_rms_full(&csv);
         let entry = metadata["templates"].as_array().unwrap().iter().find(|e| e["template"] == template).unwrap();
         let loo = entry["loo_rmse"].as_f64().unwrap();
         assert!(rms < 2.0 * loo, "{template}: RMS(CAE - FE) = {rms:.4}, LOO RMS of the database {loo:.4}");
@@ -594,13 +599,7 @@ fn db_validate_measures_random_members_against_fresh_fe_runs() {
             csv.to_str().unwrap(),
         ]);
         assert!(out.status.success(), "{}", text(&out.stderr));
-        let loo: Vec<Vec<f64>> = read(&csv)
-            .lines()
-            .filter(|l| !l.starts_with('#'))
-            .skip(1)
-            .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-            .collect();
-        let loo_rms = (loo.iter().map(|r| (r[4] - r[2]).powi(2)).sum::<f64>() / loo.len() as f64).sqrt();
+        let loo_rms = loo_rms_full(&csv);
         // db loo writes both profiles to 6 decimals: a difference of at most 1e-6 per point.
         assert!((loo_rms - rms).abs() <= 2e-6, "{row:?}: db loo gives RMS {loo_rms}");
     }

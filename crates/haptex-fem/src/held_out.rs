@@ -4,9 +4,9 @@
 //! estimate `haptex predict` gives for them.
 //!
 //! A member's parameters are drawn uniformly over the database's input
-//! ranges (r_w, r_h, velocity) by SplitMix64 (Steele, Lea and Flood 2014,
-//! "Fast splittable pseudorandom number generators"), seeded with the
-//! seed and the template, so the members of one template do not depend on
+//! ranges (r_w, r_h, velocity) by haptex's own SplitMix64
+//! ([`haptex_core::recording::rng`], fixed in every version), seeded with
+//! the seed and the template, so the members of one template do not depend on
 //! which other templates are validated, and a seed gives the same members
 //! on every machine. Values are rounded to 1e-4 mm and 0.01 mm/s, so a
 //! member can be run again from the printed table (`haptex db loo
@@ -22,32 +22,10 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use haptex_core::database::{Metadata, Template, TemplateModel, Validation, ValidationEntry};
 use haptex_core::io::write_atomic;
+use haptex_core::recording::rng::SplitMix64;
 use rayon::prelude::*;
 
 use crate::sweep::{DatabaseSpec, Run, SweepError};
-
-/// SplitMix64: a 64-bit state advanced by a Weyl sequence and mixed.
-#[derive(Debug, Clone)]
-pub struct SplitMix64(u64);
-
-impl SplitMix64 {
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1): the top 53 bits.
-    pub fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-}
 
 /// `n` random members of `template`'s family over `ranges` ((min, max) of
 /// r_w, r_h and velocity), from `seed`.
@@ -58,7 +36,7 @@ pub fn random_members(template: Template, ranges: [(f64, f64); 3], n: usize, see
         Template::Sine => 3,
     };
     let mut rng = SplitMix64::new(seed ^ stream.wrapping_mul(0xd1b5_4a32_d192_ed03));
-    let mut draw = |(lo, hi): (f64, f64), step: f64| ((lo + rng.next_f64() * (hi - lo)) / step).round() * step;
+    let mut draw = |(lo, hi): (f64, f64), step: f64| (rng.range(lo, hi) / step).round() * step;
     (0..n)
         .map(|_| {
             let width_mm = draw(ranges[0], 1e-4);
@@ -222,15 +200,6 @@ pub fn median(values: &[f64]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// SplitMix64's first outputs for seed 1234567, as the reference C
-    /// implementation (Vigna, prng.di.unimi.it/splitmix64.c) prints them.
-    #[test]
-    fn splitmix64_matches_the_reference() {
-        let mut r = SplitMix64::new(1_234_567);
-        let got: Vec<u64> = (0..3).map(|_| r.next_u64()).collect();
-        assert_eq!(got, [6_457_827_717_110_365_317, 3_203_168_211_198_807_973, 9_817_491_932_198_370_423]);
-    }
 
     /// Members lie in the ranges, on their rounding steps, the same for a
     /// seed, other for another seed, and a template's do not depend on the others.
