@@ -413,6 +413,15 @@ async fn exercise(client: &Client, url: &str, files: &Files, width: u32, height:
     // The band's ends: the button puts black and white there.
     type_into(client, "mu_white", "1.5").await?;
     note_beside(client, "mu_white-warning", "mu_white", &["above the top of the band", "clipped"], false).await?;
+    // The typed value's own map first (its build is scheduled as typed):
+    // counted before it lands, it would be taken for the button's map (a
+    // flaky failure at the phone size, "still clip: 0.36").
+    wait_for(
+        client,
+        "window.haptexMap.state.map && window.haptexMap.state.map.mapping.mu_white === 1.5",
+        "the map with mu_white 1.5",
+    )
+    .await?;
     let builds = counter(client, "builds").await?;
     click(client, "fit-band").await?;
     wait_for(client, &format!("Number(document.body.dataset.builds || 0) > {builds}"), "the mapping fit to the band")
