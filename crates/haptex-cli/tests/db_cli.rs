@@ -658,12 +658,43 @@ fn db_validate_measures_random_members_against_fresh_fe_runs() {
     let out = haptex(&["predict", "--db", db_arg, "--surface", "bump", "--x0", "5", "--width", "1", "--height", "0.3"]);
     assert!(out.status.success() && !text(&out.stderr).contains("expected error"), "{}", text(&out.stderr));
 
+    // The grid estimator over the same members: the same FE runs, another
+    // estimate; exact at a row, so a member that is a row has no error.
+    let csv = tmp.path().join("grid.csv");
+    let out = haptex(&[
+        "db",
+        "validate",
+        "--db",
+        db_arg,
+        "--random",
+        "3",
+        "--seed",
+        "11",
+        "-q",
+        "--estimator",
+        "grid",
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let grid = read(&csv);
+    let params = |t: &str| -> Vec<String> {
+        t.lines()
+            .filter(|l| !l.starts_with('#'))
+            .skip(1)
+            .map(|l| l.split(',').take(4).collect::<Vec<_>>().join(","))
+            .collect()
+    };
+    assert_eq!(params(&grid), params(&first), "the grid is measured on the same members");
+    assert_ne!(grid, first, "the grid's errors are the CAE's");
+
     let missing = tmp.path().join("none");
-    let cases: [(&[&str], &str); 4] = [
+    let cases: [(&[&str], &str); 5] = [
         (&["db", "validate", "--db", db_arg, "--random", "0"], "--random"),
         (&["db", "validate", "--db", db_arg], "--random"),
         (&["db", "validate", "--db", db_arg, "--random", "2", "--seed=-1"], "--seed"),
         (&["db", "validate", "--db", missing.to_str().unwrap(), "--random", "2"], "metadata.json"),
+        (&["db", "validate", "--db", db_arg, "--random", "2", "--record", "--estimator", "grid"], "--estimator"),
     ];
     for (args, expected) in cases {
         let out = haptex(args);

@@ -407,6 +407,20 @@ pub struct TemplateModel {
     positions: Vec<f64>,
     /// (min, max) of r_w, r_h and velocity over the rows, computed once.
     input_ranges: [(f64, f64); 3],
+    /// The rows as a grid, if they are a full one (as every sweep's are).
+    grid_interpolation: Option<crate::grid::GridInterpolation>,
+}
+
+/// How an estimate between the database's rows is made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Estimator {
+    /// The paper's conditional average estimator with the metadata's
+    /// leave-one-out widths.
+    #[default]
+    Cae,
+    /// Multilinear interpolation over the sweep's grid
+    /// ([`crate::grid::GridInterpolation`]).
+    Grid,
 }
 
 /// A predicted profile.
@@ -453,8 +467,16 @@ impl TemplateModel {
                 .map(|n| matrix.input_row(n)[l])
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)))
         });
+        let grid = crate::grid::GridInterpolation::new(&matrix).ok();
         let cae = Cae::new(matrix, entry.widths)?;
-        Ok(Self { template, cae, grid: metadata.grid, positions: metadata.grid.positions(), input_ranges })
+        Ok(Self {
+            template,
+            cae,
+            grid: metadata.grid,
+            positions: metadata.grid.positions(),
+            input_ranges,
+            grid_interpolation: grid,
+        })
     }
 
     /// Positions xi = x - x0 of the outputs (mm).
@@ -499,12 +521,39 @@ impl TemplateModel {
         height_mm: f64,
         velocity_mm_s: f64,
     ) -> Result<Prediction, DatabaseError> {
+        self.predict_with(Estimator::Cae, x0_mm, width_mm, height_mm, velocity_mm_s)
+    }
+
+    /// [`Self::predict`] with the estimator `estimator` between the rows
+    /// (an FE row is returned as it is either way; the diagnostics are the
+    /// CAE's, for its warnings). `Grid` needs rows that form a full grid.
+    pub fn predict_with(
+        &self,
+        estimator: Estimator,
+        x0_mm: f64,
+        width_mm: f64,
+        height_mm: f64,
+        velocity_mm_s: f64,
+    ) -> Result<Prediction, DatabaseError> {
+        let grid = match estimator {
+            Estimator::Cae => None,
+            Estimator::Grid => Some(self.grid_interpolation.as_ref().ok_or_else(|| {
+                DatabaseError::Query(format!(
+                    "the {} rows are not a full grid of r_w, r_h and velocity: use the CAE",
+                    self.template.name()
+                ))
+            })?),
+        };
         if !x0_mm.is_finite() {
             return Err(DatabaseError::Query(format!("x0 must be a finite number, got {}", crate::num::Num(x0_mm))));
         }
         let mut scratch = self.cae.scratch();
         let mut mu = vec![0.0; self.grid.points];
-        let (fe_row, diagnostics) = self.predict_into(&[width_mm, height_mm, velocity_mm_s], &mut scratch, &mut mu)?;
+        let query = [width_mm, height_mm, velocity_mm_s];
+        let (fe_row, diagnostics) = self.predict_into(&query, &mut scratch, &mut mu)?;
+        if let (Some(grid), None) = (grid, fe_row) {
+            grid.predict_into(self.cae.matrix(), &query, &mut mu);
+        }
         let x_mm = self.grid.positions_from(x0_mm);
         Ok(Prediction { x_mm, mu, fe_row, diagnostics })
     }

@@ -13,6 +13,7 @@ pub mod combined;
 pub mod database;
 pub mod electrovibration;
 pub mod frequency;
+pub mod grid;
 pub mod height;
 pub mod ilc;
 pub mod io;

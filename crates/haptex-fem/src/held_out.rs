@@ -20,7 +20,7 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use haptex_core::database::{Metadata, Template, TemplateModel, Validation, ValidationEntry};
+use haptex_core::database::{Estimator, Metadata, Template, TemplateModel, Validation, ValidationEntry};
 use haptex_core::io::write_atomic;
 use haptex_core::recording::rng::SplitMix64;
 use rayon::prelude::*;
@@ -81,14 +81,16 @@ pub fn member_error(run: Run, fe: &[f64], estimate: &[f64]) -> Member {
     Member { run, rms, range, relative: if range > 0.0 { rms / range } else { f64::INFINITY } }
 }
 
-/// Validates the database in `dir` on `n` random members of each of
-/// `templates` from `seed`, `jobs` FE runs at a time, calling
+/// Validates `estimator` over the database in `dir` on `n` random members
+/// of each of `templates` from `seed`, `jobs` FE runs at a time, calling
 /// `progress(done, total)` after each run. Members in template order, each
 /// template's in the order drawn.
+#[allow(clippy::too_many_arguments)]
 pub fn validate(
     dir: &Path,
     metadata: &Metadata,
     templates: &[Template],
+    estimator: Estimator,
     n: usize,
     seed: u64,
     jobs: usize,
@@ -118,8 +120,9 @@ pub fn validate(
         runs.par_iter()
             .map(|&(i, run)| -> Result<Member, SweepError> {
                 let fe = spec.simulate(&run)?;
-                let estimate =
-                    models[i].predict(0.0, run.width_mm, run.height_mm, run.velocity_mm_s).map_err(SweepError::from)?;
+                let estimate = models[i]
+                    .predict_with(estimator, 0.0, run.width_mm, run.height_mm, run.velocity_mm_s)
+                    .map_err(SweepError::from)?;
                 progress(done.fetch_add(1, Ordering::SeqCst) + 1, runs.len());
                 Ok(member_error(run, &fe, &estimate.mu))
             })

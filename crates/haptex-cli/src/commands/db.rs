@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand, ValueEnum};
-use haptex_core::database::{Metadata, Template, TemplateModel};
+use haptex_core::database::{Estimator, Metadata, Template, TemplateModel};
 use haptex_core::num::Num;
 use haptex_core::plot::{Figure, Panel};
 use haptex_fem::finger::FingerModel;
@@ -189,12 +189,34 @@ struct ValidateArgs {
     #[arg(long)]
     json: bool,
     /// Record the result in the database's metadata.json, where `haptex
-    /// predict` and the web page read what to expect of an estimate.
-    #[arg(long)]
+    /// predict` and the web page read what to expect of an estimate (of
+    /// the CAE, which they use).
+    #[arg(long, conflicts_with = "estimator")]
     record: bool,
+    /// The estimate between the rows: the paper's CAE (default), or
+    /// multilinear interpolation over the sweep's grid.
+    #[arg(long, value_enum)]
+    estimator: Option<EstimatorArg>,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum EstimatorArg {
+    /// The paper's conditional average estimator.
+    Cae,
+    /// Multilinear interpolation over the sweep's grid.
+    Grid,
+}
+
+impl From<EstimatorArg> for Estimator {
+    fn from(e: EstimatorArg) -> Self {
+        match e {
+            EstimatorArg::Cae => Estimator::Cae,
+            EstimatorArg::Grid => Estimator::Grid,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -474,8 +496,10 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
         );
         bar
     };
-    let members =
-        held_out::validate(&dir, &metadata, &templates, n, args.seed, jobs, &|done, _| bar.set_position(done as u64));
+    let estimator: Estimator = args.estimator.map_or(Estimator::Cae, Into::into);
+    let members = held_out::validate(&dir, &metadata, &templates, estimator, n, args.seed, jobs, &|done, _| {
+        bar.set_position(done as u64)
+    });
     bar.finish_and_clear();
     let members = members.with_context(|| format!("validating the database in {}", dir.display()))?;
     // The members' CSV to a file, or to stdout (`-o -`), the table then to stderr.
