@@ -589,7 +589,8 @@ impl TemplateModel {
     /// The comment lines (without `# `) of a prediction's file, as `haptex
     /// predict` writes them ([`write_prediction_csv`]): what was predicted,
     /// where it comes from (`source`, [`Self::describe`]'s), the database's
-    /// flat-surface friction and the `warning` if any ([`Self::warning`]'s).
+    /// flat-surface friction, the `warning` if any ([`Self::warning`]'s) and
+    /// what to expect of the estimate (`notes`, [`Self::estimate_notes`]').
     pub fn prediction_comments(
         &self,
         metadata: &Metadata,
@@ -597,7 +598,7 @@ impl TemplateModel {
         query: &[f64; 3],
         source: &str,
         warning: Option<&str>,
-        fe_row: Option<usize>,
+        notes: &EstimateNotes,
     ) -> Vec<String> {
         let mut comments = vec![
             format!("haptex predict: {}", self.template.describe_query(x0_mm, query)),
@@ -605,9 +606,8 @@ impl TemplateModel {
             metadata.fe.flat_mu_comment(),
         ];
         comments.extend(warning.map(|w| format!("warning: {w}")));
-        let notes = self.estimate_notes(metadata, query, fe_row);
-        comments.extend(notes.expected.map(|e| format!("expected error: {e}")));
-        comments.extend(notes.advice.map(|a| format!("advice: {a}")));
+        comments.extend(notes.expected.iter().map(|e| format!("expected error: {e}")));
+        comments.extend(notes.advice.iter().map(|a| format!("advice: {a}")));
         comments
     }
 

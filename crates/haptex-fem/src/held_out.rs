@@ -62,12 +62,10 @@ pub struct Member {
 /// The members of one template, summarized.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Summary {
-    pub template: Template,
+    /// The template and its errors' medians and maxima, as `--record`
+    /// stores them.
+    pub errors: ValidationEntry,
     pub members: usize,
-    pub rms_median: f64,
-    pub rms_max: f64,
-    pub relative_median: f64,
-    pub relative_max: f64,
     /// The member with the largest relative error.
     pub worst: Run,
 }
@@ -146,12 +144,14 @@ pub fn summarize(members: &[Member]) -> Vec<Summary> {
             let relative: Vec<f64> = of.iter().map(|m| m.relative).collect();
             let worst = of.iter().max_by(|a, b| a.relative.total_cmp(&b.relative)).expect("one member at least").run;
             Summary {
-                template,
+                errors: ValidationEntry {
+                    template,
+                    rms_median: median(&rms),
+                    rms_max: rms.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                    relative_median: median(&relative),
+                    relative_max: relative.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                },
                 members: of.len(),
-                rms_median: median(&rms),
-                rms_max: rms.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-                relative_median: median(&relative),
-                relative_max: relative.iter().copied().fold(f64::NEG_INFINITY, f64::max),
                 worst,
             }
         })
@@ -173,16 +173,7 @@ pub fn record(
         created: haptex_core::database::utc_now_rfc3339(),
         seed,
         members,
-        templates: summary
-            .iter()
-            .map(|s| ValidationEntry {
-                template: s.template,
-                rms_median: s.rms_median,
-                rms_max: s.rms_max,
-                relative_median: s.relative_median,
-                relative_max: s.relative_max,
-            })
-            .collect(),
+        templates: summary.iter().map(|s| s.errors.clone()).collect(),
     });
     let json = serde_json::to_string_pretty(&metadata).expect("metadata serializes");
     write_atomic(&dir.join("metadata.json"), |w| writeln!(w, "{json}"))?;

@@ -109,8 +109,8 @@ impl Database {
             let class = py.import("haptex._errors")?.getattr("ExtrapolationWarning")?;
             PyErr::warn(py, &class, &std::ffi::CString::new(text.as_str())?, 1)?;
         }
-        let comments =
-            model.prediction_comments(&self.metadata, x0, &query, &source, warning.as_deref(), prediction.fe_row);
+        let notes = model.estimate_notes(&self.metadata, &query, prediction.fe_row);
+        let comments = model.prediction_comments(&self.metadata, x0, &query, &source, warning.as_deref(), &notes);
         let CorePrediction { x_mm, mu, fe_row, .. } = prediction;
         Ok(Prediction {
             x_mm: array(py, x_mm.clone()),

@@ -287,9 +287,7 @@ fn build(args: BuildArgs) -> anyhow::Result<()> {
     let out = args.out.clone().unwrap_or_else(default_db);
     let mut spec = DatabaseSpec::paper();
     if let Some(templates) = &args.templates {
-        spec.sweep.templates = templates.iter().map(|&t| t.into()).collect();
-        spec.sweep.templates.sort();
-        spec.sweep.templates.dedup();
+        spec.sweep.templates = chosen(templates);
     }
     if let Some(v) = args.widths.clone() {
         spec.sweep.widths_mm = sorted(v);
@@ -363,6 +361,14 @@ fn build(args: BuildArgs) -> anyhow::Result<()> {
         print_summary(&metadata, &out);
     }
     Ok(())
+}
+
+/// The templates of a `--templates` list, in order, each once.
+fn chosen(list: &[TemplateArg]) -> Vec<Template> {
+    let mut templates: Vec<Template> = list.iter().map(|&t| t.into()).collect();
+    templates.sort();
+    templates.dedup();
+    templates
 }
 
 fn sorted(mut v: Vec<f64>) -> Vec<f64> {
@@ -464,12 +470,7 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
     let dir = args.db.clone().unwrap_or_else(default_db);
     let metadata = Metadata::read(&dir)?;
     let templates: Vec<Template> = match &args.templates {
-        Some(list) => {
-            let mut t: Vec<Template> = list.iter().map(|&t| t.into()).collect();
-            t.sort();
-            t.dedup();
-            t
-        }
+        Some(list) => chosen(list),
         None => metadata.templates.iter().map(|e| e.template).collect(),
     };
     let jobs =
@@ -532,58 +533,54 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
             eprintln!("recorded in {}", dir.join("metadata.json").display());
         }
     }
+    // With the members' CSV on stdout (`-o -`), the summary goes to stderr.
     let to_stderr = members_out.as_ref().is_some_and(|o| o.path().is_none());
-    if args.json {
+    let text = if args.json {
         let rows: Vec<serde_json::Value> = summary
             .iter()
             .map(|s| {
+                let e = &s.errors;
                 serde_json::json!({
-                    "template": s.template.name(),
+                    "template": e.template.name(),
                     "members": s.members,
-                    "rms_median": s.rms_median,
-                    "rms_max": s.rms_max,
-                    "relative_median": s.relative_median,
-                    "relative_max": s.relative_max,
+                    "rms_median": e.rms_median,
+                    "rms_max": e.rms_max,
+                    "relative_median": e.relative_median,
+                    "relative_max": e.relative_max,
                     "worst": { "r_w_mm": s.worst.width_mm, "r_h_mm": s.worst.height_mm,
                                "velocity_mm_s": s.worst.velocity_mm_s },
                 })
             })
             .collect();
-        let json = serde_json::json!({ "seed": args.seed, "random": n, "templates": rows });
-        let json = serde_json::to_string_pretty(&json)?;
-        if to_stderr {
-            eprintln!("{json}");
-        } else {
-            println!("{json}");
+        serde_json::to_string_pretty(&serde_json::json!({ "seed": args.seed, "random": n, "templates": rows }))?
+    } else {
+        let mut lines = vec![
+            "| template | members | RMS of Ft/Fn, median (max) | relative to the FE profile's range, median (max) | \
+             worst member (r_w, r_h, v) |"
+                .to_string(),
+            "|---|---|---|---|---|".to_string(),
+        ];
+        for s in &summary {
+            let e = &s.errors;
+            lines.push(format!(
+                "| {} | {} | {:.4} ({:.4}) | {:.1}% ({:.1}%) | {} mm, {} mm, {} mm/s |",
+                e.template.name(),
+                s.members,
+                e.rms_median,
+                e.rms_max,
+                100.0 * e.relative_median,
+                100.0 * e.relative_max,
+                Num(s.worst.width_mm),
+                Num(s.worst.height_mm),
+                Num(s.worst.velocity_mm_s)
+            ));
         }
-        return Ok(());
-    }
-    let mut lines = vec![
-        "| template | members | RMS of Ft/Fn, median (max) | relative to the FE profile's range, median (max) | worst \
-         member (r_w, r_h, v) |"
-            .to_string(),
-        "|---|---|---|---|---|".to_string(),
-    ];
-    for s in &summary {
-        lines.push(format!(
-            "| {} | {} | {:.4} ({:.4}) | {:.1}% ({:.1}%) | {} mm, {} mm, {} mm/s |",
-            s.template.name(),
-            s.members,
-            s.rms_median,
-            s.rms_max,
-            100.0 * s.relative_median,
-            100.0 * s.relative_max,
-            Num(s.worst.width_mm),
-            Num(s.worst.height_mm),
-            Num(s.worst.velocity_mm_s)
-        ));
-    }
-    for line in lines {
-        if to_stderr {
-            eprintln!("{line}");
-        } else {
-            println!("{line}");
-        }
+        lines.join("\n")
+    };
+    if to_stderr {
+        eprintln!("{text}");
+    } else {
+        println!("{text}");
     }
     Ok(())
 }

@@ -85,8 +85,7 @@ pub fn run(args: PredictArgs) -> anyhow::Result<()> {
     let warning = model.warning(&query, prediction.fe_row, &prediction.diagnostics);
     let notes = model.estimate_notes(&metadata, &query, prediction.fe_row);
     Output::new(args.output.clone()).write(|w| {
-        let comments =
-            model.prediction_comments(&metadata, args.x0, &query, &source, warning.as_deref(), prediction.fe_row);
+        let comments = model.prediction_comments(&metadata, args.x0, &query, &source, warning.as_deref(), &notes);
         write_prediction_csv(w, &comments, &prediction.x_mm, &prediction.mu)
     })?;
     if !args.quiet {

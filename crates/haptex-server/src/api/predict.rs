@@ -45,12 +45,15 @@ pub async fn post(call: Preamble<super::Template>) -> Result<Response, ApiError>
         let source = model.describe(&query, &prediction, entry);
         let warning = model.warning(&query, prediction.fe_row, &prediction.diagnostics);
         let Prediction { x_mm, mu, fe_row, diagnostics } = prediction;
+        // What db validate measured on random members, for the file's
+        // comments and the answer's `fe_advised`.
+        let notes = model.estimate_notes(set.metadata(), &query, fe_row);
         let profile = FrictionProfile::new(x_mm, mu)
             .map_err(|e| ApiError::internal(format!("the predicted profile is invalid: {e}")))?;
 
         if format == "csv" {
             let mut comments =
-                model.prediction_comments(set.metadata(), x0, &query, &source, warning.as_deref(), fe_row);
+                model.prediction_comments(set.metadata(), x0, &query, &source, warning.as_deref(), &notes);
             // The recipe's rest: with the parameters above, what reproduces the file.
             comments.push(format!(
                 "haptex {} (POST /api/predict); database_sha256: {}",
@@ -91,7 +94,6 @@ pub async fn post(call: Preamble<super::Template>) -> Result<Response, ApiError>
             "relative_median": e.relative_median,
             "relative_max": e.relative_max,
         })));
-        let notes = model.estimate_notes(set.metadata(), &query, fe_row);
         answer["fe_advised"] = json!(notes.advice.is_some());
         answer["h_mm"] = json!(h_mm);
         // The profile's flat-surface friction: the mu_flat of a relative
