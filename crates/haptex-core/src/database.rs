@@ -254,6 +254,11 @@ pub struct Metadata {
     /// (`haptex db validate --record`), if it was.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub validation: Option<Validation>,
+    /// The estimator estimates between the rows are served with (`haptex
+    /// predict`, the web page); the CAE when absent. `haptex db validate
+    /// --record` sets it to the estimator it measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimator: Option<Estimator>,
 }
 
 /// The estimate on random members of each template's family against FE
@@ -266,6 +271,10 @@ pub struct Validation {
     /// The seed of the members and their number per template.
     pub seed: u64,
     pub members: usize,
+    /// The estimator measured (the CAE in validations recorded before
+    /// haptex named it).
+    #[serde(default)]
+    pub estimator: Estimator,
     pub templates: Vec<ValidationEntry>,
 }
 
@@ -304,9 +313,10 @@ impl Validation {
     pub fn expected_error(&self, template: Template) -> Option<String> {
         self.entry(template).map(|e| {
             format!(
-                "on {} random members against fresh FE runs (db validate, seed {}) the estimate was off by {:.1}% \
-                 of the profile's range (median), {:.1}% at most",
+                "on {} random members against fresh FE runs (db validate --estimator {}, seed {}) the estimate was \
+                 off by {:.1}% of the profile's range (median), {:.1}% at most",
                 self.members,
+                self.estimator.name(),
                 self.seed,
                 100.0 * e.relative_median,
                 100.0 * e.relative_max
@@ -395,6 +405,12 @@ impl Metadata {
     pub fn entry(&self, template: Template) -> Option<&TemplateEntry> {
         self.templates.iter().find(|e| e.template == template)
     }
+
+    /// The estimator the database's estimates are served with: the one it
+    /// names, else the paper's CAE.
+    pub fn served_estimator(&self) -> Estimator {
+        self.estimator.unwrap_or_default()
+    }
 }
 
 /// One template's predictor: its model matrix and the CAE with the
@@ -409,10 +425,15 @@ pub struct TemplateModel {
     input_ranges: [(f64, f64); 3],
     /// The rows as a grid, if they are a full one (as every sweep's are).
     grid_interpolation: Option<crate::grid::GridInterpolation>,
+    /// The estimator of [`Self::predict`] and [`Self::predict_into`].
+    estimator: Estimator,
 }
 
-/// How an estimate between the database's rows is made.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// How an estimate between the database's rows is made. A database
+/// names the one its estimates are served with (`estimator` in
+/// `metadata.json`, [`Metadata::estimator`]); the CAE when it names none.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Estimator {
     /// The paper's conditional average estimator with the metadata's
     /// leave-one-out widths.
@@ -421,6 +442,24 @@ pub enum Estimator {
     /// Multilinear interpolation over the sweep's grid
     /// ([`crate::grid::GridInterpolation`]).
     Grid,
+}
+
+impl Estimator {
+    /// Every estimator.
+    pub const ALL: [Estimator; 2] = [Estimator::Cae, Estimator::Grid];
+
+    /// The name in `metadata.json` and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Estimator::Cae => "cae",
+            Estimator::Grid => "grid",
+        }
+    }
+
+    /// The estimator named `name` ([`Self::name`]), if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|e| e.name() == name)
+    }
 }
 
 /// A predicted profile.
@@ -432,6 +471,8 @@ pub struct Prediction {
     /// The database row whose FE profile this is, when the parameters are
     /// exactly a row's (then no estimate is involved).
     pub fe_row: Option<usize>,
+    /// The estimator between the rows (not involved at an FE row).
+    pub estimator: Estimator,
     pub diagnostics: Diagnostics,
 }
 
@@ -467,7 +508,17 @@ impl TemplateModel {
                 .map(|n| matrix.input_row(n)[l])
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)))
         });
-        let grid = crate::grid::GridInterpolation::new(&matrix).ok();
+        let grid = crate::grid::GridInterpolation::new(&matrix);
+        let estimator = metadata.served_estimator();
+        if let (Estimator::Grid, Err(e)) = (estimator, &grid) {
+            return Err(DatabaseError::File {
+                path: dir.join("metadata.json"),
+                message: format!(
+                    "estimator: 'grid' needs rows that form a full grid, and {}'s do not: {e}",
+                    entry.file
+                ),
+            });
+        }
         let cae = Cae::new(matrix, entry.widths)?;
         Ok(Self {
             template,
@@ -475,8 +526,36 @@ impl TemplateModel {
             grid: metadata.grid,
             positions: metadata.grid.positions(),
             input_ranges,
-            grid_interpolation: grid,
+            grid_interpolation: grid.ok(),
+            estimator,
         })
+    }
+
+    /// The estimator of [`Self::predict`] and [`Self::predict_into`]: the
+    /// database's ([`Metadata::served_estimator`]) unless set otherwise.
+    pub fn estimator(&self) -> Estimator {
+        self.estimator
+    }
+
+    /// The model with `estimator` between the rows, or why it cannot have
+    /// it (the grid needs rows that form a full grid).
+    pub fn with_estimator(mut self, estimator: Estimator) -> Result<Self, DatabaseError> {
+        self.grid_for(estimator)?;
+        self.estimator = estimator;
+        Ok(self)
+    }
+
+    /// The grid interpolation `estimator` needs, if it needs one.
+    fn grid_for(&self, estimator: Estimator) -> Result<Option<&crate::grid::GridInterpolation>, DatabaseError> {
+        match estimator {
+            Estimator::Cae => Ok(None),
+            Estimator::Grid => self.grid_interpolation.as_ref().map(Some).ok_or_else(|| {
+                DatabaseError::Query(format!(
+                    "the {} rows are not a full grid of r_w, r_h and velocity: use the CAE",
+                    self.template.name()
+                ))
+            }),
+        }
     }
 
     /// Positions xi = x - x0 of the outputs (mm).
@@ -491,14 +570,28 @@ impl TemplateModel {
     }
 
     /// Ft/Fn on the grid for (r_w, r_h, velocity) into `out`, without
-    /// allocation: the FE row itself at a database point, else the CAE
-    /// estimate. Returns the row used, if exact, and the diagnostics.
+    /// allocation: the FE row itself at a database point, else the
+    /// estimate of the model's estimator ([`Self::estimator`]). Returns the
+    /// row used, if exact, and the CAE's diagnostics (its nearest case and
+    /// weights, whichever the estimator).
     pub fn predict_into(
         &self,
         inputs: &[f64; 3],
         scratch: &mut Scratch,
         out: &mut [f64],
     ) -> Result<(Option<usize>, Diagnostics), DatabaseError> {
+        self.predict_into_with(self.estimator, inputs, scratch, out)
+    }
+
+    /// [`Self::predict_into`] with `estimator` between the rows.
+    pub fn predict_into_with(
+        &self,
+        estimator: Estimator,
+        inputs: &[f64; 3],
+        scratch: &mut Scratch,
+        out: &mut [f64],
+    ) -> Result<(Option<usize>, Diagnostics), DatabaseError> {
+        let grid = self.grid_for(estimator)?;
         if inputs.iter().any(|v| !v.is_finite()) {
             return Err(DatabaseError::Query(format!(
                 "parameters must be finite numbers, got {}",
@@ -507,8 +600,10 @@ impl TemplateModel {
         }
         let diagnostics = self.cae.predict_into(inputs, scratch, out)?;
         let row = self.exact_row(inputs);
-        if let Some(n) = row {
-            out.copy_from_slice(self.cae.matrix().output_row(n));
+        match (row, grid) {
+            (Some(n), _) => out.copy_from_slice(self.cae.matrix().output_row(n)),
+            (None, Some(grid)) => grid.predict_into(self.cae.matrix(), inputs, out),
+            (None, None) => {}
         }
         Ok((row, diagnostics))
     }
@@ -521,7 +616,7 @@ impl TemplateModel {
         height_mm: f64,
         velocity_mm_s: f64,
     ) -> Result<Prediction, DatabaseError> {
-        self.predict_with(Estimator::Cae, x0_mm, width_mm, height_mm, velocity_mm_s)
+        self.predict_with(self.estimator, x0_mm, width_mm, height_mm, velocity_mm_s)
     }
 
     /// [`Self::predict`] with the estimator `estimator` between the rows
@@ -535,27 +630,15 @@ impl TemplateModel {
         height_mm: f64,
         velocity_mm_s: f64,
     ) -> Result<Prediction, DatabaseError> {
-        let grid = match estimator {
-            Estimator::Cae => None,
-            Estimator::Grid => Some(self.grid_interpolation.as_ref().ok_or_else(|| {
-                DatabaseError::Query(format!(
-                    "the {} rows are not a full grid of r_w, r_h and velocity: use the CAE",
-                    self.template.name()
-                ))
-            })?),
-        };
         if !x0_mm.is_finite() {
             return Err(DatabaseError::Query(format!("x0 must be a finite number, got {}", crate::num::Num(x0_mm))));
         }
         let mut scratch = self.cae.scratch();
         let mut mu = vec![0.0; self.grid.points];
         let query = [width_mm, height_mm, velocity_mm_s];
-        let (fe_row, diagnostics) = self.predict_into(&query, &mut scratch, &mut mu)?;
-        if let (Some(grid), None) = (grid, fe_row) {
-            grid.predict_into(self.cae.matrix(), &query, &mut mu);
-        }
+        let (fe_row, diagnostics) = self.predict_into_with(estimator, &query, &mut scratch, &mut mu)?;
         let x_mm = self.grid.positions_from(x0_mm);
-        Ok(Prediction { x_mm, mu, fe_row, diagnostics })
+        Ok(Prediction { x_mm, mu, fe_row, estimator, diagnostics })
     }
 
     /// Where a prediction for `query` (r_w, r_h, velocity) comes from, in
@@ -571,6 +654,19 @@ impl TemplateModel {
                 row + 1,
                 self.template.file_name()
             ),
+            None if prediction.estimator == Estimator::Grid => {
+                let axes = self.grid_interpolation.as_ref().map_or_else(String::new, |g| {
+                    let counts: Vec<String> = g.axes().iter().map(|a| a.len().to_string()).collect();
+                    format!(" ({} values of r_w x r_h x velocity)", counts.join(" x "))
+                });
+                format!(
+                    "grid estimate: multilinear interpolation over the grid of {} FE profiles{axes}; nearest case \
+                     row {} at normalized distance {:.3}",
+                    self.cae.matrix().n(),
+                    prediction.diagnostics.nearest_row + 1,
+                    prediction.diagnostics.nearest_distance,
+                )
+            }
             None => format!(
                 "CAE estimate over {} FE profiles (widths {:.4} .. {:.4}); nearest case row {} at normalized \
                  distance {:.3}; typical error (leave-one-out RMS over the database) {:.4}, {:.0}% of a profile's \
@@ -614,12 +710,27 @@ impl TemplateModel {
     /// What the database's validation on random members ([`Validation`])
     /// says of an estimate for `query` (r_w, r_h, velocity): its expected
     /// error, and the advice to run the FE model where that is not good
-    /// enough. Nothing for an FE row or a database without a validation.
-    pub fn estimate_notes(&self, metadata: &Metadata, query: &[f64; 3], fe_row: Option<usize>) -> EstimateNotes {
-        let Some(validation) = metadata.validation.as_ref().filter(|_| fe_row.is_none()) else {
+    /// enough. Nothing for an FE row or a database without a validation;
+    /// for an estimator other than the validated one, that it was not
+    /// measured.
+    pub fn estimate_notes(&self, metadata: &Metadata, query: &[f64; 3], prediction: &Prediction) -> EstimateNotes {
+        let Some(validation) = metadata.validation.as_ref().filter(|_| prediction.fe_row.is_none()) else {
             return EstimateNotes::default();
         };
         let t = self.template;
+        if validation.estimator != prediction.estimator {
+            return EstimateNotes {
+                expected: validation.entry(t).map(|_| {
+                    format!(
+                        "not measured for the {} estimator (the database's validation, seed {}, is of the {})",
+                        prediction.estimator.name(),
+                        validation.seed,
+                        validation.estimator.name()
+                    )
+                }),
+                advice: None,
+            };
+        }
         EstimateNotes {
             expected: validation.expected_error(t),
             advice: validation.fe_advised(t).then(|| {

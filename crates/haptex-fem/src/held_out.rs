@@ -158,21 +158,25 @@ pub fn summarize(members: &[Member]) -> Vec<Summary> {
         .collect()
 }
 
-/// Records `summary` (of `members` members per template from `seed`) in
-/// the database's `metadata.json`, replacing an earlier validation; the
-/// file is rewritten atomically. `metadata` must be the directory's own.
+/// Records `summary` (of `estimator`, `members` members per template from
+/// `seed`) in the database's `metadata.json`, replacing an earlier
+/// validation, and makes `estimator` the database's; the file is rewritten
+/// atomically. `metadata` must be the directory's own.
 pub fn record(
     dir: &Path,
     metadata: &Metadata,
+    estimator: Estimator,
     seed: u64,
     members: usize,
     summary: &[Summary],
 ) -> Result<Metadata, SweepError> {
     let mut metadata = metadata.clone();
+    metadata.estimator = Some(estimator);
     metadata.validation = Some(Validation {
         created: haptex_core::database::utc_now_rfc3339(),
         seed,
         members,
+        estimator,
         templates: summary.iter().map(|s| s.errors.clone()).collect(),
     });
     let json = serde_json::to_string_pretty(&metadata).expect("metadata serializes");

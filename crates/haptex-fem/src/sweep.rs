@@ -611,8 +611,11 @@ pub fn merge(sources: &[PathBuf], out: &Path, build_wall_time_s: Option<f64>) ->
         fe: record.fe.clone(),
         templates: entries,
         files_sha256: Some(set.members().clone()),
-        // A new database has not been measured on random members yet.
+        // A new database has not been measured on random members yet, and
+        // serves the paper's CAE until one is chosen by measuring it
+        // (`haptex db validate --estimator E --record`).
         validation: None,
+        estimator: None,
     };
     let json = serde_json::to_string_pretty(&metadata).expect("metadata serializes");
     set.finish(|w, _| writeln!(w, "{json}"))?;

@@ -5,7 +5,9 @@
 use std::collections::HashMap;
 use std::path::PathBuf;
 
-use haptex_core::database::{Metadata, Prediction as CorePrediction, Template, TemplateModel, write_prediction_csv};
+use haptex_core::database::{
+    Estimator, Metadata, Prediction as CorePrediction, Template, TemplateModel, write_prediction_csv,
+};
 use haptex_fem::loo_case::LooCase as CoreLooCase;
 use haptex_fem::sweep::Run;
 use numpy::PyArray1;
@@ -78,11 +80,13 @@ impl Database {
 
     /// The friction profile of a bump, edge or sine at x0 (mm) with
     /// width r_w and height r_h (mm), slid over at `velocity` (mm/s): the
-    /// database's FE row when the parameters are one, else the CAE
-    /// estimate (paper section 3.2). The numbers of `haptex predict`, bit
-    /// for bit. Warns (haptex.ExtrapolationWarning) as the command line
-    /// does.
-    #[pyo3(signature = (surface, x0, width, height, velocity = 20.0))]
+    /// database's FE row when the parameters are one, else the estimate of
+    /// `estimator` ("grid": multilinear over the sweep's grid, "cae": the
+    /// paper's section 3.2; default: the database's own). The numbers of
+    /// `haptex predict`, bit for bit. Warns (haptex.ExtrapolationWarning)
+    /// as the command line does.
+    #[pyo3(signature = (surface, x0, width, height, velocity = 20.0, estimator = None))]
+    #[allow(clippy::too_many_arguments)]
     pub fn predict(
         &mut self,
         py: Python<'_>,
@@ -91,8 +95,16 @@ impl Database {
         width: f64,
         height: f64,
         velocity: f64,
+        estimator: Option<&str>,
     ) -> PyResult<Prediction> {
         let template = template_of(surface)?;
+        let estimator = match estimator {
+            None => None,
+            Some(name) => Some(
+                Estimator::from_name(name)
+                    .ok_or_else(|| input(format!("estimator must be one of 'grid' or 'cae', got '{name}'")))?,
+            ),
+        };
         for (name, v) in [("width", width), ("height", height), ("velocity", velocity)] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(input(format!("{name} must be a positive number, got {v}")));
@@ -101,7 +113,8 @@ impl Database {
         let query = [width, height, velocity];
         self.load(template)?;
         let model = &self.models[&template];
-        let prediction = model.predict(x0, width, height, velocity).or_raise()?;
+        let prediction =
+            model.predict_with(estimator.unwrap_or(model.estimator()), x0, width, height, velocity).or_raise()?;
         let entry = self.metadata.entry(template).ok_or_else(|| input("the database has no such template"))?;
         let source = model.describe(&query, &prediction, entry);
         let warning = model.warning(&query, prediction.fe_row, &prediction.diagnostics);
@@ -109,7 +122,7 @@ impl Database {
             let class = py.import("haptex._errors")?.getattr("ExtrapolationWarning")?;
             PyErr::warn(py, &class, &std::ffi::CString::new(text.as_str())?, 1)?;
         }
-        let notes = model.estimate_notes(&self.metadata, &query, prediction.fe_row);
+        let notes = model.estimate_notes(&self.metadata, &query, &prediction);
         let comments = model.prediction_comments(&self.metadata, x0, &query, &source, warning.as_deref(), &notes);
         let CorePrediction { x_mm, mu, fe_row, .. } = prediction;
         Ok(Prediction {
@@ -289,7 +302,8 @@ impl LooCase {
 /// database (`haptex predict`): haptex.Database(db).predict(...), the
 /// database opened for this call. Keep a haptex.Database to predict many.
 #[pyfunction]
-#[pyo3(signature = (surface, x0, width, height, velocity = 20.0, db = None))]
+#[pyo3(signature = (surface, x0, width, height, velocity = 20.0, db = None, estimator = None))]
+#[allow(clippy::too_many_arguments)]
 pub fn predict(
     py: Python<'_>,
     surface: &str,
@@ -298,6 +312,7 @@ pub fn predict(
     height: f64,
     velocity: f64,
     db: Option<&Bound<'_, PyAny>>,
+    estimator: Option<&str>,
 ) -> PyResult<Prediction> {
-    Database::new(db)?.predict(py, surface, x0, width, height, velocity)
+    Database::new(db)?.predict(py, surface, x0, width, height, velocity, estimator)
 }

@@ -116,7 +116,8 @@ struct MergeArgs {
 /// --height (and --velocity), writes `xi_mm,h_mm,mu_fe,mu_cae_loo,mu_cae_full`
 /// and optionally a PNG. For a database case the FE profile is the
 /// database's row; for any other parameters the case is simulated now with
-/// the database's FE settings (about half a second), which shows how well
+/// the database's FE settings (about a second on the shipped database's
+/// fine mesh), which shows how well
 /// the CAE predicts it.
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:\n  haptex db loo\n  \
@@ -189,12 +190,13 @@ struct ValidateArgs {
     #[arg(long)]
     json: bool,
     /// Record the result in the database's metadata.json, where `haptex
-    /// predict` and the web page read what to expect of an estimate (of
-    /// the CAE, which they use).
-    #[arg(long, conflicts_with = "estimator")]
+    /// predict` and the web page read what to expect of an estimate, and
+    /// make the estimator measured the database's: the one its estimates
+    /// are served with.
+    #[arg(long)]
     record: bool,
-    /// The estimate between the rows: the paper's CAE (default), or
-    /// multilinear interpolation over the sweep's grid.
+    /// The estimate between the rows: multilinear interpolation over the
+    /// sweep's grid, or the paper's CAE. Default: the database's own.
     #[arg(long, value_enum)]
     estimator: Option<EstimatorArg>,
     /// No progress bar.
@@ -203,7 +205,7 @@ struct ValidateArgs {
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-enum EstimatorArg {
+pub(crate) enum EstimatorArg {
     /// The paper's conditional average estimator.
     Cae,
     /// Multilinear interpolation over the sweep's grid.
@@ -497,7 +499,7 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
         );
         bar
     };
-    let estimator: Estimator = args.estimator.map_or(Estimator::Cae, Into::into);
+    let estimator: Estimator = args.estimator.map_or(metadata.served_estimator(), Into::into);
     let members = held_out::validate(&dir, &metadata, &templates, estimator, n, args.seed, jobs, &|done, _| {
         bar.set_position(done as u64)
     });
@@ -527,7 +529,7 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
     }
     let summary = held_out::summarize(&members);
     if args.record {
-        held_out::record(&dir, &metadata, args.seed, n, &summary)
+        held_out::record(&dir, &metadata, estimator, args.seed, n, &summary)
             .with_context(|| format!("recording the validation in {}", dir.join("metadata.json").display()))?;
         if !args.quiet {
             eprintln!("recorded in {}", dir.join("metadata.json").display());

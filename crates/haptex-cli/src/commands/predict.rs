@@ -12,11 +12,16 @@ use crate::args::{Output, positive};
 /// Predict the friction profile Ft/Fn(x) of a template surface from the FE
 /// database, in milliseconds.
 ///
-/// The conditional average estimator (Gaussian kernels, the leave-one-out
-/// optimal widths stored in the database's metadata) averages the database's
-/// FE profiles of the same template, weighted by how close their (r_w, r_h,
-/// velocity) are to the query. When the parameters are exactly a database
-/// row, that row's FE profile is returned and the command says so. Queries
+/// Between the database's rows, the estimate is the database's estimator
+/// (`estimator` in its metadata.json, or `--estimator`): multilinear
+/// interpolation over the sweep's grid of (r_w, r_h, velocity) for the
+/// shipped database, or the paper's conditional average estimator (Gaussian
+/// kernels, the leave-one-out optimal widths stored in the metadata), which
+/// averages the FE profiles of the same template weighted by how close
+/// their (r_w, r_h, velocity) are to the query. When the parameters are
+/// exactly a database row, that row's FE profile is returned and the
+/// command says so. The expected error measured on random members (`haptex
+/// db validate --record`) is printed with each estimate. Queries
 /// far from every database case, or with a parameter outside the database's
 /// range of r_w, r_h or velocity, are answered with a warning: the estimate
 /// then extrapolates and is unreliable.
@@ -52,6 +57,10 @@ pub struct PredictArgs {
     /// Database directory. Default: the shipped data/db, or $HAPTEX_DB.
     #[arg(long, value_name = "DIR")]
     db: Option<PathBuf>,
+    /// The estimate between the database's rows: multilinear over the
+    /// sweep's grid, or the paper's CAE. Default: the database's own.
+    #[arg(long, value_enum)]
+    estimator: Option<super::db::EstimatorArg>,
     /// Output file (default: stdout).
     #[arg(short, long, value_name = "FILE")]
     output: Option<PathBuf>,
@@ -77,13 +86,16 @@ pub fn run(args: PredictArgs) -> anyhow::Result<()> {
     let metadata = Metadata::read(&dir).with_context(|| {
         format!("no FE database in {} (build one with `haptex db build --out DIR`, or pass --db DIR)", dir.display())
     })?;
-    let model = TemplateModel::load_with(&dir, &metadata, template)?;
+    let mut model = TemplateModel::load_with(&dir, &metadata, template)?;
+    if let Some(estimator) = args.estimator {
+        model = model.with_estimator(estimator.into())?;
+    }
     let prediction = model.predict(args.x0, args.width, args.height, args.velocity)?;
     let query = [args.width, args.height, args.velocity];
     let entry = metadata.entry(template).expect("the model was loaded from this entry");
     let source = model.describe(&query, &prediction, entry);
     let warning = model.warning(&query, prediction.fe_row, &prediction.diagnostics);
-    let notes = model.estimate_notes(&metadata, &query, prediction.fe_row);
+    let notes = model.estimate_notes(&metadata, &query, &prediction);
     Output::new(args.output.clone()).write(|w| {
         let comments = model.prediction_comments(&metadata, args.x0, &query, &source, warning.as_deref(), &notes);
         write_prediction_csv(w, &comments, &prediction.x_mm, &prediction.mu)

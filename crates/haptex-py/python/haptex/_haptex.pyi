@@ -4,7 +4,7 @@ haptex): what editors and type checkers see. Units are in the names."""
 from __future__ import annotations
 
 import os
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union, final
+from typing import Any, Callable, Dict, List, Literal, Optional, Sequence, Tuple, Union, final
 
 import numpy
 import numpy as np
@@ -201,7 +201,13 @@ class Database:
 
     def __new__(cls, db: Optional[_Path] = None) -> Database: ...
     def predict(
-        self, surface: str, x0: float, width: float, height: float, velocity: float = 20.0
+        self,
+        surface: str,
+        x0: float,
+        width: float,
+        height: float,
+        velocity: float = 20.0,
+        estimator: Optional[Literal["grid", "cae"]] = None,
     ) -> Prediction: ...
     def loo_summary(self) -> Dict[str, Any]: ...
     def loo(self, surface: str, width: float, height: float, velocity: float = 20.0) -> LooCase: ...
@@ -219,6 +225,7 @@ def predict(
     height: float,
     velocity: float = 20.0,
     db: Optional[_Path] = None,
+    estimator: Optional[Literal["grid", "cae"]] = None,
 ) -> Prediction: ...
 
 # --- playback and library ---

@@ -44,10 +44,10 @@ pub async fn post(call: Preamble<super::Template>) -> Result<Response, ApiError>
             model.predict(x0, query[0], query[1], query[2]).map_err(|e| ApiError::bad_request(e.to_string(), None))?;
         let source = model.describe(&query, &prediction, entry);
         let warning = model.warning(&query, prediction.fe_row, &prediction.diagnostics);
-        let Prediction { x_mm, mu, fe_row, diagnostics } = prediction;
         // What db validate measured on random members, for the file's
         // comments and the answer's `fe_advised`.
-        let notes = model.estimate_notes(set.metadata(), &query, fe_row);
+        let notes = model.estimate_notes(set.metadata(), &query, &prediction);
+        let Prediction { x_mm, mu, fe_row, estimator, diagnostics } = prediction;
         let profile = FrictionProfile::new(x_mm, mu)
             .map_err(|e| ApiError::internal(format!("the predicted profile is invalid: {e}")))?;
 
@@ -77,6 +77,7 @@ pub async fn post(call: Preamble<super::Template>) -> Result<Response, ApiError>
         answer["fe_exact"] = json!(fe_row.is_some());
         answer["fe_row"] = json!(fe_row.map(|r| r + 1));
         answer["source"] = json!(source);
+        answer["estimator"] = json!(estimator.name());
         answer["extrapolation"] = json!(warning.is_some());
         answer["outside_database"] = json!(outside);
         answer["warnings"] = json!(warning.into_iter().collect::<Vec<_>>());
@@ -89,6 +90,7 @@ pub async fn post(call: Preamble<super::Template>) -> Result<Response, ApiError>
         answer["validation"] = json!(validation.and_then(|v| v.entry(template)).map(|e| json!({
             "members": validation.map(|v| v.members),
             "seed": validation.map(|v| v.seed),
+            "estimator": validation.map(|v| v.estimator.name()),
             "rms_median": e.rms_median,
             "rms_max": e.rms_max,
             "relative_median": e.relative_median,
