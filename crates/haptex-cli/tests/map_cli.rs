@@ -275,8 +275,9 @@ fn grating_maps_by_direction() {
     let mu = column(std::path::Path::new(&p("g0.csv")), "mu");
     let (mlo, mhi) = mu.iter().fold((f64::MAX, f64::MIN), |(a, b), &m| (a.min(m), b.max(m)));
     // The periodic part of a profile lies within its range (a fit may
-    // overshoot a sharp corner a little: 0.01).
-    assert!(mlo > lo - 0.01 && mhi < hi + 0.01 && mhi - mlo > 0.05, "{mlo}..{mhi} vs {lo}..{hi}");
+    // overshoot a sharp corner a little: 0.01) and keeps most of its
+    // modulation (the line is the periodic part, not a flat average).
+    assert!(mlo > lo - 0.01 && mhi < hi + 0.01 && mhi - mlo > 0.5 * (hi - lo), "{mlo}..{mhi} vs {lo}..{hi}");
     let out = grating("60", "cae", &p("g60.csv"));
     assert!(!out.status.success());
     assert!(stderr(&out).contains("period 3.0000 mm") && stderr(&out).contains("--source fe"), "{}", stderr(&out));

@@ -1329,18 +1329,25 @@ async fn simulate_reproduces_a_database_run_bit_for_bit() {
     assert_eq!(numbers(&answer["h_mm"]).len(), expected_x.len());
 }
 
-/// Off the database grid, the instant CAE estimate differs from the FE
-/// model by about the database's leave-one-out error (the same check as
-/// `haptex db loo` in db_cli.rs: within twice the LOO RMS), and the CSV
-/// answer reads back as the same profile.
+/// Off the database grid, the instant estimate (the database's estimator)
+/// differs from the FE model by no more than the worst random member of
+/// the database's recorded validation, the expected error every estimate
+/// states (the same check as db_cli.rs makes with `haptex db loo`), and
+/// the CSV answer reads back as the same profile.
 #[tokio::test]
-async fn simulate_off_grid_agrees_with_the_cae_within_its_loo_error() {
+async fn simulate_off_grid_agrees_with_the_estimate_within_its_validation() {
     let body = json!({ "surface": "edge", "x0_mm": 0, "width_mm": 1.3, "height_mm": 0.27, "velocity_mm_s": 35 });
     let answer = post_json("/api/simulate", &body).await.ok().json();
-    let loo = Metadata::read(&shipped_db()).unwrap().entry(Template::Edge).unwrap().loo_rmse;
+    let metadata = Metadata::read(&shipped_db()).unwrap();
+    let worst = metadata.validation.as_ref().unwrap().entry(Template::Edge).unwrap().relative_max;
     let rms = answer["cae_rms_difference"].as_f64().unwrap();
-    eprintln!("edge r_w 1.3 r_h 0.27 v 35: RMS(CAE - FE) = {rms:.5}, LOO RMS {loo:.5}");
-    assert!(rms > 0.0 && rms < 2.0 * loo, "RMS(CAE - FE) = {rms}, LOO RMS {loo}");
+    let fe = numbers(&answer["mu"]);
+    let (lo, hi) = fe.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    let relative = rms / (hi - lo);
+    eprintln!(
+        "edge r_w 1.3 r_h 0.27 v 35: RMS(estimate - FE) = {rms:.5}, {relative:.4} of the range; worst {worst:.4}"
+    );
+    assert!(rms > 0.0 && relative <= worst, "RMS(estimate - FE) = {rms}, {relative} of the range, worst {worst}");
     let csv = post_json("/api/simulate?format=csv", &body).await;
     csv.ok();
     let text = csv.text();

@@ -709,8 +709,8 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     }
     // The FE model on demand for these parameters: its profile is drawn
     // beside the estimate (on the same relative scale), within 0.1 of it
-    // everywhere in Ft/Fn (the CAE's typical error is 0.02,
-    // docs/database.md).
+    // everywhere in Ft/Fn (the estimate's worst random member was off by
+    // 0.011 RMS, docs/database.md).
     wd!(wd!(client.find(Locator::Id("run-fe"))).click());
     wait_for(client, FE_DRAWN, "the FE profile in the friction plot").await?;
     let with_fe = plotted(client, "friction").await?;

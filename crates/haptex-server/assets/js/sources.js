@@ -38,8 +38,11 @@ export const SOURCES = {
       const source = document.createElement('div');
       source.textContent = answer.fe_exact
         ? `FE result: a database case (row ${answer.fe_row} of ${answer.surface}.csv), no estimate involved.`
-        : `CAE estimate over the FE database; typical error ${fmt(answer.loo_rmse)} in mu ` +
-          `(${Math.round(100 * answer.loo_rmse_relative_to_range)}% of a profile's range, leave-one-out).`;
+        : answer.estimator === 'grid'
+          ? 'Estimate over the FE database: interpolated between its cases (multilinear over the grid of ' +
+            'width, height and velocity).'
+          : `CAE estimate over the FE database; typical error ${fmt(answer.loo_rmse)} in mu ` +
+            `(${Math.round(100 * answer.loo_rmse_relative_to_range)}% of a profile's range, leave-one-out).`;
       info.append(source);
       const v = answer.fe_exact ? null : answer.validation;
       if (v) {

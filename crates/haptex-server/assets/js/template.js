@@ -149,7 +149,7 @@ export function showFe() {
   if ($('run-fe').hidden) return; // the note says why the FE model is not available
   const fe = state.fe && state.fe.key === JSON.stringify(templateBody()) ? state.fe : null;
   $('fe-info').textContent = fe
-    ? `FE model: ${fe.seconds.toFixed(2)} s; the CAE estimate differs from it by ${fmt(fe.rms)} RMS in mu ` +
+    ? `FE model: ${fe.seconds.toFixed(2)} s; the estimate differs from it by ${fmt(fe.rms)} RMS in mu ` +
       '(dashed green in the friction plot).'
     : '';
 }
