@@ -404,6 +404,60 @@ pub fn set_by_device_file(names: &'static [&'static str]) -> impl FnMut(clap::Ar
     }
 }
 
+/// The access token of a served page (`haptex serve`, `haptex live --ws`):
+/// given, read from a file, or from $HAPTEX_TOKEN.
+#[derive(Debug, Clone, Default, PartialEq, clap::Args)]
+pub struct TokenArgs {
+    /// The access token requests must carry (16 to 256 letters, digits,
+    /// '-', '.', '_', '~'). Default: $HAPTEX_TOKEN, else a random one
+    /// where one is needed, printed in the address to open. On a shared
+    /// machine prefer --token-file or $HAPTEX_TOKEN: a command line is
+    /// visible to other users.
+    #[arg(long, value_name = "TOKEN", conflicts_with = "token_file")]
+    pub token: Option<String>,
+    /// Read the access token from this file (its first line).
+    #[arg(long, value_name = "FILE")]
+    pub token_file: Option<PathBuf>,
+}
+
+impl TokenArgs {
+    /// The token given by --token, --token-file or $HAPTEX_TOKEN, and where
+    /// it came from (to name it without printing it).
+    pub fn given(&self) -> anyhow::Result<Option<(haptex_server::access::Token, String)>> {
+        use haptex_server::access::Token;
+        if let Some(text) = &self.token {
+            let token = Token::new(text).map_err(|e| anyhow::anyhow!("--token: {e}"))?;
+            return Ok(Some((token, "--token".to_string())));
+        }
+        if let Some(path) = &self.token_file {
+            let text =
+                std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("--token-file {}: {e}", path.display()))?;
+            let first = text.lines().next().unwrap_or("");
+            let token =
+                Token::new(first).map_err(|e| anyhow::anyhow!("--token-file {}, line 1: {e}", path.display()))?;
+            return Ok(Some((token, format!("--token-file {}", path.display()))));
+        }
+        match std::env::var("HAPTEX_TOKEN") {
+            Ok(text) => {
+                let token = Token::new(&text).map_err(|e| anyhow::anyhow!("$HAPTEX_TOKEN: {e}"))?;
+                Ok(Some((token, "$HAPTEX_TOKEN".to_string())))
+            }
+            Err(std::env::VarError::NotPresent) => Ok(None),
+            Err(std::env::VarError::NotUnicode(_)) => anyhow::bail!("$HAPTEX_TOKEN: not valid UTF-8"),
+        }
+    }
+
+    /// `?token=...` for the address to open: the token itself when it was
+    /// made here (the only way to learn it), else a placeholder naming
+    /// where it came from.
+    pub fn query(token: &haptex_server::access::Token, given: Option<&str>) -> String {
+        match given {
+            None => format!("?token={}", token.expose()),
+            Some(source) => format!("?token=<the token of {source}>"),
+        }
+    }
+}
+
 /// `--device-file FILE`: [`DeviceFileArgs`] for `haptex live` and `haptex
 /// serve`, whose `--device` names the audio output.
 #[derive(Debug, Clone, PartialEq, clap::Args)]

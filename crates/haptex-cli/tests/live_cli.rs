@@ -283,18 +283,15 @@ mod device {
     struct WsClient(std::net::TcpStream);
 
     impl WsClient {
-        fn connect(addr: &str) -> Self {
-            Self::connect_to(addr, "/live/ws")
-        }
-
-        fn connect_to(addr: &str, path: &str) -> Self {
+        /// With these extra header lines (each ending in CRLF).
+        fn connect_with(addr: &str, path: &str, headers: &str) -> Self {
             use std::io::{Read, Write};
             let mut stream = std::net::TcpStream::connect(addr).unwrap();
             stream.set_read_timeout(Some(std::time::Duration::from_secs(10))).unwrap();
             write!(
                 stream,
                 "GET {path} HTTP/1.1\r\nHost: {addr}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n\
-                 Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n"
+                 Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n{headers}\r\n"
             )
             .unwrap();
             let mut head = Vec::new();
@@ -365,10 +362,31 @@ mod device {
         let profile = write(dir.path(), "ramp.csv", "x_mm,voltage_v\n0,0\n10,100\n");
         let json = dir.path().join("run.json");
         let design = ["--profile", &profile, "--json", json.to_str().unwrap()];
-        let (mut child, stderr_lines, addr, page) = live_ws(dir.path(), &design);
+        let (mut child, stderr_lines, addr, page, cookie) = live_ws(dir.path(), &design);
         assert!(page.starts_with("HTTP/1.1 200") && page.contains("(0.0 .. 10.0 mm)"), "{page}");
 
-        let mut ws = WsClient::connect(&addr);
+        // The page and its WebSocket need the token (issue 41): without it,
+        // or from a page of another site, the upgrade is refused.
+        let raw = |request: String| {
+            use std::io::{Read, Write};
+            let mut stream = std::net::TcpStream::connect(&addr).unwrap();
+            stream.set_read_timeout(Some(std::time::Duration::from_secs(10))).unwrap();
+            stream.write_all(request.as_bytes()).unwrap();
+            let mut head = [0u8; 12];
+            stream.read_exact(&mut head).unwrap();
+            String::from_utf8_lossy(&head).into_owned()
+        };
+        let upgrade = "Upgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n\
+                       Sec-WebSocket-Version: 13\r\n";
+        assert_eq!(raw(format!("GET / HTTP/1.1\r\nHost: {addr}\r\n\r\n")), "HTTP/1.1 401");
+        assert_eq!(raw(format!("GET /live/ws HTTP/1.1\r\nHost: {addr}\r\n{upgrade}\r\n")), "HTTP/1.1 401");
+        let foreign = format!(
+            "GET /live/ws HTTP/1.1\r\nHost: {addr}\r\n{upgrade}Cookie: {cookie}\r\nOrigin: http://evil.example\r\n\r\n"
+        );
+        assert_eq!(raw(foreign), "HTTP/1.1 403");
+
+        let mut ws =
+            WsClient::connect_with(&addr, "/live/ws", &format!("Cookie: {cookie}\r\nOrigin: http://{addr}\r\n"));
         let near = |v: &serde_json::Value, key: &str, want: f64| (v[key].as_f64().unwrap() - want).abs() < 1e-9;
         ws.send("2.0");
         ws.until("x = 2 mm, U = 20 V", |f| near(f, "x_mm", 2.0) && near(f, "envelope_v", 20.0));
@@ -408,10 +426,11 @@ mod device {
             }
         }
         let map = write(dir.path(), "plane.csv", &csv);
-        let (mut child, stderr_lines, addr, page) = live_ws(dir.path(), &["--voltage-map", &map, "--u-max", "100"]);
+        let (mut child, stderr_lines, addr, page, cookie) =
+            live_ws(dir.path(), &["--voltage-map", &map, "--u-max", "100"]);
         assert!(page.contains("const X0 = 0.0, X1 = 10.0;") && page.contains("const Y0 = 0.0, Y1 = 4.0,"), "{page}");
 
-        let mut ws = WsClient::connect(&addr);
+        let mut ws = WsClient::connect_with(&addr, "/live/ws", &format!("Cookie: {cookie}\r\n"));
         let near = |v: &serde_json::Value, key: &str, want: f64| (v[key].as_f64().unwrap() - want).abs() < 1e-9;
         ws.send("2.0,1.0");
         ws.until("(2, 1) mm at 25 V", |f| near(f, "x_mm", 2.0) && near(f, "y_mm", 1.0) && near(f, "envelope_v", 25.0));
@@ -431,11 +450,14 @@ mod device {
 
     /// `haptex live --ws` on the `null` device with `design`'s options (the
     /// horizon 0, the gap 60 s: the device does not pace), its stderr lines
-    /// after the address line, the address, and the page it serves.
+    /// after the address line, the address, the page it serves at the
+    /// address it printed (with the token it made) and the session cookie
+    /// (`name=value`) it set.
+    #[allow(clippy::type_complexity)]
     fn live_ws(
         home: &Path,
         design: &[&str],
-    ) -> (KillOnDrop, std::io::Lines<std::io::BufReader<std::process::ChildStderr>>, String, String) {
+    ) -> (KillOnDrop, std::io::Lines<std::io::BufReader<std::process::ChildStderr>>, String, String, String) {
         use std::io::{BufRead, Read, Write};
         let child = Command::new(env!("CARGO_BIN_EXE_haptex"))
             .args(["live", "--ws", "127.0.0.1:0", "--device", "null", "--gap-ms", "60000", "--horizon-ms", "0"])
@@ -447,17 +469,25 @@ mod device {
             .unwrap();
         let mut child = KillOnDrop(child);
         let mut stderr_lines = std::io::BufReader::new(child.0.stderr.take().unwrap()).lines();
-        let addr = loop {
+        let (addr, token) = loop {
             let line = stderr_lines.next().expect("haptex live printed its address").unwrap();
             if let Some(rest) = line.split("WebSocket ws://").nth(1) {
-                break rest.split('/').next().unwrap().to_string();
+                let token = line.split("?token=").nth(1).expect("the page's token").split(' ').next().unwrap();
+                break (rest.split('/').next().unwrap().to_string(), token.to_string());
             }
         };
+        assert_eq!(token.len(), 64, "a made token: {token}");
         let mut http = std::net::TcpStream::connect(&addr).unwrap();
-        write!(http, "GET / HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
+        write!(http, "GET /?token={token} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
         let mut page = String::new();
         http.read_to_string(&mut page).unwrap();
-        (child, stderr_lines, addr, page)
+        let cookie = page
+            .lines()
+            .find_map(|l| l.strip_prefix("set-cookie: "))
+            .and_then(|c| c.split(';').next())
+            .unwrap_or_else(|| panic!("no session cookie: {page}"))
+            .to_string();
+        (child, stderr_lines, addr, page, cookie)
     }
 
     /// A child process killed when the test ends, also when an assertion
@@ -519,15 +549,17 @@ mod device {
         ]));
         let mut lines = std::io::BufReader::new(child.0.stderr.take().unwrap()).lines();
         let mut said = Vec::new();
-        let addr = loop {
+        let (addr, token) = loop {
             let line = lines.next().expect("haptex serve printed its address").unwrap();
             if let Some(rest) = line.split("open http://").nth(1) {
-                break rest.split('/').next().unwrap().to_string();
+                let token = rest.split("?token=").nth(1).expect("--live needs a token").split(' ').next().unwrap();
+                break (rest.split('/').next().unwrap().to_string(), token.to_string());
             }
             said.push(line);
         };
         assert!(said.iter().any(|l| l.contains("live output: haptex_capture, 48000 Hz, U_max 100 V")), "{said:?}");
-        let mut ws = WsClient::connect_to(&addr, "/api/live/ws");
+        assert!(said.iter().any(|l| l.contains("access token required (--live lets requests drive")), "{said:?}");
+        let mut ws = WsClient::connect_with(&addr, "/api/live/ws", &format!("Authorization: Bearer {token}\r\n"));
         let design = serde_json::json!({ "design": { "x_mm": [0.0, 10.0], "voltage_v": [0.0, 100.0] } });
         ws.send(&design.to_string());
         let opened = ws.until("opened", |f| f.get("opened").is_some());

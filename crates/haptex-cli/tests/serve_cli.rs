@@ -26,6 +26,128 @@ fn http_get_for(port: u16, host: &str, path: &str) -> String {
     answer
 }
 
+/// GET `path` with extra header lines (each ending in CRLF).
+fn http_get_with(port: u16, path: &str, headers: &str) -> String {
+    let mut socket = TcpStream::connect(("127.0.0.1", port)).unwrap();
+    socket.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    write!(socket, "GET {path} HTTP/1.1\r\nHost: localhost\r\nConnection: close\r\n{headers}\r\n").unwrap();
+    let mut answer = String::new();
+    socket.read_to_string(&mut answer).unwrap();
+    answer
+}
+
+/// Issue 41: beyond loopback the server makes a token and prints the
+/// address that carries it; requests without it are 401 (the health
+/// check says only that it is up), with it as a bearer header they are
+/// answered, and the access log never shows it. A token from a file or
+/// $HAPTEX_TOKEN is not printed; bad ones are refused naming their
+/// source; a loopback server says it runs without one.
+#[cfg(unix)]
+#[test]
+fn serve_needs_a_token_beyond_loopback() {
+    /// Killed if a failed assertion leaves it running.
+    struct Server(std::process::Child);
+    impl Drop for Server {
+        fn drop(&mut self) {
+            let _ = self.0.kill();
+            let _ = self.0.wait();
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let start = |args: &[&str], env: &[(&str, &str)]| {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_haptex"))
+            .args(["serve"])
+            .args(args)
+            .env_remove("HAPTEX_TOKEN")
+            .envs(env.iter().copied())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run haptex serve");
+        let mut stderr = BufReader::new(child.stderr.take().unwrap());
+        let mut seen = String::new();
+        let port = loop {
+            let mut line = String::new();
+            assert!(std::io::BufRead::read_line(&mut stderr, &mut line).unwrap() > 0, "ended: {seen}");
+            seen.push_str(&line);
+            if let Some(rest) = line.split("open http://").nth(1) {
+                let port = rest.split('/').next().unwrap().rsplit(':').next().unwrap();
+                break port.parse::<u16>().unwrap();
+            }
+        };
+        (Server(child), stderr, port, seen)
+    };
+    let stop = |mut child: Server, mut stderr: BufReader<std::process::ChildStderr>| {
+        assert!(Command::new("kill").args(["-TERM", &child.0.id().to_string()]).status().unwrap().success());
+        assert!(child.0.wait().unwrap().success());
+        let mut rest = String::new();
+        stderr.read_to_string(&mut rest).unwrap();
+        rest
+    };
+
+    let (child, stderr, port, seen) = start(&["--addr", "0.0.0.0:0", "--access-log"], &[("RUST_LOG", "info")]);
+    assert!(seen.contains("access token required (it listens beyond this machine)"), "{seen}");
+    let token = common::printed_token(&seen).expect("the address with its token");
+    assert!(token.len() == 64 && token.bytes().all(|b| b.is_ascii_hexdigit()), "{seen}");
+    let health = http_get(port, "/api/health");
+    assert!(health.starts_with("HTTP/1.1 200") && health.ends_with("{\"status\":\"ok\"}"), "{health}");
+    let refused = http_get(port, "/api/config");
+    assert!(refused.starts_with("HTTP/1.1 401") && refused.contains("\"field\":\"token\""), "{refused}");
+    let page = http_get(port, &format!("/?token={token}"));
+    assert!(page.starts_with("HTTP/1.1 200") && page.contains("set-cookie: haptex_session_"), "{page}");
+    let config = http_get_with(port, "/api/config", &format!("Authorization: Bearer {token}\r\n"));
+    assert!(config.starts_with("HTTP/1.1 200"), "{config}");
+    let rest = stop(child, stderr);
+    assert!(rest.contains("\"/api/config\" 401") && rest.contains("\"/api/config\" 200"), "{rest}");
+    assert!(!rest.contains(&token), "the token in the log: {rest}");
+
+    // From a file (first line) and from the environment: not printed.
+    let file = dir.path().join("token");
+    std::fs::write(&file, "file-token-0123456789\nsecond line\n").unwrap();
+    let file_arg = file.to_str().unwrap();
+    let (child, stderr, port, seen) = start(&["--addr", "127.0.0.1:0", "--token-file", file_arg], &[]);
+    assert!(seen.contains(&format!("?token=<the token of --token-file {file_arg}>")), "{seen}");
+    assert!(!seen.contains("file-token-0123456789"), "{seen}");
+    let ok = http_get_with(port, "/api/config", "Authorization: Bearer file-token-0123456789\r\n");
+    assert!(ok.starts_with("HTTP/1.1 200"), "{ok}");
+    assert!(http_get(port, "/api/config").starts_with("HTTP/1.1 401"));
+    stop(child, stderr);
+    let (child, stderr, port, seen) = start(&["--addr", "127.0.0.1:0"], &[("HAPTEX_TOKEN", "env-token-0123456789")]);
+    assert!(seen.contains("?token=<the token of $HAPTEX_TOKEN>"), "{seen}");
+    let ok = http_get_with(port, "/api/config", "Authorization: Bearer env-token-0123456789\r\n");
+    assert!(ok.starts_with("HTTP/1.1 200"), "{ok}");
+    stop(child, stderr);
+
+    // Loopback, no uploads, no live output: no token, and it says so.
+    let (child, stderr, port, seen) = start(&["--addr", "127.0.0.1:0"], &[]);
+    assert!(seen.contains("no access token: this server listens on this machine only"), "{seen}");
+    assert!(common::printed_token(&seen).is_none(), "{seen}");
+    assert!(http_get(port, "/api/config").starts_with("HTTP/1.1 200"));
+    stop(child, stderr);
+
+    // Bad tokens, named by where they came from.
+    let empty = dir.path().join("empty");
+    std::fs::write(&empty, "").unwrap();
+    // (arguments, environment, what the error says)
+    type Bad<'a> = (&'a [&'a str], &'a [(&'a str, &'a str)], &'a str);
+    let bad: [Bad; 4] = [
+        (&["--token", "short"], &[], "--token: the token has 5 characters"),
+        (&["--token-file", "/nonexistent/token"], &[], "--token-file /nonexistent/token"),
+        (&["--token-file", empty.to_str().unwrap()], &[], "line 1: the token has 0 characters"),
+        (&[], &[("HAPTEX_TOKEN", "has space 0123456789")], "$HAPTEX_TOKEN: the token has a character"),
+    ];
+    for (args, env, expected) in bad {
+        let out = Command::new(env!("CARGO_BIN_EXE_haptex"))
+            .args(["serve", "--addr", "127.0.0.1:0"])
+            .args(args)
+            .env_remove("HAPTEX_TOKEN")
+            .envs(env.iter().copied())
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && stderr.contains(expected), "{args:?}: {stderr}");
+    }
+}
+
 #[cfg(unix)]
 #[test]
 fn serve_answers_and_stops_gracefully_on_ctrl_c_and_sigterm() {
@@ -125,6 +247,10 @@ fn serve_writable_stores_uploads_as_library_import_does() {
     let mut stderr = BufReader::new(child.stderr.take().unwrap());
     let (port, seen) = common::listening_port(&mut stderr);
     assert!(seen.contains("writable"), "{seen}");
+    // Uploads need the access token, made at start and printed once.
+    assert!(seen.contains("access token required (--writable lets requests add recordings"), "{seen}");
+    let token = common::printed_token(&seen).expect("the address with its token");
+    assert_eq!(token.len(), 64, "{seen}");
 
     let boundary = "haptex-cli-test-5b2e";
     let mut body = Vec::new();
@@ -141,7 +267,7 @@ fn serve_writable_stores_uploads_as_library_import_does() {
     write!(
         socket,
         "POST /api/recordings HTTP/1.1\r\nHost: localhost\r\nConnection: close\r\nContent-Type: multipart/form-data; \
-         boundary={boundary}\r\nContent-Length: {}\r\n\r\n",
+         boundary={boundary}\r\nAuthorization: Bearer {token}\r\nContent-Length: {}\r\n\r\n",
         body.len()
     )
     .unwrap();

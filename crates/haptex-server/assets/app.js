@@ -12,6 +12,7 @@
 // gather inputs, draw and offer downloads. js/main.js starts the page,
 // js/display-calibration.js the "Your display" panel, in that order.
 
+import './js/token.js';
 import { start } from './js/main.js';
 import { setup as setupYourDisplay } from './js/display-calibration.js';
 

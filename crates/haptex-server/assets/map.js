@@ -15,6 +15,7 @@
 // no field goes to the header line. On a phone the result of an action is
 // scrolled into view and announced.
 
+import './js/token.js';
 import { createAudio } from './js/audio.js';
 import { $ } from './js/dom.js';
 import { errorNote } from './js/feedback.js';

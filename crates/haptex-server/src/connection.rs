@@ -305,6 +305,43 @@ fn answer_for(status: StatusCode, date: Option<&[u8]>, limits: HeadLimits) -> Ve
     answer
 }
 
+/// Writes `answer` (a small JSON error with its headers) as a whole
+/// HTTP/1.1 answer on `io` with the security headers and `connection:
+/// close`, within `timeout`, then shuts the connection: for a connection
+/// refused before any request is read (a client over its connections,
+/// [`crate::clients`]).
+pub(crate) async fn write_and_close<T>(mut io: T, answer: axum::response::Response, timeout: Duration)
+where
+    T: AsyncWrite + Unpin,
+{
+    use tokio::io::AsyncWriteExt;
+    let (parts, body) = answer.into_parts();
+    let Ok(body) = axum::body::to_bytes(body, 64 << 10).await else { return };
+    let status = parts.status;
+    let mut bytes =
+        format!("HTTP/1.1 {} {}\r\n", status.as_str(), status.canonical_reason().unwrap_or("")).into_bytes();
+    for (name, value) in &parts.headers {
+        if name != "content-length" && name != "connection" {
+            bytes.extend_from_slice(name.as_str().as_bytes());
+            bytes.extend_from_slice(b": ");
+            bytes.extend_from_slice(value.as_bytes());
+            bytes.extend_from_slice(b"\r\n");
+        }
+    }
+    for (name, value) in SECURITY_HEADERS {
+        if !parts.headers.contains_key(name) {
+            bytes.extend_from_slice(format!("{name}: {value}\r\n").as_bytes());
+        }
+    }
+    bytes.extend_from_slice(format!("content-length: {}\r\nconnection: close\r\n\r\n", body.len()).as_bytes());
+    bytes.extend_from_slice(&body);
+    let _ = tokio::time::timeout(timeout, async {
+        io.write_all(&bytes).await?;
+        io.shutdown().await
+    })
+    .await;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -41,10 +41,12 @@
 //! - `lines`: answers streamed as JSON lines (the progress of the check on
 //!   the finger model, then its result).
 
+pub mod access;
 mod access_log;
 pub mod answers;
 mod api;
 pub mod assets;
+pub mod clients;
 mod connection;
 pub mod device_file;
 pub mod display;
@@ -62,6 +64,7 @@ pub mod recipe;
 pub mod routes;
 pub mod state;
 pub mod templates;
+pub mod tls;
 mod work;
 
 use std::convert::Infallible;
@@ -112,11 +115,32 @@ pub struct Config {
     /// The device requests start from: the paper's, or a device file's
     /// (`haptex serve --device-file`).
     pub default_device: params::DefaultDevice,
+    /// The access token every request but the health check must carry
+    /// ([`access`]); required when [`Config::token_required`] says so.
+    pub token: Option<access::Token>,
+    /// PEM certificate chain and private key to serve HTTPS with
+    /// (`haptex serve --tls-cert --tls-key`); `None`: plain HTTP.
+    pub tls: Option<(PathBuf, PathBuf)>,
 }
 
 impl Config {
     /// The default address, 127.0.0.1:8080.
     pub const DEFAULT_ADDR: &'static str = "127.0.0.1:8080";
+
+    /// Why this server needs an access token, if it does: it listens
+    /// beyond loopback (anyone on the network could use it), takes uploads
+    /// into the library, or drives a live output.
+    pub fn token_required(&self) -> Option<&'static str> {
+        if !self.addr.ip().is_loopback() {
+            Some("it listens beyond this machine")
+        } else if self.writable {
+            Some("--writable lets requests add recordings to the library")
+        } else if self.live.is_some() {
+            Some("--live lets requests drive the audio output")
+        } else {
+            None
+        }
+    }
 }
 
 /// The server could not start or stopped with an error.
@@ -134,6 +158,12 @@ pub enum ServeError {
     Database(#[from] haptex_core::database::DatabaseError),
     #[error(transparent)]
     HostName(#[from] HostNameError),
+    #[error("this server needs an access token: {0}")]
+    TokenRequired(&'static str),
+    #[error(transparent)]
+    Token(#[from] access::TokenError),
+    #[error(transparent)]
+    Tls(#[from] tls::TlsError),
 }
 
 /// The whole application: API routes, GUI, middleware.
@@ -142,21 +172,26 @@ pub enum ServeError {
 /// with `access_log`), security headers (on every answer, a panic's
 /// included), panic catcher (a 500, never a dropped connection), the
 /// budget of unsent answers, 4xx-to-JSON, the request guard (head sizes,
-/// host), timeout (covering the body upload and the handler's work),
+/// host), the access rules (token, Origin: [`access`]), timeout (covering the body upload and the handler's work),
 /// body limit.
 pub fn app(state: AppState) -> Router {
     let limits = state.limits().clone();
-    routes::router()
+    let tls = state.access().tls();
+    let router = routes::router()
         .fallback(error::not_found)
         .with_state(state.clone())
         .layer(DefaultBodyLimit::max(limits.max_body_bytes))
         .layer(TimeoutLayer::with_status_code(StatusCode::REQUEST_TIMEOUT, limits.request_timeout))
+        .layer(from_fn_with_state(state.clone(), clients::limit))
+        .layer(from_fn_with_state(state.clone(), access::check))
         .layer(from_fn_with_state(state.clone(), guard::check_request))
         .layer(from_fn(error::json_client_errors))
         .layer(from_fn_with_state(state.clone(), answers::budget))
         .layer(CatchPanicLayer::custom(error::panic_response))
-        .layer(map_response(assets::add_security_headers))
-        .layer(from_fn_with_state(state, access_log::log))
+        .layer(map_response(assets::add_security_headers));
+    // HSTS under TLS only: over plain HTTP a browser ignores it anyway.
+    let router = if tls { router.layer(map_response(tls::add_hsts)) } else { router };
+    router.layer(from_fn_with_state(state, access_log::log))
 }
 
 /// Serves the application on `listener` until `shutdown` completes, then
@@ -177,10 +212,24 @@ pub async fn serve(
     state: AppState,
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> Result<(), ServeError> {
-    use hyper_util::rt::{TokioIo, TokioTimer};
+    serve_with(listener, state, None, shutdown).await
+}
+
+/// [`serve`] over TLS when `tls` is given (`haptex serve --tls-cert
+/// --tls-key`; the state's access rules should say so:
+/// [`access::Access::with_tls`]): each connection's handshake on its own
+/// task, within [`Limits::header_timeout`].
+pub async fn serve_with(
+    listener: tokio::net::TcpListener,
+    state: AppState,
+    tls: Option<tls::Acceptor>,
+    shutdown: impl Future<Output = ()> + Send + 'static,
+) -> Result<(), ServeError> {
+    use hyper_util::rt::TokioTimer;
 
     let limits = state.limits().clone();
     let trimmer = tokio::spawn(memory::Trimmer::run(state.clone()));
+    let clients = Arc::clone(state.clients());
     let router = app(state);
     let head = connection::HeadLimits { head_bytes: limits.head_buffer_bytes(), headers: 2 * limits.max_headers };
     let mut http = hyper::server::conn::http1::Builder::new();
@@ -210,34 +259,29 @@ pub async fn serve(
             () = &mut shutdown => break,
         };
         let _ = stream.set_nodelay(true);
-        let requests = Arc::new(connection::Requests::default());
-        let socket = connection::Socket::new(stream, Arc::clone(&requests), head, limits.write_timeout);
-        let router = router.clone();
-        let service = hyper::service::service_fn(move |request: hyper::Request<hyper::body::Incoming>| {
-            // Open from the head's arrival until hyper has taken the
-            // answer's last byte (see `connection`).
-            let open = requests.open();
-            let answer = router.clone().oneshot(request.map(Body::new));
-            async move {
-                let response = answer.await.unwrap_or_else(|never: Infallible| match never {});
-                Ok::<_, Infallible>(response.map(|body| Body::new(connection::Held::new(body, open))))
-            }
-        });
-        let connection = http.serve_connection(TokioIo::new(socket), service).with_upgrades();
-        let (mut stop, open) = (stopped.clone(), open.clone());
+        let connection = Connection {
+            clients: Arc::clone(&clients),
+            limits: limits.clone(),
+            http: http.clone(),
+            router: router.clone(),
+            head,
+            write_timeout: limits.write_timeout,
+            stop: stopped.clone(),
+            open: open.clone(),
+            peer,
+        };
+        let (tls, handshake_timeout) = (tls.clone(), limits.header_timeout);
         tokio::spawn(async move {
-            let mut connection = std::pin::pin!(connection);
-            let ended = tokio::select! {
-                ended = connection.as_mut() => ended,
-                _ = async { stop.wait_for(|&s| s).await.map(|_| ()) } => {
-                    connection.as_mut().graceful_shutdown();
-                    connection.await
-                }
-            };
-            if let Err(e) = ended {
-                tracing::debug!(%peer, "connection ended with an error: {e}");
+            match tls {
+                None => connection.run(stream).await,
+                // The handshake on the connection's own task, within the
+                // time a client has to send its headers.
+                Some(acceptor) => match tokio::time::timeout(handshake_timeout, acceptor.accept(stream)).await {
+                    Ok(Ok(stream)) => connection.run(stream).await,
+                    Ok(Err(e)) => tracing::debug!(%peer, "TLS handshake failed: {e}"),
+                    Err(_) => tracing::debug!(%peer, "no TLS handshake within {handshake_timeout:?}"),
+                },
             }
-            drop(open);
         });
     }
     drop(listener);
@@ -250,12 +294,95 @@ pub async fn serve(
     Ok(())
 }
 
+/// One accepted connection: what its task needs to serve it.
+struct Connection {
+    clients: Arc<clients::Clients>,
+    limits: Limits,
+    http: hyper::server::conn::http1::Builder,
+    router: Router,
+    head: connection::HeadLimits,
+    write_timeout: Duration,
+    stop: tokio::sync::watch::Receiver<bool>,
+    /// Held until the connection ends (graceful shutdown waits for all).
+    open: tokio::sync::mpsc::Sender<()>,
+    peer: SocketAddr,
+}
+
+impl Connection {
+    /// Serves HTTP/1.1 on `io` (a TCP stream, or the plaintext side of a
+    /// TLS one) until the client closes or the server stops.
+    async fn run<T>(self, io: T)
+    where
+        T: tokio::io::AsyncRead + tokio::io::AsyncWrite + Unpin + Send + 'static,
+    {
+        use hyper_util::rt::TokioIo;
+        let Self { clients, limits, http, router, head, write_timeout, mut stop, open, peer } = self;
+        let ip = peer.ip();
+        // Clients on this machine are limited only if the limits say so.
+        let limited = limits.limit_loopback_clients || !ip.is_loopback();
+        let slot = if limited {
+            clients.connect(ip, limits.client_connections, limits.client_expensive_burst, limits.client_expensive_per_s)
+        } else {
+            None
+        };
+        if limited && slot.is_none() {
+            // Over the client's connections: one 429 and the connection closed.
+            let answer = clients::too_many(
+                format!("this client has {} connections open, the most this server takes", limits.client_connections),
+                1.0,
+            );
+            connection::write_and_close(io, answer, write_timeout).await;
+            drop(open);
+            return;
+        }
+        let requests = Arc::new(connection::Requests::default());
+        let socket = connection::Socket::new(io, Arc::clone(&requests), head, write_timeout);
+        let service = hyper::service::service_fn(move |request: hyper::Request<hyper::body::Incoming>| {
+            // Open from the head's arrival until hyper has taken the
+            // answer's last byte (see `connection`).
+            let open = requests.open();
+            let mut request = request.map(Body::new);
+            if limited {
+                request.extensions_mut().insert(clients::ClientAddr(ip));
+            }
+            let answer = router.clone().oneshot(request);
+            async move {
+                let response = answer.await.unwrap_or_else(|never: Infallible| match never {});
+                Ok::<_, Infallible>(response.map(|body| Body::new(connection::Held::new(body, open))))
+            }
+        });
+        let connection = http.serve_connection(TokioIo::new(socket), service).with_upgrades();
+        let mut connection = std::pin::pin!(connection);
+        let ended = tokio::select! {
+            ended = connection.as_mut() => ended,
+            _ = async { stop.wait_for(|&s| s).await.map(|_| ()) } => {
+                connection.as_mut().graceful_shutdown();
+                connection.await
+            }
+        };
+        if let Err(e) = ended {
+            tracing::debug!(%peer, "connection ended with an error: {e}");
+        }
+        drop(open);
+    }
+}
+
 /// Starts the server with `config` and blocks until Ctrl-C (or SIGTERM),
 /// then shuts down gracefully. `on_listening` is called with the bound
 /// address once the server accepts connections.
 pub fn run(config: Config, on_listening: impl FnOnce(SocketAddr)) -> Result<(), ServeError> {
+    if let (Some(why), None) = (config.token_required(), &config.token) {
+        return Err(ServeError::TokenRequired(why));
+    }
+    let acceptor = config.tls.as_ref().map(|(cert, key)| tls::acceptor(cert, key)).transpose()?;
+    let access = access::Access::open().with_tls(acceptor.is_some());
+    let access = match &config.token {
+        Some(token) => access.with_token(token.clone())?,
+        None => access,
+    };
     memory::configure();
     let mut state = AppState::new(config.library.as_deref(), config.limits.clone())?
+        .with_access(access)
         .with_hosts(HostPolicy::new(&config.allowed_hosts)?)
         .with_access_log(config.access_log)
         .with_default_device(config.default_device.clone());
@@ -274,7 +401,7 @@ pub fn run(config: Config, on_listening: impl FnOnce(SocketAddr)) -> Result<(), 
             .await
             .map_err(|cause| ServeError::Bind { addr: config.addr, cause })?;
         on_listening(listener.local_addr()?);
-        serve(listener, state, shutdown_signal()).await
+        serve_with(listener, state, acceptor, shutdown_signal()).await
     })?;
     // Blocking tasks (library reads, renders) are bounded by the limits;
     // do not wait long for a stuck one.

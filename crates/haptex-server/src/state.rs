@@ -110,6 +110,19 @@ pub struct Limits {
     /// pixel (about 10 MB of JSON at the limit); larger images are for
     /// `haptex map from-image`.
     pub max_map_pixels: usize,
+    /// Expensive requests (those that take a heavy slot: FE runs, checks,
+    /// renders, maps, calibrations, uploads) one client (IP address) may
+    /// send at once, and per second after that ([`crate::clients`]):
+    /// beyond, 429 with `Retry-After`.
+    pub client_expensive_burst: f64,
+    pub client_expensive_per_s: f64,
+    /// Connections one client may hold open at once (the next: 429, closed).
+    pub client_connections: usize,
+    /// Whether clients on this machine (loopback addresses) are limited
+    /// too: by default they are not (they are the operator's, and behind
+    /// a reverse proxy every client is loopback: limits per client then
+    /// belong to the proxy).
+    pub limit_loopback_clients: bool,
 }
 
 impl Limits {
@@ -124,7 +137,8 @@ impl Limits {
     /// for it; checks on
     /// the finger model of up to 4000 points and 4000 FE steps (about 6 s);
     /// uploads of recordings of up to 64 MiB and 1000 files; images of up
-    /// to 512 x 512 pixels turned into maps.
+    /// to 512 x 512 pixels turned into maps; per client, 20 expensive
+    /// requests at once and 10 per second after, 32 connections.
     pub const DEFAULT: Self = Self {
         max_body_bytes: 1 << 20,
         max_points: 100_000,
@@ -151,6 +165,10 @@ impl Limits {
         max_upload_bytes: 64 << 20,
         max_upload_files: 1000,
         max_map_pixels: 512 * 512,
+        client_expensive_burst: 20.0,
+        client_expensive_per_s: 10.0,
+        client_connections: 32,
+        limit_loopback_clients: false,
     };
 
     /// The read buffer hyper may fill with one request head: room for the
@@ -186,6 +204,8 @@ struct Inner {
     simulations: Arc<Semaphore>,
     /// Bytes of answers built and not yet handed to their connection.
     unsent_answer_bytes: AtomicUsize,
+    /// Every client's bucket of expensive requests and its connections.
+    clients: Arc<crate::clients::Clients>,
 }
 
 /// A profile source the GUI can offer.
@@ -211,6 +231,8 @@ struct Parts {
     live: Option<Arc<LiveHub>>,
     /// The device requests start from (`haptex serve --device-file`).
     default_device: crate::params::DefaultDevice,
+    /// Who may use the server (`haptex serve --token`; [`crate::access`]).
+    access: crate::access::Access,
 }
 
 impl AppState {
@@ -227,6 +249,7 @@ impl AppState {
             access_log: false,
             live: None,
             default_device: crate::params::DefaultDevice::PAPER,
+            access: crate::access::Access::open(),
         }))
     }
 
@@ -285,6 +308,17 @@ impl AppState {
         Self::build(Parts { default_device: device, ..self.parts() })
     }
 
+    /// This state, answering only requests that carry the access rules'
+    /// token ([`crate::access`]).
+    pub fn with_access(self, access: crate::access::Access) -> Self {
+        Self::build(Parts { access, ..self.parts() })
+    }
+
+    /// Who may use the server.
+    pub fn access(&self) -> &crate::access::Access {
+        &self.0.parts.access
+    }
+
     /// The device requests start from.
     pub fn default_device(&self) -> &crate::params::DefaultDevice {
         &self.0.parts.default_device
@@ -303,7 +337,13 @@ impl AppState {
             renders,
             simulations,
             unsent_answer_bytes: AtomicUsize::new(0),
+            clients: Arc::default(),
         }))
+    }
+
+    /// The clients' buckets and connections ([`crate::clients`]).
+    pub fn clients(&self) -> &Arc<crate::clients::Clients> {
+        &self.0.clients
     }
 
     /// The live output, if the server has one (`haptex serve --live`).

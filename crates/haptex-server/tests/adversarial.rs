@@ -1103,6 +1103,136 @@ fn measured_body() -> Value {
     })
 }
 
+/// The state the campaign runs against: a writable copy of the shipped
+/// library (POST /api/recordings needs one; its valid request uploads a
+/// recording the library holds, so nothing is added), the shipped FE
+/// database, a live output. The directory holds the library's copy.
+fn campaign_state() -> (haptex_server::AppState, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    let library = dir.path().join("library.sqlite");
+    std::fs::copy(shipped_library(), &library).unwrap();
+    let state = haptex_server::AppState::new(Some(&library), haptex_server::Limits::DEFAULT)
+        .and_then(haptex_server::AppState::with_writable_library)
+        .unwrap()
+        .with_database(&shipped_db())
+        .unwrap()
+        .with_live_output(Arc::new(common::paced_output::PacedOutput::new(None)));
+    (state, dir)
+}
+
+/// The token of the campaign against a protected server.
+const TOKEN: &str = "adversarial-token-5f1e9a0c3b7d";
+
+/// The status code of a raw answer.
+fn status_of(answer: &str) -> u16 {
+    answer.get(9..12).and_then(|s| s.parse().ok()).unwrap_or(0)
+}
+
+/// The body of a raw answer (after the head).
+fn body_of(answer: &str) -> &str {
+    answer.split_once("\r\n\r\n").map_or("", |(_, b)| b)
+}
+
+/// Issue 41: the whole campaign (every case of every route, and each
+/// route's valid request) against a server that needs a token, without
+/// it: no case is answered (2xx, 3xx or 5xx) but the health check's
+/// minimal `{"status": "ok"}`; every valid request is 401 naming the
+/// token; no answer carries the token.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn behind_a_token_no_case_of_the_campaign_is_answered_without_it() {
+    use haptex_server::access::{Access, Token};
+    let (state, _dir) = campaign_state();
+    let state = state.with_access(Access::open().with_token(Token::new(TOKEN).unwrap()).unwrap());
+    let server = RawServer::start(state).await;
+    let valid = valid_requests();
+    let mut failures = Vec::new();
+    let mut refused = 0;
+    for v in &valid {
+        let case = v.case("the valid request", 401, Some("token"), |_| {});
+        let answer = server.raw(&case.bytes()).await;
+        if v.route.1 == "/api/health" {
+            let body: Value = serde_json::from_str(body_of(&answer)).unwrap_or(Value::Null);
+            if status_of(&answer) != 200 || body != json!({ "status": "ok" }) {
+                failures.push(format!("GET /api/health: {answer}"));
+            }
+        } else if let Err(e) = check_json_error(&answer, 401, Some("token")) {
+            failures.push(format!("{} {} [valid request]: {e}", v.route.0, v.route.1));
+        }
+        for case in [generic_cases(v), route_cases(v)].concat() {
+            let answer = server.raw(&case.bytes()).await;
+            let status = status_of(&answer);
+            let minimal_health = v.route.1 == "/api/health"
+                && status == 200
+                && serde_json::from_str::<Value>(body_of(&answer)).is_ok_and(|b| b == json!({ "status": "ok" }));
+            if !(400..500).contains(&status) && !minimal_health {
+                let shown: String = answer.chars().take(300).collect();
+                failures
+                    .push(format!("{} {} [{}]: answered {status}: {shown:?}", case.route.0, case.route.1, case.what));
+            }
+            refused += usize::from(status == 401);
+            if answer.contains(TOKEN) {
+                failures.push(format!("{} {} [{}]: the token in the answer", case.route.0, case.route.1, case.what));
+            }
+        }
+    }
+    eprintln!("{refused} cases refused with 401 over {} routes", valid.len());
+    assert!(failures.is_empty(), "{} failures:\n{}", failures.len(), failures.join("\n"));
+    server.stop().await;
+}
+
+/// Issue 41: with the token, every route's valid request gets the answer
+/// a server without a token gives, byte for byte but for the `Date`
+/// header and the wall times the FE routes report (`fe_seconds`,
+/// `seconds`).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn with_its_token_every_route_answers_as_an_open_server_does() {
+    use haptex_server::access::{Access, Token};
+    let (open, _a) = campaign_state();
+    let (protected, _b) = campaign_state();
+    let protected = protected.with_access(Access::open().with_token(Token::new(TOKEN).unwrap()).unwrap());
+    let (open, protected) = (RawServer::start(open).await, RawServer::start(protected).await);
+    // Wall times, anywhere in a JSON answer or JSON line: masked.
+    fn masked(text: &str) -> String {
+        let mask = |mut v: Value| {
+            fn walk(v: &mut Value) {
+                match v {
+                    Value::Object(map) => {
+                        for (k, x) in map.iter_mut() {
+                            if k == "fe_seconds" || k == "seconds" {
+                                *x = Value::Null;
+                            } else {
+                                walk(x);
+                            }
+                        }
+                    }
+                    Value::Array(items) => items.iter_mut().for_each(walk),
+                    _ => {}
+                }
+            }
+            walk(&mut v);
+            v.to_string()
+        };
+        text.lines()
+            .filter(|l| !l.to_ascii_lowercase().starts_with("date:"))
+            .map(|l| serde_json::from_str::<Value>(l).map_or_else(|_| l.to_string(), mask))
+            .collect::<Vec<_>>()
+            .join("\n")
+    }
+    for v in valid_requests() {
+        let plain = v.case("the valid request", 200, None, |_| {});
+        let with_token = v.case("the valid request with the token", 200, None, |c| {
+            c.headers.push(("Authorization".to_string(), format!("Bearer {TOKEN}")));
+        });
+        let (a, b) = (open.raw(&plain.bytes()).await, protected.raw(&with_token.bytes()).await);
+        let expected = if v.route.1 == LIVE_SOCKET { 101 } else { 200 };
+        assert_eq!(status_of(&a), expected, "{} {}: {a}", v.route.0, v.route.1);
+        assert_eq!(masked(&a), masked(&b), "{} {}", v.route.0, v.route.1);
+        assert!(!b.contains(TOKEN));
+    }
+    open.stop().await;
+    protected.stop().await;
+}
+
 /// Sends every case on its own connection, two clients at a time, while
 /// two more upload maximal bodies back to back and another asks
 /// `/api/health` every 10 ms; checks each answer.
@@ -1115,18 +1245,7 @@ async fn every_route_answers_hostile_input_with_a_4xx_naming_the_field() {
         valid.iter().map(|v| (v.route.0.to_string(), v.route.1.to_string())).collect();
     assert_eq!(covered, served, "every route of routes::table() needs its valid request and cases here");
 
-    // A writable copy of the shipped library (POST /api/recordings needs
-    // one; its valid request uploads a recording the library holds, so
-    // nothing is added).
-    let dir = tempfile::tempdir().unwrap();
-    let library = dir.path().join("library.sqlite");
-    std::fs::copy(shipped_library(), &library).unwrap();
-    let state = haptex_server::AppState::new(Some(&library), haptex_server::Limits::DEFAULT)
-        .and_then(haptex_server::AppState::with_writable_library)
-        .unwrap()
-        .with_database(&shipped_db())
-        .unwrap()
-        .with_live_output(Arc::new(common::paced_output::PacedOutput::new(None)));
+    let (state, _dir) = campaign_state();
     let server = Arc::new(RawServer::start(state).await);
     // The valid requests are served (so the cases' refusals are theirs).
     for v in &valid {

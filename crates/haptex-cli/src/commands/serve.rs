@@ -24,13 +24,22 @@ use haptex_server::{Config, Limits};
 /// The library is read-only unless --writable, which lets the GUI (and
 /// POST /api/recordings) add uploaded recordings to it, as `haptex library
 /// import` would (docs/web.md).
+/// Access: a server that listens beyond this machine, takes uploads
+/// (--writable) or drives a live output (--live) needs an access token.
+/// It makes a random one at start and prints the address that carries it
+/// (open it once: the page exchanges it for a session cookie); --token,
+/// --token-file or $HAPTEX_TOKEN give one instead. API clients send it as
+/// `Authorization: Bearer TOKEN`. A loopback-only server without
+/// --writable and --live runs without one, unless given one (docs/web.md,
+/// "Safety").
 /// Ctrl-C stops the server after the requests in flight. Errors are
 /// logged to stderr; --access-log logs every request too (RUST_LOG=debug
 /// also logs every refused request with its field).
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:\n  \
     haptex serve\n  \
-    haptex serve --addr 0.0.0.0:8080\n  \
+    haptex serve --addr 0.0.0.0:8080   (prints the address with its access token: open it on the phone)\n  \
+    HAPTEX_TOKEN=$(cat ~/.haptex-token) haptex serve --addr 0.0.0.0:8080\n  \
     haptex serve --addr 0.0.0.0:8080 --allow-host mypc.local --access-log\n  \
     haptex serve --library my-lab.sqlite --addr 127.0.0.1:9000\n  \
     haptex serve --library my-lab.sqlite --writable   (recordings uploaded in the GUI are added to it)\n  \
@@ -63,6 +72,28 @@ pub struct ServeArgs {
     /// default, errors are logged either way.
     #[arg(long)]
     access_log: bool,
+    #[command(flatten)]
+    token: crate::args::TokenArgs,
+    /// Serve HTTPS with this PEM certificate chain (the server's
+    /// certificate first); needs --tls-key.
+    #[arg(long, value_name = "CERT.pem", requires = "tls_key")]
+    tls_cert: Option<PathBuf>,
+    /// The PEM private key of --tls-cert's certificate (PKCS#8, PKCS#1 or SEC1).
+    #[arg(long, value_name = "KEY.pem", requires = "tls_cert")]
+    tls_key: Option<PathBuf>,
+    /// Expensive requests (FE runs, checks, renders, maps, calibrations,
+    /// uploads) one client (IP address) may send at once; beyond, and
+    /// beyond --client-rate, 429 with Retry-After. Clients on this machine
+    /// (loopback) are not limited.
+    #[arg(long, value_name = "N", default_value_t = Limits::DEFAULT.client_expensive_burst, value_parser = client_limit)]
+    client_burst: f64,
+    /// Expensive requests per second one client may send after its burst.
+    #[arg(long, value_name = "PER_S", default_value_t = Limits::DEFAULT.client_expensive_per_s, value_parser = client_limit)]
+    client_rate: f64,
+    /// Connections one client may hold open at once.
+    #[arg(long, value_name = "N", default_value_t = Limits::DEFAULT.client_connections as u32,
+          value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    client_connections: u32,
     /// Play designs live on an audio output: the page's "live" panel then
     /// streams the finger's positions to this server, which renders the
     /// drive on the device (the options below are `haptex live`'s; needs a
@@ -102,17 +133,32 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
         None => haptex_server::params::DefaultDevice::PAPER,
     };
     let live = live_output(args.live, args.output)?;
-    let config = Config {
+    let given = args.token.given()?;
+    let mut config = Config {
         addr: args.addr,
         library: Some(library.clone()),
         writable: args.writable,
         database: Some(db.clone()),
-        limits: Limits::DEFAULT,
+        limits: Limits {
+            client_expensive_burst: args.client_burst,
+            client_expensive_per_s: args.client_rate,
+            client_connections: args.client_connections as usize,
+            ..Limits::DEFAULT
+        },
         allowed_hosts: args.allow_host,
         access_log: args.access_log,
         live: live.clone(),
         default_device,
+        token: given.as_ref().map(|(t, _)| t.clone()),
+        tls: args.tls_cert.clone().zip(args.tls_key.clone()),
     };
+    let scheme = if config.tls.is_some() { "https" } else { "http" };
+    let generated = config.token.is_none() && config.token_required().is_some();
+    if generated {
+        config.token = Some(haptex_server::access::Token::generate()?);
+    }
+    let token = config.token.clone();
+    let why = config.token_required();
     haptex_server::run(config, |addr| {
         eprintln!(
             "haptex serve: library {} ({}), FE database {}",
@@ -134,14 +180,30 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
                 info.a_max_um.map_or(String::new(), |a| format!(", channel 2 a_max {} um", haptex_core::num::Num(a)))
             );
         }
+        // The address to open, with the token when there is one: printed
+        // in full when made here (the only way to learn it), else with a
+        // placeholder naming where it came from.
+        let query = token.as_ref().map_or(String::new(), |t| {
+            crate::args::TokenArgs::query(t, given.as_ref().map(|(_, source)| source.as_str()))
+        });
+        match (&token, why) {
+            (Some(_), Some(why)) => {
+                eprintln!("access token required ({why}): API clients send 'Authorization: Bearer TOKEN'")
+            }
+            (Some(_), None) => eprintln!("access token required: API clients send 'Authorization: Bearer TOKEN'"),
+            (None, _) => eprintln!(
+                "no access token: this server listens on this machine only and neither takes uploads nor drives a \
+                 live output, so any program on this machine may use it (--token to require one)"
+            ),
+        }
         if addr.ip().is_unspecified() {
             eprintln!(
-                "listening on every interface, port {}: open http://<this machine's address>:{}/",
+                "listening on every interface, port {}: open {scheme}://<this machine's address>:{}/{query}",
                 addr.port(),
                 addr.port()
             );
         } else {
-            eprintln!("open http://{addr}/ (Ctrl-C stops)");
+            eprintln!("open {scheme}://{addr}/{query} (Ctrl-C stops)");
         }
     })?;
     eprintln!("haptex serve: stopped");
@@ -181,4 +243,14 @@ fn init_logging() {
     // Fails only if a subscriber is already set, which then logs instead.
     let ansi = std::io::IsTerminal::is_terminal(&std::io::stderr());
     let _ = tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).with_ansi(ansi).try_init();
+}
+
+/// A per-client limit: a finite number from 0.01 to 1e6.
+fn client_limit(text: &str) -> Result<f64, String> {
+    let v: f64 = text.trim().parse().map_err(|_| format!("expected a number, got '{text}'"))?;
+    if v.is_finite() && (0.01..=1e6).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("must be from 0.01 to 1e6, got {text}"))
+    }
 }

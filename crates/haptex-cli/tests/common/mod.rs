@@ -32,6 +32,14 @@ pub fn stderr(out: &Output) -> String {
 
 /// Reads a `haptex serve` child's standard error until it says where it
 /// listens: the port, and everything it printed up to then.
+/// The access token in the address `haptex serve` printed (in `seen`), if
+/// it printed one.
+pub fn printed_token(seen: &str) -> Option<String> {
+    let line = seen.lines().find(|l| l.starts_with("open http://") || l.contains("open http://"))?;
+    let token = line.split("?token=").nth(1)?;
+    Some(token.split_whitespace().next()?.to_string())
+}
+
 pub fn listening_port(stderr: &mut impl std::io::BufRead) -> (u16, String) {
     let mut seen = String::new();
     loop {

@@ -70,16 +70,33 @@ impl Driver {
 
     /// A session of headless Chromium, 1280 x 1000.
     pub async fn connect(&self, chromium: &Path, scratch: &Path) -> Client {
+        self.connect_with(chromium, scratch, &[]).await
+    }
+
+    /// [`Self::connect`] with more command-line arguments for Chromium.
+    pub async fn connect_with(&self, chromium: &Path, scratch: &Path, extra: &[&str]) -> Client {
         let profile = scratch.join("chromium-profile");
+        let mut args: Vec<String> = [
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--no-first-run",
+            "--disable-dev-shm-usage",
+            "--window-size=1280,1000",
+        ]
+        .into_iter()
+        .map(String::from)
+        .collect();
+        args.push(format!("--user-data-dir={}", profile.display()));
+        args.extend(extra.iter().map(|a| a.to_string()));
         let capabilities = json!({
             "browserName": "chrome",
             "goog:chromeOptions": {
                 "binary": chromium,
-                "args": [
-                    "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-                    "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-dev-shm-usage",
-                    format!("--user-data-dir={}", profile.display()), "--window-size=1280,1000",
-                ],
+                "args": args,
             },
             "goog:loggingPrefs": { "browser": "ALL" },
         });
@@ -177,6 +194,18 @@ pub async fn set_viewport(client: &Client, width: u32, height: u32) -> Check<()>
 /// exercise's error and chromedriver's log; skipped, saying so, with
 /// HAPTEX_BROWSER_TEST=skip.
 pub fn run(state: haptex_server::AppState, exercise: impl AsyncFnOnce(&Client, &str, &Path) -> Check<()>) {
+    run_with(state, None, exercise)
+}
+
+/// [`run`] over HTTPS with `tls` when given (the URL is then
+/// `https://localhost:PORT/`, and Chromium accepts the test's self-signed
+/// certificate).
+#[allow(dead_code)]
+pub fn run_with(
+    state: haptex_server::AppState,
+    tls: Option<haptex_server::tls::Acceptor>,
+    exercise: impl AsyncFnOnce(&Client, &str, &Path) -> Check<()>,
+) {
     let Some((chromium, chromedriver)) = tools() else { return };
     let scratch = tempfile::tempdir().unwrap();
     let runtime = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
@@ -184,12 +213,17 @@ pub fn run(state: haptex_server::AppState, exercise: impl AsyncFnOnce(&Client, &
         let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
         let addr = listener.local_addr().unwrap();
         let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
-        tokio::spawn(haptex_server::serve(listener, state, async {
+        let url = match &tls {
+            Some(_) => format!("https://localhost:{}/", addr.port()),
+            None => format!("http://{addr}/"),
+        };
+        let extra: &[&str] = if tls.is_some() { &["--ignore-certificate-errors"] } else { &[] };
+        tokio::spawn(haptex_server::serve_with(listener, state, tls, async {
             let _ = stopped.await;
         }));
         let driver = Driver::start(&chromedriver, scratch.path());
-        let client = driver.connect(&chromium, scratch.path()).await;
-        let result = exercise(&client, &format!("http://{addr}/"), scratch.path()).await;
+        let client = driver.connect_with(&chromium, scratch.path(), extra).await;
+        let result = exercise(&client, &url, scratch.path()).await;
         let _ = client.close().await;
         let _ = stop.send(());
         if let Err(message) = result {

@@ -253,6 +253,12 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
     if args.touch_log.is_none() && !args.stdin && args.ws.is_none() {
         bail!("give --touch-log T.csv, --stdin or --ws ADDR");
     }
+    // The page's token is checked before the device is opened.
+    if args.ws.is_some() {
+        args.token.given()?;
+    } else if args.token != crate::args::TokenArgs::default() {
+        bail!("--token and --token-file are for the page of --ws");
+    }
     if args.voltage_map.is_some() {
         return run_map(&args, design);
     }
@@ -377,13 +383,24 @@ fn play<R: LiveRenderer + 'static>(
             area,
             sample_rate,
         };
+        // The page drives the output: always behind a token.
+        let given = args.token.given()?;
+        let token = match &given {
+            Some((token, _)) => token.clone(),
+            None => haptex_server::access::Token::generate()?,
+        };
+        let query = crate::args::TokenArgs::query(&token, given.as_ref().map(|(_, source)| source.as_str()));
+        let access = haptex_server::access::Access::open().with_token(token)?;
         let (ready_tx, ready_rx) = std::sync::mpsc::channel();
         let addr = addr.clone();
-        std::thread::spawn(move || serve_ws(&addr, state, &ready_tx));
+        std::thread::spawn(move || serve_ws(&addr, state, access, &ready_tx));
         let failure = match ready_rx.recv() {
             Ok(Ok(bound)) => {
                 // Always printed: tests and scripts read the address from it.
-                eprintln!("live: page http://{bound}/ , WebSocket ws://{bound}/live/ws (Ctrl-C ends)");
+                eprintln!(
+                    "live: page http://{bound}/{query} , WebSocket ws://{bound}/live/ws with the page's cookie or \
+                     'Authorization: Bearer TOKEN' (Ctrl-C ends)"
+                );
                 None
             }
             Ok(Err(e)) => Some(e),
@@ -633,8 +650,15 @@ struct WsState {
 }
 
 /// The live page and its WebSocket, on a thread of their own (a
-/// one-thread tokio runtime); `ready` gets the bound address or why not.
-fn serve_ws(addr: &str, state: WsState, ready: &std::sync::mpsc::Sender<Result<std::net::SocketAddr, String>>) {
+/// one-thread tokio runtime), under `access` (the token, the Origin
+/// check: `haptex_server::access`); `ready` gets the bound address or why
+/// not.
+fn serve_ws(
+    addr: &str,
+    state: WsState,
+    access: haptex_server::access::Access,
+    ready: &std::sync::mpsc::Sender<Result<std::net::SocketAddr, String>>,
+) {
     use axum::routing::get;
     let runtime = match tokio::runtime::Builder::new_current_thread().enable_all().build() {
         Ok(r) => r,
@@ -652,7 +676,13 @@ fn serve_ws(addr: &str, state: WsState, ready: &std::sync::mpsc::Sender<Result<s
             }
         };
         let _ = ready.send(listener.local_addr().map_err(|e| e.to_string()));
-        let app = axum::Router::new().route("/", get(page)).route("/live/ws", get(ws_upgrade)).with_state(state);
+        let access = Arc::new(access);
+        let app = axum::Router::new().route("/", get(page)).route("/live/ws", get(ws_upgrade)).with_state(state).layer(
+            axum::middleware::from_fn(move |request, next| {
+                let access = Arc::clone(&access);
+                async move { haptex_server::access::enforce(&access, request, next).await }
+            }),
+        );
         if let Err(e) = axum::serve(listener, app).await {
             eprintln!("live: the WebSocket server stopped: {e}");
         }

@@ -88,6 +88,11 @@ pub struct LiveArgs {
     /// the latency. Runs until Ctrl-C.
     #[arg(long, value_name = "ADDR")]
     ws: Option<String>,
+    /// The page and its WebSocket drive the output: they need an access
+    /// token, made at start and printed in the page's address unless given
+    /// (as `haptex serve`'s; docs/web.md, "Safety").
+    #[command(flatten, next_help_heading = "Access token (with --ws)")]
+    token: crate::args::TokenArgs,
     #[command(flatten)]
     output: OutputArgs,
     #[command(flatten)]
