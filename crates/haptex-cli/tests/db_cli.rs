@@ -672,7 +672,9 @@ fn db_validate_measures_random_members_against_fresh_fe_runs() {
     assert!(out.status.success() && !text(&out.stderr).contains("expected error"), "{}", text(&out.stderr));
 
     // The grid estimator over the same members: the same FE runs, another
-    // estimate; exact at a row, so a member that is a row has no error.
+    // estimate. Recorded, the grid becomes the database's estimator:
+    // predict serves it and states its validation; asked for the CAE, it
+    // says that the CAE's error was not measured and gives no figure.
     let csv = tmp.path().join("grid.csv");
     let out = haptex(&[
         "db",
@@ -686,6 +688,7 @@ fn db_validate_measures_random_members_against_fresh_fe_runs() {
         "-q",
         "--estimator",
         "grid",
+        "--record",
         "-o",
         csv.to_str().unwrap(),
     ]);
@@ -701,24 +704,6 @@ fn db_validate_measures_random_members_against_fresh_fe_runs() {
     assert_eq!(params(&grid), params(&first), "the grid is measured on the same members");
     assert_ne!(grid, first, "the grid's errors are the CAE's");
 
-    // Recorded with the grid, the grid becomes the database's estimator:
-    // predict serves it and states its validation; asked for the CAE, it
-    // says that the CAE's error was not measured and gives no figure.
-    let out = haptex(&[
-        "db",
-        "validate",
-        "--db",
-        db_arg,
-        "--random",
-        "3",
-        "--seed",
-        "11",
-        "-q",
-        "--estimator",
-        "grid",
-        "--record",
-    ]);
-    assert!(out.status.success(), "{}", text(&out.stderr));
     let metadata: serde_json::Value = serde_json::from_str(&read(&db.join("metadata.json"))).unwrap();
     assert_eq!(metadata["estimator"], "grid");
     assert_eq!(metadata["validation"]["estimator"], "grid");

@@ -52,7 +52,8 @@ fn certificates_and_keys_are_checked_before_serving() {
 }
 
 /// Sends `request` over TLS (trusting `cert_pem` only) and reads the answer to its end.
-async fn https(addr: std::net::SocketAddr, cert_pem: &str, request: &str) -> String {
+async fn https(addr: std::net::SocketAddr, cert_pem: &str, request: impl AsRef<str>) -> String {
+    let request = request.as_ref();
     use rustls::pki_types::pem::PemObject;
     let mut roots = rustls::RootCertStore::empty();
     roots.add(rustls::pki_types::CertificateDer::from_pem_slice(cert_pem.as_bytes()).unwrap()).unwrap();
@@ -115,32 +116,25 @@ async fn the_page_and_the_api_over_https() {
     // A prediction, from the page's own origin (https), with the cookie.
     let body = r#"{"surface":"bump","x0_mm":5,"width_mm":1.3,"height_mm":0.27,"velocity_mm_s":20}"#;
     let cookie_pair = cookie.split(';').next().unwrap();
-    let predict = https(
-        addr,
-        &cert_pem,
-        &format!(
-            "POST /api/predict HTTP/1.1\r\nHost: localhost\r\nOrigin: https://localhost\r\nCookie: {cookie_pair}\r\n\
-             Content-Type: application/json\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{body}",
-            body.len()
-        ),
-    )
-    .await;
+    let predict_from = |origin: &str| {
+        https(
+            addr,
+            &cert_pem,
+            format!(
+                "POST /api/predict HTTP/1.1\r\nHost: localhost\r\nOrigin: {origin}\r\nCookie: {cookie_pair}\r\n\
+                 Content-Type: application/json\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{body}",
+                body.len()
+            ),
+        )
+    };
+    let predict = predict_from("https://localhost").await;
     assert!(
         predict.starts_with("HTTP/1.1 200") && predict.contains("\"x_mm\""),
         "{}",
         &predict[..predict.len().min(400)]
     );
     // The same request from the http:// origin of the same host is another origin.
-    let foreign = https(
-        addr,
-        &cert_pem,
-        &format!(
-            "POST /api/predict HTTP/1.1\r\nHost: localhost\r\nOrigin: http://localhost\r\nCookie: {cookie_pair}\r\n\
-             Content-Type: application/json\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{body}",
-            body.len()
-        ),
-    )
-    .await;
+    let foreign = predict_from("http://localhost").await;
     assert!(foreign.starts_with("HTTP/1.1 403") && foreign.contains("\"field\":\"origin\""), "{foreign}");
 
     // Plain HTTP to the TLS port: no HTTP answer (the handshake fails).
