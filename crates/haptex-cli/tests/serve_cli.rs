@@ -18,19 +18,19 @@ fn http_get(port: u16, path: &str) -> String {
 
 /// GET `path` with `Host: host`.
 fn http_get_for(port: u16, host: &str, path: &str) -> String {
-    let mut socket = TcpStream::connect(("127.0.0.1", port)).unwrap();
-    socket.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
-    write!(socket, "GET {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n").unwrap();
-    let mut answer = String::new();
-    socket.read_to_string(&mut answer).unwrap();
-    answer
+    http_request(port, host, path, "")
 }
 
 /// GET `path` with extra header lines (each ending in CRLF).
 fn http_get_with(port: u16, path: &str, headers: &str) -> String {
+    http_request(port, "localhost", path, headers)
+}
+
+/// GET `path` with `Host: host` and extra header lines; the whole answer.
+fn http_request(port: u16, host: &str, path: &str, headers: &str) -> String {
     let mut socket = TcpStream::connect(("127.0.0.1", port)).unwrap();
     socket.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
-    write!(socket, "GET {path} HTTP/1.1\r\nHost: localhost\r\nConnection: close\r\n{headers}\r\n").unwrap();
+    write!(socket, "GET {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n{headers}\r\n").unwrap();
     let mut answer = String::new();
     socket.read_to_string(&mut answer).unwrap();
     answer
