@@ -397,11 +397,13 @@ pub fn run(config: Config, on_listening: impl FnOnce(SocketAddr)) -> Result<(), 
     }
     let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build().map_err(ServeError::Runtime)?;
     runtime.block_on(async move {
+        // Before the server says it listens: a signal from then on stops it.
+        let shutdown = shutdown_signal();
         let listener = tokio::net::TcpListener::bind(config.addr)
             .await
             .map_err(|cause| ServeError::Bind { addr: config.addr, cause })?;
         on_listening(listener.local_addr()?);
-        serve_with(listener, state, acceptor, shutdown_signal()).await
+        serve_with(listener, state, acceptor, shutdown).await
     })?;
     // Blocking tasks (library reads, renders) are bounded by the limits;
     // do not wait long for a stuck one.
@@ -409,27 +411,39 @@ pub fn run(config: Config, on_listening: impl FnOnce(SocketAddr)) -> Result<(), 
     Ok(())
 }
 
-/// Completes on Ctrl-C, or on SIGTERM on Unix.
-async fn shutdown_signal() {
-    let ctrl_c = async {
+/// Completes on Ctrl-C, or on SIGTERM on Unix. The handlers are installed
+/// when this is called (inside the runtime), not when the future is first
+/// polled: a signal that arrives once the server has said it listens, but
+/// before the accept loop has polled this future (it may accept at once),
+/// would otherwise find the default action and kill the process instead of
+/// stopping it gracefully.
+fn shutdown_signal() -> impl Future<Output = ()> + Send + 'static {
+    #[cfg(unix)]
+    let signals = {
+        use tokio::signal::unix::{SignalKind, signal};
+        (signal(SignalKind::interrupt()).ok(), signal(SignalKind::terminate()).ok())
+    };
+    async move {
+        #[cfg(unix)]
+        {
+            async fn next(signal: Option<tokio::signal::unix::Signal>) {
+                match signal {
+                    Some(mut s) => {
+                        s.recv().await;
+                    }
+                    None => std::future::pending::<()>().await,
+                }
+            }
+            let (interrupt, terminate) = signals;
+            tokio::select! {
+                () = next(interrupt) => {},
+                () = next(terminate) => {},
+            }
+        }
+        #[cfg(not(unix))]
         if tokio::signal::ctrl_c().await.is_err() {
             std::future::pending::<()>().await;
         }
-    };
-    #[cfg(unix)]
-    let terminate = async {
-        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
-            Ok(mut signal) => {
-                signal.recv().await;
-            }
-            Err(_) => std::future::pending::<()>().await,
-        }
-    };
-    #[cfg(not(unix))]
-    let terminate = std::future::pending::<()>();
-    tokio::select! {
-        () = ctrl_c => {},
-        () = terminate => {},
+        tracing::info!("shutting down: finishing the requests in flight");
     }
-    tracing::info!("shutting down: finishing the requests in flight");
 }
