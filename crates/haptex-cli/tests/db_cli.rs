@@ -551,28 +551,19 @@ fn db_validate_measures_random_members_against_fresh_fe_runs() {
     let out = build(&db, &[]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let db_arg = db.to_str().unwrap();
-    let members = |name: &str, seed: &str| {
+    // db validate of 3 members from `seed` with `extra` flags: its members' CSV and its table.
+    let members = |name: &str, seed: &str, extra: &[&str]| {
         let csv = tmp.path().join(name);
-        let out = haptex(&[
-            "db",
-            "validate",
-            "--db",
-            db_arg,
-            "--random",
-            "3",
-            "--seed",
-            seed,
-            "-q",
-            "-o",
-            csv.to_str().unwrap(),
-        ]);
+        let args =
+            ["db", "validate", "--db", db_arg, "--random", "3", "--seed", seed, "-q", "-o", csv.to_str().unwrap()];
+        let out = haptex(&[&args[..], extra].concat());
         assert!(out.status.success(), "{}", text(&out.stderr));
         (read(&csv), text(&out.stdout))
     };
-    let (first, table) = members("a.csv", "11");
-    let (again, _) = members("b.csv", "11");
+    let (first, table) = members("a.csv", "11", &[]);
+    let (again, _) = members("b.csv", "11", &[]);
     assert_eq!(first, again, "the same seed gave other members");
-    let (other, _) = members("c.csv", "12");
+    let (other, _) = members("c.csv", "12", &[]);
     assert_ne!(first, other, "another seed gave the same members");
 
     let rows: Vec<Vec<String>> = first
@@ -675,25 +666,7 @@ fn db_validate_measures_random_members_against_fresh_fe_runs() {
     // estimate. Recorded, the grid becomes the database's estimator:
     // predict serves it and states its validation; asked for the CAE, it
     // says that the CAE's error was not measured and gives no figure.
-    let csv = tmp.path().join("grid.csv");
-    let out = haptex(&[
-        "db",
-        "validate",
-        "--db",
-        db_arg,
-        "--random",
-        "3",
-        "--seed",
-        "11",
-        "-q",
-        "--estimator",
-        "grid",
-        "--record",
-        "-o",
-        csv.to_str().unwrap(),
-    ]);
-    assert!(out.status.success(), "{}", text(&out.stderr));
-    let grid = read(&csv);
+    let (grid, _) = members("grid.csv", "11", &["--estimator", "grid", "--record"]);
     let params = |t: &str| -> Vec<String> {
         t.lines()
             .filter(|l| !l.starts_with('#'))
