@@ -185,10 +185,36 @@ pub struct FeSettings {
     /// The feature's position in each run, and the slide (mm).
     pub x0_mm: f64,
     pub slide_mm: f64,
-    /// Slide step: min(max_step_mm, width / 10).
+    /// Slide step: min(max_step_mm, width / 10), and at most
+    /// `averaging.step_mm` when the profiles are averaged.
     pub max_step_mm: f64,
     pub mu_skin: f64,
     pub penalty_mpa_per_mm: f64,
+    /// How each run's Ft/Fn is averaged over the finger's travel before it
+    /// is sampled on the grid. Absent in databases built before haptex
+    /// averaged (2026-12-07): their rows are Ft/Fn at the slide steps,
+    /// interpolated onto the grid.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub averaging: Option<Averaging>,
+}
+
+/// The moving average that takes the finger mesh's node passing out of a
+/// database profile (docs/database.md, "What a database row is").
+///
+/// As the skin slides over a feature, each node of the pad's surface passes
+/// it in turn, and Ft/Fn oscillates with the pad's node spacing h: a
+/// discretization error, as large as a grating's own modulation on the fine
+/// mesh. Sampled at slide steps of 2h (0.1 mm on the fine mesh), that
+/// oscillation aliases into slow, random-looking wiggles no estimator can
+/// interpolate. Steps of h/4 resolve it, and an average over 2h, the
+/// shortest wavelength the pad's mesh represents, removes it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Averaging {
+    /// The slide step of every run (mm): a quarter of the pad's node spacing.
+    pub step_mm: f64,
+    /// The width of the centred moving average of Ft/Fn over the finger's
+    /// position (mm): two node spacings, cut to the slide at its ends.
+    pub window_mm: f64,
 }
 
 impl FeSettings {
@@ -259,6 +285,34 @@ pub struct Metadata {
     /// --record` sets it to the estimator it measured.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub estimator: Option<Estimator>,
+    /// The rounds of `haptex db refine` that added rows to the sweep's, in
+    /// order; absent if none did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refined: Option<Vec<RefineRound>>,
+}
+
+/// One round of `haptex db refine`: a new value of one input between two
+/// of the grid's, with an FE run at every combination of the other inputs'
+/// values, and how far the estimate of the database before the round was
+/// from those runs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RefineRound {
+    pub template: Template,
+    /// `width`, `height` or `velocity`.
+    pub axis: String,
+    /// The new value (mm or mm/s), between the two grid values `between`.
+    pub value: f64,
+    pub between: [f64; 2],
+    /// The interval's score that chose it: the larger leave-one-line-out
+    /// error of its ends, relative to the profiles' range; none for an axis
+    /// of two values, where nothing measures it.
+    pub score: Option<f64>,
+    /// FE runs added.
+    pub runs: usize,
+    /// The grid estimate before the round against the new runs: RMS over
+    /// the grid relative to each run's range, median and largest.
+    pub held_out_relative_median: f64,
+    pub held_out_relative_max: f64,
 }
 
 /// The estimate on random members of each template's family against FE

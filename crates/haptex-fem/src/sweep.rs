@@ -18,7 +18,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use haptex_core::cae::{ModelMatrix, OptimizeOptions, optimize_widths};
-use haptex_core::database::{self, FeSettings, Grid, INPUTS, Metadata, Sweep, Template, TemplateEntry};
+use haptex_core::database::{self, Averaging, FeSettings, Grid, INPUTS, Metadata, Sweep, Template, TemplateEntry};
 use haptex_core::io::{FileSet, OutputDir, Table, write_atomic};
 use haptex_core::num::Num;
 use rayon::prelude::*;
@@ -85,6 +85,10 @@ pub struct DatabaseSpec {
     pub x0_mm: f64,
     pub slide_mm: f64,
     pub max_step_mm: f64,
+    /// Average each run's Ft/Fn over two node spacings of the pad, from
+    /// steps of a quarter node spacing ([`Averaging`]); false only for a
+    /// database built before haptex averaged.
+    pub averaged: bool,
 }
 
 impl DatabaseSpec {
@@ -115,7 +119,13 @@ impl DatabaseSpec {
             x0_mm: 6.0,
             slide_mm: 11.0,
             max_step_mm: 0.1,
+            averaged: true,
         }
+    }
+
+    /// The averaging of the runs' profiles on this spec's mesh, if any.
+    pub fn averaging(&self) -> Option<Averaging> {
+        self.averaged.then(|| averaging_for(self.resolution.parameters().pad_spacing_mm))
     }
 
     /// All runs, in a fixed order (template, width, height, velocity).
@@ -145,6 +155,9 @@ impl DatabaseSpec {
         scenario.slide_mm = self.slide_mm;
         scenario.velocity_mm_s = run.velocity_mm_s;
         scenario.step_mm = default_step_mm(&surface).min(self.max_step_mm);
+        if let Some(a) = self.averaging() {
+            scenario.step_mm = scenario.step_mm.min(a.step_mm);
+        }
         scenario
     }
 
@@ -190,6 +203,7 @@ impl DatabaseSpec {
             max_step_mm: self.max_step_mm,
             mu_skin: self.model.contact.mu_skin,
             penalty_mpa_per_mm: Scenario::paper(SurfaceShape::Flat).penalty_mpa_per_mm,
+            averaging: self.averaging(),
         }
     }
 }
@@ -226,9 +240,11 @@ impl DatabaseSpec {
         spec.x0_mm = fe.x0_mm;
         spec.slide_mm = fe.slide_mm;
         spec.max_step_mm = fe.max_step_mm;
+        spec.averaged = fe.averaging.is_some();
         if spec.fe_settings() != *fe {
             return Err(SweepError::Invalid(
-                "the database's FE settings (skin friction, contact penalty) differ from this haptex's".into(),
+                "the database's FE settings (skin friction, contact penalty, averaging) differ from this haptex's"
+                    .into(),
             ));
         }
         Ok(spec)
@@ -494,7 +510,56 @@ fn slid<'a>(
 }
 
 fn sample(profile: &haptex_core::FrictionProfile, spec: &DatabaseSpec, xi: &[f64]) -> Vec<f64> {
-    xi.iter().map(|xi| profile.mu_at(xi + spec.x0_mm)).collect()
+    match spec.averaging() {
+        Some(a) => {
+            let x: Vec<f64> = xi.iter().map(|xi| xi + spec.x0_mm).collect();
+            moving_average(profile.x_mm(), profile.mu(), a.window_mm, &x)
+        }
+        None => xi.iter().map(|xi| profile.mu_at(xi + spec.x0_mm)).collect(),
+    }
+}
+
+/// The averaging of a database on a pad mesh of node spacing `pad_mm`:
+/// steps of a quarter spacing (the node passing's first three harmonics
+/// then either lie below the sampling's Nyquist frequency or alias onto
+/// zeros of the average), a window of two spacings.
+pub fn averaging_for(pad_mm: f64) -> Averaging {
+    Averaging { step_mm: pad_mm / 4.0, window_mm: 2.0 * pad_mm }
+}
+
+/// The mean of the piecewise-linear function through (`x`, `y`) (`x`
+/// increasing) over [q - window/2, q + window/2] for each q, the window cut
+/// to [x_first, x_last]; at a window of no width, the value at q. From the
+/// cumulative trapezoid integral, with a binary search per window end.
+pub fn moving_average(x: &[f64], y: &[f64], window_mm: f64, at: &[f64]) -> Vec<f64> {
+    debug_assert_eq!(x.len(), y.len());
+    let (Some(&first), Some(&last)) = (x.first(), x.last()) else { return vec![f64::NAN; at.len()] };
+    let mut integral = Vec::with_capacity(x.len());
+    let mut sum = 0.0;
+    integral.push(0.0);
+    for i in 1..x.len() {
+        sum += 0.5 * (y[i] + y[i - 1]) * (x[i] - x[i - 1]);
+        integral.push(sum);
+    }
+    // The integral and the value at t, by linear interpolation.
+    let locate = |t: f64| -> (f64, f64) {
+        let t = t.clamp(first, last);
+        let i = x.partition_point(|&v| v <= t).clamp(1, x.len().max(2) - 1);
+        if x.len() == 1 {
+            return (0.0, y[0]);
+        }
+        let (x0, x1) = (x[i - 1], x[i]);
+        let s = if x1 > x0 { (t - x0) / (x1 - x0) } else { 0.0 };
+        let value = y[i - 1] + s * (y[i] - y[i - 1]);
+        (integral[i - 1] + 0.5 * (y[i - 1] + value) * (t - x0), value)
+    };
+    at.iter()
+        .map(|&q| {
+            let lo = (q - 0.5 * window_mm).max(first);
+            let hi = (q + 0.5 * window_mm).min(last);
+            if hi - lo <= 1e-12 { locate(q).1 } else { (locate(hi).0 - locate(lo).0) / (hi - lo) }
+        })
+        .collect()
 }
 
 /// A run file: its parameters as comments, then `xi_mm,mu`. Values are
@@ -510,6 +575,11 @@ fn write_run(w: &mut dyn Write, run: &Run, grid: &Grid, mu: &[f64], wall_time_s:
         writeln!(w, "{xi:.4},{m:.6}")?;
     }
     Ok(())
+}
+
+/// The profile of a run file on `grid`.
+pub(crate) fn read_run_profile(path: &Path, grid: &Grid) -> Result<Vec<f64>, SweepError> {
+    read_run(path, grid).map(|(mu, _)| mu)
 }
 
 /// Reads a run file: the profile and the wall time recorded in it.
@@ -616,6 +686,7 @@ pub fn merge(sources: &[PathBuf], out: &Path, build_wall_time_s: Option<f64>) ->
         // (`haptex db validate --estimator E --record`).
         validation: None,
         estimator: None,
+        refined: None,
     };
     let json = serde_json::to_string_pretty(&metadata).expect("metadata serializes");
     set.finish(|w, _| writeln!(w, "{json}"))?;
@@ -623,7 +694,7 @@ pub fn merge(sources: &[PathBuf], out: &Path, build_wall_time_s: Option<f64>) ->
 }
 
 /// A template's model matrix: a comment, the header, one row per run.
-fn write_matrix(
+pub(crate) fn write_matrix(
     w: &mut dyn Write,
     template: Template,
     columns: &[String],
@@ -648,4 +719,67 @@ fn write_matrix(
 
 fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn samples(step: f64, until: f64, f: impl Fn(f64) -> f64) -> (Vec<f64>, Vec<f64>) {
+        let n = (until / step).round() as usize;
+        let x: Vec<f64> = (0..=n).map(|i| i as f64 * step).collect();
+        let y = x.iter().map(|&x| f(x)).collect();
+        (x, y)
+    }
+
+    #[test]
+    fn moving_average_of_a_line_is_the_line_inside_and_its_half_window_mean_at_the_ends() {
+        // The centred mean of a + b x over a window inside the data is a + b q
+        // exactly (the trapezoid rule is exact on the piecewise-linear data).
+        let (x, y) = samples(0.0125, 11.0, |x| 0.3 + 0.02 * x);
+        let q = [1.0, 5.55, 10.95];
+        let avg = moving_average(&x, &y, 0.1, &q);
+        for (a, q) in avg.iter().zip(q) {
+            assert!((a - (0.3 + 0.02 * q)).abs() < 1e-12, "{a} at {q}");
+        }
+        // At the slide's ends the window is cut: at x = 11 it covers 10.95 .. 11.
+        let end = moving_average(&x, &y, 0.1, &[11.0])[0];
+        assert!((end - (0.3 + 0.02 * 10.975)).abs() < 1e-12, "{end}");
+        // No window: the linear interpolant's value.
+        let at = moving_average(&x, &y, 0.0, &[3.00625])[0];
+        assert!((at - (0.3 + 0.02 * 3.00625)).abs() < 1e-12, "{at}");
+    }
+
+    #[test]
+    fn moving_average_over_its_wavelength_removes_an_oscillation_and_keeps_a_slow_one_by_the_sinc() {
+        // A node-passing oscillation of wavelength h = 0.05 mm on a grating's
+        // slow one (1.25 mm). The window 2h removes the first (its mean over
+        // two wavelengths is 0; the trapezoid rule on steps of h/4 is exact
+        // for the sampled sine's mean over whole periods up to rounding) and
+        // scales the second by sinc(pi 2h / L) = 0.9747 (the analytic box
+        // response, to 1e-3 for the piecewise-linear data's own error
+        // (pi/50)^2/6 ~ 7e-4 of the amplitude).
+        let h = 0.05;
+        let (l, a_slow, a_node) = (1.25, 0.02, 0.04);
+        let node = |x: f64| a_node * (2.0 * std::f64::consts::PI * x / h).sin();
+        let slow = |x: f64| a_slow * (2.0 * std::f64::consts::PI * x / l).sin();
+        let a = averaging_for(h);
+        assert_eq!((a.step_mm, a.window_mm), (0.0125, 0.1));
+        let (x, y) = samples(a.step_mm, 11.0, |x| 0.5 + slow(x) + node(x));
+        let q: Vec<f64> = (0..=400).map(|i| 1.0 + i as f64 * 0.02).collect();
+        let avg = moving_average(&x, &y, a.window_mm, &q);
+        let arg = std::f64::consts::PI * a.window_mm / l;
+        let sinc = arg.sin() / arg;
+        let worst = q.iter().zip(&avg).map(|(&q, v)| (v - (0.5 + sinc * slow(q))).abs()).fold(0.0, f64::max);
+        assert!(worst < 1e-3 * a_slow + 1e-9, "largest deviation {worst}");
+        // Sampled at steps of 2h instead, the oscillation aliases: every
+        // sample sits at the same phase of it, here its zero crossing, but at
+        // a spacing 4% off h (the deformed pad's, measured) it drifts
+        // through its whole amplitude.
+        let (x, y) =
+            samples(2.0 * h, 11.0, |x| 0.5 + slow(x) + a_node * (2.0 * std::f64::consts::PI * x / 0.048).sin());
+        let raw = moving_average(&x, &y, 0.0, &q);
+        let worst_raw = q.iter().zip(&raw).map(|(&q, v)| (v - (0.5 + slow(q))).abs()).fold(0.0, f64::max);
+        assert!(worst_raw > 0.5 * a_node, "aliased deviation {worst_raw}");
+    }
 }
