@@ -722,3 +722,135 @@ fn db_validate_measures_random_members_against_fresh_fe_runs() {
         assert!(text(&out.stderr).contains(expected), "{args:?}: expected '{expected}' in: {}", text(&out.stderr));
     }
 }
+
+/// The rows of a model matrix file: (r_w, r_h, v) and the profile.
+fn matrix_rows(path: &Path) -> Vec<(Vec<f64>, Vec<f64>)> {
+    read(path)
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').map(|v| v.parse().unwrap()).collect();
+            (v[..3].to_vec(), v[3..].to_vec())
+        })
+        .collect()
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let entry = entry.unwrap();
+        if entry.file_type().unwrap().is_file() {
+            std::fs::copy(entry.path(), to.join(entry.file_name())).unwrap();
+        }
+    }
+}
+
+#[test]
+fn db_refine_adds_grid_lines_where_the_estimate_is_wrong_and_resumes_from_its_runs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("db");
+    let out = build(&db, &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let db_arg = db.to_str().unwrap();
+    let out = haptex(&["db", "validate", "--db", db_arg, "--random", "1", "--seed", "3", "-q", "--record"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let before = tmp.path().join("before");
+    copy_dir(&db, &before);
+    let old_rows = matrix_rows(&db.join("bump.csv"));
+
+    let out = haptex(&["db", "refine", "--db", db_arg, "--template", "bump", "--budget", "4", "-q"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    let metadata: serde_json::Value = serde_json::from_str(&read(&db.join("metadata.json"))).unwrap();
+    let rounds = metadata["refined"].as_array().unwrap_or_else(|| panic!("no rounds recorded: {metadata}"));
+    let added: u64 = rounds.iter().map(|r| r["runs"].as_u64().unwrap()).sum();
+    let plural = if rounds.len() == 1 { "" } else { "s" };
+    assert!(stdout.contains(&format!("{added} runs added in {} round{plural};", rounds.len())), "{stdout}");
+    // Two widths: nothing measures the interval, so it is split first, one
+    // run per velocity; the budget of 4 allows at most one more round.
+    assert!((1..=2).contains(&rounds.len()) && added <= 4, "{rounds:?}");
+    let first = &rounds[0];
+    assert_eq!(
+        (first["template"].as_str(), first["axis"].as_str(), first["value"].as_f64(), first["runs"].as_u64()),
+        (Some("bump"), Some("width"), Some(1.5), Some(2))
+    );
+    assert_eq!(first["between"], serde_json::json!([1.0, 2.0]));
+    // Its held-out error, recomputed here: before the round the grid
+    // estimate at r_w = 1.5 was the mean of the rows at 1 and 2 mm.
+    let new_rows = matrix_rows(&db.join("bump.csv"));
+    assert_eq!(new_rows.len() as u64, old_rows.len() as u64 + added);
+    let row = |rows: &[(Vec<f64>, Vec<f64>)], w: f64, v: f64| {
+        rows.iter().find(|r| r.0 == [w, 0.3, v]).unwrap_or_else(|| panic!("no row {w} {v}")).1.clone()
+    };
+    let mut relative: Vec<f64> = [20.0, 50.0]
+        .iter()
+        .map(|&v| {
+            let fe = row(&new_rows, 1.5, v);
+            let (a, b) = (row(&old_rows, 1.0, v), row(&old_rows, 2.0, v));
+            let rms = (fe.iter().zip(a.iter().zip(&b)).map(|(f, (a, b))| (0.5 * (a + b) - f).powi(2)).sum::<f64>()
+                / fe.len() as f64)
+                .sqrt();
+            let range =
+                fe.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - fe.iter().cloned().fold(f64::INFINITY, f64::min);
+            rms / range
+        })
+        .collect();
+    relative.sort_by(f64::total_cmp);
+    let (median, max) =
+        (first["held_out_relative_median"].as_f64().unwrap(), first["held_out_relative_max"].as_f64().unwrap());
+    assert!(
+        (median - 0.5 * (relative[0] + relative[1])).abs() < 1e-12 && (max - relative[1]).abs() < 1e-12,
+        "{first} vs {relative:?}"
+    );
+    // The other template is as it was; the validation measured the rows
+    // before and is gone; the refined rows are still a grid the served
+    // estimator interpolates (predict between them works, hashes checked).
+    assert_eq!(read(&db.join("edge.csv")), read(&before.join("edge.csv")));
+    assert!(metadata.get("validation").is_none(), "{metadata}");
+    let out = haptex(&[
+        "predict",
+        "--db",
+        db_arg,
+        "--surface",
+        "bump",
+        "--x0",
+        "0",
+        "--width",
+        "1.7",
+        "--height",
+        "0.3",
+        "--estimator",
+        "grid",
+        "-o",
+        tmp.path().join("p.csv").to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+
+    // Resumed from the runs: the same refinement of the database as it was
+    // reads the runs instead of computing them, to the same matrix.
+    let again = tmp.path().join("again");
+    copy_dir(&before, &again);
+    copy_dir(&db.join("runs"), &again.join("runs"));
+    std::fs::copy(db.join("sweep.json"), again.join("sweep.json")).unwrap();
+    let out = haptex(&["db", "refine", "--db", again.to_str().unwrap(), "--template", "bump", "--budget", "4", "-q"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_eq!(read(&again.join("bump.csv")), read(&db.join("bump.csv")));
+    let resumed: serde_json::Value = serde_json::from_str(&read(&again.join("metadata.json"))).unwrap();
+    assert_eq!(resumed["refined"], metadata["refined"]);
+    let cpu = |m: &serde_json::Value| m["cpu_time_s"].as_f64().unwrap();
+    assert_eq!(cpu(&resumed), cpu(&serde_json::from_str(&read(&before.join("metadata.json"))).unwrap()));
+
+    // Bad requests: named, nothing written.
+    for (args, expected) in [
+        (&["--template", "sine", "--budget", "4"][..], "no sine template"),
+        (&["--template", "bump", "--budget", "0"][..], "--budget"),
+        (&["--template", "bump", "--budget", "4", "--target", "0"][..], "--target"),
+    ] {
+        let out = haptex(&[&["db", "refine", "--db", db_arg, "-q"][..], args].concat());
+        assert!(!out.status.success(), "{args:?}");
+        assert!(text(&out.stderr).contains(expected), "{args:?}: {}", text(&out.stderr));
+    }
+    let unchanged: serde_json::Value = serde_json::from_str(&read(&db.join("metadata.json"))).unwrap();
+    assert_eq!(unchanged, metadata);
+}

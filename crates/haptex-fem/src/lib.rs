@@ -29,6 +29,7 @@ pub mod loo_case;
 pub mod material;
 pub mod mesh;
 pub mod output;
+pub mod refine;
 pub mod render;
 pub mod ring;
 pub mod scenario;

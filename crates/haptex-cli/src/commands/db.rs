@@ -12,6 +12,7 @@ use haptex_core::plot::{Figure, Panel};
 use haptex_fem::finger::FingerModel;
 use haptex_fem::held_out;
 use haptex_fem::loo_case::LooCase;
+use haptex_fem::refine;
 use haptex_fem::sweep::{self, DatabaseSpec, Run};
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -33,6 +34,7 @@ enum DbCommand {
     Merge(MergeArgs),
     Loo(LooArgs),
     Validate(ValidateArgs),
+    Refine(RefineArgs),
 }
 
 /// Run the FE sweep of the template database and, when every run is done,
@@ -204,6 +206,58 @@ struct ValidateArgs {
     quiet: bool,
 }
 
+/// Grow a template's grid where its estimate is wrong: FE runs at a new
+/// value of r_w, r_h or velocity in the middle of the interval whose
+/// leave-one-line-out error is largest (every grid value predicted between
+/// its neighbours, relative to the profile's range), one run for every
+/// combination of the other inputs, until every interval is within the
+/// target or the budget of runs is spent.
+///
+/// Each round prints the interval, its score, and the held-out error: the
+/// database's estimate before the round against the round's new FE runs.
+/// Runs go to DIR/runs as `db build` writes them, so an interrupted
+/// refinement continues where it stopped (the rounds are deterministic).
+/// The database is rewritten as a whole at the end, its rounds recorded in
+/// metadata.json; its validation on random members is dropped, since it
+/// measured the rows before: run `haptex db validate --record` again.
+#[derive(Debug, Args)]
+#[command(after_help = "Examples:\n  haptex db refine --template sine --budget 200\n  \
+                  haptex db refine --db /tmp/db --template bump --axes width,height --target 0.03 --budget 60")]
+struct RefineArgs {
+    /// Database directory, refined in place. Default: the shipped data/db, or $HAPTEX_DB.
+    #[arg(long, value_name = "DIR")]
+    db: Option<PathBuf>,
+    /// The template to refine.
+    #[arg(long, value_enum)]
+    template: TemplateArg,
+    /// Inputs that may get new values, comma-separated.
+    #[arg(long, value_delimiter = ',', value_enum, default_values_t = [AxisArg::Width])]
+    axes: Vec<AxisArg>,
+    /// Stop when every interval's leave-one-line-out error is at most this
+    /// fraction of the profiles' range.
+    #[arg(long, default_value_t = 0.05, value_parser = positive)]
+    target: f64,
+    /// Most FE runs to add.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    budget: u32,
+    /// FE runs at a time (one thread each). Default: the number of cores.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    jobs: Option<u32>,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum AxisArg {
+    /// r_w (mm).
+    Width,
+    /// r_h (mm).
+    Height,
+    /// Sliding velocity (mm/s).
+    Velocity,
+}
+
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub(crate) enum EstimatorArg {
     /// The paper's conditional average estimator.
@@ -244,6 +298,7 @@ pub fn run(args: DbArgs) -> anyhow::Result<()> {
         DbCommand::Merge(a) => merge(a),
         DbCommand::Loo(a) => loo(a),
         DbCommand::Validate(a) => validate(a),
+        DbCommand::Refine(a) => refine(a),
     }
 }
 
@@ -583,6 +638,93 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
         eprintln!("{text}");
     } else {
         println!("{text}");
+    }
+    Ok(())
+}
+
+fn refine(args: RefineArgs) -> anyhow::Result<()> {
+    let dir = args.db.clone().unwrap_or_else(default_db);
+    let template: Template = args.template.into();
+    let mut axes: Vec<usize> = args.axes.iter().map(|a| *a as usize).collect();
+    axes.sort_unstable();
+    axes.dedup();
+    let jobs =
+        args.jobs.map(|j| j as usize).unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let options = refine::RefineOptions { template, axes, target: args.target, budget: args.budget as usize, jobs };
+    if !args.quiet {
+        eprintln!(
+            "haptex db refine: {} of {}, along {}, to {}% of the range, at most {} runs, {jobs} at a time",
+            template.name(),
+            dir.display(),
+            options.axes.iter().map(|&a| refine::AXES[a]).collect::<Vec<_>>().join(", "),
+            Num(100.0 * args.target),
+            args.budget
+        );
+    }
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        let bar = ProgressBar::new(0);
+        bar.set_style(
+            ProgressStyle::with_template("{spinner} db refine [{bar:30}] {pos}/{len} runs of this round ({elapsed})")
+                .expect("valid template")
+                .progress_chars("=> "),
+        );
+        bar
+    };
+    let quiet = args.quiet;
+    let report = refine::refine(
+        &dir,
+        &options,
+        &|done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        },
+        &mut |round| {
+            if !quiet {
+                bar.suspend(|| {
+                    eprintln!(
+                        "  {} {} between {} and {} (score {}): {} runs; the estimate before was off by {:.1}% \
+                         (median), {:.1}% at most",
+                        round.axis,
+                        Num(round.value),
+                        Num(round.between[0]),
+                        Num(round.between[1]),
+                        round.score.map_or_else(|| "not measured".to_string(), |s| format!("{:.1}%", 100.0 * s)),
+                        round.runs,
+                        100.0 * round.held_out_relative_median,
+                        100.0 * round.held_out_relative_max
+                    )
+                });
+            }
+        },
+    );
+    bar.finish_and_clear();
+    let report = report.with_context(|| format!("refining {} in {}", template.name(), dir.display()))?;
+    let why = match report.stop {
+        refine::Stop::TargetMet => format!(
+            "every interval's leave-one-line-out error is within the target ({:.1}% at most)",
+            100.0 * report.worst_score
+        ),
+        refine::Stop::Budget => format!(
+            "the next round would exceed the budget of {} runs (worst interval {:.1}%)",
+            args.budget,
+            100.0 * report.worst_score
+        ),
+        refine::Stop::Resolution => format!(
+            "the worst interval ({:.1}%) is too narrow to split at the run files' resolution",
+            100.0 * report.worst_score
+        ),
+    };
+    let n = report.rounds.len();
+    println!("{} runs added in {n} round{}; stopped: {why}", report.runs_added, if n == 1 { "" } else { "s" });
+    if !report.rounds.is_empty() && !args.quiet {
+        print_summary(&report.metadata, &dir);
+        eprintln!(
+            "the validation on random members was dropped (it measured the rows before): `haptex db validate --db {} \
+             --random 30 --seed 1 --record` measures the refined database",
+            dir.display()
+        );
     }
     Ok(())
 }

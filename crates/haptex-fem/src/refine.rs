@@ -1,0 +1,391 @@
+//! Growing a database where its estimate is wrong (`haptex db refine`):
+//! the paper's "the database will be developed in time", with FE runs
+//! placed by the estimate's own error.
+//!
+//! A template's rows form a full grid of r_w x r_h x velocity, and the
+//! database serves multilinear interpolation over it (or the CAE). Each
+//! round:
+//!
+//! 1. For every interior value a_i of an axis, the rows at a_i are predicted
+//!    by interpolating linearly between the rows at a_{i-1} and a_{i+1}
+//!    (the grid's leave-one-line-out error), each as its RMS relative to
+//!    the row's range (max - min), as `db validate` measures; the value's
+//!    error is the largest over its rows.
+//! 2. Each interval (a_i, a_{i+1}) is scored by the larger error of its two
+//!    ends (an axis of two values is scored infinite: nothing measures it).
+//!    The worst interval above the target gets a new value at its middle:
+//!    one FE run for every combination of the other axes' values, so the
+//!    rows stay a full grid.
+//! 3. Before those rows are added, the estimate of the database as it was
+//!    is compared with them: the held-out error of the interval, reported
+//!    per round and recorded in the metadata.
+//!
+//! It stops when no interval scores above the target, when the next round
+//! would exceed the budget of runs, or when the worst interval cannot be
+//! split at the run files' resolution (0.001 mm, 0.1 mm/s). Runs are
+//! written to `DIR/runs` as `db build` writes them, so an interrupted
+//! refinement continues where it stopped: the rounds are deterministic,
+//! and a round whose runs are already there costs only reading them.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use haptex_core::cae::{ModelMatrix, OptimizeOptions, optimize_widths};
+use haptex_core::database::{self, INPUTS, Metadata, RefineRound, Template};
+use haptex_core::grid::GridInterpolation;
+use haptex_core::io::FileSet;
+
+use crate::sweep::{DatabaseSpec, Run, SweepError, build_runs, read_run_profile, write_matrix};
+
+/// Which inputs a refinement may split, in the model matrix's order.
+pub const AXES: [&str; 3] = ["width", "height", "velocity"];
+
+/// What to refine and how far.
+#[derive(Debug, Clone)]
+pub struct RefineOptions {
+    pub template: Template,
+    /// Indices into [`AXES`] that may get new values.
+    pub axes: Vec<usize>,
+    /// Stop when every interval's leave-one-line-out error, relative to the
+    /// profiles' range, is at most this.
+    pub target: f64,
+    /// Most FE runs to add.
+    pub budget: usize,
+    pub jobs: usize,
+}
+
+/// One round's outcome, for the report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Round {
+    pub record: RefineRound,
+}
+
+/// Why a refinement stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stop {
+    /// No interval's score is above the target.
+    TargetMet,
+    /// The next round would have spent more runs than the budget allows.
+    Budget,
+    /// The worst interval is too narrow to split at the run files' resolution.
+    Resolution,
+}
+
+/// What a refinement did.
+#[derive(Debug, Clone)]
+pub struct RefineReport {
+    pub rounds: Vec<RefineRound>,
+    pub stop: Stop,
+    /// The worst interval's score when it stopped.
+    pub worst_score: f64,
+    pub runs_added: usize,
+    pub metadata: Metadata,
+}
+
+/// A template's rows: inputs (r_w, r_h, v) and the profile.
+struct Rows {
+    rows: Vec<([f64; 3], Vec<f64>)>,
+}
+
+impl Rows {
+    fn read(path: &Path) -> Result<Self, SweepError> {
+        let matrix = ModelMatrix::read_csv_file(path, &INPUTS)?;
+        let rows = (0..matrix.n())
+            .map(|n| {
+                let i = matrix.input_row(n);
+                ([i[0], i[1], i[2]], matrix.output_row(n).to_vec())
+            })
+            .collect();
+        Ok(Self { rows })
+    }
+
+    fn axis_values(&self, axis: usize) -> Vec<f64> {
+        let mut v: Vec<f64> = self.rows.iter().map(|r| r.0[axis]).collect();
+        v.sort_by(f64::total_cmp);
+        v.dedup();
+        v
+    }
+
+    fn index(&self) -> HashMap<[u64; 3], usize> {
+        self.rows.iter().enumerate().map(|(n, r)| (r.0.map(f64::to_bits), n)).collect()
+    }
+
+    fn matrix(&self, columns: &[String]) -> Result<ModelMatrix, SweepError> {
+        let b = self.rows.iter().flat_map(|r| r.0).collect();
+        let c = self.rows.iter().flat_map(|r| r.1.iter().copied()).collect();
+        Ok(ModelMatrix::new(INPUTS.iter().map(|s| s.to_string()).collect(), columns.to_vec(), b, c)?)
+    }
+
+    fn sort(&mut self) {
+        self.rows
+            .sort_by(|a, b| a.0[0].total_cmp(&b.0[0]).then(a.0[1].total_cmp(&b.0[1])).then(a.0[2].total_cmp(&b.0[2])));
+    }
+}
+
+/// RMS of `estimate - fe` relative to the range of `fe` (the RMS itself
+/// for a flat profile).
+pub fn relative_error(estimate: &[f64], fe: &[f64]) -> (f64, f64, f64) {
+    let n = fe.len().max(1) as f64;
+    let rms = (estimate.iter().zip(fe).map(|(e, f)| (e - f) * (e - f)).sum::<f64>() / n).sqrt();
+    let (lo, hi) = fe.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    let range = hi - lo;
+    (rms, range, if range > 0.0 { rms / range } else { rms })
+}
+
+/// The leave-one-line-out error of every interior value of `axis`: the
+/// largest relative error over the rows at that value, predicted between
+/// their neighbours along the axis. Indexed like the axis's values; the
+/// ends get `None`.
+fn line_errors(rows: &Rows, axis: usize) -> Result<Vec<Option<f64>>, SweepError> {
+    let values = rows.axis_values(axis);
+    let index = rows.index();
+    let mut out = vec![None; values.len()];
+    for i in 1..values.len().saturating_sub(1) {
+        let (a, b) = (values[i - 1], values[i + 1]);
+        let t = (values[i] - a) / (b - a);
+        let mut worst: f64 = 0.0;
+        for (inputs, fe) in rows.rows.iter().filter(|r| r.0[axis] == values[i]) {
+            let at = |v: f64| {
+                let mut k = *inputs;
+                k[axis] = v;
+                index.get(&k.map(f64::to_bits)).map(|&n| &rows.rows[n].1)
+            };
+            let (Some(lo), Some(hi)) = (at(a), at(b)) else {
+                return Err(SweepError::Invalid(format!(
+                    "the rows are not a full grid: r_w {}, r_h {}, v {} has no neighbour along the {}",
+                    inputs[0], inputs[1], inputs[2], AXES[axis]
+                )));
+            };
+            let estimate: Vec<f64> = lo.iter().zip(hi).map(|(l, h)| (1.0 - t) * l + t * h).collect();
+            worst = worst.max(relative_error(&estimate, fe).2);
+        }
+        out[i] = Some(worst);
+    }
+    Ok(out)
+}
+
+/// The resolution of run file names along each axis (`Run::file_name`).
+const RESOLUTION: [f64; 3] = [1e-3, 1e-3, 0.1];
+
+/// The value a new line gets between `a` and `b` on `axis`: their middle,
+/// rounded to the run files' resolution; `None` if that is not strictly
+/// between them.
+fn middle(axis: usize, a: f64, b: f64) -> Option<f64> {
+    let r = RESOLUTION[axis];
+    let m = ((0.5 * (a + b)) / r).round() * r;
+    // Rounded to the decimals a file name shows, so the value and its file agree.
+    let m = format!("{:.*}", if axis == 2 { 1 } else { 3 }, m).parse::<f64>().ok()?;
+    (m - a > 0.5 * r && b - m > 0.5 * r).then_some(m)
+}
+
+/// Refines `options.template` of the database in `dir`, in place: FE runs
+/// go to `dir/runs`, and the database is rewritten as a whole (a file set,
+/// as `db merge` writes it) once the rounds are done. `progress` is told
+/// each round's runs as they finish, and `round` each round as it ends.
+pub fn refine(
+    dir: &Path,
+    options: &RefineOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    round_done: &mut dyn FnMut(&RefineRound),
+) -> Result<RefineReport, SweepError> {
+    let metadata = Metadata::read(dir)?;
+    let spec = DatabaseSpec::from_metadata(&metadata)?;
+    let entry = metadata
+        .entry(options.template)
+        .ok_or_else(|| SweepError::Invalid(format!("the database has no {} template", options.template.name())))?
+        .clone();
+    // The matrices as they are (their hashes checked when loaded).
+    for e in &metadata.templates {
+        haptex_core::database::TemplateModel::load_with(dir, &metadata, e.template)?;
+    }
+    if !(options.target.is_finite() && options.target > 0.0) {
+        return Err(SweepError::Invalid(format!("target {} is not a positive number", options.target)));
+    }
+    let mut rows = Rows::read(&dir.join(&entry.file))?;
+    let columns = metadata.grid.column_names();
+    GridInterpolation::new(&rows.matrix(&columns)?)
+        .map_err(|e| SweepError::Invalid(format!("{}: refine needs a full grid: {e}", entry.file)))?;
+    let mut rounds: Vec<RefineRound> = Vec::new();
+    let mut added = 0usize;
+    let mut cpu_time_s = 0.0;
+    let (stop, worst_score) = loop {
+        // Score every interval of every axis that may be split.
+        let mut best: Option<(f64, usize, f64, f64)> = None;
+        for &axis in &options.axes {
+            let values = rows.axis_values(axis);
+            if values.len() < 2 {
+                continue;
+            }
+            let lines = line_errors(&rows, axis)?;
+            for j in 0..values.len() - 1 {
+                let score = match (lines[j], lines[j + 1]) {
+                    (None, None) => f64::INFINITY,
+                    (a, b) => a.unwrap_or(0.0).max(b.unwrap_or(0.0)),
+                };
+                if best.is_none_or(|(s, ..)| score > s) {
+                    best = Some((score, axis, values[j], values[j + 1]));
+                }
+            }
+        }
+        let Some((score, axis, a, b)) = best else { break (Stop::TargetMet, 0.0) };
+        if score <= options.target {
+            break (Stop::TargetMet, score);
+        }
+        let Some(value) = middle(axis, a, b) else { break (Stop::Resolution, score) };
+        let others: Vec<Vec<f64>> = (0..3).map(|k| rows.axis_values(k)).collect();
+        let mut runs = Vec::new();
+        let choices = |k: usize| if k == axis { vec![value] } else { others[k].clone() };
+        for &w in &choices(0) {
+            for &h in &choices(1) {
+                for &v in &choices(2) {
+                    runs.push(Run { template: options.template, width_mm: w, height_mm: h, velocity_mm_s: v });
+                }
+            }
+        }
+        if added + runs.len() > options.budget {
+            break (Stop::Budget, score);
+        }
+        let report = build_runs(&spec, &runs, dir, options.jobs, progress)?;
+        cpu_time_s += report.cpu_time_s;
+        // The held-out error: the database as it was, against the new runs.
+        let matrix = rows.matrix(&columns)?;
+        let grid = GridInterpolation::new(&matrix)
+            .map_err(|e| SweepError::Invalid(format!("{}: the rows stopped being a grid: {e}", entry.file)))?;
+        let mut relative = Vec::with_capacity(runs.len());
+        let mut estimate = vec![0.0; metadata.grid.points];
+        let mut new_rows = Vec::with_capacity(runs.len());
+        for run in &runs {
+            let mu = read_run_profile(&dir.join("runs").join(run.file_name()), &metadata.grid)?;
+            let inputs = [run.width_mm, run.height_mm, run.velocity_mm_s];
+            grid.predict_into(&matrix, &inputs, &mut estimate);
+            relative.push(relative_error(&estimate, &mu).2);
+            new_rows.push((inputs, mu));
+        }
+        relative.sort_by(f64::total_cmp);
+        let record = RefineRound {
+            template: options.template,
+            axis: AXES[axis].to_string(),
+            value,
+            between: [a, b],
+            score: score.is_finite().then_some(score),
+            runs: runs.len(),
+            held_out_relative_median: median_sorted(&relative),
+            held_out_relative_max: relative.last().copied().unwrap_or(0.0),
+        };
+        round_done(&record);
+        rounds.push(record);
+        added += runs.len();
+        rows.rows.extend(new_rows);
+        rows.sort();
+    };
+    let metadata = if rounds.is_empty() {
+        metadata
+    } else {
+        write_refined(dir, metadata, options.template, &rows, &columns, &rounds, cpu_time_s)?
+    };
+    Ok(RefineReport { rounds, stop, worst_score, runs_added: added, metadata })
+}
+
+fn median_sorted(v: &[f64]) -> f64 {
+    match v.len() {
+        0 => 0.0,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// Rewrites the database with the refined template's rows: every matrix
+/// (the others as they were), its leave-one-out widths, and the metadata
+/// with the rounds appended. The validation on random members is dropped:
+/// it measured the rows before.
+fn write_refined(
+    dir: &Path,
+    mut metadata: Metadata,
+    template: Template,
+    rows: &Rows,
+    columns: &[String],
+    rounds: &[RefineRound],
+    cpu_time_s: f64,
+) -> Result<Metadata, SweepError> {
+    let mut texts = Vec::new();
+    for e in &mut metadata.templates {
+        let path = dir.join(&e.file);
+        let text = if e.template == template {
+            let mut text = Vec::new();
+            let as_runs: Vec<(Run, Vec<f64>)> = rows
+                .rows
+                .iter()
+                .map(|(i, mu)| (Run { template, width_mm: i[0], height_mm: i[1], velocity_mm_s: i[2] }, mu.clone()))
+                .collect();
+            write_matrix(&mut text, template, columns, &as_runs).map_err(|e| SweepError::Invalid(e.to_string()))?;
+            let matrix = ModelMatrix::read_csv(text.as_slice(), &path.display().to_string(), &INPUTS)?;
+            let optimum = optimize_widths(&matrix, OptimizeOptions::default())?;
+            e.rows = matrix.n();
+            e.widths = optimum.widths;
+            e.loo_rmse = optimum.errors.rmse;
+            e.loo_rmse_relative_to_range = database::relative_loo_error(&matrix, &optimum.errors);
+            e.constant_width = optimum.report.constant.w;
+            e.constant_width_rmse = optimum.report.constant.rmse;
+            text
+        } else {
+            std::fs::read(&path).map_err(|err| SweepError::File { path: path.clone(), message: err.to_string() })?
+        };
+        texts.push((e.file.clone(), text));
+    }
+    let mut set = FileSet::begin(dir, "metadata.json")?;
+    for (file, text) in &texts {
+        set.write(file, |w| w.write_all(text))?;
+    }
+    metadata.created = database::utc_now_rfc3339();
+    metadata.cpu_time_s += cpu_time_s;
+    metadata.files_sha256 = Some(set.members().clone());
+    metadata.validation = None;
+    metadata.refined.get_or_insert_with(Vec::new).extend(rounds.iter().cloned());
+    let json = serde_json::to_string_pretty(&metadata).expect("metadata serializes");
+    set.finish(|w, _| writeln!(w, "{json}"))?;
+    Ok(metadata)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_new_value_is_the_middle_at_the_file_names_resolution() {
+        assert_eq!(middle(0, 1.25, 1.5), Some(1.375));
+        assert_eq!(middle(0, 1.25, 1.375), Some(1.313)); // 1.3125 rounded
+        assert_eq!(middle(0, 1.25, 1.251), None);
+        assert_eq!(middle(2, 20.0, 50.0), Some(35.0));
+        assert_eq!(middle(2, 20.0, 20.1), None);
+    }
+
+    #[test]
+    fn relative_error_is_rms_over_the_fe_range() {
+        let fe = [0.0, 1.0, 2.0, 3.0];
+        let est = [0.5, 1.5, 2.5, 3.5];
+        let (rms, range, rel) = relative_error(&est, &fe);
+        assert!((rms - 0.5).abs() < 1e-15 && range == 3.0 && (rel - 0.5 / 3.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn line_errors_are_zero_on_a_linear_family_and_find_the_kink_of_another() {
+        // Profiles linear in r_w: interpolation between neighbours is exact.
+        let make = |f: &dyn Fn(f64, f64) -> f64| Rows {
+            rows: [0.5, 1.0, 1.5, 2.0]
+                .iter()
+                .flat_map(|&w| {
+                    [0.1, 0.2].iter().map(move |&h| ([w, h, 20.0], (0..5).map(|x| f(w, h) * x as f64).collect()))
+                })
+                .collect(),
+        };
+        let linear = make(&|w, h| 1.0 + w + h);
+        let e = line_errors(&linear, 0).unwrap();
+        assert_eq!(e[0], None);
+        assert_eq!(e[3], None);
+        assert!(e[1].unwrap() < 1e-12 && e[2].unwrap() < 1e-12, "{e:?}");
+        // A kink at r_w = 1.5: the line there is mispredicted, 1.0 is not.
+        let kinked = make(&|w, h| 1.0 + h + (w - 1.5).abs());
+        let e = line_errors(&kinked, 0).unwrap();
+        assert!(e[1].unwrap() < 1e-12 && e[2].unwrap() > 0.05, "{e:?}");
+    }
+}
