@@ -304,8 +304,9 @@ pub struct RefineRound {
     pub value: f64,
     pub between: [f64; 2],
     /// The interval's score that chose it: the larger leave-one-line-out
-    /// error of its ends, relative to the profiles' range; none for an axis
-    /// of two values, where nothing measures it.
+    /// error of its ends, relative to the profiles' range, over 4 (the
+    /// error across half that spacing, for profiles smooth in the input);
+    /// none for an axis of two values, where nothing measures it.
     pub score: Option<f64>,
     /// FE runs added.
     pub runs: usize,

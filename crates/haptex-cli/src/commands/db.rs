@@ -208,10 +208,12 @@ struct ValidateArgs {
 
 /// Grow a template's grid where its estimate is wrong: FE runs at a new
 /// value of r_w, r_h or velocity in the middle of the interval whose
-/// leave-one-line-out error is largest (every grid value predicted between
-/// its neighbours, relative to the profile's range), one run for every
-/// combination of the other inputs, until every interval is within the
-/// target or the budget of runs is spent.
+/// score is largest, one run for every combination of the other inputs,
+/// until every interval is within the target or the budget of runs is
+/// spent. An interval's score is the larger leave-one-line-out error of
+/// its ends (each grid value predicted between its neighbours, relative to
+/// the profile's range) over 4: linear interpolation's error across the
+/// interval, half that spacing, for profiles smooth in the input.
 ///
 /// Each round prints the interval, its score, and the held-out error: the
 /// database's estimate before the round against the round's new FE runs.
@@ -233,8 +235,8 @@ struct RefineArgs {
     /// Inputs that may get new values, comma-separated.
     #[arg(long, value_delimiter = ',', value_enum, default_values_t = [AxisArg::Width])]
     axes: Vec<AxisArg>,
-    /// Stop when every interval's leave-one-line-out error is at most this
-    /// fraction of the profiles' range.
+    /// Stop when every interval's score is at most this fraction of the
+    /// profiles' range.
     #[arg(long, default_value_t = 0.05, value_parser = positive)]
     target: f64,
     /// Most FE runs to add.
@@ -702,13 +704,17 @@ fn refine(args: RefineArgs) -> anyhow::Result<()> {
     bar.finish_and_clear();
     let report = report.with_context(|| format!("refining {} in {}", template.name(), dir.display()))?;
     let why = match report.stop {
-        refine::Stop::TargetMet => format!(
-            "every interval's leave-one-line-out error is within the target ({:.1}% at most)",
-            100.0 * report.worst_score
-        ),
+        refine::Stop::TargetMet => {
+            format!("every interval's score is within the target ({:.1}% at most)", 100.0 * report.worst_score)
+        }
         refine::Stop::Budget => format!(
             "the next round would exceed the budget of {} runs (worst interval {:.1}%)",
             args.budget,
+            100.0 * report.worst_score
+        ),
+        refine::Stop::NotConverging => format!(
+            "the intervals above the target ({:.1}% at most) lie where halving the spacing did not halve the \
+             estimate's error: the profiles are not smooth in the input there, and more runs would not help",
             100.0 * report.worst_score
         ),
         refine::Stop::Resolution => format!(
