@@ -267,8 +267,7 @@ pub fn refine(
         if added + runs.len() > options.budget {
             break (Stop::Budget, score);
         }
-        let report = build_runs(&spec, &runs, dir, options.jobs, progress)?;
-        cpu_time_s += report.cpu_time_s;
+        build_runs(&spec, &runs, dir, options.jobs, progress)?;
         // The held-out error: the database as it was, against the new runs.
         let matrix = rows.matrix(&columns)?;
         let grid = GridInterpolation::new(&matrix)
@@ -277,7 +276,10 @@ pub fn refine(
         let mut estimate = vec![0.0; metadata.grid.points];
         let mut new_rows = Vec::with_capacity(runs.len());
         for run in &runs {
-            let mu = read_run_profile(&dir.join("runs").join(run.file_name()), &metadata.grid)?;
+            // The FE time of every run added, computed now or by an earlier,
+            // interrupted refinement, as `db merge` counts a build's.
+            let (mu, wall_s) = read_run_profile(&dir.join("runs").join(run.file_name()), &metadata.grid)?;
+            cpu_time_s += wall_s;
             let inputs = [run.width_mm, run.height_mm, run.velocity_mm_s];
             grid.predict_into(&matrix, &inputs, &mut estimate);
             relative.push(relative_error(&estimate, &mu).2);

@@ -577,9 +577,9 @@ fn write_run(w: &mut dyn Write, run: &Run, grid: &Grid, mu: &[f64], wall_time_s:
     Ok(())
 }
 
-/// The profile of a run file on `grid`.
-pub(crate) fn read_run_profile(path: &Path, grid: &Grid) -> Result<Vec<f64>, SweepError> {
-    read_run(path, grid).map(|(mu, _)| mu)
+/// The profile of a run file on `grid`, and the run's FE wall time (s).
+pub(crate) fn read_run_profile(path: &Path, grid: &Grid) -> Result<(Vec<f64>, f64), SweepError> {
+    read_run(path, grid)
 }
 
 /// Reads a run file: the profile and the wall time recorded in it.
