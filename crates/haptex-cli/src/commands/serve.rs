@@ -94,6 +94,9 @@ pub struct ServeArgs {
     #[arg(long, value_name = "N", default_value_t = Limits::DEFAULT.client_connections as u32,
           value_parser = clap::value_parser!(u32).range(1..=100_000))]
     client_connections: u32,
+    /// Limit loopback clients too: for benchmarks and tests that use 127.0.0.x addresses as different clients.
+    #[arg(long, hide = true)]
+    limit_loopback_clients: bool,
     /// Play designs live on an audio output: the page's "live" panel then
     /// streams the finger's positions to this server, which renders the
     /// drive on the device (the options below are `haptex live`'s; needs a
@@ -143,6 +146,7 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
             client_expensive_burst: args.client_burst,
             client_expensive_per_s: args.client_rate,
             client_connections: args.client_connections as usize,
+            limit_loopback_clients: args.limit_loopback_clients,
             ..Limits::DEFAULT
         },
         allowed_hosts: args.allow_host,
