@@ -10,6 +10,7 @@
 #
 #   scripts/bench-load.sh                 # 3 runs
 #   RUNS=1 scripts/bench-load.sh --b-requests 240   # options after are load_clients.py's
+#   SERVE_ARGS="--client-rate 2" scripts/bench-load.sh   # more `haptex serve` options, both servers
 #
 # The build is the `ci` profile's (the one the tests use: release
 # optimizations with debug assertions in haptex's own crates), in
@@ -39,7 +40,8 @@ trap stop_server EXIT
 start_server() {
     local log="$out/server-$1.log"
     shift
-    "$bin" serve --addr 127.0.0.1:0 "$@" 2>"$log" &
+    # shellcheck disable=SC2086 # SERVE_ARGS is a list of options
+    "$bin" serve --addr 127.0.0.1:0 ${SERVE_ARGS:-} "$@" 2>"$log" &
     pid=$!
     url=
     for _ in $(seq 1 300); do
@@ -79,7 +81,8 @@ b = busy(); time.sleep(5); print(round((busy() - b) / os.sysconf("SC_CLK_TCK") /
 
 echo "date (UTC): $(date -u '+%Y-%m-%d %H:%M:%S')"
 lscpu | grep -E '^(Model name|CPU family|Model|CPU\(s\)|L2 cache|L3 cache):' | sed 's/  */ /g'
-echo "binary: $bin ($(git rev-parse --short HEAD)$(git diff --quiet HEAD -- crates || echo ', modified'))"
+echo "binary: $bin ($(git rev-parse --short HEAD)$(git diff --quiet HEAD -- crates || echo ', modified')); serve options: ${SERVE_ARGS:-(none)}"
+echo "load_clients.py options: ${*:-(none)}"
 
 status=0
 for run in $(seq 1 "$runs"); do
