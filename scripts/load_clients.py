@@ -263,37 +263,43 @@ def measure(url, source, token, kind, n, rate, workers=4):
 
 
 def cpu_seconds(pid):
-    """(CPU seconds used by the whole machine, by process `pid` (None if
-    not given), by this script and its children that have ended)."""
+    """CPU seconds so far: the machine's in processes (user, nice, system),
+    in interrupts (irq, softirq: the loopback's packets among them) and
+    taken by the hypervisor (steal); process `pid`'s (None if not given);
+    this script's and its children's that have ended."""
     tick = os.sysconf("SC_CLK_TCK")
     with open("/proc/stat") as f:
-        fields = [int(v) for v in f.readline().split()[1:]]
-    busy = (sum(fields[:8]) - fields[3] - fields[4]) / tick  # all but idle and iowait (guests are in user)
+        user, nice, system, _idle, _iowait, irq, softirq, steal = [int(v) for v in f.readline().split()[1:9]]
     server = None
     if pid:
         with open(f"/proc/{pid}/stat") as f:
             stat = f.read().rsplit(")", 1)[1].split()
-        server = (int(stat[11]) + int(stat[12])) / tick  # utime, stime
+        server = (int(stat[11]) + int(stat[12])) / tick  # utime, stime of all its threads
     t = os.times()
-    return busy, server, t.user + t.system + t.children_user + t.children_system
+    return {
+        "processes": (user + nice + system) / tick,
+        "interrupts": (irq + softirq) / tick,
+        "steal": steal / tick,
+        "server": server,
+        "clients": t.user + t.system + t.children_user + t.children_system,
+    }
 
 
 def cpu_use(before, after, seconds):
-    """Cores used on average between two `cpu_seconds`: by the machine, the
-    server, this benchmark's clients and everything else."""
-    busy, server, ours = (None if a is None else (a - b) / seconds for a, b in zip(after, before))
-    use = {"machine": busy, "clients": ours}
-    if server is not None:
-        use["server"] = server
-        use["others"] = busy - server - ours
+    """Cores used on average between two `cpu_seconds`: by the server, this
+    benchmark's clients, every other process, interrupts and the
+    hypervisor."""
+    use = {k: None if after[k] is None else (after[k] - before[k]) / seconds for k in after}
+    if use["server"] is not None:
+        use["others"] = use["processes"] - use["server"] - use["clients"]
     return use
 
 
 def show_cpu(use):
-    text = f"cores busy {use['machine']:.2f}: clients {use['clients']:.2f}"
-    if "server" in use:
+    text = f"cores: clients {use['clients']:.2f}"
+    if use.get("server") is not None:
         text += f", server {use['server']:.2f}, other processes {use['others']:.2f}"
-    return text
+    return text + f", interrupts {use['interrupts']:.2f}, steal {use['steal']:.2f}"
 
 
 def percentile(values, p):
