@@ -67,28 +67,19 @@ import math
 import multiprocessing
 import os
 import queue
-import struct
 import sys
 import threading
 import time
 import urllib.parse
-import zlib
+
+# The grayscale PNG of the map requests, as the health benchmark builds it
+# (this script's directory is on the import path when it is run).
+from load_health import png_gray
 
 TIMEOUT_S = 60.0
 
 
 # ---- request bodies ----
-
-
-def png_gray(width, height, pixel):
-    """An 8-bit grayscale PNG (no filter) of pixel(i, j) in 0..255."""
-    rows = b"".join(b"\x00" + bytes(pixel(i, j) for i in range(width)) for j in range(height))
-
-    def chunk(kind, data):
-        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
-
-    header = struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0)
-    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(rows, 6)) + chunk(b"IEND", b"")
 
 
 def rings(n):
