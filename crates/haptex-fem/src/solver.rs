@@ -1027,7 +1027,7 @@ pub(crate) fn newton(
             // where crests are sharper than the Gauss points are apart it
             // makes the linearised problem indefinite. The residual is exact
             // either way, so the equilibrium found is the same.
-            law.geometric_tangent = false;
+            let had_geometric_term = std::mem::replace(&mut law.geometric_tangent, false);
             // Without it the tangent is no longer exact on a curved surface,
             // and Newton's method converges only linearly where the surface
             // is sharply curved: on the fine mesh, sine r_w 1, r_h 0.2 mm
@@ -1035,9 +1035,12 @@ pub(crate) fn newton(
             // residual fell by a factor 0.9 per full step, with the active
             // and slipping sets fixed, and was at 5.8e-10 N/mm (tolerance
             // 2.3e-12) when the 100 iterations ran out, at every halving.
-            // Such a step gets the continuation's budget: a linear iteration
-            // that still decreases the residual is not a failure.
-            limit = limit.max(iteration + 1 + settings.continuation_iterations);
+            // A step that loses the term here gets the continuation's budget:
+            // a linear iteration that still decreases the residual is not a
+            // failure. (A tangent that never had it keeps the Newton limit.)
+            if had_geometric_term {
+                limit = limit.max(iteration + 1 + settings.continuation_iterations);
+            }
             stalls += 1;
             if stalls == 1 {
                 // The first time, the full Newton step: one active-set

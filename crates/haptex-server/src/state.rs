@@ -128,13 +128,16 @@ pub struct Limits {
 impl Limits {
     /// 1 MiB bodies, 100 000 points, 2 000 000 WAV samples (41.7 s at
     /// 48 kHz), 200 000 JSON samples, 8 KiB request targets, 32 KiB and
-    /// 100 header fields, 10 s per request, 10 s for headers, 10 s without
+    /// 100 header fields, 30 s per request (an FE check with the
+    /// database's settings, 4-6 s of CPU, may wait for the FE slot first),
+    /// 10 s for headers, 10 s without
     /// write progress, two heavy jobs at once (one per core of a 2-core
     /// machine: bodies over 64 KiB, FE runs, renders, maps) with at most 4
     /// waiting, each for at most 5 s, 96 MiB of working memory per request,
     /// 64 MiB of unsent answers, 2 renders at once, 1 FE simulation at once
-    /// (the other core serves everything else) with a wait of up to 5 s
-    /// for it; checks on
+    /// (the other core serves everything else) with a wait of up to 30 s
+    /// for it (one FE check of the database's settings takes 4-6 s of CPU
+    /// since its rows are averaged over the node passing); checks on
     /// the finger model of up to 4000 points and 4000 FE steps (about 6 s);
     /// uploads of recordings of up to 64 MiB and 1000 files; images of up
     /// to 512 x 512 pixels turned into maps; per client, 20 expensive
@@ -147,7 +150,7 @@ impl Limits {
         max_uri_bytes: 8 << 10,
         max_header_bytes: 32 << 10,
         max_headers: 100,
-        request_timeout: Duration::from_secs(10),
+        request_timeout: Duration::from_secs(30),
         header_timeout: Duration::from_secs(10),
         write_timeout: Duration::from_secs(10),
         heavy_body_bytes: 64 << 10,
@@ -159,7 +162,7 @@ impl Limits {
         small_answer_bytes: 64 << 10,
         concurrent_renders: 2,
         concurrent_simulations: 1,
-        simulation_wait: Duration::from_secs(5),
+        simulation_wait: Duration::from_secs(30),
         max_check_points: 4000,
         max_check_steps: 4000,
         max_upload_bytes: 64 << 20,
