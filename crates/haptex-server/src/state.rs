@@ -116,6 +116,10 @@ pub struct Limits {
     /// beyond, 429 with `Retry-After`.
     pub client_expensive_burst: f64,
     pub client_expensive_per_s: f64,
+    /// Expensive requests of one client worked on at once
+    /// ([`crate::clients`]): with fewer than `concurrent_heavy`, a heavy
+    /// slot stays free for the other clients whatever one client sends.
+    pub client_concurrent: usize,
     /// Connections one client may hold open at once (the next: 429, closed).
     pub client_connections: usize,
     /// Whether clients on this machine (loopback addresses) are limited
@@ -141,7 +145,9 @@ impl Limits {
     /// the finger model of up to 4000 points and 4000 FE steps (about 6 s);
     /// uploads of recordings of up to 64 MiB and 1000 files; images of up
     /// to 512 x 512 pixels turned into maps; per client, 20 expensive
-    /// requests at once and 10 per second after, 32 connections.
+    /// requests at once and 10 per second after, one of them worked on at a
+    /// time (the other heavy slot stays free for other clients), 32
+    /// connections.
     pub const DEFAULT: Self = Self {
         max_body_bytes: 1 << 20,
         max_points: 100_000,
@@ -170,6 +176,7 @@ impl Limits {
         max_map_pixels: 512 * 512,
         client_expensive_burst: 20.0,
         client_expensive_per_s: 10.0,
+        client_concurrent: 1,
         client_connections: 32,
         limit_loopback_clients: false,
     };

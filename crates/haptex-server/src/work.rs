@@ -150,7 +150,24 @@ where
     T: Send + 'static,
     F: FnOnce() -> Result<T, ApiError> + Send + 'static,
 {
-    let task = spawn(move || {
+    blocking_with(permits, work, false).await
+}
+
+/// [`blocking`] for an FE run ([`spawn_long`]).
+pub(crate) async fn blocking_long<T, F>(permits: Vec<OwnedSemaphorePermit>, work: F) -> Result<T, ApiError>
+where
+    T: Send + 'static,
+    F: FnOnce() -> Result<T, ApiError> + Send + 'static,
+{
+    blocking_with(permits, work, true).await
+}
+
+async fn blocking_with<T, F>(permits: Vec<OwnedSemaphorePermit>, work: F, long: bool) -> Result<T, ApiError>
+where
+    T: Send + 'static,
+    F: FnOnce() -> Result<T, ApiError> + Send + 'static,
+{
+    let work = move || {
         let heavy = !permits.is_empty();
         let result = work();
         drop(permits);
@@ -158,7 +175,8 @@ where
             crate::memory::freed_large();
         }
         result
-    });
+    };
+    let task = if long { spawn_long(work) } else { spawn(work) };
     match task.await {
         Ok(result) => result,
         Err(e) if e.is_panic() => std::panic::resume_unwind(e.into_panic()),
@@ -171,17 +189,52 @@ where
 /// about ten times the work's share of a core, so that it runs at once.
 pub const WORK_NICENESS: i32 = 10;
 
+/// The niceness of an FE run's thread ([`spawn_long`]): below other work,
+/// so that a request of milliseconds (a play, a prediction) sharing a core
+/// with a run of seconds gets three times its share (the kernel's weights
+/// of niceness 10 and 15 are 110 and 36): short requests keep their
+/// latency while FE runs go on, and the runs lose little.
+pub const LONG_WORK_NICENESS: i32 = 15;
+
 /// `tokio::task::spawn_blocking`, the thread first lowered to
 /// [`WORK_NICENESS`]: every thread that does a request's work goes
-/// through here (the blocking threads serve nothing else).
+/// through here (the blocking threads serve nothing else). Started for an
+/// expensive request of a limited client, it holds that client's share of
+/// work ([`crate::clients::CLIENT_WORK`]) until `work` ends.
 pub(crate) fn spawn<T, F>(work: F) -> JoinHandle<T>
 where
     T: Send + 'static,
     F: FnOnce() -> T + Send + 'static,
 {
+    let share = crate::clients::CLIENT_WORK.try_with(Arc::clone).ok();
     tokio::task::spawn_blocking(move || {
         lower_priority();
-        work()
+        let result = work();
+        drop(share);
+        result
+    })
+}
+
+/// [`spawn`] for an FE run (seconds of a core): on a thread of its own
+/// at [`LONG_WORK_NICENESS`], started and joined by a work thread (a
+/// thread's niceness cannot be raised back without privilege, so the
+/// pool's threads are not lowered further). Where no thread can be
+/// started, the work runs on the work thread.
+pub(crate) fn spawn_long<T, F>(work: F) -> JoinHandle<T>
+where
+    T: Send + 'static,
+    F: FnOnce() -> T + Send + 'static,
+{
+    spawn(move || {
+        let mut work = Some(work);
+        let done = std::thread::scope(|scope| {
+            let thread = std::thread::Builder::new().name("haptex-fe".into()).spawn_scoped(scope, || {
+                set_niceness(LONG_WORK_NICENESS);
+                (work.take().expect("the work runs once"))()
+            });
+            thread.ok().map(|t| t.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)))
+        });
+        done.unwrap_or_else(|| (work.take().expect("the thread did not start"))())
     })
 }
 
@@ -195,19 +248,29 @@ fn lower_priority() {
         }
         if !LOWERED.get() {
             LOWERED.set(true);
-            // On Linux, PRIO_PROCESS with a thread id sets that thread's
-            // niceness only (setpriority(2), "BUGS"). Raising one's own
-            // niceness needs no privilege; a failure leaves the default.
-            // SAFETY: plain system calls on the calling thread, no memory passed.
-            let failed = unsafe {
-                let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
-                libc::setpriority(libc::PRIO_PROCESS, tid, WORK_NICENESS) != 0
-            };
-            if failed {
-                tracing::debug!("cannot lower a work thread's priority: {}", std::io::Error::last_os_error());
-            }
+            set_niceness(WORK_NICENESS);
         }
     }
+}
+
+/// Sets the calling thread's niceness (Linux; raising it needs no
+/// privilege, a failure leaves it as it was).
+fn set_niceness(niceness: i32) {
+    #[cfg(target_os = "linux")]
+    {
+        // On Linux, PRIO_PROCESS with a thread id sets that thread's
+        // niceness only (setpriority(2), "BUGS").
+        // SAFETY: plain system calls on the calling thread, no memory passed.
+        let failed = unsafe {
+            let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+            libc::setpriority(libc::PRIO_PROCESS, tid, niceness) != 0
+        };
+        if failed {
+            tracing::debug!("cannot lower a work thread's priority: {}", std::io::Error::last_os_error());
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = niceness;
 }
 
 /// Runs `f` on a new thread at the default priority (not on a work
@@ -242,7 +305,7 @@ mod tests {
     /// A request's work runs below the async workers' priority, so that a
     /// worker with a health check to answer runs before it (issue 35,
     /// "Bounded cost per request"); a thread started for an audio output
-    /// does not inherit the lowered priority.
+    /// does not inherit the lowered priority; an FE run is lower still.
     #[tokio::test]
     async fn work_runs_below_the_async_workers_priority() {
         let worker = niceness();
@@ -251,5 +314,12 @@ mod tests {
         // Again on the same (already lowered) thread.
         assert_eq!(spawn(niceness).await.unwrap(), work);
         assert_eq!(on_new_thread(niceness).await, Some(worker));
+        // An FE run below other work, on a thread of its own: the pool's
+        // thread is not lowered further.
+        let long = spawn_long(niceness).await.unwrap();
+        assert!(long >= LONG_WORK_NICENESS.max(work), "an FE run at niceness {long}, other work at {work}");
+        assert_eq!(spawn(niceness).await.unwrap(), work);
+        // A panic in it reaches the caller.
+        assert!(spawn_long(|| panic!("in the FE run")).await.unwrap_err().is_panic());
     }
 }

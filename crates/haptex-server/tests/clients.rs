@@ -3,7 +3,8 @@
 //! two clients, with `limit_loopback_clients`): a client past its bucket of expensive requests is 429
 //! with `Retry-After` while the other's requests are answered; a client
 //! past its connections gets a 429 and a closed connection, the other
-//! connects. The latency the other client keeps is measured by a
+//! connects; a client's second expensive request waits for its first
+//! while the other's are answered. The latency the other client keeps is measured by a
 //! benchmark (scripts/load_clients.py, BENCHMARKS.md), not timed here.
 
 mod common;
@@ -72,6 +73,49 @@ async fn a_client_past_its_expensive_requests_waits_and_the_others_do_not() {
             &answer[..answer.len().min(300)]
         );
     }
+    server.stop().await;
+}
+
+/// One client's expensive requests are worked on one at a time
+/// (`client_concurrent` 1): while its first is being handled (here its
+/// body is still arriving), its second waits for it, up to `heavy_wait`,
+/// then 429; the other client's are answered meanwhile, and the first
+/// client's next one once its first is done.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_client_works_on_one_expensive_request_at_a_time_and_the_others_do_not_wait_for_it() {
+    let limits = Limits {
+        client_concurrent: 1,
+        heavy_wait: Duration::from_millis(500),
+        limit_loopback_clients: true,
+        ..Limits::DEFAULT
+    };
+    let server = RawServer::start(AppState::new(None, limits).unwrap()).await;
+    // The first request: its head and half its body.
+    let first = play();
+    let cut = first.len() - 20;
+    let mut held = connect(server.addr, "127.0.0.1").await;
+    held.write_all(&first.as_bytes()[..cut]).await.unwrap();
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    let started = std::time::Instant::now();
+    let refused = ask(server.addr, "127.0.0.1", &play()).await;
+    common::assert_json_error(&refused, 429, None);
+    assert!(refused.contains("still being worked on"), "{refused}");
+    assert!(started.elapsed() >= Duration::from_millis(500), "answered before heavy_wait: {:?}", started.elapsed());
+    for i in 0..2 {
+        let answer = ask(server.addr, "127.0.0.2", &play()).await;
+        assert!(
+            answer.starts_with("HTTP/1.1 200"),
+            "the other client's play {i}: {}",
+            &answer[..answer.len().min(300)]
+        );
+    }
+    // The first request completes, and frees the client's share.
+    held.write_all(&first.as_bytes()[cut..]).await.unwrap();
+    let mut answer = Vec::new();
+    tokio::time::timeout(Duration::from_secs(10), held.read_to_end(&mut answer)).await.unwrap().unwrap();
+    assert!(answer.starts_with(b"HTTP/1.1 200"), "{}", String::from_utf8_lossy(&answer[..answer.len().min(300)]));
+    let answer = ask(server.addr, "127.0.0.1", &play()).await;
+    assert!(answer.starts_with("HTTP/1.1 200"), "the next play: {}", &answer[..answer.len().min(300)]);
     server.stop().await;
 }
 

@@ -90,6 +90,12 @@ pub struct ServeArgs {
     /// Expensive requests per second one client may send after its burst.
     #[arg(long, value_name = "PER_S", default_value_t = Limits::DEFAULT.client_expensive_per_s, value_parser = client_limit)]
     client_rate: f64,
+    /// Expensive requests of one client worked on at once; the next waits
+    /// for one to end (up to 5 s, then 429). Below the server's 2 heavy
+    /// slots, one client cannot take them all from the others.
+    #[arg(long, value_name = "N", default_value_t = Limits::DEFAULT.client_concurrent as u32,
+          value_parser = clap::value_parser!(u32).range(1..=1000))]
+    client_concurrent: u32,
     /// Connections one client may hold open at once.
     #[arg(long, value_name = "N", default_value_t = Limits::DEFAULT.client_connections as u32,
           value_parser = clap::value_parser!(u32).range(1..=100_000))]
@@ -145,6 +151,7 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
         limits: Limits {
             client_expensive_burst: args.client_burst,
             client_expensive_per_s: args.client_rate,
+            client_concurrent: args.client_concurrent as usize,
             client_connections: args.client_connections as usize,
             limit_loopback_clients: args.limit_loopback_clients,
             ..Limits::DEFAULT

@@ -194,7 +194,7 @@ async fn start(mode: Mode, call: Preamble<Checked>) -> Result<Response, ApiError
     let permit = work::fe_slot(&state).await?;
     let heavy = work::heavy_slot(&state).await?;
     let (mut lines, response) = lines::stream();
-    work::spawn(move || {
+    work::spawn_long(move || {
         let result = std::panic::catch_unwind(AssertUnwindSafe(|| job.run(&mut lines)))
             .unwrap_or_else(|panic| Err(crate::error::panicked(&*panic)));
         lines.finish(result);

@@ -41,7 +41,7 @@ pub async fn post(call: Preamble<super::Template>) -> Result<Response, ApiError>
 
     let permit = work::fe_slot(&state).await?;
     let heavy = work::heavy_slot(&state).await?;
-    work::blocking(vec![permit, heavy], move || answer(call, &spec)).await
+    work::blocking_long(vec![permit, heavy], move || answer(call, &spec)).await
 }
 
 /// The request, if the FE model runs on demand for its parameters: each
