@@ -845,6 +845,41 @@ fn db_refine_adds_grid_lines_where_the_estimate_is_wrong_and_resumes_from_its_ru
     assert!(cpu(&metadata) > cpu(&built), "{} then {}", cpu(&built), cpu(&metadata));
     assert_eq!(cpu(&resumed), cpu(&metadata));
 
+    // As a job array would: --plan counts the first round's runs, a shard
+    // computes its part of them and writes no database, --plan counts the
+    // rest, and once all are there 0.
+    let sharded = tmp.path().join("sharded");
+    copy_dir(&before, &sharded);
+    let refine = |extra: &[&str]| {
+        let base = ["db", "refine", "--db", sharded.to_str().unwrap(), "--template", "bump", "--budget", "4", "-q"];
+        haptex(&[&base[..], extra].concat())
+    };
+    let plan = || {
+        let out = refine(&["--plan"]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        text(&out.stdout).trim().parse::<usize>().unwrap_or_else(|_| panic!("--plan printed {}", text(&out.stdout)))
+    };
+    let first = rounds[0]["runs"].as_u64().unwrap() as usize;
+    assert_eq!(plan(), first);
+    let out = refine(&["--shard", "1/2"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stdout).contains(&format!("{} runs of shard 1/2 computed", first.div_ceil(2))),
+        "{}",
+        text(&out.stdout)
+    );
+    assert_eq!(read(&sharded.join("metadata.json")), read(&before.join("metadata.json")), "a shard wrote the database");
+    assert_eq!(plan(), first / 2);
+    assert!(refine(&["--shard", "2/2"]).status.success());
+    if rounds.len() == 1 {
+        assert_eq!(plan(), 0);
+    }
+    for (args, expected) in [(&["--shard", "3/2"][..], "--shard"), (&["--shard", "1/2", "--plan"][..], "--plan")] {
+        let out = refine(args);
+        assert!(!out.status.success(), "{args:?}");
+        assert!(text(&out.stderr).contains(expected), "{args:?}: {}", text(&out.stderr));
+    }
+
     // Bad requests: named, nothing written.
     for (args, expected) in [
         (&["--template", "sine", "--budget", "4"][..], "no sine template"),

@@ -30,6 +30,16 @@
 //! written to `DIR/runs` as `db build` writes them, so an interrupted
 //! refinement continues where it stopped: the rounds are deterministic,
 //! and a round whose runs are already there costs only reading them.
+//!
+//! On a cluster ([`Mode`]): the rounds are sequential (each is chosen by
+//! the rows of the last), but a round's runs are independent. Each task of
+//! a job array replays the rounds whose runs are there and computes its
+//! shard of the first round that lacks some ([`Mode::Shard`]), writing
+//! nothing else; [`Mode::Plan`] counts the runs that round still lacks
+//! (0 once every round's runs are there). A driver submits one array per
+//! round until the count is 0, then one refinement in [`Mode::Write`]
+//! (which then only reads the runs) writes the database: the same bytes
+//! as a refinement on one machine.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -56,6 +66,20 @@ pub struct RefineOptions {
     /// Most FE runs to add.
     pub budget: usize,
     pub jobs: usize,
+    pub mode: Mode,
+}
+
+/// What a refinement does with the first round whose runs are not all in
+/// `DIR/runs`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// Computes them, and every later round's; writes the database.
+    Write,
+    /// Computes shard K of N of them (1-based: the round's runs K, K+N,
+    /// ...), then stops; writes nothing but run files.
+    Shard(usize, usize),
+    /// Counts them and stops; computes and writes nothing.
+    Plan,
 }
 
 /// One round's outcome, for the report.
@@ -76,6 +100,9 @@ pub enum Stop {
     /// Every interval above the target lies where halving the spacing did
     /// not halve the held-out error ([`converging`]).
     NotConverging,
+    /// ([`Mode::Shard`], [`Mode::Plan`]) A round lacks runs: its shard was
+    /// computed, or they were counted ([`RefineReport::pending`]).
+    Pending,
 }
 
 /// What a refinement did.
@@ -86,6 +113,10 @@ pub struct RefineReport {
     /// The worst interval's score when it stopped.
     pub worst_score: f64,
     pub runs_added: usize,
+    /// The runs the first incomplete round lacked ([`Stop::Pending`]; 0
+    /// otherwise), and how many of them this call computed.
+    pub pending: usize,
+    pub computed: usize,
     pub metadata: Metadata,
 }
 
@@ -267,7 +298,43 @@ pub fn refine(
         if added + runs.len() > options.budget {
             break (Stop::Budget, score);
         }
-        build_runs(&spec, &runs, dir, options.jobs, progress)?;
+        let missing: Vec<Run> =
+            runs.iter().filter(|r| !dir.join("runs").join(r.file_name()).exists()).cloned().collect();
+        match options.mode {
+            Mode::Write => {
+                build_runs(&spec, &runs, dir, options.jobs, progress)?;
+            }
+            _ if missing.is_empty() => {}
+            Mode::Plan => {
+                let pending = missing.len();
+                return Ok(RefineReport {
+                    rounds,
+                    stop: Stop::Pending,
+                    worst_score: score,
+                    runs_added: added,
+                    pending,
+                    computed: 0,
+                    metadata,
+                });
+            }
+            Mode::Shard(k, n) => {
+                // The round's runs K, K+N, ...: every task of the array
+                // derives the same round, so the shards partition it.
+                let shard: Vec<Run> =
+                    runs.iter().enumerate().filter(|(i, _)| i % n == k - 1).map(|(_, r)| r.clone()).collect();
+                let report = build_runs(&spec, &shard, dir, options.jobs, progress)?;
+                let pending = missing.len();
+                return Ok(RefineReport {
+                    rounds,
+                    stop: Stop::Pending,
+                    worst_score: score,
+                    runs_added: added,
+                    pending,
+                    computed: report.runs_computed,
+                    metadata,
+                });
+            }
+        }
         // The held-out error: the database as it was, against the new runs.
         let matrix = rows.matrix(&columns)?;
         let grid = GridInterpolation::new(&matrix)
@@ -303,12 +370,12 @@ pub fn refine(
         rows.rows.extend(new_rows);
         rows.sort();
     };
-    let metadata = if rounds.is_empty() {
+    let metadata = if rounds.is_empty() || options.mode != Mode::Write {
         metadata
     } else {
         write_refined(dir, metadata, options.template, &rows, &columns, &rounds, cpu_time_s)?
     };
-    Ok(RefineReport { rounds, stop, worst_score, runs_added: added, metadata })
+    Ok(RefineReport { rounds, stop, worst_score, runs_added: added, pending: 0, computed: 0, metadata })
 }
 
 /// Whether splitting (a, b) on `axis` can still be expected to help. The

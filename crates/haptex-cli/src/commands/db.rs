@@ -224,7 +224,8 @@ struct ValidateArgs {
 /// measured the rows before: run `haptex db validate --record` again.
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:\n  haptex db refine --template sine --budget 200\n  \
-                  haptex db refine --db /tmp/db --template bump --axes width,height --target 0.03 --budget 60")]
+                  haptex db refine --db /tmp/db --template bump --axes width,height --target 0.03 --budget 60\n  \
+                  haptex db refine --db /scratch/db --template sine --budget 300 --shard 3/16   # task 3 of a 16-task array")]
 struct RefineArgs {
     /// Database directory, refined in place. Default: the shipped data/db, or $HAPTEX_DB.
     #[arg(long, value_name = "DIR")]
@@ -245,6 +246,19 @@ struct RefineArgs {
     /// FE runs at a time (one thread each). Default: the number of cores.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
     jobs: Option<u32>,
+    /// A task of a job array: replay the rounds whose runs are in DIR/runs,
+    /// compute shard K of N (1-based) of the first round that lacks runs,
+    /// and stop, writing nothing but run files. Default: from
+    /// SLURM_ARRAY_TASK_ID, SLURM_ARRAY_TASK_MIN and SLURM_ARRAY_TASK_COUNT
+    /// when set. Submit one array per round until --plan prints 0, then
+    /// refine without --shard to write the database.
+    #[arg(long, value_name = "K/N", value_parser = parse_shard, conflicts_with = "plan")]
+    shard: Option<(usize, usize)>,
+    /// Print (alone on standard output) how many runs the first round
+    /// that lacks runs still needs, 0 when none does; compute and write
+    /// nothing.
+    #[arg(long)]
+    plan: bool,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -652,8 +666,18 @@ fn refine(args: RefineArgs) -> anyhow::Result<()> {
     axes.dedup();
     let jobs =
         args.jobs.map(|j| j as usize).unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let options = refine::RefineOptions { template, axes, target: args.target, budget: args.budget as usize, jobs };
-    if !args.quiet {
+    let mode = match (args.plan, args.shard) {
+        (true, _) => refine::Mode::Plan,
+        (false, Some((k, n))) => refine::Mode::Shard(k, n),
+        (false, None) => match slurm_shard()? {
+            Some((k, n)) => refine::Mode::Shard(k, n),
+            None => refine::Mode::Write,
+        },
+    };
+    let options =
+        refine::RefineOptions { template, axes, target: args.target, budget: args.budget as usize, jobs, mode };
+    let quiet = args.quiet || args.plan;
+    if !quiet {
         eprintln!(
             "haptex db refine: {} of {}, along {}, to {}% of the range, at most {} runs, {jobs} at a time",
             template.name(),
@@ -663,7 +687,7 @@ fn refine(args: RefineArgs) -> anyhow::Result<()> {
             args.budget
         );
     }
-    let bar = if args.quiet {
+    let bar = if quiet {
         ProgressBar::hidden()
     } else {
         let bar = ProgressBar::new(0);
@@ -674,7 +698,6 @@ fn refine(args: RefineArgs) -> anyhow::Result<()> {
         );
         bar
     };
-    let quiet = args.quiet;
     let report = refine::refine(
         &dir,
         &options,
@@ -703,7 +726,32 @@ fn refine(args: RefineArgs) -> anyhow::Result<()> {
     );
     bar.finish_and_clear();
     let report = report.with_context(|| format!("refining {} in {}", template.name(), dir.display()))?;
+    let round = report.rounds.len() + 1;
+    match mode {
+        refine::Mode::Plan => {
+            println!("{}", report.pending);
+            return Ok(());
+        }
+        refine::Mode::Shard(k, n) => {
+            if report.stop == refine::Stop::Pending {
+                println!(
+                    "round {round}: {} runs of shard {k}/{n} computed; {} of the round's runs were missing when this \
+                     task started; when every task of the array is done, `--plan` counts what the round still lacks",
+                    report.computed, report.pending
+                );
+            } else {
+                println!(
+                    "every round's runs are there ({} runs in {} rounds): refine without --shard to write the database",
+                    report.runs_added,
+                    report.rounds.len()
+                );
+            }
+            return Ok(());
+        }
+        refine::Mode::Write => {}
+    }
     let why = match report.stop {
+        refine::Stop::Pending => unreachable!("a refinement that writes computes every round"),
         refine::Stop::TargetMet => {
             format!("every interval's score is within the target ({:.1}% at most)", 100.0 * report.worst_score)
         }
