@@ -299,7 +299,7 @@ pub fn refine(
             break (Stop::Budget, score);
         }
         let missing: Vec<Run> =
-            runs.iter().filter(|r| !dir.join("runs").join(r.file_name()).exists()).cloned().collect();
+            runs.iter().filter(|r| !dir.join("runs").join(r.file_name()).exists()).copied().collect();
         match options.mode {
             Mode::Write => {
                 build_runs(&spec, &runs, dir, options.jobs, progress)?;
@@ -321,7 +321,7 @@ pub fn refine(
                 // The round's runs K, K+N, ...: every task of the array
                 // derives the same round, so the shards partition it.
                 let shard: Vec<Run> =
-                    runs.iter().enumerate().filter(|(i, _)| i % n == k - 1).map(|(_, r)| r.clone()).collect();
+                    runs.iter().enumerate().filter(|(i, _)| i % n == k - 1).map(|(_, r)| *r).collect();
                 let report = build_runs(&spec, &shard, dir, options.jobs, progress)?;
                 let pending = missing.len();
                 return Ok(RefineReport {
