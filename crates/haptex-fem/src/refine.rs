@@ -300,40 +300,32 @@ pub fn refine(
         }
         let missing: Vec<Run> =
             runs.iter().filter(|r| !dir.join("runs").join(r.file_name()).exists()).copied().collect();
-        match options.mode {
+        let computed = match options.mode {
             Mode::Write => {
                 build_runs(&spec, &runs, dir, options.jobs, progress)?;
+                None
             }
-            _ if missing.is_empty() => {}
-            Mode::Plan => {
-                let pending = missing.len();
-                return Ok(RefineReport {
-                    rounds,
-                    stop: Stop::Pending,
-                    worst_score: score,
-                    runs_added: added,
-                    pending,
-                    computed: 0,
-                    metadata,
-                });
-            }
+            _ if missing.is_empty() => None,
+            Mode::Plan => Some(0),
             Mode::Shard(k, n) => {
                 // The round's runs K, K+N, ...: every task of the array
                 // derives the same round, so the shards partition it.
                 let shard: Vec<Run> =
                     runs.iter().enumerate().filter(|(i, _)| i % n == k - 1).map(|(_, r)| *r).collect();
-                let report = build_runs(&spec, &shard, dir, options.jobs, progress)?;
-                let pending = missing.len();
-                return Ok(RefineReport {
-                    rounds,
-                    stop: Stop::Pending,
-                    worst_score: score,
-                    runs_added: added,
-                    pending,
-                    computed: report.runs_computed,
-                    metadata,
-                });
+                Some(build_runs(&spec, &shard, dir, options.jobs, progress)?.runs_computed)
             }
+        };
+        if let Some(computed) = computed {
+            let pending = missing.len();
+            return Ok(RefineReport {
+                rounds,
+                stop: Stop::Pending,
+                worst_score: score,
+                runs_added: added,
+                pending,
+                computed,
+                metadata,
+            });
         }
         // The held-out error: the database as it was, against the new runs.
         let matrix = rows.matrix(&columns)?;
