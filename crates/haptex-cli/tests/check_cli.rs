@@ -43,6 +43,7 @@ fn check_writes_the_felt_profile_and_a_voltage_within_u_max() {
     assert!(out.status.success(), "{}", stderr(&out));
     let err = stderr(&out);
     assert!(err.contains("trial 1 (eq. 8)") && err.contains("FE finger's contact length"), "{err}");
+    assert!(err.contains("\nstopped: "), "the compensation says why it stopped: {err}");
     let (header, rows) = table(&std::fs::read_to_string(p("check.csv")).unwrap());
     assert_eq!(header, ["x_mm", "target_mu", "voltage_v", "felt_mu", "k_fe_mm2_per_n"]);
     assert_eq!(rows.len(), 41);

@@ -611,6 +611,34 @@ pub struct Compensation {
     pub trials: Vec<Check>,
     /// Index of the best trial (smallest RMS error).
     pub best: usize,
+    /// Why it stopped.
+    pub stop: CompensationStop,
+}
+
+/// Why a compensation stopped ([`Stopping`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CompensationStop {
+    /// The last trial's RMS error was within the tolerance.
+    Tolerance,
+    /// The last trial took off less than the required fraction of the
+    /// best error so far.
+    Stalled,
+    /// The runs allowed were spent.
+    MaxRuns,
+}
+
+impl CompensationStop {
+    /// In a sentence, with the settings that made it stop.
+    pub fn describe(self, stopping: &Stopping) -> String {
+        match self {
+            Self::Tolerance => format!("stopped: the RMS error is within the tolerance {:.1e}", stopping.tolerance),
+            Self::Stalled => format!(
+                "stopped: the last FE run did not bring the RMS error below {}% of the best so far",
+                Num(100.0 * stopping.min_reduction)
+            ),
+            Self::MaxRuns => format!("stopped: the {} FE runs allowed were spent", stopping.max_runs),
+        }
+    }
 }
 
 impl Compensation {
@@ -668,6 +696,7 @@ pub fn compensate(
     let range = renderable_range(&device);
     let mut w: Vec<f64> = eq8_voltage(target, &device)?.iter().map(|u| u * u).collect();
     let mut best = 0;
+    let mut stop = CompensationStop::MaxRuns;
     for run in 0..max_runs {
         let voltage: Vec<f64> = w.iter().map(|&w| w.clamp(0.0, u_max2).sqrt().min(device.u_max_v)).collect();
         let trial = check_voltage(target, voltage, settings, &mut |p| progress(run, p))?;
@@ -677,7 +706,15 @@ pub fn compensate(
         if error < best_error {
             best = trials.len() - 1;
         }
-        if error <= tolerance || (run > 0 && error > min_reduction * best_error) {
+        if error <= tolerance {
+            stop = CompensationStop::Tolerance;
+            break;
+        }
+        if run > 0 && error > min_reduction * best_error {
+            stop = CompensationStop::Stalled;
+            break;
+        }
+        if run + 1 == max_runs {
             break;
         }
         // The gain as this trial shows it: felt/mu_HD - 1 against w.
@@ -697,7 +734,7 @@ pub fn compensate(
             w[i] = (w[i] - error / (device.mu_hd * beta)).clamp(0.0, u_max2);
         }
     }
-    Ok(Compensation { trials, best })
+    Ok(Compensation { trials, best, stop })
 }
 
 /// `haptex voltage --compensate`: eq. (8)'s design `voltage` (on
@@ -799,6 +836,7 @@ pub fn check_electrovibration(
                     t.metrics.max_error
                 ));
             }
+            lines.push(c.stop.describe(&stopping));
             let trials: Vec<CheckMetrics> = c.trials.iter().map(|t| t.metrics).collect();
             let best = c.best;
             let check = c.trials.into_iter().nth(best).expect("best trial exists");

@@ -44,7 +44,26 @@ fn compensation_cuts_the_eq8_error_by_three_within_eight_runs() {
         let eq8 = c.trials[0].metrics.rms_error;
         let best = c.best().metrics.rms_error;
         assert!(best <= eq8 / 3.0, "{surface:?}: eq. (8) {eq8:.3e}, compensated {best:.3e}");
+        assert_stopped_by_its_rule(&c, &Stopping::default());
     }
+}
+
+/// The reason a compensation gives for stopping is the rule its trials
+/// show: the last within the tolerance; or the last above the reduction
+/// times the best before it; or the runs spent.
+fn assert_stopped_by_its_rule(c: &render::Compensation, stopping: &Stopping) {
+    let errors: Vec<f64> = c.trials.iter().map(|t| t.metrics.rms_error).collect();
+    let last = *errors.last().unwrap();
+    let best_before = errors[..errors.len() - 1].iter().copied().fold(f64::INFINITY, f64::min);
+    let expected = if last <= stopping.tolerance {
+        render::CompensationStop::Tolerance
+    } else if errors.len() > 1 && last > stopping.min_reduction * best_before {
+        render::CompensationStop::Stalled
+    } else {
+        assert_eq!(errors.len(), stopping.max_runs, "{errors:?}");
+        render::CompensationStop::MaxRuns
+    };
+    assert_eq!(c.stop, expected, "{errors:?}");
 }
 
 #[test]
@@ -78,6 +97,11 @@ fn a_constant_target_is_felt_with_the_fe_finger_own_k() {
     assert!(with_fe_k.metrics.rms_error < first.metrics.rms_error);
     let c = render::compensate(&target, &s, Stopping::default(), &mut |_, _| {}).unwrap();
     assert!(c.best().metrics.rms_error <= 1e-4, "{:?}", c.best().metrics);
+    assert_eq!(c.stop, render::CompensationStop::Tolerance);
+    // Two runs allowed: spent before the tolerance.
+    let two = Stopping { max_runs: 2, tolerance: 0.0, ..Stopping::default() };
+    let c = render::compensate(&target, &s, two, &mut |_, _| {}).unwrap();
+    assert_eq!((c.trials.len(), c.stop), (2, render::CompensationStop::MaxRuns));
 }
 
 #[test]
