@@ -660,6 +660,12 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     if shown != json!(["electrovibration", true, true, true]) {
         return fail(format!("the page opens on [display, relative, both, radio] = {shown}"));
     }
+    // The message names the estimator the database serves (the grid for
+    // the shipped one), not always the CAE.
+    let message = wd!(wd!(client.find(Locator::Id("message"))).text());
+    if !message.starts_with("bump r_w 1.3 mm, r_h 0.27 mm, 20 mm/s (grid)") {
+        return fail(format!("the message does not name the grid estimate: {message:?}"));
+    }
     let predicted = predicted_bump(client, 1.3).await?;
     // One click away: the combined display, with the template's physical values.
     choose(client, "display", "combined").await?;

@@ -78,7 +78,7 @@ export const SOURCES = {
         key: JSON.stringify(body),
         x_mm: answer.x_mm, mu: answer.mu, fn_n: null, h_mm: answer.h_mm,
         label: `${answer.surface} r_w ${fmt(p.width_mm)} mm, r_h ${fmt(p.height_mm)} mm, ` +
-          `${fmt(p.velocity_mm_s)} mm/s (${answer.fe_exact ? 'FE' : 'CAE'}` +
+          `${fmt(p.velocity_mm_s)} mm/s (${answer.fe_exact ? 'FE' : answer.estimator === 'grid' ? 'grid' : 'CAE'}` +
           `${answer.extrapolation ? ', extrapolated' : ''})`,
         synthetic: false,
         extrapolation: answer.extrapolation,
