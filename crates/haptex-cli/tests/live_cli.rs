@@ -33,6 +33,7 @@ fn without_the_feature_live_says_how_to_build_it() {
 #[cfg(feature = "live")]
 mod device {
     use super::*;
+    use common::KillOnDrop;
     use std::path::Path;
     use std::process::{Command, Output, Stdio};
 
@@ -488,17 +489,6 @@ mod device {
             .unwrap_or_else(|| panic!("no session cookie: {page}"))
             .to_string();
         (child, stderr_lines, addr, page, cookie)
-    }
-
-    /// A child process killed when the test ends, also when an assertion
-    /// fails before the test's own kill.
-    struct KillOnDrop(std::process::Child);
-
-    impl Drop for KillOnDrop {
-        fn drop(&mut self) {
-            let _ = self.0.kill();
-            let _ = self.0.wait();
-        }
     }
 
     /// `haptex serve --live` on the ALSA file device: the page's WebSocket

@@ -12,6 +12,8 @@ use std::time::{Duration, Instant};
 
 mod common;
 
+use common::KillOnDrop;
+
 /// GET `path` over a plain socket; returns the whole answer.
 fn http_get(port: u16, path: &str) -> String {
     http_get_for(port, "localhost", path)
@@ -46,14 +48,6 @@ fn http_request(port: u16, host: &str, path: &str, headers: &str) -> String {
 #[cfg(unix)]
 #[test]
 fn serve_needs_a_token_beyond_loopback() {
-    /// Killed if a failed assertion leaves it running.
-    struct Server(std::process::Child);
-    impl Drop for Server {
-        fn drop(&mut self) {
-            let _ = self.0.kill();
-            let _ = self.0.wait();
-        }
-    }
     let dir = tempfile::tempdir().unwrap();
     let start = |args: &[&str], env: &[(&str, &str)]| {
         let mut child = Command::new(env!("CARGO_BIN_EXE_haptex"))
@@ -75,9 +69,9 @@ fn serve_needs_a_token_beyond_loopback() {
                 break port.parse::<u16>().unwrap();
             }
         };
-        (Server(child), stderr, port, seen)
+        (KillOnDrop(child), stderr, port, seen)
     };
-    let stop = |mut child: Server, mut stderr: BufReader<std::process::ChildStderr>| {
+    let stop = |mut child: KillOnDrop, mut stderr: BufReader<std::process::ChildStderr>| {
         assert!(Command::new("kill").args(["-TERM", &child.0.id().to_string()]).status().unwrap().success());
         assert!(child.0.wait().unwrap().success());
         let mut rest = String::new();
@@ -235,14 +229,6 @@ fn play_from(port: u16, from: &str) -> String {
 #[cfg(unix)]
 #[test]
 fn serve_limits_loopback_clients_with_the_hidden_flag() {
-    /// Killed if a failed assertion leaves it running.
-    struct Server(std::process::Child);
-    impl Drop for Server {
-        fn drop(&mut self) {
-            let _ = self.0.kill();
-            let _ = self.0.wait();
-        }
-    }
     let help = common::haptex(&["serve", "--help"]);
     assert!(help.status.success() && !String::from_utf8_lossy(&help.stdout).contains("loopback-clients"));
     for limited in [true, false] {
@@ -250,7 +236,7 @@ fn serve_limits_loopback_clients_with_the_hidden_flag() {
         if limited {
             args.push("--limit-loopback-clients");
         }
-        let mut child = Server(
+        let mut child = KillOnDrop(
             Command::new(env!("CARGO_BIN_EXE_haptex"))
                 .args(&args)
                 .env_remove("HAPTEX_TOKEN")

@@ -5,6 +5,17 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
+/// A child process killed when the test ends, also when an assertion
+/// fails before the test's own kill or wait.
+pub struct KillOnDrop(pub std::process::Child);
+
+impl Drop for KillOnDrop {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 /// Runs the haptex binary built for the tests.
 pub fn haptex(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_haptex")).args(args).output().expect("run haptex")
