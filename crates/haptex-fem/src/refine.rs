@@ -298,14 +298,18 @@ pub fn refine(
         if added + runs.len() > options.budget {
             break (Stop::Budget, score);
         }
-        let missing: Vec<Run> =
-            runs.iter().filter(|r| !dir.join("runs").join(r.file_name()).exists()).copied().collect();
+        // A task of an array (or --plan) stops at the first round that
+        // lacks runs; the refinement that writes computes them.
+        let pending = match options.mode {
+            Mode::Write => 0,
+            _ => runs.iter().filter(|r| !dir.join("runs").join(r.file_name()).exists()).count(),
+        };
         let computed = match options.mode {
             Mode::Write => {
                 build_runs(&spec, &runs, dir, options.jobs, progress)?;
                 None
             }
-            _ if missing.is_empty() => None,
+            _ if pending == 0 => None,
             Mode::Plan => Some(0),
             Mode::Shard(k, n) => {
                 // The round's runs K, K+N, ...: every task of the array
@@ -316,7 +320,6 @@ pub fn refine(
             }
         };
         if let Some(computed) = computed {
-            let pending = missing.len();
             return Ok(RefineReport {
                 rounds,
                 stop: Stop::Pending,
