@@ -185,32 +185,27 @@ fn slurm_job_array_builds_the_same_database_as_a_local_build() {
 
 /// The array job: `haptex db build` reads its shard from Slurm's variables.
 fn job_script() -> String {
-    format!(
-        "#!/bin/bash\n\
-         #SBATCH --job-name=haptex-db\n\
-         #SBATCH --array=1-{TASKS}\n\
-         #SBATCH --cpus-per-task=1\n\
-         #SBATCH --time=00:10:00\n\
-         #SBATCH --output=haptex-db-%A_%a.log\n\
-         set -euo pipefail\n\
-         haptex db build --out \"$SCRATCH/haptex-db\" --jobs 1 {}\n",
-        SWEEP.join(" ")
-    )
+    array_script("haptex-db", &format!("haptex db build --out \"$SCRATCH/haptex-db\" --jobs 1 {}", SWEEP.join(" ")))
 }
 
 /// The array job of one round of `haptex db refine`: each task computes
 /// its shard of the round, found from Slurm's variables.
 fn refine_job_script() -> String {
+    array_script("haptex-refine", &format!("haptex db refine --db \"$SCRATCH/refined\" {}", REFINE.join(" ")))
+}
+
+/// A job array of TASKS one-CPU tasks named `name` (each logging to
+/// `name-JOB_TASK.log`) running `command`.
+fn array_script(name: &str, command: &str) -> String {
     format!(
         "#!/bin/bash\n\
-         #SBATCH --job-name=haptex-refine\n\
+         #SBATCH --job-name={name}\n\
          #SBATCH --array=1-{TASKS}\n\
          #SBATCH --cpus-per-task=1\n\
          #SBATCH --time=00:10:00\n\
-         #SBATCH --output=haptex-refine-%A_%a.log\n\
+         #SBATCH --output={name}-%A_%a.log\n\
          set -euo pipefail\n\
-         haptex db refine --db \"$SCRATCH/refined\" {}\n",
-        REFINE.join(" ")
+         {command}\n"
     )
 }
 
