@@ -133,6 +133,7 @@ pub enum MeshArg {
     Coarse,
     Default,
     Fine,
+    ExtraFine,
 }
 
 impl MeshArg {
@@ -142,6 +143,7 @@ impl MeshArg {
             MeshArg::Coarse => Resolution::Coarse,
             MeshArg::Default => Resolution::Default,
             MeshArg::Fine => Resolution::Fine,
+            MeshArg::ExtraFine => Resolution::ExtraFine,
         }
     }
 }

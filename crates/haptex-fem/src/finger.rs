@@ -384,7 +384,7 @@ impl FingerModel {
                 } else {
                     ""
                 };
-                let resolution = format!("{resolution:?}").to_lowercase();
+                let resolution = resolution.name();
                 return Err(field_error(
                     "geometry",
                     format!("cannot be meshed at the {resolution} resolution ({e}){hint}"),
@@ -583,6 +583,10 @@ pub enum Resolution {
     Coarse,
     Default,
     Fine,
+    /// Half the fine mesh's pad spacing: for convergence studies and the
+    /// sharpest features (a 2D run costs about 5 times the fine mesh's).
+    #[serde(rename = "extra-fine")]
+    ExtraFine,
 }
 
 /// The numbers behind a resolution preset.
@@ -599,7 +603,17 @@ pub struct ResolutionParameters {
 }
 
 impl Resolution {
-    pub const ALL: [Resolution; 3] = [Resolution::Coarse, Resolution::Default, Resolution::Fine];
+    pub const ALL: [Resolution; 4] = [Resolution::Coarse, Resolution::Default, Resolution::Fine, Resolution::ExtraFine];
+
+    /// The name the CLI's `--mesh` and a database's metadata use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Resolution::Coarse => "coarse",
+            Resolution::Default => "default",
+            Resolution::Fine => "fine",
+            Resolution::ExtraFine => "extra-fine",
+        }
+    }
 
     pub fn parameters(self) -> ResolutionParameters {
         match self {
@@ -620,6 +634,12 @@ impl Resolution {
                 coarse_spacing_mm: 0.3,
                 skin_rows: [3, 2, 5],
                 hypodermis_rows: 12,
+            },
+            Resolution::ExtraFine => ResolutionParameters {
+                pad_spacing_mm: 0.025,
+                coarse_spacing_mm: 0.2,
+                skin_rows: [5, 3, 8],
+                hypodermis_rows: 16,
             },
         }
     }
@@ -757,7 +777,7 @@ mod tests {
     #[test]
     fn shipped_model_meshes_at_every_resolution() {
         let model = FingerModel::default_model();
-        for resolution in [Resolution::Coarse, Resolution::Default, Resolution::Fine] {
+        for resolution in Resolution::ALL {
             let finger = model.mesh(resolution).unwrap();
             let m = &finger.mesh;
             let geometry = m.geometry().unwrap();
@@ -786,6 +806,16 @@ mod tests {
         }
         let default = model.mesh(Resolution::Default).unwrap();
         assert!((2500..=3600).contains(&default.mesh.n_nodes()), "{} nodes", default.mesh.n_nodes());
+    }
+
+    /// The name a database's metadata records is the one it is read back
+    /// by and the CLI's `--mesh` takes (clap's kebab-case of the variant).
+    #[test]
+    fn resolution_names_are_the_serialized_ones() {
+        for resolution in Resolution::ALL {
+            assert_eq!(serde_json::to_value(resolution).unwrap(), resolution.name());
+        }
+        assert_eq!(Resolution::ExtraFine.name(), "extra-fine");
     }
 
     #[test]

@@ -59,11 +59,11 @@ pub fn describe_with_load_unit(scenario: &Scenario, surface: &str, load_unit: &s
         Loading::Load(f) => format!("load {} {load_unit}", Num(f)),
     };
     format!(
-        "{surface}; {loading}, slide {} mm at {} mm/s, {} tissue, {:?} mesh{}",
+        "{surface}; {loading}, slide {} mm at {} mm/s, {} tissue, {} mesh{}",
         Num(scenario.slide_mm),
         Num(scenario.velocity_mm_s),
         if scenario.viscoelastic { "visco-elastic" } else { "elastic" },
-        scenario.resolution,
+        scenario.resolution.name(),
         if scenario.kinematics == Kinematics::Finite { ", finite strain" } else { "" }
     )
 }

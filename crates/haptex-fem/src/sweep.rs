@@ -194,7 +194,7 @@ impl DatabaseSpec {
         FeSettings {
             finger_model: self.model_source.clone(),
             finger_model_sha256: hex(&Sha256::digest(self.model_text.as_bytes())),
-            mesh: format!("{:?}", self.resolution).to_lowercase(),
+            mesh: self.resolution.name().to_string(),
             material: if self.viscoelastic { "viscoelastic" } else { "elastic" }.into(),
             indent_mm: self.indent_mm,
             press_time_s: self.press_time_s,
@@ -228,6 +228,7 @@ impl DatabaseSpec {
             "coarse" => Resolution::Coarse,
             "default" => Resolution::Default,
             "fine" => Resolution::Fine,
+            "extra-fine" => Resolution::ExtraFine,
             other => return Err(SweepError::Invalid(format!("unknown mesh '{other}' in the metadata"))),
         };
         spec.viscoelastic = match fe.material.as_str() {

@@ -167,10 +167,11 @@ impl FingerArgs<'_, '_> {
     }
 
     fn resolution(&self) -> PyResult<Resolution> {
-        Ok(match choice("mesh", self.mesh, &["coarse", "default", "fine"])? {
+        Ok(match choice("mesh", self.mesh, &["coarse", "default", "fine", "extra-fine"])? {
             "coarse" => Resolution::Coarse,
             "default" => Resolution::Default,
-            _ => Resolution::Fine,
+            "fine" => Resolution::Fine,
+            _ => Resolution::ExtraFine,
         })
     }
 
@@ -412,7 +413,7 @@ impl Simulation {
 ///   skin-surface friction (default the finger model's, 0.5).
 /// material: "viscoelastic" or "elastic"; kinematics: "small" (the
 ///   paper's) or "finite" (neo-Hookean, about 3x slower); mesh: "coarse",
-///   "default", "fine"; finger: a finger model file (default the shipped
+///   "default", "fine", "extra-fine"; finger: a finger model file (default the shipped
 ///   one); penalty: contact penalty in MPa per mm.
 /// progress: True (the default, as None): a tqdm bar when tqdm is
 ///   installed; False: none; or a

@@ -96,6 +96,7 @@ impl FingertipSpec {
     /// | coarse | 12 | 3 | 1, 1, 1, 3 |
     /// | default | 24 | 4 | 1, 1, 2, 6 |
     /// | fine | 36 | 5 | 1, 1, 3, 8 |
+    /// | extra-fine | 48 | 6 | 1, 1, 4, 10 |
     pub fn from_model(model: &FingerModel, resolution: Resolution) -> Self {
         let g = &model.geometry;
         let l = &model.layers;
@@ -103,6 +104,7 @@ impl FingertipSpec {
             Resolution::Coarse => (12, 3.0, [1, 1, 1, 3]),
             Resolution::Default => (24, 4.0, [1, 1, 2, 6]),
             Resolution::Fine => (36, 5.0, [1, 1, 3, 8]),
+            Resolution::ExtraFine => (48, 6.0, [1, 1, 4, 10]),
         };
         Self {
             skin_half_axes_mm: [g.half_width_mm, SKIN_HALF_LENGTH_MM, g.half_height_mm],
