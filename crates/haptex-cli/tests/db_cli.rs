@@ -450,6 +450,48 @@ fn shipped_database_predicts_off_grid_fe_cases() {
     assert!(text(&out.stdout).contains("# warning: width r_w = 2.6 mm"));
 }
 
+/// A sine whose crests the shipped database's fine mesh does not resolve
+/// (radius under 5 pad spacings, 0.25 mm; docs/database.md, "The sine's
+/// sharp crests") comes with a caveat, in the message and the file, that
+/// names what resolves it; its advice no longer sends the user to the
+/// database's own unresolved settings (`db loo`). A sine with blunt crests,
+/// and the other templates, get none.
+#[test]
+fn predict_says_where_the_sines_fe_rows_are_not_mesh_converged() {
+    let predict = |template: &str, width: &str, height: &str| {
+        let out = haptex(&["predict", "--surface", template, "--x0", "5", "--width", width, "--height", height]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        (text(&out.stdout), text(&out.stderr))
+    };
+    // R = 1.7^2 / (4 pi^2 0.4) = 0.183 mm: the extra-fine mesh resolves it.
+    let (csv, msg) = predict("sine", "1.7", "0.4");
+    let caveat = "caveat: the grating's crests (radius 0.183 mm) are sharper than the fine mesh resolves (5 pad node \
+                  spacings, 0.25 mm)";
+    assert!(msg.contains(caveat), "{msg}");
+    assert!(msg.contains("`haptex simulate --mesh extra-fine --step 0.00625` resolves them"), "{msg}");
+    assert!(csv.contains(&format!("# {caveat}")), "{csv}");
+    assert!(
+        msg.contains("advice: for sine surfaces the estimate is not good enough, and the database's FE rows"),
+        "{msg}"
+    );
+    assert!(!msg.contains("haptex db loo"), "{msg}");
+    // R = 0.026 mm, the worst member of seed 1: no mesh of haptex's resolves it.
+    let (_, msg) = predict("sine", "0.6996", "0.4824");
+    assert!(msg.contains("caveat: the grating's crests (radius 0.026 mm)"), "{msg}");
+    assert!(msg.contains("no mesh of haptex's resolves them"), "{msg}");
+    assert!(msg.contains("read the estimate as indicative only"), "{msg}");
+    // A database row has no estimate, but the row itself is the fine mesh's.
+    let (_, msg) = predict("sine", "0.75", "0.5");
+    assert!(msg.contains("(no estimate involved)") && msg.contains("caveat: the grating's crests"), "{msg}");
+    // R = 2.3^2 / (4 pi^2 0.15) = 0.89 mm: resolved, and the advice is the FE run with the database's settings.
+    let (csv, msg) = predict("sine", "2.3", "0.15");
+    assert!(!msg.contains("caveat") && !csv.contains("caveat"), "{msg}");
+    assert!(msg.contains("haptex db loo --surface sine --width 2.3 --height 0.15"), "{msg}");
+    // A bump of the same parameters is not a grating.
+    let (_, msg) = predict("bump", "0.6996", "0.4824");
+    assert!(!msg.contains("caveat"), "{msg}");
+}
+
 /// Issue 13: `db build --grid-points 1500` (column names collide at two
 /// decimals) and a one-case sweep (a CAE matrix needs two rows) computed
 /// every FE run and failed only at the merge. Everything the runs and the

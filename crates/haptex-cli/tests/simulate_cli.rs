@@ -254,6 +254,44 @@ fn press_only_writes_the_press_curve() {
     assert!(rows.windows(2).all(|w| w[1][2] > w[0][2] && w[0][2] > 0.0), "Fn grows over the press");
 }
 
+/// A sine whose crests the mesh does not resolve (radius 2^2 / (4 pi^2
+/// 0.3) = 0.338 mm, under the coarse mesh's 5 x 0.2 mm) is simulated, with
+/// a warning before the run and the caveat in the file's header, naming the
+/// mesh that resolves it; a bump of the same size is not a grating.
+#[test]
+fn a_sine_sharper_than_the_mesh_is_said_to_be() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("sine.csv");
+    let run = |surface: &str| {
+        let out = haptex(&[
+            "simulate",
+            "--surface",
+            surface,
+            "--width",
+            "2",
+            "--height",
+            "0.3",
+            "--slide",
+            "0",
+            "--mesh",
+            "coarse",
+            "-o",
+            path.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        (stderr(&out), std::fs::read_to_string(&path).unwrap())
+    };
+    let (said, text) = run("sine");
+    let warning = "the grating's crests (radius 0.338 mm) are sharper than the coarse mesh resolves (5 pad node \
+                   spacings, 1 mm)";
+    assert!(said.starts_with(&format!("warning: {warning}")), "{said}");
+    assert!(said.contains("`haptex simulate --mesh fine --step 0.0125` resolves them"), "{said}");
+    let header = text.lines().next().unwrap();
+    assert!(header.starts_with("# ") && header.contains(&format!("; not mesh-converged: {warning}")), "{header}");
+    let (said, text) = run("bump");
+    assert!(!said.contains("warning") && !text.contains("not mesh-converged"), "{said}");
+}
+
 /// An error's cause is printed once (issue 14 found "element 927: element
 /// has a non-positive Jacobian (...): element has a non-positive Jacobian
 /// (...)"; the same doubling was in every error that formats its cause).

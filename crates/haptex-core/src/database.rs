@@ -351,6 +351,10 @@ pub struct EstimateNotes {
     pub expected: Option<String>,
     /// The advice to run the FE model, where the estimate is not good enough.
     pub advice: Option<String>,
+    /// Where the database's own FE rows are not mesh-converged (a sine whose
+    /// crests its mesh does not resolve, [`crate::crests`]): why, and what
+    /// resolves them. For FE rows too.
+    pub caveat: Option<String>,
 }
 
 /// The largest error relative to a profile's range, on random members, at
@@ -759,6 +763,7 @@ impl TemplateModel {
         comments.extend(warning.map(|w| format!("warning: {w}")));
         comments.extend(notes.expected.iter().map(|e| format!("expected error: {e}")));
         comments.extend(notes.advice.iter().map(|a| format!("advice: {a}")));
+        comments.extend(notes.caveat.iter().map(|c| format!("caveat: {c}")));
         comments
     }
 
@@ -769,10 +774,15 @@ impl TemplateModel {
     /// for an estimator other than the validated one, that it was not
     /// measured.
     pub fn estimate_notes(&self, metadata: &Metadata, query: &[f64; 3], prediction: &Prediction) -> EstimateNotes {
-        let Some(validation) = metadata.validation.as_ref().filter(|_| prediction.fe_row.is_none()) else {
-            return EstimateNotes::default();
-        };
         let t = self.template;
+        let unresolved = match t {
+            Template::Sine => crate::crests::unresolved_sine(&metadata.fe.mesh, query[0], query[1]),
+            Template::Bump | Template::Edge => None,
+        };
+        let caveat = unresolved.map(|u| u.describe());
+        let Some(validation) = metadata.validation.as_ref().filter(|_| prediction.fe_row.is_none()) else {
+            return EstimateNotes { caveat, ..EstimateNotes::default() };
+        };
         if validation.estimator != prediction.estimator {
             return EstimateNotes {
                 expected: validation.entry(t).map(|_| {
@@ -784,12 +794,24 @@ impl TemplateModel {
                     )
                 }),
                 advice: None,
+                caveat,
             };
         }
         EstimateNotes {
             expected: validation.expected_error(t),
-            advice: validation.fe_advised(t).then(|| {
-                format!(
+            advice: validation.fe_advised(t).then(|| match unresolved {
+                // The database's settings would not resolve it either.
+                Some(u) if u.resolving_mesh().is_some() => format!(
+                    "for {} surfaces the estimate is not good enough, and the database's FE rows do not resolve \
+                     this grating (caveat below): run the FE model on a mesh that does",
+                    t.name()
+                ),
+                Some(_) => format!(
+                    "for {} surfaces the estimate is not good enough, and neither the database's FE rows nor any \
+                     mesh of haptex's resolve this grating (caveat below): read the estimate as indicative only",
+                    t.name()
+                ),
+                None => format!(
                     "for {} surfaces the estimate is not good enough: run the FE model instead, `haptex db loo \
                      --surface {} --width {} --height {} --velocity {}` (its FE profile, with the database's \
                      settings) or `haptex simulate`",
@@ -798,8 +820,9 @@ impl TemplateModel {
                     Num(query[0]),
                     Num(query[1]),
                     Num(query[2])
-                )
+                ),
             }),
+            caveat,
         }
     }
 

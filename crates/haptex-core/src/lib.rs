@@ -10,6 +10,7 @@ pub mod buffer;
 pub mod cae;
 pub mod calibration;
 pub mod combined;
+pub mod crests;
 pub mod database;
 pub mod electrovibration;
 pub mod frequency;

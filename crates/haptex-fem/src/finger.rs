@@ -814,6 +814,11 @@ mod tests {
     fn resolution_names_are_the_serialized_ones() {
         for resolution in Resolution::ALL {
             assert_eq!(serde_json::to_value(resolution).unwrap(), resolution.name());
+            // haptex-core's table of spacings (which gratings a database's mesh resolves).
+            assert_eq!(
+                haptex_core::crests::pad_spacing_mm(resolution.name()),
+                Some(resolution.parameters().pad_spacing_mm)
+            );
         }
         assert_eq!(Resolution::ExtraFine.name(), "extra-fine");
     }

@@ -1180,6 +1180,26 @@ async fn predict_at_a_database_case_returns_its_fe_profile() {
     assert!(answer["source"].as_str().unwrap().starts_with("FE result"));
 }
 
+/// A sine whose crests the database's fine mesh does not resolve carries
+/// `fe_caveat`, the sentence `haptex predict` prints (docs/database.md,
+/// "The sine's sharp crests"); a blunt sine and a bump carry null.
+#[tokio::test]
+async fn predict_states_where_the_sines_fe_rows_are_not_mesh_converged() {
+    let sharp = json!({ "surface": "sine", "width_mm": 1.7, "height_mm": 0.4 });
+    let answer = post_json("/api/predict", &sharp).await.ok().json();
+    let caveat = answer["fe_caveat"].as_str().unwrap();
+    assert!(caveat.starts_with("the grating's crests (radius 0.183 mm) are sharper than the fine mesh"), "{caveat}");
+    assert!(caveat.ends_with("`haptex simulate --mesh extra-fine --step 0.00625` resolves them"), "{caveat}");
+    assert_eq!(answer["fe_advised"], true);
+    for body in [
+        json!({ "surface": "sine", "width_mm": 2.3, "height_mm": 0.15 }),
+        json!({ "surface": "bump", "width_mm": 0.6, "height_mm": 0.5 }),
+    ] {
+        let answer = post_json("/api/predict", &body).await.ok().json();
+        assert_eq!(answer["fe_caveat"], Value::Null, "{body}");
+    }
+}
+
 /// Parameters outside the database but within the accepted range are
 /// predicted, flagged and explained; the estimate stays finite.
 #[tokio::test]
@@ -1492,7 +1512,7 @@ async fn check_reproduces_the_libraries_fe_check_of_the_same_target() {
     let m = &check.metrics;
     eprintln!("check of the relative bump: {m:?}");
     assert!(m.clipped_fraction > 0.0 && m.rms_error > 1e-3 && m.rms_error < 0.05, "{m:?}");
-    assert_eq!(result["compensated"], Value::Null);
+    assert_eq!((&result["compensated"], &result["stopped"]), (&Value::Null, &Value::Null));
     assert_eq!((result["fe_runs"].as_u64(), result["settings"]["step_mm"].as_f64()), (Some(1), Some(0.05)));
     let voltage = &result["voltage"];
     assert_eq!(numbers(&voltage["voltage_v"]), check.voltage_v);
@@ -1552,6 +1572,17 @@ async fn compensate_is_the_libraries_compensation_and_offers_its_voltage() {
     let compensated = &result["compensated"];
     assert_trial_equals(compensated, expected.best(), "compensated");
     assert_eq!(compensated["trial"].as_u64(), Some(expected.best as u64 + 1));
+    // Why it stopped, as the library decided and the CLI says it.
+    let reason = match expected.stop {
+        haptex_fem::render::CompensationStop::Tolerance => "tolerance",
+        haptex_fem::render::CompensationStop::Stalled => "stalled",
+        haptex_fem::render::CompensationStop::MaxRuns => "max_runs",
+    };
+    assert_eq!(result["stopped"]["reason"], reason);
+    assert_eq!(
+        result["stopped"]["message"].as_str(),
+        Some(expected.stop.describe(&haptex_fem::render::Stopping::default()).as_str())
+    );
     let (eq8, best) = (expected.trials[0].metrics.rms_error, expected.best().metrics.rms_error);
     eprintln!("compensation of the bump: RMS error {eq8:.3e} -> {best:.3e} in {} runs", expected.trials.len());
     assert!(best <= eq8 / 3.0, "eq. (8) {eq8:.3e}, compensated {best:.3e}");

@@ -111,6 +111,9 @@ pub fn run(args: PredictArgs) -> anyhow::Result<()> {
         if let Some(a) = &notes.advice {
             eprintln!("advice: {a}");
         }
+        if let Some(c) = &notes.caveat {
+            eprintln!("caveat: {c}");
+        }
     }
     Ok(())
 }

@@ -240,6 +240,18 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
         scenario.validate()?;
     }
 
+    // A grating sharper than the mesh resolves: said before the run, and in
+    // the profile's header.
+    let unresolved = match scenario.surface {
+        SurfaceShape::Sine { width, height, .. } => {
+            haptex_core::crests::unresolved_sine(scenario.resolution.name(), width, height)
+        }
+        _ => None,
+    };
+    if let (Some(u), false) = (unresolved, args.quiet) {
+        eprintln!("warning: {}", u.describe());
+    }
+
     let bar = progress_bar(args.quiet, scenario.press_steps + slide_steps);
     let result = scenario::run(&scenario, &mut |p| {
         bar.set_position(p.step as u64);
@@ -248,7 +260,10 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     bar.finish_and_clear();
     let result = result.context("simulation failed")?;
 
-    let description = describe(&args, &scenario);
+    let mut description = describe(&args, &scenario);
+    if let Some(u) = unresolved {
+        description.push_str(&format!("; not mesh-converged: {}", u.describe()));
+    }
     Output::new(args.output.clone()).write(|w| output::write_profile(&result, &description, w))?;
     if let Some(path) = &args.history {
         haptex_core::io::write_atomic(path, |w| output::write_history(&result, w))?;

@@ -86,7 +86,9 @@ export async function runCheck(mode) {
     const seconds = (performance.now() - started) / 1000;
     setStatus(info, `${mode === 'compensate' ? 'Compensated' : 'Checked'} in ${seconds.toFixed(2)} s ` +
       `(${result.fe_runs} FE run${result.fe_runs > 1 ? 's' : ''}, ${result.fe_seconds.toFixed(2)} s; ` +
-      `steps of ${fmt(result.settings.step_mm)} mm).`);
+      `steps of ${fmt(result.settings.step_mm)} mm)` +
+      // Why the compensation stopped, as haptex check --compensate says it.
+      (result.stopped ? `; ${result.stopped.message}.` : '.'));
     info.dataset.result = key;
     if (mode === 'compensate') $('play-compensated').checked = true;
     showCheck();

@@ -60,7 +60,14 @@ export const SOURCES = {
           '"check with the FE model" below.';
         info.append(advice);
       }
-      info.classList.toggle('warning', answer.extrapolation || answer.fe_advised);
+      if (answer.fe_caveat) {
+        // The database's FE rows themselves are not mesh-converged here.
+        const caveat = document.createElement('div');
+        caveat.className = 'fe-caveat';
+        caveat.textContent = `Not mesh-converged: ${answer.fe_caveat}.`;
+        info.append(caveat);
+      }
+      info.classList.toggle('warning', answer.extrapolation || answer.fe_advised || Boolean(answer.fe_caveat));
       answer.warnings.forEach((w) => {
         const line = document.createElement('div');
         line.textContent = `Extrapolation: ${w}`;

@@ -82,7 +82,10 @@
 //! (the device's, as `POST /api/voltage` gives them), `x_mm`, `target_mu`,
 //! `eq8` (`voltage_v`, `felt_mu`, `metrics`: the first run), `compensated`
 //! (`/api/compensate`: the best trial, `trial` its 1-based number; else
-//! null), `trials` (each run's `metrics`), `fe_runs`, `fe_seconds`, and
+//! null), `trials` (each run's `metrics`), `fe_runs`, `stopped` (why the
+//! compensation stopped: `reason` one of `tolerance`, `stalled`,
+//! `max_runs`, and `message` as `haptex check --compensate` says it; null
+//! for a check), `fe_seconds`, and
 //! the voltage offered: `voltage` (as `POST /api/voltage` answers it, with
 //! its summary and U_max) and `voltage_csv` (that profile as the
 //! `x_mm,mu,voltage_v` file `haptex check --voltage-out` writes, the
@@ -362,33 +365,40 @@ impl Job {
                 })
             })
         };
-        let (trials, best) = match (self.mode, &self.combined) {
+        let (trials, best, stop) = match (self.mode, &self.combined) {
             (Mode::Check, Some((design, strategy))) => {
                 let check =
                     render::check_combined(&self.target, &self.settings, &design.ultrasonic, *strategy, &mut |p| {
                         report(0, p)
                     })
                     .map_err(fe_error)?;
-                (vec![check], 0)
+                (vec![check], 0, None)
             }
             (Mode::Check, None) => {
-                (vec![render::check(&self.target, &self.settings, &mut |p| report(0, p)).map_err(fe_error)?], 0)
+                (vec![render::check(&self.target, &self.settings, &mut |p| report(0, p)).map_err(fe_error)?], 0, None)
             }
             (Mode::Compensate, _) => {
                 let c =
                     render::compensate(&self.target, &self.settings, self.stopping, &mut report).map_err(fe_error)?;
-                (c.trials, c.best)
+                (c.trials, c.best, Some(c.stop))
             }
         };
         let fe_seconds = started.elapsed().as_secs_f64();
         match &self.combined {
             Some((design, _)) => self.answer_combined(&trials[0], design, fe_seconds),
-            None => self.answer(&trials, best, fe_seconds),
+            None => self.answer(&trials, best, stop, fe_seconds),
         }
     }
 
-    /// The result of the trials (eq. 8's first, `best` the one offered).
-    fn answer(&self, trials: &[Check], best: usize, fe_seconds: f64) -> Result<Value, ApiError> {
+    /// The result of the trials (eq. 8's first, `best` the one offered;
+    /// `stop` why a compensation stopped).
+    fn answer(
+        &self,
+        trials: &[Check],
+        best: usize,
+        stop: Option<render::CompensationStop>,
+        fe_seconds: f64,
+    ) -> Result<Value, ApiError> {
         let offered = &trials[best];
         // The voltage offered goes into eq. (8)'s mapped profile, which
         // refuses any sample outside 0 ..= U_max (its file states U_max).
@@ -423,6 +433,17 @@ impl Job {
                 value
             }
         };
+        let stopped = match stop {
+            Some(stop) => json!({
+                "reason": match stop {
+                    render::CompensationStop::Tolerance => "tolerance",
+                    render::CompensationStop::Stalled => "stalled",
+                    render::CompensationStop::MaxRuns => "max_runs",
+                },
+                "message": stop.describe(&self.stopping),
+            }),
+            None => Value::Null,
+        };
         let mut settings = self.settings_json();
         if self.mode == Mode::Compensate {
             settings["max_runs"] = json!(self.stopping.max_runs);
@@ -439,6 +460,7 @@ impl Job {
             "compensated": compensated,
             "trials": trials.iter().enumerate().map(|(i, t)| json!({ "trial": i + 1, "metrics": t.metrics })).collect::<Vec<_>>(),
             "fe_runs": trials.len(),
+            "stopped": stopped,
             "fe_seconds": fe_seconds,
             "voltage": voltage_json,
             "voltage_csv": csv,
@@ -513,6 +535,7 @@ impl Job {
             "compensated": Value::Null,
             "trials": [json!({ "trial": 1, "metrics": check.metrics })],
             "fe_runs": 1,
+            "stopped": Value::Null,
             "fe_seconds": fe_seconds,
             "voltage": voltage_json,
             "voltage_csv": csv,

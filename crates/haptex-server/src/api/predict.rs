@@ -97,6 +97,9 @@ pub async fn post(call: Preamble<super::Template>) -> Result<Response, ApiError>
             "relative_max": e.relative_max,
         })));
         answer["fe_advised"] = json!(notes.advice.is_some());
+        // Where the database's own FE rows are not mesh-converged (a sine
+        // sharper than its mesh resolves): why, and what resolves it.
+        answer["fe_caveat"] = json!(notes.caveat);
         answer["h_mm"] = json!(h_mm);
         // The profile's flat-surface friction: the mu_flat of a relative
         // voltage mapping (`POST /api/voltage` with relative and flat_mu).
