@@ -492,6 +492,52 @@ fn predict_says_where_the_sines_fe_rows_are_not_mesh_converged() {
     assert!(!msg.contains("caveat"), "{msg}");
 }
 
+/// `db validate` marks each sine member whose crests the database's mesh
+/// resolves (radius r_w^2 / (4 pi^2 r_h) at least 5 pad spacings: 1 mm on
+/// the coarse mesh), and summarizes those apart in a second row when some
+/// are and some are not, with its own median and maximum.
+#[test]
+fn db_validate_summarizes_the_sines_resolved_members_apart() {
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("db");
+    let sweep =
+        ["--templates", "sine", "--widths", "1,4", "--heights", "0.1,0.3", "--velocities", "20", "--mesh", "coarse"];
+    let out = haptex(&[&["db", "build", "--out", db.to_str().unwrap(), "--jobs", "2", "-q"][..], &sweep].concat());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let csv = tmp.path().join("members.csv");
+    let args = ["db", "validate", "--db", db.to_str().unwrap(), "--random", "6", "--seed", "3", "-q", "-o"];
+    let out = haptex(&[&args[..], &[csv.to_str().unwrap()]].concat());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let text_csv = read(&csv);
+    let mut lines = text_csv.lines().filter(|l| !l.starts_with('#'));
+    assert_eq!(lines.next(), Some("template,r_w_mm,r_h_mm,velocity_mm_s,rms,fe_range,relative,crests_resolved"));
+    let mut resolved = Vec::new();
+    for line in lines {
+        let f: Vec<&str> = line.split(',').collect();
+        let (w, h, relative): (f64, f64, f64) = (f[1].parse().unwrap(), f[2].parse().unwrap(), f[6].parse().unwrap());
+        let radius = w * w / (4.0 * std::f64::consts::PI.powi(2) * h);
+        assert_eq!(f[7], if radius >= 1.0 { "true" } else { "false" }, "{line}: crest radius {radius} mm");
+        if radius >= 1.0 {
+            resolved.push(relative);
+        }
+    }
+    let table = text(&out.stdout);
+    let row = table.lines().find(|l| l.starts_with("| sine, crests of radius >= 1 mm (resolved by the coarse mesh) |"));
+    assert!((1..6).contains(&resolved.len()), "seed 3 should give a mix; resolved {resolved:?}:\n{text_csv}");
+    let row = row.unwrap_or_else(|| panic!("no row of the resolved members:\n{table}"));
+    resolved.sort_by(f64::total_cmp);
+    let median = if resolved.len() % 2 == 1 {
+        resolved[resolved.len() / 2]
+    } else {
+        0.5 * (resolved[resolved.len() / 2 - 1] + resolved[resolved.len() / 2])
+    };
+    let expected = format!("| {} of 6 | ", resolved.len());
+    assert!(row.contains(&expected), "{row}");
+    // The CSV's relative errors are rounded to 6 decimals, the table's percentages to 0.1.
+    let shown = format!("{:.1}% ({:.1}%)", 100.0 * median, 100.0 * resolved.last().unwrap());
+    assert!(row.contains(&shown), "{row} vs {shown}");
+}
+
 /// Issue 13: `db build --grid-points 1500` (column names collide at two
 /// decimals) and a one-case sweep (a CAE matrix needs two rows) computed
 /// every FE run and failed only at the merge. Everything the runs and the

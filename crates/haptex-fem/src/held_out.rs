@@ -59,6 +59,36 @@ pub struct Member {
     pub relative: f64,
 }
 
+impl Member {
+    /// Whether the crests of this member's surface are resolved by `mesh`
+    /// ([`haptex_core::crests`]): for a sine, true or false; `None` for
+    /// the other templates, to which the rule does not apply.
+    pub fn crests_resolved(&self, mesh: &str) -> Option<bool> {
+        match self.run.template {
+            Template::Sine => {
+                Some(haptex_core::crests::unresolved_sine(mesh, self.run.width_mm, self.run.height_mm).is_none())
+            }
+            Template::Bump | Template::Edge => None,
+        }
+    }
+}
+
+/// The members whose crests `mesh` resolves, summarized per template where
+/// that leaves some out (a sine's sharpest members), with how many there
+/// were of the template; nothing for a template where it leaves out none
+/// or keeps none.
+pub fn summarize_resolved(members: &[Member], mesh: &str) -> Vec<(Summary, usize)> {
+    summarize(members)
+        .into_iter()
+        .filter_map(|all| {
+            let template = all.errors.template;
+            let of: Vec<Member> = members.iter().filter(|m| m.run.template == template).cloned().collect();
+            let resolved: Vec<Member> = of.iter().filter(|m| m.crests_resolved(mesh) != Some(false)).cloned().collect();
+            (!resolved.is_empty() && resolved.len() < of.len()).then(|| (summarize(&resolved).remove(0), of.len()))
+        })
+        .collect()
+}
+
 /// The members of one template, summarized.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Summary {
@@ -223,5 +253,39 @@ mod tests {
         assert!((m.relative - 0.125).abs() < 1e-12);
         assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
         assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
+    }
+
+    /// The members the fine mesh resolves (crest radius at least 0.25 mm)
+    /// are summarized apart, for the sine only, and only when that leaves
+    /// some out.
+    #[test]
+    fn resolved_members_are_summarized_apart() {
+        let member = |template, width_mm, height_mm, relative| Member {
+            run: Run { template, width_mm, height_mm, velocity_mm_s: 20.0 },
+            rms: relative,
+            range: 1.0,
+            relative,
+        };
+        let members = [
+            member(Template::Bump, 0.6, 0.5, 0.02),
+            member(Template::Sine, 0.7, 0.48, 0.6),   // R = 0.026 mm: not resolved
+            member(Template::Sine, 2.3, 0.15, 0.05),  // R = 0.89 mm
+            member(Template::Sine, 1.57, 0.21, 0.09), // R = 0.297 mm
+        ];
+        assert_eq!(members[1].crests_resolved("fine"), Some(false));
+        assert_eq!(members[3].crests_resolved("fine"), Some(true));
+        assert_eq!(members[3].crests_resolved("default"), Some(false));
+        assert_eq!(members[0].crests_resolved("fine"), None);
+        let resolved = summarize_resolved(&members, "fine");
+        assert_eq!(resolved.len(), 1, "{resolved:?}");
+        let (sine, of) = &resolved[0];
+        assert_eq!((sine.errors.template, sine.members, *of), (Template::Sine, 2, 3));
+        assert_eq!((sine.errors.relative_median, sine.errors.relative_max), (0.07, 0.09));
+        assert_eq!(sine.worst.width_mm, 1.57);
+        // The coarse mesh resolves none (nothing to summarize apart), the
+        // default one the bluntest, the extra-fine one all but the first.
+        assert!(summarize_resolved(&members, "coarse").is_empty());
+        assert_eq!(summarize_resolved(&members, "default")[0].0.members, 1);
+        assert_eq!(summarize_resolved(&members, "extra-fine")[0].0.members, 2);
     }
 }

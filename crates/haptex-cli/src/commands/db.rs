@@ -581,24 +581,29 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
     if let Some(out) = &members_out {
         out.write(|w| {
             writeln!(w, "# haptex db validate --random {n} --seed {} (database {})", args.seed, dir.display())?;
-            writeln!(w, "template,r_w_mm,r_h_mm,velocity_mm_s,rms,fe_range,relative")?;
+            writeln!(w, "template,r_w_mm,r_h_mm,velocity_mm_s,rms,fe_range,relative,crests_resolved")?;
             for m in &members {
                 writeln!(
                     w,
-                    "{},{},{},{},{:.6},{:.6},{:.6}",
+                    "{},{},{},{},{:.6},{:.6},{:.6},{}",
                     m.run.template.name(),
                     Num(m.run.width_mm),
                     Num(m.run.height_mm),
                     Num(m.run.velocity_mm_s),
                     m.rms,
                     m.range,
-                    m.relative
+                    m.relative,
+                    m.crests_resolved(&metadata.fe.mesh).map_or(String::new(), |r| r.to_string())
                 )?;
             }
             Ok(())
         })?;
     }
     let summary = held_out::summarize(&members);
+    // A sine's members whose crests the database's mesh resolves, apart:
+    // against the others the FE reference itself is not mesh-converged.
+    let resolved = held_out::summarize_resolved(&members, &metadata.fe.mesh);
+    let resolved_of = |t: Template| resolved.iter().find(|(s, _)| s.errors.template == t);
     if args.record {
         held_out::record(&dir, &metadata, estimator, args.seed, n, &summary)
             .with_context(|| format!("recording the validation in {}", dir.join("metadata.json").display()))?;
@@ -622,6 +627,15 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
                     "relative_max": e.relative_max,
                     "worst": { "r_w_mm": s.worst.width_mm, "r_h_mm": s.worst.height_mm,
                                "velocity_mm_s": s.worst.velocity_mm_s },
+                    "crests_resolved": resolved_of(e.template).map(|(r, _)| serde_json::json!({
+                        "members": r.members,
+                        "rms_median": r.errors.rms_median,
+                        "rms_max": r.errors.rms_max,
+                        "relative_median": r.errors.relative_median,
+                        "relative_max": r.errors.relative_max,
+                        "worst": { "r_w_mm": r.worst.width_mm, "r_h_mm": r.worst.height_mm,
+                                   "velocity_mm_s": r.worst.velocity_mm_s },
+                    })),
                 })
             })
             .collect();
@@ -633,12 +647,10 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
                 .to_string(),
             "|---|---|---|---|---|".to_string(),
         ];
-        for s in &summary {
+        let row = |name: String, members: String, s: &held_out::Summary| {
             let e = &s.errors;
-            lines.push(format!(
-                "| {} | {} | {:.4} ({:.4}) | {:.1}% ({:.1}%) | {} mm, {} mm, {} mm/s |",
-                e.template.name(),
-                s.members,
+            format!(
+                "| {name} | {members} | {:.4} ({:.4}) | {:.1}% ({:.1}%) | {} mm, {} mm, {} mm/s |",
                 e.rms_median,
                 e.rms_max,
                 100.0 * e.relative_median,
@@ -646,7 +658,24 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
                 Num(s.worst.width_mm),
                 Num(s.worst.height_mm),
                 Num(s.worst.velocity_mm_s)
-            ));
+            )
+        };
+        for s in &summary {
+            lines.push(row(s.errors.template.name().to_string(), s.members.to_string(), s));
+            if let Some((r, of)) = resolved_of(s.errors.template) {
+                let bound = haptex_core::crests::pad_spacing_mm(&metadata.fe.mesh)
+                    .map_or(0.0, |h| haptex_core::crests::RESOLVED_SPACINGS * h);
+                lines.push(row(
+                    format!(
+                        "{}, crests of radius >= {} mm (resolved by the {} mesh)",
+                        s.errors.template.name(),
+                        Num(bound),
+                        metadata.fe.mesh
+                    ),
+                    format!("{} of {of}", r.members),
+                    r,
+                ));
+            }
         }
         lines.join("\n")
     };
