@@ -314,6 +314,11 @@ pub struct RefineRound {
     /// the grid relative to each run's range, median and largest.
     pub held_out_relative_median: f64,
     pub held_out_relative_max: f64,
+    /// The round's errors (its score and held-out error) are over the rows
+    /// whose crests the database's mesh resolves only (`db refine
+    /// --resolved-only`, [`crate::crests`]).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub resolved_only: bool,
 }
 
 /// The estimate on random members of each template's family against FE

@@ -67,6 +67,12 @@ pub struct RefineOptions {
     pub budget: usize,
     pub jobs: usize,
     pub mode: Mode,
+    /// Measure the errors (scores and held-out) on the rows whose crests
+    /// the database's mesh resolves only ([`haptex_core::crests`]: a sine's
+    /// rows with crests of radius at least 5 pad spacings; every row of the
+    /// other templates): elsewhere the FE rows are not mesh-converged, and
+    /// their errors are the mesh's, which more rows cannot reduce.
+    pub resolved_only: bool,
 }
 
 /// What a refinement does with the first round whose runs are not all in
@@ -174,7 +180,7 @@ pub fn relative_error(estimate: &[f64], fe: &[f64]) -> (f64, f64, f64) {
 /// largest relative error over the rows at that value, predicted between
 /// their neighbours along the axis. Indexed like the axis's values; the
 /// ends get `None`.
-fn line_errors(rows: &Rows, axis: usize) -> Result<Vec<Option<f64>>, SweepError> {
+fn line_errors(rows: &Rows, axis: usize, counts: &dyn Fn(&[f64; 3]) -> bool) -> Result<Vec<Option<f64>>, SweepError> {
     let values = rows.axis_values(axis);
     let index = rows.index();
     let mut out = vec![None; values.len()];
@@ -182,7 +188,7 @@ fn line_errors(rows: &Rows, axis: usize) -> Result<Vec<Option<f64>>, SweepError>
         let (a, b) = (values[i - 1], values[i + 1]);
         let t = (values[i] - a) / (b - a);
         let mut worst: f64 = 0.0;
-        for (inputs, fe) in rows.rows.iter().filter(|r| r.0[axis] == values[i]) {
+        for (inputs, fe) in rows.rows.iter().filter(|r| r.0[axis] == values[i] && counts(&r.0)) {
             let at = |v: f64| {
                 let mut k = *inputs;
                 k[axis] = v;
@@ -254,6 +260,14 @@ pub fn refine(
     let mut history: Vec<RefineRound> = metadata.refined.clone().unwrap_or_default();
     let mut added = 0usize;
     let mut cpu_time_s = 0.0;
+    // The rows whose errors count.
+    let mesh = metadata.fe.mesh.clone();
+    let counts = |inputs: &[f64; 3]| match options.template {
+        Template::Sine if options.resolved_only => {
+            haptex_core::crests::unresolved_sine(&mesh, inputs[0], inputs[1]).is_none()
+        }
+        _ => true,
+    };
     let (stop, worst_score) = loop {
         // Score every interval of every axis that may be split.
         let mut best: Option<(f64, usize, f64, f64)> = None;
@@ -264,7 +278,7 @@ pub fn refine(
             if values.len() < 2 {
                 continue;
             }
-            let lines = line_errors(&rows, axis)?;
+            let lines = line_errors(&rows, axis, &counts)?;
             for j in 0..values.len() - 1 {
                 let score = match (lines[j], lines[j + 1]) {
                     (None, None) => f64::INFINITY,
@@ -343,8 +357,10 @@ pub fn refine(
             let (mu, wall_s) = read_run_profile(&dir.join("runs").join(run.file_name()), &metadata.grid)?;
             cpu_time_s += wall_s;
             let inputs = [run.width_mm, run.height_mm, run.velocity_mm_s];
-            grid.predict_into(&matrix, &inputs, &mut estimate);
-            relative.push(relative_error(&estimate, &mu).2);
+            if counts(&inputs) {
+                grid.predict_into(&matrix, &inputs, &mut estimate);
+                relative.push(relative_error(&estimate, &mu).2);
+            }
             new_rows.push((inputs, mu));
         }
         relative.sort_by(f64::total_cmp);
@@ -357,6 +373,7 @@ pub fn refine(
             runs: runs.len(),
             held_out_relative_median: median_sorted(&relative),
             held_out_relative_max: relative.last().copied().unwrap_or(0.0),
+            resolved_only: options.resolved_only,
         };
         round_done(&record);
         history.push(record.clone());
@@ -472,6 +489,30 @@ mod tests {
         assert_eq!(middle(2, 20.0, 20.1), None);
     }
 
+    /// A line's error is the worst of the rows that count: with
+    /// `--resolved-only`, a sine row whose crests the mesh does not resolve
+    /// is left out, however far off it is.
+    #[test]
+    fn line_errors_count_only_the_rows_asked_for() {
+        // Widths 1, 2, 3 at heights 0.1 and 0.5: profiles linear in the
+        // width, but the middle row at height 0.5 (crest radius 4 / (4 pi^2
+        // 0.5) = 0.20 mm, under the fine mesh's 0.25 mm) is off by 1.
+        let mut rows = Vec::new();
+        for w in [1.0, 2.0, 3.0] {
+            for h in [0.1, 0.5] {
+                let off = if w == 2.0 && h == 0.5 { 1.0 } else { 0.0 };
+                rows.push(([w, h, 20.0], vec![w + off, 2.0 * w + off, 0.0]));
+            }
+        }
+        let rows = Rows { rows };
+        let all = line_errors(&rows, 0, &|_| true).unwrap();
+        assert_eq!(all[0], None);
+        assert!(all[1].unwrap() > 0.1, "{all:?}");
+        let resolved = |i: &[f64; 3]| haptex_core::crests::unresolved_sine("fine", i[0], i[1]).is_none();
+        let counted = line_errors(&rows, 0, &resolved).unwrap();
+        assert_eq!(counted[1], Some(0.0), "the rows that count are linear in the width");
+    }
+
     #[test]
     fn an_interval_is_not_split_again_where_halving_did_not_halve_the_error() {
         let round = |value: f64, between: [f64; 2], median: f64| RefineRound {
@@ -483,6 +524,7 @@ mod tests {
             runs: 20,
             held_out_relative_median: median,
             held_out_relative_max: median,
+            resolved_only: false,
         };
         // The narrow gratings' rounds as measured: 32.5% at 0.25 mm, then 23.4%.
         let history = [round(0.625, [0.5, 0.75], 0.325), round(0.563, [0.5, 0.625], 0.234)];
@@ -516,13 +558,13 @@ mod tests {
                 .collect(),
         };
         let linear = make(&|w, h| 1.0 + w + h);
-        let e = line_errors(&linear, 0).unwrap();
+        let e = line_errors(&linear, 0, &|_| true).unwrap();
         assert_eq!(e[0], None);
         assert_eq!(e[3], None);
         assert!(e[1].unwrap() < 1e-12 && e[2].unwrap() < 1e-12, "{e:?}");
         // A kink at r_w = 1.5: the line there is mispredicted, 1.0 is not.
         let kinked = make(&|w, h| 1.0 + h + (w - 1.5).abs());
-        let e = line_errors(&kinked, 0).unwrap();
+        let e = line_errors(&kinked, 0, &|_| true).unwrap();
         assert!(e[1].unwrap() < 1e-12 && e[2].unwrap() > 0.05, "{e:?}");
     }
 }
