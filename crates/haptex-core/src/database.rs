@@ -347,6 +347,25 @@ pub struct ValidationEntry {
     pub rms_max: f64,
     pub relative_median: f64,
     pub relative_max: f64,
+    /// The members whose crests the database's mesh resolves
+    /// ([`crate::crests`]), apart, where some of the template's are and some
+    /// are not (a sine's): against the others the FE reference itself is
+    /// not mesh-converged. Absent in validations recorded before haptex
+    /// told them apart (2026-12-07).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub resolved: Option<ResolvedEntry>,
+}
+
+/// [`ValidationEntry`]'s figures over the members whose crests the mesh
+/// resolves.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ResolvedEntry {
+    /// How many of the template's members.
+    pub members: usize,
+    pub rms_median: f64,
+    pub rms_max: f64,
+    pub relative_median: f64,
+    pub relative_max: f64,
 }
 
 /// What to expect of one estimate ([`TemplateModel::estimate_notes`]).
@@ -372,28 +391,49 @@ impl Validation {
         self.templates.iter().find(|e| e.template == template)
     }
 
-    /// The expected error of an estimate of `template`, in one sentence, if
-    /// the validation covers it.
-    pub fn expected_error(&self, template: Template) -> Option<String> {
-        self.entry(template).map(|e| {
+    /// The figures that apply to an estimate of `template` whose crests
+    /// the database's mesh resolves (`crests_resolved`: `Some(true)`), or
+    /// not, or to which the rule does not apply (`None`): the resolved
+    /// members' where they were told apart and the estimate's crests are
+    /// resolved, else all members'. The number of members, whether they
+    /// are the resolved ones, the median and the largest relative error.
+    pub fn figures(&self, template: Template, crests_resolved: Option<bool>) -> Option<(usize, bool, f64, f64)> {
+        let e = self.entry(template)?;
+        Some(match (crests_resolved, e.resolved) {
+            (Some(true), Some(r)) => (r.members, true, r.relative_median, r.relative_max),
+            _ => (self.members, false, e.relative_median, e.relative_max),
+        })
+    }
+
+    /// The expected error of an estimate of `template` (its crests resolved
+    /// or not, [`Self::figures`]), in one sentence, if the validation
+    /// covers it.
+    pub fn expected_error(&self, template: Template, crests_resolved: Option<bool>) -> Option<String> {
+        self.figures(template, crests_resolved).map(|(members, resolved, median, max)| {
+            let which = if resolved {
+                format!("{members} of {} random members whose crests the mesh resolves", self.members)
+            } else {
+                format!("{members} random members")
+            };
             format!(
-                "on {} random members against fresh FE runs (db validate --estimator {}, seed {}) the estimate was \
-                 off by {:.1}% of the profile's range (median), {:.1}% at most",
-                self.members,
+                "on {which} against fresh FE runs (db validate --estimator {}, seed {}) the estimate was off by \
+                 {:.1}% of the profile's range (median), {:.1}% at most",
                 self.estimator.name(),
                 self.seed,
-                100.0 * e.relative_median,
-                100.0 * e.relative_max
+                100.0 * median,
+                100.0 * max
             )
         })
     }
 
-    /// Whether the FE run is advised over the estimate for `template`: its
-    /// worst random member was off by more than
-    /// [`ESTIMATE_ADVISED_MAX_RELATIVE`] of the profile's range.
-    pub fn fe_advised(&self, template: Template) -> bool {
+    /// Whether the FE run is advised over the estimate for `template` (its
+    /// crests resolved or not, [`Self::figures`]): its worst random member
+    /// was off by more than [`ESTIMATE_ADVISED_MAX_RELATIVE`] of the
+    /// profile's range.
+    pub fn fe_advised(&self, template: Template, crests_resolved: Option<bool>) -> bool {
         // A value that is not a number (a hand-edited file) advises the FE run.
-        self.entry(template).is_some_and(|e| e.relative_max.is_nan() || e.relative_max > ESTIMATE_ADVISED_MAX_RELATIVE)
+        self.figures(template, crests_resolved)
+            .is_some_and(|(.., max)| max.is_nan() || max > ESTIMATE_ADVISED_MAX_RELATIVE)
     }
 }
 
@@ -780,11 +820,9 @@ impl TemplateModel {
     /// measured.
     pub fn estimate_notes(&self, metadata: &Metadata, query: &[f64; 3], prediction: &Prediction) -> EstimateNotes {
         let t = self.template;
-        let unresolved = match t {
-            Template::Sine => crate::crests::unresolved_sine(&metadata.fe.mesh, query[0], query[1]),
-            Template::Bump | Template::Edge => None,
-        };
+        let unresolved = self.unresolved_crests(metadata, query);
         let caveat = unresolved.map(|u| u.describe());
+        let crests_resolved = self.crests_resolved(metadata, query);
         let Some(validation) = metadata.validation.as_ref().filter(|_| prediction.fe_row.is_none()) else {
             return EstimateNotes { caveat, ..EstimateNotes::default() };
         };
@@ -803,8 +841,8 @@ impl TemplateModel {
             };
         }
         EstimateNotes {
-            expected: validation.expected_error(t),
-            advice: validation.fe_advised(t).then(|| match unresolved {
+            expected: validation.expected_error(t, crests_resolved),
+            advice: validation.fe_advised(t, crests_resolved).then(|| match unresolved {
                 // The database's settings would not resolve it either.
                 Some(u) if u.resolving_mesh().is_some() => format!(
                     "for {} surfaces the estimate is not good enough, and the database's FE rows do not resolve \
@@ -829,6 +867,22 @@ impl TemplateModel {
             }),
             caveat,
         }
+    }
+
+    /// What the database's mesh does not resolve of a query (r_w, r_h,
+    /// velocity): a sine's crests sharper than 5 pad spacings
+    /// ([`crate::crests`]); nothing for the other templates.
+    pub fn unresolved_crests(&self, metadata: &Metadata, query: &[f64; 3]) -> Option<crate::crests::Unresolved> {
+        match self.template {
+            Template::Sine => crate::crests::unresolved_sine(&metadata.fe.mesh, query[0], query[1]),
+            Template::Bump | Template::Edge => None,
+        }
+    }
+
+    /// Whether the database's mesh resolves a query's crests: for a sine,
+    /// true or false; `None` for the templates the rule does not apply to.
+    pub fn crests_resolved(&self, metadata: &Metadata, query: &[f64; 3]) -> Option<bool> {
+        (self.template == Template::Sine).then(|| self.unresolved_crests(metadata, query).is_none())
     }
 
     /// The warning for a query (r_w, r_h, velocity) and its prediction, if
@@ -928,6 +982,53 @@ pub fn write_prediction_csv(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An estimate of a sine whose crests the mesh resolves is told the
+    /// resolved members' figures (and advised by them), where the
+    /// validation told them apart; any other estimate all members'.
+    #[test]
+    fn a_resolved_sine_is_told_the_resolved_members_figures() {
+        let entry = |template, relative_max, resolved| ValidationEntry {
+            template,
+            rms_median: 0.004,
+            rms_max: 0.06,
+            relative_median: 0.089,
+            relative_max,
+            resolved,
+        };
+        let resolved = ResolvedEntry {
+            members: 15,
+            rms_median: 0.002,
+            rms_max: 0.006,
+            relative_median: 0.054,
+            relative_max: 0.093,
+        };
+        let v = Validation {
+            created: String::new(),
+            seed: 1,
+            members: 30,
+            estimator: Estimator::Grid,
+            templates: vec![entry(Template::Sine, 0.585, Some(resolved)), entry(Template::Bump, 0.027, None)],
+        };
+        assert_eq!(v.figures(Template::Sine, Some(true)), Some((15, true, 0.054, 0.093)));
+        assert_eq!(v.figures(Template::Sine, Some(false)), Some((30, false, 0.089, 0.585)));
+        assert_eq!(v.figures(Template::Bump, None), Some((30, false, 0.089, 0.027)));
+        assert_eq!(v.figures(Template::Edge, None), None);
+        assert!(!v.fe_advised(Template::Sine, Some(true)) && v.fe_advised(Template::Sine, Some(false)));
+        let said = v.expected_error(Template::Sine, Some(true)).unwrap();
+        assert!(
+            said.starts_with("on 15 of 30 random members whose crests the mesh resolves against fresh FE runs")
+                && said.ends_with("off by 5.4% of the profile's range (median), 9.3% at most"),
+            "{said}"
+        );
+        assert!(v.expected_error(Template::Sine, Some(false)).unwrap().starts_with("on 30 random members against"));
+        // A validation recorded before the members were told apart reads as before.
+        let old: ValidationEntry = serde_json::from_str(
+            r#"{"template": "sine", "rms_median": 0.004, "rms_max": 0.06, "relative_median": 0.11, "relative_max": 0.585}"#,
+        )
+        .unwrap();
+        assert_eq!(old.resolved, None);
+    }
 
     #[test]
     fn grid_positions_and_names() {

@@ -20,7 +20,7 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use haptex_core::database::{Estimator, Metadata, Template, TemplateModel, Validation, ValidationEntry};
+use haptex_core::database::{Estimator, Metadata, ResolvedEntry, Template, TemplateModel, Validation, ValidationEntry};
 use haptex_core::io::write_atomic;
 use haptex_core::recording::rng::SplitMix64;
 use rayon::prelude::*;
@@ -87,6 +87,21 @@ pub fn summarize_resolved(members: &[Member], mesh: &str) -> Vec<(Summary, usize
             (!resolved.is_empty() && resolved.len() < of.len()).then(|| (summarize(&resolved).remove(0), of.len()))
         })
         .collect()
+}
+
+/// Puts each template's resolved members' figures ([`summarize_resolved`])
+/// into its entry, where `--record` stores them.
+pub fn attach_resolved(summary: &mut [Summary], resolved: &[(Summary, usize)]) {
+    for s in summary {
+        s.errors.resolved =
+            resolved.iter().find(|(r, _)| r.errors.template == s.errors.template).map(|(r, _)| ResolvedEntry {
+                members: r.members,
+                rms_median: r.errors.rms_median,
+                rms_max: r.errors.rms_max,
+                relative_median: r.errors.relative_median,
+                relative_max: r.errors.relative_max,
+            });
+    }
 }
 
 /// The members of one template, summarized.
@@ -180,6 +195,7 @@ pub fn summarize(members: &[Member]) -> Vec<Summary> {
                     rms_max: rms.iter().copied().fold(f64::NEG_INFINITY, f64::max),
                     relative_median: median(&relative),
                     relative_max: relative.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                    resolved: None,
                 },
                 members: of.len(),
                 worst,

@@ -1191,6 +1191,8 @@ async fn predict_states_where_the_sines_fe_rows_are_not_mesh_converged() {
     assert!(caveat.starts_with("the grating's crests (radius 0.183 mm) are sharper than the fine mesh"), "{caveat}");
     assert!(caveat.ends_with("`haptex simulate --mesh extra-fine --step 0.00625` resolves them"), "{caveat}");
     assert_eq!(answer["fe_advised"], true);
+    let v = &answer["validation"];
+    assert_eq!((&v["crests_resolved"], &v["members"], &v["of_members"]), (&json!(false), &json!(30), &json!(30)));
     for body in [
         json!({ "surface": "sine", "width_mm": 2.3, "height_mm": 0.15 }),
         json!({ "surface": "bump", "width_mm": 0.6, "height_mm": 0.5 }),
@@ -1198,6 +1200,23 @@ async fn predict_states_where_the_sines_fe_rows_are_not_mesh_converged() {
         let answer = post_json("/api/predict", &body).await.ok().json();
         assert_eq!(answer["fe_caveat"], Value::Null, "{body}");
     }
+    // The blunt sine is told the figures of the members whose crests the
+    // mesh resolves (the shipped validation's `resolved`), and advised by
+    // their worst.
+    let metadata: Value =
+        serde_json::from_str(&std::fs::read_to_string(shipped_db().join("metadata.json")).unwrap()).unwrap();
+    let sine =
+        metadata["validation"]["templates"].as_array().unwrap().iter().find(|e| e["template"] == "sine").unwrap();
+    let resolved = &sine["resolved"];
+    let answer =
+        post_json("/api/predict", &json!({ "surface": "sine", "width_mm": 2.3, "height_mm": 0.15 })).await.ok().json();
+    let v = &answer["validation"];
+    assert_eq!(
+        (&v["crests_resolved"], &v["members"], &v["of_members"]),
+        (&json!(true), &resolved["members"], &json!(30))
+    );
+    assert_eq!((&v["relative_median"], &v["relative_max"]), (&resolved["relative_median"], &resolved["relative_max"]));
+    assert_eq!(answer["fe_advised"], json!(resolved["relative_max"].as_f64().unwrap() > 0.10));
 }
 
 /// Parameters outside the database but within the accepted range are

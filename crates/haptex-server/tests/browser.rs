@@ -1048,6 +1048,27 @@ async fn sharp_sine_caveat(client: &Client) -> Check<()> {
     {
         return fail(format!("beside the sharp sine's estimate the page says {shown:?}"));
     }
+    // A blunt sine (r_w 2.3, r_h 0.15 mm: radius 0.89 mm) has no caveat, and
+    // is told the resolved members' figures, without the FE advice (their
+    // worst was within 10% of the range).
+    set("for (const [id, v] of [['template-width_mm', '2.3'], ['template-height_mm', '0.15']]) { \
+         const s = document.getElementById(id); s.value = v; s.dispatchEvent(new Event('input')); } return true;")
+    .await?;
+    wait_for(client, "window.haptex.state.drawn.label.startsWith('sine r_w 2.3 mm, r_h 0.15 mm')", "the blunt sine")
+        .await?;
+    let said = script(
+        client,
+        "const q = (s) => document.querySelector('#template-info ' + s); \
+         return [q('.expected-error')?.textContent ?? '', !!q('.fe-caveat'), !!q('.fe-advice')];",
+    )
+    .await?;
+    let expected = said[0].as_str().unwrap_or_default();
+    if !expected.starts_with("On 15 of 30 random members whose crests the mesh resolves checked against fresh FE runs")
+        || said[1] != Value::Bool(false)
+        || said[2] != Value::Bool(false)
+    {
+        return fail(format!("beside the blunt sine's estimate the page says {said}"));
+    }
     let n = updates(client).await?;
     set("const s = document.getElementById('surface'); s.value = 'bump'; s.dispatchEvent(new Event('change')); \
          return true;")

@@ -607,10 +607,11 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
             Ok(())
         })?;
     }
-    let summary = held_out::summarize(&members);
+    let mut summary = held_out::summarize(&members);
     // A sine's members whose crests the database's mesh resolves, apart:
     // against the others the FE reference itself is not mesh-converged.
     let resolved = held_out::summarize_resolved(&members, &metadata.fe.mesh);
+    held_out::attach_resolved(&mut summary, &resolved);
     let resolved_of = |t: Template| resolved.iter().find(|(s, _)| s.errors.template == t);
     if args.record {
         held_out::record(&dir, &metadata, estimator, args.seed, n, &summary)

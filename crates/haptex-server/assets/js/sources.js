@@ -48,7 +48,10 @@ export const SOURCES = {
       if (v) {
         const expected = document.createElement('div');
         expected.className = 'expected-error';
-        expected.textContent = `On ${v.members} random members checked against fresh FE runs the estimate was off ` +
+        const members = v.crests_resolved
+          ? `${v.members} of ${v.of_members} random members whose crests the mesh resolves`
+          : `${v.members} random members`;
+        expected.textContent = `On ${members} checked against fresh FE runs the estimate was off ` +
           `by ${(100 * v.relative_median).toFixed(1)}% of the profile's range (median), ` +
           `${(100 * v.relative_max).toFixed(1)}% at most.`;
         info.append(expected);
