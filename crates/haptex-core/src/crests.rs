@@ -19,16 +19,20 @@ use crate::num::Num;
 /// profile is within about 6% of its range of a mesh twice as fine.
 pub const RESOLVED_SPACINGS: f64 = 5.0;
 
-/// The pad's node spacing (mm) of the 2D finger's named mesh, as the FE
-/// model's presets define it (a test in haptex-fem keeps the two equal).
+/// The 2D finger's meshes and their pads' node spacings (mm), as the FE
+/// model's presets define them (a test in haptex-fem keeps the two
+/// equal), finest last.
+const MESHES: [(&str, f64); 4] = [("coarse", 0.2), ("default", 0.1), ("fine", 0.05), ("extra-fine", 0.025)];
+
+/// The pad's node spacing (mm) of the 2D finger's named mesh.
 pub fn pad_spacing_mm(mesh: &str) -> Option<f64> {
-    match mesh {
-        "coarse" => Some(0.2),
-        "default" => Some(0.1),
-        "fine" => Some(0.05),
-        "extra-fine" => Some(0.025),
-        _ => None,
-    }
+    MESHES.iter().find(|(name, _)| *name == mesh).map(|&(_, h)| h)
+}
+
+/// The smallest crest radius (mm) the named mesh resolves:
+/// [`RESOLVED_SPACINGS`] of its pad spacings.
+pub fn resolved_radius_mm(mesh: &str) -> Option<f64> {
+    pad_spacing_mm(mesh).map(|h| RESOLVED_SPACINGS * h)
 }
 
 /// The crest radius (mm) of a sine grating of period `period_mm` and
@@ -47,15 +51,12 @@ pub struct Unresolved {
     pub resolved_mm: f64,
 }
 
-/// The meshes, finest last.
-const MESHES: [&str; 4] = ["coarse", "default", "fine", "extra-fine"];
-
 /// Whether the sine of period `period_mm` and amplitude `amplitude_mm` is
 /// resolved by `mesh`: `None` if it is (or the mesh is unknown, or the
 /// grating flat), else what is missing.
 pub fn unresolved_sine(mesh: &str, period_mm: f64, amplitude_mm: f64) -> Option<Unresolved> {
-    let mesh = MESHES.into_iter().find(|m| *m == mesh)?;
-    let resolved_mm = RESOLVED_SPACINGS * pad_spacing_mm(mesh)?;
+    let &(mesh, spacing) = MESHES.iter().find(|(name, _)| *name == mesh)?;
+    let resolved_mm = RESOLVED_SPACINGS * spacing;
     let radius_mm = sine_crest_radius_mm(period_mm, amplitude_mm);
     (amplitude_mm != 0.0 && radius_mm.is_finite() && radius_mm < resolved_mm).then_some(Unresolved {
         radius_mm,
@@ -66,22 +67,24 @@ pub fn unresolved_sine(mesh: &str, period_mm: f64, amplitude_mm: f64) -> Option<
 
 impl Unresolved {
     /// The coarsest mesh that resolves these crests, if any does.
-    pub fn resolving_mesh(&self) -> Option<&'static str> {
-        MESHES.into_iter().find(|m| pad_spacing_mm(m).is_some_and(|h| self.radius_mm >= RESOLVED_SPACINGS * h))
+    pub fn resolving_mesh(&self) -> Option<(&'static str, f64)> {
+        MESHES.into_iter().find(|&(_, h)| self.radius_mm >= RESOLVED_SPACINGS * h)
     }
 
     /// In a sentence, with what resolves the crests (a `haptex simulate`
     /// mesh and step, or that no mesh of haptex's does).
     pub fn describe(&self) -> String {
         let then = match self.resolving_mesh() {
-            Some(mesh) => format!(
-                "`haptex simulate --mesh {mesh} --step {}` resolves them",
-                Num(pad_spacing_mm(mesh).unwrap_or(0.0) / 4.0)
-            ),
-            None => format!(
-                "no mesh of haptex's resolves them (the finest, extra-fine, resolves crests of radius {} mm and more)",
-                Num(RESOLVED_SPACINGS * 0.025)
-            ),
+            Some((mesh, spacing)) => {
+                format!("`haptex simulate --mesh {mesh} --step {}` resolves them", Num(spacing / 4.0))
+            }
+            None => {
+                let (finest, spacing) = MESHES[MESHES.len() - 1];
+                format!(
+                    "no mesh of haptex's resolves them (the finest, {finest}, resolves crests of radius {} mm and more)",
+                    Num(RESOLVED_SPACINGS * spacing)
+                )
+            }
         };
         format!(
             "the grating's crests (radius {} mm) are sharper than the {} mesh resolves ({} pad node spacings, {} mm): \
@@ -118,15 +121,16 @@ mod tests {
         let u = unresolved_sine("fine", 0.6996, 0.4824).unwrap();
         assert_eq!((u.mesh, u.resolved_mm), ("fine", 0.25));
         assert_eq!(u.resolving_mesh(), None);
+        assert_eq!(resolved_radius_mm("fine"), Some(0.25));
         assert!(u.describe().contains("no mesh of haptex's resolves them"), "{}", u.describe());
         // R = 0.179 mm: unresolved on the fine mesh, resolved on the extra-fine one.
         let u = unresolved_sine("fine", 1.7153, 0.4168).unwrap();
-        assert_eq!(u.resolving_mesh(), Some("extra-fine"));
+        assert_eq!(u.resolving_mesh(), Some(("extra-fine", 0.025)));
         assert!(u.describe().contains("`haptex simulate --mesh extra-fine --step 0.00625`"), "{}", u.describe());
         assert_eq!(unresolved_sine("extra-fine", 1.7153, 0.4168), None);
         // R = 0.295 mm: resolved on the fine mesh, not on the default one.
         assert_eq!(unresolved_sine("fine", 1.5683, 0.2114), None);
-        assert_eq!(unresolved_sine("default", 1.5683, 0.2114).unwrap().resolving_mesh(), Some("fine"));
+        assert_eq!(unresolved_sine("default", 1.5683, 0.2114).unwrap().resolving_mesh(), Some(("fine", 0.05)));
         // A flat "grating" and an unknown mesh say nothing.
         assert_eq!(unresolved_sine("fine", 1.0, 0.0), None);
         assert_eq!(unresolved_sine("hexahedral", 0.5, 0.5), None);

@@ -45,6 +45,24 @@ impl Template {
         Self::ALL.into_iter().find(|t| t.name() == text)
     }
 
+    /// What the named mesh does not resolve of this template with width
+    /// r_w and height r_h (mm): a sine's crests sharper than
+    /// [`crate::crests::RESOLVED_SPACINGS`] pad spacings; nothing for the
+    /// other templates.
+    pub fn unresolved_crests(self, mesh: &str, width: f64, height: f64) -> Option<crate::crests::Unresolved> {
+        match self {
+            Template::Sine => crate::crests::unresolved_sine(mesh, width, height),
+            Template::Bump | Template::Edge => None,
+        }
+    }
+
+    /// Whether the named mesh resolves this template's crests at r_w and
+    /// r_h: for a sine, true or false; `None` for the templates the rule
+    /// does not apply to.
+    pub fn crests_resolved(self, mesh: &str, width: f64, height: f64) -> Option<bool> {
+        (self == Template::Sine).then(|| self.unresolved_crests(mesh, width, height).is_none())
+    }
+
     /// The model-matrix file of this template in a database directory.
     pub fn file_name(self) -> String {
         format!("{}.csv", self.name())
@@ -873,16 +891,13 @@ impl TemplateModel {
     /// velocity): a sine's crests sharper than 5 pad spacings
     /// ([`crate::crests`]); nothing for the other templates.
     pub fn unresolved_crests(&self, metadata: &Metadata, query: &[f64; 3]) -> Option<crate::crests::Unresolved> {
-        match self.template {
-            Template::Sine => crate::crests::unresolved_sine(&metadata.fe.mesh, query[0], query[1]),
-            Template::Bump | Template::Edge => None,
-        }
+        self.template.unresolved_crests(&metadata.fe.mesh, query[0], query[1])
     }
 
     /// Whether the database's mesh resolves a query's crests: for a sine,
     /// true or false; `None` for the templates the rule does not apply to.
     pub fn crests_resolved(&self, metadata: &Metadata, query: &[f64; 3]) -> Option<bool> {
-        (self.template == Template::Sine).then(|| self.unresolved_crests(metadata, query).is_none())
+        self.template.crests_resolved(&metadata.fe.mesh, query[0], query[1])
     }
 
     /// The warning for a query (r_w, r_h, velocity) and its prediction, if

@@ -64,12 +64,7 @@ impl Member {
     /// ([`haptex_core::crests`]): for a sine, true or false; `None` for
     /// the other templates, to which the rule does not apply.
     pub fn crests_resolved(&self, mesh: &str) -> Option<bool> {
-        match self.run.template {
-            Template::Sine => {
-                Some(haptex_core::crests::unresolved_sine(mesh, self.run.width_mm, self.run.height_mm).is_none())
-            }
-            Template::Bump | Template::Edge => None,
-        }
+        self.run.template.crests_resolved(mesh, self.run.width_mm, self.run.height_mm)
     }
 }
 

@@ -262,11 +262,8 @@ pub fn refine(
     let mut cpu_time_s = 0.0;
     // The rows whose errors count.
     let mesh = metadata.fe.mesh.clone();
-    let counts = |inputs: &[f64; 3]| match options.template {
-        Template::Sine if options.resolved_only => {
-            haptex_core::crests::unresolved_sine(&mesh, inputs[0], inputs[1]).is_none()
-        }
-        _ => true,
+    let counts = |inputs: &[f64; 3]| {
+        !options.resolved_only || options.template.crests_resolved(&mesh, inputs[0], inputs[1]) != Some(false)
     };
     let (stop, worst_score) = loop {
         // Score every interval of every axis that may be split.

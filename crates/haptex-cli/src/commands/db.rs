@@ -672,8 +672,7 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
         for s in &summary {
             lines.push(row(s.errors.template.name().to_string(), s.members.to_string(), s));
             if let Some((r, of)) = resolved_of(s.errors.template) {
-                let bound = haptex_core::crests::pad_spacing_mm(&metadata.fe.mesh)
-                    .map_or(0.0, |h| haptex_core::crests::RESOLVED_SPACINGS * h);
+                let bound = haptex_core::crests::resolved_radius_mm(&metadata.fe.mesh).unwrap_or(0.0);
                 lines.push(row(
                     format!(
                         "{}, crests of radius >= {} mm (resolved by the {} mesh)",
