@@ -1026,15 +1026,27 @@ async fn show_template(client: &Client) -> Check<()> {
 /// the server's sentence (`fe_caveat`). Then back to the bump, at the
 /// default height.
 async fn sharp_sine_caveat(client: &Client) -> Check<()> {
-    let set = |code: &'static str| async move { script(client, code).await.map(|_| ()) };
+    // The surface chosen, or sliders set, as a user's change and input events do.
+    let surface = |name: &'static str| {
+        let code = format!(
+            "const s = document.getElementById('surface'); s.value = '{name}'; \
+             s.dispatchEvent(new Event('change')); return true;"
+        );
+        async move { script(client, &code).await }
+    };
+    let sliders = |values: &'static [(&'static str, &'static str)]| {
+        let pairs: Vec<String> = values.iter().map(|(id, v)| format!("['template-{id}', '{v}']")).collect();
+        let code = format!(
+            "for (const [id, v] of [{}]) {{ const s = document.getElementById(id); s.value = v; \
+             s.dispatchEvent(new Event('input')); }} return true;",
+            pairs.join(", ")
+        );
+        async move { script(client, &code).await }
+    };
     let n = updates(client).await?;
-    set("const s = document.getElementById('surface'); s.value = 'sine'; s.dispatchEvent(new Event('change')); \
-         return true;")
-    .await?;
+    surface("sine").await?;
     wait_update(client, n, "the sine template").await?;
-    set("for (const [id, v] of [['template-width_mm', '1.7'], ['template-height_mm', '0.4']]) { \
-         const s = document.getElementById(id); s.value = v; s.dispatchEvent(new Event('input')); } return true;")
-    .await?;
+    sliders(&[("width_mm", "1.7"), ("height_mm", "0.4")]).await?;
     wait_for(client, "window.haptex.state.drawn.label.startsWith('sine r_w 1.7 mm, r_h 0.4 mm')", "the sharp sine")
         .await?;
     let shown = script(
@@ -1051,9 +1063,7 @@ async fn sharp_sine_caveat(client: &Client) -> Check<()> {
     // A blunt sine (r_w 2.3, r_h 0.15 mm: radius 0.89 mm) has no caveat, and
     // is told the resolved members' figures, without the FE advice (their
     // worst was within 10% of the range).
-    set("for (const [id, v] of [['template-width_mm', '2.3'], ['template-height_mm', '0.15']]) { \
-         const s = document.getElementById(id); s.value = v; s.dispatchEvent(new Event('input')); } return true;")
-    .await?;
+    sliders(&[("width_mm", "2.3"), ("height_mm", "0.15")]).await?;
     wait_for(client, "window.haptex.state.drawn.label.startsWith('sine r_w 2.3 mm, r_h 0.15 mm')", "the blunt sine")
         .await?;
     let said = script(
@@ -1070,14 +1080,10 @@ async fn sharp_sine_caveat(client: &Client) -> Check<()> {
         return fail(format!("beside the blunt sine's estimate the page says {said}"));
     }
     let n = updates(client).await?;
-    set("const s = document.getElementById('surface'); s.value = 'bump'; s.dispatchEvent(new Event('change')); \
-         return true;")
-    .await?;
+    surface("bump").await?;
     wait_update(client, n, "the bump template again").await?;
     let n = updates(client).await?;
-    set("const s = document.getElementById('template-height_mm'); s.value = '0.27'; \
-         s.dispatchEvent(new Event('input')); return true;")
-    .await?;
+    sliders(&[("height_mm", "0.27")]).await?;
     wait_update(client, n, "the default height").await?;
     let gone = script(client, "return document.querySelector('#template-info .fe-caveat') === null;").await?;
     if gone != Value::Bool(true) {
