@@ -24,6 +24,15 @@ use crate::error::ApiError;
 /// long (measured), inside its 12 mm contact region; at 0.2 N/mm the skin
 /// reaches the region's end.
 pub const LOAD_N_PER_MM: Range = Range { name: "load_n_per_mm", min: 0.001, max: 0.05, unit: "N/mm" };
+/// Normal load of the 3D fingertip (`model` 3d), N: from a light touch to
+/// twice the top of the paper's "typical screen exploration (< 0.5 N)",
+/// the range of the contact-area measurements docs/fem.md compares with.
+/// The 3D finger's contact stays inside its contact region over it
+/// (measured: 0.015 to 5 N on the coarse mesh).
+pub const LOAD_3D_N: Range = Range { name: "load_n", min: 0.015, max: 2.0, unit: "N" };
+/// The 3D fingertip's direction of motion on the display, degrees from
+/// its x axis (`haptex check --direction-deg`'s range).
+pub const DIRECTION_DEG: Range = Range { name: "direction_deg", min: -360.0, max: 360.0, unit: "degrees" };
 /// Sliding velocity of the finger on the display.
 pub const CHECK_VELOCITY_MM_S: Range = Range { name: "velocity_mm_s", min: 1.0, max: 500.0, unit: "mm/s" };
 /// Slide per FE step (the voltage is sampled once per step).

@@ -99,6 +99,10 @@ pub struct Limits {
     /// together (about 1.5 ms of one core each with the default mesh): the
     /// bound on the time it holds an FE slot.
     pub max_check_steps: usize,
+    /// The same for the 3D fingertip (`model` 3d), whose steps cost more:
+    /// about 0.27 s of one core each on its default mesh and 15 ms on the
+    /// coarse one (a 10 mm profile, BENCHMARKS.md).
+    pub max_check_steps_3d: usize,
     /// Largest upload of recordings (`POST /api/recordings`) in bytes,
     /// the whole multipart body, and also the most bytes its files may
     /// hold once unzipped (64 MiB).
@@ -171,6 +175,7 @@ impl Limits {
         simulation_wait: Duration::from_secs(30),
         max_check_points: 4000,
         max_check_steps: 4000,
+        max_check_steps_3d: 600,
         max_upload_bytes: 64 << 20,
         max_upload_files: 1000,
         max_map_pixels: 512 * 512,

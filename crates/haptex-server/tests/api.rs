@@ -1544,6 +1544,48 @@ async fn check_reproduces_the_libraries_fe_check_of_the_same_target() {
     assert_eq!(table.column("mu").unwrap(), target.mu());
 }
 
+/// The 3D fingertip (issue 39, `model` 3d): the check of the database
+/// bump on the coarse 3D finger sliding at 30 degrees under 0.4 N is the
+/// library's check of the same target on that finger, bit for bit, and
+/// the answer states the finger: its settings, the drive file's comment,
+/// and a k that is a real contact area over the normal force (the 2D
+/// finger's k is a length per mm of width, 232 mm^2/N; the 3D finger's
+/// measured 70-82 mm^2/N at 0.5 N, docs/fem.md).
+#[tokio::test]
+async fn check_on_the_3d_fingertip_is_the_libraries_3d_check() {
+    let bump = fe_bump();
+    let body = json!({
+        "profile": profile_json(bump.x_mm(), bump.mu()), "relative": true, "flat_mu": 0.5,
+        "model": "3d", "mesh": "coarse", "direction_deg": 30, "load_n": 0.4,
+    });
+    let result = stream_result(&post_json("/api/check", &body).await, 1);
+    let target_mu: Vec<f64> = bump.mu().iter().map(|m| m / 0.5).collect();
+    let target = FrictionProfile::new(bump.x_mm().to_vec(), target_mu).unwrap();
+    let mut settings = render_settings(Device::PAPER);
+    settings.finger = haptex_fem::render::FeFinger::Solid { direction_deg: 30.0 };
+    settings.scenario.loading = haptex_fem::scenario::Loading::Load(0.4);
+    settings.scenario.resolution = haptex_fem::finger::Resolution::Coarse;
+    let check = haptex_fem::render::check(&target, &settings, &mut |_| {}).unwrap();
+    assert_trial_equals(&result["eq8"], &check, "eq. (8) on the 3D finger");
+    let s = &result["settings"];
+    assert_eq!(
+        (s["model"].as_str(), s["mesh"].as_str(), s["direction_deg"].as_f64(), s["load_n"].as_f64()),
+        (Some("3d"), Some("coarse"), Some(30.0), Some(0.4)),
+        "{s}"
+    );
+    assert!(s.get("load_n_per_mm").is_none(), "{s}");
+    let k = result["eq8"]["metrics"]["k_fe_mm2_per_n"].as_f64().unwrap();
+    assert!((30.0..150.0).contains(&k), "3D k {k} mm^2/N");
+    let csv = result["voltage_csv"].as_str().unwrap();
+    assert!(
+        csv.starts_with(
+            "# haptex check on the finger model: visco-elastic 3D FE finger sliding at 30 degrees, coarse mesh, \
+             load 0.4 N, 20 mm/s, step 0.05 mm;"
+        ),
+        "{csv:.300}"
+    );
+}
+
 /// A target below mu_HD everywhere: eq. (8) gives 0 V, the finger on the
 /// display feels mu_HD (Coulomb, no attraction: docs/display.md's U = 0
 /// case, 1e-8), the whole length is reported not renderable and there is
@@ -1750,6 +1792,23 @@ async fn check_bad_input_is_refused_naming_the_field_before_any_fe_run() {
             (set_field(long(100.0), "step_mm", json!(0.01)), 413, "step_mm"),
             // 3000 mm: over the budget even at the coarsest step.
             (long(3000.0), 413, "profile.x_mm"),
+            // The 3D fingertip's fields (issue 39): each in its range, each
+            // refused for the other finger, naming it.
+            (with("model", json!("4d")), 400, "model"),
+            (with("model", json!(3)), 400, "model"),
+            (with("load_n", json!(0.5)), 400, "load_n"),
+            (with("direction_deg", json!(30)), 400, "direction_deg"),
+            (with("mesh", json!("coarse")), 400, "mesh"),
+            (set_field(with("model", json!("3d")), "load_n_per_mm", json!(0.01)), 400, "load_n_per_mm"),
+            (set_field(with("model", json!("3d")), "load_n", json!(0.01)), 400, "load_n"),
+            (set_field(with("model", json!("3d")), "load_n", json!(2.5)), 400, "load_n"),
+            (set_field(with("model", json!("3d")), "direction_deg", json!(361)), 400, "direction_deg"),
+            (set_field(with("model", json!("3d")), "direction_deg", json!("north")), 400, "direction_deg"),
+            (set_field(with("model", json!("3d")), "mesh", json!("fine")), 400, "mesh"),
+            // 3D steps cost more: 21 mm in 0.02 mm steps (1050 steps) is
+            // within the 2D budget of one run and over the 3D one.
+            (set_field(set_field(long(20.0), "step_mm", json!(0.02)), "model", json!("3d")), 413, "step_mm"),
+            (set_field(long(400.0), "model", json!("3d")), 413, "profile.x_mm"),
         ] {
             cases.push((route, body, status, field));
         }

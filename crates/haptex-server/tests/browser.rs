@@ -972,6 +972,7 @@ async fn exercise(client: &Client, base: &str, scratch: &Path) -> Check<()> {
     // default template.
     finger_on_the_display(client).await?;
     save_screenshot("web-check.png", &screenshot_of(client, "check-results").await?);
+    fingertip_3d_on_the_display(client).await?;
     show_library(client, "latex").await?;
     save_screenshot("web-library.png", &screenshot(client).await?);
     if script(client, "return document.getElementById('recordings-box').hidden;").await? != Value::Bool(true) {
@@ -1208,6 +1209,72 @@ async fn finger_on_the_display(client: &Client) -> Check<()> {
     unpin(client, &felt_pin).await?;
     // The results fit a phone's width too.
     fits_a_phone(client, "with the check's results").await
+}
+
+/// The check on the 3D fingertip (issue 39): choosing it shows its load
+/// in N and its direction in place of the 2D finger's load per mm and
+/// hides the 2D check's results (no longer those of the settings shown);
+/// a load beyond its range is refused as typed, beside the buttons, in the
+/// field's words, with no FE run; a valid one runs the 3D finger (the
+/// server's `model` 3d on the coarse mesh), whose felt friction is drawn
+/// and whose summary names the finger and its real contact area. The 2D
+/// finger is chosen again after.
+async fn fingertip_3d_on_the_display(client: &Client) -> Check<()> {
+    let state = "window.haptex.state";
+    wd!(wd!(client.find(Locator::Css("#check-model option[value='3d-coarse']"))).click());
+    let shown = "return ['check-load', 'check-load-3d', 'check-direction'].map((id) => \
+                 document.getElementById(id).getClientRects().length > 0).concat(\
+                 document.getElementById('check-results').hidden);";
+    if script(client, shown).await? != json!([false, true, true, true]) {
+        return fail(format!("the 3D fingertip's fields (2D load, 3D load, direction, results hidden): {}", {
+            script(client, shown).await?
+        }));
+    }
+    type_into(client, "check-load-3d", "5").await?;
+    wd!(wd!(client.find(Locator::Id("run-check"))).click());
+    wait_for(client, "document.getElementById('check-info').textContent.startsWith('Not run')", "the refused load")
+        .await?;
+    let said = wd!(wd!(client.find(Locator::Id("check-info"))).text());
+    let marked =
+        script(client, "return document.getElementById('check-load-3d').getAttribute('aria-invalid');").await?;
+    if !said.contains("Load")
+        || marked != json!("true")
+        || script(client, &format!("return {state}.check.result.settings.model;")).await? != json!("2d")
+    {
+        return fail(format!("a 5 N load: the status says {said:?}, the field is marked {marked}"));
+    }
+    type_into(client, "check-load-3d", "0.4").await?;
+    type_into(client, "check-direction", "30").await?;
+    wd!(wd!(client.find(Locator::Id("run-check"))).click());
+    wait_for(
+        client,
+        &format!("{state}.check && {state}.check.result.settings.model === '3d'"),
+        "the 3D check's result",
+    )
+    .await?;
+    wait_for(client, "!document.getElementById('check-results').hidden", "the 3D check's plots").await?;
+    let result = script(client, &format!("return {state}.check.result;")).await?;
+    let s = &result["settings"];
+    if (s["mesh"].as_str(), s["load_n"].as_f64(), s["direction_deg"].as_f64())
+        != (Some("coarse"), Some(0.4), Some(30.0))
+    {
+        return fail(format!("the 3D check ran with {s}"));
+    }
+    if plotted(client, "check").await?[2] != numbers(&result["eq8"]["felt_mu"])? {
+        return fail("the check plot does not draw what the 3D fingertip felt");
+    }
+    let summary = wd!(wd!(client.find(Locator::Id("check-summary"))).text());
+    if !summary.contains("3D fingertip (coarse mesh) sliding at 30°, load 0.4 N")
+        || !summary.contains("real contact area per normal force")
+    {
+        return fail(format!("the 3D check's summary says {summary:?}"));
+    }
+    save_screenshot("web-check-3d.png", &screenshot_of(client, "check-box").await?);
+    wd!(wd!(client.find(Locator::Css("#check-model option[value='2d']"))).click());
+    if script(client, shown).await? != json!([true, false, false, true]) {
+        return fail("the 2D finger chosen again: its load is not shown, or the 3D results stay");
+    }
+    Ok(())
 }
 
 /// At a phone's size (390 x 844) the page does not scroll sideways; the

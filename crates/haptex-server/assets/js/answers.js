@@ -36,8 +36,10 @@ export function checkRefusal(error) {
   if (error.status === 503) return `The server is busy: ${error.message}`;
   const f = error.field || '';
   const part = f.startsWith('profile.') ? 'Friction profile'
-    : f === 'load_n_per_mm' ? 'Load'
-      : f === 'max_runs' ? 'Max runs'
-        : f.startsWith('device.') ? 'Device' : null;
+    : f === 'load_n_per_mm' || f === 'load_n' ? 'Load'
+      : f === 'direction_deg' ? 'Direction'
+        : f === 'model' || f === 'mesh' ? 'Finger'
+          : f === 'max_runs' ? 'Max runs'
+            : f.startsWith('device.') ? 'Device' : null;
   return part ? `${part}: ${error.message}` : error.message;
 }

@@ -26,10 +26,28 @@ export function checkBody() {
   // The combined display's design is checked with its plate and strategy.
   const body = voltageBody('physical', state.display === 'combined');
   delete body.method;
-  const load = numberIn('check-load');
-  if (load !== null) body.load_n_per_mm = load;
+  const [model, mesh] = $('check-model').value.split('-');
+  if (model === '3d') {
+    // The 3D fingertip: its load in N, its direction and its mesh.
+    body.model = '3d';
+    body.mesh = mesh;
+    const load = numberIn('check-load-3d');
+    if (load !== null) body.load_n = load;
+    const direction = numberIn('check-direction');
+    if (direction !== null) body.direction_deg = direction;
+  } else {
+    const load = numberIn('check-load');
+    if (load !== null) body.load_n_per_mm = load;
+  }
   if (state.source === 'template' && state.template.velocity_mm_s) body.velocity_mm_s = state.template.velocity_mm_s;
   return body;
+}
+
+/** Shows the chosen finger's fields (load in N/mm or N, the 3D fingertip's direction), hides the other's. */
+export function showFingerFields() {
+  const threeD = $('check-model').value.startsWith('3d');
+  document.querySelectorAll('#check-box .finger-2d').forEach((e) => { e.hidden = threeD; });
+  document.querySelectorAll('#check-box .finger-3d').forEach((e) => { e.hidden = !threeD; });
 }
 
 /** The last check, when it is for the profile, device, display and load shown. */
@@ -210,7 +228,11 @@ function showCheckMetrics(r) {
   const m = first.metrics;
   const title = document.createElement('div');
   const regions = document.createElement('div');
-  const finger = `load ${fmt(r.settings.load_n_per_mm)} N/mm, ${fmt(r.settings.velocity_mm_s)} mm/s`;
+  const s = r.settings;
+  const finger = s.model === '3d'
+    ? `3D fingertip (${s.mesh} mesh) sliding at ${fmt(s.direction_deg)}°, load ${fmt(s.load_n)} N, ` +
+      `${fmt(s.velocity_mm_s)} mm/s`
+    : `2D finger, load ${fmt(s.load_n_per_mm)} N/mm, ${fmt(s.velocity_mm_s)} mm/s`;
   if (!r.eq8) {
     // The combined display: the plate vibrating with a(x) under U(x).
     const band = r.voltage.summary.band_mu;
@@ -225,8 +247,10 @@ function showCheckMetrics(r) {
   regions.textContent = `not renderable (target < mu_HD = ${fmt(r.settings.mu_hd)}): ${pct(m.not_renderable_fraction)} ` +
     `of the length · above mu at U_max: ${pct(m.clipped_fraction)} · ${finger}`;
   const k = document.createElement('div');
-  k.textContent = `eq. (8) used k = ${fmt(r.parameters.k_mm2_per_n)} mm²/N; the FE finger's contact length per ` +
-    `normal force is k_FE = ${fmt(m.k_fe_mm2_per_n)} mm²/N (per mm of width: the FE finger is two-dimensional) `;
+  k.textContent = `eq. (8) used k = ${fmt(r.parameters.k_mm2_per_n)} mm²/N; ` + (s.model === '3d'
+    ? `the 3D fingertip's real contact area per normal force is k_FE = ${fmt(m.k_fe_mm2_per_n)} mm²/N `
+    : `the FE finger's contact length per normal force is k_FE = ${fmt(m.k_fe_mm2_per_n)} mm²/N (per mm of width: ` +
+      'the 2D finger has no width) ');
   const useK = document.createElement('button');
   useK.type = 'button';
   useK.className = 'small';

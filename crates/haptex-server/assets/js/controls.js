@@ -4,7 +4,7 @@
 
 import { $ } from './dom.js';
 import { ApiError } from './api.js';
-import { runCheck, showCheck } from './check.js';
+import { runCheck, showCheck, showFingerFields } from './check.js';
 import { buildDisplayControls } from './displays.js';
 import { download } from './downloads.js';
 import { explain, readDevice } from './fields.js';
@@ -127,8 +127,13 @@ export function buildControls(config) {
   $('controls').addEventListener('submit', (e) => e.preventDefault());
 
   $('check-load').value = String(config.check.load_n_per_mm);
+  $('check-load-3d').value = String(config.check.load_n);
+  $('check-direction').value = String(config.check.direction_deg);
   $('check-runs').value = String(config.check.max_runs);
-  $('check-load').addEventListener('input', () => { showCheck(); drawStrip(); });
+  ['check-load', 'check-load-3d', 'check-direction'].forEach((id) => {
+    $(id).addEventListener('input', () => { showCheck(); drawStrip(); });
+  });
+  $('check-model').addEventListener('change', () => { showFingerFields(); showCheck(); drawStrip(); });
   const checkStatus = { status: $('check-info') };
   $('run-check').addEventListener('click', () => runCheck('check').catch((e) => showError(e, checkStatus)));
   $('run-compensate').addEventListener('click', () => runCheck('compensate').catch((e) => showError(e, checkStatus)));

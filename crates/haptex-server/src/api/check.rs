@@ -16,6 +16,15 @@
 //!   sampled; default 0.05 mm, or the finest multiple of 0.005 mm that
 //!   keeps the request within [`crate::Limits::max_check_steps`], and at
 //!   most the profile's length (the answer says which);
+//! - `model` (`2d`, the default, or `3d`): the 2D plane-strain finger or
+//!   the 3D fingertip (`haptex check --model 3d`: eq. (3)'s attraction on
+//!   its real contact area, forces in N, `k_fe_mm2_per_n` a real area over
+//!   the normal force). The 3D finger takes `load_n` ([`LOAD_3D_N`], default
+//!   0.5 N) instead of `load_n_per_mm`, `direction_deg` ([`DIRECTION_DEG`],
+//!   default 0: across the finger, as the 2D finger slides) and `mesh`
+//!   (`coarse` or `default`, the default); its runs are bounded by
+//!   [`crate::Limits::max_check_steps_3d`]. Each finger's fields given to
+//!   the other are refused (400 naming the field);
 //! - `/api/compensate` only: `max_runs` (1 ..= [`MAX_RUNS`], default 8,
 //!   eq. (8)'s run included) and `tolerance` ([`TOLERANCE`], default 1e-4
 //!   in mu).
@@ -34,9 +43,9 @@
 //!
 //! The target is the profile as the voltage mapping sees it: relative to
 //! its flat-surface friction when `relative` is true (the answer's
-//! `target_mu`). The finger is the shipped model (default mesh,
-//! visco-elastic tissue, 1 mm run-up before the profile), mu_HD is its
-//! skin-display friction.
+//! `target_mu`). The finger is the shipped model (visco-elastic tissue,
+//! 1 mm run-up before the profile; the 2D finger on the default mesh),
+//! mu_HD is its skin-display friction.
 //!
 //! # Bounds
 //!
@@ -101,8 +110,9 @@ use haptex_core::num::Num;
 use haptex_core::profile::FrictionProfile;
 use haptex_fem::contact::Electrostatic;
 use haptex_fem::display::MAX_PRESSURE_MPA;
+use haptex_fem::finger::Resolution;
 use haptex_fem::render::{
-    self, Check, DEFAULT_LOAD_N_PER_MM, RenderError, RenderSettings, Stopping, TargetError, TargetPart,
+    self, Check, DEFAULT_LOAD_N_PER_MM, FeFinger, RenderError, RenderSettings, Stopping, TargetError, TargetPart,
 };
 use haptex_fem::scenario::Progress;
 use serde::Deserialize;
@@ -111,7 +121,7 @@ use serde_json::{Value, json};
 use crate::display::{DisplayDesign, DisplayName, DisplayRequest, StrategyName};
 use crate::error::ApiError;
 use crate::extract::{Preamble, Route};
-use crate::fields::{self, CHECK_VELOCITY_MM_S, LOAD_N_PER_MM, MAX_RUNS, STEP_MM, TOLERANCE};
+use crate::fields::{self, CHECK_VELOCITY_MM_S, DIRECTION_DEG, LOAD_3D_N, LOAD_N_PER_MM, MAX_RUNS, STEP_MM, TOLERANCE};
 use crate::input::{BodyKind, Pairs, ProfileJson, check_points, parse_json};
 use crate::lines::{self, Lines};
 use crate::params::DeviceRequest;
@@ -127,6 +137,35 @@ pub const DEFAULT_TOLERANCE: f64 = 1e-4;
 const STEP_GRID_MM: f64 = 0.005;
 /// Slide before the profile's first position, mm.
 const RUN_UP_MM: f64 = 1.0;
+
+/// Which FE finger: `model` in a request.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+enum ModelName {
+    /// The 2D plane-strain finger (forces per mm of width).
+    #[default]
+    #[serde(rename = "2d")]
+    TwoD,
+    /// The 3D fingertip (forces in N, a real contact area).
+    #[serde(rename = "3d")]
+    ThreeD,
+}
+
+/// The 3D fingertip's mesh: `mesh` in a request.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum MeshName {
+    Coarse,
+    Default,
+}
+
+impl MeshName {
+    fn resolution(self) -> Resolution {
+        match self {
+            Self::Coarse => Resolution::Coarse,
+            Self::Default => Resolution::Default,
+        }
+    }
+}
 
 /// Which route.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -152,6 +191,14 @@ struct CheckBody {
     flat_mu: Option<f64>,
     #[serde(default)]
     load_n_per_mm: Option<f64>,
+    #[serde(default)]
+    model: ModelName,
+    #[serde(default)]
+    load_n: Option<f64>,
+    #[serde(default)]
+    direction_deg: Option<f64>,
+    #[serde(default)]
+    mesh: Option<MeshName>,
     #[serde(default)]
     velocity_mm_s: Option<f64>,
     #[serde(default)]
@@ -266,6 +313,7 @@ impl Job {
                 Some("device.u_max_v"),
             ));
         }
+        let (finger, load, resolution) = finger_of(&body)?;
         let display = DisplayRequest {
             display: body.display,
             strategy: body.strategy,
@@ -295,7 +343,6 @@ impl Job {
             },
         };
         let relative = super::voltage::relative_request(body.relative, body.flat_mu)?;
-        let load = fields::check(LOAD_N_PER_MM, body.load_n_per_mm.unwrap_or(DEFAULT_LOAD_N_PER_MM), "load_n_per_mm")?;
         let velocity =
             fields::check(CHECK_VELOCITY_MM_S, body.velocity_mm_s.unwrap_or(DEFAULT_VELOCITY_MM_S), "velocity_mm_s")?;
         let step = body.step_mm.map(|s| fields::check(STEP_MM, s, "step_mm")).transpose()?;
@@ -328,8 +375,14 @@ impl Job {
         let mapped = super::voltage::compute(&profile, Method::Physical, &request, relative, "device.")?;
         let target = FrictionProfile::new(mapped.x_mm.clone(), mapped.mu.clone())
             .map_err(|e| ApiError::internal(format!("the mapped profile is invalid: {e}")))?;
-        let step_mm = slide_step(target.span_mm(), stopping.max_runs, step, limits.max_check_steps)?;
+        let budget = match finger {
+            FeFinger::Plane => limits.max_check_steps,
+            FeFinger::Solid { .. } => limits.max_check_steps_3d,
+        };
+        let step_mm = slide_step(target.span_mm(), stopping.max_runs, step, budget)?;
         let mut settings = RenderSettings::new(device.mu_hd, load);
+        settings.finger = finger;
+        settings.scenario.resolution = resolution;
         settings.device = *device;
         settings.scenario.velocity_mm_s = velocity;
         settings.scenario.step_mm = step_mm;
@@ -408,18 +461,14 @@ impl Job {
             .with_voltages(offered.voltage_v.clone())
             .map_err(|e| ApiError::internal(format!("the voltage offered is outside the device's limits: {e}")))?;
         trials.iter().try_for_each(finite)?;
-        let s = &self.settings;
-        let scenario = &s.scenario;
         let label = match self.mode {
             Mode::Check => "eq. (8)".to_string(),
             Mode::Compensate => format!("compensated (trial {} of {} FE runs)", best + 1, trials.len()),
         };
         let comment = format!(
-            "# haptex check on the finger model: visco-elastic FE finger, default mesh, load {} N/mm, {} mm/s, step {} \
-             mm; voltage {label}; felt-friction RMS error {:.3e} over the renderable region (eq. 8: {:.3e})",
-            Num(load_of(s)),
-            Num(scenario.velocity_mm_s),
-            Num(scenario.step_mm),
+            "# haptex check on the finger model: {}; voltage {label}; felt-friction RMS error {:.3e} over the \
+             renderable region (eq. 8: {:.3e})",
+            self.finger_comment(),
             offered.metrics.rms_error,
             trials[0].metrics.rms_error
         );
@@ -472,16 +521,45 @@ impl Job {
     /// The settings of the answer (the finger's, defaults filled in).
     fn settings_json(&self) -> Value {
         let s = &self.settings;
-        json!({
+        let mut settings = json!({
+            "model": "2d",
             "load_n_per_mm": load_of(s),
             "velocity_mm_s": s.scenario.velocity_mm_s,
             "step_mm": s.scenario.step_mm,
             "run_up_mm": s.run_up_mm,
             "loading": "load",
-            "mesh": "default",
+            "mesh": s.scenario.resolution.name(),
             "tissue": "viscoelastic",
             "mu_hd": s.device.mu_hd,
-        })
+        });
+        if let FeFinger::Solid { direction_deg } = s.finger {
+            let map = settings.as_object_mut().expect("an object");
+            map.remove("load_n_per_mm");
+            map.insert("model".into(), json!("3d"));
+            map.insert("load_n".into(), json!(load_of(s)));
+            map.insert("direction_deg".into(), json!(direction_deg));
+        }
+        settings
+    }
+
+    /// The finger of the drive file's first comment: "visco-elastic FE
+    /// finger, default mesh, load 0.0133 N/mm, 20 mm/s, step 0.05 mm".
+    fn finger_comment(&self) -> String {
+        let s = &self.settings;
+        let finger = match s.finger {
+            FeFinger::Plane => "visco-elastic FE finger".to_string(),
+            FeFinger::Solid { direction_deg } => {
+                format!("visco-elastic 3D FE finger sliding at {} degrees", Num(direction_deg))
+            }
+        };
+        format!(
+            "{finger}, {} mesh, load {} {}, {} mm/s, step {} mm",
+            s.scenario.resolution.name(),
+            Num(load_of(s)),
+            s.finger.load_unit(),
+            Num(s.scenario.velocity_mm_s),
+            Num(s.scenario.step_mm)
+        )
     }
 
     /// The result of a combined display's check: the design applied (as
@@ -498,7 +576,6 @@ impl Job {
         }
         finite(check)?;
         let m = &check.metrics;
-        let s = &self.settings;
         let answer = super::voltage::DisplayAnswer::new(&request, design, &designed);
         let strategy = match design.strategy {
             Some(haptex_core::combined::Strategy::Split) => "split",
@@ -507,11 +584,9 @@ impl Job {
             None => "none",
         };
         let comment = format!(
-            "# haptex check on the finger model: visco-elastic FE finger, default mesh, load {} N/mm, {} mm/s, step {} \
-             mm; combined display ({strategy}); felt-friction RMS error {:.3e} over the combined display's band",
-            Num(load_of(s)),
-            Num(s.scenario.velocity_mm_s),
-            Num(s.scenario.step_mm),
+            "# haptex check on the finger model: {}; combined display ({strategy}); felt-friction RMS error {:.3e} \
+             over the combined display's band",
+            self.finger_comment(),
             m.rms_error
         );
         let csv = commented_csv(&comment, |w| designed.write_csv(w))?;
@@ -571,6 +646,47 @@ fn commented_csv(
         write(w)
     })?;
     String::from_utf8(csv).map_err(|e| ApiError::internal(format!("the drive CSV is not UTF-8: {e}")))
+}
+
+/// The finger of the request (`model`, with `direction_deg` and `mesh`
+/// for the 3D fingertip), its normal load (`load_n_per_mm` in 2D, `load_n`
+/// in 3D, each in its range) and its mesh; 400 naming a field the other
+/// finger's.
+fn finger_of(body: &CheckBody) -> Result<(FeFinger, f64, Resolution), ApiError> {
+    let refuse = |field: &str, why: &str| Err(ApiError::bad_request(format!("{field} {why}"), Some(field)));
+    match body.model {
+        ModelName::TwoD => {
+            for (given, field) in [
+                (body.load_n.is_some(), "load_n"),
+                (body.direction_deg.is_some(), "direction_deg"),
+                (body.mesh.is_some(), "mesh"),
+            ] {
+                if given {
+                    return refuse(
+                        field,
+                        "is a setting of the 3D fingertip (model 3d); the 2D finger (model 2d, the default) runs on \
+                         the default mesh, slides along x and takes its load as load_n_per_mm",
+                    );
+                }
+            }
+            let load =
+                fields::check(LOAD_N_PER_MM, body.load_n_per_mm.unwrap_or(DEFAULT_LOAD_N_PER_MM), "load_n_per_mm")?;
+            Ok((FeFinger::Plane, load, Resolution::Default))
+        }
+        ModelName::ThreeD => {
+            if body.load_n_per_mm.is_some() {
+                return refuse(
+                    "load_n_per_mm",
+                    "is the 2D finger's load, per mm of width; the 3D fingertip (model 3d) presses with load_n, in N",
+                );
+            }
+            let finger = FeFinger::Solid {
+                direction_deg: fields::check(DIRECTION_DEG, body.direction_deg.unwrap_or(0.0), "direction_deg")?,
+            };
+            let load = fields::check(LOAD_3D_N, body.load_n.unwrap_or(finger.default_load()), "load_n")?;
+            Ok((finger, load, body.mesh.unwrap_or(MeshName::Default).resolution()))
+        }
+    }
 }
 
 /// The load of the settings (N/mm; they are built with load control).

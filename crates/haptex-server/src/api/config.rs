@@ -57,6 +57,8 @@ pub async fn get(State(state): State<AppState>, _: NoQuery) -> Result<Json<Value
         },
         "check": {
             "load_n_per_mm": haptex_fem::render::DEFAULT_LOAD_N_PER_MM,
+            "load_n": haptex_fem::render::DEFAULT_LOAD_3D_N,
+            "direction_deg": 0.0,
             "velocity_mm_s": crate::api::check::DEFAULT_VELOCITY_MM_S,
             "step_mm": crate::api::check::DEFAULT_STEP_MM,
             "max_runs": crate::fields::MAX_RUNS,

@@ -43,6 +43,10 @@ test('checkRefusal: a busy server, then the part of the page at fault', () => {
   assert.equal(at(400, 'profile.mu[3]', 'not finite'), 'Friction profile: not finite');
   assert.equal(at(400, 'load_n_per_mm', 'must be positive'), 'Load: must be positive');
   assert.equal(at(400, 'max_runs', 'at most 8'), 'Max runs: at most 8');
+  // The 3D fingertip's fields, in the words of the check box's labels.
+  assert.equal(at(400, 'load_n', 'at most 2 N'), 'Load: at most 2 N');
+  assert.equal(at(400, 'direction_deg', 'out of range'), 'Direction: out of range');
+  assert.equal(at(400, 'mesh', 'unknown'), 'Finger: unknown');
   assert.equal(at(400, 'device.mu_hd', 'out of range'), 'Device: out of range');
   assert.equal(at(400, 'velocity_mm_s', 'too fast'), 'too fast');
   assert.equal(at(400, null, 'no field'), 'no field');
