@@ -100,7 +100,7 @@ pub struct Limits {
     /// bound on the time it holds an FE slot.
     pub max_check_steps: usize,
     /// The same for the 3D fingertip (`model` 3d), whose steps cost more:
-    /// about 0.27 s of one core each on its default mesh and 15 ms on the
+    /// about 0.28 s of one core each on its default mesh and 17 ms on the
     /// coarse one (a 10 mm profile, BENCHMARKS.md).
     pub max_check_steps_3d: usize,
     /// Largest upload of recordings (`POST /api/recordings`) in bytes,
