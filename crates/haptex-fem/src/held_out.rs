@@ -68,46 +68,20 @@ impl Member {
     }
 }
 
-/// The members whose crests `mesh` resolves, summarized per template where
-/// that leaves some out (a sine's sharpest members), with how many there
-/// were of the template; nothing for a template where it leaves out none
-/// or keeps none.
-pub fn summarize_resolved(members: &[Member], mesh: &str) -> Vec<(Summary, usize)> {
-    summarize(members)
-        .into_iter()
-        .filter_map(|all| {
-            let template = all.errors.template;
-            let of: Vec<Member> = members.iter().filter(|m| m.run.template == template).cloned().collect();
-            let resolved: Vec<Member> = of.iter().filter(|m| m.crests_resolved(mesh) != Some(false)).cloned().collect();
-            (!resolved.is_empty() && resolved.len() < of.len()).then(|| (summarize(&resolved).remove(0), of.len()))
-        })
-        .collect()
-}
-
-/// Puts each template's resolved members' figures ([`summarize_resolved`])
-/// into its entry, where `--record` stores them.
-pub fn attach_resolved(summary: &mut [Summary], resolved: &[(Summary, usize)]) {
-    for s in summary {
-        s.errors.resolved =
-            resolved.iter().find(|(r, _)| r.errors.template == s.errors.template).map(|(r, _)| ResolvedEntry {
-                members: r.members,
-                rms_median: r.errors.rms_median,
-                rms_max: r.errors.rms_max,
-                relative_median: r.errors.relative_median,
-                relative_max: r.errors.relative_max,
-            });
-    }
-}
-
 /// The members of one template, summarized.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Summary {
     /// The template and its errors' medians and maxima, as `--record`
-    /// stores them.
+    /// stores them (with the resolved members' figures, `resolved` below).
     pub errors: ValidationEntry,
     pub members: usize,
     /// The member with the largest relative error.
     pub worst: Run,
+    /// The same over the members whose crests the mesh resolves
+    /// ([`haptex_core::crests`]), where that leaves some out and keeps some
+    /// (a sine's sharpest members): against the others the FE reference
+    /// itself is not mesh-converged. Its own `resolved` is `None`.
+    pub resolved: Option<Box<Summary>>,
 }
 
 /// The error of `estimate` against `fe` (same grid).
@@ -168,8 +142,11 @@ pub fn validate(
     })
 }
 
-/// Median and maximum per template, in the members' template order.
-pub fn summarize(members: &[Member]) -> Vec<Summary> {
+/// Median and maximum per template, in the members' template order, and
+/// the same over the members whose crests `mesh` (the database's) resolves
+/// where that differs ([`Summary::resolved`], also put into
+/// `errors.resolved`, where `--record` stores it).
+pub fn summarize(members: &[Member], mesh: &str) -> Vec<Summary> {
     let mut templates: Vec<Template> = Vec::new();
     for m in members {
         if !templates.contains(&m.run.template) {
@@ -180,23 +157,44 @@ pub fn summarize(members: &[Member]) -> Vec<Summary> {
         .into_iter()
         .map(|template| {
             let of: Vec<&Member> = members.iter().filter(|m| m.run.template == template).collect();
-            let rms: Vec<f64> = of.iter().map(|m| m.rms).collect();
-            let relative: Vec<f64> = of.iter().map(|m| m.relative).collect();
-            let worst = of.iter().max_by(|a, b| a.relative.total_cmp(&b.relative)).expect("one member at least").run;
-            Summary {
-                errors: ValidationEntry {
-                    template,
-                    rms_median: median(&rms),
-                    rms_max: rms.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-                    relative_median: median(&relative),
-                    relative_max: relative.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-                    resolved: None,
-                },
-                members: of.len(),
-                worst,
+            let mut summary = summary_of(template, &of);
+            let resolved: Vec<&Member> =
+                of.iter().copied().filter(|m| m.crests_resolved(mesh) != Some(false)).collect();
+            if !resolved.is_empty() && resolved.len() < of.len() {
+                let subset = summary_of(template, &resolved);
+                let e = &subset.errors;
+                summary.errors.resolved = Some(ResolvedEntry {
+                    members: subset.members,
+                    rms_median: e.rms_median,
+                    rms_max: e.rms_max,
+                    relative_median: e.relative_median,
+                    relative_max: e.relative_max,
+                });
+                summary.resolved = Some(Box::new(subset));
             }
+            summary
         })
         .collect()
+}
+
+/// Median and maximum of `of`, members of `template` (at least one).
+fn summary_of(template: Template, of: &[&Member]) -> Summary {
+    let rms: Vec<f64> = of.iter().map(|m| m.rms).collect();
+    let relative: Vec<f64> = of.iter().map(|m| m.relative).collect();
+    let worst = of.iter().max_by(|a, b| a.relative.total_cmp(&b.relative)).expect("one member at least").run;
+    Summary {
+        errors: ValidationEntry {
+            template,
+            rms_median: median(&rms),
+            rms_max: rms.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            relative_median: median(&relative),
+            relative_max: relative.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            resolved: None,
+        },
+        members: of.len(),
+        worst,
+        resolved: None,
+    }
 }
 
 /// Records `summary` (of `estimator`, `members` members per template from
@@ -287,16 +285,19 @@ mod tests {
         assert_eq!(members[3].crests_resolved("fine"), Some(true));
         assert_eq!(members[3].crests_resolved("default"), Some(false));
         assert_eq!(members[0].crests_resolved("fine"), None);
-        let resolved = summarize_resolved(&members, "fine");
-        assert_eq!(resolved.len(), 1, "{resolved:?}");
-        let (sine, of) = &resolved[0];
-        assert_eq!((sine.errors.template, sine.members, *of), (Template::Sine, 2, 3));
+        let summary = summarize(&members, "fine");
+        let [bump, all] = &summary[..] else { panic!("{summary:?}") };
+        assert!(bump.resolved.is_none() && bump.errors.resolved.is_none(), "{bump:?}");
+        let sine = all.resolved.as_deref().expect("the sine's resolved members apart");
+        assert_eq!((sine.errors.template, sine.members, all.members), (Template::Sine, 2, 3));
         assert_eq!((sine.errors.relative_median, sine.errors.relative_max), (0.07, 0.09));
-        assert_eq!(sine.worst.width_mm, 1.57);
+        assert_eq!((sine.worst.width_mm, all.worst.width_mm), (1.57, 0.7));
+        // What --record stores: the subset's figures in the sine's entry.
+        let stored = all.errors.resolved.expect("recorded");
+        assert_eq!((stored.members, stored.relative_median, stored.relative_max), (2, 0.07, 0.09));
         // The coarse mesh resolves none (nothing to summarize apart), the
         // default one the bluntest, the extra-fine one all but the first.
-        assert!(summarize_resolved(&members, "coarse").is_empty());
-        assert_eq!(summarize_resolved(&members, "default")[0].0.members, 1);
-        assert_eq!(summarize_resolved(&members, "extra-fine")[0].0.members, 2);
+        let resolved = |mesh| summarize(&members, mesh)[1].resolved.as_ref().map(|r| r.members);
+        assert_eq!((resolved("coarse"), resolved("default"), resolved("extra-fine")), (None, Some(1), Some(2)));
     }
 }

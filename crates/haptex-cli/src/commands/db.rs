@@ -607,12 +607,10 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
             Ok(())
         })?;
     }
-    let mut summary = held_out::summarize(&members);
-    // A sine's members whose crests the database's mesh resolves, apart:
-    // against the others the FE reference itself is not mesh-converged.
-    let resolved = held_out::summarize_resolved(&members, &metadata.fe.mesh);
-    held_out::attach_resolved(&mut summary, &resolved);
-    let resolved_of = |t: Template| resolved.iter().find(|(s, _)| s.errors.template == t);
+    // With a sine's members whose crests the database's mesh resolves
+    // apart: against the others the FE reference itself is not
+    // mesh-converged.
+    let summary = held_out::summarize(&members, &metadata.fe.mesh);
     if args.record {
         held_out::record(&dir, &metadata, estimator, args.seed, n, &summary)
             .with_context(|| format!("recording the validation in {}", dir.join("metadata.json").display()))?;
@@ -636,7 +634,7 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
                     "relative_max": e.relative_max,
                     "worst": { "r_w_mm": s.worst.width_mm, "r_h_mm": s.worst.height_mm,
                                "velocity_mm_s": s.worst.velocity_mm_s },
-                    "crests_resolved": resolved_of(e.template).map(|(r, _)| serde_json::json!({
+                    "crests_resolved": s.resolved.as_ref().map(|r| serde_json::json!({
                         "members": r.members,
                         "rms_median": r.errors.rms_median,
                         "rms_max": r.errors.rms_max,
@@ -671,7 +669,7 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
         };
         for s in &summary {
             lines.push(row(s.errors.template.name().to_string(), s.members.to_string(), s));
-            if let Some((r, of)) = resolved_of(s.errors.template) {
+            if let Some(r) = &s.resolved {
                 let bound = haptex_core::crests::resolved_radius_mm(&metadata.fe.mesh).unwrap_or(0.0);
                 lines.push(row(
                     format!(
@@ -680,7 +678,7 @@ fn validate(args: ValidateArgs) -> anyhow::Result<()> {
                         Num(bound),
                         metadata.fe.mesh
                     ),
-                    format!("{} of {of}", r.members),
+                    format!("{} of {}", r.members, s.members),
                     r,
                 ));
             }
