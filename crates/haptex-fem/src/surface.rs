@@ -311,6 +311,9 @@ const MAX_SEGMENT_MM: f64 = 0.005;
 /// Segments of the search polyline per bounding box ([`RigidSurface::boxes`]).
 const BOX_SEGMENTS: usize = 16;
 
+/// Boxes per super-box ([`RigidSurface::super_boxes`]).
+const SUPER_BOXES: usize = 16;
+
 /// How far a box's distance bound is lowered, mm: far above the rounding of
 /// a computed point-to-chord distance (about 1e-14 mm at coordinates of tens
 /// of mm), so that no chord in a skipped box can have a computed distance at
@@ -366,6 +369,12 @@ pub struct RigidSurface {
     /// below, so that the closest-point search skips runs that cannot hold
     /// the closest chord.
     boxes: Vec<[f64; 2]>,
+    /// The same over each run of [`SUPER_BOXES`] boxes (boxes k S ..
+    /// (k + 1) S): the search skips a whole run of boxes that cannot hold
+    /// the closest chord in one step. Under a long window (a point far
+    /// inside the surface, as a Newton iterate may put one for an
+    /// iteration) the walk over single boxes was most of the search.
+    super_boxes: Vec<[f64; 2]>,
 }
 
 impl RigidSurface {
@@ -441,8 +450,12 @@ impl RigidSurface {
                 let run = &h[k * BOX_SEGMENTS..=((k + 1) * BOX_SEGMENTS).min(n - 1)];
                 run.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], &v| [lo.min(v), hi.max(v)])
             })
+            .collect::<Vec<[f64; 2]>>();
+        let super_boxes = boxes
+            .chunks(SUPER_BOXES)
+            .map(|run| run.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], b| [lo.min(b[0]), hi.max(b[1])]))
             .collect();
-        Ok(Self { curve, x, h, arc, arc_slope, uniform, boxes })
+        Ok(Self { curve, x, h, arc, arc_slope, uniform, boxes, super_boxes })
     }
 
     /// The number of segments of the search polyline over [x_min, x_max]:
@@ -633,21 +646,66 @@ impl RigidSurface {
         let below = self.segment(p[0]).clamp(first, last - 1) / BOX_SEGMENTS;
         let (from, to, _, _) = run(below);
         scan(from, to, &mut best);
+        // The x gap and distance (both squared) of super-box j: no larger
+        // than those of any of its runs (its box holds theirs).
+        let super_run = |j: usize| {
+            let k_hi = ((j + 1) * SUPER_BOXES).min(self.boxes.len());
+            let (x_lo, x_hi) =
+                (self.x[j * SUPER_BOXES * BOX_SEGMENTS], self.x[(k_hi * BOX_SEGMENTS).min(self.x.len() - 1)]);
+            let [h_lo, h_hi] = self.super_boxes[j];
+            let (gx, gy) = (gap(p[0], x_lo, x_hi), gap(p[1], h_lo, h_hi));
+            (gx * gx, gx * gx + gy * gy)
+        };
         // Outwards on one side, until a run is farther in x alone than the
-        // closest chord so far (every run beyond it is farther still).
-        let walk = |runs: &mut dyn Iterator<Item = usize>, best: &mut (f64, usize, f64)| {
-            for k in runs {
-                let (from, to, x_gap2, gap2) = run(k);
+        // closest chord so far (every run beyond it is farther still). On
+        // entering a super-box from its near end, the whole of it is
+        // skipped when its box is farther than the closest chord (each of
+        // its runs would be skipped, or end the walk, one by one), and the
+        // walk ends when it is farther in x alone: the same chords are
+        // scanned as run by run, so the result is the same to the bit.
+        let walk = |from: usize, to: usize, step_left: bool, best: &mut (f64, usize, f64)| {
+            // Runs from..to (exclusive), walked down from to - 1 when
+            // step_left, else up from `from`.
+            let mut k = if step_left { to } else { from };
+            loop {
+                if step_left {
+                    if k == from {
+                        break;
+                    }
+                    k -= 1;
+                } else if k == to {
+                    break;
+                }
+                let entering = if step_left { k % SUPER_BOXES == SUPER_BOXES - 1 } else { k % SUPER_BOXES == 0 };
+                if entering {
+                    let (x_gap2, gap2) = super_run(k / SUPER_BOXES);
+                    if x_gap2 > best.0 {
+                        break;
+                    }
+                    if gap2 > best.0 {
+                        // Past this super-box: to the run beyond its far end.
+                        if step_left {
+                            k = (k + 1 - SUPER_BOXES).max(from);
+                        } else {
+                            k = (k + SUPER_BOXES).min(to);
+                        }
+                        continue;
+                    }
+                }
+                let (from_chord, to_chord, x_gap2, gap2) = run(k);
                 if x_gap2 > best.0 {
                     break;
                 }
                 if gap2 <= best.0 {
-                    scan(from, to, best);
+                    scan(from_chord, to_chord, best);
+                }
+                if !step_left {
+                    k += 1;
                 }
             }
         };
-        walk(&mut (first / BOX_SEGMENTS..below).rev(), &mut best);
-        walk(&mut (below + 1..=(last - 1) / BOX_SEGMENTS), &mut best);
+        walk(first / BOX_SEGMENTS, below, true, &mut best);
+        walk(below + 1, (last - 1) / BOX_SEGMENTS + 1, false, &mut best);
         (best.1, best.2)
     }
 
@@ -799,10 +857,13 @@ mod tests {
         };
         for shape in &shapes {
             let s = RigidSurface::new(shape, -2.0, 12.0).unwrap();
-            let mut wide = 0usize;
-            for _ in 0..20_000 {
+            let (mut wide, mut super_wide) = (0usize, 0usize);
+            for k in 0..20_000 {
                 let x = -2.5 + 15.0 * uniform();
-                let p = [x, s.height(x) - 1.2 * uniform().powi(3)];
+                // Every fourth point up to 8 mm deep, where the window spans
+                // many super-boxes (a Newton iterate far inside the surface).
+                let depth = if k % 4 == 0 { 8.0 } else { 1.2 };
+                let p = [x, s.height(x) - depth * uniform().powi(3)];
                 let v = (s.height(p[0]) - p[1]).max(1e-9);
                 let first = s.segment(p[0] - v);
                 let last = (s.segment(p[0] + v) + 1).max(first + 1);
@@ -810,8 +871,9 @@ mod tests {
                 let (j, u) = s.closest_chord(p, first, last, true);
                 assert!(i == j && t.to_bits() == u.to_bits(), "{shape:?} at {p:?}: scan ({i}, {t}), pruned ({j}, {u})");
                 wide += usize::from(last - first > 4 * BOX_SEGMENTS);
+                super_wide += usize::from(last - first > 2 * SUPER_BOXES * BOX_SEGMENTS);
             }
-            assert!(wide > 1000, "{shape:?}: only {wide} wide windows tried");
+            assert!(wide > 1000 && super_wide > 300, "{shape:?}: only {wide} wide windows tried, {super_wide} wider");
         }
     }
 
