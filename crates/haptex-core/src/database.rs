@@ -375,7 +375,8 @@ pub struct ValidationEntry {
 }
 
 /// [`ValidationEntry`]'s figures over the members whose crests the mesh
-/// resolves.
+/// resolves (and the shape of the figures that apply to one estimate,
+/// [`Validation::figures`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ResolvedEntry {
     /// How many of the template's members.
@@ -384,6 +385,20 @@ pub struct ResolvedEntry {
     pub rms_max: f64,
     pub relative_median: f64,
     pub relative_max: f64,
+}
+
+impl ValidationEntry {
+    /// This entry's own figures (not its resolved members'), over `members`
+    /// members.
+    pub fn figures_over(&self, members: usize) -> ResolvedEntry {
+        ResolvedEntry {
+            members,
+            rms_median: self.rms_median,
+            rms_max: self.rms_max,
+            relative_median: self.relative_median,
+            relative_max: self.relative_max,
+        }
+    }
 }
 
 /// What to expect of one estimate ([`TemplateModel::estimate_notes`]).
@@ -414,12 +429,12 @@ impl Validation {
     /// not, or to which the rule does not apply (`None`): the resolved
     /// members' where they were told apart and the estimate's crests are
     /// resolved, else all members'. The number of members, whether they
-    /// are the resolved ones, the median and the largest relative error.
-    pub fn figures(&self, template: Template, crests_resolved: Option<bool>) -> Option<(usize, bool, f64, f64)> {
+    /// are the resolved ones.
+    pub fn figures(&self, template: Template, crests_resolved: Option<bool>) -> Option<(ResolvedEntry, bool)> {
         let e = self.entry(template)?;
         Some(match (crests_resolved, e.resolved) {
-            (Some(true), Some(r)) => (r.members, true, r.relative_median, r.relative_max),
-            _ => (self.members, false, e.relative_median, e.relative_max),
+            (Some(true), Some(r)) => (r, true),
+            _ => (e.figures_over(self.members), false),
         })
     }
 
@@ -427,19 +442,19 @@ impl Validation {
     /// or not, [`Self::figures`]), in one sentence, if the validation
     /// covers it.
     pub fn expected_error(&self, template: Template, crests_resolved: Option<bool>) -> Option<String> {
-        self.figures(template, crests_resolved).map(|(members, resolved, median, max)| {
+        self.figures(template, crests_resolved).map(|(f, resolved)| {
             let which = if resolved {
-                format!("{members} of {} random members whose crests the mesh resolves", self.members)
+                format!("{} of {} random members whose crests the mesh resolves", f.members, self.members)
             } else {
-                format!("{members} random members")
+                format!("{} random members", f.members)
             };
             format!(
                 "on {which} against fresh FE runs (db validate --estimator {}, seed {}) the estimate was off by \
                  {:.1}% of the profile's range (median), {:.1}% at most",
                 self.estimator.name(),
                 self.seed,
-                100.0 * median,
-                100.0 * max
+                100.0 * f.relative_median,
+                100.0 * f.relative_max
             )
         })
     }
@@ -451,7 +466,7 @@ impl Validation {
     pub fn fe_advised(&self, template: Template, crests_resolved: Option<bool>) -> bool {
         // A value that is not a number (a hand-edited file) advises the FE run.
         self.figures(template, crests_resolved)
-            .is_some_and(|(.., max)| max.is_nan() || max > ESTIMATE_ADVISED_MAX_RELATIVE)
+            .is_some_and(|(f, _)| f.relative_max.is_nan() || f.relative_max > ESTIMATE_ADVISED_MAX_RELATIVE)
     }
 }
 
@@ -1025,9 +1040,11 @@ mod tests {
             estimator: Estimator::Grid,
             templates: vec![entry(Template::Sine, 0.585, Some(resolved)), entry(Template::Bump, 0.027, None)],
         };
-        assert_eq!(v.figures(Template::Sine, Some(true)), Some((15, true, 0.054, 0.093)));
-        assert_eq!(v.figures(Template::Sine, Some(false)), Some((30, false, 0.089, 0.585)));
-        assert_eq!(v.figures(Template::Bump, None), Some((30, false, 0.089, 0.027)));
+        let figures = |t, crests| v.figures(t, crests).map(|(f, r)| (f.members, r, f.relative_median, f.relative_max));
+        assert_eq!(figures(Template::Sine, Some(true)), Some((15, true, 0.054, 0.093)));
+        assert_eq!(figures(Template::Sine, Some(false)), Some((30, false, 0.089, 0.585)));
+        assert_eq!(figures(Template::Bump, None), Some((30, false, 0.089, 0.027)));
+        assert_eq!(v.figures(Template::Sine, Some(true)).unwrap().0, resolved);
         assert_eq!(v.figures(Template::Edge, None), None);
         assert!(!v.fe_advised(Template::Sine, Some(true)) && v.fe_advised(Template::Sine, Some(false)));
         let said = v.expected_error(Template::Sine, Some(true)).unwrap();

@@ -20,7 +20,7 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use haptex_core::database::{Estimator, Metadata, ResolvedEntry, Template, TemplateModel, Validation, ValidationEntry};
+use haptex_core::database::{Estimator, Metadata, Template, TemplateModel, Validation, ValidationEntry};
 use haptex_core::io::write_atomic;
 use haptex_core::recording::rng::SplitMix64;
 use rayon::prelude::*;
@@ -162,14 +162,7 @@ pub fn summarize(members: &[Member], mesh: &str) -> Vec<Summary> {
                 of.iter().copied().filter(|m| m.crests_resolved(mesh) != Some(false)).collect();
             if !resolved.is_empty() && resolved.len() < of.len() {
                 let subset = summary_of(template, &resolved);
-                let e = &subset.errors;
-                summary.errors.resolved = Some(ResolvedEntry {
-                    members: subset.members,
-                    rms_median: e.rms_median,
-                    rms_max: e.rms_max,
-                    relative_median: e.relative_median,
-                    relative_max: e.relative_max,
-                });
+                summary.errors.resolved = Some(subset.errors.figures_over(subset.members));
                 summary.resolved = Some(Box::new(subset));
             }
             summary

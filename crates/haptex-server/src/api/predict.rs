@@ -90,24 +90,21 @@ pub async fn post(call: Preamble<super::Template>) -> Result<Response, ApiError>
         // For a sine whose crests the mesh resolves, the resolved members'
         // figures where the validation told them apart.
         let crests_resolved = model.crests_resolved(set.metadata(), &query);
-        answer["validation"] = json!(validation.and_then(|v| Some((v, v.entry(template)?))).map(|(v, e)| {
-            let resolved = e.resolved.filter(|_| crests_resolved == Some(true));
-            let (members, rms_median, rms_max, relative_median, relative_max) = match resolved {
-                Some(r) => (r.members, r.rms_median, r.rms_max, r.relative_median, r.relative_max),
-                None => (v.members, e.rms_median, e.rms_max, e.relative_median, e.relative_max),
-            };
-            json!({
-                "members": members,
-                "of_members": v.members,
-                "crests_resolved": resolved.is_some(),
-                "seed": v.seed,
-                "estimator": v.estimator.name(),
-                "rms_median": rms_median,
-                "rms_max": rms_max,
-                "relative_median": relative_median,
-                "relative_max": relative_max,
-            })
-        }));
+        answer["validation"] = json!(validation.and_then(|v| Some((v, v.figures(template, crests_resolved)?))).map(
+            |(v, (f, resolved))| {
+                json!({
+                    "members": f.members,
+                    "of_members": v.members,
+                    "crests_resolved": resolved,
+                    "seed": v.seed,
+                    "estimator": v.estimator.name(),
+                    "rms_median": f.rms_median,
+                    "rms_max": f.rms_max,
+                    "relative_median": f.relative_median,
+                    "relative_max": f.relative_max,
+                })
+            }
+        ));
         answer["fe_advised"] = json!(notes.advice.is_some());
         // Where the database's own FE rows are not mesh-converged (a sine
         // sharper than its mesh resolves): why, and what resolves it.
