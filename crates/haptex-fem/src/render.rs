@@ -857,7 +857,7 @@ pub fn loading_text(loading: crate::scenario::Loading, finger: FeFinger) -> Stri
 }
 
 /// The FE finger as a check's header names it.
-fn finger_text(finger: FeFinger) -> String {
+pub fn finger_text(finger: FeFinger) -> String {
     match finger {
         FeFinger::Plane => "FE finger".to_string(),
         FeFinger::Solid { direction_deg } => format!("3D FE finger sliding at {} degrees", Num(direction_deg)),

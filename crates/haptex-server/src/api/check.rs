@@ -522,8 +522,6 @@ impl Job {
     fn settings_json(&self) -> Value {
         let s = &self.settings;
         let mut settings = json!({
-            "model": "2d",
-            "load_n_per_mm": load_of(s),
             "velocity_mm_s": s.scenario.velocity_mm_s,
             "step_mm": s.scenario.step_mm,
             "run_up_mm": s.run_up_mm,
@@ -532,12 +530,18 @@ impl Job {
             "tissue": "viscoelastic",
             "mu_hd": s.device.mu_hd,
         });
-        if let FeFinger::Solid { direction_deg } = s.finger {
-            let map = settings.as_object_mut().expect("an object");
-            map.remove("load_n_per_mm");
-            map.insert("model".into(), json!("3d"));
-            map.insert("load_n".into(), json!(load_of(s)));
-            map.insert("direction_deg".into(), json!(direction_deg));
+        // The finger's own fields: its model, its load in its unit, the 3D
+        // fingertip's direction.
+        match s.finger {
+            FeFinger::Plane => {
+                settings["model"] = json!("2d");
+                settings["load_n_per_mm"] = json!(load_of(s));
+            }
+            FeFinger::Solid { direction_deg } => {
+                settings["model"] = json!("3d");
+                settings["load_n"] = json!(load_of(s));
+                settings["direction_deg"] = json!(direction_deg);
+            }
         }
         settings
     }
@@ -546,17 +550,11 @@ impl Job {
     /// finger, default mesh, load 0.0133 N/mm, 20 mm/s, step 0.05 mm".
     fn finger_comment(&self) -> String {
         let s = &self.settings;
-        let finger = match s.finger {
-            FeFinger::Plane => "visco-elastic FE finger".to_string(),
-            FeFinger::Solid { direction_deg } => {
-                format!("visco-elastic 3D FE finger sliding at {} degrees", Num(direction_deg))
-            }
-        };
         format!(
-            "{finger}, {} mesh, load {} {}, {} mm/s, step {} mm",
+            "visco-elastic {}, {} mesh, load {}, {} mm/s, step {} mm",
+            render::finger_text(s.finger),
             s.scenario.resolution.name(),
-            Num(load_of(s)),
-            s.finger.load_unit(),
+            render::loading_text(s.scenario.loading, s.finger),
             Num(s.scenario.velocity_mm_s),
             Num(s.scenario.step_mm)
         )
