@@ -634,14 +634,17 @@ impl RigidSurface {
             return (best.1, best.2);
         }
         let gap = |v: f64, lo: f64, hi: f64| ((lo - v).max(v - hi) - BOX_SLACK_MM).max(0.0);
-        // Run k's chords within the window, and its box's x gap and
-        // distance (both squared) to p.
+        // The x gap and distance (both squared) to p of the box over
+        // vertices a ..= b (b at most the last) and heights h_lo ..= h_hi.
+        let box_gaps = |a: usize, b: usize, [h_lo, h_hi]: [f64; 2]| {
+            let (gx, gy) = (gap(p[0], self.x[a], self.x[b.min(self.x.len() - 1)]), gap(p[1], h_lo, h_hi));
+            (gx * gx, gx * gx + gy * gy)
+        };
+        // Run k's chords within the window, and its box's gaps.
         let run = |k: usize| {
             let (from, to) = ((k * BOX_SEGMENTS).max(first), ((k + 1) * BOX_SEGMENTS).min(last));
-            let (x_lo, x_hi) = (self.x[k * BOX_SEGMENTS], self.x[((k + 1) * BOX_SEGMENTS).min(self.x.len() - 1)]);
-            let [h_lo, h_hi] = self.boxes[k];
-            let (gx, gy) = (gap(p[0], x_lo, x_hi), gap(p[1], h_lo, h_hi));
-            (from, to, gx * gx, gx * gx + gy * gy)
+            let (x_gap2, gap2) = box_gaps(k * BOX_SEGMENTS, (k + 1) * BOX_SEGMENTS, self.boxes[k]);
+            (from, to, x_gap2, gap2)
         };
         let below = self.segment(p[0]).clamp(first, last - 1) / BOX_SEGMENTS;
         let (from, to, _, _) = run(below);
@@ -650,11 +653,7 @@ impl RigidSurface {
         // than those of any of its runs (its box holds theirs).
         let super_run = |j: usize| {
             let k_hi = ((j + 1) * SUPER_BOXES).min(self.boxes.len());
-            let (x_lo, x_hi) =
-                (self.x[j * SUPER_BOXES * BOX_SEGMENTS], self.x[(k_hi * BOX_SEGMENTS).min(self.x.len() - 1)]);
-            let [h_lo, h_hi] = self.super_boxes[j];
-            let (gx, gy) = (gap(p[0], x_lo, x_hi), gap(p[1], h_lo, h_hi));
-            (gx * gx, gx * gx + gy * gy)
+            box_gaps(j * SUPER_BOXES * BOX_SEGMENTS, k_hi * BOX_SEGMENTS, self.super_boxes[j])
         };
         // Outwards on one side, until a run is farther in x alone than the
         // closest chord so far (every run beyond it is farther still). On
