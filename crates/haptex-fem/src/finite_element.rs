@@ -39,9 +39,11 @@ use crate::hyperelastic::{
 use crate::lanes::{LANES, Lanes, Real};
 use pulp::Simd;
 
-/// The deformed element is inverted or degenerate.
+/// The deformed element is inverted or degenerate: det F at a Gauss point,
+/// or the element's mean dilatation (the Gauss point one past the last: 4
+/// for the Q4, 8 for the 3D hexahedron), is not positive.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[error("element inverted: det F = {det_f:e} at Gauss point {gauss_point} (4: the element's mean)")]
+#[error("element inverted: det F = {det_f:e} at Gauss point {gauss_point} (one past the last: the element's mean)")]
 pub struct Inverted {
     pub gauss_point: usize,
     pub det_f: f64,

@@ -221,7 +221,7 @@ fn add_volumetric(k: &mut [[f64; 24]; 24], grad: &[[f64; 3]; 8], scale: f64) {
 
 /// Determinant and inverse of a 3x3 matrix (the inverse is meaningless
 /// when the determinant is zero; callers check it first).
-fn invert3(j: &[[f64; 3]; 3]) -> (f64, [[f64; 3]; 3]) {
+pub(crate) fn invert3(j: &[[f64; 3]; 3]) -> (f64, [[f64; 3]; 3]) {
     let c = |r0: usize, c0: usize, r1: usize, c1: usize| j[r0][c0] * j[r1][c1] - j[r0][c1] * j[r1][c0];
     let cof = [
         [c(1, 1, 2, 2), -c(1, 0, 2, 2), c(1, 0, 2, 1)],
