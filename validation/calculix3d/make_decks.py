@@ -8,7 +8,10 @@ C3D8 order, the contact region's skin quads, the `driven` nodes, and the
 self-contained deck (mesh inline):
 
   body        every hex (parts 0-3, all E = 0.1 MPa, nu = 0.45 in the
-              half-disc file) as a C3D8I (default) or C3D8 brick
+              half-disc file) as a C3D8I (default) or C3D8 brick, or with
+              --etype C3D20R (C3D20) a quadratic brick with a node at the
+              middle of each of its straight edges (driven where both
+              ends are)
   DRIVEN      the nodes haptex drives (bone): prescribed displacement,
               down by the indent in z, then +s along x (the slide)
   SKIN        the contact region's skin faces (the VTK part-4 quads), as
@@ -226,9 +229,37 @@ def main():
          + (f"; controls {a.controls}" if a.controls else ""),
          "*NODE, NSET=NBODY"]
     L += [f"{i + 1}, {fmt(p[0])}, {fmt(p[1])}, {fmt(p[2])}" for i, p in enumerate(P)]
-    L.append(f"*ELEMENT, TYPE={a.etype}, ELSET=SOFT")
-    L += [f"{e + 1}, " + ", ".join(str(int(n) + 1) for n in c) for e, (c, _) in enumerate(m["hexes"])]
-    L += nset("DRIVEN", [int(n) + 1 for n in m["driven"]])
+    driven = [int(n) + 1 for n in m["driven"]]
+    if a.etype.startswith("C3D20"):
+        # Quadratic bricks on haptex's mesh: a node at the middle of every
+        # edge (the hexahedra's straight edges are the geometry), driven
+        # where both ends are.
+        edges = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)]
+        middle = {}
+        driven_set = set(driven)
+        L.append(f"*ELEMENT, TYPE={a.etype}, ELSET=SOFT")
+        extra = []
+        for e, (c, _) in enumerate(m["hexes"]):
+            ids = [int(n) + 1 for n in c]
+            for p, q in edges:
+                key = (min(ids[p], ids[q]), max(ids[p], ids[q]))
+                if key not in middle:
+                    middle[key] = len(P) + len(middle) + 1
+                    x = 0.5 * (P[key[0] - 1] + P[key[1] - 1])
+                    extra.append(f"{middle[key]}, {fmt(x[0])}, {fmt(x[1])}, {fmt(x[2])}")
+                    if key[0] in driven_set and key[1] in driven_set:
+                        driven.append(middle[key])
+                ids.append(middle[key])
+            entries = [str(e + 1)] + [str(v) for v in ids]
+            L.append(", ".join(entries[:16]) + ",")
+            L.append(", ".join(entries[16:]))
+        element_lines = L[L.index(f"*ELEMENT, TYPE={a.etype}, ELSET=SOFT"):]
+        del L[-len(element_lines):]
+        L += extra + element_lines
+    else:
+        L.append(f"*ELEMENT, TYPE={a.etype}, ELSET=SOFT")
+        L += [f"{e + 1}, " + ", ".join(str(int(n) + 1) for n in c) for e, (c, _) in enumerate(m["hexes"])]
+    L += nset("DRIVEN", driven)
     L += nset("SKINN", [n + 1 for n in skin_nodes])
     L += [f"** {len(faces)} skin faces of the contact region (haptex's part 4 quads)", "*SURFACE, NAME=SKIN, TYPE=ELEMENT"]
     L += [f"{e}, S{f}" for e, f in faces]

@@ -6,6 +6,8 @@
 #   validation/calculix3d/run.sh flat_linear     only these ccx jobs (haptex runs always)
 #   validation/calculix3d/run.sh diagnosis       the bump diagnosis jobs (README, "Diagnosis of the bump"):
 #                                                frictionless and small-increment runs, ~40 min
+#   validation/calculix3d/run.sh nlgeom_press    the finite-strain press jobs (README, "NLGEOM, the press
+#                                                alone"), ~50 min (the default mesh's C3D20R runs ~20 min each)
 #
 # The timing of the peer comparison: whenever flat_linear is run, this script
 # times `haptex simulate` on the same case and mesh right before the ccx run,
@@ -94,8 +96,24 @@ mk $BC --job bump_linear_n2s_stick2 --surface bump "${BUMP[@]}" --contact "NODE 
 mk $BC --job bump_linear_n2s_ctrl --surface bump "${BUMP[@]}" --contact "NODE TO SURFACE" --stick 200 --controls "$CTRL"
 mk $BC --job bump_linear_n2s_stick2_ctrl --surface bump "${BUMP[@]}" --contact "NODE TO SURFACE" --stick 2 --controls "$CTRL"
 
+# finite strain, the press alone (2026-12-07): frictionless, NLGEOM against linear, three elements on
+# the coarse mesh and the quadratic C3D20R (a node at each edge's middle) on the default one
+PRESS_JOBS=()
+for e in C3D8I C3D8 C3D20R; do
+    for kin in linear nlgeom; do
+        mk $FC --job press_mu0_${kin}_$e --surface flat --mu 0 "${S2S[@]}" --etype $e --kin $kin --slide 0
+        PRESS_JOBS+=(press_mu0_${kin}_$e)
+    done
+done
+for kin in linear nlgeom; do
+    mk work/vtk_flat_default/frame_0000.vtu --job press_mu0_${kin}_C3D20R_default --surface flat --mu 0 "${S2S[@]}" \
+        --etype C3D20R --kin $kin --slide 0
+    PRESS_JOBS+=(press_mu0_${kin}_C3D20R_default)
+done
+
 JOBS=("$@")
 [[ ${#JOBS[@]} -eq 0 ]] && JOBS=(flat_linear flat_linear_n2s bump_linear flat_nlgeom flat_linear_C3D8 flat_linear_default bump_nlgeom bump_linear_n2s bump_linear_n2s_stick20)
+[[ ${JOBS[*]} == nlgeom_press ]] && JOBS=("${PRESS_JOBS[@]}")
 [[ ${JOBS[*]} == diagnosis ]] && JOBS=(bump_mu0_n2s bump_mu0_s2s bump_mu0_s2s_inc025 bump_mu0_s2s_inc01 bump_linear_inc025 bump_linear_inc01 bump_mu0_s2s_nlgeom bump_linear_n2s_stick2 bump_linear_n2s_ctrl bump_linear_n2s_stick2_ctrl)
 
 echo "== CalculiX runs"

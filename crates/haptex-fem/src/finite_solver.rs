@@ -453,8 +453,9 @@ impl std::fmt::Display for FiniteProfile {
 }
 
 /// Anderson acceleration (type II, Walker & Ni 2011) of a fixed-point
-/// iteration x -> G(x), with all memory allocated once.
-struct Anderson {
+/// iteration x -> G(x), with all memory allocated once (the 3D finite
+/// strain's outer iteration uses it too, [`crate::solid3d::finite_contact`]).
+pub(crate) struct Anderson {
     depth: usize,
     /// Differences of residuals f = G(x) - x and of G(x), ring buffers.
     df: Vec<Vec<f64>>,
@@ -469,7 +470,7 @@ struct Anderson {
 }
 
 impl Anderson {
-    fn new(depth: usize, n: usize) -> Self {
+    pub(crate) fn new(depth: usize, n: usize) -> Self {
         Self {
             depth,
             df: vec![vec![0.0; n]; depth],
@@ -484,7 +485,7 @@ impl Anderson {
         }
     }
 
-    fn reset(&mut self) {
+    pub(crate) fn reset(&mut self) {
         self.stored = 0;
         self.next = 0;
         self.has_prev = false;
@@ -492,7 +493,7 @@ impl Anderson {
 
     /// Given the iterate `x` and its image `g` = G(x), writes the next
     /// iterate into `x`. Returns the largest |G(x) - x|.
-    fn step(&mut self, x: &mut [f64], g: &[f64]) -> f64 {
+    pub(crate) fn step(&mut self, x: &mut [f64], g: &[f64]) -> f64 {
         let n = x.len();
         let mut largest: f64 = 0.0;
         if self.depth == 0 {

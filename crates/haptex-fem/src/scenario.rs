@@ -287,8 +287,10 @@ pub enum SimulationError {
     Body3(#[from] crate::solid3d::body::BodyError),
     #[error("the 3D finger's stiffness could not be factorized: {0}")]
     Factor(#[from] crate::linalg::FactorError),
+    #[error("the 3D finger at finite strain: {0}")]
+    Finite3(#[from] crate::solid3d::finite_body::FiniteBodyError),
     #[error("the 3D finger at x = {x_mm:.3} mm (t = {t_s:.4} s): {source}")]
-    Equilibrium3 { x_mm: f64, t_s: f64, source: crate::solid3d::condensed::EquilibriumError },
+    Equilibrium3 { x_mm: f64, t_s: f64, source: crate::solid3d::finite_contact::FiniteContactError },
     #[error(
         "the 3D finger touches the surface beyond its contact region (skin up to {z_cut_mm:.2} mm above the pad) at \
          x = {x_mm:.3} mm (t = {t_s:.4} s): the surface's relief or the indentation is too large for the 3D model"

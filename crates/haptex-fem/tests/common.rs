@@ -134,3 +134,19 @@ pub fn paraboloid_block(
         .collect();
     (mesh, faces)
 }
+
+/// Ft/Fn of a 3D run at x = 0, 0.1, ..., 3 mm (x = 0: the end of the
+/// press), its largest magnitude and the largest |Ft/Fn(x) + Ft/Fn(3 - x)|:
+/// the antisymmetry of a conservative pad's profile over a path
+/// symmetric about a bump's top.
+pub fn antisymmetry_over_3_mm(result: &haptex_fem::solid3d::slide::Simulation3) -> (f64, f64) {
+    let at = |x: f64| {
+        let row =
+            result.history.iter().rev().find(|h| (h.slide_mm - x).abs() < 1e-6).unwrap_or_else(|| panic!("x = {x}"));
+        row.ft_n / row.fn_n
+    };
+    let mu: Vec<f64> = (0..=30).map(|i| at(0.1 * i as f64)).collect();
+    let largest = mu.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let worst = (0..=30).map(|i| (mu[i] + mu[30 - i]).abs()).fold(0.0f64, f64::max);
+    (largest, worst)
+}

@@ -29,6 +29,21 @@ fn distorted_block() -> Mesh3 {
     mesh
 }
 
+/// Every DOF of the block's boundary nodes.
+fn boundary_dofs(mesh: &Mesh3) -> Vec<usize> {
+    (0..mesh.n_nodes())
+        .filter(|&a| mesh.nodes[a].iter().any(|&v| v.abs() < 1e-9 || (v - L).abs() < 1e-9))
+        .flat_map(|a| [3 * a, 3 * a + 1, 3 * a + 2])
+        .collect()
+}
+
+/// The displacements (3 per node) of the homogeneous deformation `f`.
+fn affine_field(f: &[[f64; 3]; 3], nodes: &[[f64; 3]]) -> Vec<f64> {
+    (0..3 * nodes.len())
+        .map(|d| (0..3).map(|k| f[d % 3][k] * nodes[d / 3][k]).sum::<f64>() - nodes[d / 3][d % 3])
+        .collect()
+}
+
 fn times(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
     std::array::from_fn(|i| std::array::from_fn(|k| (0..3).map(|l| a[i][l] * b[l][k]).sum()))
 }
@@ -66,17 +81,12 @@ fn patch_test_homogeneous_finite_deformation() {
     for volumetric in [Volumetric::SimoTaylor, Volumetric::Quadratic] {
         let mesh = distorted_block();
         let material = Material::elastic(0.1, 0.45);
-        let boundary: Vec<usize> = (0..mesh.n_nodes())
-            .filter(|&a| mesh.nodes[a].iter().any(|&v| v.abs() < 1e-9 || (v - L).abs() < 1e-9))
-            .collect();
-        let prescribed: Vec<usize> = boundary.iter().flat_map(|&a| [3 * a, 3 * a + 1, 3 * a + 2]).collect();
-        let nodes = mesh.nodes.clone();
+        let prescribed = boundary_dofs(&mesh);
+        let affine = affine_field(&f, &mesh.nodes);
         let n = 3 * mesh.n_nodes();
         let n_elements = mesh.elements.len();
         let mut body =
             FiniteBody3::new(mesh, vec![material.clone()], vec![0; n_elements], volumetric, &prescribed).unwrap();
-        let affine: Vec<f64> =
-            (0..n).map(|d| (0..3).map(|k| f[d % 3][k] * nodes[d / 3][k]).sum::<f64>() - nodes[d / 3][d % 3]).collect();
         let mut u = vec![0.0; n];
         let settings = StaticSettings { increments: 3, ..StaticSettings::default() };
         let report = body.step(0.0, &mut u, &affine, &vec![0.0; n], &settings).unwrap();
@@ -181,18 +191,13 @@ fn prony_relaxation_of_a_held_shear() {
     let f = [[1.0, 0.4, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     assert!((det3(&f) - 1.0).abs() < 1e-15);
     let mesh = distorted_block();
-    let boundary: Vec<usize> = (0..mesh.n_nodes())
-        .filter(|&a| mesh.nodes[a].iter().any(|&v| v.abs() < 1e-9 || (v - L).abs() < 1e-9))
-        .collect();
-    let prescribed: Vec<usize> = boundary.iter().flat_map(|&a| [3 * a, 3 * a + 1, 3 * a + 2]).collect();
-    let nodes = mesh.nodes.clone();
+    let prescribed = boundary_dofs(&mesh);
+    let target = affine_field(&f, &mesh.nodes);
     let n = 3 * mesh.n_nodes();
     let n_elements = mesh.elements.len();
     let mut body =
         FiniteBody3::new(mesh, vec![material.clone()], vec![0; n_elements], Volumetric::SimoTaylor, &prescribed)
             .unwrap();
-    let target: Vec<f64> =
-        (0..n).map(|d| (0..3).map(|k| f[d % 3][k] * nodes[d / 3][k]).sum::<f64>() - nodes[d / 3][d % 3]).collect();
     let mut u = vec![0.0; n];
     let zero = vec![0.0; n];
     let settings = StaticSettings { increments: 2, ..StaticSettings::default() };

@@ -78,13 +78,8 @@ impl ViscoelasticBody {
         let dofs = DofMap::with_dofs_per_node(mesh.n_nodes(), 3, prescribed);
         let pattern = mesh.pattern(&dofs);
         let DofMap { free, n_free } = dofs;
-        let mut history_start = Vec::with_capacity(mesh.elements.len() + 1);
-        let mut count = 0;
-        for &m in &element_material {
-            history_start.push(count);
-            count += 8 * (1 + materials[m].prony.len());
-        }
-        history_start.push(count);
+        let history_start = history_starts(&materials, &element_material);
+        let count = *history_start.last().expect("one entry past the last element");
         Ok(Self {
             values: vec![0.0; pattern.nnz()],
             mesh,
@@ -249,4 +244,18 @@ impl ViscoelasticBody {
         let p = m.bulk_mpa() * self.geometry[e].dilatation(self.formulation, gp, &self.element_displacements(e, u));
         [s[0] + p, s[1] + p, s[2] + p, s[3], s[4], s[5]]
     }
+}
+
+/// Where each element's history starts in a body's history array (8 Gauss
+/// points of 1 + (Prony terms of its material) stresses each), and one
+/// entry past the last element: the array's length.
+pub(crate) fn history_starts(materials: &[Material], element_material: &[usize]) -> Vec<usize> {
+    let mut starts = Vec::with_capacity(element_material.len() + 1);
+    let mut count = 0;
+    for &m in element_material {
+        starts.push(count);
+        count += 8 * (1 + materials[m].prony.len());
+    }
+    starts.push(count);
+    starts
 }

@@ -16,16 +16,19 @@
 //! move to their new values in sub-steps: each starts from the linear
 //! predictor u_f += K_ff^-1 (r - K_fp du_p) at the last equilibrium, and a
 //! sub-step that does not converge, or in which an element inverts, is
-//! retried in halves. A Newton step that inverts an element is halved (up
-//! to [`StaticSettings::backtracks`] times). Convergence: the
-//! largest residual within `relative_tolerance` of the largest internal
-//! force (reactions included) or of `force_floor_n`.
+//! retried in halves. A Newton step that inverts an element or does not
+//! lower the residual is halved (up to [`StaticSettings::backtracks`]
+//! times). Convergence: the largest residual within `relative_tolerance`
+//! of the largest internal force (reactions included) or of
+//! `force_floor_n`.
 //!
-//! The first piece of the finite-strain fingertip, validated before the
-//! contact is added to it: tests/finite_strain_body_3d.rs (patch test,
+//! Validated without contact: tests/finite_strain_body_3d.rs (patch test,
 //! uniaxial compression against the closed form, Prony relaxation) and
-//! tests/calculix_reference_3d_nlgeom.rs (a compressed block against
-//! CalculiX's NLGEOM).
+//! tests/calculix_reference_3d_nlgeom.rs (a block moved on its whole
+//! surface, against CalculiX's NLGEOM). The finger's contact is balanced
+//! against its internal forces by [`super::finite_contact`], which
+//! calls [`FiniteBody3::begin_step`], [`FiniteBody3::internal_forces`]
+//! and [`FiniteBody3::commit`] and not [`FiniteBody3::step`].
 
 use super::finite_hex8::{NeoHookean3, Volumetric, internal_force, isochoric_stresses};
 use super::hex8::Hex8;
@@ -66,7 +69,8 @@ pub struct StaticSettings {
     pub max_iterations: usize,
     /// Times a sub-step may be halved in all.
     pub max_halvings: usize,
-    /// Halvings of a Newton step that inverts an element.
+    /// Halvings of a Newton step that inverts an element or does not lower
+    /// the residual.
     pub backtracks: usize,
     pub relative_tolerance: f64,
     /// The smallest force the relative tolerance is taken of (N).
@@ -151,13 +155,8 @@ impl FiniteBody3 {
         let dofs = DofMap::with_dofs_per_node(mesh.n_nodes(), 3, prescribed);
         let pattern = mesh.pattern(&dofs);
         let DofMap { free, n_free } = dofs;
-        let mut history_start = Vec::with_capacity(mesh.elements.len() + 1);
-        let mut count = 0;
-        for &m in &element_material {
-            history_start.push(count);
-            count += 8 * (1 + materials[m].prony.len());
-        }
-        history_start.push(count);
+        let history_start = super::body::history_starts(&materials, &element_material);
+        let count = *history_start.last().expect("one entry past the last element");
         let laws = materials.iter().map(|m| NeoHookean3::from_material(m).with_volumetric(volumetric)).collect();
         let coefficients = materials.iter().map(|m| m.step(0.0)).collect();
         Ok(Self {
@@ -311,7 +310,7 @@ impl FiniteBody3 {
                 return Err(FiniteBodyError::Length { what, got: v, expected: n });
             }
         }
-        self.coefficients = self.materials.iter().map(|m| m.step(dt_s)).collect();
+        self.begin_step(dt_s);
         if self.cholesky.is_none() {
             self.cholesky = Some(SparseCholesky::new(&self.pattern, 1)?);
         }
@@ -422,27 +421,41 @@ impl FiniteBody3 {
             if iteration == settings.max_iterations {
                 break;
             }
+            let norm: f64 = r.iter().map(|v| v * v).sum();
             self.solve(&mut r).map_err(|err| (residual, err.to_string()))?;
-            // The full Newton step unless it inverts an element: then
-            // halved, up to `backtracks` times (a step that only makes the
-            // residual grow is taken: Newton's iterates may, on the way to
-            // quadratic convergence; one that does not converge in
-            // `max_iterations` halves the sub-step).
+            // Backtracking on |R|^2: the full Newton step unless it
+            // inverts an element or does not lower the residual, then
+            // halved, up to `backtracks` times; if none lowers it, the
+            // shortest is taken (Newton's iterates may have to pass a
+            // larger residual on their way).
             let mut alpha = 1.0;
+            let mut fallback = None;
             let mut accepted = false;
-            for _ in 0..=settings.backtracks {
+            for attempt in 0..=settings.backtracks {
                 let trial: Vec<f64> = (0..n)
                     .map(|d| if self.free[d] == PRESCRIBED { u[d] } else { u[d] + alpha * r[self.free[d]] })
                     .collect();
-                if self.internal_forces(&trial).is_ok_and(|ft| ft.iter().all(|v| v.is_finite())) {
-                    u = trial;
-                    accepted = true;
-                    break;
+                if let Ok(ft) = self.internal_forces(&trial) {
+                    let trial_norm: f64 =
+                        (0..n).filter(|&d| self.free[d] != PRESCRIBED).map(|d| (load[d] - ft[d]).powi(2)).sum();
+                    if trial_norm.is_finite() {
+                        if trial_norm < norm {
+                            u = trial;
+                            accepted = true;
+                            break;
+                        }
+                        if attempt == settings.backtracks {
+                            fallback = Some(trial);
+                        }
+                    }
                 }
                 alpha *= 0.5;
             }
             if !accepted {
-                return Err((residual, "every Newton step inverted an element".into()));
+                match fallback {
+                    Some(trial) => u = trial,
+                    None => return Err((residual, "every Newton step inverted an element".into())),
+                }
             }
         }
         Err((residual, format!("{} iterations", settings.max_iterations)))
@@ -455,8 +468,26 @@ impl FiniteBody3 {
         Ok(())
     }
 
-    /// Advances every point's history to `u` with the step's coefficients.
-    fn commit(&mut self, u: &[f64]) {
+    /// The consistent tangent stiffness at `u` on the free unknowns (values
+    /// on the pattern of [`crate::solid3d::mesh::Mesh3::pattern`] for this
+    /// body's DOFs, lower triangle), with the step's visco-elastic
+    /// coefficients; the element that inverts, if one does.
+    pub fn tangent(&mut self, u: &[f64]) -> Result<&[f64], (usize, Inverted)> {
+        self.assemble(u, None)?;
+        Ok(&self.values)
+    }
+
+    /// Sets the visco-elastic coefficients of a step of `dt_s` (finite,
+    /// not negative: checked by the callers), for [`FiniteBody3::internal_forces`]
+    /// and [`FiniteBody3::commit`] when the body is solved by another
+    /// solver ([`super::finite_contact`]).
+    pub fn begin_step(&mut self, dt_s: f64) {
+        self.coefficients = self.materials.iter().map(|m| m.step(dt_s)).collect();
+    }
+
+    /// Advances every point's history to `u` with the step's coefficients
+    /// ([`FiniteBody3::step`] does it itself).
+    pub fn commit(&mut self, u: &[f64]) {
         for e in 0..self.geometry.len() {
             let mi = self.element_material[e];
             let per_point = 1 + self.materials[mi].prony.len();

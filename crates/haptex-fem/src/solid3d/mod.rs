@@ -21,6 +21,7 @@ pub mod contact;
 pub mod extrude;
 pub mod fingertip;
 pub mod finite_body;
+pub mod finite_contact;
 pub mod finite_hex8;
 pub mod friction;
 pub mod hex8;
