@@ -40,12 +40,15 @@ use crate::lanes::{LANES, Lanes, Real};
 use pulp::Simd;
 
 /// The deformed element is inverted or degenerate: det F at a Gauss point,
-/// or the element's mean dilatation (the Gauss point one past the last: 4
-/// for the Q4, 8 for the 3D hexahedron), is not positive.
+/// or the element's mean dilatation Jbar, is not positive.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[error("element inverted: det F = {det_f:e} at Gauss point {gauss_point} (one past the last: the element's mean)")]
+#[error("inverted ({})", match gauss_point {
+    Some(gp) => format!("det F = {det_f:e} at Gauss point {gp}"),
+    None => format!("mean dilatation Jbar = {det_f:e}"),
+})]
 pub struct Inverted {
-    pub gauss_point: usize,
+    /// The Gauss point, or None for the element's mean dilatation.
+    pub gauss_point: Option<usize>,
     pub det_f: f64,
 }
 
@@ -139,10 +142,10 @@ pub fn internal_force(
     let element = OneElement { q, law, shear_ratio, frozen };
     let (force, j, j_bar) = element_response(&element, u, true, tangent);
     if let Some(gp) = (0..4).find(|&gp| j[gp].is_nan() || j[gp] <= 0.0) {
-        return Err(Inverted { gauss_point: gp, det_f: j[gp] });
+        return Err(Inverted { gauss_point: Some(gp), det_f: j[gp] });
     }
     if j_bar.is_nan() || j_bar <= 0.0 {
-        return Err(Inverted { gauss_point: 4, det_f: j_bar });
+        return Err(Inverted { gauss_point: None, det_f: j_bar });
     }
     Ok(force)
 }

@@ -307,6 +307,7 @@ fn an_inverted_element_is_refused() {
     let h8 = Hex8::new(&x).unwrap();
     let mirror = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]];
     let err = internal_force(&h8, &affine(&mirror, &x), &law(), 1.0, &[[0.0; 6]; 8], None).unwrap_err();
-    assert_eq!(err.gauss_point, 0);
+    assert_eq!(err.gauss_point, Some(0));
+    assert!(err.to_string().contains("det F = -") && err.to_string().contains("Gauss point 0"), "{err}");
     assert!(err.det_f < 0.0);
 }

@@ -99,7 +99,7 @@ pub struct OuterEffort {
 pub enum FiniteContactError {
     #[error(transparent)]
     Contact(#[from] EquilibriumError),
-    #[error("element {element} inverted: {source}")]
+    #[error("element {element} of the finite-strain body is {source}")]
     Inverted { element: usize, source: crate::finite_element::Inverted },
     #[error(
         "the finite-strain equilibrium was not reached in {iterations} outer iterations (largest residual {residual_n:.3e} N)"

@@ -212,7 +212,7 @@ pub fn energy(h: &Hex8, u: &[f64; 24], law: &NeoHookean3) -> f64 {
 /// displacement `u`, with the isochoric stress `shear_ratio S0_iso(C) +
 /// frozen[gp]`; with `tangent`, its consistent derivative (24 x 24,
 /// symmetric) is written there. Refused where det F or Jbar is not
-/// positive (Gauss point 8 names the element's mean).
+/// positive.
 pub fn internal_force(
     h: &Hex8,
     u: &[f64; 24],
@@ -234,7 +234,7 @@ pub fn internal_force(
         let f = deformation_gradient(h, gp, u);
         let (j, f_inv) = invert3(&f);
         if j.is_nan() || j <= 0.0 {
-            return Err(Inverted { gauss_point: gp, det_f: j });
+            return Err(Inverted { gauss_point: Some(gp), det_f: j });
         }
         let w = h.weight[gp];
         volume += w * j;
@@ -304,7 +304,7 @@ pub fn internal_force(
     }
     let j_bar = volume / h.volume;
     if j_bar.is_nan() || j_bar <= 0.0 {
-        return Err(Inverted { gauss_point: 8, det_f: j_bar });
+        return Err(Inverted { gauss_point: None, det_f: j_bar });
     }
     let (pressure, stiffness) = law.volumetric.derivatives(law.kappa, j_bar);
     for r in 0..24 {
