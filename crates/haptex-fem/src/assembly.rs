@@ -11,6 +11,19 @@
 /// Marker for a prescribed DOF in the free numbering.
 pub const PRESCRIBED: usize = usize::MAX;
 
+/// The vector over the free unknowns (`n_free` of them) whose entry at the
+/// free index of each free global DOF d is `value(d)`; `free` maps global
+/// DOFs to free indices or [`PRESCRIBED`].
+pub fn free_entries(free: &[usize], n_free: usize, value: impl Fn(usize) -> f64) -> Vec<f64> {
+    let mut out = vec![0.0; n_free];
+    for (d, &f) in free.iter().enumerate() {
+        if f != PRESCRIBED {
+            out[f] = value(d);
+        }
+    }
+    out
+}
+
 /// The free numbering of the global DOFs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DofMap {

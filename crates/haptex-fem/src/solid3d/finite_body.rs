@@ -33,7 +33,7 @@
 use super::finite_hex8::{NeoHookean3, Volumetric, internal_force, isochoric_stresses};
 use super::hex8::Hex8;
 use super::mesh::{Mesh3, MeshError};
-use crate::assembly::{DofMap, PRESCRIBED, Pattern};
+use crate::assembly::{DofMap, PRESCRIBED, Pattern, free_entries};
 use crate::finite_element::Inverted;
 use crate::linalg::{FactorError, SparseCholesky};
 use crate::material::{Material, MaterialError, StepCoefficients, advance_history, frozen_deviator, history_deviator};
@@ -316,8 +316,11 @@ impl FiniteBody3 {
         }
         let start = u.to_vec();
         let f_start = match self.internal_forces(u) {
-            // The external forces in equilibrium at the start, so that a
-            // step of forces moves them from there (0 on a fresh body).
+            // The internal forces of the start under this step's law: the
+            // sub-steps' load goes from them to f_ext, so that the start is
+            // its own equilibrium at the fraction 0 (they are the last
+            // step's external forces only at dt = 0, where the history's
+            // relaxation does not move them).
             Ok(f) => f,
             Err((e, err)) => {
                 return Err(FiniteBodyError::NoConvergence {
@@ -388,13 +391,7 @@ impl FiniteBody3 {
         let mut kfp = vec![0.0; self.n_free];
         let f =
             self.assemble(&u, Some((&du, &mut kfp))).map_err(|(e, err)| (f64::NAN, format!("element {e}: {err}")))?;
-        let mut rhs = vec![0.0; self.n_free];
-        for d in 0..n {
-            let fi = self.free[d];
-            if fi != PRESCRIBED {
-                rhs[fi] = load[d] - f[d] - kfp[fi];
-            }
-        }
+        let mut rhs = free_entries(&self.free, self.n_free, |d| load[d] - f[d] - kfp[self.free[d]]);
         self.solve(&mut rhs).map_err(|err| (f64::NAN, err.to_string()))?;
         for d in 0..n {
             let fi = self.free[d];
@@ -407,13 +404,7 @@ impl FiniteBody3 {
                 Err((e, err)) => return Err((residual, format!("element {e}: {err}"))),
             };
             let scale = f.iter().chain(load.iter()).fold(settings.force_floor_n, |m, v| m.max(v.abs()));
-            let mut r = vec![0.0; self.n_free];
-            for d in 0..n {
-                let fi = self.free[d];
-                if fi != PRESCRIBED {
-                    r[fi] = load[d] - f[d];
-                }
-            }
+            let mut r = free_entries(&self.free, self.n_free, |d| load[d] - f[d]);
             residual = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             if residual <= settings.relative_tolerance * scale {
                 return Ok((u, iteration, residual));
@@ -437,7 +428,7 @@ impl FiniteBody3 {
                     .collect();
                 if let Ok(ft) = self.internal_forces(&trial) {
                     let trial_norm: f64 =
-                        (0..n).filter(|&d| self.free[d] != PRESCRIBED).map(|d| (load[d] - ft[d]).powi(2)).sum();
+                        free_entries(&self.free, self.n_free, |d| load[d] - ft[d]).iter().map(|v| v * v).sum();
                     if trial_norm.is_finite() {
                         if trial_norm < norm {
                             u = trial;

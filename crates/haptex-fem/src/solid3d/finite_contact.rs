@@ -34,7 +34,7 @@
 use super::condensed::{Condensation, EquilibriumError, NewtonSettings, PointForce, PointMode};
 use super::contact::ContactSurface;
 use super::finite_body::FiniteBody3;
-use crate::assembly::{PRESCRIBED, Pattern};
+use crate::assembly::{PRESCRIBED, Pattern, free_entries};
 use crate::finite_solver::Anderson;
 use crate::linalg::symmetric_matvec_add;
 
@@ -131,15 +131,7 @@ pub fn equilibrium(
     settings: &NewtonSettings,
 ) -> Result<OuterEffort, FiniteContactError> {
     let n_free = pattern.n;
-    let free_values = |x: &[f64]| {
-        let mut out = vec![0.0; n_free];
-        for (g, &d) in free.iter().enumerate() {
-            if d != PRESCRIBED {
-                out[d] = x[g];
-            }
-        }
-        out
-    };
+    let free_values = |x: &[f64]| free_entries(free, n_free, |g| x[g]);
     let inverted = |(element, source)| FiniteContactError::Inverted { element, source };
     // K at x: the tangent, or the small-strain stiffness where the
     // tangent is not positive definite.
