@@ -56,9 +56,6 @@ pub const REBUILD_CONTRACTION: f64 = 0.5;
 pub struct Operator {
     values: Vec<f64>,
     fresh: bool,
-    /// Rebuilds so far (the tangent assembled and the condensation
-    /// factorized with it).
-    pub rebuilds: usize,
 }
 
 impl Operator {
@@ -74,25 +71,10 @@ impl Operator {
     }
 }
 
-/// The contact Newton's continuation iterations from an iterate of
-/// Anderson's mix (from the plain iterate, the settings' own): a mix the
-/// contact cannot be solved from quickly is dropped for the plain iterate
-/// (on the shipped finger's bump slide, coarse mesh, eight mixes took
-/// 150-5000 iterations each and failed, most of the run's time).
-pub const MIXED_CONTINUATION: usize = 50;
-
 /// The contact Newton's tolerances inside an outer iteration, as a
 /// fraction of the outer ones: the outer residual cannot fall below the
 /// inner solve's (at the fixed point the true residual is the inner one).
 pub const INNER_FORCING: f64 = 0.1;
-
-/// What the outer iteration took.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct OuterEffort {
-    pub outer_iterations: usize,
-    /// Contact Newton iterations over all outer iterations.
-    pub newton_iterations: usize,
-}
 
 /// Why the finite-strain equilibrium was not found.
 #[derive(Debug, thiserror::Error)]
@@ -115,7 +97,8 @@ pub enum FiniteContactError {
 /// `small_k` on `pattern` over the free unknowns `free` where the tangent
 /// is not positive definite. `u` holds the prescribed values and a start
 /// on entry, the solution on return. No external forces besides the
-/// contact's, and no load control.
+/// contact's, and no load control. Returns the contact Newton iterations
+/// over all outer iterations.
 #[allow(clippy::too_many_arguments)]
 pub fn equilibrium(
     finite: &mut FiniteBody3,
@@ -129,7 +112,7 @@ pub fn equilibrium(
     point: &mut dyn FnMut(usize, [f64; 3], PointMode) -> PointForce,
     stick_predictor: bool,
     settings: &NewtonSettings,
-) -> Result<OuterEffort, FiniteContactError> {
+) -> Result<usize, FiniteContactError> {
     let n_free = pattern.n;
     let free_values = |x: &[f64]| free_entries(free, n_free, |g| x[g]);
     let inverted = |(element, source)| FiniteContactError::Inverted { element, source };
@@ -142,7 +125,6 @@ pub fn equilibrium(
      -> Result<(), FiniteContactError> {
         operator.values.clear();
         operator.values.extend_from_slice(finite.tangent(x).map_err(inverted)?);
-        operator.rebuilds += 1;
         if condensation.factorize(&operator.values).is_err() {
             operator.values.clear();
             operator.values.extend_from_slice(small_k);
@@ -156,26 +138,16 @@ pub fn equilibrium(
         increment_tolerance_mm: INNER_FORCING * settings.increment_tolerance_mm,
         ..*settings
     };
-    let mixed_settings = NewtonSettings { continuation_iterations: MIXED_CONTINUATION, ..inner_settings };
-    let mut effort = OuterEffort::default();
+    let mut newton_iterations = 0;
     let mut x = u.to_vec();
     let mut anderson = Anderson::new(ANDERSON_DEPTH, n_free);
     let mut last_residual = f64::INFINITY;
     if !operator.fresh {
         rebuild(finite, condensation, &x, operator)?;
     }
-    // The last inner solution G(x), unmixed: where Anderson's mix is an
-    // iterate the contact Newton cannot solve from (or that inverts an
-    // element), the iteration goes on from it, unmixed.
-    let mut plain: Option<Vec<f64>> = None;
     for outer in 0..MAX_OUTER_ITERATIONS {
-        effort.outer_iterations = outer + 1;
         // The load K x - f_int(x) on the free unknowns.
-        let f = match finite.internal_forces(&x) {
-            Ok(f) => f,
-            Err(_) if fall_back(&mut x, &mut anderson, &mut plain) => continue,
-            Err(e) => return Err(inverted(e)),
-        };
+        let f = finite.internal_forces(&x).map_err(inverted)?;
         let mut load = vec![0.0; n_free];
         symmetric_matvec_add(pattern, &operator.values, &free_values(&x), &mut load);
         for (g, &d) in free.iter().enumerate() {
@@ -184,23 +156,17 @@ pub fn equilibrium(
             }
         }
         let mut next = x.clone();
-        // From a mixed iterate the contact Newton gets a short budget.
-        let budget = if plain.is_some() { &mixed_settings } else { &inner_settings };
-        let inner = match condensation.equilibrium(
+        let inner = condensation.equilibrium(
             &load,
             free,
             &mut next,
             surface,
             point,
             stick_predictor && outer == 0,
-            budget,
+            &inner_settings,
             None,
-        ) {
-            Ok(inner) => inner,
-            Err(_) if fall_back(&mut x, &mut anderson, &mut plain) => continue,
-            Err(e) => return Err(e.into()),
-        };
-        effort.newton_iterations += inner.iterations;
+        )?;
+        newton_iterations += inner.iterations;
         // The true residual at the new iterate.
         let f = finite.internal_forces(&next).map_err(inverted)?;
         let mut contact = vec![0.0; x.len()];
@@ -224,7 +190,7 @@ pub fn equilibrium(
         }
         if residual <= settings.relative_tolerance * scale {
             u.copy_from_slice(&next);
-            return Ok(effort);
+            return Ok(newton_iterations);
         }
         // Anderson's mix of the map G(x) = next on the free unknowns.
         if residual > 10.0 * last_residual {
@@ -234,7 +200,6 @@ pub fn equilibrium(
         last_residual = residual;
         let mut mixed = free_values(&x);
         anderson.step(&mut mixed, &free_values(&next));
-        plain = Some(next.clone());
         for (g, &d) in free.iter().enumerate() {
             x[g] = if d == PRESCRIBED { next[g] } else { mixed[d] };
         }
@@ -244,17 +209,4 @@ pub fn equilibrium(
         }
     }
     Err(FiniteContactError::NoConvergence { iterations: MAX_OUTER_ITERATIONS, residual_n: last_residual })
-}
-
-/// Goes back to the last plain iterate `plain`, if there is one (true),
-/// forgetting Anderson's history.
-fn fall_back(x: &mut Vec<f64>, anderson: &mut Anderson, plain: &mut Option<Vec<f64>>) -> bool {
-    match plain.take() {
-        Some(p) => {
-            *x = p;
-            anderson.reset();
-            true
-        }
-        None => false,
-    }
 }

@@ -502,7 +502,10 @@ fn run_finger_on(
             // K is rebuilt at each step's first iterate.
             operator.invalidate();
         }
-        if body.prepare(dt)? {
+        // The small-strain K(dt): the small-strain solve's operator, and at
+        // finite strain the fallback where the tangent is not positive
+        // definite (the outer iteration factorizes its own operator).
+        if body.prepare(dt)? && finite.is_none() {
             condensation.factorize(body.stiffness_values())?;
             if matches!(scenario.loading, Loading::Load(_)) {
                 // The load per mm of the drive: the step's load is affine
@@ -548,7 +551,6 @@ fn run_finger_on(
                 if finite.is_none() {
                     follow_surface(&mut u, &region_nodes, &in_contact, body.free(), &tip_nodes, &field, lift, from, to);
                 }
-                let load = body.step_load(&u);
                 let mut control = match goal {
                     Target::Depth(_) => None,
                     Target::Force(force) => Some(LoadControl {
@@ -569,7 +571,7 @@ fn run_finger_on(
                 let solved = match finite.as_mut() {
                     None => condensation
                         .equilibrium(
-                            &load,
+                            &body.step_load(&u),
                             body.free(),
                             &mut u,
                             &candidate,
@@ -592,8 +594,7 @@ fn run_finger_on(
                         &mut |q, w, mode| point(q, w, mode),
                         some_stuck,
                         &newton,
-                    )
-                    .map(|e| e.newton_iterations),
+                    ),
                 };
                 match solved {
                     Ok(iterations) => {
@@ -678,9 +679,10 @@ fn run_finger_on(
         in_contact.dedup();
         some_stuck = points.iter().any(|p| p.pressure_mpa > 0.0 && p.sticking);
         (last_s, last_force) = (s, force[2] - fe_n);
-        body.commit(&u);
-        if let Some(finite) = finite.as_mut() {
-            finite.commit(&u);
+        // The history of the body that was solved.
+        match finite.as_mut() {
+            Some(finite) => finite.commit(&u),
+            None => body.commit(&u),
         }
         for p in &beyond.points {
             if field.at(relative(p.position, p.displacement(&u), s)).depth > 0.0 {
@@ -808,7 +810,7 @@ const LOAD_DEPTH_MM_PER_N: f64 = 1.0;
 /// and less from 3 x 3 to 4 x 4; the points cost little next to the
 /// dense solve on the nodes in contact (the run took 52 s with 2 x 2 and
 /// 54 s with 4 x 4).
-pub(crate) const CONTACT_RULE: usize = 4;
+const CONTACT_RULE: usize = 4;
 
 /// Most parts a step is cut into when Newton's method fails on it.
 const MAX_PIECES: usize = 16;
