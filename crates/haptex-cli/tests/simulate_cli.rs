@@ -404,6 +404,48 @@ fn simulate_3d_at_finite_strain() {
     assert!(change > 0.005 && change < 0.1, "finite over small strain: {}", fn_finite[0] / fn_small[0]);
 }
 
+/// A surface whose crest passes between the 3D skin's contact points (a
+/// bump of 0.5 by 0.5 mm on the coarse mesh) completes with a warning on
+/// stderr, even with -q, and in the profile's comments, which the profile
+/// reader skips; the resolved default bump has none.
+#[test]
+fn simulate_3d_warns_where_the_mesh_does_not_resolve_the_surface() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    for (width, height, out, warned) in [("0.5", "0.5", "spike.csv", true), ("1.5", "0.3", "bump.csv", false)] {
+        let result = haptex(&[
+            "simulate",
+            "--model",
+            "3d",
+            "--mesh",
+            "coarse",
+            "--surface",
+            "bump",
+            "--x0",
+            "3.5",
+            "--width",
+            width,
+            "--height",
+            height,
+            "--slide",
+            "0.5",
+            "-q",
+            "-o",
+            &p(out),
+        ]);
+        assert!(result.status.success(), "{}", stderr(&result));
+        let err = stderr(&result);
+        assert_eq!(err.contains("warning: the surface reached"), warned, "{err}");
+        let text = std::fs::read_to_string(p(out)).unwrap();
+        assert_eq!(text.contains("# warning: the surface reached"), warned, "{text}");
+        if warned {
+            assert!(err.contains("a finer --mesh"), "{err}");
+        }
+        let profile = haptex_core::FrictionProfile::read_csv_file(std::path::Path::new(&p(out))).unwrap();
+        assert!(profile.len() >= 5, "{} rows", profile.len());
+    }
+}
+
 /// What the 3D finger does not do is refused by the flag's name, before
 /// any work; a 3D-only flag is refused in 2D.
 #[test]

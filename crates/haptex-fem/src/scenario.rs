@@ -289,8 +289,15 @@ pub enum SimulationError {
     Factor(#[from] crate::linalg::FactorError),
     #[error("the 3D finger at finite strain: {0}")]
     Finite3(#[from] crate::solid3d::finite_body::FiniteBodyError),
-    #[error("the 3D finger at x = {x_mm:.3} mm (t = {t_s:.4} s): {source}")]
-    Equilibrium3 { x_mm: f64, t_s: f64, source: crate::solid3d::finite_contact::FiniteContactError },
+    #[error("the 3D finger at x = {x_mm:.3} mm (t = {t_s:.4} s): {source}{}", unresolved.map_or(String::new(), |u| format!("; {u}")))]
+    Equilibrium3 {
+        x_mm: f64,
+        t_s: f64,
+        source: crate::solid3d::finite_contact::FiniteContactError,
+        /// Where the surface had reached into the skin further than the
+        /// mesh resolves before the step failed (the likely cause).
+        unresolved: Option<crate::solid3d::slide::Unresolved>,
+    },
     #[error(
         "the 3D finger touches the surface beyond its contact region (skin up to {z_cut_mm:.2} mm above the pad) at \
          x = {x_mm:.3} mm (t = {t_s:.4} s): the surface's relief or the indentation is too large for the 3D model"

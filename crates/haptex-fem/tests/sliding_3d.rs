@@ -204,3 +204,73 @@ fn a_height_map_of_the_bump_slides_as_the_bump() {
     // The scenario's own surface must be flat under a map.
     assert!(run_on_map(&scenario(bump, 1.0), &map, 0.0, &mut |_| {}).is_err());
 }
+
+/// A bump narrower than the contact points' spacing (r_w 0.5, r_h 0.5 mm:
+/// a crest of 0.06 mm radius, on the coarse mesh's faces of about 0.7 mm
+/// with contact points 0.1-0.2 mm apart) passes between the points into
+/// the skin, which no point feels: the run completes, but its forces are
+/// the mesh's (the skin caught on the crest; Ft/Fn up to 1.9 with mu_skin
+/// 0.5 over the 10 mm slide), so the run says so. Measured reach: 0.19 mm
+/// by the end of the press, 0.23 mm at most, against a limit of 0.1 mm
+/// (half the 0.2 mm stratum corneum); the resolved bump of the same
+/// place (r_w 1.5, r_h 0.3 mm) reaches 0.018 mm at most (0.0004 mm, the
+/// penalty's penetration, on its flat part). Tolerances: the flag, and the
+/// reaches at 1.5 times and a quarter of the limit.
+#[test]
+fn a_bump_narrower_than_the_contact_points_is_reported_as_unresolved() {
+    let spike = simulate(SurfaceShape::Bump { x0: 3.5, width: 0.5, height: 0.5 }, 1.0, 0.0);
+    assert!((spike.reach_limit_mm - 0.1).abs() < 1e-12, "limit {}", spike.reach_limit_mm);
+    let u = spike.unresolved().expect("the crest passes between the contact points");
+    assert!(u.reach_mm > 1.5 * u.limit_mm, "{u:?}");
+    let mut csv = Vec::new();
+    haptex_fem::solid3d::output::write_profile(&spike, "spike", &mut csv).unwrap();
+    let csv = String::from_utf8(csv).unwrap();
+    let warning = csv.lines().find(|l| l.starts_with("# warning: ")).expect("the profile carries the warning");
+    assert!(warning.contains("mm into the skin between its contact points"), "{warning}");
+    let bump = simulate(SurfaceShape::Bump { x0: 3.5, width: 1.5, height: 0.3 }, 1.0, 0.0);
+    assert!(bump.unresolved().is_none());
+    let deepest = bump.history.iter().map(|r| r.surface_reach_mm).fold(0.0, f64::max);
+    assert!(deepest < 0.25 * bump.reach_limit_mm, "the resolved bump reached {deepest} mm");
+}
+
+/// On a flat the surface reaches into the skin only as far as the
+/// penalty lets it into the contact points: the deepest point's depth
+/// is p_max / k + delta / 2 (the smoothed penalty's law), and the samples
+/// between the points go at most 10% deeper (measured 5.7% after a 0.5 mm
+/// slide: samples nearer the pressure's peak than any contact point).
+#[test]
+fn on_a_flat_the_surface_reaches_into_the_skin_by_the_penalty_penetration() {
+    let s = scenario(SurfaceShape::Flat, 0.5);
+    let r = run(&s, 0.0, &mut |_| {}).unwrap();
+    let last = r.history.last().unwrap();
+    let p_max = r.patches.last().unwrap().points.iter().map(|p| p.pressure_mpa).fold(0.0, f64::max);
+    let point_depth = p_max / s.penalty_mpa_per_mm + 0.5 * s.smoothing_mm;
+    let ratio = last.surface_reach_mm / point_depth;
+    assert!((1.0..1.1).contains(&ratio), "reach {} mm against the points' {point_depth} mm", last.surface_reach_mm);
+}
+
+/// A step that fails after the surface passed between the contact points
+/// names that as well as the failure (the likely cause: on the coarse
+/// mesh the finite-strain run of the 0.5 by 0.5 mm bump ends in an
+/// inverted element at 9.55 mm, the crest having reached 0.24 mm into the
+/// skin at 3.2 mm); without it, the failure alone.
+#[test]
+fn a_failed_step_names_where_the_surface_passed_between_the_contact_points() {
+    use haptex_fem::scenario::SimulationError;
+    use haptex_fem::solid3d::finite_contact::FiniteContactError;
+    use haptex_fem::solid3d::slide::Unresolved;
+    let failed = |unresolved| SimulationError::Equilibrium3 {
+        x_mm: 9.55,
+        t_s: 0.5775,
+        source: FiniteContactError::NoConvergence { iterations: 60, residual_n: 1.5e-3 },
+        unresolved,
+    };
+    let text = failed(Some(Unresolved { reach_mm: 0.239, x_mm: 3.2, limit_mm: 0.1 })).to_string();
+    for part in
+        ["x = 9.550 mm", "not reached in 60 outer iterations", "0.239 mm into the skin", "x = 3.200 mm", "(0.100 mm)"]
+    {
+        assert!(text.contains(part), "{part} missing from: {text}");
+    }
+    let text = failed(None).to_string();
+    assert!(!text.contains("into the skin"), "{text}");
+}

@@ -352,6 +352,10 @@ fn run_3d(args: &SimulateArgs, mut scenario: Scenario) -> anyhow::Result<()> {
     };
     bar.finish_and_clear();
     let result = result.context("simulation failed")?;
+    if let Some(u) = result.unresolved() {
+        // Even with --quiet: the profile is the mesh's where this holds.
+        eprintln!("warning: {u}; the forces there are the mesh's, not the surface's");
+    }
     let description = format!("{}; direction {} degrees", describe(args, &scenario), Num(direction));
     Output::new(args.output.clone()).write(|w| solid3d_output::write_profile(&result, &description, w))?;
     if let Some(path) = &args.history {

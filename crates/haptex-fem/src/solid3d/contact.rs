@@ -85,6 +85,30 @@ impl ContactSurface {
         p.position[2] + w - plane_z
     }
 
+    /// The faces' current positions at `m` x `m` points each, evenly
+    /// spread over the face (the centres of an m x m grid of its
+    /// parameter square): `reference` the mesh's node positions, `u` the
+    /// global displacements (3 per node). Between the contact points, for
+    /// what the points cannot see.
+    pub fn face_samples<'a>(
+        &'a self,
+        reference: &'a [[f64; 3]],
+        u: &'a [f64],
+        m: usize,
+    ) -> impl Iterator<Item = [f64; 3]> + 'a {
+        const CORNERS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+        let at = move |i: usize| 2.0 * (i as f64 + 0.5) / m as f64 - 1.0;
+        self.points.chunks(self.per_face.max(1)).flat_map(move |face| {
+            let nodes = face[0].nodes;
+            let x: [[f64; 3]; 4] = nodes.map(|n| std::array::from_fn(|d| reference[n][d] + u[3 * n + d]));
+            (0..m * m).map(move |k| {
+                let (r, s) = (at(k % m), at(k / m));
+                let shape = CORNERS.map(|[a, b]| 0.25 * (1.0 + a * r) * (1.0 + b * s));
+                std::array::from_fn(|d| (0..4).map(|a| shape[a] * x[a][d]).sum())
+            })
+        })
+    }
+
     /// The total reference area of the faces (mm^2).
     pub fn area(&self) -> f64 {
         self.points.iter().map(|p| p.weight).sum()
@@ -113,5 +137,31 @@ mod tests {
         for q in 0..8 {
             assert!((s.gap(q, &u, 0.0) - (s.points[q].position[2] + 0.5)).abs() < 1e-15);
         }
+    }
+
+    #[test]
+    fn face_samples_cover_each_displaced_face_evenly() {
+        let mut m = Mesh3::block(&[0.0, 1.0, 3.0], &[0.0, 2.0], &[0.0, 1.0]).unwrap();
+        m.map(|[x, y, z]| [x, y, z + 0.1 * x * (1.0 - z)]);
+        let faces: Vec<[usize; 4]> = m.bottom_faces().into_iter().map(|(_, f)| f).collect();
+        let s = ContactSurface::with_rule(&m, &faces, 4);
+        // Lifted by 0.5 mm and moved 0.2 mm along y.
+        let u: Vec<f64> = (0..3 * m.n_nodes()).map(|i| [0.0, 0.2, 0.5][i % 3]).collect();
+        let samples: Vec<[f64; 3]> = s.face_samples(&m.nodes, &u, 5).collect();
+        assert_eq!(samples.len(), 2 * 25);
+        for x in &samples {
+            assert!((x[2] - (0.1 * x[0] + 0.5)).abs() < 1e-12, "{x:?} off the displaced face");
+        }
+        // The first face spans x in [0, 1], y in [0.2, 2.2]: a 5 x 5 grid of
+        // cell centres, 0.1 of the face from its edges.
+        let first = &samples[..25];
+        let (lo, hi) = first.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), x| {
+            ([lo[0].min(x[0]), lo[1].min(x[1])], [hi[0].max(x[0]), hi[1].max(x[1])])
+        });
+        for (got, want) in [(lo[0], 0.1), (hi[0], 0.9), (lo[1], 0.4), (hi[1], 2.0)] {
+            assert!((got - want).abs() < 1e-12, "extent {got} instead of {want}");
+        }
+        let mean: f64 = first.iter().map(|x| x[0]).sum::<f64>() / 25.0;
+        assert!((mean - 0.5).abs() < 1e-12);
     }
 }

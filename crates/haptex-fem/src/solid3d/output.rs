@@ -27,6 +27,9 @@ pub fn write_profile(result: &Simulation3, description: &str, w: &mut dyn Write)
          3D finger; force_angle_deg: the tangential force's direction from the motion's, positive to its left",
         haptex_core::num::Num(result.direction_deg)
     )?;
+    if let Some(u) = result.unresolved() {
+        writeln!(w, "# warning: {u}")?;
+    }
     writeln!(w, "x_mm,mu,ft_n,fn_n,ft_lateral_n,force_angle_deg")?;
     // The slide's rows of the history: those past the press.
     for (i, r) in result.history.iter().filter(|r| r.slide_mm > 0.0).enumerate() {
@@ -50,13 +53,15 @@ pub fn write_press_curve(result: &Simulation3, description: &str, w: &mut dyn Wr
 /// Writes every step: `t_s,slide_mm,fn_n,ft_n,ft_lateral_n,contact_area_mm2,drive_z_mm,newton_iterations`,
 /// then the contact's length along the motion and, on a display, the
 /// electrostatic attraction `fe_n` and its part on skin in contact
-/// `fe_contact_n` (0 on a passive surface; `fn_n` is the net force).
+/// `fe_contact_n` (0 on a passive surface; `fn_n` is the net force), and
+/// how far the surface reaches into the skin, `surface_reach_mm`
+/// ([`super::slide::Row3::surface_reach_mm`]).
 pub fn write_history(result: &Simulation3, w: &mut dyn Write) -> std::io::Result<()> {
     writeln!(w, "# haptex simulate --model 3d force history; forces in N on the 3D finger")?;
     writeln!(
         w,
         "t_s,slide_mm,fn_n,ft_n,ft_lateral_n,contact_area_mm2,drive_z_mm,newton_iterations,contact_length_mm,fe_n,\
-         fe_contact_n"
+         fe_contact_n,surface_reach_mm"
     )?;
     for r in &result.history {
         write_csv_row(
@@ -73,6 +78,7 @@ pub fn write_history(result: &Simulation3, w: &mut dyn Write) -> std::io::Result
                 r.contact_length_mm,
                 r.fe_n,
                 r.fe_contact_n,
+                r.surface_reach_mm,
             ],
         )?;
     }

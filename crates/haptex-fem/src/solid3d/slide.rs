@@ -92,6 +92,13 @@ pub struct Row3 {
     /// Vertical displacement of the bone (mm, negative: pressed down).
     pub drive_z_mm: f64,
     pub iterations: usize,
+    /// How far the surface reaches into the skin of the contact region
+    /// (mm, vertically), sampled at [`REACH_SAMPLES`]^2 points of each face
+    /// between and beside its contact points: the penalty's penetration
+    /// where the mesh resolves the surface, more where features narrower
+    /// than the contact points' spacing pass between them, which no
+    /// contact point feels (see [`Simulation3::reach_limit_mm`]).
+    pub surface_reach_mm: f64,
 }
 
 /// A contact point of a [`Patch`].
@@ -142,6 +149,54 @@ pub struct Simulation3 {
     /// `frame_every` slide steps, where the finger reaches the feature, and
     /// at the end.
     pub frames: Vec<Frame3>,
+    /// The reach of the surface into the skin ([`Row3::surface_reach_mm`])
+    /// beyond which the mesh does not resolve it: half the outer skin
+    /// layer (mm). A surface that reaches deeper passes between the
+    /// contact points into the skin, and the forces there are the mesh's
+    /// (a feature caught between points drags the skin: on a bump of 0.5
+    /// by 0.5 mm the coarse mesh's Ft/Fn reaches 1.9 with mu_skin 0.5).
+    pub reach_limit_mm: f64,
+}
+
+impl Simulation3 {
+    /// The largest reach of the surface into the skin over the run and
+    /// the distance travelled there (mm), where it is beyond
+    /// [`Self::reach_limit_mm`].
+    pub fn unresolved(&self) -> Option<Unresolved> {
+        unresolved(&self.history, self.reach_limit_mm)
+    }
+}
+
+/// Where a surface reached into the skin further than the mesh resolves.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Unresolved {
+    /// The largest reach (mm) and the distance travelled there (mm).
+    pub reach_mm: f64,
+    pub x_mm: f64,
+    /// The limit it passed (mm, [`Simulation3::reach_limit_mm`]).
+    pub limit_mm: f64,
+}
+
+impl std::fmt::Display for Unresolved {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the surface reached {:.3} mm into the skin between its contact points at x = {:.3} mm, more than half \
+             the outer skin layer ({:.3} mm): the mesh does not resolve the surface's features there (a finer \
+             --mesh resolves narrower ones)",
+            self.reach_mm, self.x_mm, self.limit_mm
+        )
+    }
+}
+
+/// The deepest reach of `history` if it passes `limit_mm`.
+fn unresolved(history: &[Row3], limit_mm: f64) -> Option<Unresolved> {
+    let deepest = history.iter().max_by(|a, b| a.surface_reach_mm.total_cmp(&b.surface_reach_mm))?;
+    (deepest.surface_reach_mm > limit_mm).then_some(Unresolved {
+        reach_mm: deepest.surface_reach_mm,
+        x_mm: deepest.slide_mm,
+        limit_mm,
+    })
 }
 
 /// A full-field snapshot of a 3D run.
@@ -312,6 +367,7 @@ fn run_finger_on(
 ) -> Result<Simulation3, SimulationError> {
     let started = Instant::now();
     validate(scenario)?;
+    let reach_limit_mm = REACH_LIMIT_FRACTION * scenario.model.layers.stratum_corneum_mm;
     let invalid = |m: &str| Err(SimulationError::Invalid(m.to_string()));
     if !is_direction(direction_deg) {
         return Err(SimulationError::Invalid(format!(
@@ -621,7 +677,12 @@ fn run_finger_on(
                     break total;
                 }
                 Some(source) if pieces >= MAX_PIECES => {
-                    return Err(SimulationError::Equilibrium3 { x_mm: distance, t_s, source });
+                    return Err(SimulationError::Equilibrium3 {
+                        x_mm: distance,
+                        t_s,
+                        source,
+                        unresolved: unresolved(&history, reach_limit_mm),
+                    });
                 }
                 Some(_) => pieces *= 2,
             }
@@ -684,6 +745,10 @@ fn run_finger_on(
             Some(finite) => finite.commit(&u),
             None => body.commit(&u),
         }
+        let surface_reach_mm = candidate
+            .face_samples(&tip_nodes, &u, REACH_SAMPLES)
+            .map(|x| field.height_gradient(x[0] + s[0], x[1] + s[1]).0 - (x[2] - lift))
+            .fold(f64::NEG_INFINITY, f64::max);
         for p in &beyond.points {
             if field.at(relative(p.position, p.displacement(&u), s)).depth > 0.0 {
                 return Err(SimulationError::ContactBeyondRegion { x_mm: distance, t_s, z_cut_mm: z_cut });
@@ -700,6 +765,7 @@ fn run_finger_on(
             fe_n,
             fe_contact_n,
             drive_z_mm: drive_z,
+            surface_reach_mm,
             iterations,
         };
         if k == 0 {
@@ -760,6 +826,7 @@ fn run_finger_on(
         driven_nodes: tip.driven_nodes,
         contact_faces: inside,
         frames,
+        reach_limit_mm,
     })
 }
 
@@ -811,6 +878,16 @@ const LOAD_DEPTH_MM_PER_N: f64 = 1.0;
 /// dense solve on the nodes in contact (the run took 52 s with 2 x 2 and
 /// 54 s with 4 x 4).
 const CONTACT_RULE: usize = 4;
+
+/// Sample points along each side of a skin face for
+/// [`Row3::surface_reach_mm`]: 16 x 16, a sixteenth of a face apart (on
+/// the coarse mesh about 0.04 mm at the pad, a quarter of the contact
+/// points' spacing).
+pub const REACH_SAMPLES: usize = 16;
+
+/// [`Simulation3::reach_limit_mm`] as a fraction of the outer skin
+/// layer's thickness.
+pub const REACH_LIMIT_FRACTION: f64 = 0.5;
 
 /// Most parts a step is cut into when Newton's method fails on it.
 const MAX_PIECES: usize = 16;

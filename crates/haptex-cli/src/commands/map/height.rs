@@ -331,6 +331,10 @@ pub fn line_friction_3d(
         lines.angle_deg,
         &mut |_| {},
     )?;
+    if let Some(u) = result.unresolved() {
+        // The line's friction is the mesh's where this holds.
+        eprintln!("warning: the 3D finger's line {k} (r = {} mm across the sliding direction): {u}", Num(r));
+    }
     let profile = result.profile.context("the FE run gave no profile")?;
     let (px, pmu) = (profile.x_mm(), profile.mu());
     Ok((0..g.nx).map(|i| haptex_core::profile::interpolate(px, pmu, g.x(i) - s0 + LEAD_IN_MM)).collect())
