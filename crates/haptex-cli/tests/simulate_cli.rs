@@ -454,7 +454,6 @@ fn simulate_3d_refuses_what_it_does_not_support() {
     let vtk = dir.path().join("vtk");
     let vtk = vtk.to_str().unwrap();
     let cases: Vec<(Vec<&str>, &str)> = vec![
-        (vec!["--model", "3d", "--kinematics", "finite", "--load", "0.5"], "at finite strain takes an indentation"),
         (vec!["--model", "3d", "--vtk", vtk, "--vtk-every", "0", "--step", "1e-7"], "slide"),
         (vec!["--model", "3d", "--direction-deg", "NaN"], "--direction-deg NaN must be a finite angle"),
         (vec!["--model", "3d", "--direction-deg", "400"], "--direction-deg 400 must be a finite angle"),

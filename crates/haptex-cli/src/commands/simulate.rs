@@ -102,8 +102,7 @@ pub struct SimulateArgs {
     material: MaterialArg,
     /// Kinematics: small strain (the paper's model) or finite strain
     /// (total Lagrangian, neo-Hookean tissue with the same moduli and Prony
-    /// series; about 3x slower in 2D, 6-12x in 3D, where it takes
-    /// --indent, not --load).
+    /// series; about 3x slower in 2D, 6-12x in 3D).
     #[arg(long, value_enum, default_value_t = KinematicsArg::Small)]
     kinematics: KinematicsArg,
     /// Mesh resolution: pad node spacing 0.2, 0.1, 0.05, 0.025 mm in 2D;

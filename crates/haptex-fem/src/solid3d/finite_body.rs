@@ -121,6 +121,10 @@ pub struct FiniteBody3 {
     history_start: Vec<usize>,
 }
 
+/// The tangent's values and the free unknowns' load per unit of a
+/// prescribed move ([`FiniteBody3::tangent_and_drive_load`]).
+pub type TangentAndDriveLoad<'a> = (&'a [f64], Vec<f64>);
+
 impl FiniteBody3 {
     /// A body of `mesh` whose element e is of `materials[element_material[e]]`
     /// (its moduli as the neo-Hookean law's, with `volumetric`), with the
@@ -466,6 +470,21 @@ impl FiniteBody3 {
     pub fn tangent(&mut self, u: &[f64]) -> Result<&[f64], (usize, Inverted)> {
         self.assemble(u, None)?;
         Ok(&self.values)
+    }
+
+    /// [`FiniteBody3::tangent`], and the free unknowns' load per unit of
+    /// the prescribed increments `moved` (global, 3 per node; its free
+    /// entries ignored) under that tangent: -K_fp moved, the slope of the
+    /// load in a drive the prescribed DOFs follow.
+    pub fn tangent_and_drive_load(
+        &mut self,
+        u: &[f64],
+        moved: &[f64],
+    ) -> Result<TangentAndDriveLoad<'_>, (usize, Inverted)> {
+        let mut coupling = vec![0.0; self.n_free];
+        self.assemble(u, Some((moved, &mut coupling)))?;
+        coupling.iter_mut().for_each(|v| *v = -*v);
+        Ok((&self.values, coupling))
     }
 
     /// Sets the visco-elastic coefficients of a step of `dt_s` (finite,

@@ -31,7 +31,7 @@
 //! floor); the contact Newton inside runs to [`INNER_FORCING`] of its
 //! tolerances.
 
-use super::condensed::{Condensation, EquilibriumError, NewtonSettings, PointForce, PointMode};
+use super::condensed::{Condensation, EquilibriumError, LoadControl, NewtonSettings, PointForce, PointMode};
 use super::contact::ContactSurface;
 use super::finite_body::FiniteBody3;
 use crate::assembly::{PRESCRIBED, Pattern, free_entries};
@@ -55,6 +55,8 @@ pub const REBUILD_CONTRACTION: f64 = 0.5;
 #[derive(Debug, Clone, Default)]
 pub struct Operator {
     values: Vec<f64>,
+    /// Under load control, the free unknowns' load per mm of the drive.
+    per_mm: Vec<f64>,
     fresh: bool,
 }
 
@@ -97,8 +99,12 @@ pub enum FiniteContactError {
 /// `small_k` on `pattern` over the free unknowns `free` where the tangent
 /// is not positive definite. `u` holds the prescribed values and a start
 /// on entry, the solution on return. No external forces besides the
-/// contact's, and no load control. Returns the contact Newton iterations
-/// over all outer iterations.
+/// contact's. Under load control (`load`: the drive's global DOFs, which
+/// move together, and the control with the small-strain stiffness's load
+/// per mm of the drive) the drive is an unknown of each contact solve, with
+/// the operator's load per mm of it (the tangent's, -K_fp e); its total
+/// change is returned in the control's `change_mm`. Returns the contact
+/// Newton iterations over all outer iterations.
 #[allow(clippy::too_many_arguments)]
 pub fn equilibrium(
     finite: &mut FiniteBody3,
@@ -112,22 +118,40 @@ pub fn equilibrium(
     point: &mut dyn FnMut(usize, [f64; 3], PointMode) -> PointForce,
     stick_predictor: bool,
     settings: &NewtonSettings,
+    mut load: Option<(&[usize], &mut LoadControl<'_>)>,
 ) -> Result<usize, FiniteContactError> {
     let n_free = pattern.n;
+    // A unit move of the drive (global), for the tangent's load per mm.
+    let unit_drive = load.as_ref().map(|(driven, _)| {
+        let mut e = vec![0.0; u.len()];
+        driven.iter().for_each(|&d| e[d] = 1.0);
+        e
+    });
+    let small_per_mm: Vec<f64> = load.as_ref().map_or(Vec::new(), |(_, c)| c.per_mm.to_vec());
     let free_values = |x: &[f64]| free_entries(free, n_free, |g| x[g]);
     let inverted = |(element, source)| FiniteContactError::Inverted { element, source };
     // K at x: the tangent, or the small-strain stiffness where the
-    // tangent is not positive definite.
+    // tangent is not positive definite; under load control, its load per
+    // mm of the drive.
     let rebuild = |finite: &mut FiniteBody3,
                    condensation: &mut Condensation,
                    x: &[f64],
                    operator: &mut Operator|
      -> Result<(), FiniteContactError> {
         operator.values.clear();
-        operator.values.extend_from_slice(finite.tangent(x).map_err(inverted)?);
+        operator.per_mm.clear();
+        match &unit_drive {
+            Some(e) => {
+                let (k, per_mm) = finite.tangent_and_drive_load(x, e).map_err(inverted)?;
+                operator.values.extend_from_slice(k);
+                operator.per_mm = per_mm;
+            }
+            None => operator.values.extend_from_slice(finite.tangent(x).map_err(inverted)?),
+        }
         if condensation.factorize(&operator.values).is_err() {
             operator.values.clear();
             operator.values.extend_from_slice(small_k);
+            operator.per_mm.clone_from(&small_per_mm);
             condensation.factorize(&operator.values)?;
         }
         operator.fresh = true;
@@ -142,31 +166,39 @@ pub fn equilibrium(
     let mut x = u.to_vec();
     let mut anderson = Anderson::new(ANDERSON_DEPTH, n_free);
     let mut last_residual = f64::INFINITY;
-    if !operator.fresh {
+    if !operator.fresh || (load.is_some() && operator.per_mm.len() != n_free) {
         rebuild(finite, condensation, &x, operator)?;
     }
     for outer in 0..MAX_OUTER_ITERATIONS {
         // The load K x - f_int(x) on the free unknowns.
         let f = finite.internal_forces(&x).map_err(inverted)?;
-        let mut load = vec![0.0; n_free];
-        symmetric_matvec_add(pattern, &operator.values, &free_values(&x), &mut load);
+        let mut rhs = vec![0.0; n_free];
+        symmetric_matvec_add(pattern, &operator.values, &free_values(&x), &mut rhs);
         for (g, &d) in free.iter().enumerate() {
             if d != PRESCRIBED {
-                load[d] -= f[g];
+                rhs[d] -= f[g];
             }
         }
         let mut next = x.clone();
+        let mut control = load.as_ref().map(|(_, c)| LoadControl {
+            per_mm: &operator.per_mm,
+            normal_force_n: c.normal_force_n,
+            change_mm: 0.0,
+        });
         let inner = condensation.equilibrium(
-            &load,
+            &rhs,
             free,
             &mut next,
             surface,
             point,
             stick_predictor && outer == 0,
             &inner_settings,
-            None,
+            control.as_mut(),
         )?;
         newton_iterations += inner.iterations;
+        if let (Some(c), Some((driven, _))) = (control, load.as_ref()) {
+            driven.iter().for_each(|&d| next[d] += c.change_mm);
+        }
         // The true residual at the new iterate.
         let f = finite.internal_forces(&next).map_err(inverted)?;
         let mut contact = vec![0.0; x.len()];
@@ -189,6 +221,9 @@ pub fn equilibrium(
             eprintln!("outer {outer}: residual {residual:.3e} N of {scale:.3e}, inner {}", inner.iterations);
         }
         if residual <= settings.relative_tolerance * scale {
+            if let Some((driven, c)) = load.as_mut() {
+                c.change_mm = driven.first().map_or(0.0, |&d| next[d] - u[d]);
+            }
             u.copy_from_slice(&next);
             return Ok(newton_iterations);
         }

@@ -283,7 +283,8 @@ impl From<fingertip::FingertipMesh> for Finger3 {
 /// as well. At finite strain ([`Kinematics::Finite`]) the body is the
 /// total-Lagrangian one of [`super::finite_body`] with the 2D model's
 /// volumetric function, balanced by [`super::finite_contact`]'s outer
-/// iteration; an indentation only, and not on a display, as yet.
+/// iteration (under a load, with the drive an unknown of each contact
+/// solve).
 pub fn run(
     scenario: &Scenario,
     direction_deg: f64,
@@ -382,12 +383,6 @@ fn run_finger_on(
         Loading::Load(load_n) => LOAD_DEPTH_MM_PER_N * load_n.max(0.5),
     };
     let finite_strain = scenario.kinematics == Kinematics::Finite;
-    if finite_strain && matches!(scenario.loading, Loading::Load(_)) {
-        return invalid("the 3D finger at finite strain takes an indentation (--indent), not a load (--load), as yet");
-    }
-    if finite_strain && scenario.display.is_some() {
-        return invalid("the 3D finger at finite strain does not run on a display as yet (--kinematics small)");
-    }
     let display = scenario.display.as_ref();
     let theta = direction_deg.to_radians();
     let direction = [theta.cos(), theta.sin()];
@@ -440,6 +435,8 @@ fn run_finger_on(
         soft(&materials.hypodermis),
     ];
     let mut prescribed: Vec<usize> = tip.driven_nodes.iter().flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]).collect();
+    // The drive's vertical DOFs (an unknown under a load).
+    let driven_z: Vec<usize> = tip.driven_nodes.iter().map(|&n| 3 * n + 2).collect();
     prescribed.extend_from_slice(&tip.held_dofs);
     prescribed.sort_unstable();
     prescribed.dedup();
@@ -561,8 +558,10 @@ fn run_finger_on(
         // The small-strain K(dt): the small-strain solve's operator, and at
         // finite strain the fallback where the tangent is not positive
         // definite (the outer iteration factorizes its own operator).
-        if body.prepare(dt)? && finite.is_none() {
-            condensation.factorize(body.stiffness_values())?;
+        if body.prepare(dt)? {
+            if finite.is_none() {
+                condensation.factorize(body.stiffness_values())?;
+            }
             if matches!(scenario.loading, Loading::Load(_)) {
                 // The load per mm of the drive: the step's load is affine
                 // in it, with a slope of K(dt) alone.
@@ -650,6 +649,7 @@ fn run_finger_on(
                         &mut |q, w, mode| point(q, w, mode),
                         some_stuck,
                         &newton,
+                        control.as_mut().map(|c| (&driven_z[..], c)),
                     ),
                 };
                 match solved {
