@@ -17,8 +17,9 @@
 //! f_int(u) = P F(u), the full nonlinear equilibrium on every free DOF,
 //! whatever K is; K only sets the rate, |I - K^-1 K_T| where contact does
 //! not dominate. K is the body's tangent stiffness ([`FiniteBody3::tangent`],
-//! without the contact), taken at the first iterate of a step and again
-//! whenever an outer iteration contracts the residual by less than
+//! without the contact), taken at the first iterate of a step of a new
+//! size (the caller invalidates the [`Operator`] then) and again whenever
+//! an outer iteration contracts the residual by less than
 //! [`REBUILD_CONTRACTION`]; where it is not positive definite, the
 //! small-strain stiffness of the step. (With the small-strain K throughout
 //! the shipped finger's slide converged by a factor of only 0.6-0.7 an
@@ -169,9 +170,16 @@ pub fn equilibrium(
     if !operator.fresh || (load.is_some() && operator.per_mm.len() != n_free) {
         rebuild(finite, condensation, &x, operator)?;
     }
+    // The internal forces at the last inner solution.
+    let mut last_forces: Option<(Vec<f64>, Vec<f64>)> = None;
     for outer in 0..MAX_OUTER_ITERATIONS {
-        // The load K x - f_int(x) on the free unknowns.
-        let f = finite.internal_forces(&x).map_err(inverted)?;
+        // The load K x - f_int(x) on the free unknowns (f_int(x) from the
+        // last residual's where x is that iterate: Anderson's first step
+        // after a restart).
+        let f = match last_forces.take() {
+            Some((at, f)) if at == x => f,
+            _ => finite.internal_forces(&x).map_err(inverted)?,
+        };
         let mut rhs = vec![0.0; n_free];
         symmetric_matvec_add(pattern, &operator.values, &free_values(&x), &mut rhs);
         for (g, &d) in free.iter().enumerate() {
@@ -220,6 +228,7 @@ pub fn equilibrium(
         if std::env::var_os("HAPTEX_DEBUG").is_some() {
             eprintln!("outer {outer}: residual {residual:.3e} N of {scale:.3e}, inner {}", inner.iterations);
         }
+        last_forces = Some((next.clone(), f));
         if residual <= settings.relative_tolerance * scale {
             if let Some((driven, c)) = load.as_mut() {
                 c.change_mm = driven.first().map_or(0.0, |&d| next[d] - u[d]);
