@@ -150,3 +150,17 @@ pub fn antisymmetry_over_3_mm(result: &haptex_fem::solid3d::slide::Simulation3) 
     let worst = (0..=30).map(|i| (mu[i] + mu[30 - i]).abs()).fold(0.0f64, f64::max);
     (largest, worst)
 }
+
+/// A display at a constant `u_v` volts (held), the paper's layers, no
+/// vibration, no air gap.
+pub fn constant_display(u_v: f64) -> haptex_fem::display::Display {
+    use haptex_core::electrovibration::LayerStack;
+    use haptex_core::signal::{Extend, VoltageCurve};
+    haptex_fem::display::Display {
+        voltage: VoltageCurve::new(vec![0.0, 1.0], vec![u_v, u_v]).unwrap(),
+        extend: Extend::Hold,
+        stack: LayerStack::PAPER,
+        vibration: None,
+        air_gap_um: 0.0,
+    }
+}

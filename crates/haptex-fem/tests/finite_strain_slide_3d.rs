@@ -160,9 +160,7 @@ fn under_a_load_finite_strain_lands_where_the_indentation_gives_the_load() {
 #[test]
 fn on_a_display_full_slip_is_coulomb_on_the_total_pressure_at_finite_strain() {
     use haptex_core::electrovibration::LayerStack;
-    use haptex_core::signal::{Extend, VoltageCurve};
     use haptex_fem::contact::Electrostatic;
-    use haptex_fem::display::Display;
 
     let u_v = 100.0;
     let mut s = Scenario::paper(SurfaceShape::Flat);
@@ -172,13 +170,7 @@ fn on_a_display_full_slip_is_coulomb_on_the_total_pressure_at_finite_strain() {
     s.slide_mm = 2.0;
     s.step_mm = 0.1;
     s.mu_skin = Some(0.4);
-    s.display = Some(Display {
-        voltage: VoltageCurve::new(vec![0.0, 1.0], vec![u_v, u_v]).unwrap(),
-        extend: Extend::Hold,
-        stack: LayerStack::PAPER,
-        vibration: None,
-        air_gap_um: 0.0,
-    });
+    s.display = Some(common::constant_display(u_v));
     let r = run(&s, 0.0, &mut |_| {}).unwrap();
     for row in &r.history[s.press_steps - 1..] {
         assert!((row.fn_n / 0.3 - 1.0).abs() < 1e-7, "load not held: {row:?}");

@@ -85,28 +85,41 @@ impl ContactSurface {
         p.position[2] + w - plane_z
     }
 
-    /// The faces' current positions at `m` x `m` points each, evenly
-    /// spread over the face (the centres of an m x m grid of its
-    /// parameter square): `reference` the mesh's node positions, `u` the
-    /// global displacements (3 per node). Between the contact points, for
-    /// what the points cannot see.
+    /// The faces' current positions at m x m points each, evenly spread
+    /// over the face (the centres of an m x m grid of its parameter
+    /// square), m the face's longest reference side over `spacing_mm`
+    /// rounded up (at least 2, at most 64), on the faces whose current node
+    /// positions `keep` accepts: `reference` the mesh's node positions, `u`
+    /// the global displacements (3 per node). Between the contact points,
+    /// for what the points cannot see.
     pub fn face_samples<'a>(
         &'a self,
         reference: &'a [[f64; 3]],
         u: &'a [f64],
-        m: usize,
+        spacing_mm: f64,
+        keep: impl Fn(&[[f64; 3]; 4]) -> bool + 'a,
     ) -> impl Iterator<Item = [f64; 3]> + 'a {
         const CORNERS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
-        let at = move |i: usize| 2.0 * (i as f64 + 0.5) / m as f64 - 1.0;
-        self.points.chunks(self.per_face.max(1)).flat_map(move |face| {
-            let nodes = face[0].nodes;
-            let x: [[f64; 3]; 4] = nodes.map(|n| std::array::from_fn(|d| reference[n][d] + u[3 * n + d]));
-            (0..m * m).map(move |k| {
-                let (r, s) = (at(k % m), at(k / m));
-                let shape = CORNERS.map(|[a, b]| 0.25 * (1.0 + a * r) * (1.0 + b * s));
-                std::array::from_fn(|d| (0..4).map(|a| shape[a] * x[a][d]).sum())
-            })
-        })
+        let current = move |n: usize| -> [f64; 3] { std::array::from_fn(|d| reference[n][d] + u[3 * n + d]) };
+        self.points.chunks(self.per_face.max(1)).filter(move |face| keep(&face[0].nodes.map(current))).flat_map(
+            move |face| {
+                let nodes = face[0].nodes;
+                let side = (0..4)
+                    .map(|a| {
+                        let (p, q) = (reference[nodes[a]], reference[nodes[(a + 1) % 4]]);
+                        ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+                    })
+                    .fold(0.0, f64::max);
+                let m = (side / spacing_mm).ceil().clamp(2.0, 64.0) as usize;
+                let at = move |i: usize| 2.0 * (i as f64 + 0.5) / m as f64 - 1.0;
+                let x = nodes.map(current);
+                (0..m * m).map(move |k| {
+                    let (r, s) = (at(k % m), at(k / m));
+                    let shape = CORNERS.map(|[a, b]| 0.25 * (1.0 + a * r) * (1.0 + b * s));
+                    std::array::from_fn(|d| (0..4).map(|a| shape[a] * x[a][d]).sum())
+                })
+            },
+        )
     }
 
     /// The total reference area of the faces (mm^2).
@@ -147,8 +160,14 @@ mod tests {
         let s = ContactSurface::with_rule(&m, &faces, 4);
         // Lifted by 0.5 mm and moved 0.2 mm along y.
         let u: Vec<f64> = (0..3 * m.n_nodes()).map(|i| [0.0, 0.2, 0.5][i % 3]).collect();
-        let samples: Vec<[f64; 3]> = s.face_samples(&m.nodes, &u, 5).collect();
+        // Faces of sides 1 and 2 (x) by 2 (y), tilted by 0.1: their longest
+        // sides 2 and 2.01 mm, so 5 samples along each direction at 0.41 mm.
+        let samples: Vec<[f64; 3]> = s.face_samples(&m.nodes, &u, 0.41, |_| true).collect();
         assert_eq!(samples.len(), 2 * 25);
+        // The faces kept: the second (x from 1 to 3) alone.
+        let second: Vec<[f64; 3]> = s.face_samples(&m.nodes, &u, 0.41, |x| x.iter().all(|p| p[0] >= 1.0)).collect();
+        assert_eq!(second.len(), 25);
+        assert!(second.iter().all(|p| p[0] > 1.0));
         for x in &samples {
             assert!((x[2] - (0.1 * x[0] + 0.5)).abs() < 1e-12, "{x:?} off the displaced face");
         }
