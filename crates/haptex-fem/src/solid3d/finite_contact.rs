@@ -139,6 +139,10 @@ pub fn equilibrium(
                    x: &[f64],
                    operator: &mut Operator|
      -> Result<(), FiniteContactError> {
+        // Not fresh until built: a rebuild that fails (an element inverted
+        // at x) leaves the operator to be rebuilt at the next call, which
+        // would otherwise find its values cleared.
+        operator.fresh = false;
         operator.values.clear();
         operator.per_mm.clear();
         match &unit_drive {

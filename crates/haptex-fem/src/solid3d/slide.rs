@@ -97,7 +97,8 @@ pub struct Row3 {
     /// between and beside their contact points: the penalty's penetration
     /// where the mesh resolves the surface, more where features narrower
     /// than the contact points' spacing pass between them, which no
-    /// contact point feels (see [`Simulation3::reach_limit_mm`]).
+    /// contact point feels (see [`Simulation3::reach_limit_mm`]); 0 where
+    /// the surface is nowhere above the skin.
     pub surface_reach_mm: f64,
 }
 
@@ -757,7 +758,7 @@ fn run_finger_on(
         let surface_reach_mm = candidate
             .face_samples(&tip_nodes, &u, REACH_SPACING_MM, |x| x.iter().any(|p| p[2] - lift <= high))
             .map(|x| field.height_gradient(x[0] + s[0], x[1] + s[1]).0 - (x[2] - lift))
-            .fold(f64::NEG_INFINITY, f64::max);
+            .fold(0.0, f64::max);
         for p in &beyond.points {
             if field.at(relative(p.position, p.displacement(&u), s)).depth > 0.0 {
                 return Err(SimulationError::ContactBeyondRegion { x_mm: distance, t_s, z_cut_mm: z_cut });
