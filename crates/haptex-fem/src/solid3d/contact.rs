@@ -8,6 +8,14 @@
 
 use super::mesh::Mesh3;
 
+/// A face's corners in its parameter square, in order around it.
+const CORNERS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+
+/// The bilinear shape functions of a face's four nodes at (r, s).
+fn bilinear(r: f64, s: f64) -> [f64; 4] {
+    CORNERS.map(|[a, b]| 0.25 * (1.0 + a * r) * (1.0 + b * s))
+}
+
 /// One contact point: on a face of four nodes, the shape-function values
 /// at the point, its reference position (mm) and its area weight (mm^2).
 #[derive(Debug, Clone, PartialEq)]
@@ -43,14 +51,13 @@ impl ContactSurface {
     /// The n x n Gauss-Legendre points of each face (n from 1 to 4), in
     /// rows of the face's first direction.
     pub fn with_rule(mesh: &Mesh3, faces: &[[usize; 4]], n: usize) -> Self {
-        const CORNERS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
         let (abscissae, weights) = crate::contact::gauss_legendre(n.clamp(1, 4));
         let mut points = Vec::with_capacity(abscissae.len() * abscissae.len() * faces.len());
         for face in faces {
             let x = face.map(|n| mesh.nodes[n]);
             for (j, &gs) in abscissae.iter().enumerate() {
                 for (i, &gr) in abscissae.iter().enumerate() {
-                    let shape = CORNERS.map(|[r, s]| 0.25 * (1.0 + r * gr) * (1.0 + s * gs));
+                    let shape = bilinear(gr, gs);
                     let dr = CORNERS.map(|[r, s]| 0.25 * r * (1.0 + s * gs));
                     let ds = CORNERS.map(|[r, s]| 0.25 * s * (1.0 + r * gr));
                     let mut position = [0.0; 3];
@@ -99,7 +106,6 @@ impl ContactSurface {
         spacing_mm: f64,
         keep: impl Fn(&[[f64; 3]; 4]) -> bool + 'a,
     ) -> impl Iterator<Item = [f64; 3]> + 'a {
-        const CORNERS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
         let current = move |n: usize| -> [f64; 3] { std::array::from_fn(|d| reference[n][d] + u[3 * n + d]) };
         self.points.chunks(self.per_face.max(1)).filter(move |face| keep(&face[0].nodes.map(current))).flat_map(
             move |face| {
@@ -115,7 +121,7 @@ impl ContactSurface {
                 let x = nodes.map(current);
                 (0..m * m).map(move |k| {
                     let (r, s) = (at(k % m), at(k / m));
-                    let shape = CORNERS.map(|[a, b]| 0.25 * (1.0 + a * r) * (1.0 + b * s));
+                    let shape = bilinear(r, s);
                     std::array::from_fn(|d| (0..4).map(|a| shape[a] * x[a][d]).sum())
                 })
             },
