@@ -94,11 +94,16 @@ enum Listing {
     Quads,
 }
 
-/// Queries a batched prediction puts into one matrix product: a block's
-/// weights (64 x N doubles, 207 KB at N = 405) stay in a core's L2 cache
-/// while the product streams the outputs once per block instead of once
-/// per query.
-pub const BATCH_BLOCK: usize = 64;
+/// Queries a batched prediction puts into one matrix product. The product
+/// packs the N x M outputs once per block, so a larger block spreads that
+/// over more queries: at N 405, M 500 (`scripts/compare_cae_numpy.py`'s
+/// synthetic case, one thread) a batch took 8.7 µs a query with blocks of
+/// 256 against 9.7 µs with 64, and 9.0 µs with 512 or 1024 (means of 4 to
+/// 8 alternated runs, Intel Xeon with AVX-512, 2 MiB L2 a core,
+/// 2026-12-08).
+/// 256 keeps several blocks for rayon's threads from 512 queries on; a
+/// block's weights are 256 x N doubles (830 KB at N = 405).
+pub const BATCH_BLOCK: usize = 256;
 
 /// A block whose queries use fewer than 1 / SPARSE_BLOCK_FRACTION of the
 /// model vectors on average (after the cutoff and pruning) is summed query
