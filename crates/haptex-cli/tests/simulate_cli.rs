@@ -407,14 +407,22 @@ fn simulate_3d_at_finite_strain() {
 /// A surface whose crest passes between the 3D skin's contact points (a
 /// bump of 0.5 by 0.5 mm on the coarse mesh) completes with a warning on
 /// stderr, even with -q, and in the profile's comments, which the profile
-/// reader skips; the resolved default bump has none.
+/// reader skips; the resolved default bump has none, nor the narrow one
+/// with its contact points on 2 x 2 parts of each face, which the header
+/// states.
 #[test]
 fn simulate_3d_warns_where_the_mesh_does_not_resolve_the_surface() {
     let dir = tempfile::tempdir().unwrap();
     let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
-    for (width, height, out, warned) in [("0.5", "0.5", "spike.csv", true), ("1.5", "0.3", "bump.csv", false)] {
+    for (width, height, out, parts, warned) in [
+        ("0.5", "0.5", "spike.csv", "1", true),
+        ("1.5", "0.3", "bump.csv", "1", false),
+        ("0.5", "0.5", "parts.csv", "2", false),
+    ] {
         let result = haptex(&[
             "simulate",
+            "--contact-parts",
+            parts,
             "--model",
             "3d",
             "--mesh",
@@ -438,8 +446,9 @@ fn simulate_3d_warns_where_the_mesh_does_not_resolve_the_surface() {
         assert_eq!(err.contains("warning: the surface reached"), warned, "{err}");
         let text = std::fs::read_to_string(p(out)).unwrap();
         assert_eq!(text.contains("# warning: the surface reached"), warned, "{text}");
+        assert_eq!(text.contains("contact points on 2 x 2 parts of each face"), parts == "2", "{text}");
         if warned {
-            assert!(err.contains("a finer --mesh"), "{err}");
+            assert!(err.contains("a finer --mesh, or more --contact-parts"), "{err}");
         }
         let profile = haptex_core::FrictionProfile::read_csv_file(std::path::Path::new(&p(out))).unwrap();
         assert!(profile.len() >= 5, "{} rows", profile.len());
@@ -458,6 +467,9 @@ fn simulate_3d_refuses_what_it_does_not_support() {
         (vec!["--model", "3d", "--direction-deg", "NaN"], "--direction-deg NaN must be a finite angle"),
         (vec!["--model", "3d", "--direction-deg", "400"], "--direction-deg 400 must be a finite angle"),
         (vec!["--direction-deg", "30"], "--direction-deg applies to --model 3d only"),
+        (vec!["--contact-parts", "2"], "--contact-parts applies to --model 3d only"),
+        (vec!["--model", "3d", "--contact-parts", "0"], "0 is not in 1..=8"),
+        (vec!["--model", "3d", "--contact-parts", "9"], "9 is not in 1..=8"),
         (vec!["--surface", "map:h.csv"], "a height map needs --model 3d"),
         (vec!["--model", "3d", "--load", "1000"], "load = 1000 N must be positive and at most 100 N"),
         (vec!["--model", "3d", "--surface", "map:/nonexistent/h.csv"], "/nonexistent/h.csv"),

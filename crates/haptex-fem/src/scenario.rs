@@ -69,6 +69,12 @@ pub struct Scenario {
     pub penalty_mpa_per_mm: f64,
     /// Smoothed onset of the normal penalty (mm), see `ContactLaw::pressure`.
     pub smoothing_mm: f64,
+    /// The 3D finger only: each skin face's contact points on `contact_parts`
+    /// x `contact_parts` equal parts of it (1 to
+    /// [`crate::solid3d::slide::MAX_CONTACT_PARTS`]), for surfaces whose
+    /// crests pass between the points of whole faces
+    /// ([`crate::solid3d::contact::ContactSurface::with_composite_rule`]).
+    pub contact_parts: usize,
     /// Keep a full-field frame every this many slide steps (0: none besides
     /// the end of the press and the step nearest the feature).
     pub frame_every: usize,
@@ -103,6 +109,7 @@ impl Scenario {
             mu_skin: None,
             penalty_mpa_per_mm: 200.0,
             smoothing_mm: 2e-4,
+            contact_parts: 1,
             frame_every: 0,
             settings: SolverSettings::default(),
             display: None,

@@ -118,6 +118,14 @@ pub struct SimulateArgs {
     /// features, as in 2D; 90: along them).
     #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
     direction_deg: Option<f64>,
+    /// With --model 3d: each skin face's 4 x 4 contact points on N x N
+    /// equal parts of the face (1 to 8; N^2 times the points), for crests
+    /// sharper than the faces, which pass between the points of whole
+    /// faces (the warning "the surface reached ... between its contact
+    /// points" says where). Costs time: docs/fem.md, "Contact points
+    /// closer than the faces".
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(1..=8))]
+    contact_parts: Option<u8>,
     /// Finger model file (default: the shipped data/finger/finger-2d.toml).
     #[arg(long, value_name = "FILE")]
     finger: Option<PathBuf>,
@@ -228,10 +236,16 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     scenario.display = display;
     scenario.penalty_mpa_per_mm = args.penalty;
     if three_d {
+        scenario.contact_parts = args.contact_parts.map_or(1, usize::from);
         return run_3d(&args, scenario);
     }
     if args.direction_deg.is_some() {
         anyhow::bail!("--direction-deg applies to --model 3d only (the 2D finger slides along x)");
+    }
+    if args.contact_parts.is_some() {
+        anyhow::bail!(
+            "--contact-parts applies to --model 3d only (the 2D finger's contact points are on its segments)"
+        );
     }
     // Every setting is checked before anything is sized by it.
     let slide_steps = scenario.slide_steps()?;
@@ -355,7 +369,11 @@ fn run_3d(args: &SimulateArgs, mut scenario: Scenario) -> anyhow::Result<()> {
         // Even with --quiet: the profile is the mesh's where this holds.
         eprintln!("warning: {u}; the forces there are the mesh's, not the surface's");
     }
-    let description = format!("{}; direction {} degrees", describe(args, &scenario), Num(direction));
+    let mut description = format!("{}; direction {} degrees", describe(args, &scenario), Num(direction));
+    if scenario.contact_parts > 1 {
+        let n = scenario.contact_parts;
+        description.push_str(&format!("; contact points on {n} x {n} parts of each face"));
+    }
     Output::new(args.output.clone()).write(|w| solid3d_output::write_profile(&result, &description, w))?;
     if let Some(path) = &args.history {
         haptex_core::io::write_atomic(path, |w| solid3d_output::write_history(&result, w))?;

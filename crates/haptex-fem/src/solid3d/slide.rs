@@ -184,7 +184,7 @@ impl std::fmt::Display for Unresolved {
             f,
             "the surface reached {:.3} mm into the skin between its contact points at x = {:.3} mm, more than half \
              the outer skin layer ({:.3} mm): the mesh does not resolve the surface's features there (a finer \
-             --mesh resolves narrower ones)",
+             --mesh, or more --contact-parts, resolves narrower ones)",
             self.reach_mm, self.x_mm, self.limit_mm
         )
     }
@@ -393,7 +393,8 @@ fn run_finger_on(
     // skin's points are those of the contact, so that the first touch is
     // the contact's: with 2 x 2 points the 4 x 4 ones started up to 2 um
     // inside the surface at the default mesh.)
-    let skin = ContactSurface::with_rule(&tip.mesh, &tip.skin_faces, CONTACT_RULE);
+    let parts = scenario.contact_parts;
+    let skin = ContactSurface::with_composite_rule(&tip.mesh, &tip.skin_faces, CONTACT_RULE, parts);
     let (lo, hi) = skin.points.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
         ([lo[0].min(p.position[0]), lo[1].min(p.position[1])], [hi[0].max(p.position[0]), hi[1].max(p.position[1])])
     });
@@ -420,8 +421,16 @@ fn run_finger_on(
     let z_cut = 1.5 * (indent + relief) + 0.3;
     let (inside, outside): (Vec<[usize; 4]>, Vec<[usize; 4]>) =
         tip.skin_faces.iter().partition(|face| face.iter().any(|&n| tip.mesh.nodes[n][2] <= z_cut));
-    let candidate = ContactSurface::with_rule(&tip.mesh, &inside, CONTACT_RULE);
+    let candidate = ContactSurface::with_composite_rule(&tip.mesh, &inside, CONTACT_RULE, parts);
     let beyond = ContactSurface::new(&tip.mesh, &outside);
+    // The lightest contact point of the CONTACT_RULE x CONTACT_RULE rule,
+    // for the force floor below (the residual is the nodes': a composite
+    // rule's smaller points leave it as it is).
+    let lightest = ContactSurface::with_rule(&tip.mesh, &inside, CONTACT_RULE)
+        .points
+        .iter()
+        .map(|p| p.weight)
+        .fold(f64::INFINITY, f64::min);
 
     let soft = |m: &Material| {
         let mut m = m.clone();
@@ -464,7 +473,6 @@ fn run_finger_on(
     };
     // The 2D model's tolerances and limits; the force floor of a point's
     // penalty at the floor's depth, on the lightest point.
-    let lightest = candidate.points.iter().map(|p| p.weight).fold(f64::INFINITY, f64::min);
     let newton = NewtonSettings {
         max_iterations: scenario.settings.max_iterations,
         continuation_iterations: scenario.settings.continuation_iterations,
@@ -861,8 +869,19 @@ pub fn validate(scenario: &Scenario) -> Result<(), SimulationError> {
             )));
         }
     }
+    if !(1..=MAX_CONTACT_PARTS).contains(&scenario.contact_parts) {
+        return Err(SimulationError::Invalid(format!(
+            "contact parts = {} must be from 1 to {MAX_CONTACT_PARTS}",
+            scenario.contact_parts
+        )));
+    }
     scenario.validate()
 }
+
+/// The most parts a skin face's contact points may be spread over along
+/// each of its directions ([`Scenario::contact_parts`]): 8 x 8 parts of 4 x
+/// 4 points, 1 024 points a face.
+pub const MAX_CONTACT_PARTS: usize = 8;
 
 /// A step's aim: the bone's depth below first touch (mm), or the normal
 /// force (N).
