@@ -71,7 +71,7 @@ pub struct Scenario {
     pub smoothing_mm: f64,
     /// The 3D finger only: each skin face's contact points on `contact_parts`
     /// x `contact_parts` equal parts of it (1 to
-    /// [`crate::solid3d::slide::MAX_CONTACT_PARTS`]), for surfaces whose
+    /// [`crate::solid3d::contact::MAX_CONTACT_PARTS`]), for surfaces whose
     /// crests pass between the points of whole faces
     /// ([`crate::solid3d::contact::ContactSurface::with_composite_rule`]).
     pub contact_parts: usize,

@@ -124,7 +124,7 @@ pub struct SimulateArgs {
     /// faces (the warning "the surface reached ... between its contact
     /// points" says where). Costs time: docs/fem.md, "Contact points
     /// closer than the faces".
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(1..=8))]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(1..=haptex_fem::solid3d::contact::MAX_CONTACT_PARTS as i64))]
     contact_parts: Option<u8>,
     /// Finger model file (default: the shipped data/finger/finger-2d.toml).
     #[arg(long, value_name = "FILE")]

@@ -8,6 +8,12 @@
 
 use super::mesh::Mesh3;
 
+/// The most parts a face's contact points may be spread over along each
+/// of its directions ([`ContactSurface::with_composite_rule`],
+/// [`crate::scenario::Scenario::contact_parts`]): 8 x 8 parts of 4 x 4
+/// points, 1 024 points a face.
+pub const MAX_CONTACT_PARTS: usize = 8;
+
 /// A face's corners in its parameter square, in order around it.
 const CORNERS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
 
@@ -55,13 +61,13 @@ impl ContactSurface {
     }
 
     /// The composite rule: each face's parameter square cut into `parts` x
-    /// `parts` equal squares (1 to 8), n x n Gauss-Legendre points in each
+    /// `parts` equal squares (1 to [`MAX_CONTACT_PARTS`]), n x n Gauss-Legendre points in each
     /// (n from 1 to 4): the points `parts` times closer together, for a
     /// surface whose crests are sharper than the faces. In rows of the
     /// face's first direction, over the whole face.
     pub fn with_composite_rule(mesh: &Mesh3, faces: &[[usize; 4]], n: usize, parts: usize) -> Self {
         let (gauss, gauss_weights) = crate::contact::gauss_legendre(n.clamp(1, 4));
-        let parts = parts.clamp(1, 8);
+        let parts = parts.clamp(1, MAX_CONTACT_PARTS);
         let h = 1.0 / parts as f64;
         let (abscissae, weights): (Vec<f64>, Vec<f64>) = (0..parts)
             .flat_map(|p| {

@@ -878,10 +878,7 @@ pub fn validate(scenario: &Scenario) -> Result<(), SimulationError> {
     scenario.validate()
 }
 
-/// The most parts a skin face's contact points may be spread over along
-/// each of its directions ([`Scenario::contact_parts`]): 8 x 8 parts of 4 x
-/// 4 points, 1 024 points a face.
-pub const MAX_CONTACT_PARTS: usize = 8;
+pub use super::contact::MAX_CONTACT_PARTS;
 
 /// A step's aim: the bone's depth below first touch (mm), or the normal
 /// force (N).
