@@ -63,6 +63,26 @@ impl Template {
         (self == Template::Sine).then(|| self.unresolved_crests(mesh, width, height).is_none())
     }
 
+    /// The grid estimate of this template's rows (`matrix`, sampled on
+    /// `grid`): multilinear interpolation over r_w, r_h and velocity, a
+    /// sine's profiles blended in phase (its period r_w is input 0,
+    /// [`crate::grid::GridInterpolation::in_phase`]; docs/database.md, "The
+    /// sine in phase").
+    pub fn grid_interpolation(
+        self,
+        matrix: &ModelMatrix,
+        grid: &Grid,
+    ) -> Result<crate::grid::GridInterpolation, crate::grid::GridError> {
+        let interpolation = crate::grid::GridInterpolation::new(matrix)?;
+        match self {
+            Template::Sine if grid.points >= 2 => {
+                let step = (grid.xi_max_mm - grid.xi_min_mm) / (grid.points - 1) as f64;
+                interpolation.in_phase(0, grid.xi_min_mm, step)
+            }
+            _ => Ok(interpolation),
+        }
+    }
+
     /// The model-matrix file of this template in a database directory.
     pub fn file_name(self) -> String {
         format!("{}.csv", self.name())
@@ -645,7 +665,7 @@ impl TemplateModel {
                 .map(|n| matrix.input_row(n)[l])
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)))
         });
-        let grid = crate::grid::GridInterpolation::new(&matrix);
+        let grid = template.grid_interpolation(&matrix, &metadata.grid);
         let estimator = metadata.served_estimator();
         if let (Estimator::Grid, Err(e)) = (estimator, &grid) {
             return Err(DatabaseError::File {
@@ -796,9 +816,14 @@ impl TemplateModel {
                     let counts: Vec<String> = g.axes().iter().map(|a| a.len().to_string()).collect();
                     format!(" ({} values of r_w x r_h x velocity)", counts.join(" x "))
                 });
+                let phase = if self.grid_interpolation.as_ref().is_some_and(|g| g.is_in_phase()) {
+                    ", the profiles blended in phase (at the same (x - x0) / r_w)"
+                } else {
+                    ""
+                };
                 format!(
-                    "grid estimate: multilinear interpolation over the grid of {} FE profiles{axes}; nearest case \
-                     row {} at normalized distance {:.3}",
+                    "grid estimate: multilinear interpolation over the grid of {} FE profiles{axes}{phase}; nearest \
+                     case row {} at normalized distance {:.3}",
                     self.cae.matrix().n(),
                     prediction.diagnostics.nearest_row + 1,
                     prediction.diagnostics.nearest_distance,

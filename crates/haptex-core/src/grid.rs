@@ -9,6 +9,15 @@
 //! chosen by predicting each row from neighbours a whole grid step away,
 //! which favours narrow kernels that, between rows, are nearly the nearest
 //! row. Outside an input's range the value at its end is held.
+//!
+//! Profiles of a periodic feature can be blended in phase
+//! ([`GridInterpolation::in_phase`]): a sine grating's profile at period P
+//! is, once the contact has entered it, close to a function of xi / P, so
+//! each node's profile is first resampled at the query's phase (xi P_node /
+//! P_query) and only then weighted. Blended on the absolute xi axis,
+//! profiles of neighbouring periods are out of step and their sum smears
+//! the modulation it should interpolate (docs/database.md, "The sine in
+//! phase").
 
 use crate::cae::ModelMatrix;
 
@@ -22,6 +31,17 @@ pub struct GridInterpolation {
     axes: Vec<Vec<f64>>,
     /// The row at each node, the last input varying fastest.
     rows: Vec<usize>,
+    /// The input that is the outputs' period, if they are blended in phase.
+    phase: Option<Phase>,
+}
+
+/// Outputs sampled at positions `start + k step` (k = 0 .. M - 1) of a
+/// feature whose period is input `input`, phase 0 at position 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Phase {
+    input: usize,
+    start: f64,
+    step: f64,
 }
 
 /// A model matrix that is not a full tensor grid.
@@ -63,7 +83,40 @@ impl GridInterpolation {
             }
             rows[node] = n;
         }
-        Ok(Self { axes, rows })
+        Ok(Self { axes, rows, phase: None })
+    }
+
+    /// This grid with the outputs blended in phase: they are a profile
+    /// sampled at positions `start + k step` (k = 0 .. M - 1, M the
+    /// outputs of the matrix it is used with) of a periodic feature whose
+    /// period is input `input` and whose phase is 0 at position 0. A node's
+    /// profile enters the estimate at the query's phase, read at xi P_node
+    /// / P_query by linear interpolation between its samples; a position
+    /// that falls beyond the samples is read a whole number of the node's
+    /// periods back inside them (the profile is periodic there, the
+    /// feature extending past the samples), or, for a period longer than
+    /// the samples, at their end. At a node's own period it is its row.
+    /// The query's period is held at the axis's ends, as every input is.
+    pub fn in_phase(mut self, input: usize, start: f64, step: f64) -> Result<Self, GridError> {
+        let axis = self
+            .axes
+            .get(input)
+            .ok_or_else(|| GridError(format!("no input {} of {} to take as the period", input + 1, self.axes.len())))?;
+        if let Some(p) = axis.iter().find(|p| !(p.is_finite() && **p > 0.0)) {
+            return Err(GridError(format!("a period of {p}: the periods must be positive")));
+        }
+        if !(start.is_finite() && step.is_finite() && step > 0.0) {
+            return Err(GridError(format!(
+                "positions from {start} in steps of {step}: need a finite start and a positive step"
+            )));
+        }
+        self.phase = Some(Phase { input, start, step });
+        Ok(self)
+    }
+
+    /// Whether the outputs are blended in phase ([`Self::in_phase`]).
+    pub fn is_in_phase(&self) -> bool {
+        self.phase.is_some()
     }
 
     /// Each input's grid values.
@@ -91,22 +144,70 @@ impl GridInterpolation {
             lower[l] = j;
             t[l] = ((q - axis[j]) / (axis[j + 1] - axis[j])).clamp(0.0, 1.0);
         }
+        // The query's period, held at the axis's ends.
+        let period = self.phase.map(|p| {
+            let axis = &self.axes[p.input];
+            query[p.input].clamp(axis[0], axis[axis.len() - 1])
+        });
         out.fill(0.0);
         for corner in 0..(1usize << d) {
             let (mut node, mut weight) = (0usize, 1.0f64);
+            let mut node_period = 0.0;
             for (l, axis) in self.axes.iter().enumerate() {
                 let upper = corner >> (d - 1 - l) & 1 == 1;
                 // (An upper node beyond a constant input's one value has weight 0.)
-                node = node * axis.len() + (lower[l] + usize::from(upper)).min(axis.len() - 1);
+                let j = (lower[l] + usize::from(upper)).min(axis.len() - 1);
+                node = node * axis.len() + j;
                 weight *= if upper { t[l] } else { 1.0 - t[l] };
+                if self.phase.is_some_and(|p| p.input == l) {
+                    node_period = axis[j];
+                }
             }
             if weight == 0.0 {
                 continue;
             }
-            for (o, &c) in out.iter_mut().zip(matrix.output_row(self.rows[node])) {
-                *o += weight * c;
+            let row = matrix.output_row(self.rows[node]);
+            match (self.phase, period) {
+                (Some(phase), Some(period)) if node_period != period => {
+                    add_in_phase(row, phase.start, phase.step, node_period, period, weight, out);
+                }
+                _ => {
+                    for (o, &c) in out.iter_mut().zip(row) {
+                        *o += weight * c;
+                    }
+                }
             }
         }
+    }
+}
+
+/// out_k += weight row(xi_k P_row / P), xi_k = start + k step: a profile
+/// `row` of a periodic feature of period `row_period` (phase 0 at xi = 0),
+/// sampled at the xi_k, added at the phase of period `period`
+/// ([`GridInterpolation::in_phase`]). Read between its samples linearly; a
+/// position beyond them is moved back by whole periods `row_period` (or
+/// held at the end when one period is longer than the samples).
+pub fn add_in_phase(row: &[f64], start: f64, step: f64, row_period: f64, period: f64, weight: f64, out: &mut [f64]) {
+    let m = row.len();
+    if m < 2 || row_period == period {
+        for (o, &c) in out.iter_mut().zip(row) {
+            *o += weight * c;
+        }
+        return;
+    }
+    let (ratio, period) = (row_period / period, row_period);
+    let end = start + (m - 1) as f64 * step;
+    for (k, o) in out.iter_mut().enumerate().take(m) {
+        let mut x = (start + k as f64 * step) * ratio;
+        if x > end {
+            x -= ((x - end) / period).ceil() * period;
+        } else if x < start {
+            x += ((start - x) / period).ceil() * period;
+        }
+        let u = ((x - start) / step).clamp(0.0, (m - 1) as f64);
+        let j = (u as usize).min(m - 2);
+        let f = u - j as f64;
+        *o += weight * (row[j] + f * (row[j + 1] - row[j]));
     }
 }
 
@@ -153,5 +254,68 @@ mod tests {
         let mut out = [0.0; 2];
         g.predict_into(&flat, &[0.25, 3.0], &mut out);
         assert_eq!(out, [0.25, 0.0]);
+    }
+
+    /// A sine of period P sampled at xi from -5 to 5 mm, rows at the
+    /// periods 1.0, 1.25 and 1.5 mm and two amplitudes: in phase, the
+    /// estimate at a period between rows is that period's sine to the
+    /// error of reading between samples (h^2 k^2 / 8 of the amplitude, k
+    /// = 2 pi / P, h the step: 2.5e-4 here), at the ends too (the
+    /// positions read a period back); on the absolute axis, the rows'
+    /// sines are out of step and the estimate misses by a large fraction
+    /// of the amplitude. At a row's period the row is returned.
+    #[test]
+    fn a_sine_between_periods_is_that_periods_sine_in_phase() {
+        let (start, step, m) = (-5.0, 0.02, 501);
+        let xi: Vec<f64> = (0..m).map(|k| start + k as f64 * step).collect();
+        let profile = |p: f64, a: f64| -> Vec<f64> {
+            xi.iter().map(|x| 0.5 + a * (std::f64::consts::TAU * x / p).sin()).collect()
+        };
+        let (mut b, mut c) = (Vec::new(), Vec::new());
+        for p in [1.0, 1.25, 1.5] {
+            for a in [0.05, 0.1] {
+                b.extend([p, a]);
+                c.extend(profile(p, a));
+            }
+        }
+        let names = (0..m).map(|k| format!("y{k}")).collect();
+        let matrix = ModelMatrix::new(vec!["p".into(), "a".into()], names, b, c).unwrap();
+        let plain = GridInterpolation::new(&matrix).unwrap();
+        let phased = plain.clone().in_phase(0, start, step).unwrap();
+        assert!(phased.is_in_phase() && !plain.is_in_phase());
+        let mut out = vec![0.0; m];
+        for (p, a) in [(1.1, 0.07), (1.37, 0.1), (1.25, 0.06), (1.49, 0.05)] {
+            let want = profile(p, a);
+            phased.predict_into(&matrix, &[p, a], &mut out);
+            let bound = a * (step * std::f64::consts::TAU / 1.0).powi(2) / 8.0 + 1e-15;
+            let worst = out.iter().zip(&want).map(|(o, w)| (o - w).abs()).fold(0.0, f64::max);
+            assert!(worst <= bound, "P {p}, A {a}: {worst:e} > {bound:e}");
+            plain.predict_into(&matrix, &[p, a], &mut out);
+            let worst = out.iter().zip(&want).map(|(o, w)| (o - w).abs()).fold(0.0, f64::max);
+            if [1.1, 1.37].contains(&p) {
+                assert!(worst > 0.3 * a, "P {p}: the absolute axis missed by only {worst}");
+            }
+        }
+        phased.predict_into(&matrix, &[1.25, 0.1], &mut out);
+        assert_eq!(out, profile(1.25, 0.1));
+        // Beyond the axis the period is held: the end row.
+        phased.predict_into(&matrix, &[2.0, 0.1], &mut out);
+        assert_eq!(out, profile(1.5, 0.1));
+    }
+
+    #[test]
+    fn a_period_must_be_a_positive_input() {
+        let matrix = ModelMatrix::new(
+            vec!["p".into(), "a".into()],
+            vec!["y".into()],
+            vec![0.0, 1.0, 1.0, 1.0, 0.0, 2.0, 1.0, 2.0],
+            vec![1.0, 2.0, 3.0, 4.0],
+        )
+        .unwrap();
+        let g = GridInterpolation::new(&matrix).unwrap();
+        assert!(g.clone().in_phase(2, 0.0, 1.0).unwrap_err().to_string().contains("no input 3 of 2"));
+        assert!(g.clone().in_phase(0, 0.0, 1.0).unwrap_err().to_string().contains("must be positive"));
+        assert!(g.clone().in_phase(1, 0.0, 0.0).unwrap_err().to_string().contains("positive step"));
+        assert!(g.in_phase(1, 0.0, 1.0).is_ok());
     }
 }

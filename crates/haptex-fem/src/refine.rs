@@ -46,7 +46,6 @@ use std::path::Path;
 
 use haptex_core::cae::{ModelMatrix, OptimizeOptions, optimize_widths};
 use haptex_core::database::{self, INPUTS, Metadata, RefineRound, Template};
-use haptex_core::grid::GridInterpolation;
 use haptex_core::io::FileSet;
 
 use crate::sweep::{DatabaseSpec, Run, SweepError, build_runs, read_run_profile, write_matrix};
@@ -179,8 +178,15 @@ pub fn relative_error(estimate: &[f64], fe: &[f64]) -> (f64, f64, f64) {
 /// The leave-one-line-out error of every interior value of `axis`: the
 /// largest relative error over the rows at that value, predicted between
 /// their neighbours along the axis. Indexed like the axis's values; the
-/// ends get `None`.
-fn line_errors(rows: &Rows, axis: usize, counts: &dyn Fn(&[f64; 3]) -> bool) -> Result<Vec<Option<f64>>, SweepError> {
+/// ends get `None`. With `phase` (the positions' start and step, for a
+/// sine along r_w, its period) the neighbours are blended in phase, as the
+/// grid estimate blends them ([`Template::grid_interpolation`]).
+fn line_errors(
+    rows: &Rows,
+    axis: usize,
+    counts: &dyn Fn(&[f64; 3]) -> bool,
+    phase: Option<(f64, f64)>,
+) -> Result<Vec<Option<f64>>, SweepError> {
     let values = rows.axis_values(axis);
     let index = rows.index();
     let mut out = vec![None; values.len()];
@@ -200,7 +206,15 @@ fn line_errors(rows: &Rows, axis: usize, counts: &dyn Fn(&[f64; 3]) -> bool) -> 
                     inputs[0], inputs[1], inputs[2], AXES[axis]
                 )));
             };
-            let estimate: Vec<f64> = lo.iter().zip(hi).map(|(l, h)| (1.0 - t) * l + t * h).collect();
+            let estimate: Vec<f64> = match phase {
+                Some((start, step)) => {
+                    let mut e = vec![0.0; fe.len()];
+                    haptex_core::grid::add_in_phase(lo, start, step, a, values[i], 1.0 - t, &mut e);
+                    haptex_core::grid::add_in_phase(hi, start, step, b, values[i], t, &mut e);
+                    e
+                }
+                None => lo.iter().zip(hi).map(|(l, h)| (1.0 - t) * l + t * h).collect(),
+            };
             worst = worst.max(relative_error(&estimate, fe).2);
         }
         out[i] = Some(worst);
@@ -252,7 +266,9 @@ pub fn refine(
     }
     let mut rows = Rows::read(&dir.join(&entry.file))?;
     let columns = metadata.grid.column_names();
-    GridInterpolation::new(&rows.matrix(&columns)?)
+    options
+        .template
+        .grid_interpolation(&rows.matrix(&columns)?, &metadata.grid)
         .map_err(|e| SweepError::Invalid(format!("{}: refine needs a full grid: {e}", entry.file)))?;
     let mut rounds: Vec<RefineRound> = Vec::new();
     // Every round so far, the database's earlier refinements first: which
@@ -265,6 +281,13 @@ pub fn refine(
     let counts = |inputs: &[f64; 3]| {
         !options.resolved_only || options.template.crests_resolved(&mesh, inputs[0], inputs[1]) != Some(false)
     };
+    // Along a sine's period the rows are blended in phase, as the grid
+    // estimate blends them.
+    let grid = metadata.grid;
+    let phase = |axis: usize| {
+        (options.template == Template::Sine && axis == 0 && grid.points >= 2)
+            .then(|| (grid.xi_min_mm, (grid.xi_max_mm - grid.xi_min_mm) / (grid.points - 1) as f64))
+    };
     let (stop, worst_score) = loop {
         // Score every interval of every axis that may be split.
         let mut best: Option<(f64, usize, f64, f64)> = None;
@@ -275,7 +298,7 @@ pub fn refine(
             if values.len() < 2 {
                 continue;
             }
-            let lines = line_errors(&rows, axis, &counts)?;
+            let lines = line_errors(&rows, axis, &counts, phase(axis))?;
             for j in 0..values.len() - 1 {
                 let score = match (lines[j], lines[j + 1]) {
                     (None, None) => f64::INFINITY,
@@ -343,7 +366,9 @@ pub fn refine(
         }
         // The held-out error: the database as it was, against the new runs.
         let matrix = rows.matrix(&columns)?;
-        let grid = GridInterpolation::new(&matrix)
+        let grid = options
+            .template
+            .grid_interpolation(&matrix, &metadata.grid)
             .map_err(|e| SweepError::Invalid(format!("{}: the rows stopped being a grid: {e}", entry.file)))?;
         let mut relative = Vec::with_capacity(runs.len());
         let mut estimate = vec![0.0; metadata.grid.points];
@@ -502,11 +527,11 @@ mod tests {
             }
         }
         let rows = Rows { rows };
-        let all = line_errors(&rows, 0, &|_| true).unwrap();
+        let all = line_errors(&rows, 0, &|_| true, None).unwrap();
         assert_eq!(all[0], None);
         assert!(all[1].unwrap() > 0.1, "{all:?}");
         let resolved = |i: &[f64; 3]| haptex_core::crests::unresolved_sine("fine", i[0], i[1]).is_none();
-        let counted = line_errors(&rows, 0, &resolved).unwrap();
+        let counted = line_errors(&rows, 0, &resolved, None).unwrap();
         assert_eq!(counted[1], Some(0.0), "the rows that count are linear in the width");
     }
 
@@ -555,13 +580,13 @@ mod tests {
                 .collect(),
         };
         let linear = make(&|w, h| 1.0 + w + h);
-        let e = line_errors(&linear, 0, &|_| true).unwrap();
+        let e = line_errors(&linear, 0, &|_| true, None).unwrap();
         assert_eq!(e[0], None);
         assert_eq!(e[3], None);
         assert!(e[1].unwrap() < 1e-12 && e[2].unwrap() < 1e-12, "{e:?}");
         // A kink at r_w = 1.5: the line there is mispredicted, 1.0 is not.
         let kinked = make(&|w, h| 1.0 + h + (w - 1.5).abs());
-        let e = line_errors(&kinked, 0, &|_| true).unwrap();
+        let e = line_errors(&kinked, 0, &|_| true, None).unwrap();
         assert!(e[1].unwrap() < 1e-12 && e[2].unwrap() > 0.05, "{e:?}");
     }
 }

@@ -198,7 +198,7 @@ struct ValidateArgs {
     #[arg(long)]
     record: bool,
     /// The estimate between the rows: multilinear interpolation over the
-    /// sweep's grid, or the paper's CAE. Default: the database's own.
+    /// sweep's grid (a sine's profiles in phase), or the paper's CAE. Default: the database's own.
     #[arg(long, value_enum)]
     estimator: Option<EstimatorArg>,
     /// No progress bar.
@@ -286,7 +286,8 @@ enum AxisArg {
 pub(crate) enum EstimatorArg {
     /// The paper's conditional average estimator.
     Cae,
-    /// Multilinear interpolation over the sweep's grid.
+    /// Multilinear interpolation over the sweep's grid (a sine's profiles
+    /// blended in phase).
     Grid,
 }
 

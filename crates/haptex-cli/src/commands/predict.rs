@@ -14,8 +14,9 @@ use crate::args::{Output, positive};
 ///
 /// Between the database's rows, the estimate is the database's estimator
 /// (`estimator` in its metadata.json, or `--estimator`): multilinear
-/// interpolation over the sweep's grid of (r_w, r_h, velocity) for the
-/// shipped database, or the paper's conditional average estimator (Gaussian
+/// interpolation over the sweep's grid of (r_w, r_h, velocity), a sine's
+/// profiles blended in phase (at the same (x - x0) / r_w), for the shipped
+/// database, or the paper's conditional average estimator (Gaussian
 /// kernels, the leave-one-out optimal widths stored in the metadata), which
 /// averages the FE profiles of the same template weighted by how close
 /// their (r_w, r_h, velocity) are to the query. When the parameters are
@@ -58,7 +59,7 @@ pub struct PredictArgs {
     #[arg(long, value_name = "DIR")]
     db: Option<PathBuf>,
     /// The estimate between the database's rows: multilinear over the
-    /// sweep's grid, or the paper's CAE. Default: the database's own.
+    /// sweep's grid (a sine's profiles in phase), or the paper's CAE. Default: the database's own.
     #[arg(long, value_enum)]
     estimator: Option<super::db::EstimatorArg>,
     /// Output file (default: stdout).

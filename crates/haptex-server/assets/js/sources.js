@@ -40,7 +40,9 @@ export const SOURCES = {
         ? `FE result: a database case (row ${answer.fe_row} of ${answer.surface}.csv), no estimate involved.`
         : answer.estimator === 'grid'
           ? 'Estimate over the FE database: interpolated between its cases (multilinear over the grid of ' +
-            'width, height and velocity).'
+            'width, height and velocity' +
+            (answer.surface === 'sine' ? '; the sine\'s profiles blended in phase, at the same (x - x0) / width' : '') +
+            ').'
           : `CAE estimate over the FE database; typical error ${fmt(answer.loo_rmse)} in mu ` +
             `(${Math.round(100 * answer.loo_rmse_relative_to_range)}% of a profile's range, leave-one-out).`;
       info.append(source);
