@@ -36,6 +36,14 @@ JOBS = [
     ("bump_mu0_s2s_inc025", "bump_coarse_mu0", "bump, mu = 0, s2s, increments 0.025 mm"),
     ("bump_mu0_s2s_inc01", "bump_coarse_mu0", "bump, mu = 0, s2s, increments 0.01 mm"),
     ("bump_mu0_s2s_nlgeom", "bump_coarse_mu0", "bump, mu = 0, s2s, NLGEOM neo-Hookean"),
+    # the finite-strain slide (README, "NLGEOM, the slide"): C3D20R and C3D8, NLGEOM against
+    # haptex's finite-strain run, linear against its small-strain run
+    ("flat_nlgeom_C3D20R", "flat_coarse_finite", "flat, C3D20R, NLGEOM neo-Hookean"),
+    ("flat_linear_C3D20R", "flat_coarse", "flat, C3D20R, small strain"),
+    ("flat_nlgeom_C3D8", "flat_coarse_finite", "flat, plain C3D8, NLGEOM neo-Hookean"),
+    ("bump_nlgeom_C3D8_inc025_pe", "bump_coarse_finite", "bump, plain C3D8, NLGEOM, slide increments 0.025 mm"),
+    ("bump_linear_C3D8_inc025_pe", "bump_coarse", "bump, plain C3D8, small strain, slide increments 0.025 mm"),
+    ("bump_nlgeom_C3D20R_inc025", "bump_coarse_finite", "bump, C3D20R, NLGEOM, 0.025 mm (stalled at x = 1.075 mm)"),
 ]
 HAPTEX = {
     "flat_coarse": "haptex coarse mesh, flat",
@@ -46,6 +54,10 @@ HAPTEX = {
     "bump_coarse_mu0": "haptex coarse mesh, bump, mu = 0",
     "bump_default_mu0": "haptex default mesh, bump, mu = 0",
     "bump_fine_mu0": "haptex fine mesh, bump, mu = 0",
+    "flat_coarse_finite": "haptex coarse mesh, flat, finite strain",
+    "flat_default_finite": "haptex default mesh, flat, finite strain",
+    "bump_coarse_finite": "haptex coarse mesh, bump, finite strain",
+    "bump_default_finite": "haptex default mesh, bump, finite strain",
 }
 
 
@@ -138,7 +150,14 @@ def main():
              ("haptex:bump_fine_mu0", "haptex:bump_default_mu0"), ("bump_linear_inc025", "bump_linear"),
              ("bump_mu0_s2s", "bump_mu0_n2s"), ("bump_mu0_s2s_inc025", "bump_mu0_s2s"),
              ("bump_mu0_s2s_inc01", "bump_mu0_s2s_inc025"), ("bump_linear_inc01", "bump_linear_inc025"),
-             ("bump_linear_inc01", "bump_linear")]
+             ("bump_linear_inc01", "bump_linear"),
+             # the finite-strain effect in each code, and haptex's finite-strain mesh spread
+             ("flat_nlgeom_C3D20R", "flat_linear_C3D20R"), ("haptex:flat_coarse_finite", "haptex:flat_coarse"),
+             ("flat_nlgeom_C3D8", "flat_linear_C3D8"), ("flat_linear_C3D20R", "flat_linear"),
+             ("haptex:flat_default_finite", "haptex:flat_coarse_finite"), ("haptex:flat_default_finite", "haptex:flat_default"),
+             ("bump_nlgeom_C3D8_inc025_pe", "bump_linear_C3D8_inc025_pe"), ("haptex:bump_coarse_finite", "haptex:bump_coarse"),
+             ("haptex:bump_default_finite", "haptex:bump_default"), ("haptex:bump_default_finite", "haptex:bump_coarse_finite"),
+             ("bump_linear_C3D8_inc025_pe", "bump_linear_inc025"), ("bump_nlgeom_C3D20R_inc025", "bump_nlgeom_C3D8_inc025_pe")]
 
     def load(name):
         if name.startswith("haptex:"):
@@ -165,6 +184,7 @@ def main():
             "|Ft/Fn(x) + Ft/Fn(3 - x)| over x = 0.1 .. 1.5 mm (0 for a conservative model).", "",
             "| curve | points | mean Ft/Fn | max antisymmetry error | RMS antisymmetry error |", "|---|---|---|---|---|"]
     bump = ["haptex:bump_coarse", "haptex:bump_default", "haptex:bump_fine", "bump_linear", "bump_linear_inc025", "bump_linear_inc01",
+            "haptex:bump_coarse_finite", "haptex:bump_default_finite", "bump_nlgeom_C3D8_inc025_pe", "bump_linear_C3D8_inc025_pe",
             "haptex:bump_coarse_mu0", "haptex:bump_default_mu0", "haptex:bump_fine_mu0", "bump_mu0_n2s", "bump_mu0_s2s",
             "bump_mu0_s2s_inc025", "bump_mu0_s2s_inc01", "bump_mu0_s2s_nlgeom"]
     for name in bump:

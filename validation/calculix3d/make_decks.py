@@ -34,7 +34,7 @@ MPa/mm), Coulomb friction mu with a stick slope equal to the penalty.
 Usage: make_decks.py FRAME.vtu --job NAME --surface flat|bump [--x0 --width
        --height] [--indent 0.5 --slide 3 --kin linear|nlgeom --etype C3D8I
        --mu 0.5 --penalty 200 --stick 200 --contact "NODE TO SURFACE"
-       --inc 0.1 --facet 0.05] --out DIR
+       --inc 0.1 --facet 0.05 --press-every-increment] --out DIR
 """
 import argparse
 import math
@@ -189,6 +189,9 @@ def main():
     ap.add_argument("--facet", type=float, default=0.05, help="rigid facet length along x over the bump (mm)")
     ap.add_argument("--controls", default="", help="*CONTROLS lines for each step, ';'-separated")
     ap.add_argument("--frd", action="store_true", help="also write U at the end of the press to the .frd")
+    ap.add_argument("--press-every-increment", action="store_true",
+                    help="print the press at every increment instead of at the 10 time points (after a cutback "
+                         "CalculiX 2.20 can land just short of a time point and then fail on a zero increment)")
     a = ap.parse_args()
 
     m = mesh(a.frame)
@@ -284,9 +287,10 @@ def main():
     if a.controls:
         step += "\n" + "\n".join(a.controls.split(";"))
     # press: 10 increments of indent/10 as haptex's press (printed at each)
+    press_out = "FREQUENCY=1" if a.press_every_increment else "TIME POINTS=PRESS"
     L += ["*TIME POINTS, NAME=PRESS, GENERATE", "0.1, 1., 0.1",
           "** step 1: press", step, "*STATIC", "0.1, 1., 1e-5, 0.1",
-          "*BOUNDARY", "DRIVEN, 1, 2, 0.", f"DRIVEN, 3, 3, {-a.indent}"] + out("TIME POINTS=PRESS")
+          "*BOUNDARY", "DRIVEN, 1, 2, 0.", f"DRIVEN, 3, 3, {-a.indent}"] + out(press_out)
     if a.frd:
         L += ["*NODE FILE, NSET=NBODY, TIME POINTS=PRESS", "U"]
     L += ["*END STEP"]

@@ -8,6 +8,10 @@
 #                                                frictionless and small-increment runs, ~40 min
 #   validation/calculix3d/run.sh nlgeom_press    the finite-strain press jobs (README, "NLGEOM, the press
 #                                                alone"), ~50 min (the default mesh's C3D20R runs ~20 min each)
+#   validation/calculix3d/run.sh nlgeom_slide    the finite-strain slides (README, "NLGEOM, the slide"): the flat
+#                                                with C3D20R (NLGEOM and linear) and C3D8 (NLGEOM), the bump with
+#                                                C3D8 (NLGEOM and linear), ~25 min
+#   validation/calculix3d/run.sh nlgeom_slide_failed   the runs of that section that failed, ~40 min
 #
 # The timing of the peer comparison: whenever flat_linear is run, this script
 # times `haptex simulate` on the same case and mesh right before the ccx run,
@@ -65,6 +69,16 @@ done
 "$HAPTEX" simulate "${COMMON[@]}" --mesh fine --surface bump "${BUMP[@]}" \
     -o results/haptex/bump_fine.csv --history results/haptex/bump_fine_history.csv
 
+echo "== haptex at finite strain (--kinematics finite): the flat and the bump, coarse and default mesh"
+"$HAPTEX" simulate "${COMMON[@]}" --kinematics finite --mesh coarse --surface flat \
+    -o results/haptex/flat_coarse_finite.csv --history results/haptex/flat_coarse_finite_history.csv
+"$HAPTEX" simulate "${COMMON[@]}" --kinematics finite --mesh default --surface flat \
+    -o results/haptex/flat_default_finite.csv --history results/haptex/flat_default_finite_history.csv
+"$HAPTEX" simulate "${COMMON[@]}" --kinematics finite --mesh coarse --surface bump "${BUMP[@]}" \
+    -o results/haptex/bump_coarse_finite.csv --history results/haptex/bump_coarse_finite_history.csv
+"$HAPTEX" simulate "${COMMON[@]}" --kinematics finite --mesh default --surface bump "${BUMP[@]}" \
+    -o results/haptex/bump_default_finite.csv --history results/haptex/bump_default_finite_history.csv
+
 echo "== decks"
 mk() { "$PY" make_decks.py "$@" --out decks; }
 # the reference contact: surface-to-surface penalty, 200 N/mm^3, mu 0.5, stick slope 20 N/mm^3
@@ -111,9 +125,37 @@ for kin in linear nlgeom; do
     PRESS_JOBS+=(press_mu0_${kin}_C3D20R_default)
 done
 
+# finite strain, the slide (2026-12-08; README, "NLGEOM, the slide"). The flat with the quadratic C3D20R
+# and with plain C3D8 (C3D8I's incompatible modes diverge under NLGEOM once the pad slips: flat_nlgeom),
+# NLGEOM and linear. The bump with plain C3D8 in 0.025 mm slide increments (surface-to-surface contact's
+# increment error on the bump: "Diagnosis of the bump"), its press printed at every increment (with the
+# press's time points CalculiX 2.20 failed on a zero increment after a cutback: the *_C3D8_inc025 jobs)
+mk $FC --job flat_nlgeom_C3D20R --surface flat "${S2S[@]}" --etype C3D20R --kin nlgeom
+mk $FC --job flat_linear_C3D20R --surface flat "${S2S[@]}" --etype C3D20R
+mk $FC --job flat_nlgeom_C3D8 --surface flat "${S2S[@]}" --etype C3D8 --kin nlgeom
+for kin in nlgeom linear; do
+    mk $BC --job bump_${kin}_C3D8_inc025_pe --surface bump "${BUMP[@]}" "${S2S[@]}" --etype C3D8 --kin $kin --inc 0.025 \
+        --press-every-increment
+done
+SLIDE_JOBS=(flat_nlgeom_C3D20R flat_linear_C3D20R flat_nlgeom_C3D8 bump_nlgeom_C3D8_inc025_pe bump_linear_C3D8_inc025_pe)
+# what did not get through (README, "What failed"): stick slope 200 with C3D20R on the flat; the bump with
+# C3D20R (NLGEOM: x = 1.075 mm after 20 min) and with C3D8 and the press's time points
+STICK200=(--contact "SURFACE TO SURFACE" --stick 200)
+mk $FC --job flat_nlgeom_C3D20R_stick200 --surface flat "${STICK200[@]}" --etype C3D20R --kin nlgeom
+mk $FC --job flat_linear_C3D20R_stick200 --surface flat "${STICK200[@]}" --etype C3D20R
+for e in C3D20R C3D8; do
+    for kin in nlgeom linear; do
+        mk $BC --job bump_${kin}_${e}_inc025 --surface bump "${BUMP[@]}" "${S2S[@]}" --etype $e --kin $kin --inc 0.025
+    done
+done
+SLIDE_FAILED_JOBS=(flat_nlgeom_C3D20R_stick200 flat_linear_C3D20R_stick200 bump_nlgeom_C3D20R_inc025 bump_linear_C3D20R_inc025
+    bump_nlgeom_C3D8_inc025 bump_linear_C3D8_inc025)
+
 JOBS=("$@")
 [[ ${#JOBS[@]} -eq 0 ]] && JOBS=(flat_linear flat_linear_n2s bump_linear flat_nlgeom flat_linear_C3D8 flat_linear_default bump_nlgeom bump_linear_n2s bump_linear_n2s_stick20)
 [[ ${JOBS[*]} == nlgeom_press ]] && JOBS=("${PRESS_JOBS[@]}")
+[[ ${JOBS[*]} == nlgeom_slide ]] && JOBS=("${SLIDE_JOBS[@]}")
+[[ ${JOBS[*]} == nlgeom_slide_failed ]] && JOBS=("${SLIDE_FAILED_JOBS[@]}")
 [[ ${JOBS[*]} == diagnosis ]] && JOBS=(bump_mu0_n2s bump_mu0_s2s bump_mu0_s2s_inc025 bump_mu0_s2s_inc01 bump_linear_inc025 bump_linear_inc01 bump_mu0_s2s_nlgeom bump_linear_n2s_stick2 bump_linear_n2s_ctrl bump_linear_n2s_stick2_ctrl)
 
 echo "== CalculiX runs"
