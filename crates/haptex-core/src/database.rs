@@ -755,13 +755,26 @@ impl TemplateModel {
                 crate::num::Nums(inputs)
             )));
         }
-        let diagnostics = self.cae.predict_into(inputs, scratch, out)?;
-        let row = self.exact_row(inputs);
-        match (row, grid) {
-            (Some(n), _) => out.copy_from_slice(self.cae.matrix().output_row(n)),
-            (None, Some(grid)) => grid.predict_into(self.cae.matrix(), inputs, out),
-            (None, None) => {}
+        if out.len() != self.cae.matrix().m() {
+            return Err(DatabaseError::Query(format!(
+                "a buffer of {} outputs for a profile of {} points",
+                out.len(),
+                self.cae.matrix().m()
+            )));
         }
+        // The CAE's sum only where it is the estimate; its diagnostics always.
+        let row = self.exact_row(inputs);
+        let diagnostics = match (row, grid) {
+            (Some(n), _) => {
+                out.copy_from_slice(self.cae.matrix().output_row(n));
+                self.cae.diagnose(inputs, scratch)?
+            }
+            (None, Some(grid)) => {
+                grid.predict_into(self.cae.matrix(), inputs, out);
+                self.cae.diagnose(inputs, scratch)?
+            }
+            (None, None) => self.cae.predict_into(inputs, scratch, out)?,
+        };
         Ok((row, diagnostics))
     }
 

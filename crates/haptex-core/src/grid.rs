@@ -150,33 +150,117 @@ impl GridInterpolation {
             query[p.input].clamp(axis[0], axis[axis.len() - 1])
         });
         out.fill(0.0);
-        for corner in 0..(1usize << d) {
+        // The corner's row and weight.
+        let corner_node = |corner: usize| {
             let (mut node, mut weight) = (0usize, 1.0f64);
-            let mut node_period = 0.0;
             for (l, axis) in self.axes.iter().enumerate() {
                 let upper = corner >> (d - 1 - l) & 1 == 1;
                 // (An upper node beyond a constant input's one value has weight 0.)
-                let j = (lower[l] + usize::from(upper)).min(axis.len() - 1);
-                node = node * axis.len() + j;
+                node = node * axis.len() + (lower[l] + usize::from(upper)).min(axis.len() - 1);
                 weight *= if upper { t[l] } else { 1.0 - t[l] };
-                if self.phase.is_some_and(|p| p.input == l) {
-                    node_period = axis[j];
-                }
             }
-            if weight == 0.0 {
-                continue;
-            }
-            let row = matrix.output_row(self.rows[node]);
-            match (self.phase, period) {
-                (Some(phase), Some(period)) if node_period != period => {
-                    add_in_phase(row, phase.start, phase.step, node_period, period, weight, out);
-                }
-                _ => {
-                    for (o, &c) in out.iter_mut().zip(row) {
+            (self.rows[node], weight)
+        };
+        let (Some(phase), Some(period)) = (self.phase, period) else {
+            for corner in 0..(1usize << d) {
+                let (row, weight) = corner_node(corner);
+                if weight != 0.0 {
+                    for (o, &c) in out.iter_mut().zip(matrix.output_row(row)) {
                         *o += weight * c;
                     }
                 }
             }
+            return;
+        };
+        // In phase: the corners on each side of the period's bracket share
+        // one reading position per output, found once for all of them.
+        let bit = d - 1 - phase.input;
+        let axis = &self.axes[phase.input];
+        for side in 0..2 {
+            let node_period = axis[(lower[phase.input] + side).min(axis.len() - 1)];
+            let reading = Reading::new(phase.start, phase.step, node_period, period, out.len());
+            let mut group = [(0usize, 0.0f64); GROUP];
+            let mut count = 0;
+            for corner in (0..(1usize << d)).filter(|c| c >> bit & 1 == side) {
+                let (row, weight) = corner_node(corner);
+                if weight != 0.0 {
+                    group[count] = (row, weight);
+                    count += 1;
+                }
+                if count == GROUP {
+                    reading.add(matrix, &group, out);
+                    count = 0;
+                }
+            }
+            reading.add(matrix, &group[..count], out);
+        }
+    }
+}
+
+/// Corners of the multilinear estimate read together on one side of the
+/// period's bracket (2^(D-1) of them: 4 for the database's 3 inputs).
+const GROUP: usize = 64;
+
+/// Where output k of a profile sampled at xi_k = start + k step, of a
+/// feature of period `row_period` (phase 0 at xi = 0), is read to put it
+/// at the phase of period `period`: at xi_k row_period / period, moved back
+/// inside the samples by whole periods `row_period` (or held at the end
+/// when one period is longer than the samples), as sample j and the
+/// fraction f of the way to sample j + 1. In units of the samples that
+/// position is u_k = u_0 + k ratio, with no division per output.
+struct Reading {
+    u0: f64,
+    ratio: f64,
+    /// The row's period in samples.
+    period: f64,
+    last: f64,
+    m: usize,
+}
+
+impl Reading {
+    fn new(start: f64, step: f64, row_period: f64, period: f64, m: usize) -> Self {
+        let ratio = row_period / period;
+        Self { u0: start * (ratio - 1.0) / step, ratio, period: row_period / step, last: m.saturating_sub(1) as f64, m }
+    }
+
+    #[inline(always)]
+    fn at(&self, k: usize) -> (usize, f64) {
+        let mut u = self.u0 + k as f64 * self.ratio;
+        if u > self.last {
+            u -= ((u - self.last) / self.period).ceil() * self.period;
+        } else if u < 0.0 {
+            u += (-u / self.period).ceil() * self.period;
+        }
+        let u = u.clamp(0.0, self.last);
+        let j = (u as usize).min(self.m - 2);
+        (j, u - j as f64)
+    }
+
+    /// out_k += sum over `group` of weight row(reading k): rows of the
+    /// same period, read at one position per output. At a ratio of 1, or
+    /// with fewer than two samples, the rows as they are.
+    fn add(&self, matrix: &ModelMatrix, group: &[(usize, f64)], out: &mut [f64]) {
+        if self.ratio == 1.0 || self.m < 2 {
+            for &(row, weight) in group {
+                for (o, &c) in out.iter_mut().zip(matrix.output_row(row)) {
+                    *o += weight * c;
+                }
+            }
+            return;
+        }
+        let mut rows: [(&[f64], f64); GROUP] = [(&[], 0.0); GROUP];
+        for (slot, &(row, weight)) in rows.iter_mut().zip(group) {
+            *slot = (&matrix.output_row(row)[..self.m], weight);
+        }
+        let rows = &rows[..group.len().min(GROUP)];
+        for (k, o) in out.iter_mut().enumerate().take(self.m) {
+            let (j, f) = self.at(k);
+            let (mut a, mut b) = (0.0, 0.0);
+            for &(c, weight) in rows {
+                a += weight * c[j];
+                b += weight * c[j + 1];
+            }
+            *o += a + f * (b - a);
         }
     }
 }
@@ -195,18 +279,9 @@ pub fn add_in_phase(row: &[f64], start: f64, step: f64, row_period: f64, period:
         }
         return;
     }
-    let (ratio, period) = (row_period / period, row_period);
-    let end = start + (m - 1) as f64 * step;
+    let reading = Reading::new(start, step, row_period, period, m);
     for (k, o) in out.iter_mut().enumerate().take(m) {
-        let mut x = (start + k as f64 * step) * ratio;
-        if x > end {
-            x -= ((x - end) / period).ceil() * period;
-        } else if x < start {
-            x += ((start - x) / period).ceil() * period;
-        }
-        let u = ((x - start) / step).clamp(0.0, (m - 1) as f64);
-        let j = (u as usize).min(m - 2);
-        let f = u - j as f64;
+        let (j, f) = reading.at(k);
         *o += weight * (row[j] + f * (row[j + 1] - row[j]));
     }
 }
@@ -301,6 +376,37 @@ mod tests {
         // Beyond the axis the period is held: the end row.
         phased.predict_into(&matrix, &[2.0, 0.1], &mut out);
         assert_eq!(out, profile(1.5, 0.1));
+    }
+
+    /// Eight inputs (128 corners on each side of the period's bracket,
+    /// read in groups of 64): the period's sine plus a function linear in
+    /// the seven others, to the same bound.
+    #[test]
+    fn many_inputs_are_read_in_groups_in_phase() {
+        let (start, step, m) = (-5.0, 0.02, 501);
+        let d = 8;
+        let mut b = Vec::new();
+        let mut c = Vec::new();
+        let value = |p: f64, rest: &[f64], x: f64| {
+            0.5 + 0.1 * (std::f64::consts::TAU * x / p).sin() + rest.iter().map(|v| 0.01 * v).sum::<f64>()
+        };
+        for n in 0..(1usize << d) {
+            let inputs: Vec<f64> = (0..d).map(|l| if n >> l & 1 == 1 { 1.5 } else { 1.0 }).collect();
+            c.extend((0..m).map(|k| value(inputs[0], &inputs[1..], start + k as f64 * step)));
+            b.extend(inputs);
+        }
+        let inputs = (0..d).map(|l| format!("i{l}")).collect();
+        let outputs = (0..m).map(|k| format!("y{k}")).collect();
+        let matrix = ModelMatrix::new(inputs, outputs, b, c).unwrap();
+        let g = GridInterpolation::new(&matrix).unwrap().in_phase(0, start, step).unwrap();
+        let query = [1.2, 1.1, 1.3, 1.25, 1.05, 1.45, 1.4, 1.15];
+        let mut out = vec![0.0; m];
+        g.predict_into(&matrix, &query, &mut out);
+        let bound = 0.1 * (step * std::f64::consts::TAU / 1.0).powi(2) / 8.0 + 1e-14;
+        for (k, o) in out.iter().enumerate() {
+            let want = value(query[0], &query[1..], start + k as f64 * step);
+            assert!((o - want).abs() <= bound, "output {k}: {o} against {want}");
+        }
     }
 
     #[test]

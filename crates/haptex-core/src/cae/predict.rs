@@ -240,6 +240,14 @@ impl Cae {
         Ok(diagnostics)
     }
 
+    /// The diagnostics [`Cae::predict_into`] returns for the input vector
+    /// `b` (where it lies relative to the database, how many rows enter),
+    /// from eq. (12)'s weights alone, without eq. (11)'s sum: for a caller
+    /// that estimates the outputs otherwise. Allocates nothing.
+    pub fn diagnose(&self, b: &[f64], scratch: &mut Scratch) -> Result<Diagnostics, CaeError> {
+        self.weights(b, scratch, Listing::Quads).map(|(diagnostics, _)| diagnostics)
+    }
+
     /// The weights of eq. (12) at the input vector `b`: the rows that enter
     /// eq. (11) with their weights (shifted so that the largest is 1),
     /// listed in `scratch` as `listing` says (`Listing::Rows`: in
