@@ -74,13 +74,18 @@ impl Template {
         grid: &Grid,
     ) -> Result<crate::grid::GridInterpolation, crate::grid::GridError> {
         let interpolation = crate::grid::GridInterpolation::new(matrix)?;
-        match self {
-            Template::Sine if grid.points >= 2 => {
-                let step = (grid.xi_max_mm - grid.xi_min_mm) / (grid.points - 1) as f64;
-                interpolation.in_phase(0, grid.xi_min_mm, step)
-            }
-            _ => Ok(interpolation),
+        match self.phase(grid) {
+            Some((input, start, step)) => interpolation.in_phase(input, start, step),
+            None => Ok(interpolation),
         }
+    }
+
+    /// For a template whose profiles are blended in phase (the sine): the
+    /// input that is its period (r_w, input 0) and the start and step of
+    /// the positions `grid` samples its profiles at.
+    pub fn phase(self, grid: &Grid) -> Option<(usize, f64, f64)> {
+        (self == Template::Sine && grid.points >= 2)
+            .then(|| (0, grid.xi_min_mm, (grid.xi_max_mm - grid.xi_min_mm) / (grid.points - 1) as f64))
     }
 
     /// The model-matrix file of this template in a database directory.

@@ -179,20 +179,20 @@ impl GridInterpolation {
         for side in 0..2 {
             let node_period = axis[(lower[phase.input] + side).min(axis.len() - 1)];
             let reading = Reading::new(phase.start, phase.step, node_period, period, out.len());
-            let mut group = [(0usize, 0.0f64); GROUP];
+            let mut group: [(&[f64], f64); GROUP] = [(&[], 0.0); GROUP];
             let mut count = 0;
             for corner in (0..(1usize << d)).filter(|c| c >> bit & 1 == side) {
                 let (row, weight) = corner_node(corner);
                 if weight != 0.0 {
-                    group[count] = (row, weight);
+                    group[count] = (matrix.output_row(row), weight);
                     count += 1;
                 }
                 if count == GROUP {
-                    reading.add(matrix, &group, out);
+                    reading.add(&group, out);
                     count = 0;
                 }
             }
-            reading.add(matrix, &group[..count], out);
+            reading.add(&group[..count], out);
         }
     }
 }
@@ -236,27 +236,22 @@ impl Reading {
         (j, u - j as f64)
     }
 
-    /// out_k += sum over `group` of weight row(reading k): rows of the
-    /// same period, read at one position per output. At a ratio of 1, or
-    /// with fewer than two samples, the rows as they are.
-    fn add(&self, matrix: &ModelMatrix, group: &[(usize, f64)], out: &mut [f64]) {
+    /// out_k += sum over `group` of weight row(reading k): rows (M samples
+    /// each) of the same period, read at one position per output. At a
+    /// ratio of 1, or with fewer than two samples, the rows as they are.
+    fn add(&self, group: &[(&[f64], f64)], out: &mut [f64]) {
         if self.ratio == 1.0 || self.m < 2 {
             for &(row, weight) in group {
-                for (o, &c) in out.iter_mut().zip(matrix.output_row(row)) {
+                for (o, &c) in out.iter_mut().zip(row) {
                     *o += weight * c;
                 }
             }
             return;
         }
-        let mut rows: [(&[f64], f64); GROUP] = [(&[], 0.0); GROUP];
-        for (slot, &(row, weight)) in rows.iter_mut().zip(group) {
-            *slot = (&matrix.output_row(row)[..self.m], weight);
-        }
-        let rows = &rows[..group.len().min(GROUP)];
         for (k, o) in out.iter_mut().enumerate().take(self.m) {
             let (j, f) = self.at(k);
             let (mut a, mut b) = (0.0, 0.0);
-            for &(c, weight) in rows {
+            for &(c, weight) in group {
                 a += weight * c[j];
                 b += weight * c[j + 1];
             }
@@ -272,18 +267,7 @@ impl Reading {
 /// position beyond them is moved back by whole periods `row_period` (or
 /// held at the end when one period is longer than the samples).
 pub fn add_in_phase(row: &[f64], start: f64, step: f64, row_period: f64, period: f64, weight: f64, out: &mut [f64]) {
-    let m = row.len();
-    if m < 2 || row_period == period {
-        for (o, &c) in out.iter_mut().zip(row) {
-            *o += weight * c;
-        }
-        return;
-    }
-    let reading = Reading::new(start, step, row_period, period, m);
-    for (k, o) in out.iter_mut().enumerate().take(m) {
-        let (j, f) = reading.at(k);
-        *o += weight * (row[j] + f * (row[j + 1] - row[j]));
-    }
+    Reading::new(start, step, row_period, period, row.len()).add(&[(row, weight)], out);
 }
 
 #[cfg(test)]

@@ -283,10 +283,12 @@ pub fn refine(
     };
     // Along a sine's period the rows are blended in phase, as the grid
     // estimate blends them.
-    let grid = metadata.grid;
     let phase = |axis: usize| {
-        (options.template == Template::Sine && axis == 0 && grid.points >= 2)
-            .then(|| (grid.xi_min_mm, (grid.xi_max_mm - grid.xi_min_mm) / (grid.points - 1) as f64))
+        options
+            .template
+            .phase(&metadata.grid)
+            .filter(|&(input, ..)| input == axis)
+            .map(|(_, start, step)| (start, step))
     };
     let (stop, worst_score) = loop {
         // Score every interval of every axis that may be split.
