@@ -535,6 +535,18 @@ impl Metadata {
                 message: format!("format '{}' is not '{FORMAT}'", metadata.format),
             });
         }
+        let grid = metadata.grid;
+        if grid.points >= 2 && grid.xi_max_mm <= grid.xi_min_mm {
+            return Err(DatabaseError::File {
+                path,
+                message: format!(
+                    "grid: xi_max_mm {} is not above xi_min_mm {} (the profiles' positions run from the one to the \
+                     other)",
+                    crate::num::Num(grid.xi_max_mm),
+                    crate::num::Num(grid.xi_min_mm)
+                ),
+            });
+        }
         // The files it names are read from the database's directory: each
         // a name by the one rule, so that the file cannot point elsewhere.
         let listed = metadata.files_sha256.iter().flat_map(|hashes| hashes.keys());
@@ -586,7 +598,8 @@ pub struct TemplateModel {
     /// (min, max) of r_w, r_h and velocity over the rows, computed once.
     input_ranges: [(f64, f64); 3],
     /// The rows as a grid, if they are a full one (as every sweep's are).
-    grid_interpolation: Option<crate::grid::GridInterpolation>,
+    /// The grid estimate, or why the rows cannot have it.
+    grid_interpolation: Result<crate::grid::GridInterpolation, crate::grid::GridError>,
     /// The estimator of [`Self::predict`] and [`Self::predict_into`].
     estimator: Estimator,
 }
@@ -675,10 +688,7 @@ impl TemplateModel {
         if let (Estimator::Grid, Err(e)) = (estimator, &grid) {
             return Err(DatabaseError::File {
                 path: dir.join("metadata.json"),
-                message: format!(
-                    "estimator: 'grid' needs rows that form a full grid, and {}'s do not: {e}",
-                    entry.file
-                ),
+                message: format!("estimator: 'grid' cannot serve {}: {e}", entry.file),
             });
         }
         let cae = Cae::new(matrix, entry.widths)?;
@@ -688,7 +698,7 @@ impl TemplateModel {
             grid: metadata.grid,
             positions: metadata.grid.positions(),
             input_ranges,
-            grid_interpolation: grid.ok(),
+            grid_interpolation: grid,
             estimator,
         })
     }
@@ -711,9 +721,9 @@ impl TemplateModel {
     fn grid_for(&self, estimator: Estimator) -> Result<Option<&crate::grid::GridInterpolation>, DatabaseError> {
         match estimator {
             Estimator::Cae => Ok(None),
-            Estimator::Grid => self.grid_interpolation.as_ref().map(Some).ok_or_else(|| {
+            Estimator::Grid => self.grid_interpolation.as_ref().map(Some).map_err(|e| {
                 DatabaseError::Query(format!(
-                    "the {} rows are not a full grid of r_w, r_h and velocity: use the CAE",
+                    "the {} rows cannot have the grid estimate ({e}): use the CAE",
                     self.template.name()
                 ))
             }),
@@ -830,11 +840,14 @@ impl TemplateModel {
                 self.template.file_name()
             ),
             None if prediction.estimator == Estimator::Grid => {
-                let axes = self.grid_interpolation.as_ref().map_or_else(String::new, |g| {
-                    let counts: Vec<String> = g.axes().iter().map(|a| a.len().to_string()).collect();
-                    format!(" ({} values of r_w x r_h x velocity)", counts.join(" x "))
-                });
-                let phase = if self.grid_interpolation.as_ref().is_some_and(|g| g.is_in_phase()) {
+                let axes = self.grid_interpolation.as_ref().map_or_else(
+                    |_| String::new(),
+                    |g| {
+                        let counts: Vec<String> = g.axes().iter().map(|a| a.len().to_string()).collect();
+                        format!(" ({} values of r_w x r_h x velocity)", counts.join(" x "))
+                    },
+                );
+                let phase = if self.grid_interpolation.as_ref().is_ok_and(|g| g.is_in_phase()) {
                     ", the profiles blended in phase (at the same (x - x0) / r_w)"
                 } else {
                     ""
@@ -1055,6 +1068,28 @@ pub fn write_prediction_csv(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A metadata.json whose grid runs backwards (or nowhere) is refused
+    /// by name: the positions, and the sine's phase, are read from it.
+    #[test]
+    fn a_grid_that_does_not_run_forwards_is_named() {
+        let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/db/metadata.json");
+        let mut json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(shipped).unwrap()).unwrap();
+        let dir = std::env::temp_dir().join(format!("haptex-grid-backwards-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for (lo, hi) in [(5.0, -5.0), (1.0, 1.0)] {
+            json["grid"]["xi_min_mm"] = lo.into();
+            json["grid"]["xi_max_mm"] = hi.into();
+            std::fs::write(dir.join("metadata.json"), json.to_string()).unwrap();
+            let error = Metadata::read(&dir).unwrap_err().to_string();
+            assert!(error.contains("metadata.json") && error.contains("grid: xi_max_mm"), "{error}");
+        }
+        json["grid"]["xi_min_mm"] = (-5.0).into();
+        json["grid"]["xi_max_mm"] = 5.0.into();
+        std::fs::write(dir.join("metadata.json"), json.to_string()).unwrap();
+        assert!(Metadata::read(&dir).is_ok());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     /// An estimate of a sine whose crests the mesh resolves is told the
     /// resolved members' figures (and advised by them), where the

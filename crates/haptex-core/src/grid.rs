@@ -44,10 +44,16 @@ struct Phase {
     step: f64,
 }
 
-/// A model matrix that is not a full tensor grid.
+/// Why a model matrix cannot have a grid estimate.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("the model vectors are not a full grid: {0}")]
-pub struct GridError(String);
+pub enum GridError {
+    /// Its model vectors are not a full tensor grid.
+    #[error("the model vectors are not a full grid: {0}")]
+    NotAGrid(String),
+    /// Its outputs cannot be blended in phase ([`GridInterpolation::in_phase`]).
+    #[error("the outputs cannot be blended in phase: {0}")]
+    Phase(String),
+}
 
 impl GridInterpolation {
     /// The grid of `matrix`, or why it is not one: a node without a row or
@@ -55,7 +61,7 @@ impl GridInterpolation {
     pub fn new(matrix: &ModelMatrix) -> Result<Self, GridError> {
         let d = matrix.d();
         if d > MAX_INPUTS {
-            return Err(GridError(format!("{d} inputs, at most {MAX_INPUTS}")));
+            return Err(GridError::NotAGrid(format!("{d} inputs, at most {MAX_INPUTS}")));
         }
         let axes: Vec<Vec<f64>> = (0..d)
             .map(|l| {
@@ -67,7 +73,7 @@ impl GridInterpolation {
             .collect();
         let nodes = axes.iter().try_fold(1usize, |p, a| p.checked_mul(a.len()));
         if nodes != Some(matrix.n()) {
-            return Err(GridError(format!(
+            return Err(GridError::NotAGrid(format!(
                 "{} rows for {} combinations of the inputs' values",
                 matrix.n(),
                 nodes.map_or_else(|| "too many".to_string(), |n| n.to_string())
@@ -79,7 +85,7 @@ impl GridInterpolation {
                 index * axis.len() + axis.binary_search_by(|a| a.total_cmp(v)).expect("the axis holds every value")
             });
             if rows[node] != usize::MAX {
-                return Err(GridError(format!("rows {} and {} have the same inputs", rows[node] + 1, n + 1)));
+                return Err(GridError::NotAGrid(format!("rows {} and {} have the same inputs", rows[node] + 1, n + 1)));
             }
             rows[node] = n;
         }
@@ -98,15 +104,14 @@ impl GridInterpolation {
     /// the samples, at their end. At a node's own period it is its row.
     /// The query's period is held at the axis's ends, as every input is.
     pub fn in_phase(mut self, input: usize, start: f64, step: f64) -> Result<Self, GridError> {
-        let axis = self
-            .axes
-            .get(input)
-            .ok_or_else(|| GridError(format!("no input {} of {} to take as the period", input + 1, self.axes.len())))?;
+        let axis = self.axes.get(input).ok_or_else(|| {
+            GridError::Phase(format!("no input {} of {} to take as the period", input + 1, self.axes.len()))
+        })?;
         if let Some(p) = axis.iter().find(|p| !(p.is_finite() && **p > 0.0)) {
-            return Err(GridError(format!("a period of {p}: the periods must be positive")));
+            return Err(GridError::Phase(format!("a period of {p}: the periods must be positive")));
         }
         if !(start.is_finite() && step.is_finite() && step > 0.0) {
-            return Err(GridError(format!(
+            return Err(GridError::Phase(format!(
                 "positions from {start} in steps of {step}: need a finite start and a positive step"
             )));
         }
@@ -403,7 +408,8 @@ mod tests {
         )
         .unwrap();
         let g = GridInterpolation::new(&matrix).unwrap();
-        assert!(g.clone().in_phase(2, 0.0, 1.0).unwrap_err().to_string().contains("no input 3 of 2"));
+        let error = g.clone().in_phase(2, 0.0, 1.0).unwrap_err().to_string();
+        assert!(error.starts_with("the outputs cannot be blended in phase: no input 3 of 2"), "{error}");
         assert!(g.clone().in_phase(0, 0.0, 1.0).unwrap_err().to_string().contains("must be positive"));
         assert!(g.clone().in_phase(1, 0.0, 0.0).unwrap_err().to_string().contains("positive step"));
         assert!(g.in_phase(1, 0.0, 1.0).is_ok());
